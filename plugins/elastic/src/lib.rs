@@ -1,0 +1,147 @@
+//! # Elastic joint plugin
+//!
+//! SHERPA q4 (elbow) and q5 (wrist), thesis section 3.3: a joint whose transmission is compliant,
+//! characterised by a first-order (linear) torque-deflection fit (section 3.3.2: elbow
+//! 113.78 Nm/rad, wrist q5 70.0966 Nm/rad).
+//!
+//! Kinematics, eq. 3.1/3.2: `theta_out = theta_motor + theta_RC`, ideally `theta_RC = theta_motor`
+//! so `theta_out = 2 * theta_motor` for the elbow. With `r` the ideal output-per-motor ratio the
+//! deflection is what the output encoder shows beyond the ideal transmission:
+//! `deflection = (theta_out - theta_out0) - r * (theta_motor - theta_motor0)`, with the initial
+//! angles subtracted (section 3.4.1) so that the joint may start anywhere.
+
+use jointctl_api::{
+    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Observer, PluginError, RawJointView, export_joint_plugin, params,
+};
+use jointctl_control::{LinearTransmission, Pi, PiGains, VelocityEstimator};
+use serde::Deserialize;
+
+/// Encoder role 0: the absolute encoder on the joint output.
+const OUTPUT_ENCODER: usize = 0;
+/// Drive role 0: the joint motor.
+const MOTOR: usize = 0;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Params {
+    /// First-order fit of the torque-deflection characteristic [Nm/rad] (section 3.3.2).
+    stiffness_nm_per_rad: f64,
+    /// Ideal output rad per motor rad: 2 for the elbow (eq. 3.1), 1 for q5 (assumption: the
+    /// drive reports the belt output; the thesis gives no ratio).
+    output_per_motor: f64,
+    /// Section 4.3's position feedback PI [rad -> rad].
+    position_pi: PiGains,
+    /// Oldest stale reading still used [s]. Assumption: 0.1 s (4 cycles at 40 Hz).
+    #[serde(default = "default_max_age")]
+    max_age_s: f64,
+}
+
+fn default_max_age() -> f64 {
+    0.1
+}
+
+/// A joint with a linear elastic element.
+pub struct ElasticJoint {
+    params: Params,
+    transmission: LinearTransmission,
+    velocity: VelocityEstimator,
+    pi: Pi,
+    last_mode: ControlMode,
+}
+
+impl ElasticJoint {
+    /// Eq. 3.2 solved for the RC element's deflection, relative to the activation pose.
+    fn deflection(&self, output_rad: f64, motor_rad: f64) -> f64 {
+        output_rad - self.transmission.joint_for(motor_rad)
+    }
+}
+
+impl JointPlugin for ElasticJoint {
+    fn create(params_json: &str) -> Result<Self, PluginError> {
+        let p: Params = params::parse(params_json)?;
+        params::positive("stiffness_nm_per_rad", p.stiffness_nm_per_rad)?;
+        if !(p.output_per_motor.is_finite() && p.output_per_motor != 0.0) {
+            return Err(PluginError::at("output_per_motor", "must be finite and non-zero"));
+        }
+        params::positive("max_age_s", p.max_age_s)?;
+        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        Ok(ElasticJoint {
+            transmission: LinearTransmission::new(p.output_per_motor),
+            velocity: VelocityEstimator::new(0.5),
+            pi: Pi::new(p.position_pi),
+            last_mode: ControlMode::HOLD,
+            params: p,
+        })
+    }
+
+    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
+        if ctx.dof != 1 {
+            return Err(PluginError::new(format!("an elastic joint has 1 DOF, the YAML gives {}", ctx.dof)));
+        }
+        Ok(())
+    }
+
+    fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
+        let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
+        let m = raw.drive(MOTOR).position_rad.usable(self.params.max_age_s);
+        match (q, m) {
+            (Some(q), Some(m)) => {
+                self.transmission = self.transmission.anchored(q, m);
+                Ok(())
+            }
+            _ => Err(PluginError::new(
+                "cannot activate: the output encoder and the motor position must both be readable",
+            )),
+        }
+    }
+}
+
+impl Observer for ElasticJoint {
+    fn observe(&mut self, raw: &RawJointView, out: &mut [JointState]) -> Result<(), JointFault> {
+        let mut s = JointState::UNKNOWN;
+        let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
+        let m = raw.drive(MOTOR).position_rad.usable(self.params.max_age_s);
+        if let Some(q) = q {
+            s.set_position(q);
+            s.set_stiffness(self.params.stiffness_nm_per_rad);
+        }
+        if let (Some(q), Some(m)) = (q, m) {
+            let deflection = self.deflection(q, m);
+            s.set_deflection(deflection);
+            // Section 3.3.2: first-order fit, torque = K * deflection.
+            s.set_torque(self.params.stiffness_nm_per_rad * deflection);
+        }
+        if let Some(v) = self.velocity.update(q, raw.dt_s) {
+            s.set_velocity(v);
+        }
+        out[0] = s;
+        Ok(())
+    }
+}
+
+impl Controller for ElasticJoint {
+    fn control(
+        &mut self,
+        state: &[JointState],
+        command: &[JointCommand],
+        raw: &RawJointView,
+        out: &mut [MotorSetpoint],
+    ) -> Result<(), JointFault> {
+        let cmd = command[0];
+        if cmd.mode != self.last_mode {
+            self.pi.reset();
+            self.last_mode = cmd.mode;
+        }
+        out[MOTOR] = match (cmd.mode, state[0].position()) {
+            (ControlMode::POSITION, Some(q)) => {
+                let correction = self.pi.update(cmd.position_rad - q, raw.dt_s);
+                MotorSetpoint::move_to(self.transmission.motor_for(cmd.position_rad + correction))
+            }
+            _ => MotorSetpoint::HOLD,
+        };
+        Ok(())
+    }
+}
+
+export_joint_plugin!(name: elastic, plugin: ElasticJoint, dof: 1, encoders: "output", drives: "motor");
