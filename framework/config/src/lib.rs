@@ -1,0 +1,126 @@
+//! # jointctl-config
+//!
+//! One YAML file describes a whole arm: loop rate, hardware backend and buses, and each joint
+//! with its plugin, wiring, limits and parameters. [`load`] turns it into a typed, validated
+//! [`ArmConfig`]; every problem is a [`ConfigError`] naming file, line, column and field path.
+//!
+//! ```
+//! let yaml = "arm: demo\nhal: {backend: sim}\njoints:\n  - {name: q1, plugin: rigid, limits: {position_rad: [1.0, -1.0]}}\n";
+//! let err = jointctl_config::parse_str(yaml, "demo.yaml").unwrap_err();
+//! assert_eq!(err.0[0].to_string(), "demo.yaml:4:54: joints[0].limits.position_rad: lower limit 1 must be below upper limit -1");
+//! ```
+
+mod error;
+mod model;
+mod num;
+mod spans;
+mod validate;
+
+use std::path::{Path, PathBuf};
+
+pub use error::{ConfigError, ConfigErrors};
+pub use model::*;
+pub use spans::{Location, SpanIndex};
+pub use validate::{MAX_ARM_DOF, MAX_JOINT_NAME};
+
+/// A parsed and validated arm description with what is needed to point back into its file.
+#[derive(Clone, Debug)]
+pub struct LoadedConfig {
+    /// The description.
+    pub config: ArmConfig,
+    /// The file it came from and where each field is in it.
+    pub source: ConfigSource,
+}
+
+/// The file a config came from and the location of each field in it.
+#[derive(Clone, Debug)]
+pub struct ConfigSource {
+    /// The file as given.
+    pub file: PathBuf,
+    /// Field path → location.
+    pub spans: SpanIndex,
+}
+
+impl ConfigSource {
+    /// An error about `field`, located at the field (or its nearest existing ancestor).
+    ///
+    /// ```
+    /// let src = jointctl_config::ConfigSource { file: "a.yaml".into(), spans: jointctl_config::SpanIndex::build("x:\n  y: 1\n") };
+    /// assert_eq!(src.error("x.y", "bad").to_string(), "a.yaml:2:6: x.y: bad");
+    /// ```
+    pub fn error(&self, field: &str, message: impl Into<String>) -> ConfigError {
+        let at = self.spans.nearest(field);
+        ConfigError {
+            file: self.file.clone(),
+            line: at.line,
+            column: at.column,
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    /// Resolves a path written in the file relative to the file's folder.
+    pub fn resolve(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() { p.to_path_buf() } else { self.file.parent().unwrap_or(Path::new(".")).join(p) }
+    }
+}
+
+/// Reads, parses and validates an arm description.
+pub fn load(path: impl AsRef<Path>) -> Result<LoadedConfig, ConfigErrors> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+        file: path.to_path_buf(),
+        line: 0,
+        column: 0,
+        field: String::new(),
+        message: format!("cannot read the file: {e}"),
+    })?;
+    parse_str(&text, path)
+}
+
+/// Parses and validates an arm description from text; `file` names it in errors.
+pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, ConfigErrors> {
+    let source = ConfigSource { file: file.as_ref().to_path_buf(), spans: SpanIndex::build(text) };
+    let de = serde_yaml::Deserializer::from_str(text);
+    let config: ArmConfig = serde_path_to_error::deserialize(de).map_err(|e| {
+        let field = e.path().to_string();
+        let field = if field == "." { String::new() } else { field };
+        let inner = e.into_inner();
+        let mut message = inner.to_string();
+        // serde_yaml appends its own " at line L column C"; the location is printed in front.
+        if let Some(cut) = message.find(" at line ") {
+            message.truncate(cut);
+        }
+        // serde_yaml also starts its message with the path of the enclosing mapping; the field
+        // path is printed in front already.
+        if let Some((prefix, rest)) = message.split_once(": ")
+            && !prefix.is_empty()
+            && !prefix.contains(' ')
+            && field.starts_with(prefix)
+        {
+            message = rest.to_string();
+        }
+        // Prefer the span index: serde_yaml places some errors (custom ones, missing fields) at
+        // the enclosing mapping. A key beats its value: an unknown field is best shown at its key.
+        let spanned = source.spans.key(&field).or_else(|| source.spans.value(&field)).filter(|_| !field.is_empty());
+        let (line, column) = match (spanned, inner.location()) {
+            (Some(at), _) => (at.line, at.column),
+            (None, Some(l)) => (l.line(), l.column()),
+            (None, None) => {
+                let at = source.spans.nearest(&field);
+                (at.line, at.column)
+            }
+        };
+        ConfigError { file: source.file.clone(), line, column, field, message }
+    })?;
+    let problems = validate::validate(&config);
+    if !problems.is_empty() {
+        return Err(ConfigErrors(problems.into_iter().map(|(p, m)| source.error(&p, m)).collect()));
+    }
+    Ok(LoadedConfig { config, source })
+}
+
+/// The JSON Schema of the arm description, for editors.
+pub fn json_schema() -> serde_json::Value {
+    serde_json::to_value(schemars::schema_for!(ArmConfig)).unwrap_or_default()
+}

@@ -1,0 +1,389 @@
+//! The typed arm description. Every field documents its unit; every default says where it comes
+//! from (a thesis section, or "assumption").
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Deserializer, de};
+
+use crate::num::{finite, finite_opt, finite_pair};
+
+/// One robot arm: its loop, its hardware and its joints.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ArmConfig {
+    /// Arm name: letters, digits, `_` and `-` (at most 32). Shared-memory service names are
+    /// derived from it (`<arm>/joint_state`, `<arm>/diagnostics`).
+    pub arm: String,
+    /// Control loop rate [Hz]. Default 40 Hz, the thesis' loop rate (sections 2.3 and 4.1).
+    #[serde(default = "default_rate_hz", deserialize_with = "finite")]
+    pub rate_hz: f64,
+    /// Which hardware backend the loop talks to.
+    pub hal: HalConfig,
+    /// Extra folders searched for plugin libraries, relative to this file.
+    #[serde(default)]
+    pub plugin_dirs: Vec<PathBuf>,
+    /// Loop timing.
+    #[serde(default)]
+    pub timing: TimingConfig,
+    /// Shared-memory (iceoryx2) settings.
+    #[serde(default)]
+    pub ipc: IpcConfig,
+    /// CAN and SPI buses with the devices on them.
+    #[serde(default)]
+    pub buses: BusesConfig,
+    /// The joints, each served by one plugin instance.
+    pub joints: Vec<JointConfig>,
+}
+
+fn default_rate_hz() -> f64 {
+    40.0
+}
+
+/// The hardware backend.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HalConfig {
+    /// `sim`: the simulated arm, the default; runs anywhere without hardware or root rights.
+    pub backend: HalBackend,
+    /// Settings of the simulated backend.
+    #[serde(default)]
+    pub sim: SimConfig,
+}
+
+/// Available hardware backends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum HalBackend {
+    /// The simulated arm.
+    Sim,
+}
+
+/// Settings of the simulated backend.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimConfig {
+    /// Seed of every random process in the simulation (noise, frame loss).
+    #[serde(default)]
+    pub seed: u64,
+    /// Standard deviation of absolute-encoder noise [rad]. Assumption: 0.
+    #[serde(default, deserialize_with = "finite")]
+    pub encoder_noise_rad: f64,
+    /// Time constant of a simulated drive following its set-point [s]. Assumption: 0.02 s.
+    #[serde(default = "default_drive_tau", deserialize_with = "finite")]
+    pub drive_time_constant_s: f64,
+}
+
+fn default_drive_tau() -> f64 {
+    0.02
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig { seed: 0, encoder_noise_rad: 0.0, drive_time_constant_s: default_drive_tau() }
+    }
+}
+
+/// Loop timing.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TimingConfig {
+    /// The loop sleeps until this long before each deadline, then spins [us], trading CPU for
+    /// jitter. Assumption: 200 us.
+    #[serde(default = "default_spin_us")]
+    pub spin_us: u32,
+    /// Run the loop thread with SCHED_FIFO at this priority (1-99) when permitted.
+    #[serde(default)]
+    pub realtime_priority: Option<u8>,
+    /// Pin the loop thread to this CPU.
+    #[serde(default)]
+    pub cpu: Option<usize>,
+}
+
+fn default_spin_us() -> u32 {
+    200
+}
+
+impl Default for TimingConfig {
+    fn default() -> Self {
+        TimingConfig { spin_us: default_spin_us(), realtime_priority: None, cpu: None }
+    }
+}
+
+/// Shared-memory settings.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct IpcConfig {
+    /// iceoryx2 domain (its file prefix). All processes of one arm must use the same; default:
+    /// iceoryx2's own default, which its other-language clients also use.
+    #[serde(default)]
+    pub domain: Option<String>,
+}
+
+/// The buses and their devices.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BusesConfig {
+    /// CAN buses with their motor drives (thesis section 2.2: 9 ELMO Whistle drives).
+    #[serde(default)]
+    pub can: Vec<CanBusConfig>,
+    /// SPI buses with their absolute encoders (section 2.2: 13 14-bit magnetic encoders).
+    #[serde(default)]
+    pub spi: Vec<SpiBusConfig>,
+}
+
+/// One CAN bus.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CanBusConfig {
+    /// Network interface name (e.g. `can0`).
+    pub interface: String,
+    /// Bit rate [bit/s]. Assumption: 1 Mbit/s.
+    #[serde(default = "default_bitrate")]
+    pub bitrate: u32,
+    /// The drives on this bus.
+    pub drives: Vec<DriveConfig>,
+}
+
+fn default_bitrate() -> u32 {
+    1_000_000
+}
+
+/// One motor drive.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DriveConfig {
+    /// Device name, referenced by joints.
+    pub name: String,
+    /// CANopen node id, 1-127.
+    pub node_id: u8,
+}
+
+/// One SPI bus.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SpiBusConfig {
+    /// spidev device (e.g. `/dev/spidev0.0`).
+    pub device: String,
+    /// The encoders on this bus.
+    pub encoders: Vec<EncoderConfig>,
+}
+
+/// One absolute encoder.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EncoderConfig {
+    /// Device name, referenced by joints.
+    pub name: String,
+    /// Chip-select line, 0-15.
+    pub chip_select: u8,
+    /// Subtracted from the raw angle [rad].
+    #[serde(default, deserialize_with = "finite")]
+    pub offset_rad: f64,
+    /// What the simulated backend makes this encoder read.
+    #[serde(default)]
+    pub sim: Option<EncoderSimConfig>,
+}
+
+/// A simulated encoder reads either a drive's position times a gain (a free joint) or a fixed
+/// angle (a joint whose output is clamped, as in the thesis' characterisation set-ups).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EncoderSimConfig {
+    /// Drive whose position this encoder follows.
+    #[serde(default)]
+    pub drive: Option<String>,
+    /// Encoder rad per drive rad.
+    #[serde(default = "one", deserialize_with = "finite")]
+    pub gain: f64,
+    /// Reading at drive position 0 [rad].
+    #[serde(default, deserialize_with = "finite")]
+    pub offset_rad: f64,
+    /// A fixed reading [rad] instead of following a drive.
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub fixed_rad: Option<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// One joint plugin instance: one joint, or several coupled DOFs (the wrist's q6 and q7).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct JointConfig {
+    /// Name of the instance; also the joint's name when `dofs` is not given.
+    pub name: String,
+    /// The plugin: a name (`rigid`, looked up as `libjointctl_plugin_rigid.so` or `librigid.so`),
+    /// or `{name, path}` for a library anywhere (path relative to this file).
+    pub plugin: PluginRef,
+    /// For a multi-DOF plugin: each DOF's name and limits. Empty for a 1-DOF joint.
+    #[serde(default)]
+    pub dofs: Vec<DofConfig>,
+    /// Limits of a 1-DOF joint.
+    #[serde(default)]
+    pub limits: Option<LimitsConfig>,
+    /// Encoder role → encoder device name (roles are the plugin's).
+    #[serde(default)]
+    pub encoders: BTreeMap<String, String>,
+    /// Drive role → drive device name.
+    #[serde(default)]
+    pub drives: BTreeMap<String, String>,
+    /// Parameters for the plugin, checked by the plugin.
+    #[serde(default)]
+    pub params: Params,
+}
+
+/// One DOF of a multi-DOF joint.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DofConfig {
+    /// Joint name (as published).
+    pub name: String,
+    /// Its limits.
+    #[serde(default)]
+    pub limits: Option<LimitsConfig>,
+}
+
+/// Limits enforced by the runtime on every command.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsConfig {
+    /// `[lower, upper]` joint position [rad].
+    #[serde(deserialize_with = "finite_pair")]
+    pub position_rad: [f64; 2],
+    /// Largest |joint velocity| [rad/s].
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub velocity_rad_s: Option<f64>,
+    /// Largest |joint torque| [Nm].
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub torque_nm: Option<f64>,
+}
+
+/// Where a plugin comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PluginRef {
+    /// The plugin's name (its descriptor must carry the same).
+    pub name: String,
+    /// An explicit library path, relative to the config file.
+    pub path: Option<PathBuf>,
+}
+
+impl<'de> Deserialize<'de> for PluginRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct ByPath {
+            name: String,
+            path: PathBuf,
+        }
+        impl<'de> de::Visitor<'de> for V {
+            type Value = PluginRef;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a plugin name, or a mapping {name, path}")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<PluginRef, E> {
+                Ok(PluginRef { name: v.to_string(), path: None })
+            }
+            fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<PluginRef, A::Error> {
+                let p = ByPath::deserialize(de::value::MapAccessDeserializer::new(map))?;
+                Ok(PluginRef { name: p.name, path: Some(p.path) })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl JsonSchema for PluginRef {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "PluginRef".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "A plugin name, or {name, path} for a library anywhere (path relative to the config file).",
+            "oneOf": [
+                {"type": "string"},
+                {"type": "object", "additionalProperties": false, "required": ["name", "path"],
+                 "properties": {"name": {"type": "string"}, "path": {"type": "string"}}}
+            ]
+        })
+    }
+}
+
+/// A plugin's parameters: any YAML mapping whose numbers are all finite, handed to the plugin
+/// as JSON.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Params(pub serde_json::Value);
+
+impl<'de> Deserialize<'de> for Params {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let yaml = serde_yaml::Value::deserialize(d)?;
+        to_json(&yaml, "").map(Params).map_err(|(path, msg)| {
+            de::Error::custom(if path.is_empty() { msg } else { format!("{path}: {msg}") })
+        })
+    }
+}
+
+fn to_json(v: &serde_yaml::Value, path: &str) -> Result<serde_json::Value, (String, String)> {
+    use serde_yaml::Value as Y;
+    Ok(match v {
+        Y::Null => serde_json::Value::Null,
+        Y::Bool(b) => serde_json::Value::Bool(*b),
+        Y::Number(n) => {
+            if let Some(i) = n.as_i64() {
+                i.into()
+            } else if let Some(u) = n.as_u64() {
+                u.into()
+            } else {
+                let f = n.as_f64().unwrap_or(f64::NAN);
+                match serde_json::Number::from_f64(f) {
+                    Some(num) => serde_json::Value::Number(num),
+                    None => return Err((path.to_string(), format!("must be a finite number, got {f}"))),
+                }
+            }
+        }
+        Y::String(s) => serde_json::Value::String(s.clone()),
+        Y::Sequence(items) => serde_json::Value::Array(
+            items.iter().enumerate().map(|(i, x)| to_json(x, &format!("{path}[{i}]"))).collect::<Result<_, _>>()?,
+        ),
+        Y::Mapping(m) => {
+            let mut out = serde_json::Map::new();
+            for (k, x) in m {
+                let key = match k {
+                    Y::String(s) => s.clone(),
+                    other => return Err((path.to_string(), format!("keys must be strings, got {other:?}"))),
+                };
+                let child = if path.is_empty() { key.clone() } else { format!("{path}.{key}") };
+                out.insert(key, to_json(x, &child)?);
+            }
+            serde_json::Value::Object(out)
+        }
+        Y::Tagged(t) => to_json(&t.value, path)?,
+    })
+}
+
+impl JsonSchema for Params {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Params".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "Plugin parameters; each plugin documents its own.",
+            "type": "object"
+        })
+    }
+}
+
+impl JointConfig {
+    /// The names of the DOFs this instance serves, in order.
+    pub fn dof_names(&self) -> Vec<&str> {
+        if self.dofs.is_empty() { vec![self.name.as_str()] } else { self.dofs.iter().map(|d| d.name.as_str()).collect() }
+    }
+
+    /// The limits of each DOF, in order.
+    pub fn dof_limits(&self) -> Vec<Option<LimitsConfig>> {
+        if self.dofs.is_empty() { vec![self.limits] } else { self.dofs.iter().map(|d| d.limits).collect() }
+    }
+}

@@ -1,0 +1,167 @@
+//! Checks that need the whole document: names, references, ranges, consistency.
+
+use std::collections::{HashMap, HashSet};
+
+use crate::model::{ArmConfig, LimitsConfig};
+
+/// Most DOFs one arm may publish (the size of the shared-memory sample).
+pub const MAX_ARM_DOF: usize = 16;
+/// Longest joint name (it is published in a fixed 16-byte field, NUL-terminated).
+pub const MAX_JOINT_NAME: usize = 15;
+
+fn valid_name(s: &str, max: usize) -> bool {
+    !s.is_empty() && s.len() <= max && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
+/// Every semantic problem as (field path, message).
+pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
+    let mut errs = Vec::new();
+    let mut err = |path: String, msg: String| errs.push((path, msg));
+
+    if !valid_name(&c.arm, 32) {
+        err("arm".into(), format!("`{}` is not a valid arm name: use 1-32 letters, digits, `_` or `-`", c.arm));
+    }
+    if !(c.rate_hz > 0.0 && c.rate_hz <= 10_000.0) {
+        err("rate_hz".into(), format!("must be in (0, 10000] Hz, got {}", c.rate_hz));
+    }
+    let sim = &c.hal.sim;
+    if sim.encoder_noise_rad < 0.0 {
+        err("hal.sim.encoder_noise_rad".into(), format!("must be >= 0, got {}", sim.encoder_noise_rad));
+    }
+    if sim.drive_time_constant_s <= 0.0 {
+        err("hal.sim.drive_time_constant_s".into(), format!("must be > 0, got {}", sim.drive_time_constant_s));
+    }
+    if let Some(p) = c.timing.realtime_priority
+        && !(1..=99).contains(&p)
+    {
+        err("timing.realtime_priority".into(), format!("must be 1-99, got {p}"));
+    }
+    if let Some(d) = &c.ipc.domain
+        && !valid_name(d, 32)
+    {
+        err("ipc.domain".into(), format!("`{d}` is not a valid domain: use 1-32 letters, digits, `_` or `-`"));
+    }
+
+    // Devices: unique names across all buses; node ids and chip selects unique per bus.
+    let mut devices: HashMap<&str, String> = HashMap::new();
+    let mut drive_names = HashSet::new();
+    let mut encoder_names = HashSet::new();
+    for (b, bus) in c.buses.can.iter().enumerate() {
+        if !(10_000..=1_000_000).contains(&bus.bitrate) {
+            err(format!("buses.can[{b}].bitrate"), format!("must be 10000-1000000 bit/s, got {}", bus.bitrate));
+        }
+        let mut ids = HashMap::new();
+        for (i, d) in bus.drives.iter().enumerate() {
+            let path = format!("buses.can[{b}].drives[{i}]");
+            if let Some(first) = devices.insert(&d.name, path.clone()) {
+                err(format!("{path}.name"), format!("device `{}` is already defined at {first}", d.name));
+            }
+            drive_names.insert(d.name.as_str());
+            if !(1..=127).contains(&d.node_id) {
+                err(format!("{path}.node_id"), format!("a CANopen node id is 1-127, got {}", d.node_id));
+            } else if let Some(other) = ids.insert(d.node_id, d.name.as_str()) {
+                err(format!("{path}.node_id"), format!("node id {} is already used by `{other}` on this bus", d.node_id));
+            }
+        }
+    }
+    for (b, bus) in c.buses.spi.iter().enumerate() {
+        let mut cs = HashMap::new();
+        for (i, e) in bus.encoders.iter().enumerate() {
+            let path = format!("buses.spi[{b}].encoders[{i}]");
+            if let Some(first) = devices.insert(&e.name, path.clone()) {
+                err(format!("{path}.name"), format!("device `{}` is already defined at {first}", e.name));
+            }
+            encoder_names.insert(e.name.as_str());
+            if e.chip_select > 15 {
+                err(format!("{path}.chip_select"), format!("must be 0-15, got {}", e.chip_select));
+            } else if let Some(other) = cs.insert(e.chip_select, e.name.as_str()) {
+                err(format!("{path}.chip_select"), format!("chip select {} is already used by `{other}`", e.chip_select));
+            }
+        }
+    }
+    for (b, bus) in c.buses.spi.iter().enumerate() {
+        for (i, e) in bus.encoders.iter().enumerate() {
+            let Some(s) = &e.sim else { continue };
+            let path = format!("buses.spi[{b}].encoders[{i}].sim");
+            match (&s.drive, s.fixed_rad) {
+                (Some(d), None) if !drive_names.contains(d.as_str()) => {
+                    err(format!("{path}.drive"), format!("no drive named `{d}` is defined under buses.can"))
+                }
+                (Some(_), None) | (None, Some(_)) => {}
+                _ => err(path, "give exactly one of `drive` (follow a drive) or `fixed_rad` (clamped output)".into()),
+            }
+        }
+    }
+
+    // Joints.
+    if c.joints.is_empty() {
+        err("joints".into(), "an arm needs at least one joint".into());
+    }
+    let mut instance_names = HashMap::new();
+    let mut dof_names = HashMap::new();
+    let mut drive_users: HashMap<&str, String> = HashMap::new();
+    let mut total_dof = 0;
+    for (j, joint) in c.joints.iter().enumerate() {
+        let path = format!("joints[{j}]");
+        if let Some(first) = instance_names.insert(joint.name.as_str(), j) {
+            err(format!("{path}.name"), format!("joint `{}` is already defined at joints[{first}]", joint.name));
+        }
+        if !joint.dofs.is_empty() && joint.limits.is_some() {
+            err(format!("{path}.limits"), "with `dofs`, give limits per DOF under `dofs[i].limits`".into());
+        }
+        let names: Vec<(String, &str)> = if joint.dofs.is_empty() {
+            vec![(format!("{path}.name"), joint.name.as_str())]
+        } else {
+            joint.dofs.iter().enumerate().map(|(d, dof)| (format!("{path}.dofs[{d}].name"), dof.name.as_str())).collect()
+        };
+        total_dof += names.len();
+        for (p, name) in names {
+            if !valid_name(name, crate::validate::MAX_JOINT_NAME) {
+                err(p.clone(), format!("`{name}` is not a valid joint name: use 1-15 letters, digits, `_` or `-`"));
+            }
+            if let Some(first) = dof_names.insert(name, p.clone()) {
+                if first != p {
+                    err(p, format!("joint `{name}` is already defined at {first}"));
+                }
+            }
+        }
+        let limits: Vec<(String, &LimitsConfig)> = if joint.dofs.is_empty() {
+            joint.limits.iter().map(|l| (format!("{path}.limits"), l)).collect()
+        } else {
+            joint
+                .dofs
+                .iter()
+                .enumerate()
+                .filter_map(|(d, dof)| dof.limits.as_ref().map(|l| (format!("{path}.dofs[{d}].limits"), l)))
+                .collect()
+        };
+        for (p, l) in limits {
+            let [lo, hi] = l.position_rad;
+            if lo >= hi {
+                err(format!("{p}.position_rad"), format!("lower limit {lo} must be below upper limit {hi}"));
+            }
+            if let Some(v) = l.velocity_rad_s.filter(|v| *v <= 0.0) {
+                err(format!("{p}.velocity_rad_s"), format!("must be > 0, got {v}"));
+            }
+            if let Some(t) = l.torque_nm.filter(|t| *t <= 0.0) {
+                err(format!("{p}.torque_nm"), format!("must be > 0, got {t}"));
+            }
+        }
+        for (role, dev) in &joint.encoders {
+            if !encoder_names.contains(dev.as_str()) {
+                err(format!("{path}.encoders.{role}"), format!("no encoder named `{dev}` is defined under buses.spi"));
+            }
+        }
+        for (role, dev) in &joint.drives {
+            if !drive_names.contains(dev.as_str()) {
+                err(format!("{path}.drives.{role}"), format!("no drive named `{dev}` is defined under buses.can"));
+            } else if let Some(first) = drive_users.insert(dev.as_str(), format!("{path}.drives.{role}")) {
+                err(format!("{path}.drives.{role}"), format!("drive `{dev}` is already commanded by {first}; a drive has one master"));
+            }
+        }
+    }
+    if total_dof > MAX_ARM_DOF {
+        err("joints".into(), format!("{total_dof} DOFs exceed the maximum of {MAX_ARM_DOF}"));
+    }
+    errs
+}

@@ -1,0 +1,110 @@
+//! A table of broken arm descriptions: each must be rejected at the right line, column and
+//! field, with a message that says what is wrong.
+
+use jointctl_config::parse_str;
+
+const GOOD: &str = r#"arm: rig
+rate_hz: 40
+hal:
+  backend: sim
+buses:
+  can:
+    - interface: can0
+      drives:
+        - {name: m1, node_id: 1}
+        - {name: m2, node_id: 2}
+  spi:
+    - device: /dev/spidev0.0
+      encoders:
+        - {name: e1, chip_select: 0}
+        - {name: e2, chip_select: 1}
+joints:
+  - name: q1
+    plugin: rigid
+    encoders: {output: e1}
+    drives: {motor: m1}
+    limits: {position_rad: [-1.0, 1.0], torque_nm: 10}
+    params: {position_pi: {kp: 0.5, ki: 0.1}}
+  - name: q2
+    plugin: elastic
+    encoders: {output: e2}
+    drives: {motor: m2}
+    params: {stiffness_nm_per_rad: 113.78}
+"#;
+
+/// (what is broken, text replaced, replacement, expected line, expected field, message fragment)
+const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
+    ("YAML syntax (tab indentation)", "  backend: sim", "\tbackend: sim", 4, "hal", "found character that cannot start any token"),
+    ("unknown top-level field", "rate_hz: 40", "rate_hz: 40\nspeed: 3", 3, "speed", "unknown field `speed`"),
+    ("misspelt joint field", "    limits: {position_rad", "    limts: {position_rad", 21, "joints[0].limts", "unknown field `limts`"),
+    ("wrong type", "rate_hz: 40", "rate_hz: fast", 2, "rate_hz", "invalid type: string \"fast\""),
+    ("missing required field", "    plugin: elastic\n", "", 23, "joints[1]", "missing field `plugin`"),
+    ("duplicate joint name", "  - name: q2", "  - name: q1", 23, "joints[1].name", "already defined at joints[0]"),
+    ("duplicate device name", "{name: e2, chip_select: 1}", "{name: m1, chip_select: 1}", 15, "buses.spi[0].encoders[1].name", "device `m1` is already defined"),
+    ("encoder that does not exist", "encoders: {output: e2}", "encoders: {output: e9}", 25, "joints[1].encoders.output", "no encoder named `e9`"),
+    ("drive that does not exist", "drives: {motor: m2}", "drives: {motor: m7}", 26, "joints[1].drives.motor", "no drive named `m7`"),
+    ("non-finite number", "torque_nm: 10", "torque_nm: .nan", 21, "joints[0].limits.torque_nm", "must be a finite number"),
+    ("rate out of range", "rate_hz: 40", "rate_hz: -5", 2, "rate_hz", "must be in (0, 10000] Hz"),
+    ("node id out of range", "{name: m2, node_id: 2}", "{name: m2, node_id: 200}", 10, "buses.can[0].drives[1].node_id", "node id is 1-127"),
+    ("limits upside down", "position_rad: [-1.0, 1.0]", "position_rad: [1.0, -1.0]", 21, "joints[0].limits.position_rad", "lower limit 1 must be below upper limit -1"),
+    ("invalid arm name", "arm: rig", "arm: my arm/1", 1, "arm", "not a valid arm name"),
+    ("one drive, two masters", "drives: {motor: m2}", "drives: {motor: m1}", 26, "joints[1].drives.motor", "already commanded by joints[0].drives.motor"),
+    ("duplicate node id", "{name: m2, node_id: 2}", "{name: m2, node_id: 1}", 10, "buses.can[0].drives[1].node_id", "node id 1 is already used by `m1`"),
+    ("non-finite plugin parameter", "stiffness_nm_per_rad: 113.78", "stiffness_nm_per_rad: .inf", 27, "joints[1].params", "stiffness_nm_per_rad: must be a finite number"),
+    ("unknown backend", "  backend: sim", "  backend: ethercat", 4, "hal.backend", "unknown variant `ethercat`"),
+    ("plugin of the wrong type", "plugin: rigid", "plugin: 42", 18, "joints[0].plugin", "expected a plugin name"),
+    ("negative torque limit", "torque_nm: 10", "torque_nm: -10", 21, "joints[0].limits.torque_nm", "must be > 0"),
+];
+
+#[test]
+fn the_good_config_loads() {
+    let loaded = parse_str(GOOD, "rig.yaml").expect("the reference config of this table must load");
+    assert_eq!(loaded.config.joints.len(), 2);
+    assert_eq!(loaded.config.rate_hz, 40.0);
+}
+
+#[test]
+fn each_broken_config_is_rejected_at_the_right_place() {
+    assert!(CASES.len() >= 15);
+    let mut failures = Vec::new();
+    for (what, from, to, line, field, fragment) in CASES {
+        assert!(GOOD.contains(from), "case `{what}`: the good config has no `{from}`");
+        let text = GOOD.replacen(from, to, 1);
+        match parse_str(&text, "rig.yaml") {
+            Ok(_) => failures.push(format!("{what}: accepted")),
+            Err(errs) => {
+                let e = &errs.0[0];
+                let rendered = e.to_string();
+                if e.line != *line || e.field != *field || !e.message.contains(fragment) || !rendered.starts_with("rig.yaml:") {
+                    failures.push(format!("{what}: got `{rendered}` (line {}, field `{}`)", e.line, e.field));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "misreported configs:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn an_empty_joint_list_is_refused() {
+    let text = GOOD.split("joints:").next().unwrap().to_string() + "joints: []\n";
+    let errs = parse_str(&text, "rig.yaml").unwrap_err();
+    assert_eq!(errs.0[0].field, "joints");
+    assert!(errs.0[0].message.contains("at least one joint"));
+}
+
+#[test]
+fn several_problems_are_all_reported() {
+    let text = GOOD.replacen("rate_hz: 40", "rate_hz: 0", 1).replacen("drives: {motor: m2}", "drives: {motor: m7}", 1);
+    let errs = parse_str(&text, "rig.yaml").unwrap_err();
+    let fields: Vec<_> = errs.0.iter().map(|e| e.field.as_str()).collect();
+    assert_eq!(fields, ["rate_hz", "joints[1].drives.motor"]);
+}
+
+#[test]
+fn the_schema_covers_the_top_level_fields() {
+    let schema = jointctl_config::json_schema();
+    let props = schema["properties"].as_object().expect("schema has properties");
+    for key in ["arm", "rate_hz", "hal", "buses", "joints", "timing", "ipc", "plugin_dirs"] {
+        assert!(props.contains_key(key), "schema lacks `{key}`");
+    }
+}
