@@ -38,6 +38,10 @@ pub struct JointFault(u32);
 impl JointFault {
     /// First code available to plugins.
     pub const FIRST_PLUGIN_CODE: u32 = 16;
+    /// The plugin panicked; the panic was caught at the library boundary.
+    pub const PANICKED: JointFault = JointFault(crate::abi::STATUS_PANICKED);
+    /// The plugin returned an unknown status.
+    pub const BAD_STATUS: JointFault = JointFault(crate::abi::STATUS_FAILED);
 
     /// A plugin-defined fault code; codes below [`JointFault::FIRST_PLUGIN_CODE`] are moved above it.
     ///

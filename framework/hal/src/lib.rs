@@ -1,0 +1,119 @@
+//! # jointctl-hal
+//!
+//! The hardware interface knows devices, not joints or controllers (compare ros2_control's
+//! hardware interfaces): it fills a [`SensorFrame`] with one reading per configured device and
+//! sends an [`ActuatorFrame`] of motor set-points. Which joint uses which device is the
+//! runtime's business.
+//!
+//! Backends: [`sim::SimHal`], the default, which runs anywhere.
+
+pub mod sim;
+
+use jointctl_api::{DriveReading, MotorSetpoint, Reading};
+use jointctl_config::ArmConfig;
+
+/// Device names in the order the frames use: encoders by SPI bus then position, drives by CAN
+/// bus then position, as written in the YAML.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DeviceIndex {
+    /// Encoder names; `SensorFrame::encoders[i]` is `encoders[i]`.
+    pub encoders: Vec<String>,
+    /// Drive names; `SensorFrame::drives[i]` and `ActuatorFrame::drives[i]` are `drives[i]`.
+    pub drives: Vec<String>,
+}
+
+impl DeviceIndex {
+    /// The devices of an arm description.
+    ///
+    /// ```
+    /// let cfg = jointctl_config::parse_str(
+    ///     "arm: a\nhal: {backend: sim}\nbuses: {can: [{interface: can0, drives: [{name: m, node_id: 1}]}]}\njoints: [{name: q, plugin: rigid}]\n",
+    ///     "a.yaml").unwrap().config;
+    /// let idx = jointctl_hal::DeviceIndex::of(&cfg);
+    /// assert_eq!(idx.drive("m"), Some(0));
+    /// ```
+    pub fn of(config: &ArmConfig) -> Self {
+        DeviceIndex {
+            encoders: config.buses.spi.iter().flat_map(|b| b.encoders.iter().map(|e| e.name.clone())).collect(),
+            drives: config.buses.can.iter().flat_map(|b| b.drives.iter().map(|d| d.name.clone())).collect(),
+        }
+    }
+
+    /// Index of an encoder by name.
+    pub fn encoder(&self, name: &str) -> Option<usize> {
+        self.encoders.iter().position(|n| n == name)
+    }
+
+    /// Index of a drive by name.
+    pub fn drive(&self, name: &str) -> Option<usize> {
+        self.drives.iter().position(|n| n == name)
+    }
+}
+
+/// One cycle's readings of every device. Allocated once; the HAL overwrites it in place.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SensorFrame {
+    /// Encoders in [`DeviceIndex`] order.
+    pub encoders: Vec<Reading>,
+    /// Drives in [`DeviceIndex`] order.
+    pub drives: Vec<DriveReading>,
+}
+
+impl SensorFrame {
+    /// A frame for `devices`, every reading missing.
+    pub fn new(devices: &DeviceIndex) -> Self {
+        SensorFrame {
+            encoders: vec![Reading::MISSING; devices.encoders.len()],
+            drives: vec![DriveReading::default(); devices.drives.len()],
+        }
+    }
+}
+
+/// One cycle's set-points for every drive.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActuatorFrame {
+    /// Drives in [`DeviceIndex`] order.
+    pub drives: Vec<MotorSetpoint>,
+}
+
+impl ActuatorFrame {
+    /// A frame for `devices`, every drive holding.
+    pub fn new(devices: &DeviceIndex) -> Self {
+        ActuatorFrame { drives: vec![MotorSetpoint::HOLD; devices.drives.len()] }
+    }
+}
+
+/// A failure of one HAL call. Carries no heap data: it is raised inside the control cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum HalIoError {
+    /// A bus could not be read or written this cycle; every device on it reads stale.
+    #[error("bus {bus} failed this cycle")]
+    BusFailed {
+        /// Index of the bus in the YAML (CAN buses first, then SPI).
+        bus: u16,
+    },
+}
+
+/// A failure to set a backend up.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum HalSetupError {
+    /// The configuration asks for something the backend cannot do.
+    #[error("{field}: {message}")]
+    Config {
+        /// Field path in the arm YAML.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// The hardware interface. `read` and `write` run inside the control cycle: they must not
+/// allocate, and their only I/O is the buses.
+pub trait Hal: Send {
+    /// Fills `frame` with this cycle's readings. A device that did not answer reads stale or
+    /// missing, never zero.
+    fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError>;
+
+    /// Sends this cycle's set-points; a simulated backend advances its time by `dt_s` here.
+    fn write(&mut self, frame: &ActuatorFrame, dt_s: f64) -> Result<(), HalIoError>;
+}

@@ -1,0 +1,334 @@
+//! # jointctl-ipc
+//!
+//! The shared-memory contract of a running arm, used by the runtime (publisher) and by every
+//! inspector (subscribers), so that both sides always agree on types, names and QoS.
+//!
+//! Services per arm (`<arm>` is the YAML `arm:` name):
+//! - `<arm>/joint_state`: one [`ArmState`] per cycle;
+//! - `<arm>/diagnostics`: one [`Diagnostics`] per cycle.
+//!
+//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v1`), so that
+//! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
+//! name, size and alignment but not field order, hence the version in the name. Every process of
+//! one arm builds its iceoryx2 config with [`iceoryx2_config`] rather than looking for a config
+//! file relative to its working directory, so that all of them meet in one domain.
+
+use iceoryx2::config::Config;
+use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
+
+pub use jointctl_api::FieldMask;
+
+/// Most joint DOFs in one sample.
+pub const MAX_JOINTS: usize = 16;
+/// Bytes of a joint name in a sample (NUL-padded).
+pub const NAME_LEN: usize = 16;
+
+/// Upper bounds [us] of the cycle-jitter histogram buckets in [`Diagnostics`].
+pub const JITTER_BUCKET_UPPER_US: [u64; 16] =
+    [1, 2, 5, 10, 20, 50, 100, 200, 500, 1_000, 2_000, 5_000, 10_000, 20_000, 50_000, u64::MAX];
+
+/// A joint name in a fixed-size, NUL-padded field.
+///
+/// ```
+/// let n = jointctl_ipc::encode_name("q2");
+/// assert_eq!(jointctl_ipc::decode_name(&n), "q2");
+/// ```
+pub fn encode_name(name: &str) -> [u8; NAME_LEN] {
+    let mut out = [0u8; NAME_LEN];
+    let n = name.len().min(NAME_LEN - 1);
+    out[..n].copy_from_slice(&name.as_bytes()[..n]);
+    out
+}
+
+/// The text of a fixed-size name field.
+pub fn decode_name(bytes: &[u8; NAME_LEN]) -> &str {
+    let end = bytes.iter().position(|b| *b == 0).unwrap_or(NAME_LEN);
+    core::str::from_utf8(&bytes[..end]).unwrap_or("?")
+}
+
+/// One joint DOF's observed state in SI units. A field whose bit in `valid_mask` is clear is
+/// unknown (its value is NaN).
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[repr(C)]
+pub struct JointSample {
+    /// NUL-padded joint name.
+    pub name: [u8; NAME_LEN],
+    /// Joint position [rad].
+    pub position_rad: f64,
+    /// Joint velocity [rad/s].
+    pub velocity_rad_s: f64,
+    /// Deflection of the elastic element [rad].
+    pub deflection_rad: f64,
+    /// Joint torque [Nm].
+    pub torque_nm: f64,
+    /// Joint stiffness [Nm/rad].
+    pub stiffness_nm_per_rad: f64,
+    /// VSA pivot position [mm].
+    pub pivot_mm: f64,
+    /// [`FieldMask`] bits of the observed fields.
+    pub valid_mask: u32,
+    /// 0, or the fault that holds this joint (1 = its plugin panicked; >= 16 plugin codes).
+    pub fault_code: u32,
+}
+
+impl JointSample {
+    /// An unnamed, unobserved joint.
+    pub const EMPTY: JointSample = JointSample {
+        name: [0; NAME_LEN],
+        position_rad: f64::NAN,
+        velocity_rad_s: f64::NAN,
+        deflection_rad: f64::NAN,
+        torque_nm: f64::NAN,
+        stiffness_nm_per_rad: f64::NAN,
+        pivot_mm: f64::NAN,
+        valid_mask: 0,
+        fault_code: 0,
+    };
+
+    /// The value of a field if its bit is set in `valid_mask`.
+    ///
+    /// ```
+    /// use jointctl_ipc::{FieldMask, JointSample};
+    /// let mut s = JointSample::EMPTY;
+    /// s.torque_nm = 2.0;
+    /// assert_eq!(s.get(FieldMask::TORQUE, s.torque_nm), None);
+    /// s.valid_mask = FieldMask::TORQUE;
+    /// assert_eq!(s.get(FieldMask::TORQUE, s.torque_nm), Some(2.0));
+    /// ```
+    pub fn get(&self, bit: u32, value: f64) -> Option<f64> {
+        (self.valid_mask & bit != 0).then_some(value)
+    }
+}
+
+/// Every joint of the arm, once per cycle.
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[repr(C)]
+#[type_name("jointctl.ArmState.v1")]
+pub struct ArmState {
+    /// Cycle counter, from 0 at start.
+    pub cycle: u64,
+    /// CLOCK_MONOTONIC time of the cycle's sensor read [ns].
+    pub stamp_ns: u64,
+    /// Number of valid entries in `joints`.
+    pub joint_count: u32,
+    /// 1 in the final sample published at shutdown.
+    pub final_sample: u32,
+    /// The joints, in YAML order.
+    pub joints: [JointSample; MAX_JOINTS],
+}
+
+impl ArmState {
+    /// An empty sample.
+    pub const EMPTY: ArmState =
+        ArmState { cycle: 0, stamp_ns: 0, joint_count: 0, final_sample: 0, joints: [JointSample::EMPTY; MAX_JOINTS] };
+
+    /// The valid joints.
+    pub fn joints(&self) -> &[JointSample] {
+        &self.joints[..(self.joint_count as usize).min(MAX_JOINTS)]
+    }
+}
+
+/// Health of one joint DOF.
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[repr(C)]
+pub struct JointDiagnostics {
+    /// NUL-padded joint name.
+    pub name: [u8; NAME_LEN],
+    /// [`FieldMask`] bits observed this cycle.
+    pub valid_mask: u32,
+    /// Current fault code (0 = none).
+    pub fault_code: u32,
+    /// 1 when the runtime held this joint this cycle (fault or unusable state).
+    pub held: u32,
+    _reserved: u32,
+    /// Cycles in which the joint's state was unusable and the joint was held.
+    pub invalid_cycles: u64,
+    /// Faults raised by the joint's plugin (panics, fault codes).
+    pub fault_count: u64,
+}
+
+impl JointDiagnostics {
+    /// An unnamed entry.
+    pub const EMPTY: JointDiagnostics = JointDiagnostics {
+        name: [0; NAME_LEN],
+        valid_mask: 0,
+        fault_code: 0,
+        held: 0,
+        _reserved: 0,
+        invalid_cycles: 0,
+        fault_count: 0,
+    };
+}
+
+/// Loop health, once per cycle.
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[repr(C)]
+#[type_name("jointctl.Diagnostics.v1")]
+pub struct Diagnostics {
+    /// Cycle counter.
+    pub cycle: u64,
+    /// CLOCK_MONOTONIC time of the cycle [ns].
+    pub stamp_ns: u64,
+    /// Nominal period [ns].
+    pub period_ns: u64,
+    /// Cycles whose work ended after the next deadline.
+    pub overruns: u64,
+    /// Deadlines skipped because a cycle overran.
+    pub missed_deadlines: u64,
+    /// HAL read/write failures.
+    pub hal_errors: u64,
+    /// Compute time (read to write) of the last cycle [ns].
+    pub last_compute_ns: u64,
+    /// Longest compute time so far [ns].
+    pub max_compute_ns: u64,
+    /// Largest wake-up lateness so far [ns].
+    pub max_jitter_ns: u64,
+    /// Wake-up lateness histogram, buckets bounded by [`JITTER_BUCKET_UPPER_US`].
+    pub jitter_histogram: [u64; 16],
+    /// Number of valid entries in `joints`.
+    pub joint_count: u32,
+    _reserved: u32,
+    /// Per-joint health, in the order of [`ArmState::joints`].
+    pub joints: [JointDiagnostics; MAX_JOINTS],
+}
+
+impl Diagnostics {
+    /// An empty sample.
+    pub const EMPTY: Diagnostics = Diagnostics {
+        cycle: 0,
+        stamp_ns: 0,
+        period_ns: 0,
+        overruns: 0,
+        missed_deadlines: 0,
+        hal_errors: 0,
+        last_compute_ns: 0,
+        max_compute_ns: 0,
+        max_jitter_ns: 0,
+        jitter_histogram: [0; 16],
+        joint_count: 0,
+        _reserved: 0,
+        joints: [JointDiagnostics::EMPTY; MAX_JOINTS],
+    };
+}
+
+/// The service names of one arm.
+///
+/// ```
+/// let n = jointctl_ipc::ServiceNames::for_arm("sherpa");
+/// assert_eq!(n.joint_state, "sherpa/joint_state");
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ServiceNames {
+    /// [`ArmState`] publish-subscribe service.
+    pub joint_state: String,
+    /// [`Diagnostics`] publish-subscribe service.
+    pub diagnostics: String,
+}
+
+impl ServiceNames {
+    /// Names derived from the arm's name.
+    pub fn for_arm(arm: &str) -> Self {
+        ServiceNames { joint_state: format!("{arm}/joint_state"), diagnostics: format!("{arm}/diagnostics") }
+    }
+}
+
+/// Failure to set up shared memory.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum IpcSetupError {
+    /// The iceoryx2 domain name is not usable as a file prefix.
+    #[error("iceoryx2 domain `{domain}` is not valid: {reason}")]
+    Domain {
+        /// The domain.
+        domain: String,
+        /// Why.
+        reason: String,
+    },
+    /// The iceoryx2 node could not be created.
+    #[error("cannot create the iceoryx2 node `{node}`: {reason}")]
+    Node {
+        /// Node name.
+        node: String,
+        /// Why.
+        reason: String,
+    },
+    /// A service could not be created or opened.
+    #[error("cannot open service `{service}`: {reason}")]
+    Service {
+        /// Service name.
+        service: String,
+        /// Why.
+        reason: String,
+    },
+    /// A port could not be created.
+    #[error("cannot create a {port} on `{service}`: {reason}")]
+    Port {
+        /// "publisher" or "subscriber".
+        port: &'static str,
+        /// Service name.
+        service: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// The iceoryx2 configuration of a domain: iceoryx2's defaults, with the file prefix set to
+/// `domain` when given. Built in code so that no process depends on its working directory.
+pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
+    let mut config = Config::default();
+    if let Some(d) = domain {
+        config.global.prefix = d.try_into().map_err(|e| IpcSetupError::Domain {
+            domain: d.to_string(),
+            reason: format!("{e:?}"),
+        })?;
+    }
+    Ok(config)
+}
+
+/// An iceoryx2 node in the arm's domain, with iceoryx2's own signal handling off (the runtime
+/// owns its signals and timing). Dead nodes of crashed processes are cleaned up.
+pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service>, IpcSetupError> {
+    let config = iceoryx2_config(domain)?;
+    let node_err = |reason: String| IpcSetupError::Node { node: name.to_string(), reason };
+    let node_name = NodeName::new(name).map_err(|e| node_err(format!("{e:?}")))?;
+    let node = NodeBuilder::new()
+        .name(&node_name)
+        .config(&config)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| node_err(format!("{e:?}")))?;
+    let _ = node.try_cleanup_dead_nodes();
+    Ok(node)
+}
+
+/// Subscriber buffer per inspector: a slow inspector loses the oldest samples, it never slows
+/// the publisher.
+pub const SUBSCRIBER_BUFFER: usize = 64;
+
+fn service_name(name: &str) -> Result<ServiceName, IpcSetupError> {
+    ServiceName::new(name).map_err(|e| IpcSetupError::Service { service: name.to_string(), reason: format!("{e:?}") })
+}
+
+macro_rules! service_opener {
+    ($fn:ident, $ty:ty, $doc:literal) => {
+        #[doc = $doc]
+        ///
+        /// One publisher (a second runtime of the same arm is refused), up to 16 subscribers,
+        /// the last sample kept for late subscribers, and overflow that drops the oldest sample
+        /// in a slow subscriber's buffer.
+        pub fn $fn(node: &Node<ipc::Service>, name: &str) -> Result<PortFactory<ipc::Service, $ty, ()>, IpcSetupError> {
+            node.service_builder(&service_name(name)?)
+                .publish_subscribe::<$ty>()
+                .max_publishers(1)
+                .max_subscribers(16)
+                .history_size(1)
+                .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
+                .enable_safe_overflow(true)
+                .open_or_create()
+                .map_err(|e| IpcSetupError::Service { service: name.to_string(), reason: format!("{e:?}") })
+        }
+    };
+}
+
+service_opener!(joint_state_service, ArmState, "Opens (or creates) an arm's joint-state service.");
+service_opener!(diagnostics_service, Diagnostics, "Opens (or creates) an arm's diagnostics service.");

@@ -1,0 +1,359 @@
+//! An arm wired from YAML: its plugin instances, their wiring to devices, and one control cycle
+//! split in the two halves around publishing (observe, then control).
+
+use jointctl_api::{
+    ControlMode, JointCommand, JointContext, JointFault, JointState, MAX_DOF, MAX_DRIVES, MAX_ENCODERS,
+    MotorSetpoint, RawJointView,
+};
+use jointctl_config::{ConfigErrors, LimitsConfig, LoadedConfig};
+use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
+
+use crate::joint::{FfiJoint, LoadedJoint};
+use crate::loader::PluginLoader;
+
+/// One plugin instance and its wiring.
+pub struct JointSlot {
+    /// Instance name from the YAML.
+    pub name: String,
+    /// Plugin name.
+    pub plugin: String,
+    joint: Box<dyn LoadedJoint>,
+    dofs: core::ops::Range<usize>,
+    encoder_map: [Option<usize>; MAX_ENCODERS],
+    drive_map: [Option<usize>; MAX_DRIVES],
+    drive_count: usize,
+    raw: RawJointView,
+    setpoints: [MotorSetpoint; MAX_DRIVES],
+    /// 0, or the fault that holds this joint until restart.
+    pub fault: u32,
+    /// Faults raised so far.
+    pub fault_count: u64,
+    /// Cycles in which the state was unusable and the joint was held.
+    pub invalid_cycles: u64,
+    /// Held this cycle.
+    pub held: bool,
+    /// A fault was raised this cycle and not yet reported in the log.
+    pub fault_unreported: bool,
+}
+
+impl JointSlot {
+    /// The DOF indices (into [`Arm::states`]) this instance serves.
+    pub fn dofs(&self) -> core::ops::Range<usize> {
+        self.dofs.clone()
+    }
+
+    /// The plugin's last error or panic text.
+    pub fn last_message(&self) -> &str {
+        self.joint.last_message()
+    }
+
+    fn gather(&mut self, sensor: &SensorFrame, stamp_s: f64, dt_s: f64) {
+        self.raw.stamp_s = stamp_s;
+        self.raw.dt_s = dt_s;
+        for (slot, map) in self.raw.encoders.iter_mut().zip(self.encoder_map) {
+            *slot = map.map_or(jointctl_api::Reading::MISSING, |i| sensor.encoders[i]);
+        }
+        for (slot, map) in self.raw.drives.iter_mut().zip(self.drive_map) {
+            *slot = map.map_or_else(Default::default, |i| sensor.drives[i]);
+        }
+    }
+
+    fn raise(&mut self, fault: JointFault) {
+        if self.fault == 0 {
+            self.fault_unreported = true;
+        }
+        self.fault = fault.code();
+        self.fault_count += 1;
+    }
+}
+
+/// Why a running arm could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ActivateError {
+    /// The HAL could not be read for the first readings.
+    #[error("cannot read the hardware before the first cycle: {0}")]
+    Hal(#[from] jointctl_hal::HalIoError),
+    /// A plugin refused to activate.
+    #[error("joint `{joint}` (plugin `{plugin}`) cannot activate: {message}")]
+    Plugin {
+        /// Joint instance.
+        joint: String,
+        /// Plugin name.
+        plugin: String,
+        /// Its reason.
+        message: String,
+    },
+}
+
+/// The arm: plugin instances, devices, and the state and command of every DOF.
+pub struct Arm {
+    /// Arm name.
+    pub name: String,
+    /// Loop rate [Hz].
+    pub rate_hz: f64,
+    /// Loop period [s].
+    pub dt_s: f64,
+    /// Plugin instances in YAML order.
+    pub slots: Vec<JointSlot>,
+    /// DOF names, in YAML order.
+    pub dof_names: Vec<String>,
+    /// DOF limits.
+    pub limits: Vec<Option<LimitsConfig>>,
+    /// Observed state of each DOF this cycle.
+    pub states: Vec<JointState>,
+    /// Command of each DOF.
+    pub commands: Vec<JointCommand>,
+    /// HAL read or write failures.
+    pub hal_errors: u64,
+    sensor: SensorFrame,
+    actuator: ActuatorFrame,
+    hal: Box<dyn Hal>,
+}
+
+fn roles(text: &str) -> Vec<(&str, bool)> {
+    text.split(',').filter(|r| !r.is_empty()).map(|r| match r.strip_suffix('?') {
+        Some(name) => (name, false),
+        None => (r, true),
+    }).collect()
+}
+
+impl Arm {
+    /// Loads every joint's plugin, wires it and creates and configures its instance. Every
+    /// problem is reported at its place in the YAML.
+    pub fn build(loaded: &LoadedConfig, loader: &PluginLoader, hal: Box<dyn Hal>) -> Result<Arm, ConfigErrors> {
+        let cfg = &loaded.config;
+        let src = &loaded.source;
+        let devices = DeviceIndex::of(cfg);
+        let mut errors = Vec::new();
+        let mut slots = Vec::new();
+        let mut dof_names = Vec::new();
+        let mut limits = Vec::new();
+        for (j, jc) in cfg.joints.iter().enumerate() {
+            let at = |field: &str| if field.is_empty() { format!("joints[{j}]") } else { format!("joints[{j}].{field}") };
+            let path = jc.plugin.path.as_ref().map(|p| src.resolve(p));
+            let source = match loader.load(&jc.plugin.name, path.as_deref()) {
+                Ok(s) => s,
+                Err(e) => {
+                    errors.push(src.error(&at("plugin"), e.to_string()));
+                    continue;
+                }
+            };
+            let d = source.descriptor;
+            let names = jc.dof_names();
+            // SAFETY: checked descriptors have 'static NUL-terminated strings.
+            let (enc_roles, drv_roles) = unsafe { (roles(d.text(d.encoder_roles)), roles(d.text(d.drive_roles))) };
+            if d.dof as usize != names.len() || names.len() > MAX_DOF {
+                errors.push(src.error(
+                    &at(if jc.dofs.is_empty() { "name" } else { "dofs" }),
+                    format!(
+                        "plugin `{}` serves {} DOF(s) per instance, the YAML gives {}{}",
+                        jc.plugin.name,
+                        d.dof,
+                        names.len(),
+                        if d.dof > 1 { ": name each under `dofs`" } else { "" }
+                    ),
+                ));
+                continue;
+            }
+            let mut encoder_map = [None; MAX_ENCODERS];
+            let mut drive_map = [None; MAX_DRIVES];
+            let mut wiring_ok = true;
+            for (kind, wired, declared, lookup, map) in [
+                ("encoder", &jc.encoders, &enc_roles, &devices.encoders, &mut encoder_map[..]),
+                ("drive", &jc.drives, &drv_roles, &devices.drives, &mut drive_map[..]),
+            ] {
+                let field = if kind == "encoder" { "encoders" } else { "drives" };
+                for role in wired.keys() {
+                    if !declared.iter().any(|(r, _)| r == role) {
+                        let list: Vec<_> = declared.iter().map(|(r, _)| *r).collect();
+                        errors.push(src.error(
+                            &at(&format!("{field}.{role}")),
+                            format!("plugin `{}` has no {kind} role `{role}`; its roles are: {}", jc.plugin.name, list.join(", ")),
+                        ));
+                        wiring_ok = false;
+                    }
+                }
+                for (i, (role, required)) in declared.iter().enumerate() {
+                    match wired.get(*role) {
+                        Some(dev) => map[i] = lookup.iter().position(|n| n == dev),
+                        None if *required => {
+                            errors.push(src.error(
+                                &at(field),
+                                format!("plugin `{}` needs {kind} role `{role}` wired to a device", jc.plugin.name),
+                            ));
+                            wiring_ok = false;
+                        }
+                        None => {}
+                    }
+                }
+            }
+            if !wiring_ok {
+                continue;
+            }
+            let params = jc.params.0.to_string();
+            let params = if jc.params.0.is_null() { "{}".to_string() } else { params };
+            let mut joint = match FfiJoint::create(source, &params) {
+                Ok(j) => j,
+                Err(e) => {
+                    let field = match &e.field {
+                        Some(f) => at(&format!("params.{f}")),
+                        None => at("params"),
+                    };
+                    errors.push(src.error(&field, format!("plugin `{}`: {}", jc.plugin.name, e.message)));
+                    continue;
+                }
+            };
+            let ctx = JointContext::new(d.dof, enc_roles.len() as u32, drv_roles.len() as u32, cfg.rate_hz);
+            if let Err(e) = joint.configure(&ctx) {
+                let field = e.field.as_ref().map_or_else(|| at(""), |f| at(&format!("params.{f}")));
+                errors.push(src.error(&field, format!("plugin `{}`: {}", jc.plugin.name, e.message)));
+                continue;
+            }
+            let first = dof_names.len();
+            dof_names.extend(names.iter().map(|n| n.to_string()));
+            limits.extend(jc.dof_limits());
+            slots.push(JointSlot {
+                name: jc.name.clone(),
+                plugin: jc.plugin.name.clone(),
+                joint: Box::new(joint),
+                dofs: first..dof_names.len(),
+                encoder_map,
+                drive_map,
+                drive_count: drv_roles.len(),
+                raw: RawJointView::default(),
+                setpoints: [MotorSetpoint::HOLD; MAX_DRIVES],
+                fault: 0,
+                fault_count: 0,
+                invalid_cycles: 0,
+                held: false,
+                fault_unreported: false,
+            });
+        }
+        if !errors.is_empty() {
+            return Err(ConfigErrors(errors));
+        }
+        let n = dof_names.len();
+        Ok(Arm {
+            name: cfg.arm.clone(),
+            rate_hz: cfg.rate_hz,
+            dt_s: 1.0 / cfg.rate_hz,
+            slots,
+            dof_names,
+            limits,
+            states: vec![JointState::UNKNOWN; n],
+            commands: vec![JointCommand::HOLD; n],
+            hal_errors: 0,
+            sensor: SensorFrame::new(&devices),
+            actuator: ActuatorFrame::new(&devices),
+            hal,
+        })
+    }
+
+    /// Reads the hardware once and activates every joint with those readings.
+    pub fn activate(&mut self) -> Result<(), ActivateError> {
+        self.hal.read(&mut self.sensor)?;
+        for slot in &mut self.slots {
+            slot.gather(&self.sensor, 0.0, self.dt_s);
+            let raw = slot.raw;
+            slot.joint.activate(&raw).map_err(|e| ActivateError::Plugin {
+                joint: slot.name.clone(),
+                plugin: slot.plugin.clone(),
+                message: e.to_string(),
+            })?;
+        }
+        Ok(())
+    }
+
+    /// First half of a cycle: read the hardware and observe every joint. A joint whose plugin
+    /// faults is held from now on; its state is unknown.
+    pub fn observe(&mut self, stamp_s: f64) {
+        if self.hal.read(&mut self.sensor).is_err() {
+            // The HAL marks what it could not read as stale or missing; the count is published.
+            self.hal_errors += 1;
+        }
+        for slot in &mut self.slots {
+            slot.gather(&self.sensor, stamp_s, self.dt_s);
+            let out = &mut self.states[slot.dofs.clone()];
+            if slot.fault != 0 {
+                out.fill(JointState::UNKNOWN);
+                continue;
+            }
+            if let Err(f) = slot.joint.observe(&slot.raw, out) {
+                out.fill(JointState::UNKNOWN);
+                slot.raise(f);
+            }
+        }
+    }
+
+    /// Sets the command of DOF `dof`, clamping a position set-point into the DOF's limits.
+    /// Returns whether the set-point was clamped.
+    pub fn set_command(&mut self, dof: usize, mut command: JointCommand) -> bool {
+        let mut clamped = false;
+        if command.mode == ControlMode::POSITION
+            && let Some(l) = self.limits[dof]
+        {
+            let [lo, hi] = l.position_rad;
+            let c = command.position_rad.clamp(lo, hi);
+            clamped = c != command.position_rad;
+            command.position_rad = c;
+        }
+        self.commands[dof] = command;
+        clamped
+    }
+
+    /// Second half of a cycle: control every joint whose state is usable, hold the others, and
+    /// write the set-points. `dt_s` advances a simulated backend.
+    pub fn control(&mut self) {
+        for slot in &mut self.slots {
+            let dofs = slot.dofs.clone();
+            let usable = self.states[dofs.clone()].iter().all(|s| s.position().is_some());
+            let out = &mut slot.setpoints[..slot.drive_count];
+            slot.held = true;
+            if slot.fault != 0 {
+                out.fill(MotorSetpoint::HOLD);
+            } else if !usable {
+                // A missing or implausible reading is never driven on: hold, count, publish.
+                slot.invalid_cycles += 1;
+                out.fill(MotorSetpoint::HOLD);
+            } else {
+                match slot.joint.control(&self.states[dofs.clone()], &self.commands[dofs], &slot.raw, out) {
+                    Ok(()) => slot.held = false,
+                    Err(f) => {
+                        out.fill(MotorSetpoint::HOLD);
+                        slot.raise(f);
+                    }
+                }
+            }
+            for (sp, map) in slot.setpoints[..slot.drive_count].iter().zip(slot.drive_map) {
+                if let Some(i) = map {
+                    self.actuator.drives[i] = *sp;
+                }
+            }
+        }
+        if self.hal.write(&self.actuator, self.dt_s).is_err() {
+            self.hal_errors += 1;
+        }
+    }
+
+    /// Both halves of a cycle, for runs without publishing (tests, benchmarks, experiments).
+    pub fn step(&mut self, stamp_s: f64) {
+        self.observe(stamp_s);
+        self.control();
+    }
+
+    /// Holds every drive and tells every plugin the loop stopped.
+    pub fn shutdown(&mut self) {
+        for sp in &mut self.actuator.drives {
+            *sp = MotorSetpoint::HOLD;
+        }
+        let _ = self.hal.write(&self.actuator, self.dt_s);
+        for slot in &mut self.slots {
+            slot.joint.deactivate();
+        }
+    }
+
+    /// The set-points written in the last cycle, in device order.
+    pub fn last_setpoints(&self) -> &[MotorSetpoint] {
+        &self.actuator.drives
+    }
+}

@@ -1,0 +1,255 @@
+//! Finding, loading and checking plugin libraries.
+//!
+//! Libraries are never unloaded while the process runs (unloading code that may still be
+//! referenced is how other plugin hosts crashed): a loaded [`libloading::Library`] is leaked on
+//! purpose, once per file.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use jointctl_api::abi::{ABI_MAGIC, ABI_MAJOR, ABI_MINOR, LAYOUT_HASH, PluginDescriptor};
+
+/// Where a plugin's code comes from.
+#[derive(Clone, Copy, Debug)]
+pub struct PluginSource {
+    /// The descriptor (from a loaded library or linked statically).
+    pub descriptor: &'static PluginDescriptor,
+}
+
+/// Why a plugin could not be loaded.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LoadPluginError {
+    /// No library for the plugin name in the search path.
+    #[error("plugin `{name}` not found; looked for {candidates} in: {dirs}. Build it (cargo build -p jointctl-plugin-{name}) or give `plugin: {{name: {name}, path: ...}}`")]
+    NotFound {
+        /// Plugin name.
+        name: String,
+        /// File names tried.
+        candidates: String,
+        /// Folders searched.
+        dirs: String,
+    },
+    /// dlopen failed.
+    #[error("cannot load {file}: {reason}")]
+    Open {
+        /// Library file.
+        file: PathBuf,
+        /// What the dynamic loader said.
+        reason: String,
+    },
+    /// The library has no entry point for this plugin name.
+    #[error("{file} exports no jointctl plugin named `{name}` (symbol `{symbol}` missing): is it a jointctl plugin, built with export_joint_plugin!(name: {name}, ...)?")]
+    NoEntry {
+        /// Library file.
+        file: PathBuf,
+        /// Plugin name.
+        name: String,
+        /// Symbol looked up.
+        symbol: String,
+    },
+    /// The library is not a jointctl plugin (wrong magic).
+    #[error("{file} is not a jointctl plugin library (bad descriptor magic {magic:#018x})")]
+    BadMagic {
+        /// Library file.
+        file: PathBuf,
+        /// What was found.
+        magic: u64,
+    },
+    /// ABI versions differ.
+    #[error("{file} was built for jointctl plugin ABI {found_major}.{found_minor} (jointctl-api {api}), this host speaks ABI {host_major}.{host_minor}: rebuild the plugin against jointctl-api {host_major}.x (cargo build in the plugin's crate)")]
+    AbiVersion {
+        /// Library file.
+        file: PathBuf,
+        /// Library's ABI major.
+        found_major: u32,
+        /// Library's ABI minor.
+        found_minor: u32,
+        /// Host ABI major.
+        host_major: u32,
+        /// Host ABI minor.
+        host_minor: u32,
+        /// jointctl-api version of the library.
+        api: String,
+    },
+    /// ABI versions agree but the shared types differ.
+    #[error("{file} has ABI {major}.{minor} but a different layout of the shared types (layout hash {found:#018x}, host {host:#018x}): it was built against a modified jointctl-api; rebuild it against this host's jointctl-api")]
+    Layout {
+        /// Library file.
+        file: PathBuf,
+        /// ABI major.
+        major: u32,
+        /// ABI minor.
+        minor: u32,
+        /// Library's hash.
+        found: u64,
+        /// Host's hash.
+        host: u64,
+    },
+    /// The descriptor's name differs from the name asked for.
+    #[error("{file} exports plugin `{found}` under the entry for `{name}`")]
+    NameMismatch {
+        /// Library file.
+        file: PathBuf,
+        /// Name asked for.
+        name: String,
+        /// Name in the descriptor.
+        found: String,
+    },
+}
+
+/// Checks a descriptor against this host. Reads only the header until it is known good.
+///
+/// # Safety
+/// `descriptor` must point at a readable descriptor header.
+pub unsafe fn check_descriptor(
+    descriptor: *const PluginDescriptor,
+    file: &Path,
+    name: &str,
+) -> Result<&'static PluginDescriptor, LoadPluginError> {
+    // SAFETY: the caller guarantees the header is readable; nothing past it is read before the
+    // magic, version and layout hash are checked.
+    let header = unsafe { &(*descriptor).header };
+    if header.magic != ABI_MAGIC {
+        return Err(LoadPluginError::BadMagic { file: file.into(), magic: header.magic });
+    }
+    if header.abi_major != ABI_MAJOR || header.abi_minor > ABI_MINOR {
+        // SAFETY: the header layout is stable across ABI versions.
+        let api = unsafe { cstr_lossy(header.api_version) };
+        return Err(LoadPluginError::AbiVersion {
+            file: file.into(),
+            found_major: header.abi_major,
+            found_minor: header.abi_minor,
+            host_major: ABI_MAJOR,
+            host_minor: ABI_MINOR,
+            api,
+        });
+    }
+    if header.layout_hash != LAYOUT_HASH {
+        return Err(LoadPluginError::Layout {
+            file: file.into(),
+            major: header.abi_major,
+            minor: header.abi_minor,
+            found: header.layout_hash,
+            host: LAYOUT_HASH,
+        });
+    }
+    // SAFETY: the layout matches this host's, so the whole descriptor can be read.
+    let d: &'static PluginDescriptor = unsafe { &*descriptor };
+    // SAFETY: descriptor strings are 'static and NUL-terminated (export_joint_plugin!).
+    let found = unsafe { d.text(d.name) };
+    if found != name {
+        return Err(LoadPluginError::NameMismatch { file: file.into(), name: name.into(), found: found.into() });
+    }
+    Ok(d)
+}
+
+unsafe fn cstr_lossy(p: *const core::ffi::c_char) -> String {
+    if p.is_null() {
+        return "unknown".into();
+    }
+    // SAFETY: guaranteed by the caller.
+    unsafe { core::ffi::CStr::from_ptr(p) }.to_string_lossy().into_owned()
+}
+
+/// Finds and loads plugins; remembers statically linked ones.
+#[derive(Default)]
+pub struct PluginLoader {
+    search_dirs: Vec<PathBuf>,
+    statics: HashMap<String, &'static PluginDescriptor>,
+}
+
+static LOADED: Mutex<Vec<(PathBuf, &'static libloading::Library)>> = Mutex::new(Vec::new());
+
+impl PluginLoader {
+    /// A loader searching, in order: `extra_dirs`, `$JOINTCTL_PLUGIN_PATH` (colon-separated),
+    /// the executable's folder and its parent (so that `target/debug/deps/test` finds
+    /// `target/debug/*.so`).
+    pub fn new(extra_dirs: impl IntoIterator<Item = PathBuf>) -> Self {
+        let mut dirs: Vec<PathBuf> = extra_dirs.into_iter().collect();
+        if let Some(path) = std::env::var_os("JOINTCTL_PLUGIN_PATH") {
+            dirs.extend(std::env::split_paths(&path));
+        }
+        if let Ok(exe) = std::env::current_exe()
+            && let Some(dir) = exe.parent()
+        {
+            dirs.push(dir.to_path_buf());
+            if let Some(parent) = dir.parent() {
+                dirs.push(parent.to_path_buf());
+            }
+        }
+        PluginLoader { search_dirs: dirs, statics: HashMap::new() }
+    }
+
+    /// Registers a statically linked plugin; a YAML `plugin: NAME` without a path then uses it
+    /// instead of searching for a library.
+    pub fn register_static(&mut self, descriptor: &'static PluginDescriptor) -> Result<(), LoadPluginError> {
+        // SAFETY: a descriptor from `plugin_descriptor()` is 'static and NUL-terminated.
+        let name = unsafe { descriptor.text(descriptor.name) }.to_string();
+        // SAFETY: a reference is a readable pointer.
+        let d = unsafe { check_descriptor(descriptor, Path::new("<statically linked>"), &name)? };
+        self.statics.insert(name, d);
+        Ok(())
+    }
+
+    /// The folders searched for libraries.
+    pub fn search_dirs(&self) -> &[PathBuf] {
+        &self.search_dirs
+    }
+
+    /// The plugin `name`, from `path` when given, else a static registration, else the search path.
+    pub fn load(&self, name: &str, path: Option<&Path>) -> Result<PluginSource, LoadPluginError> {
+        if path.is_none()
+            && let Some(d) = self.statics.get(name)
+        {
+            return Ok(PluginSource { descriptor: d });
+        }
+        let file = match path {
+            Some(p) => p.to_path_buf(),
+            None => self.find(name)?,
+        };
+        let library = load_library(&file)?;
+        let symbol = format!("jointctl_plugin_{name}");
+        // SAFETY: the symbol, if present, is the entry generated by export_joint_plugin!, an
+        // `extern "C" fn() -> *const PluginDescriptor`.
+        let entry = unsafe { library.get::<unsafe extern "C" fn() -> *const PluginDescriptor>(symbol.as_bytes()) }
+            .map_err(|_| LoadPluginError::NoEntry { file: file.clone(), name: name.into(), symbol: symbol.clone() })?;
+        // SAFETY: calling the entry has no preconditions; it returns a 'static descriptor.
+        let descriptor = unsafe { entry() };
+        // SAFETY: the library stays loaded forever, so its descriptor is 'static.
+        let d = unsafe { check_descriptor(descriptor, &file, name)? };
+        Ok(PluginSource { descriptor: d })
+    }
+
+    fn find(&self, name: &str) -> Result<PathBuf, LoadPluginError> {
+        let candidates = [format!("libjointctl_plugin_{name}.so"), format!("lib{name}.so")];
+        for dir in &self.search_dirs {
+            for c in &candidates {
+                let p = dir.join(c);
+                if p.is_file() {
+                    return Ok(p);
+                }
+            }
+        }
+        Err(LoadPluginError::NotFound {
+            name: name.into(),
+            candidates: candidates.join(" or "),
+            dirs: self.search_dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", "),
+        })
+    }
+}
+
+fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginError> {
+    let canonical = file.canonicalize().map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    let mut loaded = LOADED.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some((_, lib)) = loaded.iter().find(|(p, _)| *p == canonical) {
+        return Ok(lib);
+    }
+    // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's.
+    let lib = unsafe { libloading::Library::new(&canonical) }
+        .map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    // Never unloaded: see the module docs.
+    let lib: &'static libloading::Library = Box::leak(Box::new(lib));
+    loaded.push((canonical, lib));
+    Ok(lib)
+}

@@ -1,0 +1,243 @@
+//! `jointctl run`: the fixed-rate loop around an [`Arm`], with signals, deadlines and shared
+//! memory.
+//!
+//! Per cycle: wait for the deadline → read HAL and observe → publish state → (commands) →
+//! control and write → publish diagnostics. Nothing here allocates, locks or logs inside a
+//! cycle; a fault raised in a cycle is logged once, after that cycle's set-points are written.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::prelude::*;
+use jointctl_config::TimingConfig;
+use jointctl_ipc::{ArmState, Diagnostics, JointDiagnostics, JointSample, ServiceNames, encode_name};
+
+use crate::arm::Arm;
+use crate::timing::{LoopStats, Pacer, monotonic_ns};
+
+/// How long to run.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Stop after this many cycles.
+    pub cycles: Option<u64>,
+    /// Stop after this many seconds.
+    pub duration_s: Option<f64>,
+    /// Keep this many per-cycle timings for percentiles (benchmarks).
+    pub timing_samples: usize,
+}
+
+/// Why the loop could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Shared memory could not be set up.
+    #[error(transparent)]
+    Ipc(#[from] jointctl_ipc::IpcSetupError),
+    /// Another runtime publishes this arm already.
+    #[error("arm `{arm}` is already running (its service `{service}` has a publisher): stop it first ({reason})")]
+    AlreadyRunning {
+        /// Arm name.
+        arm: String,
+        /// Service.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+    /// Signal handlers could not be installed.
+    #[error("cannot install the SIGINT/SIGTERM handlers: {0}")]
+    Signals(std::io::Error),
+}
+
+/// What a run did.
+#[derive(Debug)]
+pub struct RunReport {
+    /// Timing statistics.
+    pub stats: LoopStats,
+    /// Samples that could not be published (loan or send failed).
+    pub publish_failures: u64,
+    /// Stopped by SIGINT/SIGTERM.
+    pub interrupted: bool,
+}
+
+/// The loop's shared-memory side.
+pub struct ArmPublisher {
+    // Field order matters: ports before the node that owns them.
+    state: Publisher<ipc::Service, ArmState, ()>,
+    diagnostics: Publisher<ipc::Service, Diagnostics, ()>,
+    _node: Node<ipc::Service>,
+    template: ArmState,
+    diag: Diagnostics,
+    failures: u64,
+}
+
+impl ArmPublisher {
+    /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs).
+    pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
+        let node = jointctl_ipc::create_node(domain, &format!("jointctl-run-{}", arm.name))?;
+        let names = ServiceNames::for_arm(&arm.name);
+        let busy = |service: &str, e: String| RunError::AlreadyRunning { arm: arm.name.clone(), service: service.into(), reason: e };
+        let state = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| busy(&names.joint_state, format!("{e:?}")))?;
+        let diagnostics = jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| busy(&names.diagnostics, format!("{e:?}")))?;
+        let mut template = ArmState::EMPTY;
+        let mut diag = Diagnostics::EMPTY;
+        template.joint_count = arm.dof_names.len() as u32;
+        diag.joint_count = template.joint_count;
+        diag.period_ns = (1e9 / arm.rate_hz) as u64;
+        for (i, name) in arm.dof_names.iter().enumerate() {
+            template.joints[i].name = encode_name(name);
+            diag.joints[i].name = encode_name(name);
+        }
+        Ok(ArmPublisher { state, diagnostics, _node: node, template, diag, failures: 0 })
+    }
+
+    /// Publishes the arm's current state.
+    pub fn publish_state(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64, final_sample: bool) {
+        let s = &mut self.template;
+        s.cycle = cycle;
+        s.stamp_ns = stamp_ns;
+        s.final_sample = final_sample as u32;
+        for slot in &arm.slots {
+            for i in slot.dofs() {
+                let st = &arm.states[i];
+                s.joints[i] = JointSample {
+                    name: s.joints[i].name,
+                    position_rad: st.position_rad,
+                    velocity_rad_s: st.velocity_rad_s,
+                    deflection_rad: st.deflection_rad,
+                    torque_nm: st.torque_nm,
+                    stiffness_nm_per_rad: st.stiffness_nm_per_rad,
+                    pivot_mm: st.pivot_mm,
+                    valid_mask: st.valid.0,
+                    fault_code: slot.fault,
+                };
+            }
+        }
+        let sent = self.state.loan_uninit().map(|sample| sample.write_payload(*s)).ok().map(|sample| sample.send().is_ok());
+        if sent != Some(true) {
+            self.failures += 1;
+        }
+    }
+
+    /// Publishes the loop's health.
+    pub fn publish_diagnostics(&mut self, arm: &Arm, stats: &LoopStats, cycle: u64, stamp_ns: u64) {
+        let d = &mut self.diag;
+        d.cycle = cycle;
+        d.stamp_ns = stamp_ns;
+        d.overruns = stats.overruns;
+        d.missed_deadlines = stats.missed_deadlines;
+        d.hal_errors = arm.hal_errors;
+        d.last_compute_ns = stats.last_compute_ns;
+        d.max_compute_ns = stats.max_compute_ns;
+        d.max_jitter_ns = stats.max_jitter_ns;
+        d.jitter_histogram = stats.jitter_histogram;
+        for slot in &arm.slots {
+            for i in slot.dofs() {
+                let j: &mut JointDiagnostics = &mut d.joints[i];
+                j.valid_mask = arm.states[i].valid.0;
+                j.fault_code = slot.fault;
+                j.held = slot.held as u32;
+                j.invalid_cycles = slot.invalid_cycles;
+                j.fault_count = slot.fault_count;
+            }
+        }
+        let sent = self.diagnostics.loan_uninit().map(|sample| sample.write_payload(*d)).ok().map(|sample| sample.send().is_ok());
+        if sent != Some(true) {
+            self.failures += 1;
+        }
+    }
+}
+
+/// Applies the timing settings that need privileges; says what it could not do.
+fn apply_thread_settings(timing: &TimingConfig) {
+    if let Some(cpu) = timing.cpu {
+        // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < 1024.
+        let ok = unsafe {
+            let mut set: libc::cpu_set_t = core::mem::zeroed();
+            libc::CPU_SET(cpu, &mut set);
+            libc::sched_setaffinity(0, core::mem::size_of::<libc::cpu_set_t>(), &set) == 0
+        };
+        if !ok {
+            tracing::warn!(cpu, "could not pin the loop thread: {}", std::io::Error::last_os_error());
+        }
+    }
+    if let Some(priority) = timing.realtime_priority {
+        let param = libc::sched_param { sched_priority: priority as i32 };
+        // SAFETY: valid sched_param for the calling thread.
+        if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
+            tracing::warn!(priority, "could not switch the loop to SCHED_FIFO: {}", std::io::Error::last_os_error());
+        }
+    }
+}
+
+/// Runs the loop until `opts` says stop or SIGINT/SIGTERM arrives; then holds every joint,
+/// publishes a final state and releases shared memory.
+pub fn run(
+    arm: &mut Arm,
+    timing: &TimingConfig,
+    mut publisher: Option<&mut ArmPublisher>,
+    opts: &RunOptions,
+) -> Result<RunReport, RunError> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, Arc::clone(&stop)).map_err(RunError::Signals)?;
+    }
+    apply_thread_settings(timing);
+    let period_ns = (1e9 / arm.rate_hz).round() as u64;
+    let max_cycles = opts.cycles.unwrap_or(u64::MAX);
+    let end_ns = opts.duration_s.map(|d| monotonic_ns() + (d * 1e9) as u64);
+    let mut stats = LoopStats::with_samples(opts.timing_samples);
+    let start_ns = monotonic_ns();
+    let mut pacer = Pacer::new(period_ns, timing.spin_us as u64 * 1000);
+    let mut cycle = 0u64;
+    tracing::info!(arm = %arm.name, rate_hz = arm.rate_hz, joints = arm.dof_names.len(), "loop started");
+    while cycle < max_cycles && !stop.load(Ordering::Relaxed) {
+        let deadline = pacer.deadline_ns();
+        let woke = pacer.wait(&stop);
+        if stop.load(Ordering::Relaxed) || end_ns.is_some_and(|e| woke >= e) {
+            break;
+        }
+        let stamp_s = (woke - start_ns) as f64 * 1e-9;
+        arm.observe(stamp_s);
+        if let Some(p) = publisher.as_deref_mut() {
+            p.publish_state(arm, cycle, woke, false);
+        }
+        arm.control();
+        let done = monotonic_ns();
+        let missed = pacer.advance(done);
+        stats.record(woke.saturating_sub(deadline), done - woke, missed);
+        if let Some(p) = publisher.as_deref_mut() {
+            p.publish_diagnostics(arm, &stats, cycle, woke);
+        }
+        for slot in arm.slots.iter_mut().filter(|s| s.fault_unreported) {
+            slot.fault_unreported = false;
+            tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.last_message());
+        }
+        cycle += 1;
+    }
+    let interrupted = stop.load(Ordering::Relaxed);
+    arm.shutdown();
+    let publish_failures = match publisher {
+        Some(p) => {
+            p.publish_state(arm, cycle, monotonic_ns(), true);
+            p.publish_diagnostics(arm, &stats, cycle, monotonic_ns());
+            p.failures
+        }
+        None => 0,
+    };
+    tracing::info!(
+        cycles = stats.cycles,
+        overruns = stats.overruns,
+        missed = stats.missed_deadlines,
+        max_compute_us = stats.max_compute_ns / 1000,
+        max_jitter_us = stats.max_jitter_ns / 1000,
+        interrupted,
+        "loop stopped, joints held"
+    );
+    Ok(RunReport { stats, publish_failures, interrupted })
+}

@@ -1,0 +1,173 @@
+//! Absolute-deadline pacing on CLOCK_MONOTONIC and the loop's timing statistics.
+
+use jointctl_ipc::JITTER_BUCKET_UPPER_US;
+
+/// CLOCK_MONOTONIC [ns].
+pub fn monotonic_ns() -> u64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes into a valid timespec.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+fn sleep_until_ns(deadline_ns: u64) {
+    let ts = libc::timespec {
+        tv_sec: (deadline_ns / 1_000_000_000) as libc::time_t,
+        tv_nsec: (deadline_ns % 1_000_000_000) as libc::c_long,
+    };
+    // Absolute sleep: a wake-up that comes late does not shift the following deadlines. A signal
+    // interrupts it (EINTR); the caller then re-checks its stop flag and the time.
+    // SAFETY: valid timespec; the remainder pointer may be null for TIMER_ABSTIME.
+    unsafe { libc::clock_nanosleep(libc::CLOCK_MONOTONIC, libc::TIMER_ABSTIME, &ts, core::ptr::null_mut()) };
+}
+
+/// Wakes the loop at `start + k * period`: sleeps until `spin` before the deadline, then spins.
+#[derive(Clone, Debug)]
+pub struct Pacer {
+    period_ns: u64,
+    spin_ns: u64,
+    next_ns: u64,
+}
+
+impl Pacer {
+    /// A pacer whose first deadline is one period from now.
+    pub fn new(period_ns: u64, spin_ns: u64) -> Self {
+        Pacer { period_ns, spin_ns: spin_ns.min(period_ns / 2), next_ns: monotonic_ns() + period_ns }
+    }
+
+    /// The deadline the loop is waiting for [ns].
+    pub fn deadline_ns(&self) -> u64 {
+        self.next_ns
+    }
+
+    /// Waits for the deadline; returns the wake-up time [ns]. Returns early if `stop` is set.
+    pub fn wait(&self, stop: &std::sync::atomic::AtomicBool) -> u64 {
+        use std::sync::atomic::Ordering::Relaxed;
+        let coarse = self.next_ns.saturating_sub(self.spin_ns);
+        loop {
+            let now = monotonic_ns();
+            if now >= coarse || stop.load(Relaxed) {
+                break;
+            }
+            sleep_until_ns(coarse);
+        }
+        loop {
+            let now = monotonic_ns();
+            if now >= self.next_ns || stop.load(Relaxed) {
+                return now;
+            }
+            core::hint::spin_loop();
+        }
+    }
+
+    /// Moves to the next deadline after a cycle that ended at `end_ns`. Returns how many
+    /// deadlines were missed (0 when the cycle ended in time).
+    pub fn advance(&mut self, end_ns: u64) -> u64 {
+        self.next_ns += self.period_ns;
+        if end_ns <= self.next_ns {
+            return 0;
+        }
+        // Overran: skip the deadlines already past instead of running a burst of late cycles.
+        let missed = (end_ns - self.next_ns) / self.period_ns + 1;
+        self.next_ns += missed * self.period_ns;
+        missed
+    }
+}
+
+/// Timing statistics of a run. Recording is allocation-free: the sample buffer is reserved up
+/// front and stops recording when full.
+#[derive(Clone, Debug, Default)]
+pub struct LoopStats {
+    /// Cycles run.
+    pub cycles: u64,
+    /// Cycles whose work ended after the next deadline.
+    pub overruns: u64,
+    /// Deadlines skipped.
+    pub missed_deadlines: u64,
+    /// Compute time of the last cycle [ns].
+    pub last_compute_ns: u64,
+    /// Longest compute time [ns].
+    pub max_compute_ns: u64,
+    /// Largest wake-up lateness [ns].
+    pub max_jitter_ns: u64,
+    /// Lateness histogram (buckets: [`JITTER_BUCKET_UPPER_US`]).
+    pub jitter_histogram: [u64; 16],
+    jitter_samples_ns: Vec<u32>,
+    compute_samples_ns: Vec<u32>,
+}
+
+impl LoopStats {
+    /// Statistics that keep up to `samples` individual cycle timings for percentiles.
+    pub fn with_samples(samples: usize) -> Self {
+        LoopStats {
+            jitter_samples_ns: Vec::with_capacity(samples),
+            compute_samples_ns: Vec::with_capacity(samples),
+            ..Default::default()
+        }
+    }
+
+    /// Records one cycle.
+    pub fn record(&mut self, jitter_ns: u64, compute_ns: u64, missed: u64) {
+        self.cycles += 1;
+        if missed > 0 {
+            self.overruns += 1;
+            self.missed_deadlines += missed;
+        }
+        self.last_compute_ns = compute_ns;
+        self.max_compute_ns = self.max_compute_ns.max(compute_ns);
+        self.max_jitter_ns = self.max_jitter_ns.max(jitter_ns);
+        let us = jitter_ns / 1000;
+        let bucket = JITTER_BUCKET_UPPER_US.iter().position(|b| us < *b).unwrap_or(15);
+        self.jitter_histogram[bucket] += 1;
+        if self.jitter_samples_ns.len() < self.jitter_samples_ns.capacity() {
+            self.jitter_samples_ns.push(jitter_ns.min(u32::MAX as u64) as u32);
+            self.compute_samples_ns.push(compute_ns.min(u32::MAX as u64) as u32);
+        }
+    }
+
+    /// Percentiles (0-100) of the recorded wake-up lateness [ns].
+    pub fn jitter_percentile_ns(&self, p: f64) -> Option<u64> {
+        percentile(&self.jitter_samples_ns, p)
+    }
+
+    /// Percentiles (0-100) of the recorded compute time [ns].
+    pub fn compute_percentile_ns(&self, p: f64) -> Option<u64> {
+        percentile(&self.compute_samples_ns, p)
+    }
+}
+
+fn percentile(samples: &[u32], p: f64) -> Option<u64> {
+    if samples.is_empty() {
+        return None;
+    }
+    let mut v = samples.to_vec();
+    v.sort_unstable();
+    let i = ((p / 100.0) * (v.len() - 1) as f64).round() as usize;
+    Some(v[i.min(v.len() - 1)] as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_overrun_skips_the_deadlines_already_past() {
+        let mut p = Pacer { period_ns: 1000, spin_ns: 0, next_ns: 10_000 };
+        assert_eq!(p.advance(10_500), 0);
+        assert_eq!(p.deadline_ns(), 11_000);
+        // The cycle that should have ended before 12_000 ended at 13_500: 12_000 and 13_000 missed.
+        assert_eq!(p.advance(13_500), 2);
+        assert_eq!(p.deadline_ns(), 14_000);
+    }
+
+    #[test]
+    fn stats_count_overruns_and_bucket_jitter() {
+        let mut s = LoopStats::with_samples(4);
+        s.record(3_000, 10, 0);
+        s.record(70_000, 10, 2);
+        assert_eq!((s.cycles, s.overruns, s.missed_deadlines), (2, 1, 2));
+        assert_eq!(s.jitter_histogram[2], 1); // 3 us: bucket [2, 5)
+        assert_eq!(s.jitter_histogram[6], 1); // 70 us: bucket [50, 100)
+        assert_eq!(s.jitter_percentile_ns(100.0), Some(70_000));
+    }
+}

@@ -1,0 +1,136 @@
+//! `jointctl`: run, check and inspect compliant robot arms.
+
+mod inspect;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use jointctl_runtime::{ArmPublisher, PluginLoader, RunOptions};
+
+#[derive(Parser)]
+#[command(name = "jointctl", version, about = "Run, simulate and inspect compliant robot joints")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the observe → control → actuate loop of an arm described in YAML.
+    Run {
+        /// The arm description (e.g. configs/sherpa_arm.yaml).
+        config: PathBuf,
+        /// Stop after N cycles.
+        #[arg(long)]
+        cycles: Option<u64>,
+        /// Stop after S seconds.
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Use the plugins linked into this binary instead of loading shared libraries.
+        #[arg(long)]
+        static_plugins: bool,
+        /// Do not publish to shared memory.
+        #[arg(long)]
+        no_ipc: bool,
+    },
+    /// Validate an arm description and its plugins without running.
+    Check {
+        /// The arm description.
+        config: PathBuf,
+    },
+    /// Print the JSON Schema of arm descriptions (for editors).
+    Schema,
+    /// Read a running arm's shared memory from this separate process.
+    Inspect {
+        #[command(subcommand)]
+        command: inspect::InspectCommand,
+    },
+}
+
+/// Plugins linked into this binary, for `--static-plugins` (single-binary deployment).
+fn static_loader(loader: &mut PluginLoader) -> Result<(), jointctl_runtime::LoadPluginError> {
+    loader.register_static(jointctl_plugin_rigid::plugin_descriptor())?;
+    loader.register_static(jointctl_plugin_elastic::plugin_descriptor())?;
+    Ok(())
+}
+
+fn fail(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(1)
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run { config, cycles, duration, static_plugins, no_ipc } => {
+            let loaded = match jointctl_config::load(&config) {
+                Ok(l) => l,
+                Err(e) => return fail(e),
+            };
+            let mut loader = jointctl_runtime::loader_for(&loaded);
+            if static_plugins && let Err(e) = static_loader(&mut loader) {
+                return fail(e);
+            }
+            let mut arm = match jointctl_runtime::build_arm(&loaded, &loader) {
+                Ok(a) => a,
+                Err(e) => return fail(e),
+            };
+            if let Err(e) = arm.activate() {
+                return fail(e);
+            }
+            let mut publisher = if no_ipc {
+                None
+            } else {
+                match ArmPublisher::new(&arm, loaded.config.ipc.domain.as_deref()) {
+                    Ok(p) => Some(p),
+                    Err(e) => return fail(e),
+                }
+            };
+            let opts = RunOptions { cycles, duration_s: duration, timing_samples: 0 };
+            match jointctl_runtime::run(&mut arm, &loaded.config.timing, publisher.as_mut(), &opts) {
+                Ok(report) => {
+                    eprintln!(
+                        "{} cycles, {} overruns, {} missed deadlines, max compute {:.1} us, max wake-up lateness {:.1} us",
+                        report.stats.cycles,
+                        report.stats.overruns,
+                        report.stats.missed_deadlines,
+                        report.stats.max_compute_ns as f64 / 1e3,
+                        report.stats.max_jitter_ns as f64 / 1e3
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Command::Check { config } => {
+            let loaded = match jointctl_config::load(&config) {
+                Ok(l) => l,
+                Err(e) => return fail(e),
+            };
+            let loader = jointctl_runtime::loader_for(&loaded);
+            match jointctl_runtime::build_arm(&loaded, &loader) {
+                Ok(arm) => {
+                    println!("{}: arm `{}` OK, {} Hz, {} joint(s):", config.display(), arm.name, arm.rate_hz, arm.dof_names.len());
+                    for slot in &arm.slots {
+                        let dofs: Vec<_> = slot.dofs().map(|i| arm.dof_names[i].as_str()).collect();
+                        println!("  {:<10} plugin {:<14} DOF {}", slot.name, slot.plugin, dofs.join(", "));
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Command::Schema => {
+            println!("{}", serde_json::to_string_pretty(&jointctl_config::json_schema()).unwrap_or_default());
+            ExitCode::SUCCESS
+        }
+        Command::Inspect { command } => inspect::run(command),
+    }
+}
