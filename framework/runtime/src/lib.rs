@@ -12,7 +12,7 @@ pub mod timing;
 
 pub use arm::{ActivateError, Arm, JointSlot};
 pub use loader::{LoadPluginError, PluginLoader, PluginSource};
-pub use runner::{ArmPublisher, RunError, RunOptions, RunReport, run};
+pub use runner::{ArmPublisher, ControlLoop, RunError, RunOptions, RunReport, run};
 
 use jointctl_config::{ConfigErrors, HalBackend, LoadedConfig};
 use jointctl_hal::Hal;

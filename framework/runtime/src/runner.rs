@@ -175,12 +175,74 @@ fn apply_thread_settings(timing: &TimingConfig) {
     }
 }
 
+/// One arm's loop state between cycles: what [`ControlLoop::step`] needs so that a cycle
+/// allocates nothing.
+pub struct ControlLoop<'a> {
+    /// The arm.
+    pub arm: &'a mut Arm,
+    publisher: Option<&'a mut ArmPublisher>,
+    /// Timing statistics so far.
+    pub stats: LoopStats,
+    /// Cycles run.
+    pub cycle: u64,
+    start_ns: u64,
+}
+
+impl<'a> ControlLoop<'a> {
+    /// Prepares a loop; `timing_samples` cycle timings are kept for percentiles.
+    pub fn new(arm: &'a mut Arm, publisher: Option<&'a mut ArmPublisher>, timing_samples: usize) -> Self {
+        ControlLoop { arm, publisher, stats: LoopStats::with_samples(timing_samples), cycle: 0, start_ns: monotonic_ns() }
+    }
+
+    /// One cycle, woken at `woke_ns` for the deadline `deadline_ns`: observe, publish state,
+    /// control, write, publish diagnostics. Returns the time the work ended [ns]. Allocation-free.
+    pub fn step(&mut self, deadline_ns: u64, woke_ns: u64, pacer: Option<&mut Pacer>) -> u64 {
+        let stamp_s = woke_ns.saturating_sub(self.start_ns) as f64 * 1e-9;
+        self.arm.observe(stamp_s);
+        if let Some(p) = self.publisher.as_deref_mut() {
+            p.publish_state(self.arm, self.cycle, woke_ns, false);
+        }
+        self.arm.control();
+        let done = monotonic_ns();
+        let missed = pacer.map_or(0, |p| p.advance(done));
+        self.stats.record(woke_ns.saturating_sub(deadline_ns), done - woke_ns, missed);
+        if let Some(p) = self.publisher.as_deref_mut() {
+            p.publish_diagnostics(self.arm, &self.stats, self.cycle, woke_ns);
+        }
+        self.cycle += 1;
+        done
+    }
+
+    /// Logs faults raised since the last call (outside the timed part of a cycle; rare).
+    pub fn report_faults(&mut self) {
+        for slot in self.arm.slots.iter_mut().filter(|s| s.fault_unreported) {
+            slot.fault_unreported = false;
+            tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.last_message());
+        }
+    }
+
+    /// Holds every joint, publishes a final state and diagnostics.
+    pub fn finish(self) -> (LoopStats, u64) {
+        self.arm.shutdown();
+        let failures = match self.publisher {
+            Some(p) => {
+                let now = monotonic_ns();
+                p.publish_state(self.arm, self.cycle, now, true);
+                p.publish_diagnostics(self.arm, &self.stats, self.cycle, now);
+                p.failures
+            }
+            None => 0,
+        };
+        (self.stats, failures)
+    }
+}
+
 /// Runs the loop until `opts` says stop or SIGINT/SIGTERM arrives; then holds every joint,
 /// publishes a final state and releases shared memory.
 pub fn run(
     arm: &mut Arm,
     timing: &TimingConfig,
-    mut publisher: Option<&mut ArmPublisher>,
+    publisher: Option<&mut ArmPublisher>,
     opts: &RunOptions,
 ) -> Result<RunReport, RunError> {
     let stop = Arc::new(AtomicBool::new(false));
@@ -191,45 +253,20 @@ pub fn run(
     let period_ns = (1e9 / arm.rate_hz).round() as u64;
     let max_cycles = opts.cycles.unwrap_or(u64::MAX);
     let end_ns = opts.duration_s.map(|d| monotonic_ns() + (d * 1e9) as u64);
-    let mut stats = LoopStats::with_samples(opts.timing_samples);
-    let start_ns = monotonic_ns();
-    let mut pacer = Pacer::new(period_ns, timing.spin_us as u64 * 1000);
-    let mut cycle = 0u64;
     tracing::info!(arm = %arm.name, rate_hz = arm.rate_hz, joints = arm.dof_names.len(), "loop started");
-    while cycle < max_cycles && !stop.load(Ordering::Relaxed) {
+    let mut lp = ControlLoop::new(arm, publisher, opts.timing_samples);
+    let mut pacer = Pacer::new(period_ns, timing.spin_us as u64 * 1000);
+    while lp.cycle < max_cycles && !stop.load(Ordering::Relaxed) {
         let deadline = pacer.deadline_ns();
         let woke = pacer.wait(&stop);
         if stop.load(Ordering::Relaxed) || end_ns.is_some_and(|e| woke >= e) {
             break;
         }
-        let stamp_s = (woke - start_ns) as f64 * 1e-9;
-        arm.observe(stamp_s);
-        if let Some(p) = publisher.as_deref_mut() {
-            p.publish_state(arm, cycle, woke, false);
-        }
-        arm.control();
-        let done = monotonic_ns();
-        let missed = pacer.advance(done);
-        stats.record(woke.saturating_sub(deadline), done - woke, missed);
-        if let Some(p) = publisher.as_deref_mut() {
-            p.publish_diagnostics(arm, &stats, cycle, woke);
-        }
-        for slot in arm.slots.iter_mut().filter(|s| s.fault_unreported) {
-            slot.fault_unreported = false;
-            tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.last_message());
-        }
-        cycle += 1;
+        lp.step(deadline, woke, Some(&mut pacer));
+        lp.report_faults();
     }
     let interrupted = stop.load(Ordering::Relaxed);
-    arm.shutdown();
-    let publish_failures = match publisher {
-        Some(p) => {
-            p.publish_state(arm, cycle, monotonic_ns(), true);
-            p.publish_diagnostics(arm, &stats, cycle, monotonic_ns());
-            p.failures
-        }
-        None => 0,
-    };
+    let (stats, publish_failures) = lp.finish();
     tracing::info!(
         cycles = stats.cycles,
         overruns = stats.overruns,

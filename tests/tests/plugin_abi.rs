@@ -1,0 +1,156 @@
+//! The plugin boundary: refused libraries, contained panics, plugins found from YAML alone.
+
+use jointctl_api::{JointCommand, MotorSetpoint};
+use jointctl_runtime::{LoadPluginError, PluginLoader};
+use jointctl_tests::{arm_name, artifact, rig_yaml, scratch};
+
+fn loader() -> PluginLoader {
+    PluginLoader::new([])
+}
+
+#[test]
+fn a_library_with_another_abi_version_is_refused_with_the_fix() {
+    let so = artifact("libjointctl_fixture_wrong_abi.so");
+    let err = loader().load("wrong_abi", Some(&so)).map(|_| ()).unwrap_err();
+    assert!(matches!(err, LoadPluginError::AbiVersion { found_major: 2, host_major: 1, .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(msg.contains("libjointctl_fixture_wrong_abi.so"), "names the file: {msg}");
+    assert!(msg.contains("ABI 2.0") && msg.contains("ABI 1.0"), "names both versions: {msg}");
+    assert!(msg.contains("rebuild the plugin"), "says the fix: {msg}");
+}
+
+#[test]
+fn a_library_with_another_layout_is_refused() {
+    let so = artifact("libjointctl_fixture_wrong_layout.so");
+    let err = loader().load("wrong_layout", Some(&so)).map(|_| ()).unwrap_err();
+    assert!(matches!(err, LoadPluginError::Layout { .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(msg.contains("different layout") && msg.contains("rebuild"), "{msg}");
+}
+
+#[test]
+fn a_library_without_the_named_entry_is_refused() {
+    let so = artifact("libjointctl_plugin_rigid.so");
+    let err = loader().load("elastic", Some(&so)).map(|_| ()).unwrap_err();
+    assert!(matches!(err, LoadPluginError::NoEntry { .. }), "{err:?}");
+    assert!(err.to_string().contains("jointctl_plugin_elastic"));
+}
+
+#[test]
+fn a_plugin_is_loaded_from_a_path_given_only_in_yaml() {
+    // Copy the library under a name and folder no search rule knows.
+    let dir = scratch("by-path");
+    let hidden = dir.join("somewhere").join("my_joint_type.so");
+    std::fs::create_dir_all(hidden.parent().unwrap()).unwrap();
+    std::fs::copy(artifact("libjointctl_plugin_faulty.so"), &hidden).unwrap();
+    let extra = "  - name: b\n    plugin: {name: faulty, path: somewhere/my_joint_type.so}\n    encoders: {output: e1}\n    drives: {motor: m1}\n";
+    let yaml = dir.join("arm.yaml");
+    std::fs::write(&yaml, rig_yaml(&arm_name("bypath"), 100.0, extra)).unwrap();
+    let loaded = jointctl_config::load(&yaml).unwrap();
+    let mut arm = jointctl_runtime::build_arm(&loaded, &jointctl_runtime::loader_for(&loaded)).expect("loads from the YAML path");
+    assert_eq!(arm.slots[1].plugin, "faulty");
+    arm.activate().unwrap();
+    arm.step(0.0);
+    assert!(arm.states[1].position().is_some());
+}
+
+#[test]
+fn a_missing_plugin_is_reported_at_its_yaml_line() {
+    let extra = "  - name: b\n    plugin: no_such_joint\n";
+    let loaded = jointctl_config::parse_str(&rig_yaml("x", 40.0, extra), "rig.yaml").unwrap();
+    let errs = jointctl_runtime::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
+    let e = &errs.0[0];
+    assert_eq!(e.field, "joints[1].plugin");
+    assert_eq!(e.line, 28);
+    assert!(e.message.contains("plugin `no_such_joint` not found"), "{}", e.message);
+}
+
+#[test]
+fn plugin_parameter_and_wiring_errors_point_into_the_yaml() {
+    let extra = "  - name: b\n    plugin: elastic\n    encoders: {outptu: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: -3, output_per_motor: 1, position_pi: {kp: 0, ki: 0}}\n  - name: c\n    plugin: elastic\n    encoders: {output: e2}\n    drives: {motor: m2}\n    params: {stiffness_nm_per_rad: -3, output_per_motor: 1, position_pi: {kp: 0, ki: 0}}\n";
+    let loaded = jointctl_config::parse_str(&rig_yaml("x", 40.0, extra), "rig.yaml").unwrap();
+    let errs = jointctl_runtime::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
+    let shown: Vec<String> = errs.0.iter().map(|e| e.to_string()).collect();
+    assert_eq!(errs.0.len(), 3, "{shown:#?}");
+    assert_eq!(errs.0[0].field, "joints[1].encoders.outptu");
+    assert!(errs.0[0].message.contains("no encoder role `outptu`; its roles are: output"));
+    assert_eq!(errs.0[1].field, "joints[1].encoders");
+    assert_eq!(errs.0[2].field, "joints[2].params.stiffness_nm_per_rad");
+    assert_eq!(errs.0[2].line, 36);
+    assert!(errs.0[2].message.contains("must be a finite number > 0, got -3"), "{}", shown[2]);
+}
+
+fn arm_with_faulty(params: &str) -> jointctl_runtime::Arm {
+    let extra = format!("  - name: b\n    plugin: faulty\n    encoders: {{output: e1}}\n    drives: {{motor: m1}}\n    params: {params}\n");
+    let loaded = jointctl_config::parse_str(&rig_yaml("x", 100.0, &extra), "rig.yaml").unwrap();
+    let mut arm = jointctl_runtime::build_arm(&loaded, &loader()).unwrap();
+    arm.activate().unwrap();
+    arm
+}
+
+#[test]
+fn a_panic_in_observe_faults_only_its_joint() {
+    let mut arm = arm_with_faulty("{panic_in_observe_at: 5}");
+    arm.set_command(0, JointCommand::position(0.3));
+    arm.set_command(1, JointCommand::position(0.3));
+    for i in 0..200 {
+        arm.step(i as f64 * 0.01);
+    }
+    let (a, b) = (&arm.slots[0], &arm.slots[1]);
+    assert_eq!(b.fault, jointctl_api::JointFault::PANICKED.code());
+    assert_eq!(b.fault_count, 1, "faulted once, then never called again");
+    assert!(b.last_message().contains("deliberate panic in observe at cycle 5"), "{}", b.last_message());
+    assert!(b.held && arm.states[1].position().is_none(), "the faulted joint is held and unknown");
+    assert_eq!(arm.last_setpoints()[1], MotorSetpoint::HOLD);
+    // The other joint went on and reached its set-point.
+    assert_eq!(a.fault, 0);
+    assert!(!a.held);
+    assert!((arm.states[0].position().unwrap() - 0.3).abs() < 1e-3, "{:?}", arm.states[0]);
+}
+
+#[test]
+fn a_panic_in_control_and_a_fault_code_are_contained_too() {
+    let mut arm = arm_with_faulty("{panic_in_control_at: 3}");
+    for i in 0..10 {
+        arm.step(i as f64 * 0.01);
+    }
+    assert_eq!(arm.slots[1].fault, 1);
+    assert!(arm.slots[1].last_message().contains("deliberate panic in control"));
+    assert_eq!(arm.slots[0].fault, 0);
+
+    let mut arm = arm_with_faulty("{fault_at: 2}");
+    for i in 0..10 {
+        arm.step(i as f64 * 0.01);
+    }
+    assert_eq!(arm.slots[1].fault, 42);
+    assert_eq!(arm.slots[0].fault, 0);
+}
+
+#[test]
+fn a_panic_in_create_is_a_located_config_error() {
+    let extra = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {panic_in_create: true}\n";
+    let loaded = jointctl_config::parse_str(&rig_yaml("x", 100.0, extra), "rig.yaml").unwrap();
+    let errs = jointctl_runtime::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
+    assert_eq!(errs.0[0].field, "joints[1].params");
+    assert!(errs.0[0].message.contains("deliberate panic in create"), "{}", errs.0[0]);
+}
+
+#[test]
+fn static_and_loaded_plugins_behave_the_same() {
+    let yaml = rig_yaml("x", 100.0, "");
+    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    let mut statics = PluginLoader::new([]);
+    statics.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
+    let mut runs = Vec::new();
+    for l in [loader(), statics] {
+        let mut arm = jointctl_runtime::build_arm(&loaded, &l).unwrap();
+        arm.activate().unwrap();
+        arm.set_command(0, JointCommand::position(0.5));
+        for i in 0..50 {
+            arm.step(i as f64 * 0.01);
+        }
+        // Debug text compares NaN fields (unknown torque) as equal, unlike f64 ==.
+        runs.push(format!("{:?}", arm.states[0]));
+    }
+    assert_eq!(runs[0], runs[1]);
+}
