@@ -178,6 +178,8 @@ pub struct Diagnostics {
     pub missed_deadlines: u64,
     /// HAL read/write failures.
     pub hal_errors: u64,
+    /// Cycle records the publisher thread could not keep up with (dropped, never blocking the loop).
+    pub publish_drops: u64,
     /// Compute time (read to write) of the last cycle [ns].
     pub last_compute_ns: u64,
     /// Longest compute time so far [ns].
@@ -202,6 +204,7 @@ impl Diagnostics {
         overruns: 0,
         missed_deadlines: 0,
         hal_errors: 0,
+        publish_drops: 0,
         last_compute_ns: 0,
         max_compute_ns: 0,
         max_jitter_ns: 0,

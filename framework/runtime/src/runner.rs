@@ -2,8 +2,9 @@
 //! memory.
 //!
 //! Per cycle: wait for the deadline → read HAL and observe → publish state → (commands) →
-//! control and write → publish diagnostics. Nothing here allocates, locks or logs inside a
-//! cycle; a fault raised in a cycle is logged once, after that cycle's set-points are written.
+//! control and write → hand the cycle's record to the publisher thread. Nothing here allocates,
+//! locks or logs inside a cycle; a fault raised in a cycle is logged once, after that cycle's
+//! set-points are written.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -43,6 +44,9 @@ pub enum RunError {
         /// iceoryx2's reason.
         reason: String,
     },
+    /// The publisher thread could not start.
+    #[error("cannot start the publisher thread: {0}")]
+    Thread(String),
     /// Signal handlers could not be installed.
     #[error("cannot install the SIGINT/SIGTERM handlers: {0}")]
     Signals(std::io::Error),
@@ -53,52 +57,119 @@ pub enum RunError {
 pub struct RunReport {
     /// Timing statistics.
     pub stats: LoopStats,
-    /// Samples that could not be published (loan or send failed).
+    /// Samples iceoryx2 refused (loan or send failed).
     pub publish_failures: u64,
     /// Stopped by SIGINT/SIGTERM.
     pub interrupted: bool,
 }
 
+/// One cycle's record, handed from the loop thread to the publisher thread.
+#[derive(Clone, Copy)]
+struct CycleRecord {
+    state: ArmState,
+    diagnostics: Diagnostics,
+}
+
+/// Capacity of the loop → publisher ring [cycles]: 64 ms at 1 kHz before records are dropped.
+const RING_CAPACITY: usize = 64;
+
 /// The loop's shared-memory side.
+///
+/// iceoryx2 0.10 allocates a small reference count in every `loan`, so the control thread never
+/// calls it: each cycle's record goes into a wait-free single-producer ring (no lock, no
+/// allocation, never waits) and a publisher thread, which owns the iceoryx2 node, sends it. A
+/// full ring drops the record and counts it (`publish_drops`); the loop never slows down.
 pub struct ArmPublisher {
-    // Field order matters: ports before the node that owns them.
-    state: Publisher<ipc::Service, ArmState, ()>,
-    diagnostics: Publisher<ipc::Service, Diagnostics, ()>,
-    _node: Node<ipc::Service>,
-    template: ArmState,
-    diag: Diagnostics,
-    failures: u64,
+    producer: rtrb::Producer<CycleRecord>,
+    record: Box<CycleRecord>,
+    thread: Option<std::thread::JoinHandle<u64>>,
+    stop: Arc<AtomicBool>,
+    drops: u64,
 }
 
 impl ArmPublisher {
-    /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs).
+    /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs) on a
+    /// publisher thread, and returns once they exist.
     pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
-        let node = jointctl_ipc::create_node(domain, &format!("jointctl-run-{}", arm.name))?;
-        let names = ServiceNames::for_arm(&arm.name);
-        let busy = |service: &str, e: String| RunError::AlreadyRunning { arm: arm.name.clone(), service: service.into(), reason: e };
-        let state = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| busy(&names.joint_state, format!("{e:?}")))?;
-        let diagnostics = jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| busy(&names.diagnostics, format!("{e:?}")))?;
-        let mut template = ArmState::EMPTY;
-        let mut diag = Diagnostics::EMPTY;
-        template.joint_count = arm.dof_names.len() as u32;
-        diag.joint_count = template.joint_count;
-        diag.period_ns = (1e9 / arm.rate_hz) as u64;
-        for (i, name) in arm.dof_names.iter().enumerate() {
-            template.joints[i].name = encode_name(name);
-            diag.joints[i].name = encode_name(name);
+        let (producer, mut consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
+        let stop = Arc::new(AtomicBool::new(false));
+        let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
+        let arm_name = arm.name.clone();
+        let domain = domain.map(str::to_string);
+        let thread_stop = Arc::clone(&stop);
+        let thread = std::thread::Builder::new()
+            .name(format!("{arm_name}-publisher"))
+            .spawn(move || {
+                let setup = || -> Result<_, RunError> {
+                    let node = jointctl_ipc::create_node(domain.as_deref(), &format!("jointctl-run-{arm_name}"))?;
+                    let names = ServiceNames::for_arm(&arm_name);
+                    let busy = |service: &str, e: String| RunError::AlreadyRunning {
+                        arm: arm_name.clone(),
+                        service: service.into(),
+                        reason: e,
+                    };
+                    let state: Publisher<ipc::Service, ArmState, ()> = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
+                        .publisher_builder()
+                        .create()
+                        .map_err(|e| busy(&names.joint_state, format!("{e:?}")))?;
+                    let diagnostics: Publisher<ipc::Service, Diagnostics, ()> =
+                        jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
+                            .publisher_builder()
+                            .create()
+                            .map_err(|e| busy(&names.diagnostics, format!("{e:?}")))?;
+                    Ok((node, state, diagnostics))
+                };
+                let (node, state, diagnostics) = match setup() {
+                    Ok(ports) => {
+                        let _ = ready_tx.send(Ok(()));
+                        ports
+                    }
+                    Err(e) => {
+                        let _ = ready_tx.send(Err(e));
+                        return 0;
+                    }
+                };
+                let mut failures = 0u64;
+                loop {
+                    let stopping = thread_stop.load(Ordering::Acquire);
+                    while let Ok(rec) = consumer.pop() {
+                        let ok_state = state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
+                        let ok_diag =
+                            diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
+                        failures += u64::from(!ok_state) + u64::from(!ok_diag);
+                    }
+                    if stopping {
+                        break;
+                    }
+                    std::thread::park_timeout(std::time::Duration::from_millis(50));
+                }
+                // Ports and node are dropped here: shared memory released.
+                drop((state, diagnostics, node));
+                failures
+            })
+            .map_err(|e| RunError::Thread(e.to_string()))?;
+        match ready_rx.recv() {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => {
+                let _ = thread.join();
+                return Err(e);
+            }
+            Err(_) => return Err(RunError::Thread("the publisher thread ended during setup".into())),
         }
-        Ok(ArmPublisher { state, diagnostics, _node: node, template, diag, failures: 0 })
+        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY });
+        record.state.joint_count = arm.dof_names.len() as u32;
+        record.diagnostics.joint_count = record.state.joint_count;
+        record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
+        for (i, name) in arm.dof_names.iter().enumerate() {
+            record.state.joints[i].name = encode_name(name);
+            record.diagnostics.joints[i].name = encode_name(name);
+        }
+        Ok(ArmPublisher { producer, record, thread: Some(thread), stop, drops: 0 })
     }
 
-    /// Publishes the arm's current state.
+    /// Fills the state part of this cycle's record.
     pub fn publish_state(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64, final_sample: bool) {
-        let s = &mut self.template;
+        let s = &mut self.record.state;
         s.cycle = cycle;
         s.stamp_ns = stamp_ns;
         s.final_sample = final_sample as u32;
@@ -118,20 +189,17 @@ impl ArmPublisher {
                 };
             }
         }
-        let sent = self.state.loan_uninit().map(|sample| sample.write_payload(*s)).ok().map(|sample| sample.send().is_ok());
-        if sent != Some(true) {
-            self.failures += 1;
-        }
     }
 
-    /// Publishes the loop's health.
+    /// Fills the diagnostics part and hands the record to the publisher thread.
     pub fn publish_diagnostics(&mut self, arm: &Arm, stats: &LoopStats, cycle: u64, stamp_ns: u64) {
-        let d = &mut self.diag;
+        let d = &mut self.record.diagnostics;
         d.cycle = cycle;
         d.stamp_ns = stamp_ns;
         d.overruns = stats.overruns;
         d.missed_deadlines = stats.missed_deadlines;
         d.hal_errors = arm.hal_errors;
+        d.publish_drops = self.drops;
         d.last_compute_ns = stats.last_compute_ns;
         d.max_compute_ns = stats.max_compute_ns;
         d.max_jitter_ns = stats.max_jitter_ns;
@@ -146,10 +214,36 @@ impl ArmPublisher {
                 j.fault_count = slot.fault_count;
             }
         }
-        let sent = self.diagnostics.loan_uninit().map(|sample| sample.write_payload(*d)).ok().map(|sample| sample.send().is_ok());
-        if sent != Some(true) {
-            self.failures += 1;
+        if self.producer.push(*self.record).is_err() {
+            self.drops += 1;
         }
+        if let Some(t) = &self.thread {
+            t.thread().unpark();
+        }
+    }
+
+    /// Records dropped because the publisher thread fell behind.
+    pub fn drops(&self) -> u64 {
+        self.drops
+    }
+
+    /// Sends what is queued, stops the publisher thread and releases shared memory. Returns
+    /// the samples iceoryx2 refused.
+    pub fn close(&mut self) -> u64 {
+        self.stop.store(true, Ordering::Release);
+        match self.thread.take() {
+            Some(t) => {
+                t.thread().unpark();
+                t.join().unwrap_or(0)
+            }
+            None => 0,
+        }
+    }
+}
+
+impl Drop for ArmPublisher {
+    fn drop(&mut self) {
+        self.close();
     }
 }
 
@@ -229,7 +323,7 @@ impl<'a> ControlLoop<'a> {
                 let now = monotonic_ns();
                 p.publish_state(self.arm, self.cycle, now, true);
                 p.publish_diagnostics(self.arm, &self.stats, self.cycle, now);
-                p.failures
+                p.close()
             }
             None => 0,
         };

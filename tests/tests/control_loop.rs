@@ -1,0 +1,118 @@
+//! The loop: zero allocations per cycle, deadline overruns detected and counted.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use jointctl_api::JointCommand;
+use jointctl_runtime::timing::monotonic_ns;
+use jointctl_runtime::{ArmPublisher, ControlLoop, PluginLoader, RunOptions};
+use jointctl_tests::{arm_name, rig_yaml};
+
+/// Counts allocations made by the thread that set `COUNTING` (the control thread). The
+/// publisher thread allocates inside iceoryx2 by design; it is not the control cycle.
+struct CountingAlloc;
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
+
+fn counting() -> bool {
+    COUNTING.try_with(Cell::get).unwrap_or(false)
+}
+
+unsafe impl GlobalAlloc for CountingAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if counting() {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: forwarded unchanged.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: forwarded unchanged.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if counting() {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: forwarded unchanged.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAlloc = CountingAlloc;
+
+const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";
+
+/// The plugins are linked statically here (through the same C ABI shims as the shared
+/// libraries) so that their allocations, if any, go through this process' counting allocator;
+/// a plugin loaded with dlopen allocates through its own copy of std, which no host-side
+/// allocator can see.
+#[test]
+fn a_cycle_allocates_nothing() {
+    let yaml = rig_yaml(&arm_name("alloc"), 1000.0, ELASTIC);
+    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    let mut loader = PluginLoader::new([]);
+    loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
+    loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
+    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
+    arm.activate().unwrap();
+    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
+    // Drive both joints so that the position controllers, not only hold, are exercised.
+    arm.set_command(0, JointCommand::position(0.4));
+    arm.set_command(1, JointCommand::position(-0.2));
+    let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
+    for _ in 0..100 {
+        let t = monotonic_ns();
+        lp.step(t, t, None);
+    }
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.with(|c| c.set(true));
+    for _ in 0..10_000 {
+        let t = monotonic_ns();
+        lp.step(t, t, None);
+    }
+    COUNTING.with(|c| c.set(false));
+    let n = ALLOCATIONS.load(Ordering::SeqCst);
+    assert_eq!(lp.stats.cycles, 10_100);
+    assert!(lp.arm.states[0].position().is_some_and(|q| (q - 0.4).abs() < 1e-3), "the loop really ran: {:?}", lp.arm.states[0]);
+    assert_eq!(n, 0, "{n} allocations in 10 000 cycles");
+    let (_, refused) = lp.finish();
+    assert_eq!(refused, 0, "iceoryx2 refused samples");
+    // Unpaced, 10 000 cycles take milliseconds: the publisher thread may fall behind, and then
+    // drops records (counted) instead of ever making the loop wait.
+    assert!(publisher.drops() < 10_100);
+}
+
+#[test]
+fn the_counting_allocator_sees_allocations() {
+    // Guards the test above: a counter that never counts would pass it.
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.with(|c| c.set(true));
+    let v: Vec<u64> = std::hint::black_box(Vec::with_capacity(16));
+    COUNTING.with(|c| c.set(false));
+    drop(v);
+    assert!(ALLOCATIONS.load(Ordering::SeqCst) >= 1);
+}
+
+#[test]
+fn deadline_overruns_are_detected_and_counted() {
+    // 500 Hz (2 ms period); the faulty joint stalls 5 ms every 10th cycle.
+    let extra = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stall_us: 5000, stall_every: 10}\n";
+    let yaml = rig_yaml(&arm_name("overrun"), 500.0, extra);
+    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    let mut arm = jointctl_runtime::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    arm.activate().unwrap();
+    let opts = RunOptions { cycles: Some(100), duration_s: None, timing_samples: 100 };
+    let report = jointctl_runtime::run(&mut arm, &loaded.config.timing, None, &opts).unwrap();
+    let s = &report.stats;
+    assert_eq!(s.cycles, 100);
+    // Every stalled cycle overran; machine noise may add one or two more.
+    assert!((10..=15).contains(&s.overruns), "{s:?}");
+    // A 5 ms stall in a 2 ms period ends past at least 2 deadlines.
+    assert!(s.missed_deadlines >= 20, "{s:?}");
+    assert!(s.max_compute_ns >= 5_000_000, "{s:?}");
+}
