@@ -291,6 +291,9 @@ pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
 /// An iceoryx2 node in the arm's domain, with iceoryx2's own signal handling off (the runtime
 /// owns its signals and timing). Dead nodes of crashed processes are cleaned up.
 pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service>, IpcSetupError> {
+    // iceoryx2 warns that it found no config file, which is by design here (the config is built
+    // in code); its own `IOX2_LOG_LEVEL` still overrides this.
+    set_log_level_from_env_or(LogLevel::Error);
     let config = iceoryx2_config(domain)?;
     let node_err = |reason: String| IpcSetupError::Node { node: name.to_string(), reason };
     let node_name = NodeName::new(name).map_err(|e| node_err(format!("{e:?}")))?;
