@@ -1,0 +1,182 @@
+//! `cargo bench -p jointctl-bench`: prints a table of the runtime's figures on this machine.
+//!
+//! Environment: `BENCH_CYCLES_40HZ` (default 10000, i.e. 250 s) and `BENCH_CYCLES_1KHZ`
+//! (default 10000) set the loop-jitter runs; `BENCH_QUICK=1` shortens everything for a smoke run.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use jointctl_api::JointCommand;
+use jointctl_runtime::timing::monotonic_ns;
+use jointctl_runtime::{Arm, ArmPublisher, PluginLoader, RunOptions};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn sherpa(rate_hz: f64, arm: &str) -> jointctl_config::LoadedConfig {
+    let path = root().join("configs/sherpa_arm.yaml");
+    let text = std::fs::read_to_string(&path).expect("configs/sherpa_arm.yaml");
+    let text = text.replacen("arm: sherpa", &format!("arm: {arm}"), 1).replacen("rate_hz: 40 ", &format!("rate_hz: {rate_hz} "), 1);
+    jointctl_config::parse_str(&text, &path).expect("sherpa config")
+}
+
+fn plugin_dir() -> PathBuf {
+    // target/release/deps/runtime-xxxx -> target/release, where `cargo build --release` puts the .so files.
+    let exe = std::env::current_exe().unwrap();
+    exe.parent().unwrap().parent().unwrap().to_path_buf()
+}
+
+fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::LoadedConfig) {
+    let loaded = sherpa(rate_hz, arm);
+    let mut loader = PluginLoader::new([plugin_dir()]);
+    if statically {
+        loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
+        loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
+    }
+    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap_or_else(|e| {
+        panic!("{e}\n(build the plugins first: cargo build --release --workspace)")
+    });
+    arm.activate().unwrap();
+    for i in 0..arm.dof_names.len() {
+        arm.set_command(i, JointCommand::position(0.1 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }));
+    }
+    (arm, loaded)
+}
+
+/// Median ns per cycle of `arm.step` over `rounds` batches of `batch` cycles.
+fn compute_ns(arm: &mut Arm, batch: usize) -> f64 {
+    let t = Instant::now();
+    for i in 0..batch {
+        arm.step(i as f64 * 1e-3);
+    }
+    t.elapsed().as_nanos() as f64 / batch as f64
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    v[v.len() / 2]
+}
+
+fn percentile(v: &mut [u64], p: f64) -> u64 {
+    v.sort_unstable();
+    v[((p / 100.0) * (v.len() - 1) as f64).round() as usize]
+}
+
+fn env_usize(name: &str, default: usize) -> usize {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; ignore arguments.
+    let quick = std::env::var("BENCH_QUICK").is_ok();
+    println!("jointctl runtime benchmarks ({} cores)", std::thread::available_parallelism().map_or(0, |n| n.get()));
+    println!();
+
+    // 1. Compute per cycle, static vs loaded, interleaved so that machine noise hits both alike.
+    let (mut loaded_arm, _) = build(false, 1000.0, "bench-a");
+    let (mut static_arm, _) = build(true, 1000.0, "bench-b");
+    let batch = if quick { 2_000 } else { 20_000 };
+    let rounds = if quick { 5 } else { 21 };
+    let (mut l, mut s) = (Vec::new(), Vec::new());
+    compute_ns(&mut loaded_arm, batch);
+    compute_ns(&mut static_arm, batch);
+    for _ in 0..rounds {
+        l.push(compute_ns(&mut loaded_arm, batch));
+        s.push(compute_ns(&mut static_arm, batch));
+    }
+    let (lm, sm) = (median(&mut l), median(&mut s));
+    let mut ratios: Vec<f64> = l.iter().zip(&s).map(|(a, b)| a / b).collect();
+    println!("## Cycle compute, 7-joint SHERPA config (read HAL + observe + control + write HAL), {rounds} x {batch} cycles");
+    println!("| plugins | median ns/cycle | target |");
+    println!("|---|---|---|");
+    println!("| statically linked | {sm:.0} | <= 5000 |");
+    println!("| loaded from .so | {lm:.0} | <= 5000 |");
+    println!("| loaded / static (median of per-round ratios) | {:.3} | <= 1.05 |", median(&mut ratios));
+    println!();
+
+    // 2. Loop timing at 40 Hz and 1 kHz, publishing to shared memory, no subscriber.
+    println!("## Loop timing (real run with publishing; lateness = wake-up time - deadline)");
+    println!("| rate | cycles | p50 lateness us | p99 lateness us | max lateness us | p50 compute us | p99 compute us | overruns | missed deadlines |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (rate, var, default) in [(1000.0, "BENCH_CYCLES_1KHZ", 10_000), (40.0, "BENCH_CYCLES_40HZ", 10_000)] {
+        let cycles = env_usize(var, if quick { 400 } else { default }) as u64;
+        let name = format!("bench-loop-{}", rate as u64);
+        let (mut arm, loaded) = build(false, rate, &name);
+        let mut publisher = ArmPublisher::new(&arm, None).unwrap();
+        let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize };
+        let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
+        let st = &r.stats;
+        let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
+        println!(
+            "| {rate} Hz | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {} | {} |",
+            st.cycles,
+            us(st.jitter_percentile_ns(50.0)),
+            us(st.jitter_percentile_ns(99.0)),
+            st.max_jitter_ns as f64 / 1e3,
+            us(st.compute_percentile_ns(50.0)),
+            us(st.compute_percentile_ns(99.0)),
+            st.overruns,
+            st.missed_deadlines
+        );
+    }
+    println!();
+
+    // 3. Sensor read → subscriber receive latency at 1 kHz: a subscriber thread busy-polls.
+    let cycles = if quick { 500 } else { 5_000 };
+    let (mut arm, loaded) = build(false, 1000.0, "bench-latency");
+    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let sub_stop = stop.clone();
+    let subscriber = std::thread::spawn(move || {
+        let node = jointctl_ipc::create_node(None, "bench-inspector").unwrap();
+        let names = jointctl_ipc::ServiceNames::for_arm("bench-latency");
+        let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
+        let mut lat = Vec::with_capacity(10_000);
+        while !sub_stop.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Some(s) = sub.receive().unwrap() {
+                lat.push(monotonic_ns().saturating_sub(s.stamp_ns));
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+        lat
+    });
+    std::thread::sleep(Duration::from_millis(200));
+    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0 };
+    jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
+    drop(publisher);
+    std::thread::sleep(Duration::from_millis(100));
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let mut lat = subscriber.join().unwrap();
+    lat.retain(|l| *l < 1_000_000_000); // the history sample of an earlier run, if any
+    println!("## Sensor read → subscriber receive, 1 kHz, {} samples (includes the cycle's compute and the hand-off to the publisher thread)", lat.len());
+    println!("| p50 us | p99 us | max us | target p99 |");
+    println!("|---|---|---|---|");
+    let (p50, p99) = (percentile(&mut lat, 50.0), percentile(&mut lat, 99.0));
+    println!("| {:.1} | {:.1} | {:.1} | <= 20 |", p50 as f64 / 1e3, p99 as f64 / 1e3, lat.iter().max().copied().unwrap_or(0) as f64 / 1e3);
+    println!();
+
+    // 4. Resident memory of `jointctl run` on the SHERPA config.
+    let exe = plugin_dir().join("jointctl");
+    if exe.exists() {
+        let mut child = Command::new(&exe)
+            .arg("run")
+            .arg(root().join("configs/sherpa_arm.yaml"))
+            .args(["--duration", "3"])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(1500));
+        let status = std::fs::read_to_string(format!("/proc/{}/status", child.id())).unwrap_or_default();
+        let _ = child.wait();
+        let field = |k: &str| status.lines().find(|l| l.starts_with(k)).map(|l| l.split_whitespace().nth(1).unwrap_or("?").to_string());
+        println!("## Resident memory of `jointctl run configs/sherpa_arm.yaml`");
+        println!("| VmRSS kB | VmHWM kB | target |");
+        println!("|---|---|---|");
+        println!("| {} | {} | <= 50 MB |", field("VmRSS:").unwrap_or_default(), field("VmHWM:").unwrap_or_default());
+    } else {
+        println!("(jointctl not built in {}: skipped the memory figure)", exe.display());
+    }
+}
