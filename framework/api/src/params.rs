@@ -5,7 +5,7 @@ use crate::PluginError;
 /// Parses the joint's `params` (JSON text from the runtime) into `T`; an error names the field.
 ///
 /// ```
-/// #[derive(serde::Deserialize)]
+/// #[derive(Debug, serde::Deserialize)]
 /// #[serde(deny_unknown_fields)]
 /// struct P { stiffness_nm_per_rad: f64 }
 /// let p: P = jointctl_api::params::parse(r#"{"stiffness_nm_per_rad": 113.78}"#).unwrap();
