@@ -125,6 +125,11 @@ impl LoopStats {
         }
     }
 
+    /// The recorded cycles as (wake-up lateness, compute time) [ns].
+    pub fn cycle_samples(&self) -> impl Iterator<Item = (u64, u64)> + '_ {
+        self.jitter_samples_ns.iter().zip(&self.compute_samples_ns).map(|(j, c)| (*j as u64, *c as u64))
+    }
+
     /// Percentiles (0-100) of the recorded wake-up lateness [ns].
     pub fn jitter_percentile_ns(&self, p: f64) -> Option<u64> {
         percentile(&self.jitter_samples_ns, p)
