@@ -122,3 +122,41 @@ fn deadline_overruns_are_detected_and_counted() {
     assert!(s.missed_deadlines >= 20, "{s:?}");
     assert!(s.max_compute_ns >= 5_000_000, "{s:?}");
 }
+
+#[test]
+fn a_sherpa_arm_cycle_allocates_nothing() {
+    // All seven joints, VSA characteristic interpolation included, statically linked so that
+    // the plugins' allocations would be counted.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let text = std::fs::read_to_string(&path).unwrap().replacen("arm: sherpa", &format!("arm: {}", arm_name("sherpa-alloc")), 1);
+    let loaded = jointctl_config::parse_str(&text, &path).unwrap();
+    let mut loader = PluginLoader::new([]);
+    for d in [
+        jointctl_plugin_rigid::plugin_descriptor(),
+        jointctl_plugin_elastic::plugin_descriptor(),
+        jointctl_plugin_vsa_shoulder::plugin_descriptor(),
+        jointctl_plugin_vsa_wrist::plugin_descriptor(),
+    ] {
+        loader.register_static(d).unwrap();
+    }
+    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
+    arm.activate().unwrap();
+    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
+    for i in 0..arm.dof_names.len() {
+        arm.set_command(i, JointCommand::position(0.05 * (i as f64 + 1.0)));
+    }
+    let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
+    for _ in 0..100 {
+        let t = monotonic_ns();
+        lp.step(t, t, None);
+    }
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.with(|c| c.set(true));
+    for _ in 0..5_000 {
+        let t = monotonic_ns();
+        lp.step(t, t, None);
+    }
+    COUNTING.with(|c| c.set(false));
+    assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
+    assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), 0);
+}

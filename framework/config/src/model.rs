@@ -186,14 +186,18 @@ pub struct EncoderConfig {
     pub sim: Option<EncoderSimConfig>,
 }
 
-/// A simulated encoder reads either a drive's position times a gain (a free joint) or a fixed
-/// angle (a joint whose output is clamped, as in the thesis' characterisation set-ups).
+/// A simulated encoder reads a drive's position times a gain (a free joint), a weighted sum of
+/// drives (behind a differential), or a fixed angle (a joint whose output is clamped, as in the
+/// thesis' characterisation set-ups).
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EncoderSimConfig {
     /// Drive whose position this encoder follows.
     #[serde(default)]
     pub drive: Option<String>,
+    /// Drives whose weighted positions this encoder sums (e.g. a tendon differential).
+    #[serde(default)]
+    pub sum: Vec<SimTerm>,
     /// Encoder rad per drive rad.
     #[serde(default = "one", deserialize_with = "finite")]
     pub gain: f64,
@@ -207,6 +211,17 @@ pub struct EncoderSimConfig {
 
 fn one() -> f64 {
     1.0
+}
+
+/// One term of a simulated encoder's sum: `gain * position(drive)`.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimTerm {
+    /// Drive name.
+    pub drive: String,
+    /// Encoder rad per drive rad.
+    #[serde(deserialize_with = "finite")]
+    pub gain: f64,
 }
 
 /// One joint plugin instance: one joint, or several coupled DOFs (the wrist's q6 and q7).

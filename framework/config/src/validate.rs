@@ -83,12 +83,17 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         for (i, e) in bus.encoders.iter().enumerate() {
             let Some(s) = &e.sim else { continue };
             let path = format!("buses.spi[{b}].encoders[{i}].sim");
-            match (&s.drive, s.fixed_rad) {
-                (Some(d), None) if !drive_names.contains(d.as_str()) => {
-                    err(format!("{path}.drive"), format!("no drive named `{d}` is defined under buses.can"))
+            let ways = s.drive.is_some() as u8 + s.fixed_rad.is_some() as u8 + !s.sum.is_empty() as u8;
+            if ways != 1 {
+                err(path.clone(), "give exactly one of `drive` (follow a drive), `sum` (weighted drives) or `fixed_rad` (clamped output)".into());
+            }
+            if let Some(d) = s.drive.as_ref().filter(|d| !drive_names.contains(d.as_str())) {
+                err(format!("{path}.drive"), format!("no drive named `{d}` is defined under buses.can"));
+            }
+            for (t, term) in s.sum.iter().enumerate() {
+                if !drive_names.contains(term.drive.as_str()) {
+                    err(format!("{path}.sum[{t}].drive"), format!("no drive named `{}` is defined under buses.can", term.drive));
                 }
-                (Some(_), None) | (None, Some(_)) => {}
-                _ => err(path, "give exactly one of `drive` (follow a drive) or `fixed_rad` (clamped output)".into()),
             }
         }
     }

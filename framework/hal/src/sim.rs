@@ -10,7 +10,8 @@ use crate::{ActuatorFrame, DeviceIndex, Hal, HalIoError, HalSetupError, SensorFr
 
 #[derive(Clone, Debug)]
 enum EncoderModel {
-    Follows { drive: usize, gain: f64, offset_rad: f64 },
+    /// `offset + sum(gain_i * drive_i)`.
+    Follows { terms: Vec<(usize, f64)>, offset_rad: f64 },
     Fixed(f64),
 }
 
@@ -56,21 +57,28 @@ impl SimHal {
         for (b, bus) in config.buses.spi.iter().enumerate() {
             for (i, e) in bus.encoders.iter().enumerate() {
                 let field = format!("buses.spi[{b}].encoders[{i}].sim");
+                let lookup = |d: &str, f: String| {
+                    devices.drive(d).ok_or_else(|| HalSetupError::Config { field: f, message: format!("no drive named `{d}`") })
+                };
                 let model = match &e.sim {
                     Some(EncoderSimConfig { fixed_rad: Some(q), .. }) => EncoderModel::Fixed(*q),
                     Some(EncoderSimConfig { drive: Some(d), gain, offset_rad, .. }) => EncoderModel::Follows {
-                        drive: devices.drive(d).ok_or_else(|| HalSetupError::Config {
-                            field: format!("{field}.drive"),
-                            message: format!("no drive named `{d}`"),
-                        })?,
-                        gain: *gain,
+                        terms: vec![(lookup(d, format!("{field}.drive"))?, *gain)],
+                        offset_rad: *offset_rad,
+                    },
+                    Some(EncoderSimConfig { sum, offset_rad, .. }) if !sum.is_empty() => EncoderModel::Follows {
+                        terms: sum
+                            .iter()
+                            .enumerate()
+                            .map(|(t, term)| Ok((lookup(&term.drive, format!("{field}.sum[{t}].drive"))?, term.gain)))
+                            .collect::<Result<_, HalSetupError>>()?,
                         offset_rad: *offset_rad,
                     },
                     _ => {
                         return Err(HalSetupError::Config {
                             field,
                             message: format!(
-                                "the simulated backend needs to know what encoder `{}` reads: add `sim: {{drive: NAME, gain: G}}` or `sim: {{fixed_rad: Q}}`",
+                                "the simulated backend needs to know what encoder `{}` reads: add `sim: {{drive: NAME, gain: G}}`, `sim: {{sum: [{{drive: NAME, gain: G}}, ...]}}` or `sim: {{fixed_rad: Q}}`",
                                 e.name
                             ),
                         });
@@ -97,9 +105,11 @@ impl SimHal {
 impl Hal for SimHal {
     fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
         for (i, model) in self.encoders.iter().enumerate() {
-            let truth = match *model {
-                EncoderModel::Follows { drive, gain, offset_rad } => offset_rad + gain * self.drive_position_rad[drive],
-                EncoderModel::Fixed(q) => q,
+            let truth = match model {
+                EncoderModel::Follows { terms, offset_rad } => {
+                    offset_rad + terms.iter().map(|(d, g)| g * self.drive_position_rad[*d]).sum::<f64>()
+                }
+                EncoderModel::Fixed(q) => *q,
             };
             let noise = if self.noise_rad > 0.0 { self.noise_rad * self.rng.normal() } else { 0.0 };
             frame.encoders[i] = Reading::valid(truth + noise - self.encoder_offset_rad[i]);

@@ -34,6 +34,8 @@ fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::Lo
     if statically {
         loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
         loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
+        loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
+        loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
     }
     let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap_or_else(|e| {
         panic!("{e}\n(build the plugins first: cargo build --release --workspace)")

@@ -52,6 +52,8 @@ enum Command {
 fn static_loader(loader: &mut PluginLoader) -> Result<(), jointctl_runtime::LoadPluginError> {
     loader.register_static(jointctl_plugin_rigid::plugin_descriptor())?;
     loader.register_static(jointctl_plugin_elastic::plugin_descriptor())?;
+    loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor())?;
+    loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor())?;
     Ok(())
 }
 

@@ -1,0 +1,222 @@
+//! # VSA shoulder plugin (q2 + q3)
+//!
+//! Thesis sections 2.4 and 3.4. The shoulder's two actuators a2, a3 drive q2 and q3 through a
+//! tendon differential (eq. 3.3); q2 carries the lever-arm VSA. One plugin instance therefore
+//! serves both DOFs: q2 as a variable stiffness joint, q3 as rigid (harmonic drive, section 3.1).
+//!
+//! Observer (section 4.2, figure 4.3 red and blue blocks):
+//! - pivot position [mm] from the pivot encoder;
+//! - q2 deflection from the encoder that measures it directly, with the initial angle
+//!   subtracted (section 3.4.1: the motor encoders over CAN lost frames, appendix A);
+//! - q2 torque from the characteristic of the two nearest pivot settings, linearly weighted
+//!   (section 4.2), stiffness from their first-order fits; a pivot beyond the characterised
+//!   range is clamped and flagged;
+//! - q2 position from its output encoder; q3 position from the two differential pulleys (eq. 3.3).
+//!
+//! Controller: joint position set-points → actuator set-points through the inverse of eq. 3.3,
+//! with section 4.3's position PI per DOF; the pivot drive holds.
+
+use jointctl_api::{
+    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Observer, PluginError, RawJointView, export_joint_plugin, params,
+};
+use jointctl_control::{Pi, PiGains, VelocityEstimator};
+use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
+use jointctl_models::transmission::{eq_3_3_shoulder_actuators, eq_3_3_shoulder_joints};
+use serde::Deserialize;
+
+const Q2_OUTPUT: usize = 0;
+const Q2_DEFLECTION: usize = 1;
+const PULLEY_A: usize = 2;
+const PULLEY_B: usize = 3;
+const PIVOT: usize = 4;
+const ACTUATOR_A: usize = 0;
+const ACTUATOR_B: usize = 1;
+const PIVOT_DRIVE: usize = 2;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Params {
+    /// Torque-deflection characteristic per pivot setting (the form `jointctl fit` writes).
+    characteristic: CharacteristicSpec,
+    /// Pivot travel per pivot-encoder radian [mm/rad]. Assumption (not in the thesis).
+    pivot_mm_per_rad: f64,
+    /// Pivot position at encoder angle 0 [mm]. Assumption.
+    #[serde(default)]
+    pivot_offset_mm: f64,
+    /// q3 stiffness reported (section 3.1: harmonic drive CSD-32-100, 8.3e4 Nm/rad).
+    #[serde(default = "harmonic_drive")]
+    q3_stiffness_nm_per_rad: f64,
+    /// Section 4.3's position PI per DOF [rad -> rad].
+    position_pi: PiGains,
+    /// Oldest stale reading still used [s]. Assumption: 0.1 s.
+    #[serde(default = "default_max_age")]
+    max_age_s: f64,
+}
+
+fn harmonic_drive() -> f64 {
+    8.3e4
+}
+fn default_max_age() -> f64 {
+    0.1
+}
+
+/// The shoulder: q2 (VSA) and q3 (rigid) behind the tendon differential.
+pub struct VsaShoulder {
+    p: Params,
+    characteristic: PivotCharacteristic,
+    deflection_origin_rad: f64,
+    actuator_origin: (f64, f64),
+    joint_origin: (f64, f64),
+    velocity: [VelocityEstimator; 2],
+    pi: [Pi; 2],
+    hold_target: [Option<f64>; 2],
+    last_mode: [ControlMode; 2],
+}
+
+impl VsaShoulder {
+    fn pivot_mm(&self, raw: &RawJointView) -> Option<f64> {
+        raw.encoder(PIVOT).usable(self.p.max_age_s).map(|a| self.p.pivot_offset_mm + self.p.pivot_mm_per_rad * a)
+    }
+
+    fn q3(&self, raw: &RawJointView) -> Option<f64> {
+        let a = raw.encoder(PULLEY_A).usable(self.p.max_age_s)?;
+        let b = raw.encoder(PULLEY_B).usable(self.p.max_age_s)?;
+        Some(eq_3_3_shoulder_joints(a, b).1)
+    }
+}
+
+impl JointPlugin for VsaShoulder {
+    fn create(params_json: &str) -> Result<Self, PluginError> {
+        let p: Params = params::parse(params_json)?;
+        let characteristic = PivotCharacteristic::from_spec(&p.characteristic)
+            .map_err(|e| PluginError::at(format!("characteristic.{}", e.field), e.message))?;
+        if !(p.pivot_mm_per_rad.is_finite() && p.pivot_mm_per_rad != 0.0) {
+            return Err(PluginError::at("pivot_mm_per_rad", "must be finite and non-zero"));
+        }
+        params::positive("q3_stiffness_nm_per_rad", p.q3_stiffness_nm_per_rad)?;
+        params::positive("max_age_s", p.max_age_s)?;
+        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        let pi = Pi::new(p.position_pi);
+        Ok(VsaShoulder {
+            characteristic,
+            deflection_origin_rad: 0.0,
+            actuator_origin: (0.0, 0.0),
+            joint_origin: (0.0, 0.0),
+            velocity: [VelocityEstimator::new(0.5); 2],
+            pi: [pi; 2],
+            hold_target: [None; 2],
+            last_mode: [ControlMode::HOLD; 2],
+            p,
+        })
+    }
+
+    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
+        if ctx.dof != 2 {
+            return Err(PluginError::new("the shoulder plugin serves q2 and q3: give both under `dofs`"));
+        }
+        Ok(())
+    }
+
+    fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
+        let age = self.p.max_age_s;
+        let need = |r: Option<f64>, what: &str| r.ok_or_else(|| PluginError::new(format!("cannot activate: {what} is not readable")));
+        // Section 3.4.1: the shoulder may start at a non-zero angle; subtract it.
+        self.deflection_origin_rad = need(raw.encoder(Q2_DEFLECTION).usable(age), "the q2 deflection encoder")?;
+        let q2 = need(raw.encoder(Q2_OUTPUT).usable(age), "the q2 output encoder")?;
+        let q3 = need(self.q3(raw), "a differential pulley encoder")?;
+        let a = need(raw.drive(ACTUATOR_A).position_rad.usable(age), "actuator a")?;
+        let b = need(raw.drive(ACTUATOR_B).position_rad.usable(age), "actuator b")?;
+        self.actuator_origin = (a, b);
+        self.joint_origin = (q2, q3);
+        self.hold_target = [Some(q2), Some(q3)];
+        Ok(())
+    }
+}
+
+impl Observer for VsaShoulder {
+    fn observe(&mut self, raw: &RawJointView, out: &mut [JointState]) -> Result<(), JointFault> {
+        let age = self.p.max_age_s;
+        let (mut q2, mut q3) = (JointState::UNKNOWN, JointState::UNKNOWN);
+        let pivot = self.pivot_mm(raw);
+        let q2_pos = raw.encoder(Q2_OUTPUT).usable(age);
+        let deflection = raw.encoder(Q2_DEFLECTION).usable(age).map(|d| d - self.deflection_origin_rad);
+        if let Some(q) = q2_pos {
+            q2.set_position(q);
+        }
+        if let Some(p) = pivot {
+            q2.set_pivot(p);
+            let e = self.characteristic.evaluate(p, deflection.unwrap_or(0.0));
+            q2.set_stiffness(e.stiffness_nm_per_rad);
+            if let Some(d) = deflection {
+                q2.set_deflection(d);
+                q2.set_torque(e.torque_nm);
+            }
+            if e.clamped {
+                q2.mark_clamped();
+            }
+        }
+        let q3_pos = self.q3(raw);
+        if let Some(q) = q3_pos {
+            q3.set_position(q);
+            q3.set_deflection(0.0);
+            q3.set_stiffness(self.p.q3_stiffness_nm_per_rad);
+        }
+        for (state, (v, q)) in [&mut q2, &mut q3].into_iter().zip(self.velocity.iter_mut().zip([q2_pos, q3_pos])) {
+            if let Some(v) = v.update(q, raw.dt_s) {
+                state.set_velocity(v);
+            }
+        }
+        out[0] = q2;
+        out[1] = q3;
+        Ok(())
+    }
+}
+
+impl Controller for VsaShoulder {
+    fn control(
+        &mut self,
+        state: &[JointState],
+        command: &[JointCommand],
+        raw: &RawJointView,
+        out: &mut [MotorSetpoint],
+    ) -> Result<(), JointFault> {
+        let mut target = [0.0; 2];
+        let mut any_moving = false;
+        for i in 0..2 {
+            let q = state[i].position().unwrap_or(0.0);
+            if command[i].mode != self.last_mode[i] {
+                self.pi[i].reset();
+                // Holding one DOF of a differential means keeping it where it is while the
+                // other moves.
+                self.hold_target[i] = (command[i].mode == ControlMode::HOLD).then_some(q);
+                self.last_mode[i] = command[i].mode;
+            }
+            target[i] = match command[i].mode {
+                ControlMode::POSITION => {
+                    any_moving = true;
+                    command[i].position_rad + self.pi[i].update(command[i].position_rad - q, raw.dt_s)
+                }
+                _ => self.hold_target[i].unwrap_or(q),
+            };
+        }
+        if !any_moving {
+            out.fill(MotorSetpoint::HOLD);
+            return Ok(());
+        }
+        // Inverse of eq. 3.3 (assumed differential), anchored at the activation pose.
+        let (da, db) = eq_3_3_shoulder_actuators(target[0] - self.joint_origin.0, target[1] - self.joint_origin.1);
+        out[ACTUATOR_A] = MotorSetpoint::move_to(self.actuator_origin.0 + da);
+        out[ACTUATOR_B] = MotorSetpoint::move_to(self.actuator_origin.1 + db);
+        out[PIVOT_DRIVE] = MotorSetpoint::HOLD;
+        Ok(())
+    }
+}
+
+export_joint_plugin!(
+    name: vsa_shoulder,
+    plugin: VsaShoulder,
+    dof: 2,
+    encoders: "q2_output,q2_deflection,pulley_a,pulley_b,pivot",
+    drives: "actuator_a,actuator_b,pivot",
+);

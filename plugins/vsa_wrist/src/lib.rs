@@ -1,0 +1,245 @@
+//! # VSA wrist plugin (q6 + q7)
+//!
+//! Thesis sections 3.5, 4.2 and appendix B. Each joint motor drives a planetary differential's
+//! sun; the VSA lever sits on the ring; the carrier drives a 30:40 belt to one input of a bevel
+//! differential whose outputs are q6 and q7.
+//!
+//! Observer (figure 4.3):
+//! - per drivetrain, eq. 3.8: the bevel input the carrier-input encoder predicts,
+//!   `theta_a~ = Ns/(Ns+Nr) * Dp/Db * theta_pc`, minus the measured bevel input is the
+//!   deflection of that input, both relative to the activation pose (initial angle subtracted);
+//! - eq. 3.7 turns the two input deflections into the Cartesian deflection and the two measured
+//!   bevel inputs into the joint positions. **Assumption**: theta_x is q6 and theta_y is q7;
+//! - the torque: deflection → polar (atan2 with its quadrant; eq. B.2's tanh is a typo), torque
+//!   along the two nearest measured directions at the two nearest pivot settings, interpolated,
+//!   back to q6/q7 (eq. B.3); the stiffness of each joint is the interpolated first-order fit
+//!   along its own axis (q7: 0 deg, q6: 90 deg).
+//!
+//! Controller: joint set-points → bevel inputs (eq. 3.7 inverse) → carrier inputs (eq. 3.8
+//! ratio) → motor set-points, with section 4.3's position PI per DOF; the pivot drive holds.
+
+use jointctl_api::{
+    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Observer, PluginError, RawJointView, export_joint_plugin, params,
+};
+use jointctl_control::{Pi, PiGains, VelocityEstimator};
+use jointctl_models::characteristic::{CharacteristicSpec, WristCharacteristic};
+use jointctl_models::transmission::{eq_3_7_bevel, eq_3_7_bevel_inverse, eq_3_8_deflection, eq_3_8_expected_bevel_input};
+use serde::Deserialize;
+
+const CARRIER_A: usize = 0;
+const CARRIER_B: usize = 1;
+const BEVEL_A: usize = 2;
+const BEVEL_B: usize = 3;
+const PIVOT: usize = 4;
+const MOTOR_A: usize = 0;
+const MOTOR_B: usize = 1;
+const PIVOT_DRIVE: usize = 2;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Params {
+    /// Torque-deflection curves per pivot setting and direction (the form `jointctl fit` writes).
+    characteristic: CharacteristicSpec,
+    /// Sun gear teeth Ns. Assumption (the thesis does not give the tooth counts).
+    teeth_sun: f64,
+    /// Ring gear teeth Nr. Assumption.
+    teeth_ring: f64,
+    /// Belt ratio Dp/Db between planetary carrier and bevel input (section 3.5.1: 30:40).
+    #[serde(default = "belt")]
+    belt_ratio: f64,
+    /// Pivot travel per pivot-encoder radian [mm/rad]. Assumption.
+    pivot_mm_per_rad: f64,
+    /// Pivot position at encoder angle 0 [mm]. Assumption.
+    #[serde(default)]
+    pivot_offset_mm: f64,
+    /// Section 4.3's position PI per DOF [rad -> rad].
+    position_pi: PiGains,
+    /// Oldest stale reading still used [s]. Assumption: 0.1 s.
+    #[serde(default = "default_max_age")]
+    max_age_s: f64,
+}
+
+fn belt() -> f64 {
+    30.0 / 40.0
+}
+fn default_max_age() -> f64 {
+    0.1
+}
+
+/// The wrist: q6 and q7 with one shared VSA.
+pub struct VsaWrist {
+    p: Params,
+    characteristic: WristCharacteristic,
+    carrier_origin: [f64; 2],
+    bevel_origin: [f64; 2],
+    motor_origin: [f64; 2],
+    joint_origin: [f64; 2],
+    velocity: [VelocityEstimator; 2],
+    pi: [Pi; 2],
+    hold_target: [f64; 2],
+    last_mode: [ControlMode; 2],
+}
+
+impl VsaWrist {
+    /// Eq. 3.8's ratio: bevel input per carrier-input radian.
+    fn ratio(&self) -> f64 {
+        eq_3_8_expected_bevel_input(1.0, self.p.teeth_sun, self.p.teeth_ring, self.p.belt_ratio)
+    }
+
+    fn read(&self, raw: &RawJointView, i: usize) -> Option<f64> {
+        raw.encoder(i).usable(self.p.max_age_s)
+    }
+
+    /// (q6, q7) positions from the measured bevel inputs, eq. 3.7.
+    fn positions(&self, raw: &RawJointView) -> Option<(f64, f64)> {
+        Some(eq_3_7_bevel(self.read(raw, BEVEL_A)?, self.read(raw, BEVEL_B)?))
+    }
+
+    /// (q6, q7) deflections, eq. 3.8 per drivetrain then eq. 3.7.
+    fn deflections(&self, raw: &RawJointView) -> Option<(f64, f64)> {
+        let mut d = [0.0; 2];
+        for (i, (c, b)) in [(CARRIER_A, BEVEL_A), (CARRIER_B, BEVEL_B)].into_iter().enumerate() {
+            let expected = eq_3_8_expected_bevel_input(self.read(raw, c)? - self.carrier_origin[i], self.p.teeth_sun, self.p.teeth_ring, self.p.belt_ratio);
+            d[i] = eq_3_8_deflection(expected, self.read(raw, b)? - self.bevel_origin[i]);
+        }
+        Some(eq_3_7_bevel(d[0], d[1]))
+    }
+}
+
+impl JointPlugin for VsaWrist {
+    fn create(params_json: &str) -> Result<Self, PluginError> {
+        let p: Params = params::parse(params_json)?;
+        let characteristic = WristCharacteristic::from_spec(&p.characteristic)
+            .map_err(|e| PluginError::at(format!("characteristic.{}", e.field), e.message))?;
+        params::positive("teeth_sun", p.teeth_sun)?;
+        params::positive("teeth_ring", p.teeth_ring)?;
+        params::positive("belt_ratio", p.belt_ratio)?;
+        params::positive("max_age_s", p.max_age_s)?;
+        if !(p.pivot_mm_per_rad.is_finite() && p.pivot_mm_per_rad != 0.0) {
+            return Err(PluginError::at("pivot_mm_per_rad", "must be finite and non-zero"));
+        }
+        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        let pi = Pi::new(p.position_pi);
+        Ok(VsaWrist {
+            characteristic,
+            carrier_origin: [0.0; 2],
+            bevel_origin: [0.0; 2],
+            motor_origin: [0.0; 2],
+            joint_origin: [0.0; 2],
+            velocity: [VelocityEstimator::new(0.5); 2],
+            pi: [pi; 2],
+            hold_target: [0.0; 2],
+            last_mode: [ControlMode::HOLD; 2],
+            p,
+        })
+    }
+
+    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
+        if ctx.dof != 2 {
+            return Err(PluginError::new("the wrist plugin serves q6 and q7: give both under `dofs`"));
+        }
+        Ok(())
+    }
+
+    fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
+        let need = |r: Option<f64>, what: &str| r.ok_or_else(|| PluginError::new(format!("cannot activate: {what} is not readable")));
+        for (i, (c, b, m)) in [(CARRIER_A, BEVEL_A, MOTOR_A), (CARRIER_B, BEVEL_B, MOTOR_B)].into_iter().enumerate() {
+            self.carrier_origin[i] = need(self.read(raw, c), "a planet-carrier encoder")?;
+            self.bevel_origin[i] = need(self.read(raw, b), "a bevel-input encoder")?;
+            self.motor_origin[i] = need(raw.drive(m).position_rad.usable(self.p.max_age_s), "a wrist motor")?;
+        }
+        let (q6, q7) = self.positions(raw).ok_or_else(|| PluginError::new("cannot activate: the bevel inputs are not readable"))?;
+        self.joint_origin = [q6, q7];
+        self.hold_target = [q6, q7];
+        Ok(())
+    }
+}
+
+impl Observer for VsaWrist {
+    fn observe(&mut self, raw: &RawJointView, out: &mut [JointState]) -> Result<(), JointFault> {
+        let mut s = [JointState::UNKNOWN; 2];
+        let positions = self.positions(raw);
+        if let Some((q6, q7)) = positions {
+            s[0].set_position(q6);
+            s[1].set_position(q7);
+        }
+        let pivot = self.read(raw, PIVOT).map(|a| self.p.pivot_offset_mm + self.p.pivot_mm_per_rad * a);
+        if let Some(p) = pivot {
+            let deflection = self.deflections(raw);
+            let (d6, d7) = deflection.unwrap_or((0.0, 0.0));
+            let e = self.characteristic.evaluate(p, d6, d7);
+            for (st, k) in s.iter_mut().zip([e.stiffness_q6_nm_per_rad, e.stiffness_q7_nm_per_rad]) {
+                st.set_pivot(p);
+                st.set_stiffness(k);
+                if e.clamped {
+                    st.mark_clamped();
+                }
+            }
+            if deflection.is_some() {
+                s[0].set_deflection(d6);
+                s[1].set_deflection(d7);
+                s[0].set_torque(e.torque_q6_nm);
+                s[1].set_torque(e.torque_q7_nm);
+            }
+        }
+        for (i, st) in s.iter_mut().enumerate() {
+            let q = positions.map(|p| if i == 0 { p.0 } else { p.1 });
+            if let Some(v) = self.velocity[i].update(q, raw.dt_s) {
+                st.set_velocity(v);
+            }
+        }
+        out[..2].copy_from_slice(&s);
+        Ok(())
+    }
+}
+
+impl Controller for VsaWrist {
+    fn control(
+        &mut self,
+        state: &[JointState],
+        command: &[JointCommand],
+        raw: &RawJointView,
+        out: &mut [MotorSetpoint],
+    ) -> Result<(), JointFault> {
+        let mut target = [0.0; 2];
+        let mut any_moving = false;
+        for i in 0..2 {
+            let q = state[i].position().unwrap_or(self.hold_target[i]);
+            if command[i].mode != self.last_mode[i] {
+                self.pi[i].reset();
+                if command[i].mode == ControlMode::HOLD {
+                    self.hold_target[i] = q;
+                }
+                self.last_mode[i] = command[i].mode;
+            }
+            target[i] = match command[i].mode {
+                ControlMode::POSITION => {
+                    any_moving = true;
+                    command[i].position_rad + self.pi[i].update(command[i].position_rad - q, raw.dt_s)
+                }
+                _ => self.hold_target[i],
+            };
+        }
+        if !any_moving {
+            out.fill(MotorSetpoint::HOLD);
+            return Ok(());
+        }
+        // Eq. 3.7 inverse to the bevel inputs, then eq. 3.8's ratio back to the carrier inputs
+        // (the motors' gearbox outputs), anchored at the activation pose.
+        let (b1, b2) = eq_3_7_bevel_inverse(target[0] - self.joint_origin[0], target[1] - self.joint_origin[1]);
+        let k = self.ratio();
+        out[MOTOR_A] = MotorSetpoint::move_to(self.motor_origin[0] + b1 / k);
+        out[MOTOR_B] = MotorSetpoint::move_to(self.motor_origin[1] + b2 / k);
+        out[PIVOT_DRIVE] = MotorSetpoint::HOLD;
+        Ok(())
+    }
+}
+
+export_joint_plugin!(
+    name: vsa_wrist,
+    plugin: VsaWrist,
+    dof: 2,
+    encoders: "carrier_a,carrier_b,bevel_a,bevel_b,pivot",
+    drives: "motor_a,motor_b,pivot",
+);

@@ -1,0 +1,192 @@
+//! The reference config's observers on synthetic raw readings: every joint's state checked
+//! against values computed by hand from the thesis' equations and the configured parameters.
+
+use std::sync::{Arc, Mutex};
+
+use jointctl_api::{DriveReading, FieldMask, JointCommand, Reading};
+use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, HalIoError, SensorFrame};
+use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
+use jointctl_runtime::{Arm, PluginLoader};
+
+/// A HAL whose readings the test sets by device name.
+#[derive(Clone)]
+struct ScriptedHal {
+    frame: Arc<Mutex<SensorFrame>>,
+    devices: DeviceIndex,
+    written: Arc<Mutex<Vec<jointctl_api::MotorSetpoint>>>,
+}
+
+impl ScriptedHal {
+    fn set_encoder(&self, name: &str, r: Reading) {
+        let i = self.devices.encoder(name).unwrap_or_else(|| panic!("no encoder {name}"));
+        self.frame.lock().unwrap().encoders[i] = r;
+    }
+    fn set_drive(&self, name: &str, rad: f64) {
+        let i = self.devices.drive(name).unwrap();
+        self.frame.lock().unwrap().drives[i] = DriveReading::new(Reading::valid(rad), Reading::valid(0.0), true, false);
+    }
+    fn written(&self, name: &str) -> jointctl_api::MotorSetpoint {
+        self.written.lock().unwrap()[self.devices.drive(name).unwrap()]
+    }
+}
+
+impl Hal for ScriptedHal {
+    fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
+        frame.clone_from(&self.frame.lock().unwrap());
+        Ok(())
+    }
+    fn write(&mut self, frame: &ActuatorFrame, _: f64) -> Result<(), HalIoError> {
+        *self.written.lock().unwrap() = frame.drives.clone();
+        Ok(())
+    }
+}
+
+fn sherpa() -> (Arm, ScriptedHal, jointctl_config::LoadedConfig) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let loaded = jointctl_config::load(&path).unwrap();
+    let devices = DeviceIndex::of(&loaded.config);
+    let mut frame = SensorFrame::new(&devices);
+    frame.encoders.fill(Reading::valid(0.0));
+    frame.drives.fill(DriveReading::new(Reading::valid(0.0), Reading::valid(0.0), true, false));
+    let hal = ScriptedHal {
+        frame: Arc::new(Mutex::new(frame)),
+        written: Arc::new(Mutex::new(vec![Default::default(); devices.drives.len()])),
+        devices,
+    };
+    // Loaded from the shared libraries, as `jointctl run` does.
+    let arm = Arm::build(&loaded, &PluginLoader::new([]), Box::new(hal.clone())).unwrap();
+    (arm, hal, loaded)
+}
+
+fn params_characteristic(loaded: &jointctl_config::LoadedConfig, joint: &str) -> CharacteristicSpec {
+    let j = loaded.config.joints.iter().find(|j| j.name == joint).unwrap();
+    serde_json::from_value(j.params.0["characteristic"].clone()).unwrap()
+}
+
+fn close(a: Option<f64>, b: f64, what: &str) {
+    let a = a.unwrap_or_else(|| panic!("{what} is unknown"));
+    assert!((a - b).abs() < 1e-9, "{what}: {a} vs {b}");
+}
+
+#[test]
+fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
+    let (mut arm, hal, loaded) = sherpa();
+    arm.activate().unwrap(); // all readings 0: every origin 0
+    assert_eq!(arm.dof_names, ["q1", "q2", "q3", "q4", "q5", "q6", "q7"]);
+
+    hal.set_encoder("enc_q1_out", Reading::valid(0.3));
+    // Shoulder: q2 output 0.2, deflection 0.03, pivot encoder 1.0 rad -> 22.5 + 1.0 = 23.5 mm;
+    // pulleys 0.5 / 0.1 -> q3 = (0.5 - 0.1)/2 = 0.2 (eq. 3.3, assumed differential).
+    hal.set_encoder("enc_q2_out", Reading::valid(0.2));
+    hal.set_encoder("enc_q2_deflection", Reading::valid(0.03));
+    hal.set_encoder("enc_shoulder_pivot", Reading::valid(1.0));
+    hal.set_encoder("enc_shoulder_pulley_a", Reading::valid(0.5));
+    hal.set_encoder("enc_shoulder_pulley_b", Reading::valid(0.1));
+    // Elbow: output 0.25, motor 0.1 -> deflection 0.25 - 2 * 0.1 = 0.05 (eq. 3.2), 113.78 * 0.05.
+    hal.set_encoder("enc_q4_out", Reading::valid(0.25));
+    hal.set_drive("elmo_q4", 0.1);
+    // Wrist q5: output 0.1, motor 0.08 -> 0.02 rad, 70.0966 * 0.02.
+    hal.set_encoder("enc_q5_out", Reading::valid(0.1));
+    hal.set_drive("elmo_q5", 0.08);
+    // Wrist q6/q7: carrier a 0.4 -> expected bevel 0.4 * 20/80 * 0.75 = 0.075 (eq. 3.8); bevel a
+    // measured 0.05 -> input deflection 0.025; drivetrain b at rest -> 0. Eq. 3.7: q6 deflection
+    // (0.025 + 0)/2 = 0.0125, q7 deflection (0.025 - 0)/2 = 0.0125; positions (0.05 +- 0)/2.
+    hal.set_encoder("enc_wrist_carrier_a", Reading::valid(0.4));
+    hal.set_encoder("enc_wrist_bevel_a", Reading::valid(0.05));
+    hal.set_encoder("enc_wrist_pivot", Reading::valid(-2.0)); // 25 - 2 = 23 mm
+    arm.step(0.025);
+    let s = &arm.states;
+
+    close(s[0].position(), 0.3, "q1 position");
+    close(s[0].deflection(), 0.0, "q1 deflection");
+    assert_eq!(s[0].torque(), None, "a rigid joint's torque is unknown, not zero");
+    close(s[0].stiffness(), 8.3e4, "q1 stiffness");
+
+    let shoulder = PivotCharacteristic::from_spec(&params_characteristic(&loaded, "shoulder")).unwrap();
+    let e = shoulder.evaluate(23.5, 0.03);
+    close(s[1].position(), 0.2, "q2 position");
+    close(s[1].deflection(), 0.03, "q2 deflection");
+    close(s[1].pivot(), 23.5, "q2 pivot");
+    close(s[1].torque(), e.torque_nm, "q2 torque");
+    close(s[1].stiffness(), e.stiffness_nm_per_rad, "q2 stiffness");
+    // Between the 20 and 25 mm settings (weight 0.7 on 25 mm): a sane shoulder torque.
+    assert!(e.torque_nm > 1.0 && e.torque_nm < 10.0, "{e:?}");
+    close(s[2].position(), 0.2, "q3 position");
+    close(s[2].stiffness(), 8.3e4, "q3 stiffness");
+
+    close(s[3].deflection(), 0.05, "q4 deflection");
+    close(s[3].torque(), 113.78 * 0.05, "q4 torque");
+    close(s[4].deflection(), 0.02, "q5 deflection");
+    close(s[4].torque(), 70.0966 * 0.02, "q5 torque");
+
+    let wrist = WristCharacteristic::from_spec(&params_characteristic(&loaded, "wrist")).unwrap();
+    let w = wrist.evaluate(23.0, 0.0125, 0.0125);
+    close(s[5].position(), 0.025, "q6 position");
+    close(s[6].position(), 0.025, "q7 position");
+    close(s[5].deflection(), 0.0125, "q6 deflection");
+    close(s[6].deflection(), 0.0125, "q7 deflection");
+    close(s[5].torque(), w.torque_q6_nm, "q6 torque");
+    close(s[6].torque(), w.torque_q7_nm, "q7 torque");
+    close(s[5].pivot(), 23.0, "q6 pivot");
+    // Along the 45 deg diagonal both joints carry the same torque, with the sign of the deflection.
+    assert!(w.torque_q6_nm > 0.0 && (w.torque_q6_nm - w.torque_q7_nm).abs() < 1e-12);
+    for (i, st) in s.iter().enumerate() {
+        assert!(!st.valid.has(FieldMask::CLAMPED), "joint {i} clamped");
+    }
+}
+
+#[test]
+fn a_lost_reading_makes_its_joint_unknown_and_held_and_a_pivot_beyond_range_is_flagged() {
+    let (mut arm, hal, _) = sherpa();
+    arm.activate().unwrap();
+    for i in 0..7 {
+        arm.set_command(i, JointCommand::position(0.1));
+    }
+    // Appendix A: a lost frame. The elbow's motor reading is missing this cycle.
+    hal.frame.lock().unwrap().drives[hal.devices.drive("elmo_q4").unwrap()] = DriveReading::default();
+    // Shoulder pivot far beyond the characterised 0-45 mm.
+    hal.set_encoder("enc_shoulder_pivot", Reading::valid(100.0));
+    hal.set_encoder("enc_q2_deflection", Reading::valid(0.02));
+    arm.step(0.025);
+    let q4 = &arm.states[3];
+    assert!(q4.position().is_some(), "the output encoder still gives the position");
+    assert_eq!(q4.deflection(), None, "no deflection without the motor reading");
+    assert_eq!(q4.torque(), None, "never a torque from a missing reading");
+    // The shoulder: clamped to 45 mm and flagged, not extrapolated.
+    let q2 = &arm.states[1];
+    assert!(q2.valid.has(FieldMask::CLAMPED));
+    assert!(q2.torque().is_some());
+    // An unusable output encoder: the joint is held, not driven.
+    hal.set_encoder("enc_q1_out", Reading::invalid());
+    arm.step(0.05);
+    assert_eq!(arm.states[0].position(), None);
+    assert!(arm.slots[0].held);
+    assert_eq!(arm.slots[0].invalid_cycles, 1);
+    assert_eq!(hal.written("elmo_q1"), jointctl_api::MotorSetpoint::HOLD);
+}
+
+#[test]
+fn position_commands_go_through_each_plugin_transmission() {
+    let (mut arm, hal, _) = sherpa();
+    arm.activate().unwrap();
+    // q2 = 0.2, q3 = 0.1 -> a2 = 0.3, a3 = 0.1 (eq. 3.3 inverse); the PI adds nothing at the
+    // first step beyond kp * error, so compare the direction of the differential.
+    arm.set_command(1, JointCommand::position(0.2));
+    arm.set_command(2, JointCommand::position(0.1));
+    // q6 = 0.1, q7 = 0 -> bevel inputs 0.1 / 0.1 -> motors 0.1 / 0.1875 each.
+    arm.set_command(5, JointCommand::position(0.1));
+    arm.set_command(6, JointCommand::position(0.0));
+    arm.step(0.0);
+    let a2 = hal.written("elmo_shoulder_a").position_rad;
+    let a3 = hal.written("elmo_shoulder_b").position_rad;
+    // With kp = 0.2 and the joints at 0: targets 0.2 * 1.2 = 0.24 and 0.1 * 1.2 = 0.12, plus the
+    // integral step ki * e * dt (0.5 * e * 0.025).
+    let q2t = 0.2 + 0.2 * 0.2 + 0.5 * 0.2 * 0.025;
+    let q3t = 0.1 + 0.2 * 0.1 + 0.5 * 0.1 * 0.025;
+    assert!((a2 - (q2t + q3t)).abs() < 1e-12 && (a3 - (q2t - q3t)).abs() < 1e-12, "{a2} {a3}");
+    let m_a = hal.written("elmo_wrist_a").position_rad;
+    let m_b = hal.written("elmo_wrist_b").position_rad;
+    let q6t = 0.1 + 0.2 * 0.1 + 0.5 * 0.1 * 0.025;
+    assert!((m_a - q6t / 0.1875).abs() < 1e-9 && (m_b - q6t / 0.1875).abs() < 1e-9, "{m_a} {m_b}");
+    assert_eq!(hal.written("elmo_shoulder_pivot"), jointctl_api::MotorSetpoint::HOLD);
+}
