@@ -190,3 +190,12 @@ fn position_commands_go_through_each_plugin_transmission() {
     assert!((m_a - q6t / 0.1875).abs() < 1e-9 && (m_b - q6t / 0.1875).abs() < 1e-9, "{m_a} {m_b}");
     assert_eq!(hal.written("elmo_shoulder_pivot"), jointctl_api::MotorSetpoint::HOLD);
 }
+
+#[test]
+fn the_committed_vsa_tables_are_the_generators_output() {
+    // The assumed tables in configs/sherpa_arm.yaml must be reproducible from their generator
+    // (cargo run -p jointctl-models --example assumed_tables -- shoulder|wrist).
+    let (_, _, loaded) = sherpa();
+    assert_eq!(params_characteristic(&loaded, "shoulder"), jointctl_models::assumed::shoulder_spec());
+    assert_eq!(params_characteristic(&loaded, "wrist"), jointctl_models::assumed::wrist_spec());
+}
