@@ -164,8 +164,10 @@ fn the_reference_sherpa_config_checks() {
     let out = Command::new(jointctl()).arg("check").arg(&cfg).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
-    for q in ["q1", "q2", "q3", "q4", "q5", "q6", "q7"] {
-        assert!(text.contains(&format!("DOF {q}")), "{text}");
+    let dofs: Vec<&str> = text.lines().filter_map(|l| l.split_once(" DOF ")).flat_map(|(_, d)| d.split(", ")).collect();
+    assert_eq!(dofs, ["q1", "q2", "q3", "q4", "q5", "q6", "q7"], "{text}");
+    for plugin in ["rigid", "vsa_shoulder", "elastic", "vsa_wrist"] {
+        assert!(text.contains(&format!("plugin {plugin}")), "{text}");
     }
 }
 
