@@ -199,3 +199,24 @@ fn the_committed_vsa_tables_are_the_generators_output() {
     assert_eq!(params_characteristic(&loaded, "shoulder"), jointctl_models::assumed::shoulder_spec());
     assert_eq!(params_characteristic(&loaded, "wrist"), jointctl_models::assumed::wrist_spec());
 }
+
+#[test]
+fn an_elastic_joint_with_an_input_encoder_ignores_the_drive_reading() {
+    // Section 3.4.1: deflection from absolute encoders only when the motor side has one.
+    let yaml = jointctl_tests::rig_yaml("x", 100.0, "  - name: b\n    plugin: elastic\n    encoders: {output: e1, input: e2}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 100.0, output_per_motor: 2.0, position_pi: {kp: 0, ki: 0}}\n");
+    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    let devices = DeviceIndex::of(&loaded.config);
+    let mut frame = SensorFrame::new(&devices);
+    frame.encoders.fill(Reading::valid(0.0));
+    frame.drives.fill(DriveReading::new(Reading::valid(0.0), Reading::valid(0.0), true, false));
+    let hal = ScriptedHal { frame: Arc::new(Mutex::new(frame)), written: Arc::new(Mutex::new(vec![Default::default(); 4])), devices };
+    let mut arm = Arm::build(&loaded, &PluginLoader::new([]), Box::new(hal.clone())).unwrap();
+    arm.activate().unwrap();
+    hal.set_encoder("e1", Reading::valid(0.3));
+    hal.set_encoder("e2", Reading::valid(0.1));
+    // A lost CAN frame on the drive (appendix A) does not matter: the input encoder is used.
+    hal.frame.lock().unwrap().drives[1] = DriveReading::default();
+    arm.step(0.01);
+    close(arm.states[1].deflection(), 0.3 - 2.0 * 0.1, "deflection from absolute encoders");
+    close(arm.states[1].torque(), 100.0 * 0.1, "torque");
+}

@@ -19,6 +19,10 @@ use serde::Deserialize;
 
 /// Encoder role 0: the absolute encoder on the joint output.
 const OUTPUT_ENCODER: usize = 0;
+/// Encoder role 1 (optional): an absolute encoder on the motor side of the elastic element. When
+/// wired, the deflection comes from absolute encoders only (section 3.4.1 preferred them to the
+/// motor encoders read over CAN, appendix A); otherwise from the drive's motor position.
+const INPUT_ENCODER: usize = 1;
 /// Drive role 0: the joint motor.
 const MOTOR: usize = 0;
 
@@ -48,12 +52,16 @@ pub struct ElasticJoint {
     velocity: VelocityEstimator,
     pi: Pi,
     last_mode: ControlMode,
+    input_wired: bool,
+    input_origin: f64,
+    output_origin: f64,
 }
 
 impl ElasticJoint {
-    /// Eq. 3.2 solved for the RC element's deflection, relative to the activation pose.
-    fn deflection(&self, output_rad: f64, motor_rad: f64) -> f64 {
-        output_rad - self.transmission.joint_for(motor_rad)
+    /// Eq. 3.2 solved for the RC element's deflection, relative to the activation pose (the
+    /// initial angles subtracted, section 3.4.1).
+    fn deflection(&self, output_rad: f64, input_rad: f64) -> f64 {
+        (output_rad - self.output_origin) - self.transmission.ratio() * (input_rad - self.input_origin)
     }
 }
 
@@ -71,6 +79,9 @@ impl JointPlugin for ElasticJoint {
             velocity: VelocityEstimator::new(0.5),
             pi: Pi::new(p.position_pi),
             last_mode: ControlMode::HOLD,
+            input_wired: false,
+            input_origin: 0.0,
+            output_origin: 0.0,
             params: p,
         })
     }
@@ -83,15 +94,21 @@ impl JointPlugin for ElasticJoint {
     }
 
     fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
-        let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
-        let m = raw.drive(MOTOR).position_rad.usable(self.params.max_age_s);
-        match (q, m) {
-            (Some(q), Some(m)) => {
+        let age = self.params.max_age_s;
+        let q = raw.encoder(OUTPUT_ENCODER).usable(age);
+        let m = raw.drive(MOTOR).position_rad.usable(age);
+        let i = raw.encoder(INPUT_ENCODER);
+        self.input_wired = i.status != jointctl_api::ReadingStatus::MISSING;
+        let input = if self.input_wired { i.usable(age) } else { m };
+        match (q, m, input) {
+            (Some(q), Some(m), Some(input)) => {
                 self.transmission = self.transmission.anchored(q, m);
+                self.input_origin = input;
+                self.output_origin = q;
                 Ok(())
             }
             _ => Err(PluginError::new(
-                "cannot activate: the output encoder and the motor position must both be readable",
+                "cannot activate: the output encoder, the motor position and (if wired) the input encoder must be readable",
             )),
         }
     }
@@ -101,13 +118,17 @@ impl Observer for ElasticJoint {
     fn observe(&mut self, raw: &RawJointView, out: &mut [JointState]) -> Result<(), JointFault> {
         let mut s = JointState::UNKNOWN;
         let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
-        let m = raw.drive(MOTOR).position_rad.usable(self.params.max_age_s);
+        let input = if self.input_wired {
+            raw.encoder(INPUT_ENCODER).usable(self.params.max_age_s)
+        } else {
+            raw.drive(MOTOR).position_rad.usable(self.params.max_age_s)
+        };
         if let Some(q) = q {
             s.set_position(q);
             s.set_stiffness(self.params.stiffness_nm_per_rad);
         }
-        if let (Some(q), Some(m)) = (q, m) {
-            let deflection = self.deflection(q, m);
+        if let (Some(q), Some(input)) = (q, input) {
+            let deflection = self.deflection(q, input);
             s.set_deflection(deflection);
             // Section 3.3.2: first-order fit, torque = K * deflection.
             s.set_torque(self.params.stiffness_nm_per_rad * deflection);
@@ -144,4 +165,4 @@ impl Controller for ElasticJoint {
     }
 }
 
-export_joint_plugin!(name: elastic, plugin: ElasticJoint, dof: 1, encoders: "output", drives: "motor");
+export_joint_plugin!(name: elastic, plugin: ElasticJoint, dof: 1, encoders: "output,input?", drives: "motor");
