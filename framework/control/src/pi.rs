@@ -42,8 +42,8 @@ impl PiGains {
     }
 }
 
-/// A PI controller with conditional-integration anti-windup: while the output saturates in the
-/// direction of the error, the integrator does not grow.
+/// A PI controller with anti-windup: while the output saturates in the direction of the error,
+/// the integrator grows no further than the output limit.
 ///
 /// ```
 /// use jointctl_control::{Pi, PiGains};
@@ -68,14 +68,20 @@ impl Pi {
     /// One step: `error` in the input unit, `dt_s` the step [s]. Returns the limited output.
     pub fn update(&mut self, error: f64, dt_s: f64) -> f64 {
         let limit = self.gains.output_limit;
+        let p = self.gains.kp * error;
         let candidate = self.integral + self.gains.ki * error * dt_s;
-        let unsaturated = self.gains.kp * error + candidate;
-        // Conditional integration: accept the new integral unless it drives further into the limit.
-        let winding_up = (unsaturated > limit && error > 0.0) || (unsaturated < -limit && error < 0.0);
-        if !winding_up {
-            self.integral = candidate.clamp(-limit, limit);
+        // Anti-windup: while the output saturates in the direction of the error, the integrator
+        // may grow only until the output reaches the limit, never past it (and never shrinks
+        // because of the saturation).
+        self.integral = if p + candidate > limit && error > 0.0 {
+            self.integral.max((limit - p).min(candidate))
+        } else if p + candidate < -limit && error < 0.0 {
+            self.integral.min((-limit - p).max(candidate))
+        } else {
+            candidate
         }
-        (self.gains.kp * error + self.integral).clamp(-limit, limit)
+        .clamp(-limit, limit);
+        (p + self.integral).clamp(-limit, limit)
     }
 
     /// The integrator state.

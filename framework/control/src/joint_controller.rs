@@ -1,0 +1,502 @@
+//! The control modes of one joint DOF, shared by every joint type: the runtime runs one
+//! [`JointController`] per DOF and hands its joint set-point to the joint's plugin, which maps it
+//! onto its motors. Allocation-free in [`JointController::update`].
+
+use serde::Deserialize;
+
+use crate::{Pi, PiGains, Reference, Trajectory};
+
+/// One point of the torque PI's gain schedule over the joint stiffness (section 6.2).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GainPoint {
+    /// Joint stiffness at which these gains apply [Nm/rad].
+    pub stiffness_nm_per_rad: f64,
+    /// Proportional gain on the deflection error [rad/rad].
+    pub kp: f64,
+    /// Integral gain on the deflection error [1/s].
+    pub ki: f64,
+}
+
+/// A DOF's controller settings (YAML `controller:` of a joint or DOF). The thesis tuned its PI
+/// experimentally without printing the gains (section 4.3): every default is an assumption.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerConfig {
+    /// Figure 4.6: the PI on the deflection error; `output_limit` bounds its correction [rad].
+    #[serde(default = "default_torque_pi")]
+    pub torque_pi: PiGains,
+    /// Section 6.2: gains at several stiffness settings, interpolated linearly in stiffness and
+    /// held constant beyond the ends. Empty: `torque_pi` at every stiffness.
+    #[serde(default)]
+    pub torque_pi_schedule: Vec<GainPoint>,
+    /// Largest joint set-point rate [rad/s]. Assumption: 2 rad/s.
+    #[serde(default = "default_rate")]
+    pub max_setpoint_rate_rad_s: f64,
+    /// A streamed torque or impedance command that is not renewed within this time falls back
+    /// to holding [s]. Assumption: 0.5 s.
+    #[serde(default = "default_watchdog")]
+    pub watchdog_s: f64,
+}
+
+fn default_torque_pi() -> PiGains {
+    PiGains { kp: 0.3, ki: 4.0, output_limit: 0.2 }
+}
+fn default_rate() -> f64 {
+    2.0
+}
+fn default_watchdog() -> f64 {
+    0.5
+}
+
+impl Default for ControllerConfig {
+    fn default() -> Self {
+        ControllerConfig {
+            torque_pi: default_torque_pi(),
+            torque_pi_schedule: Vec::new(),
+            max_setpoint_rate_rad_s: default_rate(),
+            watchdog_s: default_watchdog(),
+        }
+    }
+}
+
+impl ControllerConfig {
+    /// Checks every number; the error names the field.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        self.torque_pi.validate().map_err(|m| ("torque_pi".to_string(), m))?;
+        for (i, g) in self.torque_pi_schedule.iter().enumerate() {
+            let ok = g.stiffness_nm_per_rad.is_finite() && g.stiffness_nm_per_rad > 0.0 && g.kp.is_finite() && g.kp >= 0.0 && g.ki.is_finite() && g.ki >= 0.0;
+            if !ok {
+                return Err((format!("torque_pi_schedule[{i}]"), "stiffness must be > 0 and gains >= 0, all finite".into()));
+            }
+            if i > 0 && g.stiffness_nm_per_rad <= self.torque_pi_schedule[i - 1].stiffness_nm_per_rad {
+                return Err((format!("torque_pi_schedule[{i}].stiffness_nm_per_rad"), "must increase from point to point".into()));
+            }
+        }
+        if !(self.max_setpoint_rate_rad_s.is_finite() && self.max_setpoint_rate_rad_s > 0.0) {
+            return Err(("max_setpoint_rate_rad_s".into(), format!("must be finite and > 0, got {}", self.max_setpoint_rate_rad_s)));
+        }
+        if !(self.watchdog_s.is_finite() && self.watchdog_s > 0.0) {
+            return Err(("watchdog_s".into(), format!("must be finite and > 0, got {}", self.watchdog_s)));
+        }
+        Ok(())
+    }
+
+    /// The torque PI gains at a stiffness (section 6.2's gain scheduling).
+    ///
+    /// ```
+    /// use jointctl_control::{ControllerConfig, GainPoint};
+    /// let mut c = ControllerConfig::default();
+    /// c.torque_pi_schedule = vec![
+    ///     GainPoint { stiffness_nm_per_rad: 10.0, kp: 1.0, ki: 10.0 },
+    ///     GainPoint { stiffness_nm_per_rad: 30.0, kp: 0.2, ki: 2.0 },
+    /// ];
+    /// let g = c.gains_at(20.0);
+    /// assert!((g.kp - 0.6).abs() < 1e-12 && (g.ki - 6.0).abs() < 1e-12);
+    /// assert_eq!(c.gains_at(100.0).kp, 0.2);
+    /// ```
+    pub fn gains_at(&self, stiffness_nm_per_rad: f64) -> PiGains {
+        let s = &self.torque_pi_schedule;
+        let (kp, ki) = match s.len() {
+            0 => return self.torque_pi,
+            _ if stiffness_nm_per_rad <= s[0].stiffness_nm_per_rad => (s[0].kp, s[0].ki),
+            n if stiffness_nm_per_rad >= s[n - 1].stiffness_nm_per_rad => (s[n - 1].kp, s[n - 1].ki),
+            _ => {
+                let i = s.partition_point(|g| g.stiffness_nm_per_rad <= stiffness_nm_per_rad) - 1;
+                let (a, b) = (s[i], s[i + 1]);
+                let w = (stiffness_nm_per_rad - a.stiffness_nm_per_rad) / (b.stiffness_nm_per_rad - a.stiffness_nm_per_rad);
+                (a.kp + w * (b.kp - a.kp), a.ki + w * (b.ki - a.ki))
+            }
+        };
+        PiGains { kp, ki, output_limit: self.torque_pi.output_limit }
+    }
+}
+
+/// Limits of one DOF (from the YAML `limits`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DofLimits {
+    /// `[lower, upper]` joint position [rad].
+    pub position_rad: [f64; 2],
+    /// Largest |torque reference| [Nm].
+    pub torque_nm: f64,
+}
+
+impl DofLimits {
+    /// No limits.
+    pub const NONE: DofLimits = DofLimits { position_rad: [f64::NEG_INFINITY, f64::INFINITY], torque_nm: f64::INFINITY };
+}
+
+/// What a DOF is asked to do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// Keep the drives where they are.
+    Hold,
+    /// Go to a joint position with the position feedback PI (section 4.3).
+    Position {
+        /// [rad]
+        target_rad: f64,
+    },
+    /// Direct joint set-points (the thesis' dynamic-reconfigure GUI), no feedback PI.
+    Manual {
+        /// [rad]
+        target_rad: f64,
+    },
+    /// Follow a time-stamped trajectory started at `start_s`.
+    Trajectory {
+        /// The points.
+        trajectory: Trajectory,
+        /// Runtime time at which the trajectory's time 0 is [s].
+        start_s: f64,
+    },
+    /// Figure 4.6: regulate the deflection so that the observed torque follows `reference` [Nm].
+    Torque {
+        /// The torque reference.
+        reference: Reference,
+    },
+    /// Section 1.2: `tau_ref = K (q_d - q) - D dq/dt`, realised through the torque mode.
+    Impedance {
+        /// K_d [Nm/rad].
+        stiffness_nm_per_rad: f64,
+        /// D_d [Nms/rad].
+        damping_nms_per_rad: f64,
+        /// q_d [rad].
+        target_rad: f64,
+    },
+}
+
+impl Mode {
+    /// A short name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Mode::Hold => "hold",
+            Mode::Position { .. } => "position",
+            Mode::Manual { .. } => "manual",
+            Mode::Trajectory { .. } => "trajectory",
+            Mode::Torque { .. } => "torque",
+            Mode::Impedance { .. } => "impedance",
+        }
+    }
+}
+
+/// Safety events of one DOF, counted since start and published in diagnostics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ControllerEvents {
+    /// Joint set-points clamped into the position limits.
+    pub setpoint_clamps: u64,
+    /// Torque references clamped into the torque limit.
+    pub torque_clamps: u64,
+    /// Cycles whose set-point change was limited by the rate limit.
+    pub rate_limited: u64,
+    /// Streamed commands that timed out and fell back to holding.
+    pub watchdog_trips: u64,
+    /// Cycles held because a value the mode needs (torque, stiffness, velocity) was unknown.
+    pub missing_inputs: u64,
+}
+
+/// One cycle's result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output {
+    /// Hold the drives (no set-point).
+    pub hold: bool,
+    /// Joint position set-point [rad].
+    pub setpoint_rad: f64,
+    /// Joint velocity feed-forward [rad/s].
+    pub velocity_rad_s: f64,
+    /// Whether the plugin's position feedback PI should act (off in torque and impedance modes,
+    /// where it would fight the torque loop, section 4.3).
+    pub position_feedback: bool,
+    /// The torque reference used this cycle [Nm], NaN outside torque/impedance modes.
+    pub torque_reference_nm: f64,
+    /// The set-point was clamped this cycle (limits or rate).
+    pub clamped: bool,
+}
+
+impl Output {
+    const HOLD: Output = Output {
+        hold: true,
+        setpoint_rad: f64::NAN,
+        velocity_rad_s: 0.0,
+        position_feedback: false,
+        torque_reference_nm: f64::NAN,
+        clamped: false,
+    };
+}
+
+/// The observed quantities the controller needs (from the joint's state).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observed {
+    /// Joint position [rad], if observed.
+    pub position_rad: Option<f64>,
+    /// Joint velocity [rad/s], if observed.
+    pub velocity_rad_s: Option<f64>,
+    /// Joint torque [Nm], if observed.
+    pub torque_nm: Option<f64>,
+    /// Joint stiffness [Nm/rad], if observed.
+    pub stiffness_nm_per_rad: Option<f64>,
+}
+
+/// The controller of one DOF.
+#[derive(Clone, Debug)]
+pub struct JointController {
+    config: ControllerConfig,
+    limits: DofLimits,
+    mode: Mode,
+    pi: Pi,
+    last_setpoint: Option<f64>,
+    stream_deadline_s: Option<f64>,
+    /// Safety events so far.
+    pub events: ControllerEvents,
+}
+
+impl JointController {
+    /// A controller in [`Mode::Hold`].
+    pub fn new(config: ControllerConfig, limits: DofLimits) -> Self {
+        let pi = Pi::new(config.torque_pi);
+        JointController { config, limits, mode: Mode::Hold, pi, last_setpoint: None, stream_deadline_s: None, events: ControllerEvents::default() }
+    }
+
+    /// The current mode.
+    pub fn mode(&self) -> &Mode {
+        &self.mode
+    }
+
+    /// The limits.
+    pub fn limits(&self) -> DofLimits {
+        self.limits
+    }
+
+    /// Switches mode at runtime time `now_s`. A `streamed` command must be renewed within the
+    /// watchdog time or the DOF falls back to holding.
+    pub fn set_mode(&mut self, mode: Mode, now_s: f64, streamed: bool) {
+        if core::mem::discriminant(&mode) != core::mem::discriminant(&self.mode) {
+            self.pi.reset();
+        }
+        self.mode = mode;
+        self.stream_deadline_s = streamed.then_some(now_s + self.config.watchdog_s);
+    }
+
+    /// One control step at runtime time `now_s`.
+    pub fn update(&mut self, observed: &Observed, now_s: f64, dt_s: f64) -> Output {
+        if let Some(deadline) = self.stream_deadline_s
+            && now_s > deadline
+        {
+            self.events.watchdog_trips += 1;
+            self.stream_deadline_s = None;
+            self.mode = Mode::Hold;
+        }
+        let Some(q) = observed.position_rad else {
+            self.last_setpoint = None;
+            return Output::HOLD;
+        };
+        let (mut target, velocity, feedback, tau_ref) = match self.mode {
+            Mode::Hold => {
+                self.last_setpoint = None;
+                return Output::HOLD;
+            }
+            Mode::Position { target_rad } => (target_rad, 0.0, true, f64::NAN),
+            Mode::Manual { target_rad } => (target_rad, 0.0, false, f64::NAN),
+            Mode::Trajectory { trajectory, start_s } => {
+                let (p, v) = trajectory.sample(now_s - start_s);
+                (p, v, true, f64::NAN)
+            }
+            Mode::Torque { reference } => match self.torque_law(reference.value(now_s), observed, q, dt_s) {
+                Some((sp, t)) => (sp, 0.0, false, t),
+                None => return self.missing(),
+            },
+            Mode::Impedance { stiffness_nm_per_rad, damping_nms_per_rad, target_rad } => {
+                let Some(dq) = observed.velocity_rad_s else { return self.missing() };
+                let tau = stiffness_nm_per_rad * (target_rad - q) - damping_nms_per_rad * dq;
+                match self.torque_law(tau, observed, q, dt_s) {
+                    Some((sp, t)) => (sp, 0.0, false, t),
+                    None => return self.missing(),
+                }
+            }
+        };
+        let mut clamped = false;
+        let [lo, hi] = self.limits.position_rad;
+        if target < lo || target > hi {
+            target = target.clamp(lo, hi);
+            self.events.setpoint_clamps += 1;
+            clamped = true;
+        }
+        let step = self.config.max_setpoint_rate_rad_s * dt_s;
+        let from = self.last_setpoint.unwrap_or(q);
+        if (target - from).abs() > step {
+            target = from + step.copysign(target - from);
+            self.events.rate_limited += 1;
+            clamped = true;
+        }
+        self.last_setpoint = Some(target);
+        Output { hold: false, setpoint_rad: target, velocity_rad_s: velocity, position_feedback: feedback, torque_reference_nm: tau_ref, clamped }
+    }
+
+    fn missing(&mut self) -> Output {
+        self.events.missing_inputs += 1;
+        self.last_setpoint = None;
+        Output::HOLD
+    }
+
+    /// Figure 4.6: torque error → deflection error (÷ stiffness) → PI (gains scheduled over the
+    /// stiffness, section 6.2) → + feed-forward deflection + current joint position.
+    fn torque_law(&mut self, reference_nm: f64, observed: &Observed, q: f64, dt_s: f64) -> Option<(f64, f64)> {
+        let tau = observed.torque_nm?;
+        let k = observed.stiffness_nm_per_rad.filter(|k| *k > 0.0)?;
+        let mut reference = reference_nm;
+        if reference.abs() > self.limits.torque_nm {
+            reference = self.limits.torque_nm.copysign(reference);
+            self.events.torque_clamps += 1;
+        }
+        self.pi.set_gains(self.config.gains_at(k));
+        let deflection_error = (reference - tau) / k;
+        let correction = self.pi.update(deflection_error, dt_s);
+        let feed_forward = reference / k;
+        Some((q + feed_forward + correction, reference))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Waveform;
+
+    /// The closed-form plant: output clamped (q = 0), the motor follows the set-point with a
+    /// first-order response (time constant `tau_m`), torque = K_true * deflection, observed with
+    /// the model stiffness `k_model` (a model error the integrator must remove).
+    struct Plant {
+        motor: f64,
+        k_true: f64,
+        tau_m: f64,
+    }
+
+    impl Plant {
+        fn observe(&self, k_model: f64) -> Observed {
+            Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(self.k_true * self.motor), stiffness_nm_per_rad: Some(k_model) }
+        }
+        fn step(&mut self, out: &Output, dt: f64) {
+            if !out.hold {
+                self.motor += (out.setpoint_rad - self.motor) * (1.0 - (-dt / self.tau_m).exp());
+            }
+        }
+    }
+
+    fn controller(limit_nm: f64) -> JointController {
+        let cfg = ControllerConfig { max_setpoint_rate_rad_s: 100.0, ..ControllerConfig::default() };
+        JointController::new(cfg, DofLimits { position_rad: [-1.0, 1.0], torque_nm: limit_nm })
+    }
+
+    fn step_reference(nm: f64) -> Mode {
+        Mode::Torque { reference: Reference { waveform: Waveform::Step, amplitude: nm, frequency_hz: 0.0, offset: 0.0, start_s: 0.0 } }
+    }
+
+    #[test]
+    fn a_torque_step_settles_with_zero_steady_state_error() {
+        // The model stiffness is 20 % off: feed-forward alone would leave a 20 % error.
+        let (dt, mut plant) = (1.0 / 40.0, Plant { motor: 0.0, k_true: 120.0, tau_m: 0.05 });
+        let mut c = controller(100.0);
+        c.set_mode(step_reference(20.0), 0.0, false);
+        let mut t = 0.0;
+        for _ in 0..(20.0 / dt) as usize {
+            let out = c.update(&plant.observe(100.0), t, dt);
+            assert!(!out.position_feedback, "the position PI is off in torque mode");
+            plant.step(&out, dt);
+            t += dt;
+        }
+        let torque = plant.k_true * plant.motor;
+        assert!((torque - 20.0).abs() < 1e-3, "steady-state torque {torque}");
+    }
+
+    #[test]
+    fn anti_windup_recovers_after_saturation() {
+        // The PI correction is limited to 0.2 rad; a plant far softer than the model cannot reach
+        // the reference, so the PI saturates. When the reference returns to a reachable value,
+        // the torque must settle quickly instead of unwinding a huge integral.
+        let dt = 1.0 / 40.0;
+        let mut plant = Plant { motor: 0.0, k_true: 20.0, tau_m: 0.05 };
+        let mut c = controller(100.0);
+        c.set_mode(step_reference(30.0), 0.0, false);
+        let mut t = 0.0;
+        for _ in 0..(10.0 / dt) as usize {
+            let out = c.update(&plant.observe(100.0), t, dt);
+            plant.step(&out, dt);
+            t += dt;
+        }
+        // Saturated: feed-forward 0.3 rad + correction limit 0.2 rad -> at most 10 Nm.
+        assert!((plant.k_true * plant.motor - 10.0).abs() < 0.1, "saturated torque {}", plant.k_true * plant.motor);
+        c.set_mode(step_reference(5.0), t, false);
+        let mut settled_at = None;
+        for i in 0..(10.0 / dt) as usize {
+            let out = c.update(&plant.observe(100.0), t, dt);
+            plant.step(&out, dt);
+            t += dt;
+            if settled_at.is_none() && (plant.k_true * plant.motor - 5.0).abs() < 0.1 {
+                settled_at = Some(i as f64 * dt);
+            }
+        }
+        let settled = settled_at.expect("recovers");
+        assert!(settled < 2.0, "took {settled} s to recover");
+        assert!((plant.k_true * plant.motor - 5.0).abs() < 1e-2);
+    }
+
+    #[test]
+    fn limits_clamp_and_count() {
+        let mut c = controller(10.0);
+        c.set_mode(Mode::Position { target_rad: 3.0 }, 0.0, false);
+        let obs = Observed { position_rad: Some(0.99), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: None };
+        let out = c.update(&obs, 0.0, 0.01);
+        assert_eq!(out.setpoint_rad, 1.0);
+        assert!(out.clamped);
+        assert_eq!(c.events.setpoint_clamps, 1);
+        // A torque reference beyond the limit is clamped to it and counted.
+        c.set_mode(step_reference(50.0), 0.0, false);
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0) };
+        let out = c.update(&obs, 0.0, 0.01);
+        assert_eq!(out.torque_reference_nm, 10.0);
+        assert_eq!(c.events.torque_clamps, 1);
+    }
+
+    #[test]
+    fn torque_mode_without_an_observed_torque_holds() {
+        let mut c = controller(10.0);
+        c.set_mode(step_reference(5.0), 0.0, false);
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: Some(100.0) };
+        assert!(c.update(&obs, 0.0, 0.01).hold);
+        assert_eq!(c.events.missing_inputs, 1);
+    }
+
+    #[test]
+    fn the_rate_limit_ramps_a_position_step() {
+        let mut c = JointController::new(ControllerConfig { max_setpoint_rate_rad_s: 1.0, ..Default::default() }, DofLimits::NONE);
+        c.set_mode(Mode::Position { target_rad: 1.0 }, 0.0, false);
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: None };
+        let a = c.update(&obs, 0.0, 0.1);
+        let b = c.update(&obs, 0.1, 0.1);
+        assert!((a.setpoint_rad - 0.1).abs() < 1e-12 && (b.setpoint_rad - 0.2).abs() < 1e-12);
+        assert_eq!(c.events.rate_limited, 2);
+    }
+
+    #[test]
+    fn a_stream_that_stops_falls_back_to_hold() {
+        let mut c = controller(10.0);
+        c.set_mode(step_reference(1.0), 0.0, true);
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0) };
+        assert!(!c.update(&obs, 0.4, 0.01).hold);
+        c.set_mode(step_reference(1.0), 0.4, true); // renewed
+        assert!(!c.update(&obs, 0.8, 0.01).hold);
+        assert!(c.update(&obs, 0.95, 0.01).hold, "0.55 s since the last renewal");
+        assert_eq!(c.events.watchdog_trips, 1);
+        assert_eq!(c.mode().name(), "hold");
+    }
+
+    #[test]
+    fn impedance_behaves_like_a_spring_damper() {
+        // Output clamped at q = 0.1, target 0: the torque reference is -K * 0.1.
+        let mut c = controller(100.0);
+        c.set_mode(Mode::Impedance { stiffness_nm_per_rad: 50.0, damping_nms_per_rad: 2.0, target_rad: 0.0 }, 0.0, false);
+        let obs = Observed { position_rad: Some(0.1), velocity_rad_s: Some(0.5), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0) };
+        let out = c.update(&obs, 0.0, 0.01);
+        assert!((out.torque_reference_nm - (-5.0 - 1.0)).abs() < 1e-12);
+        // Unknown velocity: no damping term can be formed, so hold.
+        let obs = Observed { velocity_rad_s: None, ..obs };
+        assert!(c.update(&obs, 0.01, 0.01).hold);
+    }
+}
