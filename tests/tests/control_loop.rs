@@ -1,10 +1,10 @@
 //! The loop: zero allocations per cycle, deadline overruns detected and counted.
 
+use jointctl_control::Mode;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use jointctl_api::JointCommand;
 use jointctl_runtime::timing::monotonic_ns;
 use jointctl_runtime::{ArmPublisher, ControlLoop, PluginLoader, RunOptions};
 use jointctl_tests::{arm_name, rig_yaml};
@@ -62,8 +62,8 @@ fn a_cycle_allocates_nothing() {
     arm.activate().unwrap();
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
     // Drive both joints so that the position controllers, not only hold, are exercised.
-    arm.set_command(0, JointCommand::position(0.4));
-    arm.set_command(1, JointCommand::position(-0.2));
+    arm.set_mode(0, position(0.4));
+    arm.set_mode(1, position(-0.2));
     let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
     for _ in 0..100 {
         let t = monotonic_ns();
@@ -143,7 +143,7 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
     arm.activate().unwrap();
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
     for i in 0..arm.dof_names.len() {
-        arm.set_command(i, JointCommand::position(0.05 * (i as f64 + 1.0)));
+        arm.set_mode(i, position(0.05 * (i as f64 + 1.0)));
     }
     let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
     for _ in 0..100 {
@@ -159,4 +159,9 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
     COUNTING.with(|c| c.set(false));
     assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
     assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), 0);
+}
+
+
+fn position(target_rad: f64) -> Mode {
+    Mode::Position { target_rad }
 }

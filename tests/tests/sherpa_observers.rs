@@ -1,9 +1,10 @@
 //! The reference config's observers on synthetic raw readings: every joint's state checked
 //! against values computed by hand from the thesis' equations and the configured parameters.
 
+use jointctl_control::Mode;
 use std::sync::{Arc, Mutex};
 
-use jointctl_api::{DriveReading, FieldMask, JointCommand, Reading};
+use jointctl_api::{DriveReading, FieldMask, Reading};
 use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, HalIoError, SensorFrame};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
 use jointctl_runtime::{Arm, PluginLoader};
@@ -140,7 +141,7 @@ fn a_lost_reading_makes_its_joint_unknown_and_held_and_a_pivot_beyond_range_is_f
     let (mut arm, hal, _) = sherpa();
     arm.activate().unwrap();
     for i in 0..7 {
-        arm.set_command(i, JointCommand::position(0.1));
+        arm.set_mode(i, position(0.1));
     }
     // Appendix A: a lost frame. The elbow's motor reading is missing this cycle.
     hal.frame.lock().unwrap().drives[hal.devices.drive("elmo_q4").unwrap()] = DriveReading::default();
@@ -171,11 +172,11 @@ fn position_commands_go_through_each_plugin_transmission() {
     arm.activate().unwrap();
     // q2 = 0.2, q3 = 0.1 -> a2 = 0.3, a3 = 0.1 (eq. 3.3 inverse); the PI adds nothing at the
     // first step beyond kp * error, so compare the direction of the differential.
-    arm.set_command(1, JointCommand::position(0.2));
-    arm.set_command(2, JointCommand::position(0.1));
+    arm.set_mode(1, position(0.2));
+    arm.set_mode(2, position(0.1));
     // q6 = 0.1, q7 = 0 -> bevel inputs 0.1 / 0.1 -> motors 0.1 / 0.1875 each.
-    arm.set_command(5, JointCommand::position(0.1));
-    arm.set_command(6, JointCommand::position(0.0));
+    arm.set_mode(5, position(0.1));
+    arm.set_mode(6, position(0.0));
     arm.step(0.0);
     let a2 = hal.written("elmo_shoulder_a").position_rad;
     let a3 = hal.written("elmo_shoulder_b").position_rad;
@@ -219,4 +220,9 @@ fn an_elastic_joint_with_an_input_encoder_ignores_the_drive_reading() {
     arm.step(0.01);
     close(arm.states[1].deflection(), 0.3 - 2.0 * 0.1, "deflection from absolute encoders");
     close(arm.states[1].torque(), 100.0 * 0.1, "torque");
+}
+
+
+fn position(target_rad: f64) -> Mode {
+    Mode::Position { target_rad }
 }

@@ -405,7 +405,7 @@ pub const LAYOUT_HASH: u64 = {
         DriveReading { position_rad, velocity_rad_s, enabled, fault }
         RawJointView { stamp_s, dt_s, encoders, drives }
         JointState { position_rad, velocity_rad_s, deflection_rad, torque_nm, stiffness_nm_per_rad, pivot_mm, valid }
-        JointCommand { mode, position_rad, velocity_rad_s }
+        JointCommand { mode, position_feedback, position_rad, velocity_rad_s, stiffness_nm_per_rad }
         MotorSetpoint { position_rad, velocity_ff_rad_s, action }
         JointContext { dof, encoder_count, drive_count, rate_hz }
         ErrorBuf { message_len, field_len, message, field }

@@ -21,34 +21,68 @@ impl ControlMode {
     }
 }
 
-/// The command for one joint DOF, already validated by the runtime (finite, within limits).
+/// The command for one joint DOF, already validated by the runtime (finite, within limits): a
+/// joint position set-point and how to reach it. The runtime's controller turns every mode
+/// (position, trajectory, manual, torque, impedance) into such a set-point each cycle.
 ///
 /// ```
 /// use jointctl_api::{ControlMode, JointCommand};
 /// let c = JointCommand::position(0.3);
 /// assert_eq!(c.mode, ControlMode::POSITION);
+/// assert!(c.feedback() && c.stiffness().is_none());
 /// assert_eq!(JointCommand::HOLD.mode, ControlMode::HOLD);
 /// ```
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointCommand {
-    /// The mode this command selects.
+    /// HOLD, or POSITION to go to `position_rad`.
     pub mode: ControlMode,
-    _reserved: u32,
+    /// 1: apply the joint's position feedback PI (section 4.3); 0: pass the set-point through
+    /// (torque and impedance modes, where the feedback would fight the torque loop).
+    pub position_feedback: u8,
+    _reserved: [u8; 3],
     /// Joint position set-point [rad].
     pub position_rad: f64,
     /// Joint velocity feed-forward [rad/s].
     pub velocity_rad_s: f64,
+    /// Requested joint stiffness [Nm/rad] for a variable stiffness joint; NaN: keep the pivot.
+    pub stiffness_nm_per_rad: f64,
 }
 
 impl JointCommand {
     /// Hold: keep the drives where they are.
-    pub const HOLD: JointCommand =
-        JointCommand { mode: ControlMode::HOLD, _reserved: 0, position_rad: 0.0, velocity_rad_s: 0.0 };
+    pub const HOLD: JointCommand = JointCommand {
+        mode: ControlMode::HOLD,
+        position_feedback: 0,
+        _reserved: [0; 3],
+        position_rad: 0.0,
+        velocity_rad_s: 0.0,
+        stiffness_nm_per_rad: f64::NAN,
+    };
 
-    /// Go to a joint position [rad].
+    /// Go to a joint position [rad] with position feedback.
     pub const fn position(position_rad: f64) -> Self {
-        JointCommand { mode: ControlMode::POSITION, position_rad, ..JointCommand::HOLD }
+        JointCommand { mode: ControlMode::POSITION, position_feedback: 1, position_rad, ..JointCommand::HOLD }
+    }
+
+    /// A set-point with or without position feedback.
+    pub const fn setpoint(position_rad: f64, velocity_rad_s: f64, feedback: bool) -> Self {
+        JointCommand { mode: ControlMode::POSITION, position_feedback: feedback as u8, position_rad, velocity_rad_s, ..JointCommand::HOLD }
+    }
+
+    /// The same command with a stiffness request [Nm/rad].
+    pub const fn with_stiffness(self, stiffness_nm_per_rad: f64) -> Self {
+        JointCommand { stiffness_nm_per_rad, ..self }
+    }
+
+    /// Whether the position feedback PI should act.
+    pub const fn feedback(&self) -> bool {
+        self.position_feedback != 0
+    }
+
+    /// The requested stiffness, if any.
+    pub fn stiffness(&self) -> Option<f64> {
+        (self.stiffness_nm_per_rad.is_finite() && self.stiffness_nm_per_rad > 0.0).then_some(self.stiffness_nm_per_rad)
     }
 }
 

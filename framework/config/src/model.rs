@@ -8,6 +8,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, de};
 
 use crate::num::{finite, finite_opt, finite_pair};
+pub use jointctl_control::{ControllerConfig, GainPoint, PiGains};
 
 /// One robot arm: its loop, its hardware and its joints.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
@@ -248,6 +249,9 @@ pub struct JointConfig {
     /// Parameters for the plugin, checked by the plugin.
     #[serde(default)]
     pub params: Params,
+    /// Controller of a 1-DOF joint (torque PI, gain schedule, rate limit, watchdog).
+    #[serde(default)]
+    pub controller: Option<ControllerConfig>,
 }
 
 /// One DOF of a multi-DOF joint.
@@ -259,6 +263,9 @@ pub struct DofConfig {
     /// Its limits.
     #[serde(default)]
     pub limits: Option<LimitsConfig>,
+    /// Its controller.
+    #[serde(default)]
+    pub controller: Option<ControllerConfig>,
 }
 
 /// Limits enforced by the runtime on every command.
@@ -274,6 +281,9 @@ pub struct LimitsConfig {
     /// Largest |joint torque| [Nm].
     #[serde(default, deserialize_with = "finite_opt")]
     pub torque_nm: Option<f64>,
+    /// `[lowest, highest]` stiffness a command may request [Nm/rad] (variable stiffness joints).
+    #[serde(default)]
+    pub stiffness_nm_per_rad: Option<[f64; 2]>,
 }
 
 /// Where a plugin comes from.
@@ -400,5 +410,15 @@ impl JointConfig {
     /// The limits of each DOF, in order.
     pub fn dof_limits(&self) -> Vec<Option<LimitsConfig>> {
         if self.dofs.is_empty() { vec![self.limits] } else { self.dofs.iter().map(|d| d.limits).collect() }
+    }
+
+    /// The controller settings of each DOF (defaults where not given), with their field paths
+    /// relative to the joint.
+    pub fn dof_controllers(&self) -> Vec<(String, ControllerConfig)> {
+        if self.dofs.is_empty() {
+            vec![("controller".into(), self.controller.clone().unwrap_or_default())]
+        } else {
+            self.dofs.iter().enumerate().map(|(i, d)| (format!("dofs[{i}].controller"), d.controller.clone().unwrap_or_default())).collect()
+        }
     }
 }

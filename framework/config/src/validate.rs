@@ -151,6 +151,20 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             if let Some(t) = l.torque_nm.filter(|t| *t <= 0.0) {
                 err(format!("{p}.torque_nm"), format!("must be > 0, got {t}"));
             }
+            if let Some([a, b]) = l.stiffness_nm_per_rad
+                && !(a.is_finite() && b.is_finite() && a > 0.0 && a < b)
+            {
+                err(format!("{p}.stiffness_nm_per_rad"), format!("must be [lowest, highest] with 0 < lowest < highest, got [{a}, {b}]"));
+            }
+        }
+        if joint.dofs.is_empty() || joint.controller.is_none() {
+            for (field, c) in joint.dof_controllers() {
+                if let Err((f, m)) = c.validate() {
+                    err(format!("{path}.{field}.{f}"), m);
+                }
+            }
+        } else {
+            err(format!("{path}.controller"), "with `dofs`, give controllers per DOF under `dofs[i].controller`".into());
         }
         for (role, dev) in &joint.encoders {
             if !encoder_names.contains(dev.as_str()) {

@@ -7,7 +7,7 @@ use serde::Deserialize;
 use crate::{Pi, PiGains, Reference, Trajectory};
 
 /// One point of the torque PI's gain schedule over the joint stiffness (section 6.2).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GainPoint {
     /// Joint stiffness at which these gains apply [Nm/rad].
@@ -20,7 +20,7 @@ pub struct GainPoint {
 
 /// A DOF's controller settings (YAML `controller:` of a joint or DOF). The thesis tuned its PI
 /// experimentally without printing the gains (section 4.3): every default is an assumption.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerConfig {
     /// Figure 4.6: the PI on the deflection error; `output_limit` bounds its correction [rad].

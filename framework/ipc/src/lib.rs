@@ -66,10 +66,16 @@ pub struct JointSample {
     pub stiffness_nm_per_rad: f64,
     /// VSA pivot position [mm].
     pub pivot_mm: f64,
+    /// The torque reference in use [Nm] (torque and impedance modes), NaN otherwise.
+    pub reference_torque_nm: f64,
     /// [`FieldMask`] bits of the observed fields.
     pub valid_mask: u32,
     /// 0, or the fault that holds this joint (1 = its plugin panicked; >= 16 plugin codes).
     pub fault_code: u32,
+    /// Control mode: 0 hold, 1 position, 2 manual, 3 trajectory, 4 torque, 5 impedance.
+    pub mode: u32,
+    /// 1 when the joint accepts commands (not disabled).
+    pub enabled: u32,
 }
 
 impl JointSample {
@@ -82,8 +88,11 @@ impl JointSample {
         torque_nm: f64::NAN,
         stiffness_nm_per_rad: f64::NAN,
         pivot_mm: f64::NAN,
+        reference_torque_nm: f64::NAN,
         valid_mask: 0,
         fault_code: 0,
+        mode: 0,
+        enabled: 1,
     };
 
     /// The value of a field if its bit is set in `valid_mask`.
@@ -146,6 +155,16 @@ pub struct JointDiagnostics {
     pub invalid_cycles: u64,
     /// Faults raised by the joint's plugin (panics, fault codes).
     pub fault_count: u64,
+    /// Joint set-points clamped into the position limits.
+    pub setpoint_clamps: u64,
+    /// Torque references clamped into the torque limit.
+    pub torque_clamps: u64,
+    /// Cycles whose set-point change the rate limit cut.
+    pub rate_limited: u64,
+    /// Streamed commands that timed out (the joint fell back to holding).
+    pub watchdog_trips: u64,
+    /// Cycles held because the mode needed an unknown value (torque, stiffness, velocity).
+    pub missing_inputs: u64,
 }
 
 impl JointDiagnostics {
@@ -158,6 +177,11 @@ impl JointDiagnostics {
         _reserved: 0,
         invalid_cycles: 0,
         fault_count: 0,
+        setpoint_clamps: 0,
+        torque_clamps: 0,
+        rate_limited: 0,
+        watchdog_trips: 0,
+        missing_inputs: 0,
     };
 }
 
@@ -338,3 +362,135 @@ macro_rules! service_opener {
 
 service_opener!(joint_state_service, ArmState, "Opens (or creates) an arm's joint-state service.");
 service_opener!(diagnostics_service, Diagnostics, "Opens (or creates) an arm's diagnostics service.");
+
+/// Most trajectory points one command carries.
+pub const MAX_COMMAND_POINTS: usize = 64;
+
+/// What a [`CommandRequest`] asks for (its `kind`).
+pub mod command_kind {
+    /// Hold one joint (`joint` set) or all joints (`joint` empty).
+    pub const HOLD: u32 = 1;
+    /// Position control to `values[0]` [rad], with the position feedback PI.
+    pub const POSITION: u32 = 2;
+    /// Direct joint set-point `values[0]` [rad] (no feedback PI).
+    pub const MANUAL: u32 = 3;
+    /// Follow `points[..point_count]` = (time [s], position [rad], velocity [rad/s] or NaN).
+    pub const TRAJECTORY: u32 = 4;
+    /// Torque reference: `values` = [waveform (0 step, 1 sine, 2 cosine), amplitude [Nm],
+    /// frequency [Hz], offset [Nm], start delay [s]].
+    pub const TORQUE: u32 = 5;
+    /// Impedance: `values` = [K [Nm/rad], D [Nms/rad], target [rad] or NaN for "where it is"].
+    pub const IMPEDANCE: u32 = 6;
+    /// Requested stiffness `values[0]` [Nm/rad] (variable stiffness joints).
+    pub const STIFFNESS: u32 = 7;
+    /// Enable a joint (it accepts commands again, starting in hold).
+    pub const ENABLE: u32 = 8;
+    /// Disable a joint: it holds and refuses commands until enabled.
+    pub const DISABLE: u32 = 9;
+    /// Stop the runtime (as SIGINT: joints held, final state published).
+    pub const STOP: u32 = 10;
+}
+
+/// A command to a running arm, sent on `<arm>/command` (request-response).
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[repr(C)]
+#[type_name("jointctl.CommandRequest.v1")]
+pub struct CommandRequest {
+    /// One of [`command_kind`].
+    pub kind: u32,
+    /// 1: a streamed command that must be renewed within the joint's watchdog time.
+    pub streamed: u32,
+    /// NUL-padded joint name; empty for all joints (hold, stop).
+    pub joint: [u8; NAME_LEN],
+    /// Kind-specific numbers (see [`command_kind`]).
+    pub values: [f64; 8],
+    /// Valid entries in `points`.
+    pub point_count: u32,
+    _reserved: u32,
+    /// Trajectory points (time [s], position [rad], velocity [rad/s] or NaN).
+    pub points: [[f64; 3]; MAX_COMMAND_POINTS],
+}
+
+impl CommandRequest {
+    /// A request of `kind` for `joint` ("" for all) with `values`.
+    ///
+    /// ```
+    /// use jointctl_ipc::{CommandRequest, command_kind};
+    /// let r = CommandRequest::new(command_kind::POSITION, "q1", &[0.5]);
+    /// assert_eq!((jointctl_ipc::decode_name(&r.joint), r.values[0]), ("q1", 0.5));
+    /// ```
+    pub fn new(kind: u32, joint: &str, values: &[f64]) -> Self {
+        let mut v = [f64::NAN; 8];
+        for (d, s) in v.iter_mut().zip(values) {
+            *d = *s;
+        }
+        CommandRequest {
+            kind,
+            streamed: 0,
+            joint: encode_name(joint),
+            values: v,
+            point_count: 0,
+            _reserved: 0,
+            points: [[f64::NAN; 3]; MAX_COMMAND_POINTS],
+        }
+    }
+}
+
+/// The runtime's answer to a [`CommandRequest`].
+#[derive(Clone, Copy, Debug, ZeroCopySend)]
+#[repr(C)]
+#[type_name("jointctl.CommandResponse.v1")]
+pub struct CommandResponse {
+    /// 1 when the command was accepted and queued for the next cycle.
+    pub accepted: u32,
+    /// Bytes of `message` used.
+    pub message_len: u32,
+    /// Why it was refused, or what was done.
+    pub message: [u8; 240],
+}
+
+impl CommandResponse {
+    /// A response with a message (truncated to 240 bytes at a character boundary).
+    ///
+    /// ```
+    /// let r = jointctl_ipc::CommandResponse::new(false, "joint `q9` does not exist");
+    /// assert_eq!(r.text(), "joint `q9` does not exist");
+    /// ```
+    pub fn new(accepted: bool, message: &str) -> Self {
+        let mut m = [0u8; 240];
+        let mut n = message.len().min(240);
+        while !message.is_char_boundary(n) {
+            n -= 1;
+        }
+        m[..n].copy_from_slice(&message.as_bytes()[..n]);
+        CommandResponse { accepted: accepted as u32, message_len: n as u32, message: m }
+    }
+
+    /// The message.
+    pub fn text(&self) -> &str {
+        core::str::from_utf8(&self.message[..(self.message_len as usize).min(240)]).unwrap_or("?")
+    }
+}
+
+/// Name of an arm's command service.
+pub fn command_service_name(arm: &str) -> String {
+    format!("{arm}/command")
+}
+
+/// Opens an arm's command service. The runtime creates it (`create = true`); a client only opens
+/// it, so that "no runtime is running" is an error instead of a service nobody serves.
+pub fn command_service(
+    node: &Node<ipc::Service>,
+    name: &str,
+    create: bool,
+) -> Result<iceoryx2::service::port_factory::request_response::PortFactory<ipc::Service, CommandRequest, (), CommandResponse, ()>, IpcSetupError> {
+    let builder = node
+        .service_builder(&service_name(name)?)
+        .request_response::<CommandRequest, CommandResponse>()
+        .max_servers(1)
+        .max_clients(16)
+        .max_active_requests_per_client(4)
+        .max_response_buffer_size(4);
+    let fail = |reason: String| IpcSetupError::Service { service: name.to_string(), reason };
+    if create { builder.open_or_create().map_err(|e| fail(format!("{e:?}"))) } else { builder.open().map_err(|e| fail(format!("{e:?}"))) }
+}

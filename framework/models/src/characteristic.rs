@@ -192,6 +192,32 @@ pub fn pivot_bracket(pivots_mm: &[f64], pivot_mm: f64) -> (usize, f64, bool) {
     (i, (pivot_mm - pivots_mm[i]) / (pivots_mm[i + 1] - pivots_mm[i]), false)
 }
 
+/// The pivot setting [mm] at which a piecewise-linear, monotonic table `values` over `pivots_mm`
+/// reaches `target`, clamped to the table's range (the inverse of the stiffness table, used to
+/// turn a requested stiffness into a pivot set-point).
+///
+/// ```
+/// use jointctl_models::characteristic::invert_table;
+/// assert_eq!(invert_table(&[0.0, 10.0, 20.0], &[400.0, 200.0, 100.0], 150.0), Some(15.0));
+/// assert_eq!(invert_table(&[0.0, 10.0, 20.0], &[400.0, 200.0, 100.0], 1000.0), Some(0.0));
+/// ```
+pub fn invert_table(pivots_mm: &[f64], values: &[f64], target: f64) -> Option<f64> {
+    let n = values.len().min(pivots_mm.len());
+    if n == 0 || !target.is_finite() {
+        return None;
+    }
+    if n == 1 {
+        return Some(pivots_mm[0]);
+    }
+    let (lo, hi) = (values[..n].iter().copied().fold(f64::INFINITY, f64::min), values[..n].iter().copied().fold(f64::NEG_INFINITY, f64::max));
+    let t = target.clamp(lo, hi);
+    (0..n - 1).find_map(|i| {
+        let (a, b) = (values[i], values[i + 1]);
+        ((a.min(b)..=a.max(b)).contains(&t) && a != b).then(|| pivots_mm[i] + (t - a) / (b - a) * (pivots_mm[i + 1] - pivots_mm[i]))
+    })
+    .or_else(|| values[..n].iter().position(|v| *v == t).map(|i| pivots_mm[i]))
+}
+
 /// A 1-DOF characteristic over pivot settings (the shoulder q2; a single curve for an elastic joint).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PivotCharacteristic {
@@ -199,6 +225,7 @@ pub struct PivotCharacteristic {
     pub source: Source,
     pivots_mm: Vec<f64>,
     curves: Vec<Curve>,
+    stiffness: Vec<f64>,
 }
 
 fn sorted_strictly(v: &[f64]) -> bool {
@@ -228,7 +255,9 @@ impl PivotCharacteristic {
         if !sorted_strictly(&pivots_mm) {
             return Err(err("curves".into(), "two curves have the same pivot_mm"));
         }
-        Ok(PivotCharacteristic { source: spec.source, pivots_mm, curves: rows.into_iter().map(|r| r.1).collect() })
+        let curves: Vec<Curve> = rows.into_iter().map(|r| r.1).collect();
+        let stiffness = curves.iter().map(|c| c.stiffness_nm_per_rad).collect();
+        Ok(PivotCharacteristic { source: spec.source, pivots_mm, curves, stiffness })
     }
 
     /// The characterised pivot settings [mm], ascending.
@@ -256,21 +285,14 @@ impl PivotCharacteristic {
     }
 
     /// The pivot setting [mm] that gives a stiffness (inverse of the interpolated stiffness
-    /// table; the stiffness must be monotonic in the pivot), clamped to the characterised range.
+    /// table), clamped to the characterised range. Allocation-free.
     pub fn pivot_for_stiffness(&self, stiffness_nm_per_rad: f64) -> Option<f64> {
-        let ks: Vec<f64> = self.curves.iter().map(|c| c.stiffness_nm_per_rad).collect();
-        let n = ks.len();
-        if n == 1 {
-            return Some(self.pivots_mm[0]);
-        }
-        let decreasing = ks[0] > ks[n - 1];
-        let (lo, hi) = if decreasing { (ks[n - 1], ks[0]) } else { (ks[0], ks[n - 1]) };
-        let k = stiffness_nm_per_rad.clamp(lo, hi);
-        (0..n - 1).find_map(|i| {
-            let (a, b) = (ks[i], ks[i + 1]);
-            let inside = (a.min(b)..=a.max(b)).contains(&k);
-            (inside && a != b).then(|| self.pivots_mm[i] + (k - a) / (b - a) * (self.pivots_mm[i + 1] - self.pivots_mm[i]))
-        })
+        invert_table(&self.pivots_mm, &self.stiffness, stiffness_nm_per_rad)
+    }
+
+    /// Stiffness range [Nm/rad] over the characterised pivot settings.
+    pub fn stiffness_range(&self) -> (f64, f64) {
+        self.curves.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c.stiffness_nm_per_rad), hi.max(c.stiffness_nm_per_rad)))
     }
 }
 
@@ -403,6 +425,13 @@ impl WristCharacteristic {
         let (t0, k0) = self.along(i, w, j, rho);
         let (t1, k1) = self.along(i, w, j + 1, rho);
         ((1.0 - v) * t0 + v * t1, (1.0 - v) * k0 + v * k1)
+    }
+
+    /// The stiffness along the q6 axis (`q6 = true`) or the q7 axis at each characterised pivot
+    /// setting; with [`invert_table`] it turns a requested stiffness into a pivot setting.
+    pub fn axis_stiffness_table(&self, q6: bool) -> Vec<f64> {
+        let theta = if q6 { std::f64::consts::FRAC_PI_2 } else { 0.0 };
+        (0..self.pivots_mm.len()).map(|i| self.stiffness_along(i, 0.0, theta)).collect()
     }
 
     /// Section 4.2 / figure 4.3: deflection (q6, q7) → polar, torque along the two nearest

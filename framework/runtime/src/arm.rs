@@ -2,9 +2,12 @@
 //! split in the two halves around publishing (observe, then control).
 
 use jointctl_api::{
-    ControlMode, JointCommand, JointContext, JointFault, JointState, MAX_DOF, MAX_DRIVES, MAX_ENCODERS,
-    MotorSetpoint, RawJointView,
+    JointCommand, JointContext, JointFault, JointState, MAX_DOF, MAX_DRIVES, MAX_ENCODERS, MotorSetpoint,
+    RawJointView,
 };
+use jointctl_control::{DofLimits, JointController, Mode, Observed};
+
+use crate::commands::ArmCommand;
 use jointctl_config::{ConfigErrors, LimitsConfig, LoadedConfig};
 use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
 
@@ -101,8 +104,20 @@ pub struct Arm {
     pub limits: Vec<Option<LimitsConfig>>,
     /// Observed state of each DOF this cycle.
     pub states: Vec<JointState>,
-    /// Command of each DOF.
+    /// The command each DOF's plugin got this cycle (derived from its controller).
     pub commands: Vec<JointCommand>,
+    /// Each DOF's controller (its mode, limits and safety counters).
+    pub controllers: Vec<JointController>,
+    /// The torque reference each DOF used this cycle [Nm] (NaN outside torque/impedance modes).
+    pub torque_references: Vec<f64>,
+    /// Requested stiffness per DOF [Nm/rad], NaN when none.
+    pub stiffness_requests: Vec<f64>,
+    /// Disabled DOFs hold and ignore modes until enabled.
+    pub enabled: Vec<bool>,
+    /// A stop command arrived.
+    pub stop_requested: bool,
+    /// Runtime time of the current cycle [s].
+    pub now_s: f64,
     /// HAL read or write failures.
     pub hal_errors: u64,
     sensor: SensorFrame,
@@ -128,6 +143,7 @@ impl Arm {
         let mut slots = Vec::new();
         let mut dof_names = Vec::new();
         let mut limits = Vec::new();
+        let mut controllers = Vec::new();
         for (j, jc) in cfg.joints.iter().enumerate() {
             let at = |field: &str| if field.is_empty() { format!("joints[{j}]") } else { format!("joints[{j}].{field}") };
             let path = jc.plugin.path.as_ref().map(|p| src.resolve(p));
@@ -211,7 +227,14 @@ impl Arm {
             }
             let first = dof_names.len();
             dof_names.extend(names.iter().map(|n| n.to_string()));
-            limits.extend(jc.dof_limits());
+            for (l, (_, c)) in jc.dof_limits().into_iter().zip(jc.dof_controllers()) {
+                let dof_limits = l.map_or(DofLimits::NONE, |l| DofLimits {
+                    position_rad: l.position_rad,
+                    torque_nm: l.torque_nm.unwrap_or(f64::INFINITY),
+                });
+                controllers.push(JointController::new(c, dof_limits));
+                limits.push(l);
+            }
             slots.push(JointSlot {
                 name: jc.name.clone(),
                 plugin: jc.plugin.name.clone(),
@@ -242,6 +265,12 @@ impl Arm {
             limits,
             states: vec![JointState::UNKNOWN; n],
             commands: vec![JointCommand::HOLD; n],
+            controllers,
+            torque_references: vec![f64::NAN; n],
+            stiffness_requests: vec![f64::NAN; n],
+            enabled: vec![true; n],
+            stop_requested: false,
+            now_s: 0.0,
             hal_errors: 0,
             sensor: SensorFrame::new(&devices),
             actuator: ActuatorFrame::new(&devices),
@@ -267,6 +296,7 @@ impl Arm {
     /// First half of a cycle: read the hardware and observe every joint. A joint whose plugin
     /// faults is held from now on; its state is unknown.
     pub fn observe(&mut self, stamp_s: f64) {
+        self.now_s = stamp_s;
         if self.hal.read(&mut self.sensor).is_err() {
             // The HAL marks what it could not read as stale or missing; the count is published.
             self.hal_errors += 1;
@@ -285,25 +315,65 @@ impl Arm {
         }
     }
 
-    /// Sets the command of DOF `dof`, clamping a position set-point into the DOF's limits.
-    /// Returns whether the set-point was clamped.
-    pub fn set_command(&mut self, dof: usize, mut command: JointCommand) -> bool {
-        let mut clamped = false;
-        if command.mode == ControlMode::POSITION
-            && let Some(l) = self.limits[dof]
-        {
-            let [lo, hi] = l.position_rad;
-            let c = command.position_rad.clamp(lo, hi);
-            clamped = c != command.position_rad;
-            command.position_rad = c;
-        }
-        self.commands[dof] = command;
-        clamped
+    /// Switches DOF `dof` to a mode now. A disabled DOF stays in hold.
+    pub fn set_mode(&mut self, dof: usize, mode: Mode) {
+        self.apply(ArmCommand::Mode { dof, mode, streamed: false });
     }
 
-    /// Second half of a cycle: control every joint whose state is usable, hold the others, and
-    /// write the set-points. `dt_s` advances a simulated backend.
+    /// Applies a validated command at the current cycle's time: a reference's start delay and a
+    /// trajectory's time 0 count from now; an impedance target of NaN means "where it is".
+    pub fn apply(&mut self, command: ArmCommand) {
+        let now = self.now_s;
+        match command {
+            ArmCommand::Mode { dof, mut mode, streamed } => {
+                if !self.enabled[dof] {
+                    return;
+                }
+                match &mut mode {
+                    Mode::Torque { reference } => reference.start_s += now,
+                    Mode::Trajectory { start_s, .. } => *start_s = now,
+                    Mode::Impedance { target_rad, .. } if target_rad.is_nan() => match self.states[dof].position() {
+                        Some(q) => *target_rad = q,
+                        None => mode = Mode::Hold,
+                    },
+                    _ => {}
+                }
+                self.controllers[dof].set_mode(mode, now, streamed);
+            }
+            ArmCommand::Stiffness { dof, stiffness_nm_per_rad } => self.stiffness_requests[dof] = stiffness_nm_per_rad,
+            ArmCommand::Enable { dof, enabled } => {
+                self.enabled[dof] = enabled;
+                self.controllers[dof].set_mode(Mode::Hold, now, false);
+            }
+            ArmCommand::HoldAll => {
+                for c in &mut self.controllers {
+                    c.set_mode(Mode::Hold, now, false);
+                }
+            }
+            ArmCommand::Stop => self.stop_requested = true,
+        }
+    }
+
+    /// Second half of a cycle: run every DOF's controller, control every joint whose state is
+    /// usable, hold the others, and write the set-points.
     pub fn control(&mut self) {
+        for d in 0..self.states.len() {
+            let s = &self.states[d];
+            let observed = Observed {
+                position_rad: s.position(),
+                velocity_rad_s: s.velocity(),
+                torque_nm: s.torque(),
+                stiffness_nm_per_rad: s.stiffness(),
+            };
+            let out = self.controllers[d].update(&observed, self.now_s, self.dt_s);
+            self.torque_references[d] = out.torque_reference_nm;
+            let command = if out.hold || !self.enabled[d] {
+                JointCommand::HOLD
+            } else {
+                JointCommand::setpoint(out.setpoint_rad, out.velocity_rad_s, out.position_feedback)
+            };
+            self.commands[d] = command.with_stiffness(self.stiffness_requests[d]);
+        }
         for slot in &mut self.slots {
             let dofs = slot.dofs.clone();
             let usable = self.states[dofs.clone()].iter().all(|s| s.position().is_some());

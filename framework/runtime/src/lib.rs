@@ -5,6 +5,7 @@
 //! ([`runner::run`]) with its state in iceoryx2 shared memory.
 
 pub mod arm;
+pub mod commands;
 pub mod joint;
 pub mod loader;
 pub mod runner;

@@ -12,7 +12,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
 use jointctl_config::TimingConfig;
-use jointctl_ipc::{ArmState, Diagnostics, JointDiagnostics, JointSample, ServiceNames, encode_name};
+use jointctl_control::Mode;
+use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, JointSample, ServiceNames, encode_name};
+
+use crate::commands::{ArmCommand, CommandValidator};
 
 use crate::arm::Arm;
 use crate::timing::{LoopStats, Pacer, monotonic_ns};
@@ -72,6 +75,20 @@ struct CycleRecord {
 
 /// Capacity of the loop → publisher ring [cycles]: 64 ms at 1 kHz before records are dropped.
 const RING_CAPACITY: usize = 64;
+/// Capacity of the IPC → loop command ring.
+const COMMAND_CAPACITY: usize = 32;
+
+/// The mode code published in [`JointSample::mode`].
+pub fn mode_code(mode: &Mode) -> u32 {
+    match mode {
+        Mode::Hold => 0,
+        Mode::Position { .. } => 1,
+        Mode::Manual { .. } => 2,
+        Mode::Trajectory { .. } => 3,
+        Mode::Torque { .. } => 4,
+        Mode::Impedance { .. } => 5,
+    }
+}
 
 /// The loop's shared-memory side.
 ///
@@ -81,6 +98,7 @@ const RING_CAPACITY: usize = 64;
 /// full ring drops the record and counts it (`publish_drops`); the loop never slows down.
 pub struct ArmPublisher {
     producer: rtrb::Producer<CycleRecord>,
+    commands: rtrb::Consumer<ArmCommand>,
     record: Box<CycleRecord>,
     thread: Option<std::thread::JoinHandle<u64>>,
     stop: Arc<AtomicBool>,
@@ -92,6 +110,8 @@ impl ArmPublisher {
     /// publisher thread, and returns once they exist.
     pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
         let (producer, mut consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
+        let (mut command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
+        let mut validator = CommandValidator::new(arm.dof_names.clone(), arm.limits.clone());
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
         let arm_name = arm.name.clone();
@@ -117,9 +137,14 @@ impl ArmPublisher {
                             .publisher_builder()
                             .create()
                             .map_err(|e| busy(&names.diagnostics, format!("{e:?}")))?;
-                    Ok((node, state, diagnostics))
+                    let command_name = jointctl_ipc::command_service_name(&arm_name);
+                    let server = jointctl_ipc::command_service(&node, &command_name, true)?
+                        .server_builder()
+                        .create()
+                        .map_err(|e| busy(&command_name, format!("{e:?}")))?;
+                    Ok((node, state, diagnostics, server))
                 };
-                let (node, state, diagnostics) = match setup() {
+                let (node, state, diagnostics, server) = match setup() {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(()));
                         ports
@@ -138,13 +163,25 @@ impl ArmPublisher {
                             diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
                         failures += u64::from(!ok_state) + u64::from(!ok_diag);
                     }
+                    // Commands are validated here, outside the control thread; only valid ones
+                    // reach the loop, and every request gets an answer.
+                    while let Ok(Some(request)) = server.receive() {
+                        let response = match validator.validate(request.payload()) {
+                            Ok((command, text)) => match command_producer.push(command) {
+                                Ok(()) => CommandResponse::new(true, &text),
+                                Err(_) => CommandResponse::new(false, "the runtime's command queue is full; try again"),
+                            },
+                            Err(reason) => CommandResponse::new(false, &reason),
+                        };
+                        let _ = request.send_copy(response);
+                    }
                     if stopping {
                         break;
                     }
-                    std::thread::park_timeout(std::time::Duration::from_millis(50));
+                    std::thread::park_timeout(std::time::Duration::from_millis(5));
                 }
                 // Ports and node are dropped here: shared memory released.
-                drop((state, diagnostics, node));
+                drop((server, state, diagnostics, node));
                 failures
             })
             .map_err(|e| RunError::Thread(e.to_string()))?;
@@ -164,7 +201,7 @@ impl ArmPublisher {
             record.state.joints[i].name = encode_name(name);
             record.diagnostics.joints[i].name = encode_name(name);
         }
-        Ok(ArmPublisher { producer, record, thread: Some(thread), stop, drops: 0 })
+        Ok(ArmPublisher { producer, commands, record, thread: Some(thread), stop, drops: 0 })
     }
 
     /// Fills the state part of this cycle's record.
@@ -178,6 +215,9 @@ impl ArmPublisher {
                 let st = &arm.states[i];
                 s.joints[i] = JointSample {
                     name: s.joints[i].name,
+                    reference_torque_nm: arm.torque_references[i],
+                    mode: mode_code(arm.controllers[i].mode()),
+                    enabled: arm.enabled[i] as u32,
                     position_rad: st.position_rad,
                     velocity_rad_s: st.velocity_rad_s,
                     deflection_rad: st.deflection_rad,
@@ -212,6 +252,12 @@ impl ArmPublisher {
                 j.held = slot.held as u32;
                 j.invalid_cycles = slot.invalid_cycles;
                 j.fault_count = slot.fault_count;
+                let e = arm.controllers[i].events;
+                j.setpoint_clamps = e.setpoint_clamps;
+                j.torque_clamps = e.torque_clamps;
+                j.rate_limited = e.rate_limited;
+                j.watchdog_trips = e.watchdog_trips;
+                j.missing_inputs = e.missing_inputs;
             }
         }
         if self.producer.push(*self.record).is_err() {
@@ -295,6 +341,9 @@ impl<'a> ControlLoop<'a> {
         self.arm.observe(stamp_s);
         if let Some(p) = self.publisher.as_deref_mut() {
             p.publish_state(self.arm, self.cycle, woke_ns, false);
+            while let Ok(command) = p.commands.pop() {
+                self.arm.apply(command);
+            }
         }
         self.arm.control();
         let done = monotonic_ns();
@@ -350,7 +399,7 @@ pub fn run(
     tracing::info!(arm = %arm.name, rate_hz = arm.rate_hz, joints = arm.dof_names.len(), "loop started");
     let mut lp = ControlLoop::new(arm, publisher, opts.timing_samples);
     let mut pacer = Pacer::new(period_ns, timing.spin_us as u64 * 1000);
-    while lp.cycle < max_cycles && !stop.load(Ordering::Relaxed) {
+    while lp.cycle < max_cycles && !stop.load(Ordering::Relaxed) && !lp.arm.stop_requested {
         let deadline = pacer.deadline_ns();
         let woke = pacer.wait(&stop);
         if stop.load(Ordering::Relaxed) || end_ns.is_some_and(|e| woke >= e) {

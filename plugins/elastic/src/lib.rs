@@ -156,7 +156,7 @@ impl Controller for ElasticJoint {
         }
         out[MOTOR] = match (cmd.mode, state[0].position()) {
             (ControlMode::POSITION, Some(q)) => {
-                let correction = self.pi.update(cmd.position_rad - q, raw.dt_s);
+                let correction = if cmd.feedback() { self.pi.update(cmd.position_rad - q, raw.dt_s) } else { 0.0 };
                 MotorSetpoint::move_to(self.transmission.motor_for(cmd.position_rad + correction))
             }
             _ => MotorSetpoint::HOLD,

@@ -126,7 +126,7 @@ impl Controller for RigidJoint {
             (ControlMode::POSITION, Some(q)) => {
                 // Section 4.3: the feedback PI corrects the set-point for what the drive's own
                 // loop leaves (transmission compliance, friction).
-                let correction = self.pi.update(cmd.position_rad - q, raw.dt_s);
+                let correction = if cmd.feedback() { self.pi.update(cmd.position_rad - q, raw.dt_s) } else { 0.0 };
                 MotorSetpoint::move_to(self.transmission.motor_for(cmd.position_rad + correction))
             }
             _ => MotorSetpoint::HOLD,

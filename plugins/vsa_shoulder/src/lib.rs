@@ -14,7 +14,9 @@
 //! - q2 position from its output encoder; q3 position from the two differential pulleys (eq. 3.3).
 //!
 //! Controller: joint position set-points → actuator set-points through the inverse of eq. 3.3,
-//! with section 4.3's position PI per DOF; the pivot drive holds.
+//! with section 4.3's position PI per DOF when asked for; a requested q2 stiffness sets the pivot
+//! drive through the inverse of the stiffness table (pivot encoder and drive on one shaft:
+//! assumption).
 
 use jointctl_api::{
     Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
@@ -72,6 +74,7 @@ pub struct VsaShoulder {
     pi: [Pi; 2],
     hold_target: [Option<f64>; 2],
     last_mode: [ControlMode; 2],
+    pivot_target: Option<MotorSetpoint>,
 }
 
 impl VsaShoulder {
@@ -107,6 +110,7 @@ impl JointPlugin for VsaShoulder {
             pi: [pi; 2],
             hold_target: [None; 2],
             last_mode: [ControlMode::HOLD; 2],
+            pivot_target: None,
             p,
         })
     }
@@ -195,20 +199,29 @@ impl Controller for VsaShoulder {
             target[i] = match command[i].mode {
                 ControlMode::POSITION => {
                     any_moving = true;
-                    command[i].position_rad + self.pi[i].update(command[i].position_rad - q, raw.dt_s)
+                    let correction = if command[i].feedback() { self.pi[i].update(command[i].position_rad - q, raw.dt_s) } else { 0.0 };
+                    command[i].position_rad + correction
                 }
                 _ => self.hold_target[i].unwrap_or(q),
             };
         }
+        // A requested q2 stiffness moves the pivot (inverse of the stiffness table, clamped to
+        // the characterised settings); it stays there until the next request.
+        if let Some(k) = command[0].stiffness()
+            && let Some(pivot_mm) = self.characteristic.pivot_for_stiffness(k)
+        {
+            self.pivot_target = Some(MotorSetpoint::move_to((pivot_mm - self.p.pivot_offset_mm) / self.p.pivot_mm_per_rad));
+        }
+        out[PIVOT_DRIVE] = self.pivot_target.unwrap_or(MotorSetpoint::HOLD);
         if !any_moving {
-            out.fill(MotorSetpoint::HOLD);
+            out[ACTUATOR_A] = MotorSetpoint::HOLD;
+            out[ACTUATOR_B] = MotorSetpoint::HOLD;
             return Ok(());
         }
         // Inverse of eq. 3.3 (assumed differential), anchored at the activation pose.
         let (da, db) = eq_3_3_shoulder_actuators(target[0] - self.joint_origin.0, target[1] - self.joint_origin.1);
         out[ACTUATOR_A] = MotorSetpoint::move_to(self.actuator_origin.0 + da);
         out[ACTUATOR_B] = MotorSetpoint::move_to(self.actuator_origin.1 + db);
-        out[PIVOT_DRIVE] = MotorSetpoint::HOLD;
         Ok(())
     }
 }

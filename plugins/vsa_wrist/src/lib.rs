@@ -16,14 +16,15 @@
 //!   along its own axis (q7: 0 deg, q6: 90 deg).
 //!
 //! Controller: joint set-points → bevel inputs (eq. 3.7 inverse) → carrier inputs (eq. 3.8
-//! ratio) → motor set-points, with section 4.3's position PI per DOF; the pivot drive holds.
+//! ratio) → motor set-points, with section 4.3's position PI per DOF when asked for; a requested
+//! stiffness sets the pivot drive through the inverse of the axis' stiffness table.
 
 use jointctl_api::{
     Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
 use jointctl_control::{Pi, PiGains, VelocityEstimator};
-use jointctl_models::characteristic::{CharacteristicSpec, WristCharacteristic};
+use jointctl_models::characteristic::{CharacteristicSpec, WristCharacteristic, invert_table};
 use jointctl_models::transmission::{eq_3_7_bevel, eq_3_7_bevel_inverse, eq_3_8_deflection, eq_3_8_expected_bevel_input};
 use serde::Deserialize;
 
@@ -79,6 +80,8 @@ pub struct VsaWrist {
     pi: [Pi; 2],
     hold_target: [f64; 2],
     last_mode: [ControlMode; 2],
+    axis_stiffness: [Vec<f64>; 2],
+    pivot_target: Option<MotorSetpoint>,
 }
 
 impl VsaWrist {
@@ -122,7 +125,7 @@ impl JointPlugin for VsaWrist {
         p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
         let pi = Pi::new(p.position_pi);
         Ok(VsaWrist {
-            characteristic,
+            characteristic: characteristic.clone(),
             carrier_origin: [0.0; 2],
             bevel_origin: [0.0; 2],
             motor_origin: [0.0; 2],
@@ -131,6 +134,8 @@ impl JointPlugin for VsaWrist {
             pi: [pi; 2],
             hold_target: [0.0; 2],
             last_mode: [ControlMode::HOLD; 2],
+            axis_stiffness: [characteristic.axis_stiffness_table(true), characteristic.axis_stiffness_table(false)],
+            pivot_target: None,
             p,
         })
     }
@@ -216,13 +221,26 @@ impl Controller for VsaWrist {
             target[i] = match command[i].mode {
                 ControlMode::POSITION => {
                     any_moving = true;
-                    command[i].position_rad + self.pi[i].update(command[i].position_rad - q, raw.dt_s)
+                    let correction = if command[i].feedback() { self.pi[i].update(command[i].position_rad - q, raw.dt_s) } else { 0.0 };
+                    command[i].position_rad + correction
                 }
                 _ => self.hold_target[i],
             };
         }
+        // One pivot sets both joints' stiffness: a request for q6 (along its axis) wins over one
+        // for q7 in the same cycle. The pivot stays until the next request.
+        for (i, cmd) in command.iter().enumerate().take(2) {
+            if let Some(k) = cmd.stiffness()
+                && let Some(pivot_mm) = invert_table(self.characteristic.pivots_mm(), &self.axis_stiffness[i], k)
+            {
+                self.pivot_target = Some(MotorSetpoint::move_to((pivot_mm - self.p.pivot_offset_mm) / self.p.pivot_mm_per_rad));
+                break;
+            }
+        }
+        out[PIVOT_DRIVE] = self.pivot_target.unwrap_or(MotorSetpoint::HOLD);
         if !any_moving {
-            out.fill(MotorSetpoint::HOLD);
+            out[MOTOR_A] = MotorSetpoint::HOLD;
+            out[MOTOR_B] = MotorSetpoint::HOLD;
             return Ok(());
         }
         // Eq. 3.7 inverse to the bevel inputs, then eq. 3.8's ratio back to the carrier inputs
@@ -231,7 +249,6 @@ impl Controller for VsaWrist {
         let k = self.ratio();
         out[MOTOR_A] = MotorSetpoint::move_to(self.motor_origin[0] + b1 / k);
         out[MOTOR_B] = MotorSetpoint::move_to(self.motor_origin[1] + b2 / k);
-        out[PIVOT_DRIVE] = MotorSetpoint::HOLD;
         Ok(())
     }
 }

@@ -3,6 +3,7 @@
 //! Environment: `BENCH_CYCLES_40HZ` (default 10000, i.e. 250 s) and `BENCH_CYCLES_1KHZ`
 //! (default 10000) set the loop-jitter runs; `BENCH_QUICK=1` shortens everything for a smoke run.
 
+use jointctl_control::Mode;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -42,7 +43,7 @@ fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::Lo
     });
     arm.activate().unwrap();
     for i in 0..arm.dof_names.len() {
-        arm.set_command(i, JointCommand::position(0.1 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }));
+        arm.set_mode(i, position(0.1 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }));
     }
     (arm, loaded)
 }
@@ -181,4 +182,9 @@ fn main() {
     } else {
         println!("(jointctl not built in {}: skipped the memory figure)", exe.display());
     }
+}
+
+
+fn position(target_rad: f64) -> Mode {
+    Mode::Position { target_rad }
 }
