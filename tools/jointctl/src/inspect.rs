@@ -69,17 +69,27 @@ fn fmt(v: Option<f64>) -> String {
 
 fn human(s: &ArmState) -> String {
     let mut out = format!("cycle {:>8}{}\n", s.cycle, if s.final_sample != 0 { "  (final)" } else { "" });
-    out.push_str("  joint   pos[rad] vel[rad/s] defl[rad] torque[Nm] K[Nm/rad] state\n");
+    out.push_str("  joint   pos[rad] vel[rad/s] defl[rad] torque[Nm]  ref[Nm] K[Nm/rad] pivot[mm] mode       state\n");
+    const MODES: [&str; 6] = ["hold", "position", "manual", "trajectory", "torque", "impedance"];
     for j in s.joints() {
         out.push_str(&format!(
-            "  {:<6} {} {}    {}  {}  {} {}\n",
+            "  {:<6} {} {}    {}  {}  {} {} {} {:<10} {}\n",
             decode_name(&j.name),
             fmt(j.get(FieldMask::POSITION, j.position_rad)),
             fmt(j.get(FieldMask::VELOCITY, j.velocity_rad_s)),
             fmt(j.get(FieldMask::DEFLECTION, j.deflection_rad)),
             fmt(j.get(FieldMask::TORQUE, j.torque_nm)),
+            fmt(j.reference_torque_nm.is_finite().then_some(j.reference_torque_nm)),
             j.get(FieldMask::STIFFNESS, j.stiffness_nm_per_rad).map_or("      -".into(), |k| format!("{k:9.1}")),
-            if j.fault_code != 0 { format!("FAULT {}", j.fault_code) } else { "ok".into() }
+            fmt(j.get(FieldMask::PIVOT, j.pivot_mm)),
+            MODES.get(j.mode as usize).copied().unwrap_or("?"),
+            if j.fault_code != 0 {
+                format!("FAULT {}", j.fault_code)
+            } else if j.enabled == 0 {
+                "disabled".into()
+            } else {
+                "ok".into()
+            }
         ));
     }
     out

@@ -1,5 +1,6 @@
 //! `jointctl`: run, check and inspect compliant robot arms.
 
+mod cmd;
 mod inspect;
 
 use std::path::PathBuf;
@@ -41,6 +42,8 @@ enum Command {
     },
     /// Print the JSON Schema of arm descriptions (for editors).
     Schema,
+    /// Send a command to a running arm (exit 0 accepted, 1 refused or no runtime).
+    Cmd(cmd::CmdArgs),
     /// Read a running arm's shared memory from this separate process.
     Inspect {
         #[command(subcommand)]
@@ -135,5 +138,6 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Inspect { command } => inspect::run(command),
+        Command::Cmd(args) => cmd::run(args),
     }
 }

@@ -1,0 +1,207 @@
+//! `jointctl cmd`: send one command to a running arm and report the runtime's answer. Exit 0
+//! when the runtime accepted it; 1 with the runtime's reason when it refused it, or when no
+//! runtime serves the arm.
+
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use clap::{Args, Subcommand};
+use jointctl_ipc::{CommandRequest, MAX_COMMAND_POINTS, command_kind as kind};
+
+#[derive(Args)]
+pub struct CmdArgs {
+    /// The arm (its YAML `arm:` name).
+    #[arg(long, global = true, default_value = "sherpa")]
+    arm: String,
+    /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
+    #[arg(long, global = true)]
+    domain: Option<String>,
+    /// How long to wait for the runtime's answer [s].
+    #[arg(long, global = true, default_value_t = 2.0)]
+    timeout: f64,
+    /// A streamed command: the joint falls back to holding if it is not renewed within its
+    /// watchdog time.
+    #[arg(long, global = true)]
+    stream: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Torque control (figure 4.6) following a step, sine or cosine reference [Nm].
+    Torque {
+        /// Joint name (e.g. q2).
+        joint: String,
+        /// Step to NM.
+        #[arg(long, value_name = "NM", group = "waveform")]
+        step: Option<f64>,
+        /// Sine of amplitude NM (needs --freq).
+        #[arg(long, value_name = "NM", group = "waveform", requires = "freq")]
+        sine: Option<f64>,
+        /// Cosine of amplitude NM (needs --freq).
+        #[arg(long, value_name = "NM", group = "waveform", requires = "freq")]
+        cosine: Option<f64>,
+        /// Frequency of the sine or cosine [Hz].
+        #[arg(long, value_name = "HZ")]
+        freq: Option<f64>,
+        /// Offset added to the reference [Nm].
+        #[arg(long, value_name = "NM", default_value_t = 0.0)]
+        offset: f64,
+        /// Start the reference this long after the command arrives [s].
+        #[arg(long, value_name = "S", default_value_t = 0.0)]
+        delay: f64,
+    },
+    /// Position control with the feedback PI (section 4.3) to RAD.
+    Position {
+        /// Joint name.
+        joint: String,
+        /// Target [rad].
+        #[arg(allow_negative_numbers = true)]
+        rad: f64,
+    },
+    /// A direct joint set-point (no feedback PI), like the thesis' GUI.
+    Manual {
+        /// Joint name.
+        joint: String,
+        /// Set-point [rad].
+        #[arg(allow_negative_numbers = true)]
+        rad: f64,
+    },
+    /// Follow a trajectory: points "T:Q[:V]" (time [s], position [rad], velocity [rad/s]).
+    Trajectory {
+        /// Joint name.
+        joint: String,
+        /// Points, e.g. 0:0 1:0.5 2:0.2:0.
+        #[arg(required = true, num_args = 1.., allow_negative_numbers = true)]
+        points: Vec<String>,
+    },
+    /// Request a stiffness for a variable stiffness joint [Nm/rad].
+    Stiffness {
+        /// Joint name.
+        joint: String,
+        /// [Nm/rad]
+        nm_per_rad: f64,
+    },
+    /// Impedance control: tau = K (target - q) - D dq/dt, through the torque mode.
+    Impedance {
+        /// Joint name.
+        joint: String,
+        /// K [Nm/rad].
+        #[arg(long = "k", value_name = "NM_PER_RAD")]
+        k: f64,
+        /// D [Nms/rad].
+        #[arg(long = "d", value_name = "NMS_PER_RAD")]
+        d: f64,
+        /// Target [rad]; default: where the joint is.
+        #[arg(long, allow_negative_numbers = true)]
+        target: Option<f64>,
+    },
+    /// Hold one joint, or every joint.
+    Hold {
+        /// Joint name; all joints when left out.
+        joint: Option<String>,
+    },
+    /// Enable a joint (it starts in hold).
+    Enable {
+        /// Joint name.
+        joint: String,
+    },
+    /// Disable a joint: it holds and refuses commands until enabled.
+    Disable {
+        /// Joint name.
+        joint: String,
+    },
+    /// Stop the runtime: joints held, final state published.
+    Stop,
+}
+
+fn parse_points(points: &[String]) -> Result<Vec<[f64; 3]>, String> {
+    if points.len() > MAX_COMMAND_POINTS {
+        return Err(format!("at most {MAX_COMMAND_POINTS} points, got {}", points.len()));
+    }
+    points
+        .iter()
+        .map(|p| {
+            let parts: Vec<&str> = p.split(':').collect();
+            let num = |s: &str| s.parse::<f64>().map_err(|_| format!("point `{p}`: `{s}` is not a number"));
+            match parts.as_slice() {
+                [t, q] => Ok([num(t)?, num(q)?, f64::NAN]),
+                [t, q, v] => Ok([num(t)?, num(q)?, num(v)?]),
+                _ => Err(format!("point `{p}` is not T:Q or T:Q:V")),
+            }
+        })
+        .collect()
+}
+
+fn request(command: &Command) -> Result<CommandRequest, String> {
+    Ok(match command {
+        Command::Torque { joint, step, sine, cosine, freq, offset, delay } => {
+            let (waveform, amplitude) = match (step, sine, cosine) {
+                (Some(a), _, _) => (0.0, *a),
+                (_, Some(a), _) => (1.0, *a),
+                (_, _, Some(a)) => (2.0, *a),
+                _ => return Err("give one of --step NM, --sine NM --freq HZ, --cosine NM --freq HZ".into()),
+            };
+            CommandRequest::new(kind::TORQUE, joint, &[waveform, amplitude, freq.unwrap_or(0.0), *offset, *delay])
+        }
+        Command::Position { joint, rad } => CommandRequest::new(kind::POSITION, joint, &[*rad]),
+        Command::Manual { joint, rad } => CommandRequest::new(kind::MANUAL, joint, &[*rad]),
+        Command::Trajectory { joint, points } => {
+            let pts = parse_points(points)?;
+            let mut r = CommandRequest::new(kind::TRAJECTORY, joint, &[]);
+            r.point_count = pts.len() as u32;
+            r.points[..pts.len()].copy_from_slice(&pts);
+            r
+        }
+        Command::Stiffness { joint, nm_per_rad } => CommandRequest::new(kind::STIFFNESS, joint, &[*nm_per_rad]),
+        Command::Impedance { joint, k, d, target } => CommandRequest::new(kind::IMPEDANCE, joint, &[*k, *d, target.unwrap_or(f64::NAN)]),
+        Command::Hold { joint } => CommandRequest::new(kind::HOLD, joint.as_deref().unwrap_or(""), &[]),
+        Command::Enable { joint } => CommandRequest::new(kind::ENABLE, joint, &[]),
+        Command::Disable { joint } => CommandRequest::new(kind::DISABLE, joint, &[]),
+        Command::Stop => CommandRequest::new(kind::STOP, "", &[]),
+    })
+}
+
+pub fn run(args: CmdArgs) -> ExitCode {
+    let mut req = match request(&args.command) {
+        Ok(r) => r,
+        Err(e) => return crate::fail(e),
+    };
+    req.streamed = args.stream as u32;
+    let node = match jointctl_ipc::create_node(args.domain.as_deref(), &format!("jointctl-cmd-{}", std::process::id())) {
+        Ok(n) => n,
+        Err(e) => return crate::fail(e),
+    };
+    let name = jointctl_ipc::command_service_name(&args.arm);
+    let Ok(service) = jointctl_ipc::command_service(&node, &name, false) else {
+        return crate::fail(format!("no runtime is running arm `{}` (no service `{name}`): start `jointctl run`", args.arm));
+    };
+    let client = match service.client_builder().create() {
+        Ok(c) => c,
+        Err(e) => return crate::fail(format!("cannot connect to `{name}`: {e:?}")),
+    };
+    let pending = match client.send_copy(req) {
+        Ok(p) => p,
+        Err(e) => return crate::fail(format!("cannot send to `{name}`: {e:?}")),
+    };
+    let start = Instant::now();
+    loop {
+        match pending.receive() {
+            Ok(Some(response)) => {
+                let text = response.text().to_string();
+                return if response.accepted != 0 {
+                    println!("accepted: {text}");
+                    ExitCode::SUCCESS
+                } else {
+                    crate::fail(format!("refused: {text}"))
+                };
+            }
+            Ok(None) if start.elapsed() < Duration::from_secs_f64(args.timeout) => std::thread::sleep(Duration::from_millis(1)),
+            Ok(None) => {
+                return crate::fail(format!("no answer from arm `{}` within {} s (is its runtime running?)", args.arm, args.timeout));
+            }
+            Err(e) => return crate::fail(format!("receive failed: {e:?}")),
+        }
+    }
+}
