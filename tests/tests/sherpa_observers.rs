@@ -170,24 +170,24 @@ fn a_lost_reading_makes_its_joint_unknown_and_held_and_a_pivot_beyond_range_is_f
 fn position_commands_go_through_each_plugin_transmission() {
     let (mut arm, hal, _) = sherpa();
     arm.activate().unwrap();
-    // q2 = 0.2, q3 = 0.1 -> a2 = 0.3, a3 = 0.1 (eq. 3.3 inverse); the PI adds nothing at the
-    // first step beyond kp * error, so compare the direction of the differential.
-    arm.set_mode(1, position(0.2));
-    arm.set_mode(2, position(0.1));
-    // q6 = 0.1, q7 = 0 -> bevel inputs 0.1 / 0.1 -> motors 0.1 / 0.1875 each.
-    arm.set_mode(5, position(0.1));
+    // Targets within one step of the set-point rate limit (2 rad/s x 25 ms), so the set-points
+    // reach the plugins unchanged: q2 = 0.04, q3 = 0.02 -> a2 = q2 + q3, a3 = q2 - q3 (eq. 3.3
+    // inverse); q6 = 0.03, q7 = 0 -> both bevel inputs 0.03 -> motors 0.03 / 0.1875 (eq. 3.7
+    // inverse, eq. 3.8 ratio).
+    arm.set_mode(1, position(0.04));
+    arm.set_mode(2, position(0.02));
+    arm.set_mode(5, position(0.03));
     arm.set_mode(6, position(0.0));
     arm.step(0.0);
+    // The position PI (kp 0.2, ki 0.5, joints at 0) adds kp * e + ki * e * dt to each target.
+    let with_pi = |q: f64| q + 0.2 * q + 0.5 * q * 0.025;
     let a2 = hal.written("elmo_shoulder_a").position_rad;
     let a3 = hal.written("elmo_shoulder_b").position_rad;
-    // With kp = 0.2 and the joints at 0: targets 0.2 * 1.2 = 0.24 and 0.1 * 1.2 = 0.12, plus the
-    // integral step ki * e * dt (0.5 * e * 0.025).
-    let q2t = 0.2 + 0.2 * 0.2 + 0.5 * 0.2 * 0.025;
-    let q3t = 0.1 + 0.2 * 0.1 + 0.5 * 0.1 * 0.025;
+    let (q2t, q3t) = (with_pi(0.04), with_pi(0.02));
     assert!((a2 - (q2t + q3t)).abs() < 1e-12 && (a3 - (q2t - q3t)).abs() < 1e-12, "{a2} {a3}");
     let m_a = hal.written("elmo_wrist_a").position_rad;
     let m_b = hal.written("elmo_wrist_b").position_rad;
-    let q6t = 0.1 + 0.2 * 0.1 + 0.5 * 0.1 * 0.025;
+    let q6t = with_pi(0.03);
     assert!((m_a - q6t / 0.1875).abs() < 1e-9 && (m_b - q6t / 0.1875).abs() < 1e-9, "{m_a} {m_b}");
     assert_eq!(hal.written("elmo_shoulder_pivot"), jointctl_api::MotorSetpoint::HOLD);
 }
