@@ -207,3 +207,25 @@ fn transmission_round_trips_joint_to_motor_to_joint_for_every_plugin() {
         assert!((observed - q).abs() < 1e-6, "{}: commanded {q}, observed {observed}", arm.dof_names[dof]);
     }
 }
+
+#[test]
+fn a_reference_configured_in_yaml_runs_from_the_start() {
+    let (_, path) = sherpa_copy("startup");
+    let text = std::fs::read_to_string(&path).unwrap().replacen(
+        "          watchdog_s: 0.5                 # assumption",
+        "          watchdog_s: 0.5\n          startup: {torque: {waveform: cosine, amplitude: 3.0, frequency_hz: 0.2}}",
+        1,
+    );
+    std::fs::write(&path, text).unwrap();
+    let loaded = jointctl_config::load(&path).unwrap();
+    let mut arm = jointctl_runtime::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
+    arm.activate().unwrap();
+    for i in 0..=80 {
+        arm.step(i as f64 / 40.0);
+    }
+    assert_eq!(arm.controllers[1].mode().name(), "torque");
+    // At t = 2 s the cosine reference is 3 cos(2 pi 0.2 2) = -2.427 Nm.
+    let reference = 3.0 * (2.0 * std::f64::consts::PI * 0.2 * 2.0).cos();
+    assert!((arm.torque_references[1] - reference).abs() < 1e-9);
+    assert!((arm.states[1].torque().unwrap() - reference).abs() < 0.3, "{:?}", arm.states[1]);
+}

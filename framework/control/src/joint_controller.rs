@@ -37,6 +37,35 @@ pub struct ControllerConfig {
     /// to holding [s]. Assumption: 0.5 s.
     #[serde(default = "default_watchdog")]
     pub watchdog_s: f64,
+    /// The mode the DOF starts in (default: hold): `{position_rad: 0.3}`, or e.g. `{torque:
+    /// {waveform: sine, amplitude: 5, frequency_hz: 0.1}}` to run a chapter-5 experiment from
+    /// YAML alone.
+    #[serde(default)]
+    pub startup: Option<StartupMode>,
+}
+
+/// A DOF's mode at start, from YAML: exactly one of `position_rad` or `torque`. Times are from
+/// the loop's start [s].
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StartupMode {
+    /// Go to a position [rad] with the feedback PI.
+    #[serde(default)]
+    pub position_rad: Option<f64>,
+    /// Follow a torque reference.
+    #[serde(default)]
+    pub torque: Option<Reference>,
+}
+
+impl StartupMode {
+    /// The mode it selects.
+    pub fn mode(&self) -> Mode {
+        match (self.position_rad, self.torque) {
+            (Some(target_rad), None) => Mode::Position { target_rad },
+            (None, Some(reference)) => Mode::Torque { reference },
+            _ => Mode::Hold,
+        }
+    }
 }
 
 fn default_torque_pi() -> PiGains {
@@ -56,6 +85,7 @@ impl Default for ControllerConfig {
             torque_pi_schedule: Vec::new(),
             max_setpoint_rate_rad_s: default_rate(),
             watchdog_s: default_watchdog(),
+            startup: None,
         }
     }
 }
@@ -79,7 +109,14 @@ impl ControllerConfig {
         if !(self.watchdog_s.is_finite() && self.watchdog_s > 0.0) {
             return Err(("watchdog_s".into(), format!("must be finite and > 0, got {}", self.watchdog_s)));
         }
-        Ok(())
+        match self.startup {
+            Some(StartupMode { position_rad: Some(q), torque: None }) if !q.is_finite() => {
+                Err(("startup.position_rad".into(), "must be finite".into()))
+            }
+            Some(StartupMode { position_rad: None, torque: Some(r) }) => r.validate().map_err(|m| ("startup.torque".into(), m)),
+            Some(StartupMode { position_rad: Some(_), torque: None }) | None => Ok(()),
+            Some(_) => Err(("startup".into(), "give exactly one of `position_rad` or `torque`".into())),
+        }
     }
 
     /// The torque PI gains at a stiffness (section 6.2's gain scheduling).
@@ -249,10 +286,11 @@ pub struct JointController {
 }
 
 impl JointController {
-    /// A controller in [`Mode::Hold`].
+    /// A controller in [`Mode::Hold`], or in its configured startup mode.
     pub fn new(config: ControllerConfig, limits: DofLimits) -> Self {
         let pi = Pi::new(config.torque_pi);
-        JointController { config, limits, mode: Mode::Hold, pi, last_setpoint: None, stream_deadline_s: None, events: ControllerEvents::default() }
+        let mode = config.startup.map_or(Mode::Hold, |s| s.mode());
+        JointController { config, limits, mode, pi, last_setpoint: None, stream_deadline_s: None, events: ControllerEvents::default() }
     }
 
     /// The current mode.
@@ -485,6 +523,18 @@ mod tests {
         assert!(c.update(&obs, 0.95, 0.01).hold, "0.55 s since the last renewal");
         assert_eq!(c.events.watchdog_trips, 1);
         assert_eq!(c.mode().name(), "hold");
+    }
+
+    #[test]
+    fn a_startup_reference_from_yaml_runs_from_the_start() {
+        let cfg: ControllerConfig =
+            serde_json::from_str(r#"{"startup": {"torque": {"waveform": "cosine", "amplitude": 2.0, "frequency_hz": 0.2}}}"#).unwrap();
+        cfg.validate().unwrap();
+        let c = JointController::new(cfg, DofLimits::NONE);
+        match c.mode() {
+            Mode::Torque { reference } => assert_eq!(reference.value(0.0), 2.0),
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]

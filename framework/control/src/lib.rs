@@ -9,7 +9,7 @@ mod reference;
 mod trajectory;
 mod velocity;
 
-pub use joint_controller::{ControllerConfig, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output};
+pub use joint_controller::{ControllerConfig, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output, StartupMode};
 pub use pi::{Pi, PiGains};
 pub use reference::{Reference, Waveform};
 pub use trajectory::{MAX_TRAJECTORY_POINTS, Trajectory, TrajectoryPoint};

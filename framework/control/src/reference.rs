@@ -1,7 +1,7 @@
 use serde::Deserialize;
 
 /// The shape of a reference signal (thesis chapter 5: step, sine and cosine torque references).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Waveform {
     /// `offset` before `start_s`, `offset + amplitude` from then on.
@@ -22,7 +22,7 @@ pub enum Waveform {
 /// let s = Reference { waveform: Waveform::Step, amplitude: 20.0, frequency_hz: 0.0, offset: 0.0, start_s: 1.0 };
 /// assert_eq!((s.value(0.5), s.value(1.0)), (0.0, 20.0));
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Reference {
     /// The shape.

@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use jointctl_api::JointCommand;
 use jointctl_runtime::timing::monotonic_ns;
 use jointctl_runtime::{Arm, ArmPublisher, PluginLoader, RunOptions};
 
