@@ -56,6 +56,11 @@ impl Reading {
         Reading { value, age_s: 0.0, status: ReadingStatus::VALID, _reserved: [0; 7] }
     }
 
+    /// A checked value received `age_s` ago (bus latency).
+    pub const fn valid_aged(value: f64, age_s: f64) -> Self {
+        Reading { value, age_s, status: ReadingStatus::VALID, _reserved: [0; 7] }
+    }
+
     /// The last good value, `age_s` seconds old.
     pub const fn stale(value: f64, age_s: f64) -> Self {
         Reading { value, age_s, status: ReadingStatus::STALE, _reserved: [0; 7] }

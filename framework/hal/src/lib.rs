@@ -7,6 +7,8 @@
 //!
 //! Backends: [`sim::SimHal`], the default, which runs anywhere.
 
+pub mod codec;
+pub mod condition;
 pub mod sim;
 
 use jointctl_api::{DriveReading, MotorSetpoint, Reading};

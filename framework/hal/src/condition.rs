@@ -1,0 +1,158 @@
+//! Turning what a bus delivered into a [`Reading`] that can be trusted, per device.
+//!
+//! Thesis appendix A: lost CAN frames were read as zero, the observed deflection spiked and the
+//! arm dropped. Here nothing a bus delivers becomes a value unchecked:
+//! - nothing arrived this cycle → the last good value, marked stale with its age (or missing);
+//! - a frame that failed its checks (parity, error flag) → counted, last good value stale;
+//! - a value that jumps further than the joint can move in the elapsed time, or an exact zero
+//!   after readings away from zero (an all-zero frame passes the parity check) → implausible:
+//!   counted, last good value stale.
+//!
+//! Allocation-free; runs inside the control cycle.
+
+use jointctl_api::{Reading, ReadingStatus};
+
+/// What a bus delivered for one device this cycle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sample {
+    /// A decoded value (rad), received `age_s` ago.
+    Value {
+        /// The value [rad].
+        value: f64,
+        /// Time since it was received [s].
+        age_s: f64,
+    },
+    /// Nothing arrived.
+    Missing,
+    /// A frame arrived but failed its checks.
+    Invalid,
+}
+
+/// Plausibility limits of one device (from YAML; defaults are assumptions).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plausibility {
+    /// Fastest the measured angle can change [rad/s].
+    pub max_rate_rad_s: f64,
+    /// Allowed extra jump for quantisation and noise [rad].
+    pub tolerance_rad: f64,
+    /// The value wraps at this span (2 pi for an absolute encoder); jumps across the wrap are
+    /// unwrapped, not rejected.
+    pub wrap_rad: Option<f64>,
+    /// Reject an exact zero after a last good value farther than this from zero [rad]
+    /// (`None`: a zero is always plausible).
+    pub zero_band_rad: Option<f64>,
+}
+
+impl Plausibility {
+    /// Limits for a 14-bit absolute encoder on a joint moving at most `max_rate_rad_s`.
+    pub fn absolute_encoder(max_rate_rad_s: f64) -> Self {
+        let count = std::f64::consts::TAU / 16384.0;
+        Plausibility {
+            max_rate_rad_s,
+            tolerance_rad: 4.0 * count,
+            wrap_rad: Some(std::f64::consts::TAU),
+            zero_band_rad: Some(4.0 * count),
+        }
+    }
+
+    /// Limits for a drive position reported over CAN.
+    pub fn drive_position(max_rate_rad_s: f64) -> Self {
+        Plausibility { max_rate_rad_s, tolerance_rad: 1e-3, wrap_rad: None, zero_band_rad: Some(1e-3) }
+    }
+}
+
+/// Counters of what was not used, per device; published in diagnostics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LossCounters {
+    /// Cycles in which nothing arrived.
+    pub missing: u64,
+    /// Frames that failed their checks.
+    pub invalid: u64,
+    /// Values rejected as implausible (jumps, zeros).
+    pub implausible: u64,
+}
+
+/// The conditioner of one device.
+///
+/// ```
+/// use jointctl_api::ReadingStatus;
+/// use jointctl_hal::condition::{Conditioner, Plausibility, Sample};
+/// let mut c = Conditioner::new(Plausibility::drive_position(2.0));
+/// let v = |value| Sample::Value { value, age_s: 0.0 };
+/// assert_eq!(c.update(v(0.50), 0.000).status, ReadingStatus::VALID);
+/// assert_eq!(c.update(v(0.51), 0.025).status, ReadingStatus::VALID);
+/// // Appendix A: a lost frame read as zero is not a value.
+/// let r = c.update(v(0.0), 0.050);
+/// assert_eq!((r.status, r.value), (ReadingStatus::STALE, 0.51));
+/// assert_eq!(c.counters().implausible, 1);
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct Conditioner {
+    limits: Plausibility,
+    last_good: Option<(f64, f64)>,
+    counters: LossCounters,
+}
+
+impl Conditioner {
+    /// A conditioner that has seen nothing yet.
+    pub const fn new(limits: Plausibility) -> Self {
+        Conditioner { limits, last_good: None, counters: LossCounters { missing: 0, invalid: 0, implausible: 0 } }
+    }
+
+    /// What was not used so far.
+    pub fn counters(&self) -> LossCounters {
+        self.counters
+    }
+
+    fn hold(&self, now_s: f64) -> Reading {
+        match self.last_good {
+            Some((v, t)) => Reading::stale(v, (now_s - t).max(0.0)),
+            None => Reading::invalid(),
+        }
+    }
+
+    /// Conditions this cycle's sample at time `now_s` [s].
+    pub fn update(&mut self, sample: Sample, now_s: f64) -> Reading {
+        match sample {
+            Sample::Missing => {
+                self.counters.missing += 1;
+                match self.hold(now_s) {
+                    r if r.status == ReadingStatus::INVALID => Reading::MISSING,
+                    r => r,
+                }
+            }
+            Sample::Invalid => {
+                self.counters.invalid += 1;
+                self.hold(now_s)
+            }
+            Sample::Value { value, age_s } => {
+                if !value.is_finite() {
+                    self.counters.invalid += 1;
+                    return self.hold(now_s);
+                }
+                let received = now_s - age_s.max(0.0);
+                let Some((last, t)) = self.last_good else {
+                    self.last_good = Some((value, received));
+                    return Reading::valid_aged(value, age_s.max(0.0));
+                };
+                let l = self.limits;
+                if value == 0.0 && l.zero_band_rad.is_some_and(|band| last.abs() > band) {
+                    self.counters.implausible += 1;
+                    return self.hold(now_s);
+                }
+                // Unwrap across the encoder's zero: take the representation nearest the last value.
+                let v = match l.wrap_rad {
+                    Some(span) => value + span * ((last - value) / span).round(),
+                    None => value,
+                };
+                let allowed = l.max_rate_rad_s * (received - t).max(0.0) + l.tolerance_rad;
+                if (v - last).abs() > allowed {
+                    self.counters.implausible += 1;
+                    return self.hold(now_s);
+                }
+                self.last_good = Some((v, received));
+                Reading::valid_aged(v, age_s.max(0.0))
+            }
+        }
+    }
+}
