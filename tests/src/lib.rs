@@ -48,6 +48,6 @@ pub fn rig_yaml(arm: &str, rate_hz: f64, extra: &str) -> String {
         encoders.push_str(&format!("        - {{name: e{i}, chip_select: {i}, sim: {{drive: m{i}}}}}\n"));
     }
     format!(
-        "arm: {arm}\nrate_hz: {rate_hz}\nhal: {{backend: sim}}\ntiming: {{spin_us: 100}}\nbuses:\n  can:\n    - interface: can0\n      drives:\n{drives}  spi:\n    - device: /dev/spidev0.0\n      encoders:\n{encoders}joints:\n  - name: a\n    plugin: rigid\n    encoders: {{output: e0}}\n    drives: {{motor: m0}}\n    limits: {{position_rad: [-1.0, 1.0]}}\n    params: {{position_pi: {{kp: 0.2, ki: 0.5, output_limit: 0.05}}}}\n{extra}"
+        "arm: {arm}\nrate_hz: {rate_hz}\nhal: {{backend: sim}}\ntiming: {{spin_us: 100}}\nbuses:\n  can:\n    - interface: can0\n      drives:\n{drives}  spi:\n    - device: /dev/spidev0\n      encoders:\n{encoders}joints:\n  - name: a\n    plugin: rigid\n    encoders: {{output: e0}}\n    drives: {{motor: m0}}\n    limits: {{position_rad: [-1.0, 1.0]}}\n    params: {{position_pi: {{kp: 0.2, ki: 0.5, output_limit: 0.05}}}}\n{extra}"
     )
 }

@@ -47,10 +47,14 @@ fn default_rate_hz() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct HalConfig {
     /// `sim`: the simulated arm, the default; runs anywhere without hardware or root rights.
+    /// `socketcan`: the real buses: the drives over SocketCAN (CANopen), the encoders over spidev.
     pub backend: HalBackend,
     /// Settings of the simulated backend.
     #[serde(default)]
     pub sim: SimConfig,
+    /// Settings of the CANopen drives on the real buses.
+    #[serde(default)]
+    pub canopen: CanopenConfig,
 }
 
 /// Available hardware backends.
@@ -59,6 +63,68 @@ pub struct HalConfig {
 pub enum HalBackend {
     /// The simulated arm.
     Sim,
+    /// SocketCAN for the drives, spidev for the encoders.
+    Socketcan,
+}
+
+/// CANopen settings of the drives (CiA 301/402).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CanopenConfig {
+    /// Mode of operation (0x6060): `profile_position` as in the thesis (section 3.2; a new
+    /// set-point is taken every second cycle, on the rising edge of controlword bit 4) or
+    /// `cyclic_synchronous_position` (every SYNC), where the drive supports it.
+    #[serde(default)]
+    pub mode: DriveMode,
+    /// Answer time of an SDO at start-up [s]. Assumption: 0.2 s.
+    #[serde(default = "default_sdo_timeout", deserialize_with = "finite")]
+    pub sdo_timeout_s: f64,
+    /// A drive whose heartbeat is older than this is silent: its readings are invalid [s].
+    /// Assumption: 3 heartbeat periods.
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub heartbeat_timeout_s: Option<f64>,
+    /// SYNC counter overflow (0x1019); 0 sends SYNC without a counter. Assumption: 240.
+    #[serde(default = "default_sync_overflow")]
+    pub sync_counter_overflow: u8,
+}
+
+fn default_sdo_timeout() -> f64 {
+    0.2
+}
+fn default_sync_overflow() -> u8 {
+    240
+}
+
+impl Default for CanopenConfig {
+    fn default() -> Self {
+        CanopenConfig {
+            mode: DriveMode::default(),
+            sdo_timeout_s: default_sdo_timeout(),
+            heartbeat_timeout_s: None,
+            sync_counter_overflow: default_sync_overflow(),
+        }
+    }
+}
+
+/// CiA 402 position modes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum DriveMode {
+    /// Profile position (0x6060 = 1).
+    #[default]
+    ProfilePosition,
+    /// Cyclic synchronous position (0x6060 = 8).
+    CyclicSynchronousPosition,
+}
+
+impl DriveMode {
+    /// The 0x6060 value.
+    pub fn code(self) -> u8 {
+        match self {
+            DriveMode::ProfilePosition => 1,
+            DriveMode::CyclicSynchronousPosition => 8,
+        }
+    }
 }
 
 /// Settings of the simulated backend.
@@ -159,16 +225,43 @@ pub struct DriveConfig {
     pub name: String,
     /// CANopen node id, 1-127.
     pub node_id: u8,
+    /// Position counts per radian of the reported (gearbox output) position. Assumption when
+    /// not given: a 2048-line quadrature encoder behind a 100:1 gear, 8192 * 100 / (2 pi).
+    #[serde(default = "default_counts_per_rad", deserialize_with = "finite")]
+    pub counts_per_rad: f64,
+    /// Heartbeat producer time written to 0x1017 [ms]. Assumption: 100 ms.
+    #[serde(default = "default_heartbeat_ms")]
+    pub heartbeat_ms: u16,
+    /// Fastest the reported position can change [rad/s] (plausibility). Assumption: 10 rad/s.
+    #[serde(default = "default_drive_rate", deserialize_with = "finite")]
+    pub max_velocity_rad_s: f64,
+}
+
+fn default_counts_per_rad() -> f64 {
+    8192.0 * 100.0 / std::f64::consts::TAU
+}
+fn default_heartbeat_ms() -> u16 {
+    100
+}
+fn default_drive_rate() -> f64 {
+    10.0
 }
 
 /// One SPI bus.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SpiBusConfig {
-    /// spidev device (e.g. `/dev/spidev0.0`).
+    /// spidev bus: encoder `chip_select` N is the device file `<device>.N` (e.g. `/dev/spidev0`).
     pub device: String,
+    /// Clock [Hz]. Assumption: 1 MHz (the AS5048A allows up to 10 MHz).
+    #[serde(default = "default_spi_speed")]
+    pub speed_hz: u32,
     /// The encoders on this bus.
     pub encoders: Vec<EncoderConfig>,
+}
+
+fn default_spi_speed() -> u32 {
+    1_000_000
 }
 
 /// One absolute encoder.
@@ -182,6 +275,9 @@ pub struct EncoderConfig {
     /// Subtracted from the raw angle [rad].
     #[serde(default, deserialize_with = "finite")]
     pub offset_rad: f64,
+    /// Fastest the measured angle can change [rad/s] (plausibility). Assumption: 10 rad/s.
+    #[serde(default = "default_drive_rate", deserialize_with = "finite")]
+    pub max_velocity_rad_s: f64,
     /// What the simulated backend makes this encoder read.
     #[serde(default)]
     pub sim: Option<EncoderSimConfig>,

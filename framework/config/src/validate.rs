@@ -57,6 +57,15 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
                 err(format!("{path}.name"), format!("device `{}` is already defined at {first}", d.name));
             }
             drive_names.insert(d.name.as_str());
+            if !(d.counts_per_rad > 0.0) {
+                err(format!("{path}.counts_per_rad"), format!("must be > 0, got {}", d.counts_per_rad));
+            }
+            if !(d.max_velocity_rad_s > 0.0) {
+                err(format!("{path}.max_velocity_rad_s"), format!("must be > 0, got {}", d.max_velocity_rad_s));
+            }
+            if d.heartbeat_ms == 0 {
+                err(format!("{path}.heartbeat_ms"), "must be > 0 (the heartbeat tells a silent drive)".into());
+            }
             if !(1..=127).contains(&d.node_id) {
                 err(format!("{path}.node_id"), format!("a CANopen node id is 1-127, got {}", d.node_id));
             } else if let Some(other) = ids.insert(d.node_id, d.name.as_str()) {
@@ -72,6 +81,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
                 err(format!("{path}.name"), format!("device `{}` is already defined at {first}", e.name));
             }
             encoder_names.insert(e.name.as_str());
+            if !(e.max_velocity_rad_s > 0.0) {
+                err(format!("{path}.max_velocity_rad_s"), format!("must be > 0, got {}", e.max_velocity_rad_s));
+            }
             if e.chip_select > 15 {
                 err(format!("{path}.chip_select"), format!("must be 0-15, got {}", e.chip_select));
             } else if let Some(other) = cs.insert(e.chip_select, e.name.as_str()) {

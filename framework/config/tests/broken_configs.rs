@@ -14,7 +14,7 @@ buses:
         - {name: m1, node_id: 1}
         - {name: m2, node_id: 2}
   spi:
-    - device: /dev/spidev0.0
+    - device: /dev/spidev0
       encoders:
         - {name: e1, chip_select: 0}
         - {name: e2, chip_select: 1}

@@ -99,6 +99,11 @@ impl Conditioner {
         Conditioner { limits, last_good: None, counters: LossCounters { missing: 0, invalid: 0, implausible: 0 } }
     }
 
+    /// The last value that passed every check [rad].
+    pub fn last_good(&self) -> Option<f64> {
+        self.last_good.map(|(v, _)| v)
+    }
+
     /// What was not used so far.
     pub fn counters(&self) -> LossCounters {
         self.counters

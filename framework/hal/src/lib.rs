@@ -5,10 +5,13 @@
 //! sends an [`ActuatorFrame`] of motor set-points. Which joint uses which device is the
 //! runtime's business.
 //!
-//! Backends: [`sim::SimHal`], the default, which runs anywhere.
+//! Backends: [`sim::SimHal`], the default, which runs anywhere; [`hardware::HardwareHal`], the
+//! real buses (SocketCAN + spidev).
 
+pub mod budget;
 pub mod codec;
 pub mod condition;
+pub mod hardware;
 pub mod sim;
 
 use jointctl_api::{DriveReading, MotorSetpoint, Reading};
@@ -118,4 +121,7 @@ pub trait Hal: Send {
 
     /// Sends this cycle's set-points; a simulated backend advances its time by `dt_s` here.
     fn write(&mut self, frame: &ActuatorFrame, dt_s: f64) -> Result<(), HalIoError>;
+
+    /// Asks faulted drives to reset at the next write (CiA 402 fault reset). Default: nothing.
+    fn reset_faults(&mut self) {}
 }

@@ -24,7 +24,7 @@ enum EncoderModel {
 /// hal: {backend: sim}
 /// buses:
 ///   can: [{interface: can0, drives: [{name: m, node_id: 1}]}]
-///   spi: [{device: /dev/spidev0.0, encoders: [{name: e, chip_select: 0, sim: {drive: m, gain: 2.0}}]}]
+///   spi: [{device: /dev/spidev0, encoders: [{name: e, chip_select: 0, sim: {drive: m, gain: 2.0}}]}]
 /// joints: [{name: q, plugin: rigid}]
 /// "#, "a.yaml").unwrap().config;
 /// let devices = DeviceIndex::of(&cfg);

@@ -23,9 +23,21 @@ pub fn build_hal(loaded: &LoadedConfig) -> Result<Box<dyn Hal>, ConfigErrors> {
     match loaded.config.hal.backend {
         HalBackend::Sim => jointctl_hal::sim::SimHal::new(&loaded.config)
             .map(|h| Box::new(h) as Box<dyn Hal>)
-            .map_err(|e| match e {
-                jointctl_hal::HalSetupError::Config { field, message } => loaded.source.error(&field, message).into(),
-            }),
+            .map_err(|e| setup_error(loaded, e)),
+        HalBackend::Socketcan => {
+            for b in jointctl_hal::budget::budgets(&loaded.config) {
+                if b.load_percent > 100.0 {
+                    return Err(loaded.source.error("rate_hz", format!("the CAN bus cannot carry this rate: {b}")).into());
+                }
+            }
+            jointctl_hal::hardware::HardwareHal::new(&loaded.config).map(|h| Box::new(h) as Box<dyn Hal>).map_err(|e| setup_error(loaded, e))
+        }
+    }
+}
+
+fn setup_error(loaded: &LoadedConfig, e: jointctl_hal::HalSetupError) -> ConfigErrors {
+    match e {
+        jointctl_hal::HalSetupError::Config { field, message } => loaded.source.error(&field, message).into(),
     }
 }
 

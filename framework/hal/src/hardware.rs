@@ -1,0 +1,411 @@
+//! The real buses: the ELMO drives as CANopen nodes over SocketCAN, the absolute encoders over
+//! Linux spidev. Lost or late frames are never data: every reading goes through a
+//! [`Conditioner`], carries its age, and is stale or invalid rather than zero.
+//!
+//! Start-up (blocking, before the loop): per drive, SDO writes of the mode of operation
+//! (0x6060), the heartbeat producer time (0x1017) and SYNC-triggered TPDO1 (0x1800:02 = 1);
+//! then NMT start. In the loop (never blocking): read drains the socket (TPDO1 statusword +
+//! position, heartbeats, EMCY, error frames) and each encoder's pipelined SPI answer; write sends
+//! every drive's RPDO1 (controlword + target) and one SYNC with its counter. The CiA 402 enable
+//! sequence advances one step per cycle, and only once the drive's actual position is known (the
+//! first target is where the drive is). A faulted drive stays faulted until [`Hal::reset_faults`].
+
+use std::io::ErrorKind;
+use std::time::{Duration, Instant};
+
+use jointctl_api::{DriveAction, DriveReading, Reading};
+use jointctl_config::{ArmConfig, DriveMode};
+use socketcan::{CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, SocketOptions, StandardId};
+
+use crate::codec::as5048;
+use crate::codec::canopen::{self as co, DriveState, Frame};
+use crate::condition::{Conditioner, Plausibility, Sample};
+use crate::{ActuatorFrame, Hal, HalIoError, HalSetupError, SensorFrame};
+
+/// Health of one CAN bus.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BusHealth {
+    /// The controller reported bus-off.
+    pub bus_off: bool,
+    /// The controller reported error-passive.
+    pub error_passive: bool,
+    /// Error frames received.
+    pub error_frames: u64,
+    /// Frames that could not be sent.
+    pub tx_failures: u64,
+}
+
+/// Health of one drive.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DriveHealth {
+    /// CiA 402 state from the last statusword.
+    pub state: Option<DriveState>,
+    /// Emergency messages received.
+    pub emcy_count: u64,
+    /// The last emergency code.
+    pub last_emcy_code: u16,
+    /// No heartbeat within the timeout.
+    pub silent: bool,
+    /// Cycles without a TPDO, frames rejected, values rejected.
+    pub losses: crate::condition::LossCounters,
+}
+
+struct Drive {
+    name: String,
+    node: u8,
+    counts_per_rad: f64,
+    conditioner: Conditioner,
+    fresh: Option<(i32, f64)>,
+    statusword: Option<u16>,
+    last_heartbeat_s: Option<f64>,
+    heartbeat_timeout_s: f64,
+    target_counts: Option<i32>,
+    toggle: bool,
+    reset_requested: bool,
+    health: DriveHealth,
+}
+
+struct CanBus {
+    index: usize,
+    socket: CanSocket,
+    interface: String,
+    drives: Vec<Drive>,
+    sync_counter: u8,
+    sync_overflow: u8,
+    health: BusHealth,
+}
+
+struct Encoder {
+    name: String,
+    path: String,
+    device: Option<spidev::Spidev>,
+    offset_rad: f64,
+    conditioner: Conditioner,
+}
+
+/// The real hardware.
+pub struct HardwareHal {
+    t0: Instant,
+    mode: DriveMode,
+    buses: Vec<CanBus>,
+    encoders: Vec<Encoder>,
+}
+
+fn to_socketcan(f: &Frame) -> Option<CanFrame> {
+    CanFrame::new(StandardId::new(f.id)?, f.bytes())
+}
+
+fn from_socketcan(f: &CanFrame) -> Option<Frame> {
+    match f {
+        CanFrame::Data(d) => match d.id() {
+            socketcan::Id::Standard(id) => Some(Frame::new(id.as_raw(), d.data())),
+            socketcan::Id::Extended(_) => None,
+        },
+        _ => None,
+    }
+}
+
+impl CanBus {
+    fn send(&mut self, f: &Frame) {
+        let ok = to_socketcan(f).is_some_and(|cf| self.socket.write_frame(&cf).is_ok());
+        if !ok {
+            self.health.tx_failures += 1;
+        }
+    }
+
+    /// Blocking SDO write with a timeout (start-up only).
+    fn sdo_write(&mut self, d: usize, index: u16, sub: u8, value: &[u8], timeout: Duration) -> Result<(), HalSetupError> {
+        let node = self.drives[d].node;
+        let name = self.drives[d].name.clone();
+        let field = format!("buses.can[{}].drives[{d}]", self.index);
+        let req = co::sdo_write(node, index, sub, value);
+        let cf = to_socketcan(&req).ok_or_else(|| HalSetupError::Config { field: field.clone(), message: "bad SDO frame".into() })?;
+        self.socket.write_frame(&cf).map_err(|e| HalSetupError::Config {
+            field: field.clone(),
+            message: format!("cannot send on {}: {e}", self.interface),
+        })?;
+        let deadline = Instant::now() + timeout;
+        while Instant::now() < deadline {
+            match self.socket.read_frame_timeout(deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1))) {
+                Ok(frame) => match from_socketcan(&frame).and_then(|f| co::decode_sdo_response(&f)) {
+                    Some(co::SdoResponse::WriteOk { node: n, index: i, sub: s }) if n == node && i == index && s == sub => return Ok(()),
+                    Some(co::SdoResponse::Abort { node: n, index: i, sub: s, code }) if n == node && i == index && s == sub => {
+                        return Err(HalSetupError::Config {
+                            field,
+                            message: format!("drive `{name}` (node {node} on {}) refused SDO write {index:#06x}:{sub:02x} (abort code {code:#010x})", self.interface),
+                        });
+                    }
+                    _ => {}
+                },
+                Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::TimedOut => {}
+                Err(e) => {
+                    return Err(HalSetupError::Config { field, message: format!("cannot read from {}: {e}", self.interface) });
+                }
+            }
+        }
+        Err(HalSetupError::Config {
+            field,
+            message: format!(
+                "drive `{name}` (node {node} on {}) did not answer SDO write {index:#06x}:{sub:02x} within {:.0} ms: is it powered and its node id right?",
+                self.interface,
+                timeout.as_secs_f64() * 1e3
+            ),
+        })
+    }
+
+    fn handle(&mut self, frame: &CanFrame, now_s: f64) {
+        if let CanFrame::Error(e) = frame {
+            self.health.error_frames += 1;
+            // linux/can/error.h: class bits in the id, controller details in data[1].
+            let class = e.raw_id();
+            if class & 0x0000_0040 != 0 {
+                self.health.bus_off = true;
+            }
+            if class & 0x0000_0004 != 0 && e.data().get(1).is_some_and(|b| b & 0x30 != 0) {
+                self.health.error_passive = true;
+            }
+            return;
+        }
+        let Some(f) = from_socketcan(frame) else { return };
+        if let Some(t) = co::decode_tpdo1(&f) {
+            if let Some(d) = self.drives.iter_mut().find(|d| d.node == t.node) {
+                d.fresh = Some((t.position_counts, now_s));
+                d.statusword = Some(t.statusword);
+                d.health.state = Some(co::state_of(t.statusword));
+            }
+        } else if let Some((node, _state)) = co::decode_heartbeat(&f) {
+            if let Some(d) = self.drives.iter_mut().find(|d| d.node == node) {
+                d.last_heartbeat_s = Some(now_s);
+            }
+        } else if let Some(e) = co::decode_emcy(&f)
+            && let Some(d) = self.drives.iter_mut().find(|d| d.node == e.node)
+        {
+            d.health.emcy_count += 1;
+            d.health.last_emcy_code = e.code;
+        }
+    }
+}
+
+impl HardwareHal {
+    /// Opens the buses, configures every drive over SDO and starts them (NMT). Blocks for the
+    /// SDO answers; fails with the drive, node and bus named.
+    pub fn new(config: &ArmConfig) -> Result<Self, HalSetupError> {
+        let co_cfg = &config.hal.canopen;
+        let timeout = Duration::from_secs_f64(co_cfg.sdo_timeout_s.max(0.001));
+        let mut buses = Vec::new();
+        for (b, bus) in config.buses.can.iter().enumerate() {
+            let field = format!("buses.can[{b}].interface");
+            let socket = CanSocket::open(&bus.interface).map_err(|e| HalSetupError::Config {
+                field: field.clone(),
+                message: format!(
+                    "cannot open CAN interface `{}`: {e}. Is it up? (ip link set {} up type can bitrate {})",
+                    bus.interface, bus.interface, bus.bitrate
+                ),
+            })?;
+            let _ = socket.set_error_filter_accept_all();
+            let drives = bus
+                .drives
+                .iter()
+                .map(|d| Drive {
+                    name: d.name.clone(),
+                    node: d.node_id,
+                    counts_per_rad: d.counts_per_rad,
+                    conditioner: Conditioner::new(Plausibility::drive_position(d.max_velocity_rad_s)),
+                    fresh: None,
+                    statusword: None,
+                    last_heartbeat_s: None,
+                    heartbeat_timeout_s: co_cfg.heartbeat_timeout_s.unwrap_or(3.0 * d.heartbeat_ms as f64 / 1000.0),
+                    target_counts: None,
+                    toggle: false,
+                    reset_requested: false,
+                    health: DriveHealth::default(),
+                })
+                .collect();
+            let mut can = CanBus { index: b, socket, interface: bus.interface.clone(), drives, sync_counter: 0, sync_overflow: co_cfg.sync_counter_overflow, health: BusHealth::default() };
+            can.send(&co::nmt(co::NmtCommand::PreOperational, 0));
+            for (i, d) in bus.drives.iter().enumerate() {
+                can.sdo_write(i, 0x6060, 0, &[co_cfg.mode.code()], timeout)?;
+                can.sdo_write(i, 0x1017, 0, &d.heartbeat_ms.to_le_bytes(), timeout)?;
+                can.sdo_write(i, 0x1800, 2, &[1], timeout)?;
+            }
+            can.send(&co::nmt(co::NmtCommand::Start, 0));
+            can.socket.set_nonblocking(true).map_err(|e| HalSetupError::Config { field, message: format!("cannot make the socket non-blocking: {e}") })?;
+            buses.push(can);
+        }
+        let mut encoders = Vec::new();
+        for bus in &config.buses.spi {
+            for e in &bus.encoders {
+                let path = format!("{}.{}", bus.device, e.chip_select);
+                let device = match spidev::Spidev::open(&path) {
+                    Ok(mut dev) => {
+                        let opts = spidev::SpidevOptions::new()
+                            .bits_per_word(8)
+                            .max_speed_hz(bus.speed_hz)
+                            .mode(spidev::SpiModeFlags::SPI_MODE_1)
+                            .build();
+                        dev.configure(&opts).map_err(|err| HalSetupError::Config {
+                            field: format!("encoder `{}`", e.name),
+                            message: format!("cannot configure {path}: {err}"),
+                        })?;
+                        Some(dev)
+                    }
+                    Err(err) => {
+                        return Err(HalSetupError::Config {
+                            field: format!("encoder `{}`", e.name),
+                            message: format!("cannot open {path}: {err} (is spidev enabled for chip select {}?)", e.chip_select),
+                        });
+                    }
+                };
+                encoders.push(Encoder {
+                    name: e.name.clone(),
+                    path,
+                    device,
+                    offset_rad: e.offset_rad,
+                    conditioner: Conditioner::new(Plausibility::absolute_encoder(e.max_velocity_rad_s)),
+                });
+            }
+        }
+        let mut hal = HardwareHal { t0: Instant::now(), mode: co_cfg.mode, buses, encoders };
+        // Pipelined SPI: the first command's answer arrives with the first read.
+        for e in &mut hal.encoders {
+            let _ = spi_word(e, as5048::READ_ANGLE);
+        }
+        Ok(hal)
+    }
+
+    /// Health of each CAN bus, in YAML order.
+    pub fn bus_health(&self) -> impl Iterator<Item = (&str, BusHealth)> {
+        self.buses.iter().map(|b| (b.interface.as_str(), b.health))
+    }
+
+    /// Health of each drive, in device order.
+    pub fn drive_health(&self) -> impl Iterator<Item = (&str, DriveHealth)> {
+        self.buses.iter().flat_map(|b| b.drives.iter().map(|d| (d.name.as_str(), d.health)))
+    }
+
+    /// Loss counters of each encoder, in device order.
+    pub fn encoder_health(&self) -> impl Iterator<Item = (&str, &str, crate::condition::LossCounters)> {
+        self.encoders.iter().map(|e| (e.name.as_str(), e.path.as_str(), e.conditioner.counters()))
+    }
+}
+
+fn spi_word(e: &mut Encoder, command: u16) -> Option<u16> {
+    let dev = e.device.as_ref()?;
+    let tx = command.to_be_bytes();
+    let mut rx = [0u8; 2];
+    let mut t = spidev::SpidevTransfer::read_write(&tx, &mut rx);
+    dev.transfer(&mut t).ok()?;
+    Some(u16::from_be_bytes(rx))
+}
+
+impl Hal for HardwareHal {
+    fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
+        let now = self.t0.elapsed().as_secs_f64();
+        let mut result = Ok(());
+        let mut base = 0;
+        for (b, bus) in self.buses.iter_mut().enumerate() {
+            for d in &mut bus.drives {
+                d.fresh = None;
+            }
+            loop {
+                match bus.socket.read_frame() {
+                    Ok(f) => bus.handle(&f, now),
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                    Err(_) => {
+                        result = Err(HalIoError::BusFailed { bus: b as u16 });
+                        break;
+                    }
+                }
+            }
+            for (i, d) in bus.drives.iter_mut().enumerate() {
+                d.health.silent = d.last_heartbeat_s.is_some_and(|t| now - t > d.heartbeat_timeout_s);
+                let sample = match d.fresh {
+                    // A silent node's stale frames are not trusted either.
+                    _ if d.health.silent => Sample::Invalid,
+                    Some((counts, rx)) => Sample::Value { value: counts as f64 / d.counts_per_rad, age_s: now - rx },
+                    None => Sample::Missing,
+                };
+                let conditioned = d.conditioner.update(sample, now);
+                // A silent node (no heartbeat) gives no usable position at all, however recent.
+                let position = if d.health.silent { Reading::invalid() } else { conditioned };
+                d.health.losses = d.conditioner.counters();
+                let state = d.health.state;
+                frame.drives[base + i] = DriveReading::new(
+                    position,
+                    Reading::MISSING,
+                    state == Some(DriveState::OperationEnabled) && !d.health.silent,
+                    state == Some(DriveState::Fault),
+                );
+            }
+            base += bus.drives.len();
+        }
+        for (i, e) in self.encoders.iter_mut().enumerate() {
+            let sample = match spi_word(e, as5048::READ_ANGLE).map(as5048::decode) {
+                Some(Ok(counts)) => Sample::Value { value: as5048::counts_to_rad(counts) - e.offset_rad, age_s: 0.0 },
+                Some(Err(_)) => Sample::Invalid,
+                None => Sample::Missing,
+            };
+            frame.encoders[i] = e.conditioner.update(sample, now);
+        }
+        result
+    }
+
+    fn write(&mut self, frame: &ActuatorFrame, _dt_s: f64) -> Result<(), HalIoError> {
+        let mut base = 0;
+        let profile = self.mode == DriveMode::ProfilePosition;
+        for bus in &mut self.buses {
+            for i in 0..bus.drives.len() {
+                let sp = frame.drives[base + i];
+                let d = &mut bus.drives[i];
+                // The first target is where the drive is: never enable towards an unknown target.
+                if d.target_counts.is_none()
+                    && let Some(q) = d.conditioner_last_good()
+                {
+                    d.target_counts = Some((q * d.counts_per_rad).round() as i32);
+                }
+                if sp.action == DriveAction::MOVE && sp.position_rad.is_finite() && d.target_counts.is_some() {
+                    d.target_counts = Some((sp.position_rad * d.counts_per_rad).round() as i32);
+                }
+                let state = d.health.state.unwrap_or(DriveState::NotReadyToSwitchOn);
+                let controlword = match (d.target_counts, state) {
+                    (None, _) => co::controlword::DISABLE_VOLTAGE,
+                    (Some(_), DriveState::Fault) if d.reset_requested => {
+                        d.reset_requested = false;
+                        co::controlword::FAULT_RESET
+                    }
+                    (Some(_), DriveState::Fault) => co::controlword::DISABLE_VOLTAGE,
+                    (Some(_), DriveState::OperationEnabled) => {
+                        d.toggle = !d.toggle;
+                        let handshake = if profile && d.toggle { co::controlword::NEW_SETPOINT | co::controlword::CHANGE_IMMEDIATELY } else { 0 };
+                        co::controlword::ENABLE_OPERATION | handshake
+                    }
+                    (Some(_), s) => co::next_controlword(s).unwrap_or(co::controlword::ENABLE_OPERATION),
+                };
+                let node = d.node;
+                let target = d.target_counts.unwrap_or(0);
+                bus.send(&co::rpdo1(node, controlword, target));
+            }
+            let counter = (bus.sync_overflow > 1).then(|| {
+                bus.sync_counter = if bus.sync_counter >= bus.sync_overflow { 1 } else { bus.sync_counter + 1 };
+                bus.sync_counter
+            });
+            bus.send(&co::sync(counter));
+            base += bus.drives.len();
+        }
+        Ok(())
+    }
+
+    fn reset_faults(&mut self) {
+        for bus in &mut self.buses {
+            for d in &mut bus.drives {
+                d.reset_requested = true;
+            }
+        }
+    }
+}
+
+impl Drive {
+    fn conditioner_last_good(&self) -> Option<f64> {
+        self.conditioner.last_good()
+    }
+}
