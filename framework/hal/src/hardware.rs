@@ -395,6 +395,36 @@ impl Hal for HardwareHal {
         Ok(())
     }
 
+    fn device_health(&self, out: &mut [crate::DeviceHealth]) {
+        let mut i = 0;
+        for bus in &self.buses {
+            let bus_flags = if bus.health.bus_off { crate::DeviceHealth::BUS_OFF } else { 0 }
+                | if bus.health.error_passive { crate::DeviceHealth::ERROR_PASSIVE } else { 0 };
+            for d in &bus.drives {
+                if let Some(h) = out.get_mut(i) {
+                    let l = d.health.losses;
+                    *h = crate::DeviceHealth {
+                        missing: l.missing,
+                        invalid: l.invalid,
+                        implausible: l.implausible,
+                        emcy: d.health.emcy_count,
+                        flags: bus_flags
+                            | if d.health.silent { crate::DeviceHealth::SILENT } else { 0 }
+                            | if d.health.state == Some(DriveState::Fault) { crate::DeviceHealth::FAULT } else { 0 },
+                    };
+                }
+                i += 1;
+            }
+        }
+        for e in &self.encoders {
+            if let Some(h) = out.get_mut(i) {
+                let l = e.conditioner.counters();
+                *h = crate::DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
+            }
+            i += 1;
+        }
+    }
+
     fn reset_faults(&mut self) {
         for bus in &mut self.buses {
             for d in &mut bus.drives {

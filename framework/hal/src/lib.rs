@@ -99,6 +99,23 @@ pub enum HalIoError {
     },
 }
 
+/// A HAL with no hardware behind it: every reading missing, writes go nowhere. For validating
+/// an arm description (`jointctl check`) without its buses.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NullHal;
+
+impl Hal for NullHal {
+    fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
+        frame.encoders.fill(Reading::MISSING);
+        frame.drives.fill(DriveReading::default());
+        Ok(())
+    }
+
+    fn write(&mut self, _: &ActuatorFrame, _: f64) -> Result<(), HalIoError> {
+        Ok(())
+    }
+}
+
 /// A failure to set a backend up.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum HalSetupError {
@@ -124,4 +141,35 @@ pub trait Hal: Send {
 
     /// Asks faulted drives to reset at the next write (CiA 402 fault reset). Default: nothing.
     fn reset_faults(&mut self) {}
+
+    /// Fills the health of each device, drives first then encoders, in [`DeviceIndex`] order.
+    /// Called every cycle: must not allocate. Default: nothing to report.
+    fn device_health(&self, _out: &mut [DeviceHealth]) {}
+}
+
+/// Health of one device, published in diagnostics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DeviceHealth {
+    /// Cycles in which nothing arrived from it.
+    pub missing: u64,
+    /// Frames that failed their checks.
+    pub invalid: u64,
+    /// Values rejected as implausible.
+    pub implausible: u64,
+    /// Emergency messages (drives).
+    pub emcy: u64,
+    /// Bit flags: [`DeviceHealth::SILENT`], [`DeviceHealth::FAULT`], [`DeviceHealth::BUS_OFF`],
+    /// [`DeviceHealth::ERROR_PASSIVE`].
+    pub flags: u32,
+}
+
+impl DeviceHealth {
+    /// No heartbeat within the timeout.
+    pub const SILENT: u32 = 1;
+    /// The drive reports a fault.
+    pub const FAULT: u32 = 2;
+    /// Its bus is off.
+    pub const BUS_OFF: u32 = 4;
+    /// Its bus controller is error-passive.
+    pub const ERROR_PASSIVE: u32 = 8;
 }

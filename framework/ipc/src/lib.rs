@@ -185,6 +185,34 @@ impl JointDiagnostics {
     };
 }
 
+/// Most devices (drives and encoders) in diagnostics.
+pub const MAX_DEVICES: usize = 32;
+
+/// Health of one device (drive or encoder): what the HAL did not use, and why.
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[repr(C)]
+pub struct DeviceDiagnostics {
+    /// NUL-padded device name.
+    pub name: [u8; NAME_LEN],
+    /// Cycles in which nothing arrived (lost or late frames).
+    pub missing: u64,
+    /// Frames that failed their checks (parity, error flag, silent node).
+    pub invalid: u64,
+    /// Values rejected as implausible (jumps, zeros after non-zero readings).
+    pub implausible: u64,
+    /// Emergency messages.
+    pub emcy: u64,
+    /// 1 silent, 2 fault, 4 bus-off, 8 error-passive.
+    pub flags: u32,
+    _reserved: u32,
+}
+
+impl DeviceDiagnostics {
+    /// An unnamed entry.
+    pub const EMPTY: DeviceDiagnostics =
+        DeviceDiagnostics { name: [0; NAME_LEN], missing: 0, invalid: 0, implausible: 0, emcy: 0, flags: 0, _reserved: 0 };
+}
+
 /// Loop health, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
@@ -217,6 +245,11 @@ pub struct Diagnostics {
     _reserved: u32,
     /// Per-joint health, in the order of [`ArmState::joints`].
     pub joints: [JointDiagnostics; MAX_JOINTS],
+    /// Number of valid entries in `devices`.
+    pub device_count: u32,
+    _reserved2: u32,
+    /// Per-device health: drives, then encoders, in YAML order.
+    pub devices: [DeviceDiagnostics; MAX_DEVICES],
 }
 
 impl Diagnostics {
@@ -236,6 +269,9 @@ impl Diagnostics {
         joint_count: 0,
         _reserved: 0,
         joints: [JointDiagnostics::EMPTY; MAX_JOINTS],
+        device_count: 0,
+        _reserved2: 0,
+        devices: [DeviceDiagnostics::EMPTY; MAX_DEVICES],
     };
 }
 

@@ -123,6 +123,7 @@ pub struct Arm {
     sensor: SensorFrame,
     actuator: ActuatorFrame,
     hal: Box<dyn Hal>,
+    devices: DeviceIndex,
 }
 
 fn roles(text: &str) -> Vec<(&str, bool)> {
@@ -275,6 +276,7 @@ impl Arm {
             sensor: SensorFrame::new(&devices),
             actuator: ActuatorFrame::new(&devices),
             hal,
+            devices,
         })
     }
 
@@ -420,6 +422,16 @@ impl Arm {
         for slot in &mut self.slots {
             slot.joint.deactivate();
         }
+    }
+
+    /// The HAL's health of each device (drives, then encoders). Allocation-free.
+    pub fn device_health(&self, out: &mut [jointctl_hal::DeviceHealth]) {
+        self.hal.device_health(out);
+    }
+
+    /// Device names: drives, then encoders.
+    pub fn device_names(&self) -> impl Iterator<Item = &str> {
+        self.devices.drives.iter().chain(&self.devices.encoders).map(String::as_str)
     }
 
     /// The set-points written in the last cycle, in device order.

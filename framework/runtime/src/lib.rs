@@ -25,11 +25,7 @@ pub fn build_hal(loaded: &LoadedConfig) -> Result<Box<dyn Hal>, ConfigErrors> {
             .map(|h| Box::new(h) as Box<dyn Hal>)
             .map_err(|e| setup_error(loaded, e)),
         HalBackend::Socketcan => {
-            for b in jointctl_hal::budget::budgets(&loaded.config) {
-                if b.load_percent > 100.0 {
-                    return Err(loaded.source.error("rate_hz", format!("the CAN bus cannot carry this rate: {b}")).into());
-                }
-            }
+            check_bus_budget(loaded)?;
             jointctl_hal::hardware::HardwareHal::new(&loaded.config).map(|h| Box::new(h) as Box<dyn Hal>).map_err(|e| setup_error(loaded, e))
         }
     }
@@ -39,6 +35,28 @@ fn setup_error(loaded: &LoadedConfig, e: jointctl_hal::HalSetupError) -> ConfigE
     match e {
         jointctl_hal::HalSetupError::Config { field, message } => loaded.source.error(&field, message).into(),
     }
+}
+
+/// Checks that the configured CAN buses can carry the loop rate (worst-case stuffing). Over
+/// 100 % is an error for the real buses, a warning for the simulated backend (returned as text).
+pub fn check_bus_budget(loaded: &LoadedConfig) -> Result<Vec<String>, ConfigErrors> {
+    let mut warnings = Vec::new();
+    for b in jointctl_hal::budget::budgets(&loaded.config) {
+        if b.load_percent > 100.0 {
+            let message = format!("the CAN bus cannot carry this rate: {b}");
+            match loaded.config.hal.backend {
+                HalBackend::Socketcan => return Err(loaded.source.error("rate_hz", message).into()),
+                HalBackend::Sim => warnings.push(format!("warning: on real hardware {message}")),
+            }
+        }
+    }
+    Ok(warnings)
+}
+
+/// Loads the plugins of a config and builds its arm on a HAL with no hardware behind it, to
+/// validate plugins, parameters and wiring without the buses (`jointctl check`).
+pub fn build_arm_for_check(loaded: &LoadedConfig, loader: &PluginLoader) -> Result<Arm, ConfigErrors> {
+    Arm::build(loaded, loader, Box::new(jointctl_hal::NullHal))
 }
 
 /// A plugin loader with the config's `plugin_dirs` (relative to the config file) searched first.

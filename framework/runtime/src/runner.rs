@@ -98,6 +98,7 @@ pub fn mode_code(mode: &Mode) -> u32 {
 /// full ring drops the record and counts it (`publish_drops`); the loop never slows down.
 pub struct ArmPublisher {
     producer: rtrb::Producer<CycleRecord>,
+    health: Vec<jointctl_hal::DeviceHealth>,
     commands: rtrb::Consumer<ArmCommand>,
     record: Box<CycleRecord>,
     thread: Option<std::thread::JoinHandle<u64>>,
@@ -201,7 +202,14 @@ impl ArmPublisher {
             record.state.joints[i].name = encode_name(name);
             record.diagnostics.joints[i].name = encode_name(name);
         }
-        Ok(ArmPublisher { producer, commands, record, thread: Some(thread), stop, drops: 0 })
+        let mut devices = 0;
+        for (d, name) in record.diagnostics.devices.iter_mut().zip(arm.device_names()) {
+            d.name = encode_name(name);
+            devices += 1;
+        }
+        record.diagnostics.device_count = devices as u32;
+        let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
+        Ok(ArmPublisher { producer, health, commands, record, thread: Some(thread), stop, drops: 0 })
     }
 
     /// Fills the state part of this cycle's record.
@@ -259,6 +267,10 @@ impl ArmPublisher {
                 j.watchdog_trips = e.watchdog_trips;
                 j.missing_inputs = e.missing_inputs;
             }
+        }
+        arm.device_health(&mut self.health);
+        for (d, h) in self.record.diagnostics.devices.iter_mut().zip(&self.health) {
+            (d.missing, d.invalid, d.implausible, d.emcy, d.flags) = (h.missing, h.invalid, h.implausible, h.emcy, h.flags);
         }
         if self.producer.push(*self.record).is_err() {
             self.drops += 1;

@@ -121,12 +121,26 @@ fn main() -> ExitCode {
                 Err(e) => return fail(e),
             };
             let loader = jointctl_runtime::loader_for(&loaded);
-            match jointctl_runtime::build_arm(&loaded, &loader) {
+            let warnings = match jointctl_runtime::check_bus_budget(&loaded) {
+                Ok(w) => w,
+                Err(e) => return fail(e),
+            };
+            match jointctl_runtime::build_arm_for_check(&loaded, &loader) {
                 Ok(arm) => {
                     println!("{}: arm `{}` OK, {} Hz, {} joint(s):", config.display(), arm.name, arm.rate_hz, arm.dof_names.len());
                     for slot in &arm.slots {
                         let dofs: Vec<_> = slot.dofs().map(|i| arm.dof_names[i].as_str()).collect();
                         println!("  {:<10} plugin {:<14} DOF {}", slot.name, slot.plugin, dofs.join(", "));
+                    }
+                    let budgets = jointctl_hal::budget::budgets(&loaded.config);
+                    if !budgets.is_empty() {
+                        println!("CAN bus budget at {} Hz:", arm.rate_hz);
+                        for b in budgets {
+                            println!("  {b}");
+                        }
+                    }
+                    for w in warnings {
+                        println!("{w}");
                     }
                     ExitCode::SUCCESS
                 }
