@@ -76,11 +76,11 @@ fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
     assert_eq!(arm.dof_names, ["q1", "q2", "q3", "q4", "q5", "q6", "q7"]);
 
     hal.set_encoder("enc_q1_out", Reading::valid(0.3));
-    // Shoulder: q2 output 0.2, deflection 0.03, pivot encoder 1.0 rad -> 22.5 + 1.0 = 23.5 mm;
+    // Shoulder: q2 output 0.2, deflection 0.03, pivot encoder 0.1 rad -> 22.5 + 10 * 0.1 = 23.5 mm;
     // pulleys 0.5 / 0.1 -> q3 = (0.5 - 0.1)/2 = 0.2 (eq. 3.3, assumed differential).
     hal.set_encoder("enc_q2_out", Reading::valid(0.2));
     hal.set_encoder("enc_q2_deflection", Reading::valid(0.03));
-    hal.set_encoder("enc_shoulder_pivot", Reading::valid(1.0));
+    hal.set_encoder("enc_shoulder_pivot", Reading::valid(0.1));
     hal.set_encoder("enc_shoulder_pulley_a", Reading::valid(0.5));
     hal.set_encoder("enc_shoulder_pulley_b", Reading::valid(0.1));
     // Elbow: output 0.25, motor 0.1 -> deflection 0.25 - 2 * 0.1 = 0.05 (eq. 3.2), 113.78 * 0.05.
@@ -94,7 +94,7 @@ fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
     // (0.025 + 0)/2 = 0.0125, q7 deflection (0.025 - 0)/2 = 0.0125; positions (0.05 +- 0)/2.
     hal.set_encoder("enc_wrist_carrier_a", Reading::valid(0.4));
     hal.set_encoder("enc_wrist_bevel_a", Reading::valid(0.05));
-    hal.set_encoder("enc_wrist_pivot", Reading::valid(-2.0)); // 25 - 2 = 23 mm
+    hal.set_encoder("enc_wrist_pivot", Reading::valid(-0.2)); // 25 - 10 * 0.2 = 23 mm
     arm.step(0.025);
     let s = &arm.states;
 
@@ -146,7 +146,7 @@ fn a_lost_reading_makes_its_joint_unknown_and_held_and_a_pivot_beyond_range_is_f
     // Appendix A: a lost frame. The elbow's motor reading is missing this cycle.
     hal.frame.lock().unwrap().drives[hal.devices.drive("elmo_q4").unwrap()] = DriveReading::default();
     // Shoulder pivot far beyond the characterised 0-45 mm.
-    hal.set_encoder("enc_shoulder_pivot", Reading::valid(100.0));
+    hal.set_encoder("enc_shoulder_pivot", Reading::valid(10.0));
     hal.set_encoder("enc_q2_deflection", Reading::valid(0.02));
     arm.step(0.025);
     let q4 = &arm.states[3];

@@ -140,6 +140,32 @@ pub struct SimConfig {
     /// Time constant of a simulated drive following its set-point [s]. Assumption: 0.02 s.
     #[serde(default = "default_drive_tau", deserialize_with = "finite")]
     pub drive_time_constant_s: f64,
+    /// Pass encoder readings through the 14-bit AS5048A frame codec (section 2.2), so that
+    /// they are quantised to 2 pi / 16384 rad as on the robot.
+    #[serde(default = "yes")]
+    pub quantize_encoders: bool,
+    /// Fraction of drive TPDO frames lost on the simulated CAN bus (appendix A), 0-1.
+    #[serde(default, deserialize_with = "finite")]
+    pub can_loss_rate: f64,
+    /// What a lost frame becomes: `missing` (nothing arrives) or `zero` (appendix A's failure:
+    /// the host read a lost encoder value as zero).
+    #[serde(default)]
+    pub can_loss_mode: CanLossMode,
+}
+
+/// What a lost simulated CAN frame becomes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CanLossMode {
+    /// Nothing arrives.
+    #[default]
+    Missing,
+    /// A frame with an all-zero position arrives (thesis appendix A).
+    Zero,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn default_drive_tau() -> f64 {
@@ -148,7 +174,14 @@ fn default_drive_tau() -> f64 {
 
 impl Default for SimConfig {
     fn default() -> Self {
-        SimConfig { seed: 0, encoder_noise_rad: 0.0, drive_time_constant_s: default_drive_tau() }
+        SimConfig {
+            seed: 0,
+            encoder_noise_rad: 0.0,
+            drive_time_constant_s: default_drive_tau(),
+            quantize_encoders: true,
+            can_loss_rate: 0.0,
+            can_loss_mode: CanLossMode::Missing,
+        }
     }
 }
 

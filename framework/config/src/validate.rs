@@ -28,6 +28,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if sim.encoder_noise_rad < 0.0 {
         err("hal.sim.encoder_noise_rad".into(), format!("must be >= 0, got {}", sim.encoder_noise_rad));
     }
+    if !(0.0..=1.0).contains(&sim.can_loss_rate) {
+        err("hal.sim.can_loss_rate".into(), format!("must be a fraction 0-1, got {}", sim.can_loss_rate));
+    }
     if sim.drive_time_constant_s <= 0.0 {
         err("hal.sim.drive_time_constant_s".into(), format!("must be > 0, got {}", sim.drive_time_constant_s));
     }

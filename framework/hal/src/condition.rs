@@ -137,8 +137,14 @@ impl Conditioner {
                 }
                 let received = now_s - age_s.max(0.0);
                 let Some((last, t)) = self.last_good else {
-                    self.last_good = Some((value, received));
-                    return Reading::valid_aged(value, age_s.max(0.0));
+                    // An absolute encoder's first reading is taken in (-span/2, span/2]: a joint
+                    // just below its zero reads slightly negative, not almost a full turn.
+                    let first = match self.limits.wrap_rad {
+                        Some(span) => value - span * (value / span).round(),
+                        None => value,
+                    };
+                    self.last_good = Some((first, received));
+                    return Reading::valid_aged(first, age_s.max(0.0));
                 };
                 let l = self.limits;
                 if value == 0.0 && l.zero_band_rad.is_some_and(|band| last.abs() > band) {

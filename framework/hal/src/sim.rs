@@ -4,9 +4,11 @@
 //! by the runtime, so a run is repeatable and can go faster than real time.
 
 use jointctl_api::{DriveAction, DriveReading, Reading};
-use jointctl_config::{ArmConfig, EncoderSimConfig};
+use jointctl_config::{ArmConfig, CanLossMode, EncoderSimConfig};
 
-use crate::{ActuatorFrame, DeviceIndex, Hal, HalIoError, HalSetupError, SensorFrame};
+use crate::codec::{as5048, canopen};
+use crate::condition::{Conditioner, Plausibility, Sample};
+use crate::{ActuatorFrame, DeviceHealth, DeviceIndex, Hal, HalIoError, HalSetupError, SensorFrame};
 
 #[derive(Clone, Debug)]
 enum EncoderModel {
@@ -34,7 +36,8 @@ enum EncoderModel {
 /// for _ in 0..1000 { hal.write(&out, 0.01).unwrap(); }
 /// let mut frame = SensorFrame::new(&devices);
 /// hal.read(&mut frame).unwrap();
-/// assert!((frame.encoders[0].value - 2.0).abs() < 1e-6);
+/// // Quantised to 14 bits, as on the robot (2 pi / 16384 = 0.38 mrad).
+/// assert!((frame.encoders[0].value - 2.0).abs() < 4e-4);
 /// ```
 #[derive(Clone, Debug)]
 pub struct SimHal {
@@ -46,6 +49,13 @@ pub struct SimHal {
     noise_rad: f64,
     tau_s: f64,
     rng: SplitMix64,
+    quantize: bool,
+    loss_rate: f64,
+    loss_mode: CanLossMode,
+    counts_per_rad: Vec<f64>,
+    encoder_conditioners: Vec<Conditioner>,
+    drive_conditioners: Vec<Conditioner>,
+    time_s: f64,
 }
 
 impl SimHal {
@@ -89,7 +99,16 @@ impl SimHal {
             }
         }
         let n = devices.drives.len();
+        let drives: Vec<_> = config.buses.can.iter().flat_map(|b| b.drives.iter()).collect();
+        let encoder_rates: Vec<f64> = config.buses.spi.iter().flat_map(|b| b.encoders.iter().map(|e| e.max_velocity_rad_s)).collect();
         Ok(SimHal {
+            quantize: config.hal.sim.quantize_encoders,
+            loss_rate: config.hal.sim.can_loss_rate,
+            loss_mode: config.hal.sim.can_loss_mode,
+            counts_per_rad: drives.iter().map(|d| d.counts_per_rad).collect(),
+            drive_conditioners: drives.iter().map(|d| Conditioner::new(Plausibility::drive_position(d.max_velocity_rad_s))).collect(),
+            encoder_conditioners: encoder_rates.iter().map(|r| Conditioner::new(Plausibility::absolute_encoder(*r))).collect(),
+            time_s: 0.0,
             drive_position_rad: vec![0.0; n],
             drive_velocity_rad_s: vec![0.0; n],
             drive_target_rad: vec![0.0; n],
@@ -112,20 +131,54 @@ impl Hal for SimHal {
                 EncoderModel::Fixed(q) => *q,
             };
             let noise = if self.noise_rad > 0.0 { self.noise_rad * self.rng.normal() } else { 0.0 };
-            frame.encoders[i] = Reading::valid(truth + noise - self.encoder_offset_rad[i]);
+            let angle = truth + noise - self.encoder_offset_rad[i];
+            // The same frames and decoder as the robot's SPI bus: 14-bit words with parity.
+            let sample = if self.quantize {
+                match as5048::decode(as5048::encode(as5048::rad_to_counts(angle))) {
+                    Ok(counts) => Sample::Value { value: as5048::counts_to_rad(counts), age_s: 0.0 },
+                    Err(_) => Sample::Invalid,
+                }
+            } else {
+                Sample::Value { value: angle, age_s: 0.0 }
+            };
+            frame.encoders[i] = if self.quantize {
+                self.encoder_conditioners[i].update(sample, self.time_s)
+            } else {
+                match sample {
+                    Sample::Value { value, .. } => Reading::valid(value),
+                    _ => Reading::invalid(),
+                }
+            };
         }
         for (i, d) in frame.drives.iter_mut().enumerate() {
-            *d = DriveReading::new(
-                Reading::valid(self.drive_position_rad[i]),
-                Reading::valid(self.drive_velocity_rad_s[i]),
-                true,
-                false,
-            );
+            // The same TPDO1 frames and decoder as the robot's CAN bus, with losses.
+            let counts = (self.drive_position_rad[i] * self.counts_per_rad[i]).round() as i32;
+            let lost = self.loss_rate > 0.0 && self.rng.uniform() < self.loss_rate;
+            let frame_out = match (lost, self.loss_mode) {
+                (false, _) => Some(canopen::tpdo1(i as u8 + 1, 0x0237, counts)),
+                (true, CanLossMode::Zero) => Some(canopen::tpdo1(i as u8 + 1, 0x0237, 0)),
+                (true, CanLossMode::Missing) => None,
+            };
+            let sample = match frame_out.as_ref().and_then(canopen::decode_tpdo1) {
+                Some(t) => Sample::Value { value: t.position_counts as f64 / self.counts_per_rad[i], age_s: 0.0 },
+                None => Sample::Missing,
+            };
+            let position = self.drive_conditioners[i].update(sample, self.time_s);
+            *d = DriveReading::new(position, Reading::valid(self.drive_velocity_rad_s[i]), true, false);
         }
         Ok(())
     }
 
+    fn device_health(&self, out: &mut [DeviceHealth]) {
+        let all = self.drive_conditioners.iter().chain(&self.encoder_conditioners);
+        for (h, c) in out.iter_mut().zip(all) {
+            let l = c.counters();
+            *h = DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
+        }
+    }
+
     fn write(&mut self, frame: &ActuatorFrame, dt_s: f64) -> Result<(), HalIoError> {
+        self.time_s += dt_s;
         let alpha = 1.0 - (-dt_s / self.tau_s).exp();
         for (i, sp) in frame.drives.iter().enumerate() {
             if sp.action == DriveAction::MOVE && sp.position_rad.is_finite() {

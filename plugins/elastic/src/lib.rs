@@ -36,9 +36,15 @@ struct Params {
     output_per_motor: f64,
     /// Section 4.3's position feedback PI [rad -> rad].
     position_pi: PiGains,
-    /// Oldest stale reading still used [s]. Assumption: 0.1 s (4 cycles at 40 Hz).
+    /// Oldest stale reading still used for the position [s]. Assumption: 0.1 s (4 cycles at 40 Hz).
     #[serde(default = "default_max_age")]
     max_age_s: f64,
+    /// Oldest motor-side reading combined with the output encoder into a deflection [s]. A stale
+    /// motor position next to a fresh output position is a false deflection while the joint
+    /// moves (a lost frame during motion), so by default only readings of this cycle are used
+    /// and the torque is unknown otherwise.
+    #[serde(default)]
+    max_deflection_age_s: f64,
 }
 
 fn default_max_age() -> f64 {
@@ -73,6 +79,9 @@ impl JointPlugin for ElasticJoint {
             return Err(PluginError::at("output_per_motor", "must be finite and non-zero"));
         }
         params::positive("max_age_s", p.max_age_s)?;
+        if !(p.max_deflection_age_s.is_finite() && p.max_deflection_age_s >= 0.0) {
+            return Err(PluginError::at("max_deflection_age_s", "must be finite and >= 0"));
+        }
         p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
         Ok(ElasticJoint {
             transmission: LinearTransmission::new(p.output_per_motor),
@@ -118,16 +127,18 @@ impl Observer for ElasticJoint {
     fn observe(&mut self, raw: &RawJointView, out: &mut [JointState]) -> Result<(), JointFault> {
         let mut s = JointState::UNKNOWN;
         let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
+        let age = self.params.max_deflection_age_s;
         let input = if self.input_wired {
-            raw.encoder(INPUT_ENCODER).usable(self.params.max_age_s)
+            raw.encoder(INPUT_ENCODER).usable(age)
         } else {
-            raw.drive(MOTOR).position_rad.usable(self.params.max_age_s)
+            raw.drive(MOTOR).position_rad.usable(age)
         };
+        let q_for_deflection = raw.encoder(OUTPUT_ENCODER).usable(age);
         if let Some(q) = q {
             s.set_position(q);
             s.set_stiffness(self.params.stiffness_nm_per_rad);
         }
-        if let (Some(q), Some(input)) = (q, input) {
+        if let (Some(q), Some(input)) = (q_for_deflection, input) {
             let deflection = self.deflection(q, input);
             s.set_deflection(deflection);
             // Section 3.3.2: first-order fit, torque = K * deflection.
