@@ -3,7 +3,6 @@
 use jointctl_control::Mode;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use jointctl_runtime::timing::monotonic_ns;
 use jointctl_runtime::{ArmPublisher, ControlLoop, PluginLoader, RunOptions};
@@ -14,8 +13,21 @@ use jointctl_tests::{arm_name, rig_yaml};
 struct CountingAlloc;
 thread_local! {
     static COUNTING: Cell<bool> = const { Cell::new(false) };
+    // Per thread too: tests run in parallel, and one test's allocations must not count in another's.
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
 }
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
+
+fn count_one() {
+    let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
+}
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
+
+fn reset_count() {
+    ALLOCATIONS.with(|a| a.set(0));
+}
 
 fn counting() -> bool {
     COUNTING.try_with(Cell::get).unwrap_or(false)
@@ -24,7 +36,7 @@ fn counting() -> bool {
 unsafe impl GlobalAlloc for CountingAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if counting() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+            count_one();
         }
         // SAFETY: forwarded unchanged.
         unsafe { System.alloc(layout) }
@@ -35,7 +47,7 @@ unsafe impl GlobalAlloc for CountingAlloc {
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         if counting() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+            count_one();
         }
         // SAFETY: forwarded unchanged.
         unsafe { System.realloc(ptr, layout, new_size) }
@@ -69,14 +81,14 @@ fn a_cycle_allocates_nothing() {
         let t = monotonic_ns();
         lp.step(t, t, None);
     }
-    ALLOCATIONS.store(0, Ordering::SeqCst);
+    reset_count();
     COUNTING.with(|c| c.set(true));
     for _ in 0..10_000 {
         let t = monotonic_ns();
         lp.step(t, t, None);
     }
     COUNTING.with(|c| c.set(false));
-    let n = ALLOCATIONS.load(Ordering::SeqCst);
+    let n = allocations();
     assert_eq!(lp.stats.cycles, 10_100);
     assert!(lp.arm.states[0].position().is_some_and(|q| (q - 0.4).abs() < 1e-3), "the loop really ran: {:?}", lp.arm.states[0]);
     assert_eq!(n, 0, "{n} allocations in 10 000 cycles");
@@ -90,12 +102,12 @@ fn a_cycle_allocates_nothing() {
 #[test]
 fn the_counting_allocator_sees_allocations() {
     // Guards the test above: a counter that never counts would pass it.
-    ALLOCATIONS.store(0, Ordering::SeqCst);
+    reset_count();
     COUNTING.with(|c| c.set(true));
     let v: Vec<u64> = std::hint::black_box(Vec::with_capacity(16));
     COUNTING.with(|c| c.set(false));
     drop(v);
-    assert!(ALLOCATIONS.load(Ordering::SeqCst) >= 1);
+    assert!(allocations() >= 1);
 }
 
 #[test]
@@ -150,7 +162,7 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
         let t = monotonic_ns();
         lp.step(t, t, None);
     }
-    ALLOCATIONS.store(0, Ordering::SeqCst);
+    reset_count();
     COUNTING.with(|c| c.set(true));
     for _ in 0..5_000 {
         let t = monotonic_ns();
@@ -158,7 +170,7 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
     }
     COUNTING.with(|c| c.set(false));
     assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
-    assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), 0);
+    assert_eq!(allocations(), 0);
 }
 
 

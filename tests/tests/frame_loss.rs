@@ -8,8 +8,8 @@ use jointctl_tests::scratch;
 fn run(loss_rate: f64, mode: &str) -> (f64, f64, u64) {
     let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
     let text = std::fs::read_to_string(&src).unwrap().replacen(
-        "    drive_time_constant_s: 0.02   # assumption",
-        &format!("    drive_time_constant_s: 0.02\n    can_loss_rate: {loss_rate}\n    can_loss_mode: {mode}"),
+        "    encoder_noise_rad: 0.0",
+        &format!("    encoder_noise_rad: 0.0\n    can_loss_rate: {loss_rate}\n    can_loss_mode: {mode}"),
         1,
     );
     let path = scratch(&format!("loss-{mode}-{loss_rate}")).join("arm.yaml");

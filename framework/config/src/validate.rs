@@ -31,8 +31,25 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if !(0.0..=1.0).contains(&sim.can_loss_rate) {
         err("hal.sim.can_loss_rate".into(), format!("must be a fraction 0-1, got {}", sim.can_loss_rate));
     }
-    if sim.drive_time_constant_s <= 0.0 {
-        err("hal.sim.drive_time_constant_s".into(), format!("must be > 0, got {}", sim.drive_time_constant_s));
+    if !(sim.spi_latency_s >= 0.0 && sim.spi_latency_s <= 0.1) {
+        err("hal.sim.spi_latency_s".into(), format!("must be 0-0.1 s, got {}", sim.spi_latency_s));
+    }
+    if !(sim.can_latency_s >= 0.0 && sim.can_latency_s <= 0.1) {
+        err("hal.sim.can_latency_s".into(), format!("must be 0-0.1 s, got {}", sim.can_latency_s));
+    }
+    if !(sim.substep_s >= 1e-5 && sim.substep_s <= 0.005) {
+        err("hal.sim.substep_s".into(), format!("must be 1e-5 to 5e-3 s, got {}", sim.substep_s));
+    }
+    let e = &sim.elmo;
+    for (name, v) in [
+        ("max_velocity_rad_s", e.max_velocity_rad_s),
+        ("max_acceleration_rad_s2", e.max_acceleration_rad_s2),
+        ("inertia_kgm2", e.inertia_kgm2),
+        ("torque_limit_nm", e.torque_limit_nm),
+    ] {
+        if v <= 0.0 {
+            err(format!("hal.sim.elmo.{name}"), format!("must be > 0, got {v}"));
+        }
     }
     if let Some(p) = c.timing.realtime_priority
         && !(1..=99).contains(&p)
@@ -98,16 +115,20 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         for (i, e) in bus.encoders.iter().enumerate() {
             let Some(s) = &e.sim else { continue };
             let path = format!("buses.spi[{b}].encoders[{i}].sim");
-            let ways = s.drive.is_some() as u8 + s.fixed_rad.is_some() as u8 + !s.sum.is_empty() as u8;
+            let ways = s.drive.is_some() as u8 + s.fixed_rad.is_some() as u8 + !s.sum.is_empty() as u8 + s.signal.is_some() as u8;
             if ways != 1 {
-                err(path.clone(), "give exactly one of `drive` (follow a drive), `sum` (weighted drives) or `fixed_rad` (clamped output)".into());
+                err(path.clone(), "give exactly one of `drive` (follow a drive), `sum` (weighted terms), `signal` (a simulated joint's signal) or `fixed_rad` (clamped output)".into());
             }
             if let Some(d) = s.drive.as_ref().filter(|d| !drive_names.contains(d.as_str())) {
                 err(format!("{path}.drive"), format!("no drive named `{d}` is defined under buses.can"));
             }
             for (t, term) in s.sum.iter().enumerate() {
-                if !drive_names.contains(term.drive.as_str()) {
-                    err(format!("{path}.sum[{t}].drive"), format!("no drive named `{}` is defined under buses.can", term.drive));
+                match (&term.drive, &term.signal) {
+                    (Some(d), None) if !drive_names.contains(d.as_str()) => {
+                        err(format!("{path}.sum[{t}].drive"), format!("no drive named `{d}` is defined under buses.can"))
+                    }
+                    (Some(_), None) | (None, Some(_)) => {}
+                    _ => err(format!("{path}.sum[{t}]"), "give exactly one of `drive` or `signal`".into()),
                 }
             }
         }

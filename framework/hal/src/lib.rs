@@ -5,14 +5,13 @@
 //! sends an [`ActuatorFrame`] of motor set-points. Which joint uses which device is the
 //! runtime's business.
 //!
-//! Backends: [`sim::SimHal`], the default, which runs anywhere; [`hardware::HardwareHal`], the
-//! real buses (SocketCAN + spidev).
+//! Backends: the simulated arm (crate `jointctl-sim`), the default, which runs anywhere;
+//! [`hardware::HardwareHal`], the real buses (SocketCAN + spidev).
 
 pub mod budget;
 pub mod codec;
 pub mod condition;
 pub mod hardware;
-pub mod sim;
 
 use jointctl_api::{DriveReading, MotorSetpoint, Reading};
 use jointctl_config::ArmConfig;

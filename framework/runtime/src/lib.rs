@@ -21,7 +21,7 @@ use jointctl_hal::Hal;
 /// The HAL backend a config asks for.
 pub fn build_hal(loaded: &LoadedConfig) -> Result<Box<dyn Hal>, ConfigErrors> {
     match loaded.config.hal.backend {
-        HalBackend::Sim => jointctl_hal::sim::SimHal::new(&loaded.config)
+        HalBackend::Sim => jointctl_sim::SimHal::new(&loaded.config)
             .map(|h| Box::new(h) as Box<dyn Hal>)
             .map_err(|e| setup_error(loaded, e)),
         HalBackend::Socketcan => {

@@ -1,0 +1,351 @@
+//! # jointctl-sim
+//!
+//! The simulated arm, replacing the thesis' 20-sim bond-graph models (sections 3.2-3.5), as a
+//! HAL backend (`hal: {backend: sim}`): [`elmo`] drives (profile + PID + inertia + friction),
+//! [`unit`]s (a joint's transmission, elastic element with plant effects, and environment), and
+//! the buses: absolute encoders through the AS5048A codec (14-bit quantisation, noise), drive
+//! positions through TPDO1 frames (frame loss, appendix A's zero mode), SPI and CAN latency
+//! (section 2.3), all through the same conditioner as the robot. Seeded and stepped by the
+//! runtime, so a run is repeatable and can go faster than real time.
+
+pub mod elmo;
+pub mod rng;
+pub mod unit;
+
+use jointctl_api::{DriveAction, DriveReading, Reading};
+use jointctl_config::{ArmConfig, CanLossMode, EncoderSimConfig};
+use jointctl_hal::codec::{as5048, canopen};
+use jointctl_hal::condition::{Conditioner, Plausibility, Sample};
+use jointctl_hal::{ActuatorFrame, DeviceHealth, DeviceIndex, Hal, HalIoError, HalSetupError, SensorFrame};
+
+use crate::elmo::ElmoDrive;
+use crate::rng::SplitMix64;
+use crate::unit::{Element, SignalKind, Unit};
+
+/// A value that a simulated encoder reads.
+#[derive(Clone, Copy, Debug)]
+enum Term {
+    Drive(usize),
+    Signal { unit: usize, dof: usize, kind: SignalKind },
+}
+
+#[derive(Clone, Debug)]
+enum EncoderModel {
+    Sum { terms: Vec<(Term, f64)>, offset_rad: f64 },
+    Fixed(f64),
+}
+
+/// Past values of one device, one per physics step, to read them with a bus latency.
+#[derive(Clone, Debug)]
+struct DelayLine {
+    samples: Vec<(f64, f64)>,
+    next: usize,
+    filled: bool,
+}
+
+impl DelayLine {
+    const CAPACITY: usize = 512;
+
+    fn new() -> Self {
+        DelayLine { samples: vec![(f64::NEG_INFINITY, 0.0); Self::CAPACITY], next: 0, filled: false }
+    }
+
+    fn push(&mut self, t: f64, v: f64) {
+        self.samples[self.next] = (t, v);
+        self.next = (self.next + 1) % Self::CAPACITY;
+        self.filled |= self.next == 0;
+    }
+
+    /// The newest value no newer than `t` (the oldest kept if all are newer).
+    fn at(&self, t: f64) -> f64 {
+        let n = if self.filled { Self::CAPACITY } else { self.next };
+        let mut best: Option<(f64, f64)> = None;
+        let mut oldest: Option<(f64, f64)> = None;
+        for k in 0..n {
+            let (ts, v) = self.samples[k];
+            if ts <= t + 1e-12 && best.is_none_or(|(b, _)| ts > b) {
+                best = Some((ts, v));
+            }
+            if oldest.is_none_or(|(o, _)| ts < o) {
+                oldest = Some((ts, v));
+            }
+        }
+        best.or(oldest).map_or(0.0, |(_, v)| v)
+    }
+}
+
+/// The simulated arm.
+pub struct SimHal {
+    drives: Vec<ElmoDrive>,
+    units: Vec<Unit>,
+    encoders: Vec<EncoderModel>,
+    quantized: Vec<bool>,
+    encoder_offset_rad: Vec<f64>,
+    encoder_history: Vec<DelayLine>,
+    drive_history: Vec<DelayLine>,
+    encoder_conditioners: Vec<Conditioner>,
+    drive_conditioners: Vec<Conditioner>,
+    counts_per_rad: Vec<f64>,
+    noise_rad: f64,
+    loss_rate: f64,
+    loss_mode: CanLossMode,
+    spi_latency_s: f64,
+    can_latency_s: f64,
+    substep_s: f64,
+    rng: SplitMix64,
+    time_s: f64,
+    positions: Vec<f64>,
+    velocities: Vec<f64>,
+    loads: Vec<f64>,
+}
+
+fn setup(field: impl Into<String>, message: impl Into<String>) -> HalSetupError {
+    HalSetupError::Config { field: field.into(), message: message.into() }
+}
+
+impl SimHal {
+    /// The simulated arm of a configuration.
+    pub fn new(config: &ArmConfig) -> Result<Self, HalSetupError> {
+        let devices = DeviceIndex::of(config);
+        let sim = &config.hal.sim;
+        let drive_cfgs: Vec<_> = config.buses.can.iter().flat_map(|b| b.drives.iter()).collect();
+        let drives: Vec<ElmoDrive> = drive_cfgs.iter().map(|_| ElmoDrive::new(sim.elmo, 0.0)).collect();
+        let drive_index = |name: &str, field: String| devices.drive(name).ok_or_else(|| setup(field, format!("no drive named `{name}`")));
+
+        let mut units = Vec::new();
+        for (j, joint) in config.joints.iter().enumerate() {
+            let Some(s) = &joint.sim else { continue };
+            let at = |f: &str| format!("joints[{j}].sim.{f}");
+            let dof_names: Vec<String> = joint.dof_names().iter().map(|n| n.to_string()).collect();
+            let drive_ids = s
+                .drives
+                .iter()
+                .enumerate()
+                .map(|(i, d)| drive_index(d, at(&format!("drives[{i}]"))))
+                .collect::<Result<Vec<_>, _>>()?;
+            if s.matrix.len() != dof_names.len() || s.matrix.iter().any(|r| r.len() != drive_ids.len() || r.iter().any(|m| !m.is_finite())) {
+                return Err(setup(
+                    at("matrix"),
+                    format!("needs {} row(s) (one per DOF) of {} finite number(s) (one per drive)", dof_names.len(), drive_ids.len()),
+                ));
+            }
+            let element = Element::from_config(&s.element, &joint.params.0, dof_names.len())
+                .map_err(|(f, m)| setup(if f.starts_with("params") { format!("joints[{j}].{f}") } else { format!("joints[{j}].{f}") }, m))?;
+            let pivot = match &s.pivot {
+                Some(p) => Some((drive_index(&p.drive, at("pivot.drive"))?, p.mm_per_rad, p.offset_mm)),
+                None => None,
+            };
+            units.push(Unit::new(dof_names, drive_ids, s.matrix.clone(), element, pivot, s.environment.clone(), s.effects.clone()));
+        }
+        let signal = |name: &str, field: String| -> Result<Term, HalSetupError> {
+            let (dof, kind) = name.rsplit_once('.').ok_or_else(|| setup(field.clone(), format!("`{name}` is not DOF.SIGNAL")))?;
+            let kind = SignalKind::parse(kind).ok_or_else(|| {
+                setup(field.clone(), format!("unknown signal `{kind}`: use output, theta, deflection, torque or pivot_mm"))
+            })?;
+            units
+                .iter()
+                .enumerate()
+                .find_map(|(u, unit)| unit.dof_names.iter().position(|n| n == dof).map(|d| Term::Signal { unit: u, dof: d, kind }))
+                .ok_or_else(|| setup(field, format!("no simulated joint has a DOF `{dof}` (give that joint a `sim:` section)")))
+        };
+
+        let mut encoders = Vec::new();
+        let mut quantized = Vec::new();
+        let mut offsets = Vec::new();
+        let mut rates = Vec::new();
+        for (b, bus) in config.buses.spi.iter().enumerate() {
+            for (i, e) in bus.encoders.iter().enumerate() {
+                let field = format!("buses.spi[{b}].encoders[{i}].sim");
+                let model = match &e.sim {
+                    Some(EncoderSimConfig { fixed_rad: Some(q), .. }) => EncoderModel::Fixed(*q),
+                    Some(EncoderSimConfig { drive: Some(d), gain, offset_rad, .. }) => {
+                        EncoderModel::Sum { terms: vec![(Term::Drive(drive_index(d, format!("{field}.drive"))?), *gain)], offset_rad: *offset_rad }
+                    }
+                    Some(EncoderSimConfig { signal: Some(sig), gain, offset_rad, .. }) => {
+                        EncoderModel::Sum { terms: vec![(signal(sig, format!("{field}.signal"))?, *gain)], offset_rad: *offset_rad }
+                    }
+                    Some(EncoderSimConfig { sum, offset_rad, .. }) if !sum.is_empty() => {
+                        let mut terms = Vec::new();
+                        for (t, term) in sum.iter().enumerate() {
+                            let what = match (&term.drive, &term.signal) {
+                                (Some(d), _) => Term::Drive(drive_index(d, format!("{field}.sum[{t}].drive"))?),
+                                (None, Some(s)) => signal(s, format!("{field}.sum[{t}].signal"))?,
+                                (None, None) => return Err(setup(format!("{field}.sum[{t}]"), "give `drive` or `signal`")),
+                            };
+                            terms.push((what, term.gain));
+                        }
+                        EncoderModel::Sum { terms, offset_rad: *offset_rad }
+                    }
+                    _ => {
+                        return Err(setup(
+                            field,
+                            format!(
+                                "the simulated backend needs to know what encoder `{}` reads: add `sim: {{drive: NAME}}`, `{{signal: DOF.output}}`, `{{sum: [...]}}` or `{{fixed_rad: Q}}`",
+                                e.name
+                            ),
+                        ));
+                    }
+                };
+                quantized.push(sim.quantize_encoders && e.sim.as_ref().is_none_or(|s| s.quantized));
+                encoders.push(model);
+                offsets.push(e.offset_rad);
+                rates.push(e.max_velocity_rad_s);
+            }
+        }
+        let n_drives = drives.len();
+        let mut hal = SimHal {
+            drives,
+            units,
+            encoder_history: vec![DelayLine::new(); encoders.len()],
+            drive_history: vec![DelayLine::new(); n_drives],
+            encoder_conditioners: rates.iter().map(|r| Conditioner::new(Plausibility::absolute_encoder(*r))).collect(),
+            drive_conditioners: drive_cfgs.iter().map(|d| Conditioner::new(Plausibility::drive_position(d.max_velocity_rad_s))).collect(),
+            counts_per_rad: drive_cfgs.iter().map(|d| d.counts_per_rad).collect(),
+            encoders,
+            quantized,
+            encoder_offset_rad: offsets,
+            noise_rad: sim.encoder_noise_rad,
+            loss_rate: sim.can_loss_rate,
+            loss_mode: sim.can_loss_mode,
+            spi_latency_s: sim.spi_latency_s,
+            can_latency_s: sim.can_latency_s,
+            substep_s: sim.substep_s,
+            rng: SplitMix64(sim.seed ^ 0x9e37_79b9_7f4a_7c15),
+            time_s: 0.0,
+            positions: vec![0.0; n_drives],
+            velocities: vec![0.0; n_drives],
+            loads: vec![0.0; n_drives],
+        };
+        for u in &mut hal.units {
+            u.start(&hal.positions);
+        }
+        hal.record();
+        Ok(hal)
+    }
+
+    fn truth(&self, model: &EncoderModel) -> f64 {
+        match model {
+            EncoderModel::Fixed(q) => *q,
+            EncoderModel::Sum { terms, offset_rad } => {
+                offset_rad
+                    + terms
+                        .iter()
+                        .map(|(t, g)| {
+                            g * match *t {
+                                Term::Drive(d) => self.drives[d].position,
+                                Term::Signal { unit, dof, kind } => self.units[unit].signal(dof, kind),
+                            }
+                        })
+                        .sum::<f64>()
+            }
+        }
+    }
+
+    fn record(&mut self) {
+        for i in 0..self.encoders.len() {
+            let v = self.truth(&self.encoders[i]);
+            self.encoder_history[i].push(self.time_s, v);
+        }
+        for (h, d) in self.drive_history.iter_mut().zip(&self.drives) {
+            h.push(self.time_s, d.position);
+        }
+    }
+
+    /// Simulated time [s].
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// The simulated joints.
+    pub fn units(&self) -> &[Unit] {
+        &self.units
+    }
+
+    /// The simulated drives, in device order.
+    pub fn drives(&self) -> &[ElmoDrive] {
+        &self.drives
+    }
+
+    /// The true element torque and the torque sensor's reading of DOF `name` [Nm].
+    pub fn joint_torque(&self, name: &str) -> Option<(f64, f64)> {
+        self.units.iter().find_map(|u| u.dof_names.iter().position(|n| n == name).map(|i| (u.torque[i], u.sensor_torque[i])))
+    }
+
+    /// Advances the physics by `dt` with the drives' current set-points.
+    pub fn advance(&mut self, dt: f64) {
+        let n = ((dt / self.substep_s).round() as usize).max(1);
+        let h = dt / n as f64;
+        for _ in 0..n {
+            for (i, d) in self.drives.iter().enumerate() {
+                self.positions[i] = d.position;
+                self.velocities[i] = d.velocity;
+            }
+            self.loads.iter_mut().for_each(|l| *l = 0.0);
+            for u in &mut self.units {
+                u.step(&self.positions, &self.velocities, &mut self.loads, h, &mut self.rng);
+            }
+            for (d, load) in self.drives.iter_mut().zip(&self.loads) {
+                d.step(*load, h);
+            }
+            self.time_s += h;
+            self.record();
+        }
+    }
+}
+
+impl Hal for SimHal {
+    fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
+        let now = self.time_s;
+        for i in 0..self.encoders.len() {
+            let truth = self.encoder_history[i].at(now - self.spi_latency_s);
+            let noise = if self.noise_rad > 0.0 { self.noise_rad * self.rng.normal() } else { 0.0 };
+            let angle = truth + noise - self.encoder_offset_rad[i];
+            frame.encoders[i] = if self.quantized[i] {
+                // The same frames and decoder as the robot's SPI bus: 14-bit words with parity.
+                let sample = match as5048::decode(as5048::encode(as5048::rad_to_counts(angle))) {
+                    Ok(counts) => Sample::Value { value: as5048::counts_to_rad(counts), age_s: self.spi_latency_s },
+                    Err(_) => Sample::Invalid,
+                };
+                self.encoder_conditioners[i].update(sample, now)
+            } else {
+                Reading::valid_aged(angle, self.spi_latency_s)
+            };
+        }
+        for (i, d) in frame.drives.iter_mut().enumerate() {
+            // The same TPDO1 frames and decoder as the robot's CAN bus, with latency and losses.
+            let position = self.drive_history[i].at(now - self.can_latency_s);
+            let counts = (position * self.counts_per_rad[i]).round() as i32;
+            let lost = self.loss_rate > 0.0 && self.rng.uniform() < self.loss_rate;
+            let frame_out = match (lost, self.loss_mode) {
+                (false, _) => Some(canopen::tpdo1(i as u8 + 1, 0x0237, counts)),
+                (true, CanLossMode::Zero) => Some(canopen::tpdo1(i as u8 + 1, 0x0237, 0)),
+                (true, CanLossMode::Missing) => None,
+            };
+            let sample = match frame_out.as_ref().and_then(canopen::decode_tpdo1) {
+                Some(t) => Sample::Value { value: t.position_counts as f64 / self.counts_per_rad[i], age_s: self.can_latency_s },
+                None => Sample::Missing,
+            };
+            let reading = self.drive_conditioners[i].update(sample, now);
+            *d = DriveReading::new(reading, Reading::valid(self.drives[i].velocity), true, false);
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, frame: &ActuatorFrame, dt_s: f64) -> Result<(), HalIoError> {
+        for (d, sp) in self.drives.iter_mut().zip(&frame.drives) {
+            if sp.action == DriveAction::MOVE {
+                d.set_target(sp.position_rad);
+            }
+        }
+        self.advance(dt_s);
+        Ok(())
+    }
+
+    fn device_health(&self, out: &mut [DeviceHealth]) {
+        let all = self.drive_conditioners.iter().chain(&self.encoder_conditioners);
+        for (h, c) in out.iter_mut().zip(all) {
+            let l = c.counters();
+            *h = DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
+        }
+    }
+}

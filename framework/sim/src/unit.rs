@@ -1,0 +1,305 @@
+//! One simulated joint (a plugin instance's hardware): its drives move the motor-side angles
+//! `theta = M a` (the transmission), an elastic element joins each theta to its output, and the
+//! output meets its environment. The element's torque acts back on the drives through `M^T`
+//! (virtual work).
+
+use jointctl_config::{EffectsConfig, ElementSimConfig, EnvironmentConfig};
+use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
+use jointctl_models::lever_arm::LeverArm;
+
+use crate::rng::SplitMix64;
+
+/// Section 3.1: the harmonic drive stiffness used for a "rigid" element [Nm/rad].
+pub const HARMONIC_DRIVE_STIFFNESS: f64 = 8.3e4;
+
+/// The elastic element of a unit.
+#[derive(Clone, Debug)]
+pub enum Element {
+    /// A linear spring [Nm/rad].
+    Linear(f64),
+    /// A 1-DOF characteristic over pivot settings.
+    Pivot(PivotCharacteristic),
+    /// The 2-DOF wrist characteristic.
+    Wrist(WristCharacteristic),
+    /// Eq. 2.6: stiffness from the pivot setting.
+    LeverArm(LeverArm),
+}
+
+/// A problem building a unit.
+pub type UnitError = (String, String);
+
+impl Element {
+    /// Builds an element; tables come from the joint's `params.characteristic`.
+    pub fn from_config(cfg: &ElementSimConfig, params: &serde_json::Value, dof: usize) -> Result<Element, UnitError> {
+        let table = || -> Result<CharacteristicSpec, UnitError> {
+            serde_json::from_value(params.get("characteristic").cloned().unwrap_or_default())
+                .map_err(|e| ("sim.element".into(), format!("needs the joint's params.characteristic: {e}")))
+        };
+        Ok(match cfg {
+            ElementSimConfig::Rigid => Element::Linear(HARMONIC_DRIVE_STIFFNESS),
+            ElementSimConfig::Linear { stiffness_nm_per_rad } if *stiffness_nm_per_rad > 0.0 => Element::Linear(*stiffness_nm_per_rad),
+            ElementSimConfig::Linear { .. } => return Err(("sim.element.linear.stiffness_nm_per_rad".into(), "must be > 0".into())),
+            ElementSimConfig::PivotTable => Element::Pivot(
+                PivotCharacteristic::from_spec(&table()?).map_err(|e| (format!("params.characteristic.{}", e.field), e.message))?,
+            ),
+            ElementSimConfig::WristTable if dof == 2 => Element::Wrist(
+                WristCharacteristic::from_spec(&table()?).map_err(|e| (format!("params.characteristic.{}", e.field), e.message))?,
+            ),
+            ElementSimConfig::WristTable => return Err(("sim.element".into(), "wrist_table needs a 2-DOF joint".into())),
+            ElementSimConfig::LeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m } => Element::LeverArm(LeverArm {
+                lever_length_m: *lever_length_m,
+                crank_radius_m: *crank_radius_m,
+                spring_n_per_m: *spring_n_per_m,
+                pivot_offset_m: *pivot_offset_m,
+            }),
+        })
+    }
+
+    /// Element torque per DOF for the (effective) deflections, at a pivot setting.
+    fn torques(&self, pivot_mm: f64, d: &[f64], out: &mut [f64]) {
+        match self {
+            Element::Linear(k) => out.iter_mut().zip(d).for_each(|(t, d)| *t = k * d),
+            Element::Pivot(c) => out.iter_mut().zip(d).for_each(|(t, d)| *t = c.evaluate(pivot_mm, *d).torque_nm),
+            Element::LeverArm(l) => {
+                let k = l.stiffness_at(pivot_mm);
+                out.iter_mut().zip(d).for_each(|(t, d)| *t = k * d);
+            }
+            Element::Wrist(c) => {
+                let e = c.evaluate(pivot_mm, d[0], d[1]);
+                out[0] = e.torque_q6_nm;
+                out[1] = e.torque_q7_nm;
+            }
+        }
+    }
+}
+
+/// Most DOFs of one unit.
+pub const MAX_UNIT_DOF: usize = 4;
+
+/// Per-DOF effect state.
+#[derive(Clone, Copy, Debug, Default)]
+struct EffectState {
+    dahl_z: f64,
+    mode_y: f64,
+    mode_v: f64,
+    sensor_noise: f64,
+}
+
+/// One simulated joint.
+#[derive(Clone, Debug)]
+pub struct Unit {
+    /// DOF names (as published).
+    pub dof_names: Vec<String>,
+    /// Drive indices (columns of `matrix`).
+    pub drives: Vec<usize>,
+    matrix: Vec<Vec<f64>>,
+    element: Element,
+    pivot: Option<(usize, f64, f64)>,
+    environment: EnvironmentConfig,
+    effects: EffectsConfig,
+    /// Output positions [rad].
+    pub output: [f64; MAX_UNIT_DOF],
+    output_velocity: [f64; MAX_UNIT_DOF],
+    /// Motor-side angles [rad].
+    pub theta: [f64; MAX_UNIT_DOF],
+    theta_velocity: [f64; MAX_UNIT_DOF],
+    /// Element torques (what the joint really carries) [Nm].
+    pub torque: [f64; MAX_UNIT_DOF],
+    /// What the torque sensor reads [Nm].
+    pub sensor_torque: [f64; MAX_UNIT_DOF],
+    /// The pivot setting [mm].
+    pub pivot_mm: f64,
+    state: [EffectState; MAX_UNIT_DOF],
+    time_s: f64,
+}
+
+impl Unit {
+    /// A unit from its parts (drive indices resolved by the caller).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        dof_names: Vec<String>,
+        drives: Vec<usize>,
+        matrix: Vec<Vec<f64>>,
+        element: Element,
+        pivot: Option<(usize, f64, f64)>,
+        environment: EnvironmentConfig,
+        effects: EffectsConfig,
+    ) -> Self {
+        Unit {
+            dof_names,
+            drives,
+            matrix,
+            element,
+            pivot,
+            environment,
+            effects,
+            output: [0.0; MAX_UNIT_DOF],
+            output_velocity: [0.0; MAX_UNIT_DOF],
+            theta: [0.0; MAX_UNIT_DOF],
+            theta_velocity: [0.0; MAX_UNIT_DOF],
+            torque: [0.0; MAX_UNIT_DOF],
+            sensor_torque: [0.0; MAX_UNIT_DOF],
+            pivot_mm: 0.0,
+            state: [EffectState::default(); MAX_UNIT_DOF],
+            time_s: 0.0,
+        }
+    }
+
+    fn dof(&self) -> usize {
+        self.dof_names.len()
+    }
+
+    /// Where a flow-source environment puts output `i` at time `t`.
+    fn flow(&self, i: usize, t: f64) -> Option<f64> {
+        match self.environment {
+            EnvironmentConfig::Flow { amplitude_rad, frequency_hz, angle_deg } => {
+                let s = amplitude_rad * (std::f64::consts::TAU * frequency_hz * t).sin();
+                Some(if self.dof() == 2 {
+                    // Direction angle_deg: 0 = the second DOF (q7) only, 90 = the first (q6).
+                    let a = angle_deg.to_radians();
+                    if i == 0 { s * a.sin() } else { s * a.cos() }
+                } else {
+                    s
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// Sets the outputs where the environment holds them at the start (drive positions given).
+    pub fn start(&mut self, drive_positions: &[f64]) {
+        self.update_theta(drive_positions, &vec![0.0; drive_positions.len()]);
+        for i in 0..self.dof() {
+            self.output[i] = match self.environment {
+                EnvironmentConfig::Fixed(q) => q,
+                EnvironmentConfig::Flow { .. } => self.flow(i, 0.0).unwrap_or(0.0),
+                _ => self.theta[i],
+            };
+        }
+    }
+
+    fn update_theta(&mut self, positions: &[f64], velocities: &[f64]) {
+        for (i, row) in self.matrix.iter().enumerate() {
+            self.theta[i] = row.iter().zip(&self.drives).map(|(m, d)| m * positions[*d]).sum();
+            self.theta_velocity[i] = row.iter().zip(&self.drives).map(|(m, d)| m * velocities[*d]).sum();
+        }
+        if let Some((d, mm_per_rad, offset)) = self.pivot {
+            self.pivot_mm = offset + mm_per_rad * positions[d];
+        }
+    }
+
+    /// One step: element torques from the drives' state, the outputs' motion, and the reaction
+    /// torque added into `loads` (per drive).
+    pub fn step(&mut self, positions: &[f64], velocities: &[f64], loads: &mut [f64], dt: f64, rng: &mut SplitMix64) {
+        self.time_s += dt;
+        self.update_theta(positions, velocities);
+        let n = self.dof();
+        let fx = self.effects.clone();
+        let mut d_eff = [0.0; MAX_UNIT_DOF];
+        let mut rate = [0.0; MAX_UNIT_DOF];
+        for i in 0..n {
+            let d = self.theta[i] - self.output[i];
+            rate[i] = self.theta_velocity[i] - self.output_velocity[i];
+            // Dead-zone (play): no torque until the play is taken up.
+            d_eff[i] = d.signum() * (d.abs() - fx.dead_zone_rad).max(0.0);
+        }
+        let mut base = [0.0; MAX_UNIT_DOF];
+        self.element.torques(self.pivot_mm, &d_eff[..n], &mut base[..n]);
+        for i in 0..n {
+            let st = &mut self.state[i];
+            let mut t = base[i] + fx.cubic_nm_per_rad3 * d_eff[i].powi(3) + fx.viscous_nms_per_rad * rate[i];
+            if let Some(h) = fx.hysteresis {
+                // Dahl: dz/dt = sigma (1 - z/fc sgn(v)) v.
+                let v = rate[i];
+                st.dahl_z += h.sigma_nm_per_rad * (1.0 - st.dahl_z / h.limit_nm * v.signum()) * v * dt;
+                st.dahl_z = st.dahl_z.clamp(-h.limit_nm, h.limit_nm);
+                t += st.dahl_z;
+            }
+            self.torque[i] = t;
+            // The torque sensor: a structural mode rings on changes of the torque.
+            let mut sensed = t;
+            if let Some(m) = fx.vibration {
+                let w = std::f64::consts::TAU * m.frequency_hz;
+                let acc = -w * w * (st.mode_y - t) - 2.0 * m.damping_ratio * w * st.mode_v;
+                st.mode_v += acc * dt;
+                st.mode_y += st.mode_v * dt;
+                sensed += m.gain * (st.mode_y - t);
+            }
+            if fx.torque_noise_nm > 0.0 {
+                st.sensor_noise = fx.torque_noise_nm * rng.normal();
+            }
+            self.sensor_torque[i] = sensed + fx.torque_offset_nm + st.sensor_noise;
+        }
+        // Reaction on the drives: loads = M^T tau.
+        for (i, row) in self.matrix.iter().enumerate() {
+            for (m, d) in row.iter().zip(&self.drives) {
+                loads[*d] += m * self.torque[i];
+            }
+        }
+        // The outputs.
+        let t_now = self.time_s;
+        for i in 0..n {
+            match self.environment {
+                EnvironmentConfig::Fixed(q) => {
+                    self.output[i] = q;
+                    self.output_velocity[i] = 0.0;
+                }
+                EnvironmentConfig::Flow { .. } => {
+                    let q = self.flow(i, t_now).unwrap_or(0.0);
+                    self.output_velocity[i] = (q - self.output[i]) / dt;
+                    self.output[i] = q;
+                }
+                EnvironmentConfig::Free { inertia_kgm2, damping_nms_per_rad, gravity_nm } => {
+                    let a = (self.torque[i] - damping_nms_per_rad * self.output_velocity[i] - gravity_nm * self.output[i].sin()) / inertia_kgm2;
+                    self.output_velocity[i] += a * dt;
+                    self.output[i] += self.output_velocity[i] * dt;
+                }
+                EnvironmentConfig::Spring { stiffness_nm_per_rad, rest_rad, inertia_kgm2, damping_nms_per_rad } => {
+                    let a = (self.torque[i] - stiffness_nm_per_rad * (self.output[i] - rest_rad) - damping_nms_per_rad * self.output_velocity[i]) / inertia_kgm2;
+                    self.output_velocity[i] += a * dt;
+                    self.output[i] += self.output_velocity[i] * dt;
+                }
+            }
+        }
+    }
+
+    /// A named signal of DOF `i`.
+    pub fn signal(&self, i: usize, kind: SignalKind) -> f64 {
+        match kind {
+            SignalKind::Output => self.output[i],
+            SignalKind::Theta => self.theta[i],
+            SignalKind::Deflection => self.theta[i] - self.output[i],
+            SignalKind::Torque => self.sensor_torque[i],
+            SignalKind::Pivot => self.pivot_mm,
+        }
+    }
+}
+
+/// What a simulated signal measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SignalKind {
+    /// Output position [rad].
+    Output,
+    /// Motor-side joint angle [rad].
+    Theta,
+    /// Deflection theta - output [rad].
+    Deflection,
+    /// The torque sensor [Nm].
+    Torque,
+    /// Pivot setting [mm].
+    Pivot,
+}
+
+impl SignalKind {
+    /// Parses `output`, `theta`, `deflection`, `torque`, `pivot_mm`.
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "output" => SignalKind::Output,
+            "theta" => SignalKind::Theta,
+            "deflection" => SignalKind::Deflection,
+            "torque" => SignalKind::Torque,
+            "pivot_mm" => SignalKind::Pivot,
+            _ => return None,
+        })
+    }
+}
