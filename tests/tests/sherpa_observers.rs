@@ -83,10 +83,11 @@ fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
     hal.set_encoder("enc_shoulder_pivot", Reading::valid(0.1));
     hal.set_encoder("enc_shoulder_pulley_a", Reading::valid(0.5));
     hal.set_encoder("enc_shoulder_pulley_b", Reading::valid(0.1));
-    // Elbow: output 0.25, motor 0.1 -> deflection 0.25 - 2 * 0.1 = 0.05 (eq. 3.2), 113.78 * 0.05.
+    // Elbow: output 0.25, motor 0.1 -> deflection 2 * 0.1 - 0.25 = -0.05 (eq. 3.2, motor side
+    // minus output), 113.78 * -0.05.
     hal.set_encoder("enc_q4_out", Reading::valid(0.25));
     hal.set_drive("elmo_q4", 0.1);
-    // Wrist q5: output 0.1, motor 0.08 -> 0.02 rad, 70.0966 * 0.02.
+    // Wrist q5: output 0.1, motor 0.08 -> -0.02 rad, 70.0966 * -0.02.
     hal.set_encoder("enc_q5_out", Reading::valid(0.1));
     hal.set_drive("elmo_q5", 0.08);
     // Wrist q6/q7: carrier a 0.4 -> expected bevel 0.4 * 20/80 * 0.75 = 0.075 (eq. 3.8); bevel a
@@ -115,10 +116,10 @@ fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
     close(s[2].position(), 0.2, "q3 position");
     close(s[2].stiffness(), 8.3e4, "q3 stiffness");
 
-    close(s[3].deflection(), 0.05, "q4 deflection");
-    close(s[3].torque(), 113.78 * 0.05, "q4 torque");
-    close(s[4].deflection(), 0.02, "q5 deflection");
-    close(s[4].torque(), 70.0966 * 0.02, "q5 torque");
+    close(s[3].deflection(), -0.05, "q4 deflection");
+    close(s[3].torque(), 113.78 * -0.05, "q4 torque");
+    close(s[4].deflection(), -0.02, "q5 deflection");
+    close(s[4].torque(), 70.0966 * -0.02, "q5 torque");
 
     let wrist = WristCharacteristic::from_spec(&params_characteristic(&loaded, "wrist")).unwrap();
     let w = wrist.evaluate(23.0, 0.0125, 0.0125);
@@ -218,8 +219,8 @@ fn an_elastic_joint_with_an_input_encoder_ignores_the_drive_reading() {
     // A lost CAN frame on the drive (appendix A) does not matter: the input encoder is used.
     hal.frame.lock().unwrap().drives[1] = DriveReading::default();
     arm.step(0.01);
-    close(arm.states[1].deflection(), 0.3 - 2.0 * 0.1, "deflection from absolute encoders");
-    close(arm.states[1].torque(), 100.0 * 0.1, "torque");
+    close(arm.states[1].deflection(), 2.0 * 0.1 - 0.3, "deflection from absolute encoders");
+    close(arm.states[1].torque(), 100.0 * -0.1, "torque");
 }
 
 

@@ -257,21 +257,30 @@ pub struct JointSimConfig {
     /// joint's transmission (eq. 3.1 ratio 2 for the elbow, eq. 3.3 for the shoulder, eq. 3.7
     /// with the eq. 3.8 ratio for the wrist).
     pub matrix: Vec<Vec<f64>>,
-    /// The elastic element between theta and the output.
-    pub element: ElementSimConfig,
+    /// The elastic element between theta and the output, the same for every DOF...
+    #[serde(default)]
+    pub element: Option<ElementSimConfig>,
+    /// ... or one per DOF (the shoulder: q2's VSA and rigid q3). A `wrist_table` covers both
+    /// of its DOFs and stands alone.
+    #[serde(default)]
+    pub elements: Vec<ElementSimConfig>,
     /// Where the VSA's pivot is: `pivot_mm = offset_mm + mm_per_rad * drive`.
     #[serde(default)]
     pub pivot: Option<PivotSimConfig>,
-    /// What the output is attached to.
-    pub environment: EnvironmentConfig,
+    /// What the output is attached to, the same for every DOF...
+    #[serde(default)]
+    pub environment: Option<EnvironmentConfig>,
+    /// ... or one per DOF.
+    #[serde(default)]
+    pub environments: Vec<EnvironmentConfig>,
     /// Plant effects the observer does not model, each off unless given.
     #[serde(default)]
     pub effects: EffectsConfig,
 }
 
-/// The elastic element.
+/// The elastic element, e.g. `{kind: linear, stiffness_nm_per_rad: 113.78}` or `{kind: rigid}`.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ElementSimConfig {
     /// Rigid (theta is the output); a clamped output then holds the drives too.
     Rigid,
@@ -310,12 +319,17 @@ pub struct PivotSimConfig {
     pub offset_mm: f64,
 }
 
-/// What a simulated joint's output is attached to.
+/// What a simulated joint's output is attached to, e.g. `{kind: fixed, position_rad: 0}` or
+/// `{kind: free, inertia_kgm2: 0.3}`.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum EnvironmentConfig {
-    /// Clamped at this position [rad] (the thesis' validation set-ups, figures 5.1, 5.14).
-    Fixed(f64),
+    /// Clamped (the thesis' validation set-ups, figures 5.1, 5.14).
+    Fixed {
+        /// Where [rad].
+        #[serde(default)]
+        position_rad: f64,
+    },
     /// A free link.
     Free {
         /// Output inertia [kg m^2].

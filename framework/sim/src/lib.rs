@@ -129,13 +129,27 @@ impl SimHal {
                     format!("needs {} row(s) (one per DOF) of {} finite number(s) (one per drive)", dof_names.len(), drive_ids.len()),
                 ));
             }
-            let element = Element::from_config(&s.element, &joint.params.0, dof_names.len())
-                .map_err(|(f, m)| setup(if f.starts_with("params") { format!("joints[{j}].{f}") } else { format!("joints[{j}].{f}") }, m))?;
+            let n = dof_names.len();
+            let element_cfgs: Vec<_> = match (&s.element, s.elements.as_slice()) {
+                (Some(e), []) => vec![e.clone()],
+                (None, list) if list.len() == n => list.to_vec(),
+                _ => return Err(setup(at("element"), format!("give `element` (all DOFs) or `elements` with {n} entries (one per DOF)"))),
+            };
+            let elements = element_cfgs
+                .iter()
+                .map(|e| Element::from_config(e, &joint.params.0, if element_cfgs.len() == 1 { n } else { 1 }))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|(f, m)| setup(format!("joints[{j}].{f}"), m))?;
+            let environments: Vec<_> = match (&s.environment, s.environments.as_slice()) {
+                (Some(e), []) => vec![e.clone(); n],
+                (None, list) if list.len() == n => list.to_vec(),
+                _ => return Err(setup(at("environment"), format!("give `environment` (all DOFs) or `environments` with {n} entries"))),
+            };
             let pivot = match &s.pivot {
                 Some(p) => Some((drive_index(&p.drive, at("pivot.drive"))?, p.mm_per_rad, p.offset_mm)),
                 None => None,
             };
-            units.push(Unit::new(dof_names, drive_ids, s.matrix.clone(), element, pivot, s.environment.clone(), s.effects.clone()));
+            units.push(Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects));
         }
         let signal = |name: &str, field: String| -> Result<Term, HalSetupError> {
             let (dof, kind) = name.rsplit_once('.').ok_or_else(|| setup(field.clone(), format!("`{name}` is not DOF.SIGNAL")))?;
@@ -347,5 +361,37 @@ impl Hal for SimHal {
             let l = c.counters();
             *h = DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
         }
+    }
+}
+
+/// A [`SimHal`] shared with the code that runs an experiment or a test, to read the ground
+/// truth (the torque sensor, the true element torque) next to what the arm observes. It locks a
+/// mutex in `read` and `write`: for experiments and tests, never for `jointctl run`.
+#[derive(Clone)]
+pub struct SharedSim(pub std::sync::Arc<std::sync::Mutex<SimHal>>);
+
+impl SharedSim {
+    /// Wraps a simulator.
+    pub fn new(sim: SimHal) -> Self {
+        SharedSim(std::sync::Arc::new(std::sync::Mutex::new(sim)))
+    }
+
+    /// Runs `f` on the simulator.
+    pub fn with<R>(&self, f: impl FnOnce(&SimHal) -> R) -> R {
+        f(&self.0.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+}
+
+impl Hal for SharedSim {
+    fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner()).read(frame)
+    }
+
+    fn write(&mut self, frame: &ActuatorFrame, dt_s: f64) -> Result<(), HalIoError> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner()).write(frame, dt_s)
+    }
+
+    fn device_health(&self, out: &mut [DeviceHealth]) {
+        self.0.lock().unwrap_or_else(|p| p.into_inner()).device_health(out)
     }
 }

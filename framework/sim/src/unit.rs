@@ -93,9 +93,9 @@ pub struct Unit {
     /// Drive indices (columns of `matrix`).
     pub drives: Vec<usize>,
     matrix: Vec<Vec<f64>>,
-    element: Element,
+    elements: Vec<Element>,
     pivot: Option<(usize, f64, f64)>,
-    environment: EnvironmentConfig,
+    environments: Vec<EnvironmentConfig>,
     effects: EffectsConfig,
     /// Output positions [rad].
     pub output: [f64; MAX_UNIT_DOF],
@@ -120,18 +120,18 @@ impl Unit {
         dof_names: Vec<String>,
         drives: Vec<usize>,
         matrix: Vec<Vec<f64>>,
-        element: Element,
+        elements: Vec<Element>,
         pivot: Option<(usize, f64, f64)>,
-        environment: EnvironmentConfig,
+        environments: Vec<EnvironmentConfig>,
         effects: EffectsConfig,
     ) -> Self {
         Unit {
             dof_names,
             drives,
             matrix,
-            element,
+            elements,
             pivot,
-            environment,
+            environments,
             effects,
             output: [0.0; MAX_UNIT_DOF],
             output_velocity: [0.0; MAX_UNIT_DOF],
@@ -151,7 +151,7 @@ impl Unit {
 
     /// Where a flow-source environment puts output `i` at time `t`.
     fn flow(&self, i: usize, t: f64) -> Option<f64> {
-        match self.environment {
+        match self.environments[i] {
             EnvironmentConfig::Flow { amplitude_rad, frequency_hz, angle_deg } => {
                 let s = amplitude_rad * (std::f64::consts::TAU * frequency_hz * t).sin();
                 Some(if self.dof() == 2 {
@@ -170,8 +170,8 @@ impl Unit {
     pub fn start(&mut self, drive_positions: &[f64]) {
         self.update_theta(drive_positions, &vec![0.0; drive_positions.len()]);
         for i in 0..self.dof() {
-            self.output[i] = match self.environment {
-                EnvironmentConfig::Fixed(q) => q,
+            self.output[i] = match self.environments[i] {
+                EnvironmentConfig::Fixed { position_rad } => position_rad,
                 EnvironmentConfig::Flow { .. } => self.flow(i, 0.0).unwrap_or(0.0),
                 _ => self.theta[i],
             };
@@ -194,7 +194,7 @@ impl Unit {
         self.time_s += dt;
         self.update_theta(positions, velocities);
         let n = self.dof();
-        let fx = self.effects.clone();
+        let fx = self.effects;
         let mut d_eff = [0.0; MAX_UNIT_DOF];
         let mut rate = [0.0; MAX_UNIT_DOF];
         for i in 0..n {
@@ -204,7 +204,14 @@ impl Unit {
             d_eff[i] = d.signum() * (d.abs() - fx.dead_zone_rad).max(0.0);
         }
         let mut base = [0.0; MAX_UNIT_DOF];
-        self.element.torques(self.pivot_mm, &d_eff[..n], &mut base[..n]);
+        if self.elements.len() == 1 && n > 1 {
+            // One element for every DOF (a 2-DOF wrist table couples them).
+            self.elements[0].torques(self.pivot_mm, &d_eff[..n], &mut base[..n]);
+        } else {
+            for (i, e) in self.elements.iter().enumerate().take(n) {
+                e.torques(self.pivot_mm, &d_eff[i..i + 1], &mut base[i..i + 1]);
+            }
+        }
         for i in 0..n {
             let st = &mut self.state[i];
             let mut t = base[i] + fx.cubic_nm_per_rad3 * d_eff[i].powi(3) + fx.viscous_nms_per_rad * rate[i];
@@ -239,9 +246,9 @@ impl Unit {
         // The outputs.
         let t_now = self.time_s;
         for i in 0..n {
-            match self.environment {
-                EnvironmentConfig::Fixed(q) => {
-                    self.output[i] = q;
+            match self.environments[i] {
+                EnvironmentConfig::Fixed { position_rad } => {
+                    self.output[i] = position_rad;
                     self.output_velocity[i] = 0.0;
                 }
                 EnvironmentConfig::Flow { .. } => {

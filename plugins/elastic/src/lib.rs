@@ -6,9 +6,11 @@
 //!
 //! Kinematics, eq. 3.1/3.2: `theta_out = theta_motor + theta_RC`, ideally `theta_RC = theta_motor`
 //! so `theta_out = 2 * theta_motor` for the elbow. With `r` the ideal output-per-motor ratio the
-//! deflection is what the output encoder shows beyond the ideal transmission:
-//! `deflection = (theta_out - theta_out0) - r * (theta_motor - theta_motor0)`, with the initial
-//! angles subtracted (section 3.4.1) so that the joint may start anywhere.
+//! deflection is how far the motor side leads the output:
+//! `deflection = r * (theta_motor - theta_motor0) - (theta_out - theta_out0)`, with the initial
+//! angles subtracted (section 3.4.1) so that the joint may start anywhere. A positive deflection
+//! is a positive torque on the output, the convention of figure 4.6 (set-point = position +
+//! feed-forward deflection) and of eq. 3.8 (expected minus measured).
 
 use jointctl_api::{
     Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
@@ -65,9 +67,9 @@ pub struct ElasticJoint {
 
 impl ElasticJoint {
     /// Eq. 3.2 solved for the RC element's deflection, relative to the activation pose (the
-    /// initial angles subtracted, section 3.4.1).
+    /// initial angles subtracted, section 3.4.1): motor side minus output.
     fn deflection(&self, output_rad: f64, input_rad: f64) -> f64 {
-        (output_rad - self.output_origin) - self.transmission.ratio() * (input_rad - self.input_origin)
+        self.transmission.ratio() * (input_rad - self.input_origin) - (output_rad - self.output_origin)
     }
 }
 

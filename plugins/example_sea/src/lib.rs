@@ -67,7 +67,8 @@ impl Observer for SeaJoint {
             s.set_position(q);
         }
         if let (Some(q), Some(m)) = (q, m) {
-            let deflection = (q - self.output_origin) - (m - self.motor_origin);
+            // Motor side minus output: a positive deflection pushes the output positive.
+            let deflection = (m - self.motor_origin) - (q - self.output_origin);
             s.set_deflection(deflection);
             s.set_torque(self.p.spring_nm_per_rad * deflection);
         }
@@ -84,7 +85,7 @@ impl Controller for SeaJoint {
     fn control(&mut self, state: &[JointState], cmd: &[JointCommand], _: &RawJointView, out: &mut [MotorSetpoint]) -> Result<(), JointFault> {
         out[MOTOR] = match (cmd[0].mode, state[0].deflection()) {
             (ControlMode::POSITION, Some(d)) => {
-                MotorSetpoint::move_to(self.motor_origin + (cmd[0].position_rad - self.output_origin) - d)
+                MotorSetpoint::move_to(self.motor_origin + (cmd[0].position_rad - self.output_origin) + d)
             }
             _ => MotorSetpoint::HOLD,
         };
