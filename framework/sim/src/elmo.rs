@@ -96,9 +96,13 @@ impl ElmoDrive {
     /// moves), semi-implicit Euler.
     pub fn step(&mut self, load_nm: f64, dt: f64) {
         let c = self.cfg;
+        let v_before = self.profile.velocity;
         self.profile.step(self.target, c.max_velocity_rad_s, c.max_acceleration_rad_s2, dt);
+        // Section 3.2: the ELMO's loops carry feed-forward terms; here the profile's acceleration
+        // through the inertia, so that the PID only corrects what the model misses.
+        let feed_forward = c.inertia_kgm2 * (self.profile.velocity - v_before) / dt;
         let e = self.profile.position - self.position;
-        let unsaturated = c.kp * e + c.ki * (self.integral + e * dt) + c.kd * (self.profile.velocity - self.velocity);
+        let unsaturated = feed_forward + c.kp * e + c.ki * (self.integral + e * dt) + c.kd * (self.profile.velocity - self.velocity);
         let u = unsaturated.clamp(-c.torque_limit_nm, c.torque_limit_nm);
         if u == unsaturated {
             self.integral += e * dt;

@@ -395,3 +395,17 @@ impl Hal for SharedSim {
         self.0.lock().unwrap_or_else(|p| p.into_inner()).device_health(out)
     }
 }
+
+impl SimHal {
+    /// Sets a drive's target directly (experiments: hold a VSA's pivot at a setting).
+    pub fn set_drive_target(&mut self, drive: usize, position_rad: f64) {
+        if let Some(d) = self.drives.get_mut(drive) {
+            d.set_target(position_rad);
+        }
+    }
+
+    /// Lets the drives move for `seconds` of simulated time without reading (settling).
+    pub fn settle_drives(&mut self, seconds: f64) {
+        self.advance(seconds);
+    }
+}

@@ -1,6 +1,7 @@
 //! `jointctl`: run, check and inspect compliant robot arms.
 
 mod cmd;
+mod experiment;
 mod inspect;
 
 use std::path::PathBuf;
@@ -42,6 +43,16 @@ enum Command {
     },
     /// Print the JSON Schema of arm descriptions (for editors).
     Schema,
+    /// Run the thesis' experiments on the simulated arm.
+    Experiment {
+        #[command(subcommand)]
+        command: experiment::ExperimentCommand,
+    },
+    /// Work with the simulated arm directly.
+    Sim {
+        #[command(subcommand)]
+        command: experiment::SimCommand,
+    },
     /// Send a command to a running arm (exit 0 accepted, 1 refused or no runtime).
     Cmd(cmd::CmdArgs),
     /// Read a running arm's shared memory from this separate process.
@@ -58,6 +69,14 @@ fn static_loader(loader: &mut PluginLoader) -> Result<(), jointctl_runtime::Load
     loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor())?;
     loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor())?;
     Ok(())
+}
+
+/// The loader for experiments: the plugins linked into this binary, then the config's search path
+/// (plugins given by path in the YAML are always loaded from there).
+fn experiment_loader(loaded: &jointctl_config::LoadedConfig) -> Result<PluginLoader, jointctl_runtime::LoadPluginError> {
+    let mut loader = jointctl_runtime::loader_for(loaded);
+    static_loader(&mut loader)?;
+    Ok(loader)
 }
 
 fn fail(message: impl std::fmt::Display) -> ExitCode {
@@ -153,5 +172,7 @@ fn main() -> ExitCode {
         }
         Command::Inspect { command } => inspect::run(command),
         Command::Cmd(args) => cmd::run(args),
+        Command::Experiment { command } => experiment::experiment(command),
+        Command::Sim { command } => experiment::sim(command),
     }
 }

@@ -1,0 +1,247 @@
+//! Torque tracking (thesis chapter 5, figures 5.2-5.26): the joint's output clamped (figures 5.1,
+//! 5.14), torque control following step, sine and cosine references at several stiffness
+//! settings, and a frequency sweep; observed and sensor torque compared with the reference.
+
+use jointctl_config::{EnvironmentConfig, LoadedConfig};
+use jointctl_control::{Mode, Reference, Waveform};
+use jointctl_runtime::{Arm, PluginLoader};
+use jointctl_runtime::commands::ArmCommand;
+use jointctl_sim::{SharedSim, SimHal};
+use serde::Serialize;
+
+use crate::{ExperimentError, arm_dof, locate, set_environment};
+
+/// The loop and bus of an experiment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scenario {
+    /// The thesis' set-up: a 40 Hz loop, SPI 15 ms and CAN 30 ms latency (section 2.3).
+    Thesis,
+    /// The same hardware with a 1 kHz loop and the 1 ms latencies of a direct bus (assumption).
+    Modern,
+}
+
+impl Scenario {
+    /// Parses `thesis` or `modern`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "thesis" => Some(Scenario::Thesis),
+            "modern" => Some(Scenario::Modern),
+            _ => None,
+        }
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scenario::Thesis => "thesis",
+            Scenario::Modern => "modern",
+        }
+    }
+
+    /// (loop rate [Hz], SPI latency [s], CAN latency [s]).
+    pub fn timing(self) -> (f64, f64, f64) {
+        match self {
+            Scenario::Thesis => (40.0, 0.015, 0.030),
+            Scenario::Modern => (1000.0, 0.001, 0.001),
+        }
+    }
+}
+
+/// One run's result, in the documented JSON row shape.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// DOF.
+    pub joint: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// `step`, `sine` or `cosine`.
+    pub reference: String,
+    /// Frequency [Hz] (0 for a step).
+    pub frequency_hz: f64,
+    /// Pivot setting [mm], if the joint has one.
+    pub pivot_mm: Option<f64>,
+    /// RMSE(observed - reference) / amplitude.
+    pub nrmse_observed: f64,
+    /// RMSE(sensor - reference) / amplitude.
+    pub nrmse_sensor: f64,
+    /// Phase lag of the sensor torque behind the reference [deg] (sine and cosine).
+    pub phase_lag_deg: Option<f64>,
+    /// Sensor amplitude / reference amplitude at the reference frequency (sine and cosine).
+    #[serde(skip)]
+    pub gain: Option<f64>,
+    /// Samples for plotting: (t, reference, observed, sensor).
+    #[serde(skip)]
+    pub trace: Vec<(f64, f64, f64, f64)>,
+}
+
+/// Which runs to make.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Requested stiffness settings [Nm/rad] (variable stiffness joints); empty: as configured.
+    pub stiffness_nm_per_rad: Vec<f64>,
+    /// (waveform, frequency [Hz]) pairs.
+    pub references: Vec<(Waveform, f64)>,
+    /// Periods per sine/cosine run (at least 10 s for a step).
+    pub periods: f64,
+}
+
+impl Plan {
+    /// Chapter 5 references (step; sine and cosine at 0.1 and 0.2 Hz) and a sweep to 8 Hz.
+    pub fn thesis(stiffness_nm_per_rad: Vec<f64>) -> Self {
+        let mut references = vec![(Waveform::Step, 0.0)];
+        for f in [0.1, 0.2] {
+            references.push((Waveform::Sine, f));
+            references.push((Waveform::Cosine, f));
+        }
+        for f in [0.5, 1.0, 2.0, 4.0, 8.0] {
+            references.push((Waveform::Sine, f));
+        }
+        Plan { stiffness_nm_per_rad, references, periods: 2.0 }
+    }
+}
+
+fn sine_fit(t: &[f64], y: &[f64], f: f64) -> (f64, f64) {
+    // Least squares y ~ a sin(wt) + b cos(wt): amplitude and phase.
+    let w = std::f64::consts::TAU * f;
+    let (mut ss, mut cc, mut sc, mut ys, mut yc) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (ti, yi) in t.iter().zip(y) {
+        let (s, c) = (w * ti).sin_cos();
+        ss += s * s;
+        cc += c * c;
+        sc += s * c;
+        ys += yi * s;
+        yc += yi * c;
+    }
+    let det = ss * cc - sc * sc;
+    let a = (ys * cc - yc * sc) / det;
+    let b = (yc * ss - ys * sc) / det;
+    (a.hypot(b), b.atan2(a))
+}
+
+/// Runs one reference at one stiffness setting.
+#[allow(clippy::too_many_arguments)]
+fn run_one(
+    cfg: &LoadedConfig,
+    loader: &PluginLoader,
+    joint: &str,
+    scenario: Scenario,
+    stiffness: Option<f64>,
+    waveform: Waveform,
+    frequency_hz: f64,
+    periods: f64,
+) -> Result<Row, ExperimentError> {
+    let sim = SharedSim::new(SimHal::new(&cfg.config).map_err(|e| ExperimentError(e.to_string()))?);
+    let mut arm = Arm::build(cfg, loader, Box::new(sim.clone()))?;
+    arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
+    let dof = arm_dof(&arm, joint);
+    let dt = 1.0 / arm.rate_hz;
+    let mut t = 0.0;
+    arm.observe(t);
+    if let Some(k) = stiffness {
+        arm.apply(ArmCommand::Stiffness { dof, stiffness_nm_per_rad: k });
+    }
+    // Let the pivot settle with the joint held.
+    for _ in 0..(3.0 / dt) as usize {
+        arm.control();
+        t += dt;
+        arm.observe(t);
+    }
+    let k = arm.states[dof].stiffness().unwrap_or(100.0);
+    let limit = arm.controllers[dof].limits().torque_nm;
+    // Chapter 5: the stiffer the joint, the larger the torque amplitude (0.05 rad of deflection,
+    // an assumption), within half the torque limit.
+    let amplitude = (0.05 * k).min(0.5 * if limit.is_finite() { limit } else { f64::INFINITY });
+    let reference = Reference { waveform, amplitude, frequency_hz, offset: 0.0, start_s: 0.5 };
+    arm.apply(ArmCommand::Mode { dof, mode: Mode::Torque { reference }, streamed: false });
+    let duration = if waveform == Waveform::Step { 10.0 } else { (periods / frequency_hz).max(4.0) };
+    let start = t;
+    let mut trace = Vec::new();
+    for _ in 0..(duration / dt) as usize {
+        arm.control();
+        t += dt;
+        arm.observe(t);
+        let sensor = sim.with(|s| s.joint_torque(joint).map_or(f64::NAN, |x| x.1));
+        let r = arm.torque_references[dof];
+        trace.push((t - start, if r.is_finite() { r } else { reference.value(t) }, arm.states[dof].torque().unwrap_or(f64::NAN), sensor));
+    }
+    // Scored from the reference's start (0.5 s after the mode switch).
+    let scored: Vec<(f64, f64, f64, f64)> = trace.iter().copied().filter(|p| p.0 >= 0.5).collect();
+    let rmse = |sel: fn(&(f64, f64, f64, f64)) -> f64| {
+        let v: Vec<f64> = scored.iter().map(|p| sel(p) - p.1).filter(|e| e.is_finite()).collect();
+        (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt()
+    };
+    let (phase_lag_deg, gain) = if waveform == Waveform::Step {
+        (None, None)
+    } else {
+        let ts: Vec<f64> = scored.iter().map(|p| p.0).collect();
+        let (ar, pr) = sine_fit(&ts, &scored.iter().map(|p| p.1).collect::<Vec<_>>(), frequency_hz);
+        let (asn, ps) = sine_fit(&ts, &scored.iter().map(|p| if p.3.is_finite() { p.3 } else { 0.0 }).collect::<Vec<_>>(), frequency_hz);
+        let lag = (pr - ps).to_degrees().rem_euclid(360.0);
+        (Some(if lag > 180.0 { lag - 360.0 } else { lag }), Some(asn / ar))
+    };
+    Ok(Row {
+        joint: joint.to_string(),
+        scenario: scenario.name().to_string(),
+        reference: match waveform {
+            Waveform::Step => "step",
+            Waveform::Sine => "sine",
+            Waveform::Cosine => "cosine",
+        }
+        .to_string(),
+        frequency_hz,
+        pivot_mm: arm.states[dof].pivot(),
+        nrmse_observed: rmse(|p| p.2) / amplitude,
+        nrmse_sensor: rmse(|p| p.3) / amplitude,
+        phase_lag_deg,
+        gain,
+        trace,
+    })
+}
+
+/// Runs a plan; `progress(done, total)` after each run.
+pub fn run(
+    loaded: &LoadedConfig,
+    loader: &PluginLoader,
+    joint: &str,
+    scenario: Scenario,
+    plan: &Plan,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Row>, ExperimentError> {
+    let mut cfg = loaded.clone();
+    let (j, i) = locate(&cfg, joint)?;
+    // Chapter 5's set-ups clamp the joint's output (figures 5.1, 5.14).
+    let clamp = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    set_environment(&mut cfg, j, i, clamp.clone(), clamp);
+    let (rate, spi, can) = scenario.timing();
+    cfg.config.rate_hz = rate;
+    cfg.config.hal.sim.spi_latency_s = spi;
+    cfg.config.hal.sim.can_latency_s = can;
+    let settings: Vec<Option<f64>> = if plan.stiffness_nm_per_rad.is_empty() { vec![None] } else { plan.stiffness_nm_per_rad.iter().map(|k| Some(*k)).collect() };
+    let total = settings.len() * plan.references.len();
+    let mut rows = Vec::new();
+    for k in &settings {
+        for (w, f) in &plan.references {
+            rows.push(run_one(&cfg, loader, joint, scenario, *k, *w, *f, plan.periods)?);
+            progress(rows.len(), total);
+        }
+    }
+    Ok(rows)
+}
+
+/// The highest swept frequency at which the sensor torque keeps at least -3 dB of the
+/// reference's amplitude and lags less than 90 degrees [Hz], per stiffness setting (the smallest).
+pub fn bandwidth_hz(rows: &[Row]) -> Option<f64> {
+    let mut by_pivot: std::collections::BTreeMap<i64, Vec<&Row>> = Default::default();
+    for r in rows.iter().filter(|r| r.reference == "sine") {
+        by_pivot.entry(r.pivot_mm.map_or(0, |p| (p * 1000.0) as i64)).or_default().push(r);
+    }
+    by_pivot
+        .values()
+        .map(|rs| {
+            rs.iter()
+                .filter(|r| r.gain.is_some_and(|g| g >= 0.707) && r.phase_lag_deg.is_some_and(|p| p.abs() < 90.0))
+                .map(|r| r.frequency_hz)
+                .fold(0.0, f64::max)
+        })
+        .reduce(f64::min)
+}

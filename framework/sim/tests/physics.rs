@@ -1,0 +1,106 @@
+//! The simulated drives and joints: the ELMO profile, limits, and energy conservation.
+
+use jointctl_config::{EffectsConfig, ElmoConfig, EnvironmentConfig};
+use jointctl_sim::elmo::ElmoDrive;
+use jointctl_sim::rng::SplitMix64;
+use jointctl_sim::unit::{Element, Unit};
+
+fn lossless() -> ElmoConfig {
+    ElmoConfig { friction_ka_nm: 0.0, ..ElmoConfig::default() }
+}
+
+#[test]
+fn the_elmo_reaches_its_set_point_without_overshoot_within_its_limits() {
+    // Figure 3.4's experiment: a set-point of 1 rad.
+    let cfg = ElmoConfig::default();
+    let mut d = ElmoDrive::new(cfg, 0.0);
+    d.set_target(1.0);
+    let dt = 0.0005;
+    let (mut max_pos, mut max_vel, mut max_torque): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    let mut reached = None;
+    for i in 0..(3.0 / dt) as usize {
+        d.step(0.0, dt);
+        max_pos = max_pos.max(d.position);
+        max_vel = max_vel.max(d.velocity.abs());
+        max_torque = max_torque.max(d.torque.abs());
+        if reached.is_none() && (d.position - 1.0).abs() < 1e-3 {
+            reached = Some(i as f64 * dt);
+        }
+    }
+    assert!((d.position - 1.0).abs() < 1e-4, "settled at {}", d.position);
+    // The profile never passes the target; the PID follows it within 0.1 % of the step.
+    assert!(d.profile.position <= 1.0 + 1e-12);
+    assert!(max_pos < 1.001, "overshoot to {max_pos}");
+    assert!(max_vel <= cfg.max_velocity_rad_s * 1.05, "velocity {max_vel}");
+    assert!(max_torque <= cfg.torque_limit_nm + 1e-9);
+    // Trapezoid: 0.1 s to reach 3 rad/s, cruise, 0.1 s to stop: about 0.43 s for 1 rad.
+    let t = reached.unwrap();
+    assert!((0.35..0.6).contains(&t), "reached after {t} s");
+}
+
+#[test]
+fn the_torque_limit_holds_against_a_large_load() {
+    let cfg = ElmoConfig { torque_limit_nm: 10.0, ..lossless() };
+    let mut d = ElmoDrive::new(cfg, 0.0);
+    for _ in 0..2000 {
+        d.step(50.0, 0.0005);
+        assert!(d.torque.abs() <= 10.0 + 1e-12);
+    }
+    assert!(d.position < -0.1, "a load beyond the limit pushes the drive back");
+}
+
+#[test]
+fn energy_put_in_by_the_drive_is_stored_in_the_spring_and_the_masses() {
+    // Lossless: no friction, no damping. Work done by the drive's torque equals the kinetic
+    // energy of drive and link plus the spring's potential energy.
+    let cfg = lossless();
+    let mut drive = ElmoDrive::new(cfg, 0.0);
+    let env = EnvironmentConfig::Free { inertia_kgm2: 0.2, damping_nms_per_rad: 0.0, gravity_nm: 0.0 };
+    let k = 150.0;
+    let mut unit = Unit::new(vec!["q".into()], vec![0], vec![vec![2.0]], vec![Element::Linear(k)], None, vec![env], EffectsConfig::default());
+    unit.start(&[0.0]);
+    let mut rng = SplitMix64(1);
+    drive.set_target(0.4);
+    let dt = 0.0001;
+    let mut work = 0.0;
+    for _ in 0..(1.0 / dt) as usize {
+        let mut load = [0.0];
+        unit.step(&[drive.position], &[drive.velocity], &mut load, dt, &mut rng);
+        let v0 = drive.velocity;
+        drive.step(load[0], dt);
+        work += drive.torque * 0.5 * (v0 + drive.velocity) * dt;
+    }
+    let deflection = unit.theta[0] - unit.output[0];
+    let link_velocity = {
+        // Recover the link's velocity from one more step with no drive motion.
+        let before = unit.output[0];
+        let mut load = [0.0];
+        unit.step(&[drive.position], &[drive.velocity], &mut load, dt, &mut rng);
+        (unit.output[0] - before) / dt
+    };
+    let stored = 0.5 * k * deflection * deflection + 0.5 * cfg.inertia_kgm2 * drive.velocity.powi(2) + 0.5 * 0.2 * link_velocity.powi(2);
+    assert!(work > 0.1, "the drive did work: {work} J");
+    let error = (work - stored).abs() / work;
+    assert!(error < 0.03, "work in {work:.4} J, stored {stored:.4} J ({:.1} %)", error * 100.0);
+}
+
+#[test]
+fn the_transmission_reaction_is_the_transpose() {
+    // A 2-DOF unit, outputs clamped: the loads on the drives are M^T tau.
+    let m = vec![vec![0.5, 0.5], vec![0.5, -0.5]];
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let mut unit = Unit::new(
+        vec!["a".into(), "b".into()],
+        vec![0, 1],
+        m,
+        vec![Element::Linear(100.0), Element::Linear(50.0)],
+        None,
+        vec![fixed.clone(), fixed],
+        EffectsConfig::default(),
+    );
+    unit.start(&[0.0, 0.0]);
+    let mut loads = [0.0, 0.0];
+    unit.step(&[0.3, 0.1], &[0.0, 0.0], &mut loads, 0.001, &mut SplitMix64(1));
+    // theta = (0.2, 0.1): torques (20, 5); loads = M^T tau = (0.5*20 + 0.5*5, 0.5*20 - 0.5*5).
+    assert!((loads[0] - 12.5).abs() < 1e-12 && (loads[1] - 7.5).abs() < 1e-12, "{loads:?}");
+}

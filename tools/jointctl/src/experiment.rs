@@ -1,0 +1,220 @@
+//! `jointctl experiment` and `jointctl sim`: the thesis' experiments on the simulated arm.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Subcommand;
+use jointctl_experiments::plot::{COLORS, Series, lines};
+use jointctl_experiments::record::{RecordOptions, record, write_csv};
+use jointctl_experiments::tracking::{Plan, Row, Scenario, bandwidth_hz, run};
+
+#[derive(Subcommand)]
+pub enum ExperimentCommand {
+    /// Chapter 5: torque tracking of one joint, output clamped, at several stiffness settings.
+    TorqueTracking {
+        /// The arm description (simulated backend).
+        config: PathBuf,
+        /// The DOF (e.g. q2).
+        #[arg(long)]
+        joint: String,
+        /// `thesis` (40 Hz, 15/30 ms latency) or `modern` (1 kHz, 1 ms).
+        #[arg(long, default_value = "thesis")]
+        scenario: String,
+        /// Stiffness settings to request [Nm/rad], comma-separated; default: low, middle and
+        /// high of the joint's stiffness limits (VSA joints), or as configured.
+        #[arg(long, value_delimiter = ',')]
+        stiffness: Vec<f64>,
+        /// Print one JSON object `{"rows": [...]}` instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Where to write the table, rows and plots (default reports/torque-tracking-JOINT-SCENARIO).
+        #[arg(long)]
+        report: Option<PathBuf>,
+        /// Fewer references (step, 0.1 Hz sine, 1 Hz sine): a quick look.
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+#[derive(Subcommand)]
+pub enum SimCommand {
+    /// Record a characterisation (sections 3.3.1, 3.4.1, 3.5.1) as CSV for `jointctl fit`.
+    Record {
+        /// The arm description (simulated backend).
+        config: PathBuf,
+        /// The DOF to deflect.
+        #[arg(long)]
+        joint: String,
+        /// Output CSV file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Flow-source amplitude [rad].
+        #[arg(long, default_value_t = 0.1)]
+        amplitude: f64,
+        /// Flow-source frequency [Hz].
+        #[arg(long, default_value_t = 0.2)]
+        frequency: f64,
+        /// Duration [s].
+        #[arg(long, default_value_t = 20.0)]
+        duration: f64,
+        /// Pivot setting to hold [mm] (VSA joints).
+        #[arg(long)]
+        pivot_mm: Option<f64>,
+        /// Deflection direction [deg] (wrist: 0 = q7 only, 90 = q6 only).
+        #[arg(long, default_value_t = 0.0)]
+        angle_deg: f64,
+        /// Sample rate [Hz].
+        #[arg(long, default_value_t = 100.0)]
+        rate: f64,
+    },
+}
+
+fn table(rows: &[Row]) -> String {
+    let mut t = String::from("| joint | scenario | reference | f [Hz] | pivot [mm] | NRMSE observed | NRMSE sensor | phase lag [deg] | gain |\n|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let _ = writeln!(
+            t,
+            "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {} | {} |",
+            r.joint,
+            r.scenario,
+            r.reference,
+            r.frequency_hz,
+            r.pivot_mm.map_or("-".into(), |p| format!("{p:.1}")),
+            r.nrmse_observed,
+            r.nrmse_sensor,
+            r.phase_lag_deg.map_or("-".into(), |p| format!("{p:.1}")),
+            r.gain.map_or("-".into(), |g| format!("{g:.2}"))
+        );
+    }
+    t
+}
+
+fn plots(dir: &Path, rows: &[Row]) -> Result<(), String> {
+    for r in rows {
+        let name = format!(
+            "{}-{}-{}Hz-pivot{}.svg",
+            r.joint,
+            r.reference,
+            r.frequency_hz,
+            r.pivot_mm.map_or("none".into(), |p| format!("{p:.1}"))
+        );
+        let pick = |f: fn(&(f64, f64, f64, f64)) -> f64| r.trace.iter().map(|p| (p.0, f(p))).collect::<Vec<_>>();
+        let title = format!(
+            "{} torque, {} {} Hz, pivot {} mm ({} scenario)",
+            r.joint,
+            r.reference,
+            r.frequency_hz,
+            r.pivot_mm.map_or("-".into(), |p| format!("{p:.1}")),
+            r.scenario
+        );
+        lines(
+            &dir.join(name),
+            &title,
+            "t [s]",
+            "torque [Nm]",
+            &[
+                Series { name: "reference", points: pick(|p| p.1), color: COLORS[0] },
+                Series { name: "observed", points: pick(|p| p.2), color: COLORS[1] },
+                Series { name: "sensor", points: pick(|p| p.3), color: COLORS[2] },
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
+    match cmd {
+        ExperimentCommand::TorqueTracking { config, joint, scenario, stiffness, json, report, quick } => {
+            let Some(scn) = Scenario::parse(&scenario) else {
+                return crate::fail(format!("--scenario must be `thesis` or `modern`, got `{scenario}`"));
+            };
+            let loaded = match jointctl_config::load(&config) {
+                Ok(l) => l,
+                Err(e) => return crate::fail(e),
+            };
+            let settings = if stiffness.is_empty() {
+                let limits = loaded.config.joints.iter().find_map(|j| {
+                    let names = j.dof_names();
+                    names.iter().position(|n| *n == joint).and_then(|i| j.dof_limits()[i]).and_then(|l| l.stiffness_nm_per_rad)
+                });
+                limits.map_or_else(Vec::new, |[lo, hi]| vec![lo, (lo * hi).sqrt(), hi])
+            } else {
+                stiffness
+            };
+            let mut plan = Plan::thesis(settings);
+            if quick {
+                plan.references = vec![(jointctl_control::Waveform::Step, 0.0), (jointctl_control::Waveform::Sine, 0.1), (jointctl_control::Waveform::Sine, 1.0)];
+            }
+            let bar = indicatif::ProgressBar::new((plan.references.len() * plan.stiffness_nm_per_rad.len().max(1)) as u64);
+            bar.set_style(indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} runs {elapsed}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+            bar.set_prefix(format!("torque tracking {joint} ({})", scn.name()));
+            let loader = match crate::experiment_loader(&loaded) {
+                Ok(l) => l,
+                Err(e) => return crate::fail(e),
+            };
+            let rows = match run(&loaded, &loader, &joint, scn, &plan, |done, _| bar.set_position(done as u64)) {
+                Ok(r) => r,
+                Err(e) => {
+                    bar.abandon();
+                    return crate::fail(e);
+                }
+            };
+            bar.finish_and_clear();
+            let dir = report.unwrap_or_else(|| PathBuf::from(format!("reports/torque-tracking-{joint}-{}", scn.name())));
+            let bandwidth = bandwidth_hz(&rows);
+            let md = format!(
+                "# Torque tracking of {joint}, {} scenario\n\nConfig: `{}`. Output clamped (figures 5.1, 5.14). NRMSE = RMSE / reference amplitude; phase lag and gain of the sensor torque at the reference frequency.\n\n{}\nBandwidth (highest swept frequency with gain >= 0.707 and lag < 90 deg, lowest over the stiffness settings): {}\n",
+                scn.name(),
+                config.display(),
+                table(&rows),
+                bandwidth.map_or("-".into(), |b| format!("{b} Hz"))
+            );
+            let written = std::fs::create_dir_all(&dir)
+                .map_err(|e| e.to_string())
+                .and_then(|_| std::fs::write(dir.join("table.md"), &md).map_err(|e| e.to_string()))
+                .and_then(|_| std::fs::write(dir.join("rows.json"), serde_json::json!({ "rows": rows }).to_string()).map_err(|e| e.to_string()))
+                .and_then(|_| plots(&dir, &rows));
+            if let Err(e) = written {
+                return crate::fail(format!("cannot write the report in {}: {e}", dir.display()));
+            }
+            if json {
+                println!("{}", serde_json::json!({ "rows": rows }));
+            } else {
+                print!("{md}");
+                println!("\nReport and plots: {}", dir.display());
+            }
+            ExitCode::SUCCESS
+        }
+    }
+}
+
+pub fn sim(cmd: SimCommand) -> ExitCode {
+    match cmd {
+        SimCommand::Record { config, joint, out, amplitude, frequency, duration, pivot_mm, angle_deg, rate } => {
+            let loaded = match jointctl_config::load(&config) {
+                Ok(l) => l,
+                Err(e) => return crate::fail(e),
+            };
+            let opts = RecordOptions { joint, amplitude_rad: amplitude, frequency_hz: frequency, duration_s: duration, pivot_mm, angle_deg, rate_hz: rate };
+            let loader = match crate::experiment_loader(&loaded) {
+                Ok(l) => l,
+                Err(e) => return crate::fail(e),
+            };
+            let samples = match record(&loaded, &loader, &opts) {
+                Ok(s) => s,
+                Err(e) => return crate::fail(e),
+            };
+            let file = match std::fs::File::create(&out) {
+                Ok(f) => f,
+                Err(e) => return crate::fail(format!("cannot create {}: {e}", out.display())),
+            };
+            let is_wrist = samples.first().is_some_and(|_| opts.angle_deg != 0.0) || angle_deg != 0.0;
+            if let Err(e) = write_csv(&samples, is_wrist.then_some(angle_deg), std::io::BufWriter::new(file)) {
+                return crate::fail(format!("cannot write {}: {e}", out.display()));
+            }
+            eprintln!("{} samples written to {}", samples.len(), out.display());
+            ExitCode::SUCCESS
+        }
+    }
+}
