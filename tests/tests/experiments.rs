@@ -85,3 +85,48 @@ fn the_experiment_command_prints_the_documented_json() {
     let svgs = std::fs::read_dir(&dir).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "svg")).count();
     assert_eq!(svgs, 3);
 }
+
+fn record_with(loaded: &jointctl_config::LoadedConfig, joint: &str, pivot_mm: Option<f64>, angle_deg: f64) -> Vec<jointctl_experiments::record::Sample> {
+    let opts = RecordOptions { joint: joint.into(), amplitude_rad: 0.1, frequency_hz: 0.2, duration_s: 10.0, pivot_mm, angle_deg, rate_hz: 100.0 };
+    record(loaded, &PluginLoader::new([]), &opts).unwrap()
+}
+
+/// Area enclosed by the torque-deflection loop over the last full period [Nm rad].
+fn loop_area(samples: &[jointctl_experiments::record::Sample]) -> f64 {
+    let last = &samples[samples.len() - 500..];
+    last.windows(2).map(|w| 0.5 * (w[0].torque + w[1].torque) * (w[1].deflection - w[0].deflection)).sum::<f64>().abs()
+}
+
+#[test]
+fn a_vsa_recording_reproduces_its_table_at_the_held_pivot() {
+    let loaded = sherpa();
+    let samples = record_with(&loaded, "q2", Some(20.0), 0.0);
+    let spec: jointctl_models::characteristic::CharacteristicSpec =
+        serde_json::from_value(loaded.config.joints[1].params.0["characteristic"].clone()).unwrap();
+    let table = jointctl_models::characteristic::PivotCharacteristic::from_spec(&spec).unwrap();
+    let mut worst: f64 = 0.0;
+    for s in &samples[100..] {
+        assert!((s.pivot_mm - 20.0).abs() < 0.01, "pivot held at 20 mm: {}", s.pivot_mm);
+        worst = worst.max((s.torque - table.evaluate(20.0, s.deflection).torque_nm).abs());
+    }
+    // The torque sensor and the table agree up to the quantised deflection (14 bits).
+    assert!(worst < 0.3, "largest difference from the table {worst} Nm");
+}
+
+#[test]
+fn hysteresis_and_dead_zone_in_the_plant_show_in_the_recording() {
+    let base = sherpa();
+    let plain = loop_area(&record_with(&base, "q4", None, 0.0));
+    let mut with = base.clone();
+    let sim = with.config.joints[2].sim.as_mut().unwrap();
+    sim.effects.hysteresis = Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 1.5 });
+    sim.effects.dead_zone_rad = 0.01;
+    let samples = record_with(&with, "q4", None, 0.0);
+    let area = loop_area(&samples);
+    // Dahl hysteresis of 1.5 Nm over a +-0.1 rad sweep encloses about 4 x 1.5 x 0.1 = 0.6 Nm rad.
+    assert!(plain < 0.05, "the plain elastic joint has no loop: {plain}");
+    assert!(area > 0.3, "hysteresis loop area {area} Nm rad");
+    // In the dead-zone, the elastic element carries no torque: only the hysteresis remains.
+    let inside: Vec<f64> = samples[200..].iter().filter(|s| s.deflection.abs() < 0.005).map(|s| s.torque.abs()).collect();
+    assert!(!inside.is_empty() && inside.iter().all(|t| *t <= 1.5 + 0.2), "{inside:?}");
+}

@@ -280,19 +280,41 @@ impl Arm {
         })
     }
 
-    /// Reads the hardware once and activates every joint with those readings.
+    /// Activates every joint with the hardware's first readings. Readings may not all be there at
+    /// once (a real CAN bus answers only after the first SYNC; a frame may be lost), so it reads,
+    /// holds every drive and tries again, for up to `timeout_s`; joints already activated are not
+    /// activated twice. The error names the joints that never could.
     pub fn activate(&mut self) -> Result<(), ActivateError> {
-        self.hal.read(&mut self.sensor)?;
-        for slot in &mut self.slots {
-            slot.gather(&self.sensor, 0.0, self.dt_s);
-            let raw = slot.raw;
-            slot.joint.activate(&raw).map_err(|e| ActivateError::Plugin {
-                joint: slot.name.clone(),
-                plugin: slot.plugin.clone(),
-                message: e.to_string(),
-            })?;
+        self.activate_within(1.0)
+    }
+
+    /// [`Arm::activate`] with an explicit timeout [s].
+    pub fn activate_within(&mut self, timeout_s: f64) -> Result<(), ActivateError> {
+        let attempts = ((timeout_s * self.rate_hz).ceil() as usize).max(1);
+        let mut done = vec![false; self.slots.len()];
+        let mut last_error = None;
+        for attempt in 0..attempts {
+            self.hal.read(&mut self.sensor)?;
+            for (slot, done) in self.slots.iter_mut().zip(done.iter_mut()).filter(|(_, d)| !**d) {
+                slot.gather(&self.sensor, 0.0, self.dt_s);
+                let raw = slot.raw;
+                match slot.joint.activate(&raw) {
+                    Ok(()) => *done = true,
+                    Err(e) => {
+                        last_error = Some(ActivateError::Plugin { joint: slot.name.clone(), plugin: slot.plugin.clone(), message: e.to_string() })
+                    }
+                }
+            }
+            if done.iter().all(|d| *d) {
+                return Ok(());
+            }
+            if attempt + 1 < attempts {
+                self.actuator.drives.fill(MotorSetpoint::HOLD);
+                self.hal.write(&self.actuator, self.dt_s)?;
+                std::thread::sleep(std::time::Duration::from_secs_f64(self.dt_s.min(0.05)));
+            }
         }
-        Ok(())
+        Err(last_error.unwrap_or(ActivateError::Hal(jointctl_hal::HalIoError::BusFailed { bus: 0 })))
     }
 
     /// First half of a cycle: read the hardware and observe every joint. A joint whose plugin

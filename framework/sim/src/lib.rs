@@ -56,21 +56,20 @@ impl DelayLine {
         self.filled |= self.next == 0;
     }
 
-    /// The newest value no newer than `t` (the oldest kept if all are newer).
+    /// The newest value no newer than `t` (the oldest kept if all are newer). Walks back from
+    /// the newest sample: a latency of L costs L / substep steps.
     fn at(&self, t: f64) -> f64 {
         let n = if self.filled { Self::CAPACITY } else { self.next };
-        let mut best: Option<(f64, f64)> = None;
-        let mut oldest: Option<(f64, f64)> = None;
-        for k in 0..n {
+        let mut oldest = 0.0;
+        for back in 1..=n {
+            let k = (self.next + Self::CAPACITY - back) % Self::CAPACITY;
             let (ts, v) = self.samples[k];
-            if ts <= t + 1e-12 && best.is_none_or(|(b, _)| ts > b) {
-                best = Some((ts, v));
+            if ts <= t + 1e-12 {
+                return v;
             }
-            if oldest.is_none_or(|(o, _)| ts < o) {
-                oldest = Some((ts, v));
-            }
+            oldest = v;
         }
-        best.or(oldest).map_or(0.0, |(_, v)| v)
+        oldest
     }
 }
 
