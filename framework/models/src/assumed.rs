@@ -71,6 +71,7 @@ pub fn shoulder_spec() -> CharacteristicSpec {
                 coefficients: None,
                 positive: Some(round6(through_zero(&xp, &yp, 3).unwrap_or_default())),
                 negative: Some(round6(through_zero(&xn, &yn, 3).unwrap_or_default())),
+                offset_nm: None,
                 stiffness_nm_per_rad: round6(vec![first_order(&x_all, &y_all)])[0],
             }
         })
@@ -101,6 +102,7 @@ pub fn wrist_spec() -> CharacteristicSpec {
                 coefficients: Some(round6(through_zero(&x, &y, 4).unwrap_or_default())),
                 positive: None,
                 negative: None,
+                offset_nm: None,
                 stiffness_nm_per_rad: round6(vec![first_order(&x, &y)])[0],
             });
         }

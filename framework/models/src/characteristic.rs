@@ -52,6 +52,10 @@ pub struct CurveSpec {
     /// Coefficients for deflection < 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub negative: Option<Vec<f64>>,
+    /// Torque at zero deflection [Nm], for a fit not forced through zero (the thesis forces it
+    /// through zero: leave it out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset_nm: Option<f64>,
     /// First-order fit [Nm/rad].
     pub stiffness_nm_per_rad: f64,
 }
@@ -84,6 +88,7 @@ fn err(field: String, message: impl Into<String>) -> SpecError {
 pub struct Curve {
     positive: [f64; MAX_ORDER],
     negative: [f64; MAX_ORDER],
+    offset_nm: f64,
     /// First-order fit [Nm/rad].
     pub stiffness_nm_per_rad: f64,
 }
@@ -113,16 +118,18 @@ impl Curve {
         let mut n = [0.0; MAX_ORDER];
         p[..positive.len().min(MAX_ORDER)].copy_from_slice(&positive[..positive.len().min(MAX_ORDER)]);
         n[..negative.len().min(MAX_ORDER)].copy_from_slice(&negative[..negative.len().min(MAX_ORDER)]);
-        Curve { positive: p, negative: n, stiffness_nm_per_rad }
+        Curve { positive: p, negative: n, offset_nm: 0.0, stiffness_nm_per_rad }
     }
 
-    /// Torque [Nm] at a deflection [rad]. Zero at zero, continuous across the branches.
+    /// Torque [Nm] at a deflection [rad]. The offset (zero unless fitted) at zero, continuous
+    /// across the branches.
     pub fn torque(&self, deflection_rad: f64) -> f64 {
-        if deflection_rad >= 0.0 {
-            horner_through_zero(&self.positive, deflection_rad)
-        } else {
-            horner_through_zero(&self.negative, deflection_rad)
-        }
+        self.offset_nm
+            + if deflection_rad >= 0.0 {
+                horner_through_zero(&self.positive, deflection_rad)
+            } else {
+                horner_through_zero(&self.negative, deflection_rad)
+            }
     }
 
     fn from_spec(s: &CurveSpec, i: usize) -> Result<Curve, SpecError> {
@@ -139,18 +146,23 @@ impl Curve {
         if !(s.stiffness_nm_per_rad.is_finite() && s.stiffness_nm_per_rad > 0.0) {
             return Err(err(at("stiffness_nm_per_rad"), format!("must be finite and > 0, got {}", s.stiffness_nm_per_rad)));
         }
-        match (&s.coefficients, &s.positive, &s.negative) {
+        let offset_nm = match s.offset_nm {
+            Some(o) if !o.is_finite() => return Err(err(at("offset_nm"), "must be finite")),
+            o => o.unwrap_or(0.0),
+        };
+        let curve = match (&s.coefficients, &s.positive, &s.negative) {
             (Some(c), None, None) => {
                 check("coefficients", c)?;
-                Ok(Curve::continuous(c, s.stiffness_nm_per_rad))
+                Curve::continuous(c, s.stiffness_nm_per_rad)
             }
             (None, Some(p), Some(n)) => {
                 check("positive", p)?;
                 check("negative", n)?;
-                Ok(Curve::branched(p, n, s.stiffness_nm_per_rad))
+                Curve::branched(p, n, s.stiffness_nm_per_rad)
             }
-            _ => Err(err(format!("curves[{i}]"), "give either `coefficients`, or both `positive` and `negative`")),
-        }
+            _ => return Err(err(format!("curves[{i}]"), "give either `coefficients`, or both `positive` and `negative`")),
+        };
+        Ok(Curve { offset_nm, ..curve })
     }
 }
 

@@ -52,8 +52,8 @@ fn two_settings() -> PivotCharacteristic {
     PivotCharacteristic::from_spec(&CharacteristicSpec {
         source: Source::Assumed,
         curves: vec![
-            CurveSpec { pivot_mm: Some(0.0), angle_deg: None, coefficients: None, positive: Some(vec![100.0]), negative: Some(vec![80.0]), stiffness_nm_per_rad: 90.0 },
-            CurveSpec { pivot_mm: Some(10.0), angle_deg: None, coefficients: Some(vec![20.0, 0.0, 100.0]), positive: None, negative: None, stiffness_nm_per_rad: 30.0 },
+            CurveSpec { pivot_mm: Some(0.0), angle_deg: None, coefficients: None, positive: Some(vec![100.0]), negative: Some(vec![80.0]), offset_nm: None, stiffness_nm_per_rad: 90.0 },
+            CurveSpec { pivot_mm: Some(10.0), angle_deg: None, coefficients: Some(vec![20.0, 0.0, 100.0]), positive: None, negative: None, offset_nm: None, stiffness_nm_per_rad: 30.0 },
         ],
     })
     .unwrap()

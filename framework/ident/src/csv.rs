@@ -1,0 +1,139 @@
+//! Measured experiments as CSV with a header. Required columns `t` [s], `deflection` [rad],
+//! `torque` [Nm]; optional `pivot_mm`, `angle_deg`, `motor_position` [rad], `reference_torque`
+//! [Nm] (an empty optional cell is "not given"). Unknown columns are ignored with a note. Every
+//! error names the file, line and column.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A problem in a data file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DataError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line (0: the whole file).
+    pub line: usize,
+    /// The column's name, if one.
+    pub column: Option<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for DataError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}: ", self.file.display(), self.line)?;
+        if let Some(c) = &self.column {
+            write!(f, "column `{c}`: ")?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for DataError {}
+
+/// One experiment, column by column (SI units; pivot in mm, angle in degrees).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Data {
+    /// Time [s], strictly increasing.
+    pub t: Vec<f64>,
+    /// Deflection [rad].
+    pub deflection: Vec<f64>,
+    /// Torque [Nm].
+    pub torque: Vec<f64>,
+    /// Pivot setting [mm] per sample (NaN when not given).
+    pub pivot_mm: Vec<f64>,
+    /// Deflection direction [deg] per sample (NaN when not given).
+    pub angle_deg: Vec<f64>,
+    /// Motor position [rad] (NaN when not given).
+    pub motor_position: Vec<f64>,
+    /// Reference torque [Nm] (NaN when not given).
+    pub reference_torque: Vec<f64>,
+    /// Notes for the user (ignored columns).
+    pub notes: Vec<String>,
+}
+
+impl Data {
+    /// Samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+}
+
+const KNOWN: [&str; 7] = ["t", "deflection", "torque", "pivot_mm", "angle_deg", "motor_position", "reference_torque"];
+
+/// Reads a CSV file.
+pub fn read(path: &Path) -> Result<Data, DataError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DataError { file: path.into(), line: 0, column: None, message: format!("cannot read: {e}") })?;
+    parse(&text, path)
+}
+
+/// Parses CSV text; `file` names it in errors.
+///
+/// ```
+/// let d = jointctl_ident::csv::parse("t,deflection,torque,extra\n0,0,0,x\n0.01,0.001,0.1,y\n", "a.csv".as_ref()).unwrap();
+/// assert_eq!(d.len(), 2);
+/// assert_eq!(d.notes, ["column `extra` is not used"]);
+/// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,zero\n", "a.csv".as_ref()).unwrap_err();
+/// assert_eq!(e.to_string(), "a.csv:2: column `torque`: `zero` is not a number");
+/// ```
+pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
+    let err = |line: usize, column: Option<&str>, message: String| DataError { file: file.into(), line, column: column.map(str::to_string), message };
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let Some((h, header)) = lines.next() else {
+        return Err(err(0, None, "the file is empty; expected a header `t,deflection,torque,...` and samples".into()));
+    };
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let col = |name: &str| names.iter().position(|n| *n == name);
+    for required in ["t", "deflection", "torque"] {
+        if col(required).is_none() {
+            return Err(err(h + 1, Some(required), format!("missing required column (the header is `{header}`)")));
+        }
+    }
+    let mut data = Data::default();
+    for n in &names {
+        if !KNOWN.contains(n) {
+            data.notes.push(format!("column `{n}` is not used"));
+        }
+    }
+    let idx: Vec<Option<usize>> = KNOWN.iter().map(|k| col(k)).collect();
+    for (i, line) in lines {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let mut values = [f64::NAN; 7];
+        for (k, c) in idx.iter().enumerate() {
+            let Some(c) = c else { continue };
+            let cell = cells.get(*c).copied().unwrap_or("");
+            if cell.is_empty() {
+                if k < 3 {
+                    return Err(err(i + 1, Some(KNOWN[k]), "empty cell in a required column".into()));
+                }
+                continue;
+            }
+            let v: f64 = cell.parse().map_err(|_| err(i + 1, Some(KNOWN[k]), format!("`{cell}` is not a number")))?;
+            if !v.is_finite() {
+                return Err(err(i + 1, Some(KNOWN[k]), format!("`{cell}` is not a finite number")));
+            }
+            values[k] = v;
+        }
+        if let Some(prev) = data.t.last()
+            && values[0] <= *prev
+        {
+            return Err(err(i + 1, Some("t"), format!("time {} does not increase (previous {prev})", values[0])));
+        }
+        data.t.push(values[0]);
+        data.deflection.push(values[1]);
+        data.torque.push(values[2]);
+        data.pivot_mm.push(values[3]);
+        data.angle_deg.push(values[4]);
+        data.motor_position.push(values[5]);
+        data.reference_torque.push(values[6]);
+    }
+    if data.is_empty() {
+        return Err(err(h + 1, None, "the file has a header but no samples".into()));
+    }
+    Ok(data)
+}

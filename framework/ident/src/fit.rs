@@ -1,0 +1,221 @@
+//! `jointctl fit`: the thesis' curve-fitting step (sections 3.3.2, 3.4.2, 3.5.2), reproducible.
+//! Per stiffness setting (`pivot_mm`) and deflection direction (`angle_deg`): moving-average
+//! smoothing, a polynomial fit of a chosen order or the lowest order within 2 % of the best
+//! held-out error, optionally separate positive/negative branches, optionally through zero, and
+//! the first-order fit used as the joint's stiffness (section 4.2).
+
+use jointctl_models::characteristic::{CharacteristicSpec, CurveSpec, MAX_ORDER, Source};
+use jointctl_models::fit::{FitError, polynomial, through_zero};
+
+use crate::csv::Data;
+
+/// The polynomial order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Order {
+    /// This order.
+    Fixed(usize),
+    /// The lowest order up to this one whose held-out RMSE is within 2 % of the best.
+    Auto(usize),
+}
+
+/// How to fit.
+#[derive(Clone, Copy, Debug)]
+pub struct FitOptions {
+    /// Moving-average window [samples]; 1 = none (the thesis used 8 for the shoulder, 5 for the wrist).
+    pub smoothing_window: usize,
+    /// Polynomial order.
+    pub order: Order,
+    /// Separate fits for positive and negative deflection (the shoulder's best fit).
+    pub branches: bool,
+    /// Force zero torque at zero deflection (the thesis does).
+    pub through_zero: bool,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions { smoothing_window: 1, order: Order::Auto(MAX_ORDER), branches: false, through_zero: true }
+    }
+}
+
+/// The fit of one stiffness setting and direction.
+#[derive(Clone, Debug)]
+pub struct GroupFit {
+    /// Pivot setting [mm], if the data has one.
+    pub pivot_mm: Option<f64>,
+    /// Direction [deg], if the data has one.
+    pub angle_deg: Option<f64>,
+    /// Samples in the group.
+    pub samples: usize,
+    /// Polynomial order used.
+    pub order: usize,
+    /// The fitted curve in the plugins' YAML form.
+    pub curve: CurveSpec,
+    /// RMSE of the curve on the (smoothed) samples [Nm].
+    pub rmse_nm: f64,
+    /// Largest error [Nm].
+    pub max_error_nm: f64,
+    /// RMSE of the positive and negative branches [Nm].
+    pub branch_rmse_nm: (f64, f64),
+    /// Smoothed (deflection, torque) points, for plots.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A fit of a whole experiment.
+#[derive(Clone, Debug)]
+pub struct FitResult {
+    /// Per group.
+    pub groups: Vec<GroupFit>,
+    /// The characteristic in the plugins' YAML form.
+    pub spec: CharacteristicSpec,
+}
+
+fn key(v: f64) -> Option<i64> {
+    v.is_finite().then(|| (v * 1000.0).round() as i64)
+}
+
+fn smooth(v: &[f64], window: usize) -> Vec<f64> {
+    if window <= 1 {
+        return v.to_vec();
+    }
+    let h = window / 2;
+    (0..v.len())
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(h), (i + window - h).min(v.len()));
+            v[a..b].iter().sum::<f64>() / (b - a) as f64
+        })
+        .collect()
+}
+
+/// Evaluates `[c0?, c1, c2, ...]`.
+fn eval(coefs: &[f64], with_constant: bool, x: f64) -> f64 {
+    let (c0, rest) = if with_constant { (coefs[0], &coefs[1..]) } else { (0.0, coefs) };
+    c0 + rest.iter().enumerate().map(|(k, c)| c * x.powi(k as i32 + 1)).sum::<f64>()
+}
+
+fn fit_poly(x: &[f64], y: &[f64], order: usize, through: bool) -> Result<Vec<f64>, FitError> {
+    if through { through_zero(x, y, order) } else { polynomial(x, y, order) }
+}
+
+fn rmse_of(x: &[f64], y: &[f64], coefs: &[f64], with_constant: bool) -> (f64, f64) {
+    let mut sq = 0.0;
+    let mut worst: f64 = 0.0;
+    for (xi, yi) in x.iter().zip(y) {
+        let e = yi - eval(coefs, with_constant, *xi);
+        sq += e * e;
+        worst = worst.max(e.abs());
+    }
+    ((sq / x.len().max(1) as f64).sqrt(), worst)
+}
+
+/// The order to use: fixed, or chosen on held-out samples (every 5th sample held out).
+fn choose_order(x: &[f64], y: &[f64], order: Order, through: bool) -> usize {
+    let Order::Auto(max) = order else {
+        let Order::Fixed(n) = order else { unreachable!() };
+        return n;
+    };
+    let (mut tx, mut ty, mut vx, mut vy) = (vec![], vec![], vec![], vec![]);
+    for (i, (a, b)) in x.iter().zip(y).enumerate() {
+        if i % 5 == 4 {
+            vx.push(*a);
+            vy.push(*b);
+        } else {
+            tx.push(*a);
+            ty.push(*b);
+        }
+    }
+    let scores: Vec<(usize, f64)> = (1..=max.min(MAX_ORDER))
+        .filter_map(|n| fit_poly(&tx, &ty, n, through).ok().map(|c| (n, rmse_of(&vx, &vy, &c, !through).0)))
+        .collect();
+    let best = scores.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+    scores.iter().find(|s| s.1 <= best * 1.02).map_or(1, |s| s.0)
+}
+
+/// Fits every stiffness setting and direction of an experiment.
+pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, String> {
+    if let Order::Fixed(n) | Order::Auto(n) = opts.order
+        && !(1..=MAX_ORDER).contains(&n)
+    {
+        return Err(format!("the polynomial order must be 1-{MAX_ORDER}, got {n}"));
+    }
+    // Groups in the order of their pivot setting, then direction.
+    let mut keys: Vec<(Option<i64>, Option<i64>)> = Vec::new();
+    for i in 0..data.len() {
+        let k = (key(data.pivot_mm[i]), key(data.angle_deg[i]));
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys.sort();
+    let mut groups = Vec::new();
+    for k in &keys {
+        let idx: Vec<usize> = (0..data.len()).filter(|i| (key(data.pivot_mm[*i]), key(data.angle_deg[*i])) == *k).collect();
+        let x = smooth(&idx.iter().map(|i| data.deflection[*i]).collect::<Vec<_>>(), opts.smoothing_window);
+        let y = smooth(&idx.iter().map(|i| data.torque[*i]).collect::<Vec<_>>(), opts.smoothing_window);
+        let label = format!(
+            "pivot {} mm, angle {} deg",
+            k.0.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0)),
+            k.1.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0))
+        );
+        let stiffness = through_zero(&x, &y, 1).map_err(|e| format!("{label}: {e}"))?[0];
+        let through = opts.through_zero;
+        let (curve, order, rmse, worst, branch_rmse) = if opts.branches {
+            let split = |pos: bool| -> (Vec<f64>, Vec<f64>) { x.iter().zip(&y).filter(|(a, _)| (**a >= 0.0) == pos).map(|(a, b)| (*a, *b)).unzip() };
+            let (px, py) = split(true);
+            let (nx, ny) = split(false);
+            let order = choose_order(&x, &y, opts.order, through);
+            let cp = fit_poly(&px, &py, order, through).map_err(|e| format!("{label}, positive deflection: {e}"))?;
+            let cn = fit_poly(&nx, &ny, order, through).map_err(|e| format!("{label}, negative deflection: {e}"))?;
+            let (rp, wp) = rmse_of(&px, &py, &cp, !through);
+            let (rn, wn) = rmse_of(&nx, &ny, &cn, !through);
+            let n = (px.len() + nx.len()).max(1) as f64;
+            let rmse = ((rp * rp * px.len() as f64 + rn * rn * nx.len() as f64) / n).sqrt();
+            let (offset, cp, cn) = if through {
+                (None, cp, cn)
+            } else {
+                // One offset for the curve: the mean of the branches' constants.
+                (Some(0.5 * (cp[0] + cn[0])), cp[1..].to_vec(), cn[1..].to_vec())
+            };
+            let curve = CurveSpec {
+                pivot_mm: k.0.map(|v| v as f64 / 1000.0),
+                angle_deg: k.1.map(|v| v as f64 / 1000.0),
+                coefficients: None,
+                positive: Some(cp),
+                negative: Some(cn),
+                offset_nm: offset,
+                stiffness_nm_per_rad: stiffness,
+            };
+            (curve, order, rmse, wp.max(wn), (rp, rn))
+        } else {
+            let order = choose_order(&x, &y, opts.order, through);
+            let c = fit_poly(&x, &y, order, through).map_err(|e| format!("{label}: {e}"))?;
+            let (rmse, worst) = rmse_of(&x, &y, &c, !through);
+            let pos: (Vec<f64>, Vec<f64>) = x.iter().zip(&y).filter(|(a, _)| **a >= 0.0).map(|(a, b)| (*a, *b)).unzip();
+            let neg: (Vec<f64>, Vec<f64>) = x.iter().zip(&y).filter(|(a, _)| **a < 0.0).map(|(a, b)| (*a, *b)).unzip();
+            let branch = (rmse_of(&pos.0, &pos.1, &c, !through).0, rmse_of(&neg.0, &neg.1, &c, !through).0);
+            let (offset, coefs) = if through { (None, c) } else { (Some(c[0]), c[1..].to_vec()) };
+            let curve = CurveSpec {
+                pivot_mm: k.0.map(|v| v as f64 / 1000.0),
+                angle_deg: k.1.map(|v| v as f64 / 1000.0),
+                coefficients: Some(coefs),
+                positive: None,
+                negative: None,
+                offset_nm: offset,
+                stiffness_nm_per_rad: stiffness,
+            };
+            (curve, order, rmse, worst, branch)
+        };
+        groups.push(GroupFit {
+            pivot_mm: curve.pivot_mm,
+            angle_deg: curve.angle_deg,
+            samples: idx.len(),
+            order,
+            curve,
+            rmse_nm: rmse,
+            max_error_nm: worst,
+            branch_rmse_nm: branch_rmse,
+            points: x.into_iter().zip(y).collect(),
+        });
+    }
+    let spec = CharacteristicSpec { source: Source::Measured, curves: groups.iter().map(|g| g.curve.clone()).collect() };
+    Ok(FitResult { groups, spec })
+}
