@@ -113,11 +113,42 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
         };
         ConfigError { file: source.file.clone(), line, column, field, message }
     })?;
+    let mut config = config;
+    let mut include_errors = Vec::new();
+    for (j, joint) in config.joints.iter_mut().enumerate() {
+        if let Err((field, message)) = include_params(&source, &mut joint.params) {
+            include_errors.push(source.error(&format!("joints[{j}].params.{field}"), message));
+        }
+    }
+    if !include_errors.is_empty() {
+        return Err(ConfigErrors(include_errors));
+    }
     let problems = validate::validate(&config);
     if !problems.is_empty() {
         return Err(ConfigErrors(problems.into_iter().map(|(p, m)| source.error(&p, m)).collect()));
     }
     Ok(LoadedConfig { config, source })
+}
+
+/// `params: {include: FILE, ...}`: the YAML mapping in FILE (relative to the config) is merged
+/// into the params; keys written next to `include` win. So that `jointctl fit --out FILE` feeds a
+/// joint without editing the arm description.
+fn include_params(source: &ConfigSource, params: &mut Params) -> Result<(), (String, String)> {
+    let Some(obj) = params.0.as_object_mut() else { return Ok(()) };
+    let Some(include) = obj.remove("include") else { return Ok(()) };
+    let Some(rel) = include.as_str() else {
+        return Err(("include".into(), "must be a file path".into()));
+    };
+    let path = source.resolve(Path::new(rel));
+    let text = std::fs::read_to_string(&path).map_err(|e| ("include".into(), format!("cannot read {}: {e}", path.display())))?;
+    let included: Params = serde_yaml::from_str(&text).map_err(|e| ("include".into(), format!("{}: {e}", path.display())))?;
+    let serde_json::Value::Object(map) = included.0 else {
+        return Err(("include".into(), format!("{} must hold a YAML mapping", path.display())));
+    };
+    for (k, v) in map {
+        obj.entry(k).or_insert(v);
+    }
+    Ok(())
 }
 
 /// The JSON Schema of the arm description, for editors.

@@ -363,6 +363,9 @@ pub enum EnvironmentConfig {
         /// Deflection direction for a 2-DOF joint [deg] (0 = the second DOF only, 90 = the first).
         #[serde(default)]
         angle_deg: f64,
+        /// The source starts moving at this simulated time [s] (the joint at rest before).
+        #[serde(default)]
+        start_s: f64,
     },
 }
 

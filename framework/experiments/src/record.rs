@@ -50,8 +50,12 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     let (j, i) = locate(&cfg, &opts.joint)?;
     let n = cfg.config.joints[j].dof_names().len();
     cfg.config.rate_hz = opts.rate_hz;
-    let flow = EnvironmentConfig::Flow { amplitude_rad: opts.amplitude_rad, frequency_hz: opts.frequency_hz, angle_deg: opts.angle_deg };
-    if n == 2 && matches!(cfg.config.joints[j].sim.as_ref().and_then(|s| s.element.as_ref()), Some(jointctl_config::ElementSimConfig::WristTable)) {
+    // The pivot settles first (3 s), with the joint at rest; the flow starts when the recording does.
+    let settle_s = if opts.pivot_mm.is_some() { 3.0 } else { 0.0 };
+    let flow = EnvironmentConfig::Flow { amplitude_rad: opts.amplitude_rad, frequency_hz: opts.frequency_hz, angle_deg: opts.angle_deg, start_s: settle_s };
+    // The 2-DOF wrist is deflected along a direction (both DOFs move); any other joint's DOF alone.
+    let directional = n == 2 && matches!(cfg.config.joints[j].sim.as_ref().and_then(|s| s.element.as_ref()), Some(jointctl_config::ElementSimConfig::WristTable));
+    if directional {
         // The wrist is deflected along a direction: both DOFs move.
         if let Some(sim) = cfg.config.joints[j].sim.as_mut() {
             sim.environment = Some(flow);
@@ -64,7 +68,7 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     if let (Some(p), Some(pivot)) = (opts.pivot_mm, cfg.config.joints[j].sim.as_ref().and_then(|s| s.pivot.clone())) {
         let d = jointctl_hal_index(&cfg, &pivot.drive)?;
         sim_hal.set_drive_target(d, (p - pivot.offset_mm) / pivot.mm_per_rad);
-        sim_hal.settle_drives(3.0);
+        sim_hal.settle_drives(settle_s);
     }
     let first_drive = cfg.config.joints[j].sim.as_ref().and_then(|s| s.drives.first().cloned()).unwrap_or_default();
     let first_drive = jointctl_hal_index(&cfg, &first_drive)?;
@@ -72,7 +76,7 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     let mut arm = Arm::build(&cfg, loader, Box::new(sim.clone()))?;
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
     let dof = arm_dof(&arm, &opts.joint);
-    let two = n == 2 && arm.slots.iter().any(|s| s.dofs().len() == 2 && s.dofs().contains(&dof));
+    let two = directional;
     let (sa, ca) = (opts.angle_deg.to_radians().sin(), opts.angle_deg.to_radians().cos());
     let steps = (opts.duration_s * opts.rate_hz).round() as usize;
     let mut out = Vec::with_capacity(steps);
@@ -96,7 +100,11 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
         } else {
             st[dof].deflection().unwrap_or(f64::NAN)
         };
-        out.push(Sample { t, deflection, torque, pivot_mm: st[dof].pivot().unwrap_or(f64::NAN), motor_position: motor });
+        // A cycle whose deflection the observer could not form (a reading not usable this
+        // cycle) is not a measurement.
+        if deflection.is_finite() && torque.is_finite() {
+            out.push(Sample { t, deflection, torque, pivot_mm: st[dof].pivot().unwrap_or(f64::NAN), motor_position: motor });
+        }
     }
     Ok(out)
 }

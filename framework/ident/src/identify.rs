@@ -147,6 +147,8 @@ struct Spec {
 
 /// Prepared samples of one part.
 struct Part {
+    /// Deflections before this part (the hysteresis state carries over).
+    warm: Vec<f64>,
     t: Vec<f64>,
     d: Vec<f64>,
     v: Vec<f64>,
@@ -161,7 +163,7 @@ impl Part {
 
     fn every(&self, k: usize) -> Part {
         let pick = |v: &Vec<f64>| v.iter().step_by(k.max(1)).copied().collect();
-        Part { t: pick(&self.t), d: pick(&self.d), v: pick(&self.v), tau: pick(&self.tau), pivot: pick(&self.pivot) }
+        Part { warm: pick(&self.warm), t: pick(&self.t), d: pick(&self.d), v: pick(&self.v), tau: pick(&self.tau), pivot: pick(&self.pivot) }
     }
 }
 
@@ -242,7 +244,9 @@ impl Model<'_> {
             names.push("k3_nm_per_rad3");
         }
         if let Some(l) = spec.hysteresis {
-            cols.push(dahl_unit(&p.d, l));
+            let mut history = p.warm.clone();
+            history.extend_from_slice(&p.d);
+            cols.push(dahl_unit(&history, l)[p.warm.len()..].to_vec());
             names.push("limit_nm");
         }
         if let Some(f) = spec.vibration {
@@ -486,7 +490,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
     let pivot: Vec<f64> = keep.iter().map(|i| if data.pivot_mm[*i].is_finite() { data.pivot_mm[*i] } else { 0.0 }).collect();
     let t_split = t[0] + opts.train_fraction * (t[t.len() - 1] - t[0]);
     let split = t.partition_point(|x| *x < t_split);
-    let part = |r: std::ops::Range<usize>| Part { t: t[r.clone()].to_vec(), d: d[r.clone()].to_vec(), v: v[r.clone()].to_vec(), tau: tau[r.clone()].to_vec(), pivot: pivot[r].to_vec() };
+    let part = |r: std::ops::Range<usize>| Part { warm: d[..r.start].to_vec(), t: t[r.clone()].to_vec(), d: d[r.clone()].to_vec(), v: v[r.clone()].to_vec(), tau: tau[r.clone()].to_vec(), pivot: pivot[r].to_vec() };
     let train = part(0..split);
     let test = part(split..t.len());
     if train.len() < 30 || test.len() < 10 {

@@ -152,9 +152,12 @@ impl Unit {
     /// Where a flow-source environment puts output `i` at time `t`.
     fn flow(&self, i: usize, t: f64) -> Option<f64> {
         match self.environments[i] {
-            EnvironmentConfig::Flow { amplitude_rad, frequency_hz, angle_deg } => {
-                let s = amplitude_rad * (std::f64::consts::TAU * frequency_hz * t).sin();
-                Some(if self.dof() == 2 {
+            EnvironmentConfig::Flow { amplitude_rad, frequency_hz, angle_deg, start_s } => {
+                let s = if t < start_s { 0.0 } else { amplitude_rad * (std::f64::consts::TAU * frequency_hz * (t - start_s)).sin() };
+                // A direction only when both DOFs are moved (the wrist); a flow on one DOF of a
+                // unit (the shoulder's q2) moves that DOF alone.
+                let directional = self.dof() == 2 && self.environments.iter().all(|e| matches!(e, EnvironmentConfig::Flow { .. }));
+                Some(if directional {
                     // Direction angle_deg: 0 = the second DOF (q7) only, 90 = the first (q6).
                     let a = angle_deg.to_radians();
                     if i == 0 { s * a.sin() } else { s * a.cos() }

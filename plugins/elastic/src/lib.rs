@@ -17,6 +17,7 @@ use jointctl_api::{
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
 use jointctl_control::{LinearTransmission, Pi, PiGains, VelocityEstimator};
+use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
 use serde::Deserialize;
 
 /// Encoder role 0: the absolute encoder on the joint output.
@@ -32,7 +33,12 @@ const MOTOR: usize = 0;
 #[serde(deny_unknown_fields)]
 struct Params {
     /// First-order fit of the torque-deflection characteristic [Nm/rad] (section 3.3.2).
-    stiffness_nm_per_rad: f64,
+    #[serde(default)]
+    stiffness_nm_per_rad: Option<f64>,
+    /// A fitted characteristic (`jointctl fit`, one curve) instead of the linear stiffness: the
+    /// torque from the curve, the stiffness from its first-order fit (section 4.2).
+    #[serde(default)]
+    characteristic: Option<CharacteristicSpec>,
     /// Ideal output rad per motor rad: 2 for the elbow (eq. 3.1), 1 for q5 (assumption: the
     /// drive reports the belt output; the thesis gives no ratio).
     output_per_motor: f64,
@@ -56,6 +62,8 @@ fn default_max_age() -> f64 {
 /// A joint with a linear elastic element.
 pub struct ElasticJoint {
     params: Params,
+    stiffness_nm_per_rad: f64,
+    curve: Option<PivotCharacteristic>,
     transmission: LinearTransmission,
     velocity: VelocityEstimator,
     pi: Pi,
@@ -76,7 +84,15 @@ impl ElasticJoint {
 impl JointPlugin for ElasticJoint {
     fn create(params_json: &str) -> Result<Self, PluginError> {
         let p: Params = params::parse(params_json)?;
-        params::positive("stiffness_nm_per_rad", p.stiffness_nm_per_rad)?;
+        let curve = match &p.characteristic {
+            Some(spec) => Some(PivotCharacteristic::from_spec(spec).map_err(|e| PluginError::at(format!("characteristic.{}", e.field), e.message))?),
+            None => None,
+        };
+        let stiffness = match (p.stiffness_nm_per_rad, &curve) {
+            (Some(k), None) => params::positive("stiffness_nm_per_rad", k)?,
+            (None, Some(c)) => c.stiffness(0.0),
+            _ => return Err(PluginError::new("give either `stiffness_nm_per_rad` (linear) or `characteristic` (a fitted curve)")),
+        };
         if !(p.output_per_motor.is_finite() && p.output_per_motor != 0.0) {
             return Err(PluginError::at("output_per_motor", "must be finite and non-zero"));
         }
@@ -86,6 +102,8 @@ impl JointPlugin for ElasticJoint {
         }
         p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
         Ok(ElasticJoint {
+            stiffness_nm_per_rad: stiffness,
+            curve,
             transmission: LinearTransmission::new(p.output_per_motor),
             velocity: VelocityEstimator::new(0.5),
             pi: Pi::new(p.position_pi),
@@ -138,13 +156,17 @@ impl Observer for ElasticJoint {
         let q_for_deflection = raw.encoder(OUTPUT_ENCODER).usable(age);
         if let Some(q) = q {
             s.set_position(q);
-            s.set_stiffness(self.params.stiffness_nm_per_rad);
+            s.set_stiffness(self.stiffness_nm_per_rad);
         }
         if let (Some(q), Some(input)) = (q_for_deflection, input) {
             let deflection = self.deflection(q, input);
             s.set_deflection(deflection);
-            // Section 3.3.2: first-order fit, torque = K * deflection.
-            s.set_torque(self.params.stiffness_nm_per_rad * deflection);
+            // Section 3.3.2: first-order fit, torque = K * deflection (or the fitted curve).
+            let torque = match &self.curve {
+                Some(c) => c.evaluate(0.0, deflection).torque_nm,
+                None => self.stiffness_nm_per_rad * deflection,
+            };
+            s.set_torque(torque);
         }
         if let Some(v) = self.velocity.update(q, raw.dt_s) {
             s.set_velocity(v);

@@ -2,6 +2,7 @@
 
 mod cmd;
 mod experiment;
+mod ident;
 mod inspect;
 
 use std::path::PathBuf;
@@ -53,6 +54,10 @@ enum Command {
         #[command(subcommand)]
         command: experiment::SimCommand,
     },
+    /// Fit torque-deflection characteristics to a measured experiment (the thesis' Matlab step).
+    Fit(ident::FitArgs),
+    /// Show what a joint model gets wrong on measured data, name the cause, measure the gain.
+    Identify(ident::IdentifyArgs),
     /// Send a command to a running arm (exit 0 accepted, 1 refused or no runtime).
     Cmd(cmd::CmdArgs),
     /// Read a running arm's shared memory from this separate process.
@@ -172,6 +177,8 @@ fn main() -> ExitCode {
         }
         Command::Inspect { command } => inspect::run(command),
         Command::Cmd(args) => cmd::run(args),
+        Command::Fit(args) => ident::run_fit(args),
+        Command::Identify(args) => ident::run_identify(args),
         Command::Experiment { command } => experiment::experiment(command),
         Command::Sim { command } => experiment::sim(command),
     }

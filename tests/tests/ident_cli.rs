@@ -1,0 +1,136 @@
+//! `jointctl fit` and `jointctl identify` end to end.
+
+use std::process::Command;
+
+use jointctl_experiments::record::{RecordOptions, record, write_csv};
+use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
+use jointctl_runtime::PluginLoader;
+use jointctl_tests::{jointctl, scratch};
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+#[test]
+fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
+    let out = Command::new(jointctl())
+        .args(["identify", "--data"])
+        .arg(root().join("tests/data/q4_worn_elbow.csv"))
+        .arg("--config")
+        .arg(root().join("configs/sherpa_arm.yaml"))
+        .args(["--joint", "q4", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("exactly one JSON object");
+    let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+    assert_eq!(keys, ["samples", "dropped_samples", "rmse_before", "rmse_after", "causes"]);
+    assert_eq!(v["samples"], 4000);
+    let first = &v["causes"][0];
+    let ckeys: Vec<&str> = first.as_object().unwrap().keys().map(String::as_str).collect();
+    assert_eq!(ckeys, ["effect", "params", "rmse_gain", "evidence"]);
+    assert_eq!(first["effect"], "hysteresis");
+    let limit = first["params"]["limit_nm"].as_f64().unwrap();
+    assert!((limit - 1.2).abs() < 0.2, "limit {limit} Nm, the plant has 1.2");
+    let (before, after) = (v["rmse_before"].as_f64().unwrap(), v["rmse_after"].as_f64().unwrap());
+    assert!(after < before / 5.0, "{before} -> {after}");
+}
+
+#[test]
+fn identify_finds_an_effect_switched_on_in_the_simulated_plant_but_not_in_the_config() {
+    // Play (a dead-zone of 0.01 rad) in the q5 plant; the configured model is the linear
+    // 70.0966 Nm/rad. (Viscous friction would not do here: eq. 3.5's arctan friction in the
+    // baseline becomes viscous friction for a small k_b, as the thesis notes in section 3.5.)
+    let mut loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
+    let q5 = loaded.config.joints.iter_mut().find(|j| j.name == "q5").unwrap();
+    q5.sim.as_mut().unwrap().effects.dead_zone_rad = 0.01;
+    let opts = RecordOptions { joint: "q5".into(), amplitude_rad: 0.08, frequency_hz: 0.3, duration_s: 40.0, pivot_mm: None, angle_deg: 0.0, rate_hz: 100.0 };
+    let samples = record(&loaded, &PluginLoader::new([]), &opts).unwrap();
+    let mut csv = Vec::new();
+    write_csv(&samples, None, &mut csv).unwrap();
+    let data = jointctl_ident::csv::parse(std::str::from_utf8(&csv).unwrap(), "q5.csv".as_ref()).unwrap();
+    let baseline = BaselineModel::Given(Box::new(|d, _| 70.0966 * d));
+    let report = identify(&data, &IdentifyOptions { baseline, ..IdentifyOptions::default() }).unwrap();
+    let first = report.causes.first().expect("a cause");
+    assert_eq!(first.effect, "dead_zone", "{:?}", report.causes);
+    let w = first.params["half_width_rad"];
+    assert!((w - 0.01).abs() / 0.01 < 0.2, "half width {w}");
+    assert!(report.rmse_after < report.rmse_before / 3.0);
+}
+
+#[test]
+fn fit_output_feeds_the_runtime_through_include_without_editing() {
+    let dir = scratch("fit-include");
+    let fitted = dir.join("q4_fit.yaml");
+    let out = Command::new(jointctl())
+        .arg("fit")
+        .arg(root().join("tests/data/q4_worn_elbow.csv"))
+        .args(["--order", "3", "--out"])
+        .arg(&fitted)
+        .args(["--report"])
+        .arg(dir.join("plots"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = String::from_utf8_lossy(&out.stderr);
+    assert!(table.contains("| - | - | 4000 | 3 |"), "{table}");
+    assert!(dir.join("plots/fit-pivotnone-anglenone.svg").exists());
+    // The arm description includes the fitted file instead of the linear stiffness.
+    let cfg = std::fs::read_to_string(root().join("configs/sherpa_arm.yaml")).unwrap().replacen(
+        "      stiffness_nm_per_rad: 113.78                                 # section 3.3.2, elbow",
+        &format!("      include: {}", fitted.display()),
+        1,
+    );
+    let path = dir.join("arm.yaml");
+    std::fs::write(&path, cfg).unwrap();
+    let loaded = jointctl_config::load(&path).unwrap();
+    let mut arm = jointctl_runtime::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    arm.activate().unwrap();
+    arm.step(0.0);
+    let k = arm.states[3].stiffness().unwrap();
+    // The first-order fit of the worn elbow's data (hysteresis widens, not tilts, the loop).
+    assert!((k - 113.78).abs() / 113.78 < 0.1, "stiffness {k}");
+}
+
+#[test]
+fn fit_groups_a_vsa_characterisation_by_pivot_into_a_table_the_shoulder_loads() {
+    let loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
+    let mut text = String::from("t,deflection,torque,pivot_mm\n");
+    let mut t0 = 0.0;
+    for pivot in [10.0, 30.0] {
+        let opts = RecordOptions { joint: "q2".into(), amplitude_rad: 0.06, frequency_hz: 0.3, duration_s: 8.0, pivot_mm: Some(pivot), angle_deg: 0.0, rate_hz: 100.0 };
+        for s in record(&loaded, &PluginLoader::new([]), &opts).unwrap().iter().skip(50) {
+            text.push_str(&format!("{},{},{},{pivot}\n", t0 + s.t, s.deflection, s.torque));
+        }
+        t0 += 10.0;
+    }
+    let data = jointctl_ident::csv::parse(&text, "q2.csv".as_ref()).unwrap();
+    let opts = jointctl_ident::fit::FitOptions { smoothing_window: 8, order: jointctl_ident::fit::Order::Fixed(3), branches: true, through_zero: true };
+    let result = jointctl_ident::fit::fit(&data, &opts).unwrap();
+    assert_eq!(result.groups.len(), 2);
+    let table = jointctl_models::characteristic::PivotCharacteristic::from_spec(&result.spec).expect("the shoulder's table form");
+    assert_eq!(table.pivots_mm(), &[10.0, 30.0]);
+    // Stiffer at 10 mm than at 30 mm (eq. 2.6), as in the configured table.
+    assert!(table.stiffness(10.0) > 1.5 * table.stiffness(30.0));
+    for g in &result.groups {
+        assert!(g.rmse_nm < 0.3, "pivot {:?}: RMSE {}", g.pivot_mm, g.rmse_nm);
+    }
+}
+
+#[test]
+fn bad_data_files_are_errors_with_file_line_and_column() {
+    let dir = scratch("bad-csv");
+    for (content, expected) in [
+        ("t,torque\n0,1\n", "bad.csv:1: column `deflection`: missing required column"),
+        ("t,deflection,torque\n0,0.1,1\n0.01,x,2\n", "bad.csv:3: column `deflection`: `x` is not a number"),
+        ("t,deflection,torque\n0,0.1,1\n0,0.2,2\n", "bad.csv:3: column `t`: time 0 does not increase"),
+        ("", "bad.csv:0: the file is empty"),
+    ] {
+        let f = dir.join("bad.csv");
+        std::fs::write(&f, content).unwrap();
+        let out = Command::new(jointctl()).arg("fit").arg(&f).output().unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "expected `{expected}` in: {err}");
+    }
+}

@@ -1,0 +1,242 @@
+//! `jointctl fit` and `jointctl identify`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Args;
+use jointctl_experiments::plot::{COLORS, Series, lines};
+use jointctl_ident::fit::{FitOptions, Order, fit};
+use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
+
+#[derive(Args)]
+pub struct FitArgs {
+    /// Measured experiment (CSV: t, deflection, torque[, pivot_mm, angle_deg, ...]).
+    data: PathBuf,
+    /// Moving-average window [samples] (the thesis: 8 for the shoulder, 5 for the wrist).
+    #[arg(long, default_value_t = 1)]
+    smooth: usize,
+    /// Polynomial order 1-6, or `auto` (lowest within 2 % of the best held-out error).
+    #[arg(long, default_value = "auto")]
+    order: String,
+    /// Separate fits for positive and negative deflection.
+    #[arg(long)]
+    branches: bool,
+    /// Do not force zero torque at zero deflection (the curve gets an offset).
+    #[arg(long)]
+    no_through_zero: bool,
+    /// Write the characteristic here, in the form the joint plugins load (use it with
+    /// `params: {include: FILE}`); default: print it.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write plots (measured loop and fitted curve per setting) into this folder.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct IdentifyArgs {
+    /// Measured experiment (CSV).
+    #[arg(long)]
+    data: PathBuf,
+    /// The arm description whose joint model is the baseline (with --joint).
+    #[arg(long, requires = "joint")]
+    config: Option<PathBuf>,
+    /// The DOF in the config.
+    #[arg(long, requires = "config")]
+    joint: Option<String>,
+    /// Baseline characteristic order when no config is given.
+    #[arg(long, default_value_t = 1)]
+    baseline_order: usize,
+    /// Write a Markdown report with plots into this folder.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Print exactly one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run_fit(a: FitArgs) -> ExitCode {
+    let data = match jointctl_ident::csv::read(&a.data) {
+        Ok(d) => d,
+        Err(e) => return crate::fail(e),
+    };
+    for n in &data.notes {
+        eprintln!("note: {n}");
+    }
+    let order = match a.order.as_str() {
+        "auto" => Order::Auto(6),
+        s => match s.parse::<usize>() {
+            Ok(n) => Order::Fixed(n),
+            Err(_) => return crate::fail(format!("--order must be 1-6 or `auto`, got `{s}`")),
+        },
+    };
+    let opts = FitOptions { smoothing_window: a.smooth.max(1), order, branches: a.branches, through_zero: !a.no_through_zero };
+    let result = match fit(&data, &opts) {
+        Ok(r) => r,
+        Err(e) => return crate::fail(format!("{}: {e}", a.data.display())),
+    };
+    eprintln!("| pivot [mm] | angle [deg] | samples | order | stiffness [Nm/rad] | RMSE [Nm] | max error [Nm] | RMSE + / - [Nm] |");
+    eprintln!("|---|---|---|---|---|---|---|---|");
+    for g in &result.groups {
+        eprintln!(
+            "| {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} / {:.4} |",
+            g.pivot_mm.map_or("-".into(), |p| p.to_string()),
+            g.angle_deg.map_or("-".into(), |p| p.to_string()),
+            g.samples,
+            g.order,
+            g.curve.stiffness_nm_per_rad,
+            g.rmse_nm,
+            g.max_error_nm,
+            g.branch_rmse_nm.0,
+            g.branch_rmse_nm.1
+        );
+    }
+    let yaml = match serde_yaml::to_string(&serde_json::json!({ "characteristic": result.spec })) {
+        Ok(y) => format!("# Fitted by `jointctl fit {}` (smoothing {}, order {}, branches {}, through zero {}).\n{y}", a.data.display(), opts.smoothing_window, a.order, opts.branches, opts.through_zero),
+        Err(e) => return crate::fail(e),
+    };
+    match &a.out {
+        Some(path) => {
+            if let Err(e) = std::fs::write(path, &yaml) {
+                return crate::fail(format!("cannot write {}: {e}", path.display()));
+            }
+            eprintln!("characteristic written to {}", path.display());
+        }
+        None => print!("{yaml}"),
+    }
+    if let Some(dir) = &a.report {
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            return crate::fail(format!("cannot create {}: {e}", dir.display()));
+        }
+        for g in &result.groups {
+            let single = jointctl_models::characteristic::CharacteristicSpec {
+                source: result.spec.source,
+                curves: vec![jointctl_models::characteristic::CurveSpec { pivot_mm: None, angle_deg: None, ..g.curve.clone() }],
+            };
+            let Ok(curve) = jointctl_models::characteristic::PivotCharacteristic::from_spec(&single) else { continue };
+            let (lo, hi) = g.points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.0), h.max(p.0)));
+            let fitted: Vec<(f64, f64)> = (0..=200).map(|i| lo + (hi - lo) * i as f64 / 200.0).map(|x| (x, curve.evaluate(0.0, x).torque_nm)).collect();
+            let name = format!("fit-pivot{}-angle{}.svg", g.pivot_mm.map_or("none".into(), |p| p.to_string()), g.angle_deg.map_or("none".into(), |p| p.to_string()));
+            let title = format!("torque-deflection, pivot {} mm, angle {} deg", g.pivot_mm.map_or("-".into(), |p| p.to_string()), g.angle_deg.map_or("-".into(), |p| p.to_string()));
+            if let Err(e) = lines(&dir.join(name), &title, "deflection [rad]", "torque [Nm]", &[
+                Series { name: "measured", points: g.points.clone(), color: COLORS[1] },
+                Series { name: "fitted", points: fitted, color: COLORS[2] },
+            ]) {
+                return crate::fail(e);
+            }
+        }
+        eprintln!("plots written to {}", dir.display());
+    }
+    ExitCode::SUCCESS
+}
+
+/// The baseline from a config's joint: its characteristic (elastic or shoulder table).
+fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> {
+    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
+    let entry = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)).ok_or_else(|| format!("no joint `{joint}` in {}", config.display()))?;
+    let p = &entry.params.0;
+    if let Some(spec) = p.get("characteristic") {
+        let spec: jointctl_models::characteristic::CharacteristicSpec = serde_json::from_value(spec.clone()).map_err(|e| format!("{}: params.characteristic: {e}", entry.name))?;
+        if spec.curves.iter().any(|c| c.angle_deg.is_some()) {
+            return Err(format!("joint `{joint}`: 2-DOF characteristics (the wrist) are not supported as a baseline yet; identify without --config"));
+        }
+        let table = jointctl_models::characteristic::PivotCharacteristic::from_spec(&spec).map_err(|e| format!("{}: {}", e.field, e.message))?;
+        return Ok(BaselineModel::Given(Box::new(move |d, pivot| table.evaluate(pivot, d).torque_nm)));
+    }
+    if let Some(k) = p.get("stiffness_nm_per_rad").and_then(|v| v.as_f64()) {
+        return Ok(BaselineModel::Given(Box::new(move |d, _| k * d)));
+    }
+    Err(format!("joint `{joint}` ({}) has no characteristic or stiffness in its params", entry.plugin.name))
+}
+
+pub fn run_identify(a: IdentifyArgs) -> ExitCode {
+    let data = match jointctl_ident::csv::read(&a.data) {
+        Ok(d) => d,
+        Err(e) => return crate::fail(e),
+    };
+    let baseline = match (&a.config, &a.joint) {
+        (Some(c), Some(j)) => match config_baseline(c, j) {
+            Ok(b) => b,
+            Err(e) => return crate::fail(e),
+        },
+        _ => BaselineModel::Polynomial(a.baseline_order.clamp(1, 6)),
+    };
+    let spinner = (!a.json).then(|| {
+        let s = indicatif::ProgressBar::new_spinner();
+        s.set_message(format!("identifying {} samples", data.len()));
+        s.enable_steady_tick(std::time::Duration::from_millis(100));
+        s
+    });
+    let result = identify(&data, &IdentifyOptions { baseline, ..IdentifyOptions::default() });
+    if let Some(s) = spinner {
+        s.finish_and_clear();
+    }
+    let report = match result {
+        Ok(r) => r,
+        Err(e) => return crate::fail(format!("{}: {e}", a.data.display())),
+    };
+    let mut md = format!(
+        "# What the model misses: {}\n\n{} samples, {} dropped as dropouts. Baseline fitted on the first 70 % of the time range, scored on the last 30 %.\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n\n",
+        a.data.display(),
+        report.samples,
+        report.dropped_samples,
+        report.rmse_before,
+        report.rmse_after
+    );
+    if report.causes.is_empty() {
+        md.push_str("No cause found: the baseline explains the data.\n");
+    } else {
+        md.push_str("| cause | parameters | RMSE gain [Nm] | evidence |\n|---|---|---|---|\n");
+        for c in &report.causes {
+            let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k} = {v:.5}")).collect();
+            let _ = writeln!(md, "| {} | {} | {:.4} | {} |", c.effect, params.join(", "), c.rmse_gain, c.evidence);
+        }
+    }
+    if !report.rejected.is_empty() {
+        let _ = writeln!(md, "\nRejected as physically impossible: {}.", report.rejected.join(", "));
+    }
+    if let Some(dir) = &a.report {
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            return crate::fail(format!("cannot create {}: {e}", dir.display()));
+        }
+        let h = &report.held_out;
+        let col = |i: usize, j: usize| h.iter().map(|r| (r[i], r[j])).collect::<Vec<_>>();
+        let resid = |j: usize, x: usize| h.iter().map(|r| (r[x], r[3] - r[j])).collect::<Vec<_>>();
+        let plots: [(&str, &str, &str, &str, Vec<Series>); 4] = [
+            ("loop.svg", "torque-deflection loop (held-out part)", "deflection [rad]", "torque [Nm]", vec![
+                Series { name: "measured", points: col(1, 3), color: COLORS[0] },
+                Series { name: "baseline", points: col(1, 4), color: COLORS[1] },
+                Series { name: "extended", points: col(1, 5), color: COLORS[2] },
+            ]),
+            ("residual-vs-deflection.svg", "residual vs deflection", "deflection [rad]", "residual [Nm]", vec![
+                Series { name: "baseline", points: resid(4, 1), color: COLORS[1] },
+                Series { name: "extended", points: resid(5, 1), color: COLORS[2] },
+            ]),
+            ("residual-vs-velocity.svg", "residual vs deflection rate", "deflection rate [rad/s]", "residual [Nm]", vec![
+                Series { name: "baseline", points: resid(4, 2), color: COLORS[1] },
+                Series { name: "extended", points: resid(5, 2), color: COLORS[2] },
+            ]),
+            ("torque-vs-time.svg", "torque over time (held-out part)", "t [s]", "torque [Nm]", vec![
+                Series { name: "measured", points: col(0, 3), color: COLORS[0] },
+                Series { name: "baseline", points: col(0, 4), color: COLORS[1] },
+                Series { name: "extended", points: col(0, 5), color: COLORS[2] },
+            ]),
+        ];
+        for (file, title, x, y, series) in plots.iter() {
+            if let Err(e) = lines(&dir.join(file), title, x, y, series) {
+                return crate::fail(e);
+            }
+            let _ = writeln!(md, "\n![{title}]({file})");
+        }
+        if let Err(e) = std::fs::write(dir.join("report.md"), &md) {
+            return crate::fail(format!("cannot write the report: {e}"));
+        }
+    }
+    if a.json {
+        println!("{}", serde_json::to_string(&report).unwrap_or_default());
+    } else {
+        print!("{md}");
+    }
+    ExitCode::SUCCESS
+}
