@@ -585,11 +585,17 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
                 let coarse_dt = dt * train.len().div_ceil(8000) as f64;
                 let span = (2.0 * coarse_dt * ((values.len() / 2) as f64 / 40.0).max(1.0) / dt).ceil() as i64;
                 let centre = (best_g / dt).round() as i64;
-                let full_rss = |k: i64| {
-                    let s = refit_kb(with(&spec, c, k as f64 * dt));
-                    model.fit(&s, &train).map_or(f64::INFINITY, |f| f.1)
-                };
-                best_g = ((centre - span)..=(centre + span)).filter(|k| *k != 0).min_by(|a, b| full_rss(*a).total_cmp(&full_rss(*b))).unwrap_or(centre) as f64 * dt;
+                // k_b (a costly search) is refitted once, at the coarse optimum, for the scan;
+                // the three best samples of the scan are then compared with k_b refitted each.
+                let kb_here = refit_kb(with(&spec, c, best_g)).kb;
+                let rss_with = |s: &Spec| model.fit(s, &train).map_or(f64::INFINITY, |f| f.1);
+                let mut scan: Vec<(f64, i64)> = ((centre - span)..=(centre + span))
+                    .filter(|k| *k != 0)
+                    .map(|k| (rss_with(&Spec { kb: kb_here, ..with(&spec, c, k as f64 * dt) }), k))
+                    .collect();
+                scan.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let full_rss = |k: i64| rss_with(&refit_kb(with(&spec, c, k as f64 * dt)));
+                best_g = scan.iter().take(3).map(|(_, k)| *k).min_by(|a, b| full_rss(*a).total_cmp(&full_rss(*b))).unwrap_or(centre) as f64 * dt;
             }
             for g in [best_g] {
                 let s = refit_kb(with(&spec, c, g));
