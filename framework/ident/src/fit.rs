@@ -131,6 +131,21 @@ fn choose_order(x: &[f64], y: &[f64], order: Order, through: bool) -> usize {
 }
 
 /// Fits every stiffness setting and direction of an experiment.
+///
+/// ```
+/// use jointctl_ident::fit::{fit, FitOptions, Order};
+///
+/// // A 113.78 Nm/rad spring (the elbow's eq. 3.8 stiffness) deflected over +-0.1 rad.
+/// let mut csv = String::from("t,deflection,torque\n");
+/// for i in 0..200 {
+///     let phi = 0.1 * (i as f64 * 0.05).sin();
+///     csv += &format!("{},{phi},{}\n", i as f64 * 0.01, 113.78 * phi);
+/// }
+/// let data = jointctl_ident::csv::parse(&csv, "elbow.csv".as_ref()).unwrap();
+/// let fitted = fit(&data, &FitOptions { order: Order::Fixed(1), ..FitOptions::default() }).unwrap();
+/// let k = fitted.groups[0].curve.coefficients.as_ref().unwrap()[0];
+/// assert!((k - 113.78).abs() < 1e-6);
+/// ```
 pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, String> {
     if let Order::Fixed(n) | Order::Auto(n) = opts.order
         && !(1..=MAX_ORDER).contains(&n)

@@ -8,7 +8,8 @@
 //!    70 % of the time range; the last 30 % is held out for scoring.
 //! 3. Candidate causes, each a physical extension of the model: `viscous_friction`,
 //!    `hysteresis` (Dahl), `dead_zone`, `stiffness_nonlinearity`, `time_delay`, `sensor_offset`,
-//!    `vibration`; `dropout` comes from step 1. More can be registered ([`Candidate`]).
+//!    `vibration`; `dropout` comes from step 1. More can be registered through the
+//!    [`CandidateCause`] trait ([`IdentifyOptions::extra_candidates`]).
 //! 4. Forward selection on the training part by the Bayesian information criterion: a cause
 //!    is kept when it lowers BIC by more than 10 (Kass and Raftery's "very strong" evidence),
 //!    the same criterion for every cause and every data set. A fit that is physically
@@ -74,11 +75,90 @@ pub struct IdentifyOptions {
     pub train_fraction: f64,
     /// Most causes reported.
     pub max_causes: usize,
+    /// Causes beyond the built-in vocabulary, tested with the same criterion.
+    pub extra_candidates: Vec<Box<dyn CandidateCause>>,
 }
 
 impl Default for IdentifyOptions {
     fn default() -> Self {
-        IdentifyOptions { baseline: BaselineModel::Polynomial(1), train_fraction: 0.7, max_causes: 3 }
+        IdentifyOptions { baseline: BaselineModel::Polynomial(1), train_fraction: 0.7, max_causes: 3, extra_candidates: Vec::new() }
+    }
+}
+
+/// What a candidate sees of one part of the data (training or held out). The deflection and
+/// velocity are as the torque channel sees them (shifted when a time delay is in the model).
+pub struct Samples<'a> {
+    /// Time [s].
+    pub t_s: &'a [f64],
+    /// Deflection [rad].
+    pub deflection_rad: &'a [f64],
+    /// Deflection rate [rad/s].
+    pub velocity_rad_per_s: &'a [f64],
+    /// Stiffness setting [mm] (0 when the data has none).
+    pub pivot_mm: &'a [f64],
+    /// Deflections before this part, oldest first: the history a stateful effect starts from.
+    pub history_rad: &'a [f64],
+}
+
+/// Scales of the experiment, for a candidate's parameter grid.
+#[derive(Clone, Copy, Debug)]
+pub struct Excitation {
+    /// Largest |deflection| [rad].
+    pub amplitude_rad: f64,
+    /// Fundamental frequency of the deflection (zero crossings per second) [Hz].
+    pub frequency_hz: f64,
+    /// Sample period [s].
+    pub sample_period_s: f64,
+}
+
+/// A user-defined cause: a model extension linear in its coefficients, with at most one
+/// non-linear parameter searched on a grid (refined between grid points when the grid is
+/// positive). It competes with the built-in causes under the same BIC criterion, on the same
+/// training part, and its gain is measured on the same held-out part.
+///
+/// ```
+/// use jointctl_ident::identify::{CandidateCause, Excitation, Samples};
+///
+/// /// Cogging: a torque ripple periodic in deflection, `a sin(w phi) + b cos(w phi)`.
+/// struct Cogging;
+///
+/// impl CandidateCause for Cogging {
+///     fn name(&self) -> &str { "cogging" }
+///     fn coefficient_names(&self) -> Vec<String> { vec!["sin_nm".into(), "cos_nm".into()] }
+///     fn parameter_name(&self) -> Option<&str> { Some("ripples_per_rad") }
+///     fn grid(&self, e: &Excitation) -> Vec<f64> {
+///         (1..=40).map(|k| k as f64 * 4.0 / e.amplitude_rad).collect()
+///     }
+///     fn columns(&self, w: f64, s: &Samples) -> Vec<Vec<f64>> {
+///         vec![
+///             s.deflection_rad.iter().map(|x| (w * x).sin()).collect(),
+///             s.deflection_rad.iter().map(|x| (w * x).cos()).collect(),
+///         ]
+///     }
+/// }
+/// let e = Excitation { amplitude_rad: 0.1, frequency_hz: 0.2, sample_period_s: 0.005 };
+/// assert_eq!(Cogging.grid(&e).len(), 40);
+/// ```
+pub trait CandidateCause: Send + Sync {
+    /// The name reported in the `effect` field.
+    fn name(&self) -> &str;
+    /// Names of the linear coefficients, SI units in the names; reported as parameters.
+    fn coefficient_names(&self) -> Vec<String>;
+    /// Name of the non-linear parameter, if there is one (reported with its value).
+    fn parameter_name(&self) -> Option<&str> {
+        None
+    }
+    /// Values of the non-linear parameter to try (ignored without a parameter).
+    fn grid(&self, excitation: &Excitation) -> Vec<f64> {
+        let _ = excitation;
+        vec![0.0]
+    }
+    /// One column per coefficient, one value per sample, for a parameter value.
+    fn columns(&self, parameter: f64, samples: &Samples) -> Vec<Vec<f64>>;
+    /// Why a fit is physically impossible (it is then rejected, not reported), or `None`.
+    fn impossible(&self, parameter: f64, coefficients: &[f64]) -> Option<String> {
+        let _ = (parameter, coefficients);
+        None
     }
 }
 
@@ -102,6 +182,8 @@ pub enum Candidate {
     TimeDelay,
     /// `+ a sin(2 pi f t) + b cos(2 pi f t)`.
     Vibration,
+    /// The registered [`CandidateCause`] at this index of [`IdentifyOptions::extra_candidates`].
+    Registered(usize),
 }
 
 impl Candidate {
@@ -126,12 +208,13 @@ impl Candidate {
             Candidate::DeadZone => "dead_zone",
             Candidate::TimeDelay => "time_delay",
             Candidate::Vibration => "vibration",
+            Candidate::Registered(_) => "registered",
         }
     }
 }
 
 /// One model: which extensions with which grid parameters.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 struct Spec {
     /// Eq. 3.5's k_b (refitted with every model).
     kb: f64,
@@ -143,6 +226,8 @@ struct Spec {
     /// Delay of the torque channel [s].
     delay: Option<f64>,
     vibration: Option<f64>,
+    /// Parameter of each selected registered candidate (index into the options' list).
+    registered: Vec<(usize, f64)>,
 }
 
 /// Prepared samples of one part.
@@ -190,11 +275,12 @@ fn dahl_unit(d: &[f64], lambda: f64) -> Vec<f64> {
 
 struct Model<'a> {
     baseline: &'a BaselineModel,
+    registered: &'a [Box<dyn CandidateCause>],
 }
 
 impl Model<'_> {
     /// Columns of the linear part and the fixed part (a given characteristic), for a spec.
-    fn design(&self, spec: &Spec, p: &Part) -> (Vec<Vec<f64>>, Vec<f64>, Vec<&'static str>) {
+    fn design(&self, spec: &Spec, p: &Part) -> (Vec<Vec<f64>>, Vec<f64>, Vec<String>) {
         let n = p.len();
         // A delay shifts the whole torque channel: what it sees of deflection and velocity.
         let spacing = if n > 1 { (p.t[n - 1] - p.t[0]) / (n - 1) as f64 } else { 1.0 };
@@ -209,18 +295,29 @@ impl Model<'_> {
         };
         let shifted = shift(&p.d);
         let velocity = shift(&p.v);
+        let mut cols: Vec<Vec<f64>> = Vec::new();
+        let mut names: Vec<String> = Vec::new();
+        for &(i, value) in &spec.registered {
+            let Some(candidate) = self.registered.get(i) else { continue };
+            let samples = Samples { t_s: &p.t, deflection_rad: &shifted, velocity_rad_per_s: &velocity, pivot_mm: &p.pivot, history_rad: &p.warm };
+            let coefficient_names = candidate.coefficient_names();
+            let columns = candidate.columns(value, &samples);
+            // A column of the wrong length would silently misalign the fit: leave it out.
+            for (name, col) in coefficient_names.into_iter().zip(columns).filter(|(_, c)| c.len() == n) {
+                cols.push(col);
+                names.push(name);
+            }
+        }
         let elastic: Vec<f64> = match spec.dead_zone {
             Some(w) => shifted.iter().map(|x| dead_zone(*x, w)).collect(),
             None => shifted,
         };
-        let mut cols = Vec::new();
-        let mut names = Vec::new();
         let mut fixed = vec![0.0; n];
         match self.baseline {
             BaselineModel::Polynomial(order) => {
                 for k in 1..=*order {
                     cols.push(elastic.iter().map(|x| x.powi(k as i32)).collect());
-                    names.push(["k1", "k2", "k3", "k4", "k5", "k6"][(k - 1).min(5)]);
+                    names.push(format!("k{k}"));
                 }
             }
             BaselineModel::Given(f) => {
@@ -230,37 +327,37 @@ impl Model<'_> {
             }
         }
         cols.push(velocity.iter().map(|v| (spec.kb * v).atan()).collect());
-        names.push("friction_ka_nm");
+        names.push("friction_ka_nm".into());
         if spec.viscous {
             cols.push(velocity.clone());
-            names.push("damping_nms_per_rad");
+            names.push("damping_nms_per_rad".into());
         }
         if spec.offset {
             cols.push(vec![1.0; n]);
-            names.push("offset_nm");
+            names.push("offset_nm".into());
         }
         if spec.cubic {
             cols.push(elastic.iter().map(|x| x.powi(3)).collect());
-            names.push("k3_nm_per_rad3");
+            names.push("k3_nm_per_rad3".into());
         }
         if let Some(l) = spec.hysteresis {
             let mut history = p.warm.clone();
             history.extend_from_slice(&p.d);
             cols.push(dahl_unit(&history, l)[p.warm.len()..].to_vec());
-            names.push("limit_nm");
+            names.push("limit_nm".into());
         }
         if let Some(f) = spec.vibration {
             let w = std::f64::consts::TAU * f;
             cols.push(p.t.iter().map(|t| (w * t).sin()).collect());
             cols.push(p.t.iter().map(|t| (w * t).cos()).collect());
-            names.push("vibration_sin_nm");
-            names.push("vibration_cos_nm");
+            names.push("vibration_sin_nm".into());
+            names.push("vibration_cos_nm".into());
         }
         (cols, fixed, names)
     }
 
     /// Least squares on a part: coefficients and residual sum of squares.
-    fn fit(&self, spec: &Spec, p: &Part) -> Option<(Vec<f64>, f64, Vec<&'static str>)> {
+    fn fit(&self, spec: &Spec, p: &Part) -> Option<(Vec<f64>, f64, Vec<String>)> {
         let (cols, fixed, names) = self.design(spec, p);
         let m = cols.len();
         let mut ata = DMatrix::<f64>::zeros(m, m);
@@ -284,7 +381,7 @@ impl Model<'_> {
         let mut coefs: Vec<f64> = solve(&ata, &aty)?.iter().copied().collect();
         // Coulomb friction cannot be negative: if the unconstrained optimum says so, the
         // constrained one has it at zero (least squares with one bound: drop the column).
-        if let Some(f) = names.iter().position(|n| *n == "friction_ka_nm")
+        if let Some(f) = names.iter().position(|n| n == "friction_ka_nm")
             && coefs[f] < 0.0
         {
             let keep: Vec<usize> = (0..m).filter(|i| *i != f).collect();
@@ -319,8 +416,13 @@ fn bic(rss: f64, n: usize, params: usize) -> f64 {
     n as f64 * (rss / n as f64).max(1e-300).ln() + params as f64 * (n as f64).ln()
 }
 
-fn params_of(spec: &Spec) -> usize {
-    spec.viscous as usize
+fn params_of(spec: &Spec, registered: &[Box<dyn CandidateCause>]) -> usize {
+    spec.registered
+        .iter()
+        .filter_map(|(i, _)| registered.get(*i))
+        .map(|c| c.coefficient_names().len() + c.parameter_name().is_some() as usize)
+        .sum::<usize>()
+        + spec.viscous as usize
         + spec.offset as usize
         + spec.cubic as usize
         + 2 * spec.hysteresis.is_some() as usize
@@ -386,7 +488,7 @@ fn refine_around(f: impl Fn(f64) -> f64, grid: &[f64], best: f64, iterations: us
 }
 
 fn with(spec: &Spec, c: Candidate, value: f64) -> Spec {
-    let mut s = *spec;
+    let mut s = spec.clone();
     match c {
         Candidate::ViscousFriction => s.viscous = true,
         Candidate::SensorOffset => s.offset = true,
@@ -395,12 +497,13 @@ fn with(spec: &Spec, c: Candidate, value: f64) -> Spec {
         Candidate::DeadZone => s.dead_zone = Some(value),
         Candidate::TimeDelay => s.delay = Some(value),
         Candidate::Vibration => s.vibration = Some(value),
+        Candidate::Registered(i) => s.registered.push((i, value)),
     }
     s
 }
 
 fn without(spec: &Spec, c: Candidate) -> Spec {
-    let mut s = *spec;
+    let mut s = spec.clone();
     match c {
         Candidate::ViscousFriction => s.viscous = false,
         Candidate::SensorOffset => s.offset = false,
@@ -409,16 +512,24 @@ fn without(spec: &Spec, c: Candidate) -> Spec {
         Candidate::DeadZone => s.dead_zone = None,
         Candidate::TimeDelay => s.delay = None,
         Candidate::Vibration => s.vibration = None,
+        Candidate::Registered(i) => s.registered.retain(|(k, _)| *k != i),
     }
     s
 }
 
-fn coef(names: &[&str], coefs: &[f64], name: &str) -> Option<f64> {
-    names.iter().position(|n| *n == name).map(|i| coefs[i])
+fn coef(names: &[String], coefs: &[f64], name: &str) -> Option<f64> {
+    names.iter().position(|n| n == name).map(|i| coefs[i])
 }
 
 /// Is a fitted model physically possible? Returns why not.
-fn impossible(spec: &Spec, names: &[&str], coefs: &[f64]) -> Option<String> {
+fn impossible(spec: &Spec, names: &[String], coefs: &[f64], registered: &[Box<dyn CandidateCause>]) -> Option<String> {
+    for &(i, value) in &spec.registered {
+        let Some(c) = registered.get(i) else { continue };
+        let own: Vec<f64> = c.coefficient_names().iter().map(|n| coef(names, coefs, n).unwrap_or(f64::NAN)).collect();
+        if let Some(why) = c.impossible(value, &own) {
+            return Some(why);
+        }
+    }
     if spec.viscous && coef(names, coefs, "damping_nms_per_rad").is_some_and(|b| b < 0.0) {
         return Some("negative viscous damping".into());
     }
@@ -431,7 +542,37 @@ fn impossible(spec: &Spec, names: &[&str], coefs: &[f64]) -> Option<String> {
     None
 }
 
+fn name_of(c: Candidate, opts: &IdentifyOptions) -> String {
+    match c {
+        Candidate::Registered(i) => opts.extra_candidates.get(i).map_or("registered".into(), |c| c.name().to_string()),
+        _ => c.name().into(),
+    }
+}
+
 /// Identifies what `data`'s model misses.
+///
+/// ```
+/// use jointctl_ident::identify::{identify, IdentifyOptions};
+///
+/// // A linear spring with a 0.5 Nm torque-sensor offset, sine excitation (not phase-locked to
+/// // the 100 Hz sampling).
+/// let mut data = jointctl_ident::csv::Data::default();
+/// for i in 0..3000 {
+///     let t = i as f64 * 0.01;
+///     let phi = 0.1 * (std::f64::consts::TAU * 0.237 * t).sin();
+///     let noise = 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5);
+///     data.t.push(t);
+///     data.deflection.push(phi);
+///     data.torque.push(80.0 * phi + 0.5 + noise);
+///     for c in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
+///         c.push(f64::NAN);
+///     }
+/// }
+/// let report = identify(&data, &IdentifyOptions::default()).unwrap();
+/// assert_eq!(report.causes[0].effect, "sensor_offset");
+/// assert!((report.causes[0].params["offset_nm"] - 0.5).abs() < 0.01);
+/// assert!(report.rmse_after < 0.01 && report.rmse_before > 0.4);
+/// ```
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
     let n_all = data.len();
     if n_all < 50 {
@@ -501,9 +642,9 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
     let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
 
     // 2. Baseline: k_b of eq. 3.5 on a grid, then refined.
-    let model = Model { baseline: &opts.baseline };
+    let model = Model { baseline: &opts.baseline, registered: &opts.extra_candidates };
     let kb_grid = log_grid(0.3, 3000.0, 12);
-    let rss_kb = |spec: &Spec, kb: f64| model.fit(&Spec { kb, ..*spec }, &coarse).map_or(f64::INFINITY, |f| f.1);
+    let rss_kb = |spec: &Spec, kb: f64| model.fit(&Spec { kb, ..spec.clone() }, &coarse).map_or(f64::INFINITY, |f| f.1);
     let best_kb = kb_grid.iter().copied().min_by(|a, b| rss_kb(&Spec::default(), *a).total_cmp(&rss_kb(&Spec::default(), *b))).unwrap_or(1.0);
     let kb = refine_around(|k| rss_kb(&Spec::default(), k), &kb_grid, best_kb, 25);
     // Every model refits k_b near the current value (a candidate may take part of the friction).
@@ -526,13 +667,14 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
         let crossings = d.windows(2).filter(|w| w[0] < 0.0 && w[1] >= 0.0).count() as f64;
         (crossings / (t[t.len() - 1] - t[0])).max(0.01)
     };
-    let mut spec = base_spec;
+    let mut spec = base_spec.clone();
     let mut chosen: Vec<(Candidate, String)> = Vec::new();
     let mut current_bic = model.fit(&spec, &coarse).map(|(_, rss, _)| bic(rss, coarse.len(), base_params)).unwrap_or(f64::INFINITY);
     let mut rejected: Vec<String> = Vec::new();
     for _ in 0..opts.max_causes {
         let mut best: Option<(f64, Spec, Candidate, String)> = None;
-        for &c in Candidate::ALL.iter().filter(|c| !chosen.iter().any(|(k, _)| k == *c)) {
+        let registered = (0..opts.extra_candidates.len()).map(Candidate::Registered);
+        for c in Candidate::ALL.into_iter().chain(registered).filter(|c| !chosen.iter().any(|(k, _)| k == c)) {
             if c == Candidate::StiffnessNonlinearity && matches!(opts.baseline, BaselineModel::Polynomial(k) if k >= 3) {
                 continue;
             }
@@ -570,11 +712,21 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
                     };
                     vec![refine_log(power, f0 * 0.985, f0 * 1.015, 40)]
                 }
+                Candidate::Registered(i) => {
+                    let candidate = &opts.extra_candidates[i];
+                    let grid = candidate.grid(&Excitation { amplitude_rad: amplitude_d, frequency_hz: excitation_hz, sample_period_s: dt });
+                    if candidate.parameter_name().is_none() || grid.is_empty() { vec![0.0] } else { grid }
+                }
                 _ => vec![0.0],
             };
             // The grid's best value, refined between its neighbours for continuous parameters.
             let mut values = grid.clone();
-            if matches!(c, Candidate::Hysteresis | Candidate::DeadZone) {
+            let refinable = match c {
+                Candidate::Hysteresis | Candidate::DeadZone => true,
+                Candidate::Registered(i) => opts.extra_candidates[i].parameter_name().is_some() && grid.len() > 1 && grid.iter().all(|g| *g > 0.0),
+                _ => false,
+            };
+            if refinable {
                 let best_g = grid.iter().copied().min_by(|a, b| rss_at(*a).total_cmp(&rss_at(*b))).unwrap_or(grid[0]);
                 values.push(refine_around(rss_at, &grid, best_g, 25));
             }
@@ -600,11 +752,11 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
             for g in [best_g] {
                 let s = refit_kb(with(&spec, c, g));
                 let Some((coefs, rss, names)) = model.fit(&s, &coarse) else { continue };
-                if let Some(why) = impossible(&s, &names, &coefs) {
-                    rejected.push(format!("{} ({why})", c.name()));
+                if let Some(why) = impossible(&s, &names, &coefs, &opts.extra_candidates) {
+                    rejected.push(format!("{} ({why})", name_of(c, opts)));
                     continue;
                 }
-                let mut b = bic(rss, coarse.len(), base_params + params_of(&s));
+                let mut b = bic(rss, coarse.len(), base_params + params_of(&s, &opts.extra_candidates));
                 if c == Candidate::Vibration {
                     // The frequency is the best of M resolvable ones (band x duration): a
                     // look-elsewhere search, charged 2 ln M on top of BIC's parameter count.
@@ -663,8 +815,17 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
                 params.insert("frequency_hz".into(), spec.vibration.unwrap_or(f64::NAN));
                 params.insert("amplitude_nm".into(), a.hypot(b));
             }
+            Candidate::Registered(i) => {
+                let candidate = &opts.extra_candidates[*i];
+                for name in candidate.coefficient_names() {
+                    params.insert(name.clone(), coef(&names, &coefs, &name).unwrap_or(f64::NAN));
+                }
+                if let (Some(name), Some((_, value))) = (candidate.parameter_name(), spec.registered.iter().find(|(k, _)| k == i)) {
+                    params.insert(name.into(), *value);
+                }
+            }
         }
-        causes.push(Cause { effect: c.name().into(), params, rmse_gain: gain, evidence: format!("{why} on the training part (threshold {BIC_THRESHOLD})") });
+        causes.push(Cause { effect: name_of(*c, opts), params, rmse_gain: gain, evidence: format!("{why} on the training part (threshold {BIC_THRESHOLD})") });
     }
     if n_dropped > 0 {
         let mut params = BTreeMap::new();
