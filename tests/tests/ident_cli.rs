@@ -74,7 +74,7 @@ fn fit_output_feeds_the_runtime_through_include_without_editing() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let table = String::from_utf8_lossy(&out.stderr);
     assert!(table.contains("| - | - | 4000 | 3 |"), "{table}");
-    assert!(dir.join("plots/fit-pivotnone-anglenone.svg").exists());
+    assert!(dir.join("plots/fit.svg").exists());
     // The arm description includes the fitted file instead of the linear stiffness.
     let cfg = std::fs::read_to_string(root().join("configs/sherpa_arm.yaml")).unwrap().replacen(
         "      stiffness_nm_per_rad: 113.78                                 # section 3.3.2, elbow",

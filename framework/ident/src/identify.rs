@@ -16,7 +16,8 @@
 //!    impossible (negative damping, negative hysteresis) is rejected: that is evidence for
 //!    another cause.
 //! 5. The extended model is fitted on the training part, and 6. its gain measured on the
-//!    held-out part only.
+//!    held-out part only. A selected cause without a held-out gain is dropped as not confirmed
+//!    (it fitted the training part only).
 
 use std::collections::BTreeMap;
 
@@ -54,7 +55,8 @@ pub struct Report {
     /// Held-out part: (t, deflection, velocity, measured, baseline, extended) for plots.
     #[serde(skip)]
     pub held_out: Vec<[f64; 6]>,
-    /// Candidate fits rejected as physically impossible (evidence for another cause).
+    /// Candidates rejected: fits that are physically impossible (evidence for another cause) and
+    /// causes not confirmed on the held-out part.
     #[serde(skip)]
     pub rejected: Vec<String>,
 }
@@ -779,14 +781,30 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
         }
     }
 
-    // 5. The extended model on the whole training part; 6. gains on the held-out part.
-    let spec = refit_kb(spec);
-    let (coefs, _, names) = model.fit(&spec, &train).ok_or("the extended model cannot be fitted")?;
-    let rmse_after = rmse(&spec, &coefs);
+    // 5. The extended model on the whole training part; 6. gains on the held-out part. A cause
+    // whose removal makes the held-out error smaller fitted the training part only: it is not
+    // confirmed, dropped (the weakest first) and the rest refitted.
+    let gain_of = |spec: &Spec, c: Candidate, rmse_after: f64| {
+        let reduced = refit_kb(without(spec, c));
+        model.fit(&reduced, &train).map(|(k, _, _)| rmse(&reduced, &k) - rmse_after).unwrap_or(0.0)
+    };
+    let mut spec = refit_kb(spec);
+    let (coefs, names, rmse_after, gains) = loop {
+        let (coefs, _, names) = model.fit(&spec, &train).ok_or("the extended model cannot be fitted")?;
+        let rmse_after = rmse(&spec, &coefs);
+        let gains: Vec<f64> = chosen.iter().map(|(c, _)| gain_of(&spec, *c, rmse_after)).collect();
+        let weakest = (0..gains.len()).min_by(|a, b| gains[*a].total_cmp(&gains[*b]));
+        match weakest {
+            Some(i) if gains[i] <= 0.0 => {
+                let (c, _) = chosen.remove(i);
+                rejected.push(format!("{} (not confirmed on the held-out part: gain {:.4} Nm)", name_of(c, opts), gains[i]));
+                spec = refit_kb(without(&spec, c));
+            }
+            _ => break (coefs, names, rmse_after, gains),
+        }
+    };
     let mut causes = Vec::new();
-    for (c, why) in &chosen {
-        let reduced = refit_kb(without(&spec, *c));
-        let gain = model.fit(&reduced, &train).map(|(k, _, _)| rmse(&reduced, &k) - rmse_after).unwrap_or(0.0);
+    for ((c, why), gain) in chosen.iter().zip(gains) {
         let mut params = BTreeMap::new();
         match c {
             Candidate::ViscousFriction => {

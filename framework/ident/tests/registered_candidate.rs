@@ -2,6 +2,8 @@
 //! the same criterion: found with its parameters when present, silent when absent, and rejected
 //! (not reported) when its own physics says the fit is impossible.
 
+mod common;
+
 use jointctl_ident::csv::Data;
 use jointctl_ident::identify::{CandidateCause, Excitation, IdentifyOptions, Samples, identify};
 
@@ -46,38 +48,9 @@ impl CandidateCause for BoundedDamping {
     }
 }
 
-/// The thesis' baseline (linear spring + eq. 3.5 friction), a sine excitation, 14-bit
-/// deflection, 0.02 Nm sensor noise, plus a ripple of `ripple_nm` at `w` per rad and viscous
-/// damping `b`.
+/// The sine experiment plus a ripple of `ripple_nm` at `w` per rad and viscous damping `b`.
 fn experiment(ripple_nm: f64, w: f64, b: f64) -> Data {
-    // Not phase-locked to the sampling (0.25 Hz would be exactly 800 samples a period): locked,
-    // every period samples the same deflections and the 14-bit quantisation error becomes a
-    // real ripple in torque against measured deflection.
-    let (rate, n, amp, f, k) = (200.0, 16_000, 0.1, 0.2371, 120.0);
-    let q = std::f64::consts::TAU / 16384.0;
-    let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
-    let mut uniform = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut data = Data::default();
-    for i in 0..n {
-        let t = i as f64 / rate;
-        let x = amp * (std::f64::consts::TAU * f * t).sin();
-        let v = amp * std::f64::consts::TAU * f * (std::f64::consts::TAU * f * t).cos();
-        // Gaussian noise of 0.02 Nm (Box-Muller).
-        let (u1, u2) = (uniform().max(1e-12), uniform());
-        let noise = 0.02 * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-        data.t.push(t);
-        data.deflection.push((x / q).round() * q);
-        data.torque.push(k * x + 0.3 * (80.0 * v).atan() + ripple_nm * (w * x).sin() + b * v + noise);
-        for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
-            col.push(f64::NAN);
-        }
-    }
-    data
+    common::sine_experiment(|_, x, v| ripple_nm * (w * x).sin() + b * v)
 }
 
 fn with(candidates: Vec<Box<dyn CandidateCause>>) -> IdentifyOptions {

@@ -117,8 +117,17 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
             let Ok(curve) = jointctl_models::characteristic::PivotCharacteristic::from_spec(&single) else { continue };
             let (lo, hi) = g.points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.0), h.max(p.0)));
             let fitted: Vec<(f64, f64)> = (0..=200).map(|i| lo + (hi - lo) * i as f64 / 200.0).map(|x| (x, curve.evaluate(0.0, x).torque_nm)).collect();
-            let name = format!("fit-pivot{}-angle{}.svg", g.pivot_mm.map_or("none".into(), |p| p.to_string()), g.angle_deg.map_or("none".into(), |p| p.to_string()));
-            let title = format!("torque-deflection, pivot {} mm, angle {} deg", g.pivot_mm.map_or("-".into(), |p| p.to_string()), g.angle_deg.map_or("-".into(), |p| p.to_string()));
+            // Files and titles name only the settings the data has.
+            let (mut name, mut title) = (String::from("fit"), format!("torque-deflection, order {}", g.order));
+            if let Some(p) = g.pivot_mm {
+                name += &format!("-pivot{p}mm");
+                title += &format!(", pivot {p} mm");
+            }
+            if let Some(a) = g.angle_deg {
+                name += &format!("-angle{a}deg");
+                title += &format!(", angle {a} deg");
+            }
+            name += ".svg";
             if let Err(e) = lines(&dir.join(name), &title, "deflection [rad]", "torque [Nm]", &[
                 Series { name: "measured", points: g.points.clone(), color: COLORS[1] },
                 Series { name: "fitted", points: fitted, color: COLORS[2] },
@@ -194,7 +203,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         }
     }
     if !report.rejected.is_empty() {
-        let _ = writeln!(md, "\nRejected as physically impossible: {}.", report.rejected.join(", "));
+        let _ = writeln!(md, "\nRejected (physically impossible, or not confirmed on the held-out part): {}.", report.rejected.join(", "));
     }
     if let Some(dir) = &a.report {
         if let Err(e) = std::fs::create_dir_all(dir) {
