@@ -843,7 +843,17 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
                 }
             }
         }
-        causes.push(Cause { effect: name_of(*c, opts), params, rmse_gain: gain, evidence: format!("{why} on the training part (threshold {BIC_THRESHOLD})") });
+        let mut evidence = format!("{why} on the training part (threshold {BIC_THRESHOLD})");
+        if let (Candidate::Vibration, Some(f)) = (c, spec.vibration) {
+            // A mode at a harmonic of the excitation (within the frequency resolution of the
+            // record) cannot be told from a periodic shape error of the model: say so.
+            let harmonic = (f / excitation_hz).round();
+            let resolution_hz = 1.0 / (t[t.len() - 1] - t[0]);
+            if harmonic >= 1.0 && (f - harmonic * excitation_hz).abs() < resolution_hz {
+                evidence += &format!("; at {harmonic:.0}x the excitation frequency: possibly a periodic model error rather than a structural mode");
+            }
+        }
+        causes.push(Cause { effect: name_of(*c, opts), params, rmse_gain: gain, evidence });
     }
     if n_dropped > 0 {
         let mut params = BTreeMap::new();

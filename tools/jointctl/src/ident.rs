@@ -98,7 +98,8 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
     };
     match &a.out {
         Some(path) => {
-            if let Err(e) = std::fs::write(path, &yaml) {
+            let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+            if let Err(e) = parent.map_or(Ok(()), std::fs::create_dir_all).and_then(|_| std::fs::write(path, &yaml)) {
                 return crate::fail(format!("cannot write {}: {e}", path.display()));
             }
             eprintln!("characteristic written to {}", path.display());
