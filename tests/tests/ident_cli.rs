@@ -54,6 +54,7 @@ fn identify_finds_an_effect_switched_on_in_the_simulated_plant_but_not_in_the_co
     let first = report.causes.first().expect("a cause");
     assert_eq!(first.effect, "dead_zone", "{:?}", report.causes);
     let w = first.params["half_width_rad"];
+    println!("q5 play: half width {w:.5} rad (plant 0.01), held-out RMSE {:.4} -> {:.4} Nm", report.rmse_before, report.rmse_after);
     assert!((w - 0.01).abs() / 0.01 < 0.2, "half width {w}");
     assert!(report.rmse_after < report.rmse_before / 3.0);
 }
