@@ -160,6 +160,49 @@ fn main() {
     println!("| {:.1} | {:.1} | {:.1} | <= 20 |", p50 as f64 / 1e3, p99 as f64 / 1e3, lat.iter().max().copied().unwrap_or(0) as f64 / 1e3);
     println!();
 
+    // 3b. Publish → inspector receive alone (the definition): the arm-state type over the
+    // same iceoryx2 service kind, stamped at send, 1 kHz, a busy-polling subscriber thread.
+    {
+        let samples = if quick { 1_000 } else { 10_000 };
+        let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
+        let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
+        let publisher = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().publisher_builder().create().unwrap();
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let sub_stop = stop.clone();
+        let subscriber = std::thread::spawn(move || {
+            let node = jointctl_ipc::create_node(None, "bench-ipc-inspector").unwrap();
+            let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
+            let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
+            let mut lat = Vec::with_capacity(10_000);
+            while !sub_stop.load(std::sync::atomic::Ordering::Relaxed) {
+                if let Some(s) = sub.receive().unwrap() {
+                    lat.push(monotonic_ns().saturating_sub(s.stamp_ns));
+                } else {
+                    std::hint::spin_loop();
+                }
+            }
+            lat
+        });
+        std::thread::sleep(Duration::from_millis(200));
+        let mut state = jointctl_ipc::ArmState::EMPTY;
+        for cycle in 0..samples {
+            state.cycle = cycle;
+            state.stamp_ns = monotonic_ns();
+            publisher.loan_uninit().unwrap().write_payload(state).send().unwrap();
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let mut lat = subscriber.join().unwrap();
+        lat.retain(|l| *l < 1_000_000_000);
+        println!("## Publish → inspector receive (iceoryx2 alone, arm-state payload), 1 kHz, {} samples", lat.len());
+        println!("| p50 us | p99 us | max us | target p99 |");
+        println!("|---|---|---|---|");
+        let (p50, p99) = (percentile(&mut lat, 50.0), percentile(&mut lat, 99.0));
+        println!("| {:.1} | {:.1} | {:.1} | <= 20 |", p50 as f64 / 1e3, p99 as f64 / 1e3, lat.iter().max().copied().unwrap_or(0) as f64 / 1e3);
+        println!();
+    }
+
     // 4. Simulation speed: the whole 7-joint arm, every plant effect on, 1 kHz loop (observers,
     // controllers and physics), simulated time over wall time on this core.
     {
