@@ -135,3 +135,18 @@ fn bad_data_files_are_errors_with_file_line_and_column() {
         assert!(err.contains(expected), "expected `{expected}` in: {err}");
     }
 }
+
+#[test]
+fn bad_identify_arguments_are_errors_not_silently_changed() {
+    let data = root().join("tests/data/q4_worn_elbow.csv");
+    for (args, expected) in [
+        (vec!["--baseline-order", "9"], "--baseline-order must be 1-6, got 9"),
+        (vec!["--config", "configs/sherpa_arm.yaml", "--joint", "q9"], "no joint `q9`"),
+        (vec!["--config", "configs/sherpa_arm.yaml", "--joint", "q6"], "2-DOF characteristics (the wrist) are not supported as a baseline"),
+    ] {
+        let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&data).args(&args).output().unwrap();
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "expected `{expected}` in: {err}");
+    }
+}

@@ -170,7 +170,10 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             Ok(b) => b,
             Err(e) => return crate::fail(e),
         },
-        _ => BaselineModel::Polynomial(a.baseline_order.clamp(1, 6)),
+        (None, None) if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
+        (None, None) => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
+        (Some(_), None) => return crate::fail("--config needs --joint NAME: the DOF whose model is the baseline"),
+        (None, Some(_)) => return crate::fail("--joint needs --config FILE: the arm description it is in"),
     };
     let spinner = (!a.json).then(|| {
         let s = indicatif::ProgressBar::new_spinner();
