@@ -56,6 +56,28 @@ fn compute_ns(arm: &mut Arm, batch: usize) -> f64 {
     t.elapsed().as_nanos() as f64 / batch as f64
 }
 
+/// A busy-polling inspector thread on `arm`'s joint-state service: collects, until the flag is
+/// set, how long after each sample's `stamp_ns` it arrived [ns].
+fn latency_subscriber(arm: &'static str) -> (std::sync::Arc<std::sync::atomic::AtomicBool>, std::thread::JoinHandle<Vec<u64>>) {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let sub_stop = stop.clone();
+    let subscriber = std::thread::spawn(move || {
+        let node = jointctl_ipc::create_node(None, &format!("{arm}-inspector")).unwrap();
+        let names = jointctl_ipc::ServiceNames::for_arm(arm);
+        let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
+        let mut lat = Vec::with_capacity(10_000);
+        while !sub_stop.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Some(s) = sub.receive().unwrap() {
+                lat.push(monotonic_ns().saturating_sub(s.stamp_ns));
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+        lat
+    });
+    (stop, subscriber)
+}
+
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap());
     v[v.len() / 2]
@@ -129,22 +151,7 @@ fn main() {
     let cycles = if quick { 500 } else { 5_000 };
     let (mut arm, loaded) = build(false, 1000.0, "bench-latency");
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let sub_stop = stop.clone();
-    let subscriber = std::thread::spawn(move || {
-        let node = jointctl_ipc::create_node(None, "bench-inspector").unwrap();
-        let names = jointctl_ipc::ServiceNames::for_arm("bench-latency");
-        let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
-        let mut lat = Vec::with_capacity(10_000);
-        while !sub_stop.load(std::sync::atomic::Ordering::Relaxed) {
-            if let Some(s) = sub.receive().unwrap() {
-                lat.push(monotonic_ns().saturating_sub(s.stamp_ns));
-            } else {
-                std::hint::spin_loop();
-            }
-        }
-        lat
-    });
+    let (stop, subscriber) = latency_subscriber("bench-latency");
     std::thread::sleep(Duration::from_millis(200));
     let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0 };
     jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
@@ -167,22 +174,7 @@ fn main() {
         let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
         let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
         let publisher = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().publisher_builder().create().unwrap();
-        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-        let sub_stop = stop.clone();
-        let subscriber = std::thread::spawn(move || {
-            let node = jointctl_ipc::create_node(None, "bench-ipc-inspector").unwrap();
-            let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
-            let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
-            let mut lat = Vec::with_capacity(10_000);
-            while !sub_stop.load(std::sync::atomic::Ordering::Relaxed) {
-                if let Some(s) = sub.receive().unwrap() {
-                    lat.push(monotonic_ns().saturating_sub(s.stamp_ns));
-                } else {
-                    std::hint::spin_loop();
-                }
-            }
-            lat
-        });
+        let (stop, subscriber) = latency_subscriber("bench-ipc");
         std::thread::sleep(Duration::from_millis(200));
         let mut state = jointctl_ipc::ArmState::EMPTY;
         for cycle in 0..samples {
