@@ -304,7 +304,8 @@ impl Model<'_> {
             let samples = Samples { t_s: &p.t, deflection_rad: &shifted, velocity_rad_per_s: &velocity, pivot_mm: &p.pivot, history_rad: &p.warm };
             let coefficient_names = candidate.coefficient_names();
             let columns = candidate.columns(value, &samples);
-            // A column of the wrong length would silently misalign the fit: leave it out.
+            // Shapes are checked up front (check_registered); a column that still has the wrong
+            // length would misalign the fit, so it is left out.
             for (name, col) in coefficient_names.into_iter().zip(columns).filter(|(_, c)| c.len() == n) {
                 cols.push(col);
                 names.push(name);
@@ -544,6 +545,32 @@ fn impossible(spec: &Spec, names: &[String], coefs: &[f64], registered: &[Box<dy
     None
 }
 
+/// A registered cause must not reuse a name and must give one column per coefficient, one value
+/// per sample: checked once, up front, so that a mistake is an error rather than a cause that
+/// silently contributes nothing.
+fn check_registered(registered: &[Box<dyn CandidateCause>], p: &Part) -> Result<(), String> {
+    let builtin: Vec<&str> = Candidate::ALL.iter().map(|c| c.name()).chain(["dropout"]).collect();
+    for (i, c) in registered.iter().enumerate() {
+        let name = c.name();
+        if builtin.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
+            return Err(format!("registered cause `{name}`: the name is already taken"));
+        }
+        let value = c.grid(&Excitation { amplitude_rad: 1.0, frequency_hz: 1.0, sample_period_s: 1.0 }).first().copied().unwrap_or(0.0);
+        let samples = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, pivot_mm: &p.pivot, history_rad: &p.warm };
+        let columns = c.columns(value, &samples);
+        let expected = c.coefficient_names().len();
+        if columns.len() != expected || columns.iter().any(|col| col.len() != p.len()) {
+            let lengths: Vec<usize> = columns.iter().map(Vec::len).collect();
+            return Err(format!(
+                "registered cause `{name}`: columns() gave {} column(s) of {lengths:?} values; expected {expected} (one per coefficient name) of {} values (one per sample)",
+                columns.len(),
+                p.len()
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn name_of(c: Candidate, opts: &IdentifyOptions) -> String {
     match c {
         Candidate::Registered(i) => opts.extra_candidates.get(i).map_or("registered".into(), |c| c.name().to_string()),
@@ -641,6 +668,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
     }
     // Grid searches on at most ~8000 training samples; final fits on all of them.
     let coarse = train.every(train.len().div_ceil(8000));
+    check_registered(&opts.extra_candidates, &coarse)?;
     let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
 
     // 2. Baseline: k_b of eq. 3.5 on a grid, then refined.

@@ -90,3 +90,27 @@ fn a_registered_cause_whose_fit_is_impossible_is_rejected_not_reported() {
     assert_eq!(report.causes.first().map(|c| c.effect.as_str()), Some("viscous_friction"), "{:?}", report.causes);
     assert!(report.rejected.iter().any(|r| r.starts_with("bounded_damping (damping")), "{:?}", report.rejected);
 }
+
+/// A cause that forgets a column.
+struct MissingColumn(&'static str);
+
+impl CandidateCause for MissingColumn {
+    fn name(&self) -> &str {
+        self.0
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["a_nm".into(), "b_nm".into()]
+    }
+    fn columns(&self, _: f64, s: &Samples) -> Vec<Vec<f64>> {
+        vec![s.deflection_rad.to_vec()]
+    }
+}
+
+#[test]
+fn a_malformed_registered_cause_is_an_error_not_a_silent_no_op() {
+    let data = experiment(0.0, 150.0, 0.0);
+    let err = identify(&data, &with(vec![Box::new(MissingColumn("play"))])).unwrap_err();
+    assert!(err.contains("registered cause `play`: columns() gave 1 column(s)") && err.contains("expected 2"), "{err}");
+    let err = identify(&data, &with(vec![Box::new(ToothRipple), Box::new(MissingColumn("hysteresis"))])).unwrap_err();
+    assert_eq!(err, "registered cause `hysteresis`: the name is already taken");
+}
