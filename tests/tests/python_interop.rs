@@ -1,0 +1,75 @@
+//! An outside client: the Python inspector (tools/inspect_py, PyPI `iceoryx2` 0.10, ctypes
+//! mirrors of the payloads) reads a running arm from shared memory and prints the same JSON as
+//! `jointctl inspect echo --json`. This keeps the `#[repr(C)]` contract readable from another
+//! language: a field added, reordered or retyped on the Rust side breaks this test.
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+use jointctl_tests::{arm_name, jointctl, rig_yaml, scratch};
+
+fn root() -> PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The interop venv's Python (`.ci/setup-python-venv` makes it; the README's test command runs it).
+fn python() -> PathBuf {
+    let p = std::env::var_os("JOINTCTL_PYTHON").map(PathBuf::from).unwrap_or_else(|| root().join(".venv-interop/bin/python"));
+    assert!(p.exists(), "{} is missing: run `bash .ci/setup-python-venv` first (the README's test command does)", p.display());
+    p
+}
+
+const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";
+
+#[test]
+fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
+    let arm = arm_name("py");
+    let dir = scratch("py");
+    let yaml = dir.join("rig.yaml");
+    std::fs::write(&yaml, rig_yaml(&arm, 100.0, ELASTIC)).unwrap();
+    let mut run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--duration", "20"]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    // The Rust inspector's first sample also tells that the runtime is up.
+    let rust = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    // A position set-point for `a`, so that the states carry a moving, non-zero value.
+    let cmd = Command::new(jointctl()).args(["cmd", "position", "a", "0.3", "--arm", &arm]).output().unwrap();
+    let py = Command::new(python())
+        .arg(root().join("tools/inspect_py/jointctl_inspect.py"))
+        .args([&arm, "--count", "20", "--timeout", "10"])
+        .output()
+        .unwrap();
+    let _ = run.kill();
+    let _ = run.wait();
+    assert!(cmd.status.success(), "cmd: {}", String::from_utf8_lossy(&cmd.stderr));
+    assert!(py.status.success(), "python inspector: {}", String::from_utf8_lossy(&py.stderr));
+    assert!(rust.status.success(), "rust inspector: {}", String::from_utf8_lossy(&rust.stderr));
+
+    let py_samples: Vec<serde_json::Value> = String::from_utf8(py.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(py_samples.len(), 20);
+    let rust_sample: serde_json::Value = serde_json::from_str(String::from_utf8(rust.stdout).unwrap().lines().next().unwrap()).unwrap();
+    // Same keys in the same order, joint by joint, as the Rust inspector's documented shape.
+    let keys = |v: &serde_json::Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    for s in &py_samples {
+        assert_eq!(keys(s), keys(&rust_sample));
+        let (pj, rj) = (s["joints"].as_array().unwrap(), rust_sample["joints"].as_array().unwrap());
+        assert_eq!(pj.len(), rj.len());
+        for (p, r) in pj.iter().zip(rj) {
+            assert_eq!(keys(p), keys(r));
+            assert_eq!(p["name"], r["name"]);
+            // Configuration-fixed values are read identically through both layouts.
+            assert_eq!(p["stiffness"], r["stiffness"]);
+            assert_eq!(p["valid"], true);
+        }
+        assert_eq!(pj[0]["torque"], serde_json::Value::Null, "a rigid joint's torque is unknown");
+        assert!(pj[1]["torque"].is_f64());
+    }
+    // Live data: cycles increase, time stamps advance with them, and `a` moves towards 0.3 rad.
+    for w in py_samples.windows(2) {
+        assert!(w[1]["cycle"].as_u64() > w[0]["cycle"].as_u64());
+        assert!(w[1]["stamp_ns"].as_u64() > w[0]["stamp_ns"].as_u64());
+    }
+    let positions: Vec<f64> = py_samples.iter().map(|s| s["joints"][0]["position"].as_f64().unwrap()).collect();
+    assert!(positions.iter().all(|p| (-1.0..=1.0).contains(p)), "{positions:?}");
+    assert!(positions.last() > positions.first(), "a moves towards 0.3 rad: {positions:?}");
+    // The Rust inspector ran before the Python one: an earlier cycle of the same run.
+    assert!(rust_sample["cycle"].as_u64() < py_samples[0]["cycle"].as_u64());
+}
