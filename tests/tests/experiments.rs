@@ -1,7 +1,7 @@
 //! The thesis' experiments on the simulated arm.
 
 use jointctl_control::Waveform;
-use jointctl_experiments::record::{RecordOptions, record, write_csv};
+use jointctl_experiments::record::{RecordOptions, record};
 use jointctl_experiments::tracking::{Plan, Scenario, run};
 use jointctl_runtime::PluginLoader;
 use jointctl_tests::{jointctl, scratch};
@@ -10,23 +10,27 @@ fn sherpa() -> jointctl_config::LoadedConfig {
     jointctl_config::load(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml")).unwrap()
 }
 
+/// The thesis' characterisation end to end through the command line: `jointctl sim record` (the
+/// output moved by a flow source, the drives holding), then `jointctl fit --order 1` (first-order
+/// fit through zero, section 4.2); the stiffness is read from the YAML it writes.
 fn characterise(joint: &str) -> f64 {
-    let opts = RecordOptions { joint: joint.into(), amplitude_rad: 0.1, frequency_hz: 0.2, duration_s: 10.0, pivot_mm: None, angle_deg: 0.0, rate_hz: 100.0 };
-    let samples = record(&sherpa(), &PluginLoader::new([]), &opts).unwrap();
-    // The CSV round trip the fit tool reads, then the thesis' first-order fit through zero.
-    let mut csv = Vec::new();
-    write_csv(&samples, None, &mut csv).unwrap();
-    let text = String::from_utf8(csv).unwrap();
-    let (x, y): (Vec<f64>, Vec<f64>) = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            (c[1].parse::<f64>().unwrap(), c[2].parse::<f64>().unwrap())
-        })
-        .unzip();
-    assert!(x.iter().cloned().fold(0.0, f64::max) > 0.09, "the joint was deflected about 0.1 rad");
-    jointctl_models::fit::through_zero(&x, &y, 1).unwrap()[0]
+    let dir = scratch(&format!("characterise-{joint}"));
+    let (csv, yaml) = (dir.join("rec.csv"), dir.join("fit.yaml"));
+    let config = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let rec = std::process::Command::new(jointctl())
+        .args(["sim", "record"])
+        .arg(&config)
+        .args(["--joint", joint, "--duration", "10", "--amplitude", "0.1", "--frequency", "0.2", "--out"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(rec.status.success(), "sim record: {}", String::from_utf8_lossy(&rec.stderr));
+    let deflections = std::fs::read_to_string(&csv).unwrap().lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse::<f64>().unwrap()).fold(0.0, f64::max);
+    assert!(deflections > 0.09, "the joint was deflected about 0.1 rad (largest {deflections})");
+    let fit = std::process::Command::new(jointctl()).arg("fit").arg(&csv).args(["--order", "1", "--out"]).arg(&yaml).output().unwrap();
+    assert!(fit.status.success(), "fit: {}", String::from_utf8_lossy(&fit.stderr));
+    let written: serde_yaml::Value = serde_yaml::from_str(&std::fs::read_to_string(&yaml).unwrap()).unwrap();
+    written["characteristic"]["curves"][0]["stiffness_nm_per_rad"].as_f64().expect("a fitted stiffness")
 }
 
 #[test]
@@ -34,6 +38,7 @@ fn recorded_characterisations_fit_back_to_the_configured_stiffness() {
     // Section 3.3.2: elbow 113.78 Nm/rad, wrist q5 70.0966 Nm/rad.
     for (joint, k) in [("q4", 113.78), ("q5", 70.0966)] {
         let fitted = characterise(joint);
+        println!("{joint}: jointctl fit gives {fitted:.3} Nm/rad (configured {k})");
         assert!((fitted - k).abs() / k < 0.01, "{joint}: fitted {fitted} Nm/rad, configured {k}");
     }
 }
