@@ -150,3 +150,50 @@ fn bad_identify_arguments_are_errors_not_silently_changed() {
         assert!(err.contains(expected), "expected `{expected}` in: {err}");
     }
 }
+
+#[test]
+fn fit_groups_a_wrist_characterisation_by_pivot_and_direction_into_the_wrist_table() {
+    // Section 3.5.2: the wrist deflected along 0/45/90/135 deg at each pivot setting; one fit
+    // call for all of them (smoothing 5, continuous 4th order through zero, as the thesis did).
+    let loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
+    let (pivots, angles) = ([15.0, 35.0], [0.0, 45.0, 90.0, 135.0]);
+    let mut text = String::from("t,deflection,torque,pivot_mm,angle_deg\n");
+    let mut t0 = 0.0;
+    for pivot in pivots {
+        for angle in angles {
+            let opts = RecordOptions { joint: "q6".into(), amplitude_rad: 0.06, frequency_hz: 0.3, duration_s: 7.0, pivot_mm: Some(pivot), angle_deg: angle, rate_hz: 100.0 };
+            for s in record(&loaded, &PluginLoader::new([]), &opts).unwrap().iter().skip(50) {
+                text.push_str(&format!("{},{},{},{pivot},{angle}\n", t0 + s.t, s.deflection, s.torque));
+            }
+            t0 += 10.0;
+        }
+    }
+    let data = jointctl_ident::csv::parse(&text, "wrist.csv".as_ref()).unwrap();
+    let opts = jointctl_ident::fit::FitOptions { smoothing_window: 5, order: jointctl_ident::fit::Order::Fixed(4), branches: false, through_zero: true };
+    let result = jointctl_ident::fit::fit(&data, &opts).unwrap();
+    assert_eq!(result.groups.len(), 8);
+    let fitted = jointctl_models::characteristic::WristCharacteristic::from_spec(&result.spec).expect("the wrist's table form");
+    assert_eq!(fitted.pivots_mm(), &pivots);
+    // The configured table (what the simulated wrist's element is) is reproduced along every
+    // recorded direction and pivot, outside the assumed 0.02 rad dead-zone.
+    let wrist = loaded.config.joints.iter().find(|j| j.name == "wrist").unwrap();
+    let spec = serde_json::from_value(wrist.params.0["characteristic"].clone()).unwrap();
+    let configured = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).unwrap();
+    let mut worst: (f64, f64) = (0.0, 0.0);
+    for pivot in pivots {
+        for angle in angles {
+            let (s, c) = (f64::to_radians(angle).sin(), f64::to_radians(angle).cos());
+            for rho in [-0.05, -0.035, 0.035, 0.05] {
+                let along = |w: &jointctl_models::characteristic::WristCharacteristic| {
+                    let e = w.evaluate(pivot, rho * s, rho * c);
+                    e.torque_q6_nm * s + e.torque_q7_nm * c
+                };
+                let (want, got) = (along(&configured), along(&fitted));
+                worst = (worst.0.max((got - want).abs()), worst.1.max(want.abs()));
+                assert!((got - want).abs() < 0.1 * want.abs() + 0.02, "pivot {pivot} mm, {angle} deg, {rho} rad: fitted {got:.4} Nm, configured {want:.4} Nm");
+            }
+        }
+    }
+    println!("wrist 2 pivots x 4 directions: largest torque difference {:.4} Nm (largest torque compared {:.3} Nm)", worst.0, worst.1);
+    assert!(worst.1 > 0.1, "the comparison covers real torques");
+}
