@@ -46,7 +46,7 @@ pub struct IdentifyArgs {
     #[arg(long, requires = "config")]
     joint: Option<String>,
     /// Baseline characteristic order when no config is given.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, conflicts_with = "config")]
     baseline_order: usize,
     /// Write a Markdown report with plots into this folder.
     #[arg(long)]
@@ -170,10 +170,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             Ok(b) => b,
             Err(e) => return crate::fail(e),
         },
-        (None, None) if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
-        (None, None) => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
-        (Some(_), None) => return crate::fail("--config needs --joint NAME: the DOF whose model is the baseline"),
-        (None, Some(_)) => return crate::fail("--joint needs --config FILE: the arm description it is in"),
+        // clap makes --config and --joint come together.
+        _ if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
+        _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
     let spinner = (!a.json).then(|| {
         let s = indicatif::ProgressBar::new_spinner();
