@@ -160,3 +160,79 @@ fn static_and_loaded_plugins_behave_the_same() {
 fn position(target_rad: f64) -> Mode {
     Mode::Position { target_rad }
 }
+
+/// Issue finding: `deactivate` was called on an instance that had panicked. A panicked plugin is
+/// never entered again; an instance that did not panic is deactivated as usual.
+#[test]
+fn a_panicked_plugin_is_never_entered_again_not_even_to_deactivate() {
+    let dir = scratch("no-reentry");
+    for (params, expect_called) in [("{}", true), ("{panic_in_observe_at: 2}", false), ("{panic_in_control_at: 2}", false)] {
+        let marker = dir.join("deactivated");
+        let _ = std::fs::remove_file(&marker);
+        let params = format!("{{deactivate_marker: {}, {}", marker.display(), &params[1..]);
+        let params = params.replace(", }", "}");
+        let mut arm = arm_with_faulty(&params);
+        for i in 0..10 {
+            arm.step(i as f64 * 0.01);
+        }
+        let b = &arm.slots[1];
+        assert_eq!(b.fault_count, u64::from(!expect_called), "{params}: faulted once at most, then never called");
+        arm.shutdown();
+        assert_eq!(marker.exists(), expect_called, "{params}: deactivate called = {}", marker.exists());
+    }
+}
+
+/// A joint type whose descriptor declares what the host cannot wire.
+struct Declares;
+impl jointctl_api::Observer for Declares {
+    fn observe(&mut self, _: &jointctl_api::RawJointView, _: &mut [jointctl_api::JointState]) -> Result<(), jointctl_api::JointFault> {
+        Ok(())
+    }
+}
+impl jointctl_api::Controller for Declares {
+    fn control(
+        &mut self,
+        _: &[jointctl_api::JointState],
+        _: &[jointctl_api::JointCommand],
+        _: &jointctl_api::RawJointView,
+        _: &mut [MotorSetpoint],
+    ) -> Result<(), jointctl_api::JointFault> {
+        Ok(())
+    }
+}
+impl jointctl_api::JointPlugin for Declares {
+    fn create(_: &str) -> Result<Self, jointctl_api::PluginError> {
+        Ok(Declares)
+    }
+}
+
+use jointctl_api::abi::PluginDescriptor;
+static NINE_ENCODERS: PluginDescriptor =
+    PluginDescriptor::new::<Declares>(c"nine", c"0", 1, c"e0,e1,e2,e3,e4,e5,e6,e7,e8", c"motor", true);
+static FIVE_DRIVES: PluginDescriptor =
+    PluginDescriptor::new::<Declares>(c"five", c"0", 1, c"output", c"m0,m1,m2,m3,m4?", true);
+static TWICE: PluginDescriptor = PluginDescriptor::new::<Declares>(c"twice", c"0", 1, c"output,output?", c"motor", true);
+static NO_DOF: PluginDescriptor = PluginDescriptor::new::<Declares>(c"nodof", c"0", 0, c"output", c"motor", true);
+
+/// Issue finding: a 9th encoder role panicked `Arm::build`, an unwired optional 5th drive passed
+/// `check` and panicked on the first cycle. Such descriptors are refused when registered or
+/// loaded, with what is wrong and the limits; `check` and `run` report it at the joint's
+/// `plugin` line.
+#[test]
+fn role_counts_duplicates_and_dofs_are_validated_before_wiring() {
+    for (d, wants) in [(&NINE_ENCODERS, "9 encoder roles"), (&FIVE_DRIVES, "5 drive roles"), (&TWICE, "the encoder role `output` twice"), (&NO_DOF, "0 DOFs")] {
+        let mut l = PluginLoader::new([]);
+        let err = l.register_static(d).unwrap_err();
+        assert!(matches!(err, LoadPluginError::Roles { .. }), "{err:?}");
+        let msg = err.to_string();
+        assert!(msg.contains(wants) && msg.contains("at most 8 encoder and 4 drive roles"), "{msg}");
+    }
+    // Through the YAML, as `check` sees it: an error at the plugin line, no panic.
+    let mut l = PluginLoader::new([]);
+    let _ = l.register_static(&FIVE_DRIVES);
+    let extra = "  - name: b\n    plugin: five\n    encoders: {output: e1}\n    drives: {m0: m1}\n";
+    let loaded = jointctl_config::parse_str(&rig_yaml("x", 40.0, extra), "rig.yaml").unwrap();
+    let errs = jointctl_runtime::build_arm_for_check(&loaded, &l).map(|_| ()).unwrap_err();
+    assert_eq!(errs.0[0].field, "joints[1].plugin", "{}", errs.0[0]);
+    assert!(errs.0[0].message.contains("not found"), "an unregistered descriptor is simply not there: {}", errs.0[0]);
+}

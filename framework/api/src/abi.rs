@@ -13,8 +13,8 @@ use core::mem::{align_of, offset_of, size_of};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use crate::{
-    DriveReading, JointCommand, JointContext, JointPlugin, JointState, MotorSetpoint, PluginError, RawJointView,
-    Reading,
+    DriveReading, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint, PluginError,
+    RawJointView, Reading,
 };
 
 /// First 8 bytes of every descriptor: "JNTCTL" + format 1.
@@ -24,7 +24,21 @@ pub const ABI_MAJOR: u32 = 1;
 /// Bumped on compatible additions; a host accepts plugins with a minor version up to its own.
 pub const ABI_MINOR: u32 = 0;
 /// Version of the `jointctl-api` crate the library was built against.
-pub const API_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "\0");
+pub const API_VERSION: &str = env!("CARGO_PKG_VERSION");
+const API_VERSION_C: &CStr = c_string(concat!(env!("CARGO_PKG_VERSION"), "\0"));
+
+/// A `'static` C string from a literal that ends in exactly one NUL; anything else is refused
+/// when the constant is evaluated (at compile time in [`export_joint_plugin!`]).
+///
+/// ```
+/// assert_eq!(jointctl_api::abi::c_string("motor\0").to_str(), Ok("motor"));
+/// ```
+pub const fn c_string(text: &'static str) -> &'static CStr {
+    match CStr::from_bytes_with_nul(text.as_bytes()) {
+        Ok(c) => c,
+        Err(_) => panic!("a descriptor string must end with one NUL and contain no other"),
+    }
+}
 
 /// Return code of an entry point: success.
 pub const STATUS_OK: u32 = 0;
@@ -37,19 +51,69 @@ pub const STATUS_FAILED: u32 = 2;
 pub type Handle = *mut c_void;
 
 /// The part of a descriptor that never changes shape, read before anything else.
+///
+/// Its fields are private: a header is only made by [`PluginDescriptor::new`] (this host's
+/// versions and hash) or changed through [`PluginDescriptor::with_versions`], so safe code can
+/// never point `api_version` at memory that is not a NUL-terminated string.
 #[repr(C)]
 #[derive(Debug)]
 pub struct DescriptorHeader {
+    magic: u64,
+    abi_major: u32,
+    abi_minor: u32,
+    layout_hash: u64,
+    api_version: *const c_char,
+}
+
+impl DescriptorHeader {
     /// Must equal [`ABI_MAGIC`].
-    pub magic: u64,
+    pub const fn magic(&self) -> u64 {
+        self.magic
+    }
+
     /// [`ABI_MAJOR`] of the library.
-    pub abi_major: u32,
+    pub const fn abi_major(&self) -> u32 {
+        self.abi_major
+    }
+
     /// [`ABI_MINOR`] of the library.
-    pub abi_minor: u32,
-    /// [`LAYOUT_HASH`] of the library: sizes, alignments, field names and offsets of every shared type.
-    pub layout_hash: u64,
-    /// NUL-terminated `jointctl-api` version the library was built with.
-    pub api_version: *const c_char,
+    pub const fn abi_minor(&self) -> u32 {
+        self.abi_minor
+    }
+
+    /// [`LAYOUT_HASH`] of the library: the shared types, entry-point signatures and constants.
+    pub const fn layout_hash(&self) -> u64 {
+        self.layout_hash
+    }
+
+    /// The `jointctl-api` version the library was built with.
+    ///
+    /// ```
+    /// # use jointctl_api::*;
+    /// # struct P;
+    /// # impl Observer for P { fn observe(&mut self, _: &RawJointView, _: &mut [JointState]) -> Result<(), JointFault> { Ok(()) } }
+    /// # impl Controller for P { fn control(&mut self, _: &[JointState], _: &[JointCommand], _: &RawJointView, _: &mut [MotorSetpoint]) -> Result<(), JointFault> { Ok(()) } }
+    /// # impl JointPlugin for P { fn create(_: &str) -> Result<Self, PluginError> { Ok(P) } }
+    /// export_joint_plugin!(name: p, plugin: P, dof: 1, encoders: "output", drives: "motor");
+    /// assert_eq!(plugin_descriptor().header().api_version(), env!("CARGO_PKG_VERSION"));
+    /// ```
+    pub fn api_version(&self) -> &str {
+        // SAFETY: `api_version` is only ever set from `API_VERSION_C`, a `'static` C string
+        // (the fields are private and every constructor sets it so).
+        unsafe { c_text(self.api_version) }
+    }
+}
+
+/// Reads a C string the safe constructors made.
+///
+/// # Safety
+/// `ptr` is null or points at a NUL-terminated string that outlives `'a`.
+unsafe fn c_text<'a>(ptr: *const c_char) -> &'a str {
+    if ptr.is_null() {
+        return "";
+    }
+    // SAFETY: guaranteed by the caller.
+    unsafe { CStr::from_ptr(ptr) }.to_str().unwrap_or("<not UTF-8>")
 }
 
 /// Entry points of one plugin type. All take and return only `#[repr(C)]` data.
@@ -82,40 +146,70 @@ pub struct PluginVTable {
 }
 
 /// What a plugin library exports.
+///
+/// Every field is private: a descriptor is made only by [`PluginDescriptor::new`], whose strings
+/// are `&'static CStr`, so safe code cannot make one whose strings lack their NUL or point at
+/// freed memory. A descriptor read from a library is trusted only after
+/// `jointctl_runtime::loader::check_descriptor` compared its header with this host's.
+///
+/// The safe API cannot take a string without its NUL, nor set a field:
+///
+/// ```compile_fail
+/// # use jointctl_api::*;
+/// # struct P;
+/// # impl Observer for P { fn observe(&mut self, _: &RawJointView, _: &mut [JointState]) -> Result<(), JointFault> { Ok(()) } }
+/// # impl Controller for P { fn control(&mut self, _: &[JointState], _: &[JointCommand], _: &RawJointView, _: &mut [MotorSetpoint]) -> Result<(), JointFault> { Ok(()) } }
+/// # impl JointPlugin for P { fn create(_: &str) -> Result<Self, PluginError> { Ok(P) } }
+/// static D: abi::PluginDescriptor = abi::PluginDescriptor::new::<P>("fixed", c"1", 1, c"output", c"motor", true);
+/// ```
+///
+/// ```compile_fail
+/// # use jointctl_api::*;
+/// # struct P;
+/// # impl Observer for P { fn observe(&mut self, _: &RawJointView, _: &mut [JointState]) -> Result<(), JointFault> { Ok(()) } }
+/// # impl Controller for P { fn control(&mut self, _: &[JointState], _: &[JointCommand], _: &RawJointView, _: &mut [MotorSetpoint]) -> Result<(), JointFault> { Ok(()) } }
+/// # impl JointPlugin for P { fn create(_: &str) -> Result<Self, PluginError> { Ok(P) } }
+/// let mut d = abi::PluginDescriptor::new::<P>(c"fixed", c"1", 1, c"output", c"motor", true);
+/// d.name = b"fixed".as_ptr().cast();
+/// ```
+///
+/// while the same descriptor with C strings is fine:
+///
+/// ```
+/// # use jointctl_api::*;
+/// # struct P;
+/// # impl Observer for P { fn observe(&mut self, _: &RawJointView, _: &mut [JointState]) -> Result<(), JointFault> { Ok(()) } }
+/// # impl Controller for P { fn control(&mut self, _: &[JointState], _: &[JointCommand], _: &RawJointView, _: &mut [MotorSetpoint]) -> Result<(), JointFault> { Ok(()) } }
+/// # impl JointPlugin for P { fn create(_: &str) -> Result<Self, PluginError> { Ok(P) } }
+/// static D: abi::PluginDescriptor = abi::PluginDescriptor::new::<P>(c"fixed", c"1", 1, c"output", c"motor", true);
+/// assert_eq!(D.name(), "fixed");
+/// ```
 #[repr(C)]
 #[derive(Debug)]
 pub struct PluginDescriptor {
-    /// Checked first.
-    pub header: DescriptorHeader,
-    /// NUL-terminated plugin name (the name YAML uses).
-    pub name: *const c_char,
-    /// NUL-terminated plugin crate version.
-    pub version: *const c_char,
-    /// 1 when built with `panic = "unwind"`, so that panics can be caught at the boundary.
-    pub built_with_unwind: u8,
+    header: DescriptorHeader,
+    name: *const c_char,
+    version: *const c_char,
+    built_with_unwind: u8,
     _reserved: [u8; 3],
-    /// Degrees of freedom one instance handles.
-    pub dof: u32,
-    /// NUL-terminated, comma-separated encoder roles; a trailing `?` marks a role optional.
-    pub encoder_roles: *const c_char,
-    /// NUL-terminated, comma-separated drive roles.
-    pub drive_roles: *const c_char,
-    /// Entry points.
-    pub vtable: PluginVTable,
+    dof: u32,
+    encoder_roles: *const c_char,
+    drive_roles: *const c_char,
+    vtable: PluginVTable,
 }
 
-// SAFETY: the pointers in a descriptor point at `'static` immutable strings.
+// SAFETY: the pointers in a descriptor point at `'static` immutable strings (see `new`).
 unsafe impl Sync for PluginDescriptor {}
 
 impl PluginDescriptor {
-    /// The descriptor of plugin type `P`. All strings must end with `\0`.
-    /// Used by [`export_joint_plugin!`](crate::export_joint_plugin).
+    /// The descriptor of plugin type `P`. Used by [`export_joint_plugin!`](crate::export_joint_plugin).
+    /// Roles are comma-separated; a trailing `?` marks a role optional.
     pub const fn new<P: JointPlugin>(
-        name: &'static str,
-        version: &'static str,
+        name: &'static CStr,
+        version: &'static CStr,
         dof: u32,
-        encoder_roles: &'static str,
-        drive_roles: &'static str,
+        encoder_roles: &'static CStr,
+        drive_roles: &'static CStr,
         built_with_unwind: bool,
     ) -> Self {
         PluginDescriptor {
@@ -124,15 +218,15 @@ impl PluginDescriptor {
                 abi_major: ABI_MAJOR,
                 abi_minor: ABI_MINOR,
                 layout_hash: LAYOUT_HASH,
-                api_version: API_VERSION.as_ptr().cast(),
+                api_version: API_VERSION_C.as_ptr(),
             },
-            name: name.as_ptr().cast(),
-            version: version.as_ptr().cast(),
+            name: name.as_ptr(),
+            version: version.as_ptr(),
             built_with_unwind: built_with_unwind as u8,
             _reserved: [0; 3],
             dof,
-            encoder_roles: encoder_roles.as_ptr().cast(),
-            drive_roles: drive_roles.as_ptr().cast(),
+            encoder_roles: encoder_roles.as_ptr(),
+            drive_roles: drive_roles.as_ptr(),
             vtable: PluginVTable {
                 create: shim_create::<P>,
                 configure: shim_configure::<P>,
@@ -145,16 +239,69 @@ impl PluginDescriptor {
         }
     }
 
-    /// Reads one of the descriptor's strings.
+    /// The same descriptor claiming other ABI versions and layout hash: how a library built
+    /// against another `jointctl-api` looks to this host (the loader's refusal tests use it).
+    /// Only numbers change, so it is safe.
     ///
-    /// # Safety
-    /// `ptr` must be null or point at a NUL-terminated string that lives as long as `self`.
-    pub unsafe fn text(&self, ptr: *const c_char) -> &str {
-        if ptr.is_null() {
-            return "";
-        }
-        // SAFETY: guaranteed by the caller.
-        unsafe { CStr::from_ptr(ptr) }.to_str().unwrap_or("<not UTF-8>")
+    /// ```
+    /// # use jointctl_api::*;
+    /// # struct P;
+    /// # impl Observer for P { fn observe(&mut self, _: &RawJointView, _: &mut [JointState]) -> Result<(), JointFault> { Ok(()) } }
+    /// # impl Controller for P { fn control(&mut self, _: &[JointState], _: &[JointCommand], _: &RawJointView, _: &mut [MotorSetpoint]) -> Result<(), JointFault> { Ok(()) } }
+    /// # impl JointPlugin for P { fn create(_: &str) -> Result<Self, PluginError> { Ok(P) } }
+    /// let d = abi::PluginDescriptor::new::<P>(c"p", c"1", 1, c"output", c"motor", true)
+    ///     .with_versions(abi::ABI_MAJOR + 1, 0, abi::LAYOUT_HASH);
+    /// assert_eq!(d.header().abi_major(), abi::ABI_MAJOR + 1);
+    /// ```
+    pub const fn with_versions(mut self, abi_major: u32, abi_minor: u32, layout_hash: u64) -> Self {
+        self.header.abi_major = abi_major;
+        self.header.abi_minor = abi_minor;
+        self.header.layout_hash = layout_hash;
+        self
+    }
+
+    /// Checked first: magic, versions, layout hash.
+    pub const fn header(&self) -> &DescriptorHeader {
+        &self.header
+    }
+
+    /// The plugin name (the name YAML uses).
+    pub fn name(&self) -> &str {
+        // SAFETY: set only from a `&'static CStr` in `new` (fields are private).
+        unsafe { c_text(self.name) }
+    }
+
+    /// The plugin crate's version.
+    pub fn version(&self) -> &str {
+        // SAFETY: as in `name`.
+        unsafe { c_text(self.version) }
+    }
+
+    /// Comma-separated encoder roles; a trailing `?` marks a role optional.
+    pub fn encoder_roles(&self) -> &str {
+        // SAFETY: as in `name`.
+        unsafe { c_text(self.encoder_roles) }
+    }
+
+    /// Comma-separated drive roles; a trailing `?` marks a role optional.
+    pub fn drive_roles(&self) -> &str {
+        // SAFETY: as in `name`.
+        unsafe { c_text(self.drive_roles) }
+    }
+
+    /// Degrees of freedom one instance handles.
+    pub const fn dof(&self) -> u32 {
+        self.dof
+    }
+
+    /// Built with `panic = "unwind"`, so that its panics can be caught at the boundary.
+    pub const fn built_with_unwind(&self) -> bool {
+        self.built_with_unwind != 0
+    }
+
+    /// Entry points. Calling them is `unsafe`: see [`PluginVTable`].
+    pub const fn vtable(&self) -> &PluginVTable {
+        &self.vtable
     }
 }
 
@@ -193,14 +340,15 @@ impl ErrorBuf {
         self.field_len = copy_truncated(&mut self.field, field.unwrap_or(""));
     }
 
-    /// The stored message.
+    /// The stored message. The length was written by the plugin's copy of this code, so it is
+    /// clamped to the buffer and cut at the last whole UTF-8 character, never trusted.
     pub fn message(&self) -> &str {
-        core::str::from_utf8(&self.message[..self.message_len as usize]).unwrap_or("<not UTF-8>")
+        utf8_prefix(&self.message, self.message_len)
     }
 
     /// The stored field path, if any.
     pub fn field(&self) -> Option<&str> {
-        let f = core::str::from_utf8(&self.field[..self.field_len as usize]).unwrap_or("");
+        let f = utf8_prefix(&self.field, self.field_len);
         (!f.is_empty()).then_some(f)
     }
 
@@ -208,6 +356,18 @@ impl ErrorBuf {
     pub fn clear(&mut self) {
         self.message_len = 0;
         self.field_len = 0;
+    }
+}
+
+/// The valid UTF-8 start of `buf[..len]`, with `len` clamped to the buffer and the text ending
+/// at the first NUL (a forged length must not expose the buffer's unused bytes).
+fn utf8_prefix(buf: &[u8], len: u32) -> &str {
+    let bytes = &buf[..(len as usize).min(buf.len())];
+    let bytes = &bytes[..bytes.iter().position(|b| *b == 0).unwrap_or(bytes.len())];
+    match core::str::from_utf8(bytes) {
+        Ok(s) => s,
+        // The prefix up to the first invalid byte is valid UTF-8 by definition.
+        Err(e) => core::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default(),
     }
 }
 
@@ -382,39 +542,82 @@ const fn mix_usize(hash: u64, value: usize) -> u64 {
     mix_bytes(hash, &(value as u64).to_le_bytes())
 }
 
+/// Hashes each listed type's name, size and alignment and each field's name, offset and
+/// declared type (as written). A compile-time check beside each field makes the declared type
+/// the real one, so the hash cannot drift from the code: change a field's type and this list
+/// must change too, and with it the hash.
 macro_rules! hash_layouts {
-    ($hash:ident; $($ty:ident { $($field:ident),* $(,)? })*) => {
+    ($hash:ident; $($ty:ident { $($field:ident : $fty:ty),* $(,)? })*) => {
         $(
             $hash = mix_bytes($hash, stringify!($ty).as_bytes());
             $hash = mix_usize($hash, size_of::<$ty>());
             $hash = mix_usize($hash, align_of::<$ty>());
             $(
                 $hash = mix_bytes($hash, stringify!($field).as_bytes());
+                $hash = mix_bytes($hash, stringify!($fty).as_bytes());
                 $hash = mix_usize($hash, offset_of!($ty, $field));
             )*
+            const _: () = {
+                #[allow(dead_code)]
+                fn declared_types_are_the_real_ones(v: &$ty) {
+                    $( let _: &$fty = &v.$field; )*
+                }
+            };
         )*
     };
 }
 
-/// FNV-1a over the size, alignment, field names and field offsets of every type that crosses
-/// the boundary. Two builds agree on it only if they agree on the layout.
+/// Mixes named constants (name and value) into the hash: status codes, limits and the values
+/// of the `#[repr(transparent)]` enums both sides must agree on.
+macro_rules! hash_constants {
+    ($hash:ident; $($name:expr),* $(,)?) => {
+        $(
+            $hash = mix_bytes($hash, stringify!($name).as_bytes());
+            $hash = mix_bytes($hash, &($name as u64).to_le_bytes());
+        )*
+    };
+}
+
+/// FNV-1a over everything both sides of the boundary must agree on: the size, alignment, field
+/// names, offsets and field types of every shared type, the signatures of the entry points
+/// (the vtable's field types), and the constants (status codes, limits, mode, action, status
+/// and mask values). Two builds agree on it only if they agree on all of these.
 pub const LAYOUT_HASH: u64 = {
+    use crate::{ControlMode, DriveAction, FieldMask, ReadingStatus};
     let mut hash = 0xcbf2_9ce4_8422_2325_u64;
     hash_layouts!(hash;
-        Reading { value, age_s, status }
-        DriveReading { position_rad, velocity_rad_s, enabled, fault }
-        RawJointView { stamp_s, dt_s, encoders, drives }
-        JointState { position_rad, velocity_rad_s, deflection_rad, torque_nm, stiffness_nm_per_rad, pivot_mm, valid }
-        JointCommand { mode, position_feedback, position_rad, velocity_rad_s, stiffness_nm_per_rad }
-        MotorSetpoint { position_rad, velocity_ff_rad_s, action }
-        JointContext { dof, encoder_count, drive_count, rate_hz }
-        ErrorBuf { message_len, field_len, message, field }
-        PluginVTable { create, configure, activate, observe, control, deactivate, destroy }
-        DescriptorHeader { magic, abi_major, abi_minor, layout_hash, api_version }
-        PluginDescriptor { header, name, version, built_with_unwind, dof, encoder_roles, drive_roles, vtable }
+        Reading { value: f64, age_s: f64, status: ReadingStatus }
+        DriveReading { position_rad: Reading, velocity_rad_s: Reading, enabled: u8, fault: u8 }
+        RawJointView { stamp_s: f64, dt_s: f64, encoders: [Reading; crate::MAX_ENCODERS], drives: [DriveReading; crate::MAX_DRIVES] }
+        JointState { position_rad: f64, velocity_rad_s: f64, deflection_rad: f64, torque_nm: f64, stiffness_nm_per_rad: f64, pivot_mm: f64, valid: FieldMask }
+        JointCommand { mode: ControlMode, position_feedback: u8, position_rad: f64, velocity_rad_s: f64, stiffness_nm_per_rad: f64 }
+        MotorSetpoint { position_rad: f64, velocity_ff_rad_s: f64, action: DriveAction }
+        JointContext { dof: u32, encoder_count: u32, drive_count: u32, rate_hz: f64 }
+        ErrorBuf { message_len: u32, field_len: u32, message: [u8; 1024], field: [u8; 256] }
+        PluginVTable {
+            create: unsafe extern "C" fn(*const u8, usize, *mut ErrorBuf) -> Handle,
+            configure: unsafe extern "C" fn(Handle, *const JointContext, *mut ErrorBuf) -> u32,
+            activate: unsafe extern "C" fn(Handle, *const RawJointView, *mut ErrorBuf) -> u32,
+            observe: unsafe extern "C" fn(Handle, *const RawJointView, *mut JointState, u32, *mut ErrorBuf) -> u32,
+            control: unsafe extern "C" fn(Handle, *const JointState, *const JointCommand, u32, *const RawJointView, *mut MotorSetpoint, u32, *mut ErrorBuf) -> u32,
+            deactivate: unsafe extern "C" fn(Handle) -> u32,
+            destroy: unsafe extern "C" fn(Handle),
+        }
+        DescriptorHeader { magic: u64, abi_major: u32, abi_minor: u32, layout_hash: u64, api_version: *const c_char }
+        PluginDescriptor {
+            header: DescriptorHeader, name: *const c_char, version: *const c_char, built_with_unwind: u8,
+            dof: u32, encoder_roles: *const c_char, drive_roles: *const c_char, vtable: PluginVTable,
+        }
     );
-    hash = mix_usize(hash, crate::MAX_ENCODERS);
-    hash = mix_usize(hash, crate::MAX_DRIVES);
+    hash_constants!(hash;
+        crate::MAX_ENCODERS, crate::MAX_DRIVES, crate::MAX_DOF,
+        STATUS_OK, STATUS_PANICKED, STATUS_FAILED, JointFault::FIRST_PLUGIN_CODE,
+        ControlMode::HOLD.0, ControlMode::POSITION.0,
+        DriveAction::HOLD.0, DriveAction::MOVE.0,
+        ReadingStatus::MISSING.0, ReadingStatus::VALID.0, ReadingStatus::STALE.0, ReadingStatus::INVALID.0,
+        FieldMask::POSITION, FieldMask::VELOCITY, FieldMask::DEFLECTION, FieldMask::TORQUE,
+        FieldMask::STIFFNESS, FieldMask::PIVOT, FieldMask::CLAMPED,
+    );
     hash
 };
 
@@ -444,18 +647,18 @@ pub const LAYOUT_HASH: u64 = {
 ///     fn create(_: &str) -> Result<Self, PluginError> { Ok(Fixed) }
 /// }
 /// export_joint_plugin!(name: fixed, plugin: Fixed, dof: 1, encoders: "output", drives: "motor");
-/// assert_eq!(unsafe { plugin_descriptor().text(plugin_descriptor().name) }, "fixed");
+/// assert_eq!(plugin_descriptor().name(), "fixed");
 /// ```
 #[macro_export]
 macro_rules! export_joint_plugin {
     (name: $name:ident, plugin: $ty:ty, dof: $dof:literal, encoders: $enc:literal, drives: $drv:literal $(,)?) => {
         #[doc(hidden)]
         pub static __JOINTCTL_DESCRIPTOR: $crate::abi::PluginDescriptor = $crate::abi::PluginDescriptor::new::<$ty>(
-            concat!(stringify!($name), "\0"),
-            concat!(env!("CARGO_PKG_VERSION"), "\0"),
+            $crate::abi::c_string(concat!(stringify!($name), "\0")),
+            $crate::abi::c_string(concat!(env!("CARGO_PKG_VERSION"), "\0")),
             $dof,
-            concat!($enc, "\0"),
-            concat!($drv, "\0"),
+            $crate::abi::c_string(concat!($enc, "\0")),
+            $crate::abi::c_string(concat!($drv, "\0")),
             cfg!(panic = "unwind"),
         );
 
@@ -470,4 +673,49 @@ macro_rules! export_joint_plugin {
             &__JOINTCTL_DESCRIPTOR
         }
     };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue finding: `ErrorBuf::message` sliced by a length the plugin wrote. A length beyond the
+    /// buffer, or one that cuts a character, gives the valid text, never a panic.
+    #[test]
+    fn an_error_buffer_with_a_forged_length_reads_safely() {
+        let mut e = ErrorBuf::new();
+        e.write("grüße", Some("k"));
+        e.message_len = 5000;
+        e.field_len = u32::MAX;
+        assert_eq!(e.message(), "grüße");
+        assert_eq!(e.field(), Some("k"));
+        e.write("grüße", None);
+        e.message_len = 3; // inside the two bytes of `ü`
+        assert_eq!(e.message(), "gr");
+    }
+
+    /// The hash covers field types and constants, not only names and offsets: two layouts with
+    /// the same names, sizes and offsets but swapped `u32` argument meaning differ in the
+    /// signature text, and a changed constant changes the hash.
+    #[test]
+    fn the_layout_hash_covers_types_signatures_and_constants() {
+        let base = {
+            let mut h = 0xcbf2_9ce4_8422_2325_u64;
+            h = mix_bytes(h, b"observe");
+            mix_bytes(h, stringify!(unsafe extern "C" fn(Handle, *const RawJointView, *mut JointState, u32, *mut ErrorBuf) -> u32).as_bytes())
+        };
+        let swapped = {
+            let mut h = 0xcbf2_9ce4_8422_2325_u64;
+            h = mix_bytes(h, b"observe");
+            mix_bytes(h, stringify!(unsafe extern "C" fn(Handle, *const RawJointView, *mut JointState, *mut ErrorBuf, u32) -> u32).as_bytes())
+        };
+        assert_ne!(base, swapped);
+        let mut a = 0xcbf2_9ce4_8422_2325_u64;
+        let mut b = a;
+        hash_constants!(a; STATUS_OK);
+        let status_ok_changed = 7u32;
+        b = mix_bytes(b, b"STATUS_OK");
+        b = mix_bytes(b, &(status_ok_changed as u64).to_le_bytes());
+        assert_ne!(a, b);
+    }
 }

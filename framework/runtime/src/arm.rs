@@ -157,17 +157,16 @@ impl Arm {
             };
             let d = source.descriptor;
             let names = jc.dof_names();
-            // SAFETY: checked descriptors have 'static NUL-terminated strings.
-            let (enc_roles, drv_roles) = unsafe { (roles(d.text(d.encoder_roles)), roles(d.text(d.drive_roles))) };
-            if d.dof as usize != names.len() || names.len() > MAX_DOF {
+            let (enc_roles, drv_roles) = (roles(d.encoder_roles()), roles(d.drive_roles()));
+            if d.dof() as usize != names.len() || names.len() > MAX_DOF {
                 errors.push(src.error(
                     &at(if jc.dofs.is_empty() { "name" } else { "dofs" }),
                     format!(
                         "plugin `{}` serves {} DOF(s) per instance, the YAML gives {}{}",
                         jc.plugin.name,
-                        d.dof,
+                        d.dof(),
                         names.len(),
-                        if d.dof > 1 { ": name each under `dofs`" } else { "" }
+                        if d.dof() > 1 { ": name each under `dofs`" } else { "" }
                     ),
                 ));
                 continue;
@@ -220,7 +219,7 @@ impl Arm {
                     continue;
                 }
             };
-            let ctx = JointContext::new(d.dof, enc_roles.len() as u32, drv_roles.len() as u32, cfg.rate_hz);
+            let ctx = JointContext::new(d.dof(), enc_roles.len() as u32, drv_roles.len() as u32, cfg.rate_hz);
             if let Err(e) = joint.configure(&ctx) {
                 let field = e.field.as_ref().map_or_else(|| at(""), |f| at(&format!("params.{f}")));
                 errors.push(src.error(&field, format!("plugin `{}`: {}", jc.plugin.name, e.message)));

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use jointctl_api::abi::{ABI_MAGIC, ABI_MAJOR, ABI_MINOR, LAYOUT_HASH, PluginDescriptor};
+use jointctl_api::{MAX_DOF, MAX_DRIVES, MAX_ENCODERS};
 
 /// Where a plugin's code comes from.
 #[derive(Clone, Copy, Debug)]
@@ -86,6 +87,22 @@ pub enum LoadPluginError {
         /// Host's hash.
         host: u64,
     },
+    /// The descriptor declares roles or DOFs this host cannot wire.
+    #[error("{file}: plugin `{name}` declares {problem}: rebuild it with at most {max_encoders} encoder and {max_drives} drive roles, each named once, and 1 to {max_dof} DOFs")]
+    Roles {
+        /// Library file.
+        file: PathBuf,
+        /// Plugin name.
+        name: String,
+        /// What is wrong with its declaration.
+        problem: String,
+        /// [`jointctl_api::MAX_ENCODERS`].
+        max_encoders: usize,
+        /// [`jointctl_api::MAX_DRIVES`].
+        max_drives: usize,
+        /// [`jointctl_api::MAX_DOF`].
+        max_dof: usize,
+    },
     /// The descriptor's name differs from the name asked for.
     #[error("{file} exports plugin `{found}` under the entry for `{name}`")]
     NameMismatch {
@@ -109,47 +126,70 @@ pub unsafe fn check_descriptor(
 ) -> Result<&'static PluginDescriptor, LoadPluginError> {
     // SAFETY: the caller guarantees the header is readable; nothing past it is read before the
     // magic, version and layout hash are checked.
-    let header = unsafe { &(*descriptor).header };
-    if header.magic != ABI_MAGIC {
-        return Err(LoadPluginError::BadMagic { file: file.into(), magic: header.magic });
+    let header = unsafe { (*descriptor).header() };
+    if header.magic() != ABI_MAGIC {
+        return Err(LoadPluginError::BadMagic { file: file.into(), magic: header.magic() });
     }
-    if header.abi_major != ABI_MAJOR || header.abi_minor > ABI_MINOR {
-        // SAFETY: the header layout is stable across ABI versions.
-        let api = unsafe { cstr_lossy(header.api_version) };
+    if header.abi_major() != ABI_MAJOR || header.abi_minor() > ABI_MINOR {
+        // The header layout is stable across ABI versions, so its version string can be read.
+        let api = header.api_version().to_string();
         return Err(LoadPluginError::AbiVersion {
             file: file.into(),
-            found_major: header.abi_major,
-            found_minor: header.abi_minor,
+            found_major: header.abi_major(),
+            found_minor: header.abi_minor(),
             host_major: ABI_MAJOR,
             host_minor: ABI_MINOR,
             api,
         });
     }
-    if header.layout_hash != LAYOUT_HASH {
+    if header.layout_hash() != LAYOUT_HASH {
         return Err(LoadPluginError::Layout {
             file: file.into(),
-            major: header.abi_major,
-            minor: header.abi_minor,
-            found: header.layout_hash,
+            major: header.abi_major(),
+            minor: header.abi_minor(),
+            found: header.layout_hash(),
             host: LAYOUT_HASH,
         });
     }
     // SAFETY: the layout matches this host's, so the whole descriptor can be read.
     let d: &'static PluginDescriptor = unsafe { &*descriptor };
-    // SAFETY: descriptor strings are 'static and NUL-terminated (export_joint_plugin!).
-    let found = unsafe { d.text(d.name) };
+    let found = d.name();
     if found != name {
         return Err(LoadPluginError::NameMismatch { file: file.into(), name: name.into(), found: found.into() });
+    }
+    if let Some(problem) = declaration_problem(d) {
+        return Err(LoadPluginError::Roles {
+            file: file.into(),
+            name: name.into(),
+            problem,
+            max_encoders: MAX_ENCODERS,
+            max_drives: MAX_DRIVES,
+            max_dof: MAX_DOF,
+        });
     }
     Ok(d)
 }
 
-unsafe fn cstr_lossy(p: *const core::ffi::c_char) -> String {
-    if p.is_null() {
-        return "unknown".into();
+/// What is wrong with a descriptor's DOF count and role lists, if anything: the host wires at
+/// most [`MAX_ENCODERS`] encoders and [`MAX_DRIVES`] drives per instance (optional roles
+/// included, since the YAML may wire them), each role named once.
+fn declaration_problem(d: &PluginDescriptor) -> Option<String> {
+    if d.dof() == 0 || d.dof() as usize > MAX_DOF {
+        return Some(format!("{} DOFs", d.dof()));
     }
-    // SAFETY: guaranteed by the caller.
-    unsafe { core::ffi::CStr::from_ptr(p) }.to_string_lossy().into_owned()
+    for (kind, text, max) in [("encoder", d.encoder_roles(), MAX_ENCODERS), ("drive", d.drive_roles(), MAX_DRIVES)] {
+        let names: Vec<&str> = text.split(',').filter(|r| !r.is_empty()).map(|r| r.strip_suffix('?').unwrap_or(r)).collect();
+        if names.len() > max {
+            return Some(format!("{} {kind} roles ({text})", names.len()));
+        }
+        if let Some(bad) = names.iter().find(|n| n.is_empty() || !n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')) {
+            return Some(format!("the {kind} role `{bad}` (names are letters, digits and `_`)"));
+        }
+        if let Some((_, dup)) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)) {
+            return Some(format!("the {kind} role `{dup}` twice"));
+        }
+    }
+    None
 }
 
 /// Finds and loads plugins; remembers statically linked ones.
@@ -184,8 +224,7 @@ impl PluginLoader {
     /// Registers a statically linked plugin; a YAML `plugin: NAME` without a path then uses it
     /// instead of searching for a library.
     pub fn register_static(&mut self, descriptor: &'static PluginDescriptor) -> Result<(), LoadPluginError> {
-        // SAFETY: a descriptor from `plugin_descriptor()` is 'static and NUL-terminated.
-        let name = unsafe { descriptor.text(descriptor.name) }.to_string();
+        let name = descriptor.name().to_string();
         // SAFETY: a reference is a readable pointer.
         let d = unsafe { check_descriptor(descriptor, Path::new("<statically linked>"), &name)? };
         self.statics.insert(name, d);

@@ -25,6 +25,9 @@ struct Params {
     /// ... every this many cycles (0 = never).
     #[serde(default)]
     stall_every: u64,
+    /// Create this file in `deactivate`, so a test can see whether the host called it.
+    #[serde(default)]
+    deactivate_marker: Option<std::path::PathBuf>,
 }
 
 /// A joint that panics, faults or stalls when told to.
@@ -75,6 +78,12 @@ impl JointPlugin for Faulty {
             panic!("faulty joint: deliberate panic in create");
         }
         Ok(Faulty { p, cycle: 0 })
+    }
+
+    fn deactivate(&mut self) {
+        if let Some(marker) = &self.p.deactivate_marker {
+            let _ = std::fs::write(marker, b"deactivated");
+        }
     }
 }
 

@@ -25,11 +25,8 @@ impl JointPlugin for Nothing {
     }
 }
 
-static DESCRIPTOR: PluginDescriptor = {
-    let mut d = PluginDescriptor::new::<Nothing>("wrong_abi\0", "0.0.0\0", 1, "output\0", "motor\0", true);
-    d.header.abi_major += 1;
-    d
-};
+static DESCRIPTOR: PluginDescriptor = PluginDescriptor::new::<Nothing>(c"wrong_abi", c"0.0.0", 1, c"output", c"motor", true)
+    .with_versions(abi::ABI_MAJOR + 1, abi::ABI_MINOR, abi::LAYOUT_HASH);
 
 /// The entry point the host looks up.
 #[unsafe(no_mangle)]

@@ -25,11 +25,8 @@ impl JointPlugin for Nothing {
     }
 }
 
-static DESCRIPTOR: PluginDescriptor = {
-    let mut d = PluginDescriptor::new::<Nothing>("wrong_layout\0", "0.0.0\0", 1, "output\0", "motor\0", true);
-    d.header.layout_hash ^= 0x5a5a;
-    d
-};
+static DESCRIPTOR: PluginDescriptor = PluginDescriptor::new::<Nothing>(c"wrong_layout", c"0.0.0", 1, c"output", c"motor", true)
+    .with_versions(abi::ABI_MAJOR, abi::ABI_MINOR, abi::LAYOUT_HASH ^ 0x5a5a);
 
 /// The entry point the host looks up.
 #[unsafe(no_mangle)]
