@@ -116,21 +116,39 @@ unsafe fn c_text<'a>(ptr: *const c_char) -> &'a str {
     unsafe { CStr::from_ptr(ptr) }.to_str().unwrap_or("<not UTF-8>")
 }
 
-/// Entry points of one plugin type. All take and return only `#[repr(C)]` data.
-#[repr(C)]
-#[derive(Debug)]
-pub struct PluginVTable {
+/// Declares [`PluginVTable`] and, from the same tokens, the text of its signatures (field
+/// names, parameter names and types) that [`LAYOUT_HASH`] covers: the declaration and what the
+/// hash sees cannot drift apart, and swapping two `u32` parameters changes the hash.
+macro_rules! plugin_vtable {
+    ($($(#[$doc:meta])* $field:ident : $fty:ty,)*) => {
+        /// Entry points of one plugin type. All take and return only `#[repr(C)]` data.
+        #[repr(C)]
+        #[derive(Debug)]
+        pub struct PluginVTable {
+            $($(#[$doc])* pub $field: $fty,)*
+        }
+
+        /// The vtable's fields with their full signatures, as hashed into [`LAYOUT_HASH`].
+        ///
+        /// ```
+        /// assert!(jointctl_api::abi::VTABLE_SIGNATURES.contains("observe"));
+        /// ```
+        pub const VTABLE_SIGNATURES: &str = concat!($(stringify!($field), ": ", stringify!($fty), ";\n",)*);
+    };
+}
+
+plugin_vtable! {
     /// Creates an instance from JSON parameters (`params`, `len` bytes of UTF-8); null on error.
-    pub create: unsafe extern "C" fn(params: *const u8, len: usize, err: *mut ErrorBuf) -> Handle,
+    create: unsafe extern "C" fn(params: *const u8, len: usize, err: *mut ErrorBuf) -> Handle,
     /// Checks the wiring and rate.
-    pub configure: unsafe extern "C" fn(Handle, ctx: *const JointContext, err: *mut ErrorBuf) -> u32,
+    configure: unsafe extern "C" fn(h: Handle, ctx: *const JointContext, err: *mut ErrorBuf) -> u32,
     /// First readings, before the first cycle.
-    pub activate: unsafe extern "C" fn(Handle, raw: *const RawJointView, err: *mut ErrorBuf) -> u32,
+    activate: unsafe extern "C" fn(h: Handle, raw: *const RawJointView, err: *mut ErrorBuf) -> u32,
     /// One observation: `out` has `dof` entries. Returns a status or a fault code (>= 16).
-    pub observe: unsafe extern "C" fn(Handle, raw: *const RawJointView, out: *mut JointState, dof: u32, err: *mut ErrorBuf) -> u32,
+    observe: unsafe extern "C" fn(h: Handle, raw: *const RawJointView, out: *mut JointState, dof: u32, err: *mut ErrorBuf) -> u32,
     /// One control step: `state`/`command` have `dof` entries, `out` has `drives` entries.
-    pub control: unsafe extern "C" fn(
-        Handle,
+    control: unsafe extern "C" fn(
+        h: Handle,
         state: *const JointState,
         command: *const JointCommand,
         dof: u32,
@@ -140,9 +158,9 @@ pub struct PluginVTable {
         err: *mut ErrorBuf,
     ) -> u32,
     /// The loop stopped.
-    pub deactivate: unsafe extern "C" fn(Handle) -> u32,
+    deactivate: unsafe extern "C" fn(h: Handle) -> u32,
     /// Frees the instance (the plugin allocated it, so the plugin frees it).
-    pub destroy: unsafe extern "C" fn(Handle),
+    destroy: unsafe extern "C" fn(h: Handle),
 }
 
 /// What a plugin library exports.
@@ -538,6 +556,21 @@ const fn mix_bytes(mut hash: u64, bytes: &[u8]) -> u64 {
     hash
 }
 
+/// [`mix_bytes`] over a token text without its whitespace, which the compiler's pretty-printer
+/// (`stringify!`) may lay out differently from one version to the next.
+const fn mix_tokens(mut hash: u64, text: &str) -> u64 {
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() {
+        if !bytes[i].is_ascii_whitespace() {
+            hash ^= bytes[i] as u64;
+            hash = hash.wrapping_mul(0x0100_0000_01b3);
+        }
+        i += 1;
+    }
+    hash
+}
+
 const fn mix_usize(hash: u64, value: usize) -> u64 {
     mix_bytes(hash, &(value as u64).to_le_bytes())
 }
@@ -554,7 +587,7 @@ macro_rules! hash_layouts {
             $hash = mix_usize($hash, align_of::<$ty>());
             $(
                 $hash = mix_bytes($hash, stringify!($field).as_bytes());
-                $hash = mix_bytes($hash, stringify!($fty).as_bytes());
+                $hash = mix_tokens($hash, stringify!($fty));
                 $hash = mix_usize($hash, offset_of!($ty, $field));
             )*
             const _: () = {
@@ -594,21 +627,15 @@ pub const LAYOUT_HASH: u64 = {
         MotorSetpoint { position_rad: f64, velocity_ff_rad_s: f64, action: DriveAction }
         JointContext { dof: u32, encoder_count: u32, drive_count: u32, rate_hz: f64 }
         ErrorBuf { message_len: u32, field_len: u32, message: [u8; 1024], field: [u8; 256] }
-        PluginVTable {
-            create: unsafe extern "C" fn(*const u8, usize, *mut ErrorBuf) -> Handle,
-            configure: unsafe extern "C" fn(Handle, *const JointContext, *mut ErrorBuf) -> u32,
-            activate: unsafe extern "C" fn(Handle, *const RawJointView, *mut ErrorBuf) -> u32,
-            observe: unsafe extern "C" fn(Handle, *const RawJointView, *mut JointState, u32, *mut ErrorBuf) -> u32,
-            control: unsafe extern "C" fn(Handle, *const JointState, *const JointCommand, u32, *const RawJointView, *mut MotorSetpoint, u32, *mut ErrorBuf) -> u32,
-            deactivate: unsafe extern "C" fn(Handle) -> u32,
-            destroy: unsafe extern "C" fn(Handle),
-        }
         DescriptorHeader { magic: u64, abi_major: u32, abi_minor: u32, layout_hash: u64, api_version: *const c_char }
         PluginDescriptor {
             header: DescriptorHeader, name: *const c_char, version: *const c_char, built_with_unwind: u8,
             dof: u32, encoder_roles: *const c_char, drive_roles: *const c_char, vtable: PluginVTable,
         }
     );
+    // The entry points: their names, parameter names and types, in order, and the table's size.
+    hash = mix_tokens(hash, VTABLE_SIGNATURES);
+    hash = mix_usize(hash, size_of::<PluginVTable>());
     hash_constants!(hash;
         crate::MAX_ENCODERS, crate::MAX_DRIVES, crate::MAX_DOF,
         STATUS_OK, STATUS_PANICKED, STATUS_FAILED, JointFault::FIRST_PLUGIN_CODE,
@@ -694,28 +721,22 @@ mod tests {
         assert_eq!(e.message(), "gr");
     }
 
-    /// The hash covers field types and constants, not only names and offsets: two layouts with
-    /// the same names, sizes and offsets but swapped `u32` argument meaning differ in the
-    /// signature text, and a changed constant changes the hash.
+    /// Issue finding: swapping two `u32` parameters of an entry point passed the ABI check.
+    /// The signatures' text (parameter names included) is part of the hash, taken from the same
+    /// tokens that declare the vtable; a changed constant changes the hash too.
     #[test]
-    fn the_layout_hash_covers_types_signatures_and_constants() {
-        let base = {
-            let mut h = 0xcbf2_9ce4_8422_2325_u64;
-            h = mix_bytes(h, b"observe");
-            mix_bytes(h, stringify!(unsafe extern "C" fn(Handle, *const RawJointView, *mut JointState, u32, *mut ErrorBuf) -> u32).as_bytes())
-        };
-        let swapped = {
-            let mut h = 0xcbf2_9ce4_8422_2325_u64;
-            h = mix_bytes(h, b"observe");
-            mix_bytes(h, stringify!(unsafe extern "C" fn(Handle, *const RawJointView, *mut JointState, *mut ErrorBuf, u32) -> u32).as_bytes())
-        };
-        assert_ne!(base, swapped);
-        let mut a = 0xcbf2_9ce4_8422_2325_u64;
-        let mut b = a;
-        hash_constants!(a; STATUS_OK);
-        let status_ok_changed = 7u32;
-        b = mix_bytes(b, b"STATUS_OK");
-        b = mix_bytes(b, &(status_ok_changed as u64).to_le_bytes());
-        assert_ne!(a, b);
+    fn the_layout_hash_covers_signatures_with_parameter_names_and_constants() {
+        let compact: String = VTABLE_SIGNATURES.split_whitespace().collect();
+        let order = "dof:u32,raw:*constRawJointView,out:*mutMotorSetpoint,drives:u32";
+        assert!(compact.contains(order), "{compact}");
+        let swapped = compact.replacen(order, "drives:u32,raw:*constRawJointView,out:*mutMotorSetpoint,dof:u32", 1);
+        let h = |text: &str| mix_tokens(0xcbf2_9ce4_8422_2325, text);
+        assert_eq!(h(VTABLE_SIGNATURES), h(&compact), "whitespace does not count");
+        assert_ne!(h(&compact), h(&swapped));
+        let (mut a, mut b) = (0xcbf2_9ce4_8422_2325_u64, 0xcbf2_9ce4_8422_2325_u64);
+        hash_constants!(a; STATUS_FAILED);
+        b = mix_bytes(b, b"STATUS_FAILED");
+        b = mix_bytes(b, &(STATUS_FAILED as u64 + 1).to_le_bytes());
+        assert_ne!(a, b, "a constant's value is hashed");
     }
 }
