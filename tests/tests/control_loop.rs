@@ -33,6 +33,8 @@ fn counting() -> bool {
     COUNTING.try_with(Cell::get).unwrap_or(false)
 }
 
+// SAFETY: every call is forwarded unchanged to the system allocator; counting touches only a
+// thread-local flag and an atomic, neither of which allocates.
 unsafe impl GlobalAlloc for CountingAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if counting() {

@@ -3,6 +3,8 @@
 //! Small, allocation-free building blocks that joint plugins share. Everything here runs inside
 //! one control cycle, so nothing allocates, blocks or does I/O.
 
+#![forbid(unsafe_code)]
+
 mod joint_controller;
 mod pi;
 mod reference;

@@ -7,6 +7,8 @@
 //! - [`tracking`]: torque tracking (chapter 5): references (step, sine, cosine, a frequency
 //!   sweep) at several stiffness settings, with NRMSE and phase lag, in two scenarios.
 
+#![forbid(unsafe_code)]
+
 pub mod plot;
 pub mod record;
 pub mod tracking;

@@ -8,6 +8,8 @@
 //! Backends: the simulated arm (crate `jointctl-sim`), the default, which runs anywhere;
 //! [`hardware::HardwareHal`], the real buses (SocketCAN + spidev).
 
+#![forbid(unsafe_code)]
+
 pub mod budget;
 pub mod codec;
 pub mod condition;

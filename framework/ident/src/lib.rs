@@ -6,6 +6,8 @@
 //! - [`identify`]: given measured data, what the joint model gets wrong, which physical cause
 //!   explains it, the extended model, and the gain on held-out data.
 
+#![forbid(unsafe_code)]
+
 pub mod csv;
 pub mod fit;
 pub mod identify;

@@ -13,6 +13,8 @@
 //! one arm builds its iceoryx2 config with [`iceoryx2_config`] rather than looking for a config
 //! file relative to its working directory, so that all of them meet in one domain.
 
+#![forbid(unsafe_code)]
+
 use iceoryx2::config::Config;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;

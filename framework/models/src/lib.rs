@@ -13,6 +13,8 @@
 //!
 //! Everything evaluated in a control cycle is allocation-free.
 
+#![forbid(unsafe_code)]
+
 pub mod assumed;
 pub mod characteristic;
 pub mod fit;
