@@ -4,7 +4,7 @@
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use jointctl_control::{Mode, Reference, Waveform};
+use jointctl_modes::{Mode, Reference, Waveform};
 use jointctl_runtime::commands::ArmCommand;
 use jointctl_tests::{arm_name, jointctl, scratch};
 

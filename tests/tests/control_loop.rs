@@ -1,6 +1,6 @@
 //! The loop: zero allocations per cycle, deadline overruns detected and counted.
 
-use jointctl_control::Mode;
+use jointctl_modes::Mode;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 

@@ -1,6 +1,6 @@
 //! The thesis' experiments on the simulated arm.
 
-use jointctl_control::Waveform;
+use jointctl_modes::Waveform;
 use jointctl_experiments::record::{RecordOptions, record};
 use jointctl_experiments::tracking::{Plan, Scenario, run};
 use jointctl_runtime::PluginLoader;

@@ -4,7 +4,7 @@
 //! is against the simulated torque sensor (the elbow's torque is real while its link
 //! accelerates), sample by sample.
 
-use jointctl_control::Mode;
+use jointctl_modes::Mode;
 use jointctl_tests::scratch;
 
 fn run(loss_rate: f64, mode: &str) -> (f64, f64, u64) {

@@ -1,6 +1,6 @@
 //! The plugin boundary: refused libraries, contained panics, plugins found from YAML alone.
 
-use jointctl_control::Mode;
+use jointctl_modes::Mode;
 use jointctl_api::MotorSetpoint;
 use jointctl_runtime::{LoadPluginError, PluginLoader};
 use jointctl_tests::{arm_name, artifact, rig_yaml, scratch};

@@ -1,7 +1,7 @@
 //! The reference config's observers on synthetic raw readings: every joint's state checked
 //! against values computed by hand from the thesis' equations and the configured parameters.
 
-use jointctl_control::Mode;
+use jointctl_modes::Mode;
 use std::sync::{Arc, Mutex};
 
 use jointctl_api::{DriveReading, FieldMask, Reading};

@@ -8,7 +8,8 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, de};
 
 use crate::num::{finite, finite_opt, finite_pair};
-pub use jointctl_control::{ControllerConfig, GainPoint, PiGains};
+pub use jointctl_control::PiGains;
+pub use jointctl_modes::{ControllerConfig, GainPoint};
 
 /// One robot arm: its loop, its hardware and its joints.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]

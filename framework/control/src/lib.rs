@@ -1,21 +1,17 @@
 //! # jointctl-control
 //!
-//! Small, allocation-free building blocks that joint plugins share. Everything here runs inside
-//! one control cycle, so nothing allocates, blocks or does I/O.
+//! Small, allocation-free building blocks that joint plugins share: the PI with anti-windup,
+//! the velocity estimate, the linear transmission. Everything here runs inside one control
+//! cycle, so nothing allocates, blocks or does I/O. The host's mode logic (hold, position,
+//! torque, impedance, ...) lives in `jointctl-modes`, so a plugin built on these blocks pulls in
+//! neither it nor a schema generator.
 
 #![forbid(unsafe_code)]
 
-mod joint_controller;
 mod pi;
-mod reference;
-mod trajectory;
+mod transmission;
 mod velocity;
 
-pub use joint_controller::{ControllerConfig, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output, StartupMode};
 pub use pi::{Pi, PiGains};
-pub use reference::{Reference, Waveform};
-pub use trajectory::{MAX_TRAJECTORY_POINTS, Trajectory, TrajectoryPoint};
-pub use velocity::VelocityEstimator;
-
-mod transmission;
 pub use transmission::LinearTransmission;
+pub use velocity::VelocityEstimator;

@@ -4,7 +4,7 @@ use serde::Deserialize;
 ///
 /// The thesis tuned its PI gains experimentally and does not print them (sections 4.3, 5):
 /// every default here is an assumption.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PiGains {
     /// Proportional gain [output unit / input unit].

@@ -3,7 +3,7 @@
 //! settings, and a frequency sweep; observed and sensor torque compared with the reference.
 
 use jointctl_config::{EnvironmentConfig, LoadedConfig};
-use jointctl_control::{Mode, Reference, Waveform};
+use jointctl_modes::{Mode, Reference, Waveform};
 use jointctl_runtime::{Arm, PluginLoader};
 use jointctl_runtime::commands::ArmCommand;
 use jointctl_sim::{SharedSim, SimHal};

@@ -5,7 +5,7 @@ use jointctl_api::{
     JointCommand, JointContext, JointFault, JointState, MAX_DOF, MAX_DRIVES, MAX_ENCODERS, MotorSetpoint,
     RawJointView,
 };
-use jointctl_control::{DofLimits, JointController, Mode, Observed};
+use jointctl_modes::{DofLimits, JointController, Mode, Observed};
 
 use crate::commands::ArmCommand;
 use jointctl_config::{ConfigErrors, LimitsConfig, LoadedConfig};

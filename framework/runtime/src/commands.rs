@@ -2,7 +2,7 @@
 //! its next cycle. An invalid command changes nothing and says why.
 
 use jointctl_config::LimitsConfig;
-use jointctl_control::{Mode, Reference, Trajectory, TrajectoryPoint, Waveform};
+use jointctl_modes::{Mode, Reference, Trajectory, TrajectoryPoint, Waveform};
 use jointctl_ipc::{CommandRequest, command_kind as kind, decode_name};
 
 /// A validated command, ready for the loop. Times inside a mode (a reference's start, a

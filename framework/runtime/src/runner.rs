@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
 use jointctl_config::TimingConfig;
-use jointctl_control::Mode;
+use jointctl_modes::Mode;
 use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, JointSample, ServiceNames, encode_name};
 
 use crate::commands::{ArmCommand, CommandValidator};

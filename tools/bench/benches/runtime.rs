@@ -3,7 +3,7 @@
 //! Environment: `BENCH_CYCLES_40HZ` (default 10000, i.e. 250 s) and `BENCH_CYCLES_1KHZ`
 //! (default 10000) set the loop-jitter runs; `BENCH_QUICK=1` shortens everything for a smoke run.
 
-use jointctl_control::Mode;
+use jointctl_modes::Mode;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -212,7 +212,7 @@ fn main() {
         let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
         arm.activate().unwrap();
         for i in 0..arm.dof_names.len() {
-            arm.set_mode(i, jointctl_control::Mode::Position { target_rad: 0.1 });
+            arm.set_mode(i, jointctl_modes::Mode::Position { target_rad: 0.1 });
         }
         let seconds = if quick { 2.0 } else { 20.0 };
         let t = Instant::now();

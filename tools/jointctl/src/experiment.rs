@@ -144,7 +144,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
             };
             let mut plan = Plan::thesis(settings);
             if quick {
-                plan.references = vec![(jointctl_control::Waveform::Step, 0.0), (jointctl_control::Waveform::Sine, 0.1), (jointctl_control::Waveform::Sine, 1.0)];
+                plan.references = vec![(jointctl_modes::Waveform::Step, 0.0), (jointctl_modes::Waveform::Sine, 0.1), (jointctl_modes::Waveform::Sine, 1.0)];
             }
             let bar = indicatif::ProgressBar::new((plan.references.len() * plan.stiffness_nm_per_rad.len().max(1)) as u64);
             bar.set_style(indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} runs {elapsed}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));

@@ -15,7 +15,7 @@ pub enum Waveform {
 /// A reference generator: evaluated every cycle, allocation-free.
 ///
 /// ```
-/// use jointctl_control::{Reference, Waveform};
+/// use jointctl_modes::{Reference, Waveform};
 /// let r = Reference { waveform: Waveform::Sine, amplitude: 5.0, frequency_hz: 0.1, offset: 1.0, start_s: 2.0 };
 /// assert_eq!(r.value(0.0), 1.0);
 /// assert!((r.value(4.5) - (1.0 + 5.0)).abs() < 1e-9); // a quarter period after the start

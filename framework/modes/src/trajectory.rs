@@ -18,7 +18,7 @@ pub struct TrajectoryPoint {
 /// point it holds the first, after the last it holds the last.
 ///
 /// ```
-/// use jointctl_control::{Trajectory, TrajectoryPoint};
+/// use jointctl_modes::{Trajectory, TrajectoryPoint};
 /// let p = |t, q| TrajectoryPoint { time_s: t, position_rad: q, velocity_rad_s: f64::NAN };
 /// let tr = Trajectory::new(&[p(0.0, 0.0), p(1.0, 1.0), p(2.0, 0.5)]).unwrap();
 /// assert_eq!(tr.sample(0.5), (0.5, 1.0));

@@ -4,7 +4,9 @@
 
 use serde::Deserialize;
 
-use crate::{Pi, PiGains, Reference, Trajectory};
+use jointctl_control::{Pi, PiGains};
+
+use crate::{Reference, Trajectory};
 
 /// One point of the torque PI's gain schedule over the joint stiffness (section 6.2).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, schemars::JsonSchema)]
@@ -25,6 +27,7 @@ pub struct GainPoint {
 pub struct ControllerConfig {
     /// Figure 4.6: the PI on the deflection error; `output_limit` bounds its correction [rad].
     #[serde(default = "default_torque_pi")]
+    #[schemars(with = "crate::PiGainsSchema")]
     pub torque_pi: PiGains,
     /// Section 6.2: gains at several stiffness settings, interpolated linearly in stiffness and
     /// held constant beyond the ends. Empty: `torque_pi` at every stiffness.
@@ -122,7 +125,7 @@ impl ControllerConfig {
     /// The torque PI gains at a stiffness (section 6.2's gain scheduling).
     ///
     /// ```
-    /// use jointctl_control::{ControllerConfig, GainPoint};
+    /// use jointctl_modes::{ControllerConfig, GainPoint};
     /// let mut c = ControllerConfig::default();
     /// c.torque_pi_schedule = vec![
     ///     GainPoint { stiffness_nm_per_rad: 10.0, kp: 1.0, ki: 10.0 },

@@ -1,0 +1,21 @@
+//! # jointctl-modes
+//!
+//! The host's mode logic, one [`JointController`] per DOF: hold, position (with the plugin's
+//! feedback PI, thesis section 4.3), manual, trajectory, torque (figure 4.6, with section 6.2's
+//! gain schedule) and impedance; their reference generators and trajectories; and the YAML
+//! `controller:` settings ([`ControllerConfig`]). The runtime runs it; plugins never see it: they
+//! get a joint set-point and map it onto their motors with `jointctl-control`'s blocks.
+
+#![forbid(unsafe_code)]
+
+mod joint_controller;
+mod reference;
+mod schema;
+mod trajectory;
+
+pub use joint_controller::{
+    ControllerConfig, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output, StartupMode,
+};
+pub use reference::{Reference, Waveform};
+pub use schema::PiGainsSchema;
+pub use trajectory::{MAX_TRAJECTORY_POINTS, Trajectory, TrajectoryPoint};
