@@ -162,7 +162,7 @@ fn q2_observed_torque_follows_a_0_1_hz_sine() {
     // In-process and faster than real time: the SHERPA config, 40 Hz, 20 s of a 5 Nm sine.
     let (_, path) = sherpa_copy("sine");
     let loaded = jointctl_config::load(&path).unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
     arm.activate().unwrap();
     let reference = Reference { waveform: Waveform::Sine, amplitude: 5.0, frequency_hz: 0.1, offset: 0.0, start_s: 0.0 };
     arm.observe(0.0);
@@ -193,7 +193,7 @@ fn transmission_round_trips_joint_to_motor_to_joint_for_every_plugin() {
     // planetary ratios. (q2's output is clamped in this configuration.)
     let (_, path) = sherpa_copy("round-trip");
     let loaded = jointctl_config::load(&path).unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
     arm.activate().unwrap();
     let targets = [(0, 0.3), (2, -0.2), (3, 0.25), (4, -0.4), (5, 0.15), (6, -0.1)];
     for (dof, q) in targets {
@@ -220,7 +220,7 @@ fn a_reference_configured_in_yaml_runs_from_the_start() {
     );
     std::fs::write(&path, text).unwrap();
     let loaded = jointctl_config::load(&path).unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
     arm.activate().unwrap();
     for i in 0..=80 {
         arm.step(i as f64 / 40.0);

@@ -72,7 +72,7 @@ fn a_cycle_allocates_nothing() {
     let mut loader = PluginLoader::new([]);
     loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
     loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap();
     arm.activate().unwrap();
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
     // Drive both joints so that the position controllers, not only hold, are exercised.
@@ -118,7 +118,7 @@ fn deadline_overruns_are_detected_and_counted() {
     let extra = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stall_us: 5000, stall_every: 10}\n";
     let yaml = rig_yaml(&arm_name("overrun"), 500.0, extra);
     let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
     arm.activate().unwrap();
     let opts = RunOptions { cycles: Some(100), duration_s: None, timing_samples: 100 };
     let report = jointctl_runtime::run(&mut arm, &loaded.config.timing, None, &opts).unwrap();
@@ -153,7 +153,7 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
     ] {
         loader.register_static(d).unwrap();
     }
-    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap();
     arm.activate().unwrap();
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
     for i in 0..arm.dof_names.len() {

@@ -9,7 +9,7 @@ fn the_example_sea_plugin_loads_from_yaml_alone_and_prefers_its_torque_sensor() 
     let loaded = jointctl_config::load(&cfg).unwrap();
     // No search path at all: only the YAML's `path` can find it.
     let loader = jointctl_runtime::PluginLoader::new([]);
-    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap();
     arm.activate().unwrap();
     arm.step(0.01);
     assert_eq!(arm.slots[0].plugin, "example_sea");

@@ -85,7 +85,7 @@ fn fit_output_feeds_the_runtime_through_include_without_editing() {
     let path = dir.join("arm.yaml");
     std::fs::write(&path, cfg).unwrap();
     let loaded = jointctl_config::load(&path).unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
     arm.activate().unwrap();
     arm.step(0.0);
     let k = arm.states[3].stiffness().unwrap();

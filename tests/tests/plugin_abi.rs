@@ -48,7 +48,7 @@ fn a_plugin_is_loaded_from_a_path_given_only_in_yaml() {
     let yaml = dir.join("arm.yaml");
     std::fs::write(&yaml, rig_yaml(&arm_name("bypath"), 100.0, extra)).unwrap();
     let loaded = jointctl_config::load(&yaml).unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &jointctl_runtime::loader_for(&loaded)).expect("loads from the YAML path");
+    let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::loader_for(&loaded)).expect("loads from the YAML path");
     assert_eq!(arm.slots[1].plugin, "faulty");
     arm.activate().unwrap();
     arm.step(0.0);
@@ -59,7 +59,7 @@ fn a_plugin_is_loaded_from_a_path_given_only_in_yaml() {
 fn a_missing_plugin_is_reported_at_its_yaml_line() {
     let extra = "  - name: b\n    plugin: no_such_joint\n";
     let loaded = jointctl_config::parse_str(&rig_yaml("x", 40.0, extra), "rig.yaml").unwrap();
-    let errs = jointctl_runtime::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
+    let errs = jointctl_backends::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
     let e = &errs.0[0];
     assert_eq!(e.field, "joints[1].plugin");
     assert_eq!(e.line, 28);
@@ -70,7 +70,7 @@ fn a_missing_plugin_is_reported_at_its_yaml_line() {
 fn plugin_parameter_and_wiring_errors_point_into_the_yaml() {
     let extra = "  - name: b\n    plugin: elastic\n    encoders: {outptu: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: -3, output_per_motor: 1, position_pi: {kp: 0, ki: 0}}\n  - name: c\n    plugin: elastic\n    encoders: {output: e2}\n    drives: {motor: m2}\n    params: {stiffness_nm_per_rad: -3, output_per_motor: 1, position_pi: {kp: 0, ki: 0}}\n";
     let loaded = jointctl_config::parse_str(&rig_yaml("x", 40.0, extra), "rig.yaml").unwrap();
-    let errs = jointctl_runtime::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
+    let errs = jointctl_backends::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
     let shown: Vec<String> = errs.0.iter().map(|e| e.to_string()).collect();
     assert_eq!(errs.0.len(), 3, "{shown:#?}");
     assert_eq!(errs.0[0].field, "joints[1].encoders.outptu");
@@ -84,7 +84,7 @@ fn plugin_parameter_and_wiring_errors_point_into_the_yaml() {
 fn arm_with_faulty(params: &str) -> jointctl_runtime::Arm {
     let extra = format!("  - name: b\n    plugin: faulty\n    encoders: {{output: e1}}\n    drives: {{motor: m1}}\n    params: {params}\n");
     let loaded = jointctl_config::parse_str(&rig_yaml("x", 100.0, &extra), "rig.yaml").unwrap();
-    let mut arm = jointctl_runtime::build_arm(&loaded, &loader()).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader()).unwrap();
     arm.activate().unwrap();
     arm
 }
@@ -131,7 +131,7 @@ fn a_panic_in_control_and_a_fault_code_are_contained_too() {
 fn a_panic_in_create_is_a_located_config_error() {
     let extra = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {panic_in_create: true}\n";
     let loaded = jointctl_config::parse_str(&rig_yaml("x", 100.0, extra), "rig.yaml").unwrap();
-    let errs = jointctl_runtime::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
+    let errs = jointctl_backends::build_arm(&loaded, &loader()).map(|_| ()).unwrap_err();
     assert_eq!(errs.0[0].field, "joints[1].params");
     assert!(errs.0[0].message.contains("deliberate panic in create"), "{}", errs.0[0]);
 }
@@ -144,7 +144,7 @@ fn static_and_loaded_plugins_behave_the_same() {
     statics.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
     let mut runs = Vec::new();
     for l in [loader(), statics] {
-        let mut arm = jointctl_runtime::build_arm(&loaded, &l).unwrap();
+        let mut arm = jointctl_backends::build_arm(&loaded, &l).unwrap();
         arm.activate().unwrap();
         arm.set_mode(0, position(0.5));
         for i in 0..50 {

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use jointctl_api::{MotorSetpoint, ReadingStatus};
 use jointctl_hal::codec::canopen::{self as co, DriveState, Frame};
-use jointctl_hal::hardware::HardwareHal;
+use jointctl_hal_socketcan::HardwareHal;
 use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
 use socketcan::{CanFrame, CanSocket, EmbeddedFrame, Socket, StandardId};
 

@@ -5,15 +5,18 @@
 //! sends an [`ActuatorFrame`] of motor set-points. Which joint uses which device is the
 //! runtime's business.
 //!
-//! Backends: the simulated arm (crate `jointctl-sim`), the default, which runs anywhere;
-//! [`hardware::HardwareHal`], the real buses (SocketCAN + spidev).
+//! This crate holds what every backend shares and nothing that needs hardware: the [`Hal`]
+//! trait and its frames, the robot's frame codecs ([`codec`]), the plausibility conditioner
+//! ([`condition`]), the bus budget ([`budget`]) and the [`NullHal`]. Backends live in their own
+//! crates: the simulated arm (`jointctl-sim`), the default, which runs anywhere, and the real
+//! buses (`jointctl-hal-socketcan`: SocketCAN + spidev); `jointctl-backends` picks the one a
+//! config asks for.
 
 #![forbid(unsafe_code)]
 
 pub mod budget;
 pub mod codec;
 pub mod condition;
-pub mod hardware;
 
 use jointctl_api::{DriveReading, MotorSetpoint, Reading};
 use jointctl_config::ArmConfig;

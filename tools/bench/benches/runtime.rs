@@ -37,7 +37,7 @@ fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::Lo
         loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
         loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
     }
-    let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap_or_else(|e| {
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| {
         panic!("{e}\n(build the plugins first: cargo build --release --workspace)")
     });
     arm.activate().unwrap();
@@ -209,7 +209,7 @@ fn main() {
         loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
         loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
         loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
-        let mut arm = jointctl_runtime::build_arm(&loaded, &loader).unwrap();
+        let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap();
         arm.activate().unwrap();
         for i in 0..arm.dof_names.len() {
             arm.set_mode(i, jointctl_modes::Mode::Position { target_rad: 0.1 });

@@ -108,7 +108,7 @@ fn main() -> ExitCode {
             if static_plugins && let Err(e) = static_loader(&mut loader) {
                 return fail(e);
             }
-            let mut arm = match jointctl_runtime::build_arm(&loaded, &loader) {
+            let mut arm = match jointctl_backends::build_arm(&loaded, &loader) {
                 Ok(a) => a,
                 Err(e) => return fail(e),
             };
@@ -145,7 +145,7 @@ fn main() -> ExitCode {
                 Err(e) => return fail(e),
             };
             let loader = jointctl_runtime::loader_for(&loaded);
-            let warnings = match jointctl_runtime::check_bus_budget(&loaded) {
+            let warnings = match jointctl_backends::check_bus_budget(&loaded) {
                 Ok(w) => w,
                 Err(e) => return fail(e),
             };

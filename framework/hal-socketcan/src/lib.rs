@@ -1,3 +1,5 @@
+//! # jointctl-hal-socketcan
+//!
 //! The real buses: the ELMO drives as CANopen nodes over SocketCAN, the absolute encoders over
 //! Linux spidev. Lost or late frames are never data: every reading goes through a
 //! [`Conditioner`], carries its age, and is stale or invalid rather than zero.
@@ -17,10 +19,10 @@ use jointctl_api::{DriveAction, DriveReading, Reading};
 use jointctl_config::{ArmConfig, DriveMode};
 use socketcan::{CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, SocketOptions, StandardId};
 
-use crate::codec::as5048;
-use crate::codec::canopen::{self as co, DriveState, Frame};
-use crate::condition::{Conditioner, Plausibility, Sample};
-use crate::{ActuatorFrame, Hal, HalIoError, HalSetupError, SensorFrame};
+use jointctl_hal::codec::as5048;
+use jointctl_hal::codec::canopen::{self as co, DriveState, Frame};
+use jointctl_hal::condition::{Conditioner, Plausibility, Sample};
+use jointctl_hal::{ActuatorFrame, Hal, HalIoError, HalSetupError, SensorFrame};
 
 /// Health of one CAN bus.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -47,7 +49,7 @@ pub struct DriveHealth {
     /// No heartbeat within the timeout.
     pub silent: bool,
     /// Cycles without a TPDO, frames rejected, values rejected.
-    pub losses: crate::condition::LossCounters,
+    pub losses: jointctl_hal::condition::LossCounters,
 }
 
 struct Drive {
@@ -284,7 +286,7 @@ impl HardwareHal {
     }
 
     /// Loss counters of each encoder, in device order.
-    pub fn encoder_health(&self) -> impl Iterator<Item = (&str, &str, crate::condition::LossCounters)> {
+    pub fn encoder_health(&self) -> impl Iterator<Item = (&str, &str, jointctl_hal::condition::LossCounters)> {
         self.encoders.iter().map(|e| (e.name.as_str(), e.path.as_str(), e.conditioner.counters()))
     }
 }
@@ -395,22 +397,22 @@ impl Hal for HardwareHal {
         Ok(())
     }
 
-    fn device_health(&self, out: &mut [crate::DeviceHealth]) {
+    fn device_health(&self, out: &mut [jointctl_hal::DeviceHealth]) {
         let mut i = 0;
         for bus in &self.buses {
-            let bus_flags = if bus.health.bus_off { crate::DeviceHealth::BUS_OFF } else { 0 }
-                | if bus.health.error_passive { crate::DeviceHealth::ERROR_PASSIVE } else { 0 };
+            let bus_flags = if bus.health.bus_off { jointctl_hal::DeviceHealth::BUS_OFF } else { 0 }
+                | if bus.health.error_passive { jointctl_hal::DeviceHealth::ERROR_PASSIVE } else { 0 };
             for d in &bus.drives {
                 if let Some(h) = out.get_mut(i) {
                     let l = d.health.losses;
-                    *h = crate::DeviceHealth {
+                    *h = jointctl_hal::DeviceHealth {
                         missing: l.missing,
                         invalid: l.invalid,
                         implausible: l.implausible,
                         emcy: d.health.emcy_count,
                         flags: bus_flags
-                            | if d.health.silent { crate::DeviceHealth::SILENT } else { 0 }
-                            | if d.health.state == Some(DriveState::Fault) { crate::DeviceHealth::FAULT } else { 0 },
+                            | if d.health.silent { jointctl_hal::DeviceHealth::SILENT } else { 0 }
+                            | if d.health.state == Some(DriveState::Fault) { jointctl_hal::DeviceHealth::FAULT } else { 0 },
                     };
                 }
                 i += 1;
@@ -419,7 +421,7 @@ impl Hal for HardwareHal {
         for e in &self.encoders {
             if let Some(h) = out.get_mut(i) {
                 let l = e.conditioner.counters();
-                *h = crate::DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
+                *h = jointctl_hal::DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
             }
             i += 1;
         }
