@@ -4,6 +4,7 @@
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use jointctl_ipc::JointMode;
 use jointctl_modes::{Mode, Reference, Waveform};
 use jointctl_runtime::commands::ArmCommand;
 use jointctl_tests::{arm_name, jointctl, scratch};
@@ -88,7 +89,7 @@ fn commands_from_another_process_are_acknowledged_and_change_the_published_state
     let (code, text) = cmd(&arm, &["position", "q1", "0.4"]);
     assert_eq!(code, 0, "{text}");
     assert!(text.contains("accepted: q1: position"), "{text}");
-    watch.wait_for("q1 at 0.4", |s| s.joints[0].mode == 1 && (s.joints[0].position_rad - 0.4).abs() < 0.01);
+    watch.wait_for("q1 at 0.4", |s| s.joints[0].mode == JointMode::POSITION && (s.joints[0].position_rad - 0.4).abs() < 0.01);
 
     // Refusals change nothing and say why.
     let (code, text) = cmd(&arm, &["position", "q1", "7"]);
@@ -103,12 +104,12 @@ fn commands_from_another_process_are_acknowledged_and_change_the_published_state
     let (code, text) = cmd(&arm, &["position", "nope", "0"]);
     assert_eq!(code, 1);
     assert!(text.contains("joint `nope` does not exist"), "{text}");
-    assert_eq!(watch.latest().joints[0].mode, 1, "q1 still in position mode");
+    assert_eq!(watch.latest().joints[0].mode, JointMode::POSITION, "q1 still in position mode");
 
     // Torque mode on q2 (output clamped in the simulated arm, figure 5.1): a 3 Nm step.
     let (code, text) = cmd(&arm, &["torque", "q2", "--step", "3"]);
     assert_eq!(code, 0, "{text}");
-    let s = watch.wait_for("q2 torque 3 Nm", |s| s.joints[1].mode == 4 && (s.joints[1].torque_nm - 3.0).abs() < 0.05);
+    let s = watch.wait_for("q2 torque 3 Nm", |s| s.joints[1].mode == JointMode::TORQUE && (s.joints[1].torque_nm - 3.0).abs() < 0.05);
     assert_eq!(s.joints[1].reference_torque_nm, 3.0);
 
     // A requested stiffness moves the pivot; the observed stiffness follows.
@@ -127,7 +128,7 @@ fn commands_from_another_process_are_acknowledged_and_change_the_published_state
 
     // Hold all, then stop: the runtime ends by itself, cleanly.
     assert_eq!(cmd(&arm, &["hold"]).0, 0);
-    watch.wait_for("all held", |s| s.joints().iter().all(|j| j.mode == 0));
+    watch.wait_for("all held", |s| s.joints().iter().all(|j| j.mode == JointMode::HOLD));
     assert_eq!(cmd(&arm, &["stop"]).0, 0);
     let t = Instant::now();
     let status = loop {
@@ -150,9 +151,9 @@ fn a_streamed_command_that_stops_arriving_falls_back_to_hold() {
     let watch = Watch::new(&arm);
     let (code, text) = cmd(&arm, &["--stream", "torque", "q2", "--step", "2"]);
     assert_eq!(code, 0, "{text}");
-    watch.wait_for("torque mode", |s| s.joints[1].mode == 4);
+    watch.wait_for("torque mode", |s| s.joints[1].mode == JointMode::TORQUE);
     // Not renewed: after the watchdog time (0.5 s, assumption) q2 holds again.
-    watch.wait_for("hold after the watchdog", |s| s.joints[1].mode == 0);
+    watch.wait_for("hold after the watchdog", |s| s.joints[1].mode == JointMode::HOLD);
     let _ = run.kill();
     let _ = run.wait();
 }

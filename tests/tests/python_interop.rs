@@ -69,7 +69,10 @@ fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
     }
     let positions: Vec<f64> = py_samples.iter().map(|s| s["joints"][0]["position"].as_f64().unwrap()).collect();
     assert!(positions.iter().all(|p| (-1.0..=1.0).contains(p)), "{positions:?}");
-    assert!(positions.last() > positions.first(), "a moves towards 0.3 rad: {positions:?}");
+    // Under load the Python client may start after `a` has settled, so compare with the target,
+    // not first against last: never farther from 0.3 rad, and clearly away from the start at 0.
+    let (first, last) = (positions[0], positions[positions.len() - 1]);
+    assert!((last - 0.3).abs() <= (first - 0.3).abs() + 1e-9 && last > 0.05, "a moves towards 0.3 rad: {positions:?}");
     // The Rust inspector ran before the Python one: an earlier cycle of the same run.
     assert!(rust_sample["cycle"].as_u64() < py_samples[0]["cycle"].as_u64());
 }

@@ -39,7 +39,7 @@ class JointSample(ctypes.Structure):
         ("reference_torque_nm", ctypes.c_double),
         ("valid_mask", ctypes.c_uint32),
         ("fault_code", ctypes.c_uint32),
-        ("mode", ctypes.c_uint32),
+        ("mode", ctypes.c_uint32),  # jointctl_ipc::JointMode (0 hold .. 5 impedance)
         ("enabled", ctypes.c_uint32),
     ]
 
@@ -57,7 +57,7 @@ class ArmState(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "jointctl.ArmState.v1"
+        return "jointctl.ArmState.v2"
 
 
 def field(sample: JointSample, bit: int, value: float):

@@ -25,3 +25,10 @@ pub use state::{FieldMask, JointState};
 
 /// Most degrees of freedom one plugin instance handles (the wrist plugin handles q6 and q7).
 pub const MAX_DOF: usize = 4;
+
+/// Most degrees of freedom of one arm (the SHERPA arm has 7): the config validates against it
+/// and every shared-memory payload is sized by it.
+pub const MAX_ARM_DOF: usize = 16;
+
+/// Longest joint or device name in bytes: names travel in fixed 16-byte, NUL-padded fields.
+pub const MAX_JOINT_NAME: usize = 15;

@@ -5,9 +5,9 @@ use std::collections::{HashMap, HashSet};
 use crate::model::{ArmConfig, LimitsConfig};
 
 /// Most DOFs one arm may publish (the size of the shared-memory sample).
-pub const MAX_ARM_DOF: usize = 16;
+pub use jointctl_api::MAX_ARM_DOF;
 /// Longest joint name (it is published in a fixed 16-byte field, NUL-terminated).
-pub const MAX_JOINT_NAME: usize = 15;
+pub use jointctl_api::MAX_JOINT_NAME;
 
 fn valid_name(s: &str, max: usize) -> bool {
     !s.is_empty() && s.len() <= max && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
@@ -160,10 +160,10 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             if !valid_name(name, crate::validate::MAX_JOINT_NAME) {
                 err(p.clone(), format!("`{name}` is not a valid joint name: use 1-15 letters, digits, `_` or `-`"));
             }
-            if let Some(first) = dof_names.insert(name, p.clone()) {
-                if first != p {
-                    err(p, format!("joint `{name}` is already defined at {first}"));
-                }
+            if let Some(first) = dof_names.insert(name, p.clone())
+                && first != p
+            {
+                err(p, format!("joint `{name}` is already defined at {first}"));
             }
         }
         let limits: Vec<(String, &LimitsConfig)> = if joint.dofs.is_empty() {

@@ -7,7 +7,7 @@
 //! - `<arm>/joint_state`: one [`ArmState`] per cycle;
 //! - `<arm>/diagnostics`: one [`Diagnostics`] per cycle.
 //!
-//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v1`), so that
+//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v2`), so that
 //! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
 //! name, size and alignment but not field order, hence the version in the name. Every process of
 //! one arm builds its iceoryx2 config with [`iceoryx2_config`] rather than looking for a config
@@ -21,10 +21,141 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 
 pub use jointctl_api::FieldMask;
 
-/// Most joint DOFs in one sample.
-pub const MAX_JOINTS: usize = 16;
+/// Most joint DOFs in one sample: the most DOFs an arm description may have (the config
+/// validates against the same constant, so the two cannot drift apart).
+pub const MAX_JOINTS: usize = jointctl_api::MAX_ARM_DOF;
 /// Bytes of a joint name in a sample (NUL-padded).
 pub const NAME_LEN: usize = 16;
+
+// A joint name the config accepts always fits its field with the NUL.
+const _: () = assert!(jointctl_api::MAX_JOINT_NAME < NAME_LEN);
+
+/// A joint DOF's control mode, as published in [`JointSample::mode`].
+///
+/// A `u32` newtype with named values rather than a Rust `enum`: a subscriber reads it from
+/// memory another process wrote, and an `enum` holding a value outside its variants would be
+/// undefined behaviour; here an unknown value is just [`JointMode::name`] `"unknown"`.
+///
+/// ```
+/// use jointctl_ipc::JointMode;
+/// assert_eq!(JointMode::TORQUE.name(), "torque");
+/// assert_eq!(JointMode::from_name("impedance"), Some(JointMode::IMPEDANCE));
+/// assert_eq!(JointMode(99).name(), "unknown");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
+#[repr(C)]
+pub struct JointMode(pub u32);
+
+impl JointMode {
+    /// Holding the drives where they are.
+    pub const HOLD: JointMode = JointMode(0);
+    /// Position control with the feedback PI (section 4.3).
+    pub const POSITION: JointMode = JointMode(1);
+    /// A direct joint set-point.
+    pub const MANUAL: JointMode = JointMode(2);
+    /// Following a time-stamped trajectory.
+    pub const TRAJECTORY: JointMode = JointMode(3);
+    /// Torque control (figure 4.6).
+    pub const TORQUE: JointMode = JointMode(4);
+    /// Impedance control through the torque mode.
+    pub const IMPEDANCE: JointMode = JointMode(5);
+    /// Every mode with its name, in code order (for clients in other languages too).
+    pub const ALL: [(JointMode, &'static str); 6] = [
+        (Self::HOLD, "hold"),
+        (Self::POSITION, "position"),
+        (Self::MANUAL, "manual"),
+        (Self::TRAJECTORY, "trajectory"),
+        (Self::TORQUE, "torque"),
+        (Self::IMPEDANCE, "impedance"),
+    ];
+
+    /// The mode's lower-case name, `"unknown"` for a value outside [`JointMode::ALL`].
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
+    }
+
+    /// The mode with this name.
+    pub fn from_name(name: &str) -> Option<JointMode> {
+        Self::ALL.iter().find(|(_, n)| *n == name).map(|(m, _)| *m)
+    }
+}
+
+/// The waveform of a torque reference in a [`CommandRequest`] (chapter 5's step, sine and
+/// cosine). A newtype for the same reason as [`JointMode`].
+///
+/// ```
+/// assert_eq!(jointctl_ipc::TorqueWaveform::COSINE.name(), "cosine");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
+#[repr(C)]
+pub struct TorqueWaveform(pub u32);
+
+impl TorqueWaveform {
+    /// A step of `amplitude` at the start time.
+    pub const STEP: TorqueWaveform = TorqueWaveform(0);
+    /// `amplitude * sin(2 pi f t)`.
+    pub const SINE: TorqueWaveform = TorqueWaveform(1);
+    /// `amplitude * cos(2 pi f t)`.
+    pub const COSINE: TorqueWaveform = TorqueWaveform(2);
+    /// Every waveform with its name, in code order.
+    pub const ALL: [(TorqueWaveform, &'static str); 3] = [(Self::STEP, "step"), (Self::SINE, "sine"), (Self::COSINE, "cosine")];
+
+    /// The waveform's name, `"unknown"` outside [`TorqueWaveform::ALL`].
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
+    }
+}
+
+/// What a [`CommandRequest`] asks for. A newtype for the same reason as [`JointMode`].
+///
+/// ```
+/// assert_eq!(jointctl_ipc::CommandKind::STIFFNESS.name(), "stiffness");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
+#[repr(C)]
+pub struct CommandKind(pub u32);
+
+impl CommandKind {
+    /// Hold one joint (`joint` set) or all joints (`joint` empty).
+    pub const HOLD: CommandKind = CommandKind(1);
+    /// Position control to `values[0]` [rad], with the position feedback PI.
+    pub const POSITION: CommandKind = CommandKind(2);
+    /// Direct joint set-point `values[0]` [rad] (no feedback PI).
+    pub const MANUAL: CommandKind = CommandKind(3);
+    /// Follow `points[..point_count]` = (time [s], position [rad], velocity [rad/s] or NaN).
+    pub const TRAJECTORY: CommandKind = CommandKind(4);
+    /// Torque reference of [`CommandRequest::waveform`]: `values` = [amplitude [Nm], frequency
+    /// [Hz], offset [Nm], start delay [s]].
+    pub const TORQUE: CommandKind = CommandKind(5);
+    /// Impedance: `values` = [K [Nm/rad], D [Nms/rad], target [rad] or NaN for "where it is"].
+    pub const IMPEDANCE: CommandKind = CommandKind(6);
+    /// Requested stiffness `values[0]` [Nm/rad] (variable stiffness joints).
+    pub const STIFFNESS: CommandKind = CommandKind(7);
+    /// Enable a joint (it accepts commands again, starting in hold).
+    pub const ENABLE: CommandKind = CommandKind(8);
+    /// Disable a joint: it holds and refuses commands until enabled.
+    pub const DISABLE: CommandKind = CommandKind(9);
+    /// Stop the runtime (as SIGINT: joints held, final state published).
+    pub const STOP: CommandKind = CommandKind(10);
+    /// Every kind with its name, in code order.
+    pub const ALL: [(CommandKind, &'static str); 10] = [
+        (Self::HOLD, "hold"),
+        (Self::POSITION, "position"),
+        (Self::MANUAL, "manual"),
+        (Self::TRAJECTORY, "trajectory"),
+        (Self::TORQUE, "torque"),
+        (Self::IMPEDANCE, "impedance"),
+        (Self::STIFFNESS, "stiffness"),
+        (Self::ENABLE, "enable"),
+        (Self::DISABLE, "disable"),
+        (Self::STOP, "stop"),
+    ];
+
+    /// The kind's name, `"unknown"` outside [`CommandKind::ALL`].
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
+    }
+}
 
 /// Upper bounds [us] of the cycle-jitter histogram buckets in [`Diagnostics`].
 pub const JITTER_BUCKET_UPPER_US: [u64; 16] =
@@ -74,8 +205,8 @@ pub struct JointSample {
     pub valid_mask: u32,
     /// 0, or the fault that holds this joint (1 = its plugin panicked; >= 16 plugin codes).
     pub fault_code: u32,
-    /// Control mode: 0 hold, 1 position, 2 manual, 3 trajectory, 4 torque, 5 impedance.
-    pub mode: u32,
+    /// Control mode.
+    pub mode: JointMode,
     /// 1 when the joint accepts commands (not disabled).
     pub enabled: u32,
 }
@@ -93,7 +224,7 @@ impl JointSample {
         reference_torque_nm: f64::NAN,
         valid_mask: 0,
         fault_code: 0,
-        mode: 0,
+        mode: JointMode::HOLD,
         enabled: 1,
     };
 
@@ -115,7 +246,7 @@ impl JointSample {
 /// Every joint of the arm, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.ArmState.v1")]
+#[type_name("jointctl.ArmState.v2")]
 pub struct ArmState {
     /// Cycle counter, from 0 at start.
     pub cycle: u64,
@@ -218,7 +349,7 @@ impl DeviceDiagnostics {
 /// Loop health, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.Diagnostics.v1")]
+#[type_name("jointctl.Diagnostics.v2")]
 pub struct Diagnostics {
     /// Cycle counter.
     pub cycle: u64,
@@ -404,43 +535,21 @@ service_opener!(diagnostics_service, Diagnostics, "Opens (or creates) an arm's d
 /// Most trajectory points one command carries.
 pub const MAX_COMMAND_POINTS: usize = 64;
 
-/// What a [`CommandRequest`] asks for (its `kind`).
-pub mod command_kind {
-    /// Hold one joint (`joint` set) or all joints (`joint` empty).
-    pub const HOLD: u32 = 1;
-    /// Position control to `values[0]` [rad], with the position feedback PI.
-    pub const POSITION: u32 = 2;
-    /// Direct joint set-point `values[0]` [rad] (no feedback PI).
-    pub const MANUAL: u32 = 3;
-    /// Follow `points[..point_count]` = (time [s], position [rad], velocity [rad/s] or NaN).
-    pub const TRAJECTORY: u32 = 4;
-    /// Torque reference: `values` = [waveform (0 step, 1 sine, 2 cosine), amplitude [Nm],
-    /// frequency [Hz], offset [Nm], start delay [s]].
-    pub const TORQUE: u32 = 5;
-    /// Impedance: `values` = [K [Nm/rad], D [Nms/rad], target [rad] or NaN for "where it is"].
-    pub const IMPEDANCE: u32 = 6;
-    /// Requested stiffness `values[0]` [Nm/rad] (variable stiffness joints).
-    pub const STIFFNESS: u32 = 7;
-    /// Enable a joint (it accepts commands again, starting in hold).
-    pub const ENABLE: u32 = 8;
-    /// Disable a joint: it holds and refuses commands until enabled.
-    pub const DISABLE: u32 = 9;
-    /// Stop the runtime (as SIGINT: joints held, final state published).
-    pub const STOP: u32 = 10;
-}
-
 /// A command to a running arm, sent on `<arm>/command` (request-response).
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.CommandRequest.v1")]
+#[type_name("jointctl.CommandRequest.v2")]
 pub struct CommandRequest {
-    /// One of [`command_kind`].
-    pub kind: u32,
+    /// What is asked.
+    pub kind: CommandKind,
     /// 1: a streamed command that must be renewed within the joint's watchdog time.
     pub streamed: u32,
     /// NUL-padded joint name; empty for all joints (hold, stop).
     pub joint: [u8; NAME_LEN],
-    /// Kind-specific numbers (see [`command_kind`]).
+    /// The torque reference's waveform ([`CommandKind::TORQUE`] only).
+    pub waveform: TorqueWaveform,
+    _reserved0: u32,
+    /// Kind-specific numbers (see [`CommandKind`]).
     pub values: [f64; 8],
     /// Valid entries in `points`.
     pub point_count: u32,
@@ -450,14 +559,26 @@ pub struct CommandRequest {
 }
 
 impl CommandRequest {
+    /// A torque reference for `joint`: `waveform` with [amplitude [Nm], frequency [Hz], offset
+    /// [Nm], start delay [s]].
+    ///
+    /// ```
+    /// use jointctl_ipc::{CommandRequest, TorqueWaveform};
+    /// let r = CommandRequest::torque("q2", TorqueWaveform::SINE, &[5.0, 0.1, 0.0, 0.0]);
+    /// assert_eq!((r.waveform, r.values[1]), (TorqueWaveform::SINE, 0.1));
+    /// ```
+    pub fn torque(joint: &str, waveform: TorqueWaveform, values: &[f64]) -> Self {
+        CommandRequest { waveform, ..Self::new(CommandKind::TORQUE, joint, values) }
+    }
+
     /// A request of `kind` for `joint` ("" for all) with `values`.
     ///
     /// ```
-    /// use jointctl_ipc::{CommandRequest, command_kind};
-    /// let r = CommandRequest::new(command_kind::POSITION, "q1", &[0.5]);
+    /// use jointctl_ipc::{CommandKind, CommandRequest};
+    /// let r = CommandRequest::new(CommandKind::POSITION, "q1", &[0.5]);
     /// assert_eq!((jointctl_ipc::decode_name(&r.joint), r.values[0]), ("q1", 0.5));
     /// ```
-    pub fn new(kind: u32, joint: &str, values: &[f64]) -> Self {
+    pub fn new(kind: CommandKind, joint: &str, values: &[f64]) -> Self {
         let mut v = [f64::NAN; 8];
         for (d, s) in v.iter_mut().zip(values) {
             *d = *s;
@@ -466,6 +587,8 @@ impl CommandRequest {
             kind,
             streamed: 0,
             joint: encode_name(joint),
+            waveform: TorqueWaveform::STEP,
+            _reserved0: 0,
             values: v,
             point_count: 0,
             _reserved: 0,
@@ -477,7 +600,7 @@ impl CommandRequest {
 /// The runtime's answer to a [`CommandRequest`].
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.CommandResponse.v1")]
+#[type_name("jointctl.CommandResponse.v2")]
 pub struct CommandResponse {
     /// 1 when the command was accepted and queued for the next cycle.
     pub accepted: u32,

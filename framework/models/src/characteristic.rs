@@ -453,7 +453,7 @@ impl WristCharacteristic {
         let (r, mut theta) = eq_b_2_polar(deflection_q7_rad, deflection_q6_rad);
         // Fold onto [0, pi): the opposite direction is the same line with a negative radius.
         let mut rho = r;
-        if theta < 0.0 || theta >= std::f64::consts::PI {
+        if !(0.0..std::f64::consts::PI).contains(&theta) {
             theta = if theta < 0.0 { theta + std::f64::consts::PI } else { theta - std::f64::consts::PI };
             rho = -r;
         }

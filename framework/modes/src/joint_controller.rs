@@ -168,6 +168,7 @@ impl DofLimits {
 
 /// What a DOF is asked to do.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant, reason = "a trajectory lives inline so that switching modes never allocates in the loop")]
 pub enum Mode {
     /// Keep the drives where they are.
     Hold,

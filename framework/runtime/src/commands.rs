@@ -3,11 +3,12 @@
 
 use jointctl_config::LimitsConfig;
 use jointctl_modes::{Mode, Reference, Trajectory, TrajectoryPoint, Waveform};
-use jointctl_ipc::{CommandRequest, command_kind as kind, decode_name};
+use jointctl_ipc::{CommandKind, CommandRequest, TorqueWaveform, decode_name};
 
 /// A validated command, ready for the loop. Times inside a mode (a reference's start, a
 /// trajectory's start) are relative to the cycle that applies it.
 #[derive(Clone, Copy, Debug)]
+#[allow(clippy::large_enum_variant, reason = "commands cross the wait-free hand-off by value: no allocation in the loop")]
 pub enum ArmCommand {
     /// Switch one DOF's mode.
     Mode {
@@ -83,18 +84,18 @@ impl CommandValidator {
     /// Validates a request; on success returns the command and a confirmation text.
     ///
     /// ```
-    /// use jointctl_ipc::{CommandRequest, command_kind};
+    /// use jointctl_ipc::{CommandKind, CommandRequest};
     /// let mut v = jointctl_runtime::commands::CommandValidator::new(vec!["q1".into()], vec![None]);
-    /// assert!(v.validate(&CommandRequest::new(command_kind::POSITION, "q1", &[0.2])).is_ok());
-    /// let e = v.validate(&CommandRequest::new(command_kind::POSITION, "q1", &[f64::NAN])).unwrap_err();
+    /// assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.2])).is_ok());
+    /// let e = v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[f64::NAN])).unwrap_err();
     /// assert!(e.contains("finite"));
     /// ```
     pub fn validate(&mut self, req: &CommandRequest) -> Result<(ArmCommand, String), String> {
         let joint = decode_name(&req.joint);
         let v = &req.values;
         match req.kind {
-            kind::STOP => return Ok((ArmCommand::Stop, "stopping".into())),
-            kind::HOLD if joint.is_empty() => return Ok((ArmCommand::HoldAll, "holding every joint".into())),
+            CommandKind::STOP => return Ok((ArmCommand::Stop, "stopping".into())),
+            CommandKind::HOLD if joint.is_empty() => return Ok((ArmCommand::HoldAll, "holding every joint".into())),
             _ => {}
         }
         let dof = self.dof(joint)?;
@@ -102,16 +103,16 @@ impl CommandValidator {
         let disabled = !self.enabled[dof];
         let streamed = req.streamed != 0;
         let cmd = match req.kind {
-            kind::ENABLE | kind::DISABLE => {
-                let enabled = req.kind == kind::ENABLE;
+            CommandKind::ENABLE | CommandKind::DISABLE => {
+                let enabled = req.kind == CommandKind::ENABLE;
                 self.enabled[dof] = enabled;
                 return Ok((ArmCommand::Enable { dof, enabled }, format!("{name} {}", if enabled { "enabled (holding)" } else { "disabled (holding)" })));
             }
-            kind::HOLD => ArmCommand::Mode { dof, mode: Mode::Hold, streamed: false },
+            CommandKind::HOLD => ArmCommand::Mode { dof, mode: Mode::Hold, streamed: false },
             _ if disabled => return Err(format!("joint `{name}` is disabled; enable it first")),
-            kind::POSITION => ArmCommand::Mode { dof, mode: Mode::Position { target_rad: self.within_position(dof, v[0])? }, streamed },
-            kind::MANUAL => ArmCommand::Mode { dof, mode: Mode::Manual { target_rad: self.within_position(dof, v[0])? }, streamed },
-            kind::TRAJECTORY => {
+            CommandKind::POSITION => ArmCommand::Mode { dof, mode: Mode::Position { target_rad: self.within_position(dof, v[0])? }, streamed },
+            CommandKind::MANUAL => ArmCommand::Mode { dof, mode: Mode::Manual { target_rad: self.within_position(dof, v[0])? }, streamed },
+            CommandKind::TRAJECTORY => {
                 let n = req.point_count as usize;
                 if n == 0 || n > req.points.len() {
                     return Err(format!("a trajectory needs 1 to {} points, got {n}", req.points.len()));
@@ -124,19 +125,19 @@ impl CommandValidator {
                 let trajectory = Trajectory::new(&pts[..n])?;
                 ArmCommand::Mode { dof, mode: Mode::Trajectory { trajectory, start_s: 0.0 }, streamed }
             }
-            kind::TORQUE => {
-                let waveform = match v[0] {
-                    w if w == 0.0 => Waveform::Step,
-                    w if w == 1.0 => Waveform::Sine,
-                    w if w == 2.0 => Waveform::Cosine,
-                    w => return Err(format!("waveform must be 0 (step), 1 (sine) or 2 (cosine), got {w}")),
+            CommandKind::TORQUE => {
+                let waveform = match req.waveform {
+                    TorqueWaveform::STEP => Waveform::Step,
+                    TorqueWaveform::SINE => Waveform::Sine,
+                    TorqueWaveform::COSINE => Waveform::Cosine,
+                    TorqueWaveform(w) => return Err(format!("unknown torque waveform {w} (step 0, sine 1, cosine 2)")),
                 };
                 let reference = Reference {
                     waveform,
-                    amplitude: finite("the amplitude", v[1])?,
-                    frequency_hz: if waveform == Waveform::Step { 0.0 } else { finite("the frequency", v[2])? },
-                    offset: if v[3].is_nan() { 0.0 } else { finite("the offset", v[3])? },
-                    start_s: if v[4].is_nan() { 0.0 } else { finite("the start delay", v[4])? },
+                    amplitude: finite("the amplitude", v[0])?,
+                    frequency_hz: if waveform == Waveform::Step { 0.0 } else { finite("the frequency", v[1])? },
+                    offset: if v[2].is_nan() { 0.0 } else { finite("the offset", v[2])? },
+                    start_s: if v[3].is_nan() { 0.0 } else { finite("the start delay", v[3])? },
                 };
                 reference.validate()?;
                 if waveform != Waveform::Step && reference.frequency_hz <= 0.0 {
@@ -152,7 +153,7 @@ impl CommandValidator {
                 }
                 ArmCommand::Mode { dof, mode: Mode::Torque { reference }, streamed }
             }
-            kind::IMPEDANCE => {
+            CommandKind::IMPEDANCE => {
                 let k = finite("K", v[0])?;
                 let d = finite("D", v[1])?;
                 if k < 0.0 || d < 0.0 {
@@ -161,7 +162,7 @@ impl CommandValidator {
                 let target = if v[2].is_nan() { f64::NAN } else { self.within_position(dof, v[2])? };
                 ArmCommand::Mode { dof, mode: Mode::Impedance { stiffness_nm_per_rad: k, damping_nms_per_rad: d, target_rad: target }, streamed }
             }
-            kind::STIFFNESS => {
+            CommandKind::STIFFNESS => {
                 let k = finite("the stiffness", v[0])?;
                 if k <= 0.0 {
                     return Err(format!("the stiffness must be > 0 Nm/rad, got {k}"));
@@ -173,7 +174,7 @@ impl CommandValidator {
                 }
                 ArmCommand::Stiffness { dof, stiffness_nm_per_rad: k }
             }
-            other => return Err(format!("unknown command kind {other}")),
+            CommandKind(other) => return Err(format!("unknown command kind {other}")),
         };
         let what = match &cmd {
             ArmCommand::Mode { mode, .. } => format!("{name}: {}", mode.name()),

@@ -1,8 +1,8 @@
 //! `jointctl run`: the fixed-rate loop around an [`Arm`], with signals, deadlines and shared
 //! memory.
 //!
-//! Per cycle: wait for the deadline → read HAL and observe → publish state → (commands) →
-//! control and write → hand the cycle's record to the publisher thread. Nothing here allocates,
+//! Per cycle: wait for the deadline → read HAL and observe → (commands) → control and write →
+//! hand the cycle's record (state and diagnostics) to the publisher thread. Nothing here allocates,
 //! locks or logs inside a cycle; a fault raised in a cycle is logged once, after that cycle's
 //! set-points are written.
 
@@ -13,7 +13,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
 use jointctl_config::TimingConfig;
 use jointctl_modes::Mode;
-use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, JointSample, ServiceNames, encode_name};
+use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, JointMode, JointSample, ServiceNames, encode_name};
 
 use crate::commands::{ArmCommand, CommandValidator};
 
@@ -78,15 +78,15 @@ const RING_CAPACITY: usize = 64;
 /// Capacity of the IPC → loop command ring.
 const COMMAND_CAPACITY: usize = 32;
 
-/// The mode code published in [`JointSample::mode`].
-pub fn mode_code(mode: &Mode) -> u32 {
+/// The mode published in [`JointSample::mode`].
+pub fn published_mode(mode: &Mode) -> JointMode {
     match mode {
-        Mode::Hold => 0,
-        Mode::Position { .. } => 1,
-        Mode::Manual { .. } => 2,
-        Mode::Trajectory { .. } => 3,
-        Mode::Torque { .. } => 4,
-        Mode::Impedance { .. } => 5,
+        Mode::Hold => JointMode::HOLD,
+        Mode::Position { .. } => JointMode::POSITION,
+        Mode::Manual { .. } => JointMode::MANUAL,
+        Mode::Trajectory { .. } => JointMode::TRAJECTORY,
+        Mode::Torque { .. } => JointMode::TORQUE,
+        Mode::Impedance { .. } => JointMode::IMPEDANCE,
     }
 }
 
@@ -224,7 +224,7 @@ impl ArmPublisher {
                 s.joints[i] = JointSample {
                     name: s.joints[i].name,
                     reference_torque_nm: arm.torque_references[i],
-                    mode: mode_code(arm.controllers[i].mode()),
+                    mode: published_mode(arm.controllers[i].mode()),
                     enabled: arm.enabled[i] as u32,
                     position_rad: st.position_rad,
                     velocity_rad_s: st.velocity_rad_s,
@@ -346,13 +346,14 @@ impl<'a> ControlLoop<'a> {
         ControlLoop { arm, publisher, stats: LoopStats::with_samples(timing_samples), cycle: 0, start_ns: monotonic_ns() }
     }
 
-    /// One cycle, woken at `woke_ns` for the deadline `deadline_ns`: observe, publish state,
-    /// control, write, publish diagnostics. Returns the time the work ended [ns]. Allocation-free.
+    /// One cycle, woken at `woke_ns` for the deadline `deadline_ns`: observe, apply the commands
+    /// that arrived, control, write, then publish the cycle's state and diagnostics together, so
+    /// that each sample's mode and torque reference are the ones used with the torque beside
+    /// them. Returns the time the work ended [ns]. Allocation-free.
     pub fn step(&mut self, deadline_ns: u64, woke_ns: u64, pacer: Option<&mut Pacer>) -> u64 {
         let stamp_s = woke_ns.saturating_sub(self.start_ns) as f64 * 1e-9;
         self.arm.observe(stamp_s);
         if let Some(p) = self.publisher.as_deref_mut() {
-            p.publish_state(self.arm, self.cycle, woke_ns, false);
             while let Ok(command) = p.commands.pop() {
                 self.arm.apply(command);
             }
@@ -362,6 +363,7 @@ impl<'a> ControlLoop<'a> {
         let missed = pacer.map_or(0, |p| p.advance(done));
         self.stats.record(woke_ns.saturating_sub(deadline_ns), done - woke_ns, missed);
         if let Some(p) = self.publisher.as_deref_mut() {
+            p.publish_state(self.arm, self.cycle, woke_ns, false);
             p.publish_diagnostics(self.arm, &self.stats, self.cycle, woke_ns);
         }
         self.cycle += 1;

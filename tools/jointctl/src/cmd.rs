@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::{Args, Subcommand};
-use jointctl_ipc::{CommandRequest, MAX_COMMAND_POINTS, command_kind as kind};
+use jointctl_ipc::{CommandKind as kind, CommandRequest, MAX_COMMAND_POINTS, TorqueWaveform};
 
 #[derive(Args)]
 pub struct CmdArgs {
@@ -138,12 +138,12 @@ fn request(command: &Command) -> Result<CommandRequest, String> {
     Ok(match command {
         Command::Torque { joint, step, sine, cosine, freq, offset, delay } => {
             let (waveform, amplitude) = match (step, sine, cosine) {
-                (Some(a), _, _) => (0.0, *a),
-                (_, Some(a), _) => (1.0, *a),
-                (_, _, Some(a)) => (2.0, *a),
+                (Some(a), _, _) => (TorqueWaveform::STEP, *a),
+                (_, Some(a), _) => (TorqueWaveform::SINE, *a),
+                (_, _, Some(a)) => (TorqueWaveform::COSINE, *a),
                 _ => return Err("give one of --step NM, --sine NM --freq HZ, --cosine NM --freq HZ".into()),
             };
-            CommandRequest::new(kind::TORQUE, joint, &[waveform, amplitude, freq.unwrap_or(0.0), *offset, *delay])
+            CommandRequest::torque(joint, waveform, &[amplitude, freq.unwrap_or(0.0), *offset, *delay])
         }
         Command::Position { joint, rad } => CommandRequest::new(kind::POSITION, joint, &[*rad]),
         Command::Manual { joint, rad } => CommandRequest::new(kind::MANUAL, joint, &[*rad]),

@@ -70,7 +70,6 @@ fn fmt(v: Option<f64>) -> String {
 fn human(s: &ArmState) -> String {
     let mut out = format!("cycle {:>8}{}\n", s.cycle, if s.final_sample != 0 { "  (final)" } else { "" });
     out.push_str("  joint   pos[rad] vel[rad/s] defl[rad] torque[Nm]  ref[Nm] K[Nm/rad] pivot[mm] mode       state\n");
-    const MODES: [&str; 6] = ["hold", "position", "manual", "trajectory", "torque", "impedance"];
     for j in s.joints() {
         out.push_str(&format!(
             "  {:<6} {} {}    {}  {}  {} {} {} {:<10} {}\n",
@@ -82,7 +81,7 @@ fn human(s: &ArmState) -> String {
             fmt(j.reference_torque_nm.is_finite().then_some(j.reference_torque_nm)),
             j.get(FieldMask::STIFFNESS, j.stiffness_nm_per_rad).map_or("      -".into(), |k| format!("{k:9.1}")),
             fmt(j.get(FieldMask::PIVOT, j.pivot_mm)),
-            MODES.get(j.mode as usize).copied().unwrap_or("?"),
+            j.mode.name(),
             if j.fault_code != 0 {
                 format!("FAULT {}", j.fault_code)
             } else if j.enabled == 0 {

@@ -29,7 +29,7 @@ pub enum FrameError {
 /// assert_eq!(decode(0x0000), Ok(0));
 /// ```
 pub fn decode(word: u16) -> Result<u16, FrameError> {
-    if word.count_ones() % 2 != 0 {
+    if !word.count_ones().is_multiple_of(2) {
         return Err(FrameError::Parity);
     }
     if word & 0x4000 != 0 {
@@ -42,7 +42,7 @@ pub fn decode(word: u16) -> Result<u16, FrameError> {
 /// and tests).
 pub fn encode(counts: u16) -> u16 {
     let w = counts & 0x3FFF;
-    if w.count_ones() % 2 == 0 { w } else { w | 0x8000 }
+    if w.count_ones().is_multiple_of(2) { w } else { w | 0x8000 }
 }
 
 /// Counts → angle in [0, 2 pi) [rad].
