@@ -195,8 +195,8 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         }
         if joint.dofs.is_empty() || joint.controller.is_none() {
             for (field, c) in joint.dof_controllers() {
-                if let Err((f, m)) = c.validate() {
-                    err(format!("{path}.{field}.{f}"), m);
+                if let Err(e) = c.validate() {
+                    err(format!("{path}.{field}.{}", e.field()), e.to_string());
                 }
             }
         } else {

@@ -8,10 +8,12 @@
 
 #![forbid(unsafe_code)]
 
+mod invalid;
 mod pi;
 mod transmission;
 mod velocity;
 
+pub use invalid::InvalidNumber;
 pub use pi::{Pi, PiGains};
 pub use transmission::LinearTransmission;
 pub use velocity::VelocityEstimator;

@@ -1,5 +1,7 @@
 use serde::Deserialize;
 
+use crate::InvalidNumber;
+
 /// Gains and limits of a [`Pi`] loop, as written in a joint's YAML `params`.
 ///
 /// The thesis tuned its PI gains experimentally and does not print them (sections 4.3, 5):
@@ -28,16 +30,10 @@ impl PiGains {
     /// assert!(PiGains { kp: 1.0, ki: 0.5, output_limit: 0.1 }.validate().is_ok());
     /// assert!(PiGains { kp: -1.0, ki: 0.5, output_limit: 0.1 }.validate().is_err());
     /// ```
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.kp.is_finite() && self.kp >= 0.0) {
-            return Err(format!("kp must be finite and >= 0, got {}", self.kp));
-        }
-        if !(self.ki.is_finite() && self.ki >= 0.0) {
-            return Err(format!("ki must be finite and >= 0, got {}", self.ki));
-        }
-        if self.output_limit.is_nan() || self.output_limit <= 0.0 {
-            return Err(format!("output_limit must be > 0, got {}", self.output_limit));
-        }
+    pub fn validate(&self) -> Result<(), InvalidNumber> {
+        InvalidNumber::check("kp", self.kp, "finite and >= 0", self.kp.is_finite() && self.kp >= 0.0)?;
+        InvalidNumber::check("ki", self.ki, "finite and >= 0", self.ki.is_finite() && self.ki >= 0.0)?;
+        InvalidNumber::check("output_limit", self.output_limit, "> 0", self.output_limit > 0.0)?;
         Ok(())
     }
 }

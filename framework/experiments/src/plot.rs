@@ -19,8 +19,36 @@ pub struct Series<'a> {
     pub color: RGBColor,
 }
 
+/// Why a plot was not drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// No series has two finite points with different x.
+    #[error("nothing to plot in {}", path.display())]
+    Empty {
+        /// The SVG file.
+        path: std::path::PathBuf,
+    },
+    /// The SVG could not be drawn or written.
+    #[error("cannot draw {}", path.display())]
+    Draw {
+        /// The SVG file.
+        path: std::path::PathBuf,
+        /// plotters' reason.
+        source: DrawingAreaErrorKind<std::io::Error>,
+    },
+}
+
 /// Draws series into an SVG file.
-pub fn lines(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<(), String> {
+///
+/// ```
+/// use jointctl_experiments::plot::{COLORS, PlotError, Series, lines};
+/// let path = std::env::temp_dir().join(format!("doc-plot-{}.svg", std::process::id()));
+/// let s = Series { name: "observed", points: vec![(0.0, 0.0), (1.0, 2.0)], color: COLORS[1] };
+/// lines(&path, "q4, 113.78 Nm/rad, step", "t [s]", "torque [Nm]", &[s]).unwrap();
+/// let empty = Series { name: "none", points: vec![], color: COLORS[0] };
+/// assert!(matches!(lines(&path, "t", "x", "y", &[empty]), Err(PlotError::Empty { .. })));
+/// ```
+pub fn lines(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<(), PlotError> {
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for s in series {
         for &(x, y) in &s.points {
@@ -30,11 +58,11 @@ pub fn lines(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[S
         }
     }
     if !(x0 < x1) {
-        return Err("nothing to plot".into());
+        return Err(PlotError::Empty { path: path.to_path_buf() });
     }
     let pad = ((y1 - y0) * 0.1).max(1e-6);
     let root = SVGBackend::new(path, (900, 420)).into_drawing_area();
-    let e = |e: DrawingAreaErrorKind<std::io::Error>| e.to_string();
+    let e = |source: DrawingAreaErrorKind<std::io::Error>| PlotError::Draw { path: path.to_path_buf(), source };
     root.fill(&WHITE).map_err(e)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 18))

@@ -9,6 +9,34 @@ use jointctl_models::fit::{FitError, polynomial, through_zero};
 
 use crate::csv::Data;
 
+/// Why [`fit`] failed.
+///
+/// ```
+/// use jointctl_ident::fit::{FitOptions, FitRunError, Order, fit};
+/// let data = jointctl_ident::csv::parse("t,deflection,torque\n0,0.1,1\n", "d.csv".as_ref()).unwrap();
+/// let e = fit(&data, &FitOptions { order: Order::Fixed(9), ..FitOptions::default() }).unwrap_err();
+/// assert!(matches!(e, FitRunError::Order { got: 9, .. }));
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FitRunError {
+    /// The polynomial order is out of range.
+    #[error("the polynomial order must be 1-{max}, got {got}")]
+    Order {
+        /// Order asked for.
+        got: usize,
+        /// Highest order supported.
+        max: usize,
+    },
+    /// One group's (pivot setting, direction, branch) curve cannot be fitted.
+    #[error("{group}: {source}")]
+    Group {
+        /// The group, e.g. `pivot 44.9549 mm, angle - deg, positive deflection`.
+        group: String,
+        /// Why.
+        source: FitError,
+    },
+}
+
 /// The polynomial order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Order {
@@ -146,11 +174,11 @@ fn choose_order(x: &[f64], y: &[f64], order: Order, through: bool) -> usize {
 /// let k = fitted.groups[0].curve.coefficients.as_ref().unwrap()[0];
 /// assert!((k - 113.78).abs() < 1e-6);
 /// ```
-pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, String> {
+pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
     if let Order::Fixed(n) | Order::Auto(n) = opts.order
         && !(1..=MAX_ORDER).contains(&n)
     {
-        return Err(format!("the polynomial order must be 1-{MAX_ORDER}, got {n}"));
+        return Err(FitRunError::Order { got: n, max: MAX_ORDER });
     }
     // Groups in the order of their pivot setting, then direction.
     let mut keys: Vec<(Option<i64>, Option<i64>)> = Vec::new();
@@ -171,15 +199,15 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, String> {
             k.0.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0)),
             k.1.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0))
         );
-        let stiffness = through_zero(&x, &y, 1).map_err(|e| format!("{label}: {e}"))?[0];
+        let stiffness = through_zero(&x, &y, 1).map_err(|source| FitRunError::Group { group: label.clone(), source })?[0];
         let through = opts.through_zero;
         let (curve, order, rmse, worst, branch_rmse) = if opts.branches {
             let split = |pos: bool| -> (Vec<f64>, Vec<f64>) { x.iter().zip(&y).filter(|(a, _)| (**a >= 0.0) == pos).map(|(a, b)| (*a, *b)).unzip() };
             let (px, py) = split(true);
             let (nx, ny) = split(false);
             let order = choose_order(&x, &y, opts.order, through);
-            let cp = fit_poly(&px, &py, order, through).map_err(|e| format!("{label}, positive deflection: {e}"))?;
-            let cn = fit_poly(&nx, &ny, order, through).map_err(|e| format!("{label}, negative deflection: {e}"))?;
+            let cp = fit_poly(&px, &py, order, through).map_err(|source| FitRunError::Group { group: format!("{label}, positive deflection"), source })?;
+            let cn = fit_poly(&nx, &ny, order, through).map_err(|source| FitRunError::Group { group: format!("{label}, negative deflection"), source })?;
             let (rp, wp) = rmse_of(&px, &py, &cp, !through);
             let (rn, wn) = rmse_of(&nx, &ny, &cn, !through);
             let n = (px.len() + nx.len()).max(1) as f64;
@@ -202,7 +230,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, String> {
             (curve, order, rmse, wp.max(wn), (rp, rn))
         } else {
             let order = choose_order(&x, &y, opts.order, through);
-            let c = fit_poly(&x, &y, order, through).map_err(|e| format!("{label}: {e}"))?;
+            let c = fit_poly(&x, &y, order, through).map_err(|source| FitRunError::Group { group: label.clone(), source })?;
             let (rmse, worst) = rmse_of(&x, &y, &c, !through);
             let pos: (Vec<f64>, Vec<f64>) = x.iter().zip(&y).filter(|(a, _)| **a >= 0.0).map(|(a, b)| (*a, *b)).unzip();
             let neg: (Vec<f64>, Vec<f64>) = x.iter().zip(&y).filter(|(a, _)| **a < 0.0).map(|(a, b)| (*a, *b)).unzip();

@@ -571,15 +571,55 @@ fn impossible(spec: &Spec, names: &[String], coefs: &[f64], registered: &[Box<dy
     None
 }
 
+/// Why [`identify`] failed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum IdentifyError {
+    /// Too few samples to identify anything.
+    #[error("{samples} samples are too few to identify anything (at least {needed})")]
+    TooFewSamples {
+        /// Samples given.
+        samples: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// One side of the 70/30 fit/held-out split has too few samples.
+    #[error("too few samples on one side of the 70/30 split")]
+    UnevenSplit,
+    /// A model's least-squares problem is singular (degenerate data).
+    #[error("the {model} model cannot be fitted (degenerate data)")]
+    Degenerate {
+        /// "baseline" or "extended".
+        model: &'static str,
+    },
+    /// A registered cause reuses a built-in or an earlier registered cause's name.
+    #[error("registered cause `{name}`: the name is already taken")]
+    CauseNameTaken {
+        /// The cause's name.
+        name: String,
+    },
+    /// A registered cause's `columns()` do not match its coefficient names or the samples.
+    #[error("registered cause `{name}`: columns() gave {} column(s) of {lengths:?} values; expected {expected_columns} (one per coefficient name) of {samples} values (one per sample)", lengths.len())]
+    CauseColumns {
+        /// The cause's name.
+        name: String,
+        /// Length of each column returned.
+        lengths: Vec<usize>,
+        /// Columns expected.
+        expected_columns: usize,
+        /// Samples (values per column) expected.
+        samples: usize,
+    },
+}
+
 /// A registered cause must not reuse a name and must give one column per coefficient, one value
 /// per sample: checked once, up front, so that a mistake is an error rather than a cause that
 /// silently contributes nothing.
-fn check_registered(registered: &[Box<dyn CandidateCause>], p: &Part) -> Result<(), String> {
+fn check_registered(registered: &[Box<dyn CandidateCause>], p: &Part) -> Result<(), IdentifyError> {
     let builtin: Vec<&str> = Candidate::ALL.iter().map(|c| c.name()).chain(["dropout"]).collect();
     for (i, c) in registered.iter().enumerate() {
         let name = c.name();
         if builtin.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
-            return Err(format!("registered cause `{name}`: the name is already taken"));
+            return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
         let value = c.grid(&Excitation { amplitude_rad: 1.0, frequency_hz: 1.0, sample_period_s: 1.0 }).first().copied().unwrap_or(0.0);
         let samples = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, pivot_mm: &p.pivot, history_rad: &p.warm };
@@ -587,11 +627,7 @@ fn check_registered(registered: &[Box<dyn CandidateCause>], p: &Part) -> Result<
         let expected = c.coefficient_names().len();
         if columns.len() != expected || columns.iter().any(|col| col.len() != p.len()) {
             let lengths: Vec<usize> = columns.iter().map(Vec::len).collect();
-            return Err(format!(
-                "registered cause `{name}`: columns() gave {} column(s) of {lengths:?} values; expected {expected} (one per coefficient name) of {} values (one per sample)",
-                columns.len(),
-                p.len()
-            ));
+            return Err(IdentifyError::CauseColumns { name: name.into(), lengths, expected_columns: expected, samples: p.len() });
         }
     }
     Ok(())
@@ -628,10 +664,10 @@ fn name_of(c: Candidate, opts: &IdentifyOptions) -> String {
 /// assert!((report.causes[0].params["offset_nm"] - 0.5).abs() < 0.01);
 /// assert!(report.rmse_after < 0.01 && report.rmse_before > 0.4);
 /// ```
-pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
+pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let n_all = data.len();
     if n_all < 50 {
-        return Err(format!("{n_all} samples are too few to identify anything (at least 50)"));
+        return Err(IdentifyError::TooFewSamples { samples: n_all, needed: 50 });
     }
     // 1. Dropouts: an exact zero between readings clearly away from zero.
     let steps: Vec<f64> = data.deflection.windows(2).map(|w| (w[1] - w[0]).abs()).filter(|s| *s > 0.0).collect();
@@ -690,7 +726,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
     let train = part(0..split);
     let test = part(split..t.len());
     if train.len() < 30 || test.len() < 10 {
-        return Err("too few samples on one side of the 70/30 split".into());
+        return Err(IdentifyError::UnevenSplit);
     }
     // Grid searches on at most ~8000 training samples; final fits on all of them.
     let coarse = train.every(train.len().div_ceil(8000));
@@ -710,7 +746,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
         BaselineModel::Given(_) => 2,
     };
     let base_spec = Spec { kb, ..Spec::default() };
-    let (base_coefs, _, _) = model.fit(&base_spec, &train).ok_or("the baseline cannot be fitted (degenerate data)")?;
+    let (base_coefs, _, _) = model.fit(&base_spec, &train).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let rmse = |spec: &Spec, coefs: &[f64]| {
         let pred = model.predict(spec, coefs, &test);
         (pred.iter().zip(&test.tau).map(|(p, y)| (p - y).powi(2)).sum::<f64>() / test.len() as f64).sqrt()
@@ -838,7 +874,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, String> {
     };
     let mut spec = refit_kb(spec);
     let (coefs, names, rmse_after, gains) = loop {
-        let (coefs, _, names) = model.fit(&spec, &train).ok_or("the extended model cannot be fitted")?;
+        let (coefs, _, names) = model.fit(&spec, &train).ok_or(IdentifyError::Degenerate { model: "extended" })?;
         let rmse_after = rmse(&spec, &coefs);
         let gains: Vec<f64> = chosen.iter().map(|(c, _)| gain_of(&spec, *c, rmse_after)).collect();
         let weakest = (0..gains.len()).min_by(|a, b| gains[*a].total_cmp(&gains[*b]));

@@ -16,7 +16,11 @@
 #![forbid(unsafe_code)]
 
 use iceoryx2::config::Config;
+use iceoryx2::node::NodeCreationFailure;
+use iceoryx2::service::service_name::ServiceNameError;
 use iceoryx2::prelude::*;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenOrCreateError;
+use iceoryx2::service::builder::request_response::{RequestResponseOpenError, RequestResponseOpenOrCreateError};
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 
 pub use jointctl_api::FieldMask;
@@ -429,42 +433,70 @@ impl ServiceNames {
     }
 }
 
-/// Failure to set up shared memory.
+/// Failure to set up shared memory; iceoryx2's own error is kept as the source.
+///
+/// ```
+/// let e = jointctl_ipc::create_node(Some("bad/domain"), "n").unwrap_err();
+/// assert!(matches!(e, jointctl_ipc::IpcSetupError::Domain { .. }));
+/// assert!(std::error::Error::source(&e).is_some());
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum IpcSetupError {
     /// The iceoryx2 domain name is not usable as a file prefix.
-    #[error("iceoryx2 domain `{domain}` is not valid: {reason}")]
+    #[error("iceoryx2 domain `{domain}` is not valid")]
     Domain {
         /// The domain.
         domain: String,
-        /// Why.
-        reason: String,
+        /// iceoryx2's reason.
+        source: SemanticStringError,
+    },
+    /// The node name is not valid.
+    #[error("`{node}` is not a valid iceoryx2 node name")]
+    NodeName {
+        /// Node name.
+        node: String,
+        /// iceoryx2's reason.
+        source: SemanticStringError,
     },
     /// The iceoryx2 node could not be created.
-    #[error("cannot create the iceoryx2 node `{node}`: {reason}")]
+    #[error("cannot create the iceoryx2 node `{node}`")]
     Node {
         /// Node name.
         node: String,
-        /// Why.
-        reason: String,
+        /// iceoryx2's reason.
+        source: NodeCreationFailure,
     },
-    /// A service could not be created or opened.
-    #[error("cannot open service `{service}`: {reason}")]
-    Service {
+    /// The service name is not valid.
+    #[error("`{service}` is not a valid iceoryx2 service name")]
+    ServiceName {
         /// Service name.
         service: String,
-        /// Why.
-        reason: String,
+        /// iceoryx2's reason.
+        source: ServiceNameError,
     },
-    /// A port could not be created.
-    #[error("cannot create a {port} on `{service}`: {reason}")]
-    Port {
-        /// "publisher" or "subscriber".
-        port: &'static str,
+    /// A publish-subscribe service could not be created or opened.
+    #[error("cannot open service `{service}`")]
+    PublishSubscribe {
         /// Service name.
         service: String,
-        /// Why.
-        reason: String,
+        /// iceoryx2's reason.
+        source: PublishSubscribeOpenOrCreateError,
+    },
+    /// The command service could not be created.
+    #[error("cannot create service `{service}`")]
+    CreateRequestResponse {
+        /// Service name.
+        service: String,
+        /// iceoryx2's reason.
+        source: RequestResponseOpenOrCreateError,
+    },
+    /// The command service could not be opened (usually: no runtime serves it).
+    #[error("cannot open service `{service}`")]
+    OpenRequestResponse {
+        /// Service name.
+        service: String,
+        /// iceoryx2's reason.
+        source: RequestResponseOpenError,
     },
 }
 
@@ -473,10 +505,7 @@ pub enum IpcSetupError {
 pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
     let mut config = Config::default();
     if let Some(d) = domain {
-        config.global.prefix = d.try_into().map_err(|e| IpcSetupError::Domain {
-            domain: d.to_string(),
-            reason: format!("{e:?}"),
-        })?;
+        config.global.prefix = d.try_into().map_err(|source| IpcSetupError::Domain { domain: d.to_string(), source })?;
     }
     Ok(config)
 }
@@ -488,14 +517,13 @@ pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service
     // in code); its own `IOX2_LOG_LEVEL` still overrides this.
     set_log_level_from_env_or(LogLevel::Error);
     let config = iceoryx2_config(domain)?;
-    let node_err = |reason: String| IpcSetupError::Node { node: name.to_string(), reason };
-    let node_name = NodeName::new(name).map_err(|e| node_err(format!("{e:?}")))?;
+    let node_name = NodeName::new(name).map_err(|source| IpcSetupError::NodeName { node: name.to_string(), source })?;
     let node = NodeBuilder::new()
         .name(&node_name)
         .config(&config)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(|e| node_err(format!("{e:?}")))?;
+        .map_err(|source| IpcSetupError::Node { node: name.to_string(), source })?;
     let _ = node.try_cleanup_dead_nodes();
     Ok(node)
 }
@@ -505,7 +533,7 @@ pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service
 pub const SUBSCRIBER_BUFFER: usize = 64;
 
 fn service_name(name: &str) -> Result<ServiceName, IpcSetupError> {
-    ServiceName::new(name).map_err(|e| IpcSetupError::Service { service: name.to_string(), reason: format!("{e:?}") })
+    ServiceName::new(name).map_err(|source| IpcSetupError::ServiceName { service: name.to_string(), source })
 }
 
 macro_rules! service_opener {
@@ -524,7 +552,7 @@ macro_rules! service_opener {
                 .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
                 .enable_safe_overflow(true)
                 .open_or_create()
-                .map_err(|e| IpcSetupError::Service { service: name.to_string(), reason: format!("{e:?}") })
+                .map_err(|source| IpcSetupError::PublishSubscribe { service: name.to_string(), source })
         }
     };
 }
@@ -652,6 +680,10 @@ pub fn command_service(
         .max_clients(16)
         .max_active_requests_per_client(4)
         .max_response_buffer_size(4);
-    let fail = |reason: String| IpcSetupError::Service { service: name.to_string(), reason };
-    if create { builder.open_or_create().map_err(|e| fail(format!("{e:?}"))) } else { builder.open().map_err(|e| fail(format!("{e:?}"))) }
+    let service = || name.to_string();
+    if create {
+        builder.open_or_create().map_err(|source| IpcSetupError::CreateRequestResponse { service: service(), source })
+    } else {
+        builder.open().map_err(|source| IpcSetupError::OpenRequestResponse { service: service(), source })
+    }
 }

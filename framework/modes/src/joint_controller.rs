@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-use jointctl_control::{Pi, PiGains};
+use jointctl_control::{InvalidNumber, Pi, PiGains};
 
 use crate::{Reference, Trajectory};
 
@@ -95,30 +95,31 @@ impl Default for ControllerConfig {
 
 impl ControllerConfig {
     /// Checks every number; the error names the field.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        self.torque_pi.validate().map_err(|m| ("torque_pi".to_string(), m))?;
+    pub fn validate(&self) -> Result<(), ControllerConfigError> {
+        use ControllerConfigError as E;
+        self.torque_pi.validate().map_err(|source| E::Number { at: "torque_pi.".into(), source })?;
         for (i, g) in self.torque_pi_schedule.iter().enumerate() {
-            let ok = g.stiffness_nm_per_rad.is_finite() && g.stiffness_nm_per_rad > 0.0 && g.kp.is_finite() && g.kp >= 0.0 && g.ki.is_finite() && g.ki >= 0.0;
-            if !ok {
-                return Err((format!("torque_pi_schedule[{i}]"), "stiffness must be > 0 and gains >= 0, all finite".into()));
+            let at = || format!("torque_pi_schedule[{i}].");
+            let k = g.stiffness_nm_per_rad;
+            InvalidNumber::check("stiffness_nm_per_rad", k, "finite and > 0", k.is_finite() && k > 0.0).map_err(|source| E::Number { at: at(), source })?;
+            InvalidNumber::check("kp", g.kp, "finite and >= 0", g.kp.is_finite() && g.kp >= 0.0).map_err(|source| E::Number { at: at(), source })?;
+            InvalidNumber::check("ki", g.ki, "finite and >= 0", g.ki.is_finite() && g.ki >= 0.0).map_err(|source| E::Number { at: at(), source })?;
+            if i > 0 && k <= self.torque_pi_schedule[i - 1].stiffness_nm_per_rad {
+                return Err(E::ScheduleNotIncreasing { index: i });
             }
-            if i > 0 && g.stiffness_nm_per_rad <= self.torque_pi_schedule[i - 1].stiffness_nm_per_rad {
-                return Err((format!("torque_pi_schedule[{i}].stiffness_nm_per_rad"), "must increase from point to point".into()));
-            }
         }
-        if !(self.max_setpoint_rate_rad_s.is_finite() && self.max_setpoint_rate_rad_s > 0.0) {
-            return Err(("max_setpoint_rate_rad_s".into(), format!("must be finite and > 0, got {}", self.max_setpoint_rate_rad_s)));
-        }
-        if !(self.watchdog_s.is_finite() && self.watchdog_s > 0.0) {
-            return Err(("watchdog_s".into(), format!("must be finite and > 0, got {}", self.watchdog_s)));
-        }
+        let rate = self.max_setpoint_rate_rad_s;
+        InvalidNumber::check("max_setpoint_rate_rad_s", rate, "finite and > 0", rate.is_finite() && rate > 0.0)
+            .map_err(|source| E::Number { at: String::new(), source })?;
+        let w = self.watchdog_s;
+        InvalidNumber::check("watchdog_s", w, "finite and > 0", w.is_finite() && w > 0.0).map_err(|source| E::Number { at: String::new(), source })?;
         match self.startup {
-            Some(StartupMode { position_rad: Some(q), torque: None }) if !q.is_finite() => {
-                Err(("startup.position_rad".into(), "must be finite".into()))
-            }
-            Some(StartupMode { position_rad: None, torque: Some(r) }) => r.validate().map_err(|m| ("startup.torque".into(), m)),
-            Some(StartupMode { position_rad: Some(_), torque: None }) | None => Ok(()),
-            Some(_) => Err(("startup".into(), "give exactly one of `position_rad` or `torque`".into())),
+            Some(StartupMode { position_rad: Some(q), torque: None }) => InvalidNumber::check("position_rad", q, "finite", q.is_finite())
+                .map(|_| ())
+                .map_err(|source| E::Number { at: "startup.".into(), source }),
+            Some(StartupMode { position_rad: None, torque: Some(r) }) => r.validate().map_err(|source| E::Number { at: "startup.torque.".into(), source }),
+            None => Ok(()),
+            Some(_) => Err(E::StartupAmbiguous),
         }
     }
 
@@ -164,6 +165,50 @@ pub struct DofLimits {
 impl DofLimits {
     /// No limits.
     pub const NONE: DofLimits = DofLimits { position_rad: [f64::NEG_INFINITY, f64::INFINITY], torque_nm: f64::INFINITY };
+}
+
+/// What is wrong with a [`ControllerConfig`]; [`field`](Self::field) is the YAML path below
+/// `controller`.
+///
+/// ```
+/// use jointctl_modes::ControllerConfig;
+/// let mut c = ControllerConfig::default();
+/// c.watchdog_s = 0.0;
+/// let e = c.validate().unwrap_err();
+/// assert_eq!(e.field(), "watchdog_s");
+/// assert_eq!(e.to_string(), "watchdog_s must be finite and > 0, got 0");
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ControllerConfigError {
+    /// A number out of its range; `at` is the path of the table holding it (`""`,
+    /// `"torque_pi."`, `"torque_pi_schedule[2]."`, `"startup."`).
+    #[error("{source}")]
+    Number {
+        /// Path prefix of the table holding the number.
+        at: String,
+        /// The number and its rule.
+        source: InvalidNumber,
+    },
+    /// A gain-schedule point's stiffness is not above its predecessor's.
+    #[error("must increase from point to point")]
+    ScheduleNotIncreasing {
+        /// The point's index.
+        index: usize,
+    },
+    /// `startup` gives both or neither of `position_rad` and `torque`.
+    #[error("give exactly one of `position_rad` or `torque`")]
+    StartupAmbiguous,
+}
+
+impl ControllerConfigError {
+    /// The field's path below the joint's `controller` table.
+    pub fn field(&self) -> String {
+        match self {
+            ControllerConfigError::Number { at, source } => format!("{at}{}", source.field),
+            ControllerConfigError::ScheduleNotIncreasing { index } => format!("torque_pi_schedule[{index}].stiffness_nm_per_rad"),
+            ControllerConfigError::StartupAmbiguous => "startup".into(),
+        }
+    }
 }
 
 /// What a DOF is asked to do.

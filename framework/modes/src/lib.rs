@@ -14,8 +14,8 @@ mod schema;
 mod trajectory;
 
 pub use joint_controller::{
-    ControllerConfig, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output, StartupMode,
+    ControllerConfig, ControllerConfigError, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output, StartupMode,
 };
 pub use reference::{Reference, Waveform};
 pub use schema::PiGainsSchema;
-pub use trajectory::{MAX_TRAJECTORY_POINTS, Trajectory, TrajectoryPoint};
+pub use trajectory::{MAX_TRAJECTORY_POINTS, Trajectory, TrajectoryError, TrajectoryPoint};

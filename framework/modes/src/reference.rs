@@ -1,3 +1,4 @@
+use jointctl_control::InvalidNumber;
 use serde::Deserialize;
 
 /// The shape of a reference signal (thesis chapter 5: step, sine and cosine torque references).
@@ -58,15 +59,11 @@ impl Reference {
     }
 
     /// Checks the numbers are finite and the frequency non-negative.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidNumber> {
         for (name, v) in [("amplitude", self.amplitude), ("frequency_hz", self.frequency_hz), ("offset", self.offset), ("start_s", self.start_s)] {
-            if !v.is_finite() {
-                return Err(format!("{name} must be finite, got {v}"));
-            }
+            InvalidNumber::check(name, v, "finite", v.is_finite())?;
         }
-        if self.frequency_hz < 0.0 {
-            return Err(format!("frequency_hz must be >= 0, got {}", self.frequency_hz));
-        }
+        InvalidNumber::check("frequency_hz", self.frequency_hz, ">= 0", self.frequency_hz >= 0.0)?;
         Ok(())
     }
 

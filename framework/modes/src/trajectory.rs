@@ -13,6 +13,34 @@ pub struct TrajectoryPoint {
     pub velocity_rad_s: f64,
 }
 
+/// Why points do not make a [`Trajectory`].
+///
+/// ```
+/// use jointctl_modes::{Trajectory, TrajectoryError};
+/// assert_eq!(Trajectory::new(&[]).unwrap_err(), TrajectoryError::PointCount { got: 0 });
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TrajectoryError {
+    /// Fewer than 1 or more than [`MAX_TRAJECTORY_POINTS`] points.
+    #[error("a trajectory has 1 to {MAX_TRAJECTORY_POINTS} points, got {got}")]
+    PointCount {
+        /// Points given.
+        got: usize,
+    },
+    /// A time or position is not finite, or a velocity is infinite.
+    #[error("point {index}: time and position must be finite")]
+    NotFinite {
+        /// The point's index.
+        index: usize,
+    },
+    /// A point's time is not after its predecessor's.
+    #[error("point {index}: times must increase strictly")]
+    TimesNotIncreasing {
+        /// The point's index.
+        index: usize,
+    },
+}
+
 /// A time-stamped joint trajectory (the thesis' MoveIt! path) in fixed storage, interpolated
 /// each cycle: cubic Hermite where velocities are given, linear otherwise; before the first
 /// point it holds the first, after the last it holds the last.
@@ -34,16 +62,16 @@ pub struct Trajectory {
 impl Trajectory {
     /// A trajectory from 1 to [`MAX_TRAJECTORY_POINTS`] points with strictly increasing,
     /// finite times and finite positions.
-    pub fn new(points: &[TrajectoryPoint]) -> Result<Self, String> {
+    pub fn new(points: &[TrajectoryPoint]) -> Result<Self, TrajectoryError> {
         if points.is_empty() || points.len() > MAX_TRAJECTORY_POINTS {
-            return Err(format!("a trajectory has 1 to {MAX_TRAJECTORY_POINTS} points, got {}", points.len()));
+            return Err(TrajectoryError::PointCount { got: points.len() });
         }
         for (i, p) in points.iter().enumerate() {
             if !(p.time_s.is_finite() && p.position_rad.is_finite()) || p.velocity_rad_s.is_infinite() {
-                return Err(format!("point {i}: time and position must be finite"));
+                return Err(TrajectoryError::NotFinite { index: i });
             }
             if i > 0 && p.time_s <= points[i - 1].time_s {
-                return Err(format!("point {i}: times must increase strictly"));
+                return Err(TrajectoryError::TimesNotIncreasing { index: i });
             }
         }
         let mut storage = [TrajectoryPoint { time_s: 0.0, position_rad: 0.0, velocity_rad_s: f64::NAN }; MAX_TRAJECTORY_POINTS];

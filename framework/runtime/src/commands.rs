@@ -39,6 +39,124 @@ pub enum ArmCommand {
     Stop,
 }
 
+/// Why a command was refused. Every variant names what was wrong and where, so the client can
+/// print it as the answer.
+///
+/// ```
+/// use jointctl_runtime::commands::CommandError;
+/// let e = CommandError::NotFinite { what: "the amplitude", value: f64::NAN };
+/// assert_eq!(e.to_string(), "the amplitude must be a finite number, got NaN");
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CommandError {
+    /// The command needs a joint name and has none.
+    #[error("this command needs a joint name")]
+    NoJoint,
+    /// No DOF has this name.
+    #[error("joint `{joint}` does not exist; the arm's joints are {known}")]
+    UnknownJoint {
+        /// The name asked for.
+        joint: String,
+        /// The arm's DOF names, comma-separated.
+        known: String,
+    },
+    /// The DOF is disabled.
+    #[error("joint `{joint}` is disabled; enable it first")]
+    Disabled {
+        /// The DOF.
+        joint: String,
+    },
+    /// A value is NaN or infinite.
+    #[error("{what} must be a finite number, got {value}")]
+    NotFinite {
+        /// Which value.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// A position beyond the DOF's limits.
+    #[error("position {position_rad} rad is outside {joint}'s limits [{}, {}] rad", limits_rad[0], limits_rad[1])]
+    PositionOutOfLimits {
+        /// The DOF.
+        joint: String,
+        /// The position asked for [rad].
+        position_rad: f64,
+        /// The DOF's position limits [rad].
+        limits_rad: [f64; 2],
+    },
+    /// A trajectory with no points or more than the request can carry.
+    #[error("a trajectory needs 1 to {max} points, got {got}")]
+    TrajectoryPointCount {
+        /// Points claimed by the request.
+        got: usize,
+        /// Most points a request carries.
+        max: usize,
+    },
+    /// One trajectory point is refused.
+    #[error("point {index}: {source}")]
+    TrajectoryPoint {
+        /// The point's index.
+        index: usize,
+        /// Why.
+        source: Box<CommandError>,
+    },
+    /// The points do not make a trajectory.
+    #[error(transparent)]
+    Trajectory(#[from] jointctl_modes::TrajectoryError),
+    /// A waveform code this runtime does not know.
+    #[error("unknown torque waveform {0} (step 0, sine 1, cosine 2)")]
+    UnknownWaveform(u32),
+    /// The torque reference's numbers are out of range.
+    #[error(transparent)]
+    Reference(#[from] jointctl_control::InvalidNumber),
+    /// A periodic reference without a positive frequency.
+    #[error("a {waveform:?} reference needs a frequency > 0 Hz")]
+    NeedsFrequency {
+        /// The waveform.
+        waveform: Waveform,
+    },
+    /// A negative start delay.
+    #[error("the start delay must be >= 0 s, got {delay_s} s")]
+    NegativeDelay {
+        /// The delay asked for [s].
+        delay_s: f64,
+    },
+    /// The reference would exceed the DOF's torque limit.
+    #[error("the reference reaches {peak_nm} Nm, beyond {joint}'s torque limit {limit_nm} Nm")]
+    TorqueBeyondLimit {
+        /// The DOF.
+        joint: String,
+        /// Largest torque the reference reaches [Nm].
+        peak_nm: f64,
+        /// The DOF's limit [Nm].
+        limit_nm: f64,
+    },
+    /// Negative impedance gains.
+    #[error("K and D must be >= 0, got K = {stiffness_nm_per_rad}, D = {damping_nms_per_rad}")]
+    NegativeImpedance {
+        /// K [Nm/rad].
+        stiffness_nm_per_rad: f64,
+        /// D [Nms/rad].
+        damping_nms_per_rad: f64,
+    },
+    /// A stiffness that is not positive.
+    #[error("the stiffness must be > 0 Nm/rad, got {0}")]
+    NonPositiveStiffness(f64),
+    /// A stiffness beyond the DOF's range.
+    #[error("stiffness {stiffness_nm_per_rad} Nm/rad is outside {joint}'s range [{}, {}] Nm/rad", range[0], range[1])]
+    StiffnessOutOfRange {
+        /// The DOF.
+        joint: String,
+        /// The stiffness asked for [Nm/rad].
+        stiffness_nm_per_rad: f64,
+        /// The DOF's range [Nm/rad].
+        range: [f64; 2],
+    },
+    /// A command kind this runtime does not know.
+    #[error("unknown command kind {0}")]
+    UnknownKind(u32),
+}
+
 /// Checks commands against the arm's joints and limits (outside the control thread).
 #[derive(Clone, Debug)]
 pub struct CommandValidator {
@@ -47,8 +165,8 @@ pub struct CommandValidator {
     enabled: Vec<bool>,
 }
 
-fn finite(name: &str, v: f64) -> Result<f64, String> {
-    if v.is_finite() { Ok(v) } else { Err(format!("{name} must be a finite number, got {v}")) }
+fn finite(what: &'static str, value: f64) -> Result<f64, CommandError> {
+    if value.is_finite() { Ok(value) } else { Err(CommandError::NotFinite { what, value }) }
 }
 
 impl CommandValidator {
@@ -58,25 +176,22 @@ impl CommandValidator {
         CommandValidator { names, limits, enabled }
     }
 
-    fn dof(&self, joint: &str) -> Result<usize, String> {
+    fn dof(&self, joint: &str) -> Result<usize, CommandError> {
         self.names.iter().position(|n| n == joint).ok_or_else(|| {
             if joint.is_empty() {
-                "this command needs a joint name".to_string()
+                CommandError::NoJoint
             } else {
-                format!("joint `{joint}` does not exist; the arm's joints are {}", self.names.join(", "))
+                CommandError::UnknownJoint { joint: joint.into(), known: self.names.join(", ") }
             }
         })
     }
 
-    fn within_position(&self, dof: usize, q: f64) -> Result<f64, String> {
+    fn within_position(&self, dof: usize, q: f64) -> Result<f64, CommandError> {
         let q = finite("the position", q)?;
         if let Some(l) = self.limits[dof]
             && !(l.position_rad[0]..=l.position_rad[1]).contains(&q)
         {
-            return Err(format!(
-                "position {q} rad is outside {}'s limits [{}, {}] rad",
-                self.names[dof], l.position_rad[0], l.position_rad[1]
-            ));
+            return Err(CommandError::PositionOutOfLimits { joint: self.names[dof].clone(), position_rad: q, limits_rad: l.position_rad });
         }
         Ok(q)
     }
@@ -88,9 +203,9 @@ impl CommandValidator {
     /// let mut v = jointctl_runtime::commands::CommandValidator::new(vec!["q1".into()], vec![None]);
     /// assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.2])).is_ok());
     /// let e = v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[f64::NAN])).unwrap_err();
-    /// assert!(e.contains("finite"));
+    /// assert!(e.to_string().contains("finite"));
     /// ```
-    pub fn validate(&mut self, req: &CommandRequest) -> Result<(ArmCommand, String), String> {
+    pub fn validate(&mut self, req: &CommandRequest) -> Result<(ArmCommand, String), CommandError> {
         let joint = decode_name(&req.joint);
         let v = &req.values;
         match req.kind {
@@ -109,17 +224,17 @@ impl CommandValidator {
                 return Ok((ArmCommand::Enable { dof, enabled }, format!("{name} {}", if enabled { "enabled (holding)" } else { "disabled (holding)" })));
             }
             CommandKind::HOLD => ArmCommand::Mode { dof, mode: Mode::Hold, streamed: false },
-            _ if disabled => return Err(format!("joint `{name}` is disabled; enable it first")),
+            _ if disabled => return Err(CommandError::Disabled { joint: name.clone() }),
             CommandKind::POSITION => ArmCommand::Mode { dof, mode: Mode::Position { target_rad: self.within_position(dof, v[0])? }, streamed },
             CommandKind::MANUAL => ArmCommand::Mode { dof, mode: Mode::Manual { target_rad: self.within_position(dof, v[0])? }, streamed },
             CommandKind::TRAJECTORY => {
                 let n = req.point_count as usize;
                 if n == 0 || n > req.points.len() {
-                    return Err(format!("a trajectory needs 1 to {} points, got {n}", req.points.len()));
+                    return Err(CommandError::TrajectoryPointCount { got: n, max: req.points.len() });
                 }
                 let mut pts = [TrajectoryPoint { time_s: 0.0, position_rad: 0.0, velocity_rad_s: f64::NAN }; jointctl_ipc::MAX_COMMAND_POINTS];
                 for (i, p) in req.points[..n].iter().enumerate() {
-                    self.within_position(dof, p[1]).map_err(|e| format!("point {i}: {e}"))?;
+                    self.within_position(dof, p[1]).map_err(|e| CommandError::TrajectoryPoint { index: i, source: Box::new(e) })?;
                     pts[i] = TrajectoryPoint { time_s: p[0], position_rad: p[1], velocity_rad_s: p[2] };
                 }
                 let trajectory = Trajectory::new(&pts[..n])?;
@@ -130,7 +245,7 @@ impl CommandValidator {
                     TorqueWaveform::STEP => Waveform::Step,
                     TorqueWaveform::SINE => Waveform::Sine,
                     TorqueWaveform::COSINE => Waveform::Cosine,
-                    TorqueWaveform(w) => return Err(format!("unknown torque waveform {w} (step 0, sine 1, cosine 2)")),
+                    TorqueWaveform(w) => return Err(CommandError::UnknownWaveform(w)),
                 };
                 let reference = Reference {
                     waveform,
@@ -141,15 +256,15 @@ impl CommandValidator {
                 };
                 reference.validate()?;
                 if waveform != Waveform::Step && reference.frequency_hz <= 0.0 {
-                    return Err(format!("a {waveform:?} reference needs a frequency > 0 Hz"));
+                    return Err(CommandError::NeedsFrequency { waveform });
                 }
                 if reference.start_s < 0.0 {
-                    return Err("the start delay must be >= 0 s".into());
+                    return Err(CommandError::NegativeDelay { delay_s: reference.start_s });
                 }
                 if let Some(limit) = self.limits[dof].and_then(|l| l.torque_nm)
                     && reference.peak() > limit
                 {
-                    return Err(format!("the reference reaches {} Nm, beyond {name}'s torque limit {limit} Nm", reference.peak()));
+                    return Err(CommandError::TorqueBeyondLimit { joint: name.clone(), peak_nm: reference.peak(), limit_nm: limit });
                 }
                 ArmCommand::Mode { dof, mode: Mode::Torque { reference }, streamed }
             }
@@ -157,7 +272,7 @@ impl CommandValidator {
                 let k = finite("K", v[0])?;
                 let d = finite("D", v[1])?;
                 if k < 0.0 || d < 0.0 {
-                    return Err(format!("K and D must be >= 0, got K = {k}, D = {d}"));
+                    return Err(CommandError::NegativeImpedance { stiffness_nm_per_rad: k, damping_nms_per_rad: d });
                 }
                 let target = if v[2].is_nan() { f64::NAN } else { self.within_position(dof, v[2])? };
                 ArmCommand::Mode { dof, mode: Mode::Impedance { stiffness_nm_per_rad: k, damping_nms_per_rad: d, target_rad: target }, streamed }
@@ -165,16 +280,16 @@ impl CommandValidator {
             CommandKind::STIFFNESS => {
                 let k = finite("the stiffness", v[0])?;
                 if k <= 0.0 {
-                    return Err(format!("the stiffness must be > 0 Nm/rad, got {k}"));
+                    return Err(CommandError::NonPositiveStiffness(k));
                 }
                 if let Some([lo, hi]) = self.limits[dof].and_then(|l| l.stiffness_nm_per_rad)
                     && !(lo..=hi).contains(&k)
                 {
-                    return Err(format!("stiffness {k} Nm/rad is outside {name}'s range [{lo}, {hi}] Nm/rad"));
+                    return Err(CommandError::StiffnessOutOfRange { joint: name.clone(), stiffness_nm_per_rad: k, range: [lo, hi] });
                 }
                 ArmCommand::Stiffness { dof, stiffness_nm_per_rad: k }
             }
-            CommandKind(other) => return Err(format!("unknown command kind {other}")),
+            CommandKind(other) => return Err(CommandError::UnknownKind(other)),
         };
         let what = match &cmd {
             ArmCommand::Mode { mode, .. } => format!("{name}: {}", mode.name()),

@@ -9,7 +9,8 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
+use iceoryx2::service::port_factory::server::ServerCreateError;
 use iceoryx2::prelude::*;
 use jointctl_config::TimingConfig;
 use jointctl_modes::Mode;
@@ -47,12 +48,70 @@ pub enum RunError {
         /// iceoryx2's reason.
         reason: String,
     },
+    /// A port of the arm's services could not be created for another reason than a running
+    /// runtime (iceoryx2's reason kept).
+    #[error("cannot create the {port} of `{service}`")]
+    Port {
+        /// "publisher" or "server".
+        port: &'static str,
+        /// Service.
+        service: String,
+        /// iceoryx2's reason.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// The publisher thread could not start.
     #[error("cannot start the publisher thread: {0}")]
     Thread(String),
     /// Signal handlers could not be installed.
     #[error("cannot install the SIGINT/SIGTERM handlers: {0}")]
     Signals(std::io::Error),
+}
+
+/// A port-creation failure of iceoryx2 that may mean "another runtime holds this port".
+trait PortCreateFailure: std::error::Error + Send + Sync + 'static {
+    /// "publisher" or "server".
+    const PORT: &'static str;
+    /// The port's one slot is taken: another runtime runs the arm.
+    fn slot_taken(&self) -> bool;
+}
+
+impl PortCreateFailure for PublisherCreateError {
+    const PORT: &'static str = "publisher";
+    fn slot_taken(&self) -> bool {
+        *self == PublisherCreateError::ExceedsMaxSupportedPublishers
+    }
+}
+
+impl PortCreateFailure for ServerCreateError {
+    const PORT: &'static str = "server";
+    fn slot_taken(&self) -> bool {
+        *self == ServerCreateError::ExceedsMaxSupportedServers
+    }
+}
+
+/// Only "the one publisher/server slot is taken" means another runtime runs this arm; any
+/// other failure is reported as what it is, with iceoryx2's error as the source.
+fn port_error<E: PortCreateFailure>(arm: &str, service: &str, e: E) -> RunError {
+    if e.slot_taken() {
+        RunError::AlreadyRunning { arm: arm.into(), service: service.into(), reason: format!("{e:?}") }
+    } else {
+        RunError::Port { port: E::PORT, service: service.into(), source: Box::new(e) }
+    }
+}
+
+#[cfg(test)]
+mod port_error_tests {
+    use super::*;
+
+    #[test]
+    fn only_a_taken_slot_reads_as_already_running() {
+        assert!(matches!(port_error("a", "a/s", PublisherCreateError::ExceedsMaxSupportedPublishers), RunError::AlreadyRunning { .. }));
+        assert!(matches!(port_error("a", "a/c", ServerCreateError::ExceedsMaxSupportedServers), RunError::AlreadyRunning { .. }));
+        let e = port_error("a", "a/s", PublisherCreateError::UnableToCreateDataSegment);
+        assert!(matches!(e, RunError::Port { port: "publisher", .. }), "{e}");
+        assert!(std::error::Error::source(&e).is_some(), "iceoryx2's error is kept");
+        assert!(matches!(port_error("a", "a/c", ServerCreateError::UnableToCreatePortTag), RunError::Port { port: "server", .. }));
+    }
 }
 
 /// What a run did.
@@ -124,25 +183,20 @@ impl ArmPublisher {
                 let setup = || -> Result<_, RunError> {
                     let node = jointctl_ipc::create_node(domain.as_deref(), &format!("jointctl-run-{arm_name}"))?;
                     let names = ServiceNames::for_arm(&arm_name);
-                    let busy = |service: &str, e: String| RunError::AlreadyRunning {
-                        arm: arm_name.clone(),
-                        service: service.into(),
-                        reason: e,
-                    };
                     let state: Publisher<ipc::Service, ArmState, ()> = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
                         .publisher_builder()
                         .create()
-                        .map_err(|e| busy(&names.joint_state, format!("{e:?}")))?;
+                        .map_err(|e| port_error(&arm_name, &names.joint_state, e))?;
                     let diagnostics: Publisher<ipc::Service, Diagnostics, ()> =
                         jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
                             .publisher_builder()
                             .create()
-                            .map_err(|e| busy(&names.diagnostics, format!("{e:?}")))?;
+                            .map_err(|e| port_error(&arm_name, &names.diagnostics, e))?;
                     let command_name = jointctl_ipc::command_service_name(&arm_name);
                     let server = jointctl_ipc::command_service(&node, &command_name, true)?
                         .server_builder()
                         .create()
-                        .map_err(|e| busy(&command_name, format!("{e:?}")))?;
+                        .map_err(|e| port_error(&arm_name, &command_name, e))?;
                     Ok((node, state, diagnostics, server))
                 };
                 let (node, state, diagnostics, server) = match setup() {
@@ -172,7 +226,7 @@ impl ArmPublisher {
                                 Ok(()) => CommandResponse::new(true, &text),
                                 Err(_) => CommandResponse::new(false, "the runtime's command queue is full; try again"),
                             },
-                            Err(reason) => CommandResponse::new(false, &reason),
+                            Err(reason) => CommandResponse::new(false, &reason.to_string()),
                         };
                         let _ = request.send_copy(response);
                     }

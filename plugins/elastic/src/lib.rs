@@ -100,7 +100,7 @@ impl JointPlugin for ElasticJoint {
         if !(p.max_deflection_age_s.is_finite() && p.max_deflection_age_s >= 0.0) {
             return Err(PluginError::at("max_deflection_age_s", "must be finite and >= 0"));
         }
-        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
         Ok(ElasticJoint {
             stiffness_nm_per_rad: stiffness,
             curve,

@@ -60,7 +60,7 @@ impl JointPlugin for RigidJoint {
         }
         params::positive("stiffness_nm_per_rad", p.stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
-        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
         Ok(RigidJoint {
             transmission: LinearTransmission::new(p.joint_per_motor),
             velocity: VelocityEstimator::new(0.5),

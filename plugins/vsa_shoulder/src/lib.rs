@@ -99,7 +99,7 @@ impl JointPlugin for VsaShoulder {
         }
         params::positive("q3_stiffness_nm_per_rad", p.q3_stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
-        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
         let pi = Pi::new(p.position_pi);
         Ok(VsaShoulder {
             characteristic,

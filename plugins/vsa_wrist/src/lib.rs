@@ -122,7 +122,7 @@ impl JointPlugin for VsaWrist {
         if !(p.pivot_mm_per_rad.is_finite() && p.pivot_mm_per_rad != 0.0) {
             return Err(PluginError::at("pivot_mm_per_rad", "must be finite and non-zero"));
         }
-        p.position_pi.validate().map_err(|m| PluginError::at("position_pi", m))?;
+        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
         let pi = Pi::new(p.position_pi);
         Ok(VsaWrist {
             characteristic: characteristic.clone(),

@@ -171,7 +171,7 @@ pub fn run(args: CmdArgs) -> ExitCode {
     req.streamed = args.stream as u32;
     let node = match jointctl_ipc::create_node(args.domain.as_deref(), &format!("jointctl-cmd-{}", std::process::id())) {
         Ok(n) => n,
-        Err(e) => return crate::fail(e),
+        Err(e) => return crate::fail_err(e),
     };
     let name = jointctl_ipc::command_service_name(&args.arm);
     let Ok(service) = jointctl_ipc::command_service(&node, &name, false) else {

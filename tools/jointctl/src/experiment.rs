@@ -118,7 +118,8 @@ fn plots(dir: &Path, rows: &[Row]) -> Result<(), String> {
                 Series { name: "observed", points: pick(|p| p.2), color: COLORS[1] },
                 Series { name: "sensor", points: pick(|p| p.3), color: COLORS[2] },
             ],
-        )?;
+        )
+        .map_err(|e| crate::chain(&e))?;
     }
     Ok(())
 }
@@ -131,7 +132,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
             };
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let settings = if stiffness.is_empty() {
                 let limits = loaded.config.joints.iter().find_map(|j| {
@@ -151,13 +152,13 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
             bar.set_prefix(format!("torque tracking {joint} ({})", scn.name()));
             let loader = match crate::experiment_loader(&loaded) {
                 Ok(l) => l,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let rows = match run(&loaded, &loader, &joint, scn, &plan, |done, _| bar.set_position(done as u64)) {
                 Ok(r) => r,
                 Err(e) => {
                     bar.abandon();
-                    return crate::fail(e);
+                    return crate::fail_err(e);
                 }
             };
             bar.finish_and_clear();
@@ -194,16 +195,16 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
         SimCommand::Record { config, joint, out, amplitude, frequency, duration, pivot_mm, angle_deg, rate } => {
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let opts = RecordOptions { joint, amplitude_rad: amplitude, frequency_hz: frequency, duration_s: duration, pivot_mm, angle_deg, rate_hz: rate };
             let loader = match crate::experiment_loader(&loaded) {
                 Ok(l) => l,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let samples = match record(&loaded, &loader, &opts) {
                 Ok(s) => s,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let file = match std::fs::File::create(&out) {
                 Ok(f) => f,

@@ -59,7 +59,7 @@ pub struct IdentifyArgs {
 pub fn run_fit(a: FitArgs) -> ExitCode {
     let data = match jointctl_ident::csv::read(&a.data) {
         Ok(d) => d,
-        Err(e) => return crate::fail(e),
+        Err(e) => return crate::fail_err(e),
     };
     for n in &data.notes {
         eprintln!("note: {n}");
@@ -94,7 +94,7 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
     }
     let yaml = match serde_yaml::to_string(&serde_json::json!({ "characteristic": result.spec })) {
         Ok(y) => format!("# Fitted by `jointctl fit {}` (smoothing {}, order {}, branches {}, through zero {}).\n{y}", a.data.display(), opts.smoothing_window, a.order, opts.branches, opts.through_zero),
-        Err(e) => return crate::fail(e),
+        Err(e) => return crate::fail_err(e),
     };
     match &a.out {
         Some(path) => {
@@ -133,7 +133,7 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
                 Series { name: "measured", points: g.points.clone(), color: COLORS[1] },
                 Series { name: "fitted", points: fitted, color: COLORS[2] },
             ]) {
-                return crate::fail(e);
+                return crate::fail_err(e);
             }
         }
         eprintln!("plots written to {}", dir.display());
@@ -163,7 +163,7 @@ fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> 
 pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     let data = match jointctl_ident::csv::read(&a.data) {
         Ok(d) => d,
-        Err(e) => return crate::fail(e),
+        Err(e) => return crate::fail_err(e),
     };
     let baseline = match (&a.config, &a.joint) {
         (Some(c), Some(j)) => match config_baseline(c, j) {
@@ -237,7 +237,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         ];
         for (file, title, x, y, series) in plots.iter() {
             if let Err(e) = lines(&dir.join(file), title, x, y, series) {
-                return crate::fail(e);
+                return crate::fail_err(e);
             }
             let _ = writeln!(md, "\n![{title}]({file})");
         }

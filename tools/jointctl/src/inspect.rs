@@ -99,7 +99,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
         InspectCommand::List { arm, domain } => {
             let config = match jointctl_ipc::iceoryx2_config(domain.as_deref()) {
                 Ok(c) => c,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let prefix = arm.map(|a| format!("{a}/"));
             let mut found = 0;
@@ -123,12 +123,12 @@ pub fn run(command: InspectCommand) -> ExitCode {
         InspectCommand::Echo { arm, domain, json, count, timeout } => {
             let node = match jointctl_ipc::create_node(domain.as_deref(), &format!("jointctl-inspect-{}", std::process::id())) {
                 Ok(n) => n,
-                Err(e) => return crate::fail(e),
+                Err(e) => return crate::fail_err(e),
             };
             let names = ServiceNames::for_arm(&arm);
             let subscriber = match jointctl_ipc::joint_state_service(&node, &names.joint_state)
-                .map_err(|e| e.to_string())
-                .and_then(|s| s.subscriber_builder().create().map_err(|e| format!("{e:?}")))
+                .map_err(|e| crate::chain(&e))
+                .and_then(|s| s.subscriber_builder().create().map_err(|e| format!("cannot subscribe to `{}`: {e}", names.joint_state)))
             {
                 Ok(s) => s,
                 Err(e) => return crate::fail(e),

@@ -89,6 +89,26 @@ fn fail(message: impl std::fmt::Display) -> ExitCode {
     ExitCode::from(1)
 }
 
+/// An error and every source below it, `outer: inner: innermost`.
+fn chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut next = e.source();
+    while let Some(s) = next {
+        let part = s.to_string();
+        // Errors that print their source inline (`{source}`) would repeat it.
+        if !text.ends_with(&part) {
+            text = format!("{text}: {part}");
+        }
+        next = s.source();
+    }
+    text
+}
+
+/// Fails with an error and its sources.
+fn fail_err(e: impl std::error::Error + 'static) -> ExitCode {
+    fail(chain(&e))
+}
+
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -102,25 +122,25 @@ fn main() -> ExitCode {
         Command::Run { config, cycles, duration, static_plugins, no_ipc } => {
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
-                Err(e) => return fail(e),
+                Err(e) => return fail_err(e),
             };
             let mut loader = jointctl_runtime::loader_for(&loaded);
             if static_plugins && let Err(e) = static_loader(&mut loader) {
-                return fail(e);
+                return fail_err(e);
             }
             let mut arm = match jointctl_backends::build_arm(&loaded, &loader) {
                 Ok(a) => a,
-                Err(e) => return fail(e),
+                Err(e) => return fail_err(e),
             };
             if let Err(e) = arm.activate() {
-                return fail(e);
+                return fail_err(e);
             }
             let mut publisher = if no_ipc {
                 None
             } else {
                 match ArmPublisher::new(&arm, loaded.config.ipc.domain.as_deref()) {
                     Ok(p) => Some(p),
-                    Err(e) => return fail(e),
+                    Err(e) => return fail_err(e),
                 }
             };
             let opts = RunOptions { cycles, duration_s: duration, timing_samples: 0 };
@@ -136,18 +156,18 @@ fn main() -> ExitCode {
                     );
                     ExitCode::SUCCESS
                 }
-                Err(e) => fail(e),
+                Err(e) => fail_err(e),
             }
         }
         Command::Check { config } => {
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
-                Err(e) => return fail(e),
+                Err(e) => return fail_err(e),
             };
             let loader = jointctl_runtime::loader_for(&loaded);
             let warnings = match jointctl_backends::check_bus_budget(&loaded) {
                 Ok(w) => w,
-                Err(e) => return fail(e),
+                Err(e) => return fail_err(e),
             };
             match jointctl_runtime::build_arm_for_check(&loaded, &loader) {
                 Ok(arm) => {
@@ -168,7 +188,7 @@ fn main() -> ExitCode {
                     }
                     ExitCode::SUCCESS
                 }
-                Err(e) => fail(e),
+                Err(e) => fail_err(e),
             }
         }
         Command::Schema => {
