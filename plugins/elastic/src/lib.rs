@@ -13,10 +13,10 @@
 //! feed-forward deflection) and of eq. 3.8 (expected minus measured).
 
 use jointctl_api::{
-    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Controller, ControlMode, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
-use jointctl_control::{LinearTransmission, Pi, PiGains, VelocityEstimator};
+use jointctl_control::{LinearTransmission, PiGains, PositionLoop, VelocityEstimator};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
 use serde::Deserialize;
 
@@ -44,8 +44,8 @@ struct Params {
     output_per_motor: f64,
     /// Section 4.3's position feedback PI [rad -> rad].
     position_pi: PiGains,
-    /// Oldest stale reading still used for the position [s]. Assumption: 0.1 s (4 cycles at 40 Hz).
-    #[serde(default = "default_max_age")]
+    /// Oldest stale reading still used for the position [s] (default: `jointctl_control::default_max_age_s`).
+    #[serde(default = "jointctl_control::default_max_age_s")]
     max_age_s: f64,
     /// Oldest motor-side reading combined with the output encoder into a deflection [s]. A stale
     /// motor position next to a fresh output position is a false deflection while the joint
@@ -55,9 +55,6 @@ struct Params {
     max_deflection_age_s: f64,
 }
 
-fn default_max_age() -> f64 {
-    0.1
-}
 
 /// A joint with a linear elastic element.
 pub struct ElasticJoint {
@@ -66,8 +63,7 @@ pub struct ElasticJoint {
     curve: Option<PivotCharacteristic>,
     transmission: LinearTransmission,
     velocity: VelocityEstimator,
-    pi: Pi,
-    last_mode: ControlMode,
+    position: PositionLoop,
     input_wired: bool,
     input_origin: f64,
     output_origin: f64,
@@ -100,14 +96,13 @@ impl JointPlugin for ElasticJoint {
         if !(p.max_deflection_age_s.is_finite() && p.max_deflection_age_s >= 0.0) {
             return Err(PluginError::at("max_deflection_age_s", "must be finite and >= 0"));
         }
-        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
+        let position = PositionLoop::from_params(p.position_pi)?;
         Ok(ElasticJoint {
             stiffness_nm_per_rad: stiffness,
             curve,
             transmission: LinearTransmission::new(p.output_per_motor),
             velocity: VelocityEstimator::new(0.5),
-            pi: Pi::new(p.position_pi),
-            last_mode: ControlMode::HOLD,
+            position,
             input_wired: false,
             input_origin: 0.0,
             output_origin: 0.0,
@@ -115,12 +110,6 @@ impl JointPlugin for ElasticJoint {
         })
     }
 
-    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
-        if ctx.dof != 1 {
-            return Err(PluginError::new(format!("an elastic joint has 1 DOF, the YAML gives {}", ctx.dof)));
-        }
-        Ok(())
-    }
 
     fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
         let age = self.params.max_age_s;
@@ -184,16 +173,10 @@ impl Controller for ElasticJoint {
         raw: &RawJointView,
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
-        let cmd = command[0];
-        if cmd.mode != self.last_mode {
-            self.pi.reset();
-            self.last_mode = cmd.mode;
-        }
-        out[MOTOR] = match (cmd.mode, state[0].position()) {
-            (ControlMode::POSITION, Some(q)) => {
-                let correction = if cmd.feedback() { self.pi.update(cmd.position_rad - q, raw.dt_s) } else { 0.0 };
-                MotorSetpoint::move_to(self.transmission.motor_for(cmd.position_rad + correction))
-            }
+        // Only position mode moves the motor; every other mode leaves it to the drive's hold.
+        let target = self.position.target_rad(&command[0], state[0].position(), raw.dt_s);
+        out[MOTOR] = match target {
+            Some(q) if command[0].mode == ControlMode::POSITION => MotorSetpoint::move_to(self.transmission.motor_for(q)),
             _ => MotorSetpoint::HOLD,
         };
         Ok(())

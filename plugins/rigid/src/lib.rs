@@ -5,10 +5,10 @@
 //! output absolute encoder; deflection is 0; torque is not observed (reported unknown, not zero).
 
 use jointctl_api::{
-    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Controller, ControlMode, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
-use jointctl_control::{LinearTransmission, Pi, PiGains, VelocityEstimator};
+use jointctl_control::{LinearTransmission, PiGains, PositionLoop, VelocityEstimator};
 use serde::Deserialize;
 
 /// Encoder role 0: the absolute encoder on the joint output.
@@ -28,8 +28,8 @@ struct Params {
     stiffness_nm_per_rad: f64,
     /// Section 4.3's position feedback PI on the joint position error [rad -> rad].
     position_pi: PiGains,
-    /// Oldest stale reading still used [s]. Assumption: 0.1 s (4 cycles at 40 Hz).
-    #[serde(default = "default_max_age")]
+    /// Oldest stale reading still used [s] (default: `jointctl_control::default_max_age_s`).
+    #[serde(default = "jointctl_control::default_max_age_s")]
     max_age_s: f64,
 }
 
@@ -39,17 +39,13 @@ fn one() -> f64 {
 fn harmonic_drive_stiffness() -> f64 {
     8.3e4
 }
-fn default_max_age() -> f64 {
-    0.1
-}
 
 /// A joint treated as rigid.
 pub struct RigidJoint {
     params: Params,
     transmission: LinearTransmission,
     velocity: VelocityEstimator,
-    pi: Pi,
-    last_mode: ControlMode,
+    position: PositionLoop,
 }
 
 impl JointPlugin for RigidJoint {
@@ -60,22 +56,15 @@ impl JointPlugin for RigidJoint {
         }
         params::positive("stiffness_nm_per_rad", p.stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
-        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
+        let position = PositionLoop::from_params(p.position_pi)?;
         Ok(RigidJoint {
             transmission: LinearTransmission::new(p.joint_per_motor),
             velocity: VelocityEstimator::new(0.5),
-            pi: Pi::new(p.position_pi),
-            last_mode: ControlMode::HOLD,
+            position,
             params: p,
         })
     }
 
-    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
-        if ctx.dof != 1 {
-            return Err(PluginError::new(format!("a rigid joint has 1 DOF, the YAML gives {}", ctx.dof)));
-        }
-        Ok(())
-    }
 
     fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
         let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
@@ -117,18 +106,10 @@ impl Controller for RigidJoint {
         raw: &RawJointView,
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
-        let cmd = command[0];
-        if cmd.mode != self.last_mode {
-            self.pi.reset();
-            self.last_mode = cmd.mode;
-        }
-        out[MOTOR] = match (cmd.mode, state[0].position()) {
-            (ControlMode::POSITION, Some(q)) => {
-                // Section 4.3: the feedback PI corrects the set-point for what the drive's own
-                // loop leaves (transmission compliance, friction).
-                let correction = if cmd.feedback() { self.pi.update(cmd.position_rad - q, raw.dt_s) } else { 0.0 };
-                MotorSetpoint::move_to(self.transmission.motor_for(cmd.position_rad + correction))
-            }
+        // Only position mode moves the motor; every other mode leaves it to the drive's hold.
+        let target = self.position.target_rad(&command[0], state[0].position(), raw.dt_s);
+        out[MOTOR] = match target {
+            Some(q) if command[0].mode == ControlMode::POSITION => MotorSetpoint::move_to(self.transmission.motor_for(q)),
             _ => MotorSetpoint::HOLD,
         };
         Ok(())

@@ -19,10 +19,10 @@
 //! assumption).
 
 use jointctl_api::{
-    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Controller, ControlMode, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
-use jointctl_control::{Pi, PiGains, VelocityEstimator};
+use jointctl_control::{PiGains, PositionLoop, VelocityEstimator};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
 use jointctl_models::transmission::{eq_3_3_shoulder_actuators, eq_3_3_shoulder_joints};
 use serde::Deserialize;
@@ -51,16 +51,13 @@ struct Params {
     q3_stiffness_nm_per_rad: f64,
     /// Section 4.3's position PI per DOF [rad -> rad].
     position_pi: PiGains,
-    /// Oldest stale reading still used [s]. Assumption: 0.1 s.
-    #[serde(default = "default_max_age")]
+    /// Oldest stale reading still used [s] (default: `jointctl_control::default_max_age_s`).
+    #[serde(default = "jointctl_control::default_max_age_s")]
     max_age_s: f64,
 }
 
 fn harmonic_drive() -> f64 {
     8.3e4
-}
-fn default_max_age() -> f64 {
-    0.1
 }
 
 /// The shoulder: q2 (VSA) and q3 (rigid) behind the tendon differential.
@@ -71,9 +68,7 @@ pub struct VsaShoulder {
     actuator_origin: (f64, f64),
     joint_origin: (f64, f64),
     velocity: [VelocityEstimator; 2],
-    pi: [Pi; 2],
-    hold_target: [Option<f64>; 2],
-    last_mode: [ControlMode; 2],
+    position: [PositionLoop; 2],
     pivot_target: Option<MotorSetpoint>,
 }
 
@@ -99,27 +94,17 @@ impl JointPlugin for VsaShoulder {
         }
         params::positive("q3_stiffness_nm_per_rad", p.q3_stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
-        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
-        let pi = Pi::new(p.position_pi);
+        let position = PositionLoop::from_params(p.position_pi)?;
         Ok(VsaShoulder {
             characteristic,
             deflection_origin_rad: 0.0,
             actuator_origin: (0.0, 0.0),
             joint_origin: (0.0, 0.0),
             velocity: [VelocityEstimator::new(0.5); 2],
-            pi: [pi; 2],
-            hold_target: [None; 2],
-            last_mode: [ControlMode::HOLD; 2],
+            position: [position; 2],
             pivot_target: None,
             p,
         })
-    }
-
-    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
-        if ctx.dof != 2 {
-            return Err(PluginError::new("the shoulder plugin serves q2 and q3: give both under `dofs`"));
-        }
-        Ok(())
     }
 
     fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
@@ -133,7 +118,8 @@ impl JointPlugin for VsaShoulder {
         let b = need(raw.drive(ACTUATOR_B).position_rad.usable(age), "actuator b")?;
         self.actuator_origin = (a, b);
         self.joint_origin = (q2, q3);
-        self.hold_target = [Some(q2), Some(q3)];
+        self.position[0].hold_at(q2);
+        self.position[1].hold_at(q3);
         Ok(())
     }
 }
@@ -185,26 +171,10 @@ impl Controller for VsaShoulder {
         raw: &RawJointView,
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
-        let mut target = [0.0; 2];
-        let mut any_moving = false;
-        for i in 0..2 {
-            let q = state[i].position().unwrap_or(0.0);
-            if command[i].mode != self.last_mode[i] {
-                self.pi[i].reset();
-                // Holding one DOF of a differential means keeping it where it is while the
-                // other moves.
-                self.hold_target[i] = (command[i].mode == ControlMode::HOLD).then_some(q);
-                self.last_mode[i] = command[i].mode;
-            }
-            target[i] = match command[i].mode {
-                ControlMode::POSITION => {
-                    any_moving = true;
-                    let correction = if command[i].feedback() { self.pi[i].update(command[i].position_rad - q, raw.dt_s) } else { 0.0 };
-                    command[i].position_rad + correction
-                }
-                _ => self.hold_target[i].unwrap_or(q),
-            };
-        }
+        // Section 4.3 per DOF; a DOF not in position mode holds still while the other moves,
+        // and an unknown target (a position not read) holds both motors.
+        let target: [Option<f64>; 2] = std::array::from_fn(|i| self.position[i].target_rad(&command[i], state[i].position(), raw.dt_s));
+        let any_moving = command[..2].iter().any(|c| c.mode == ControlMode::POSITION);
         // A requested q2 stiffness moves the pivot (inverse of the stiffness table, clamped to
         // the characterised settings); it stays there until the next request.
         if let Some(k) = command[0].stiffness()
@@ -213,13 +183,13 @@ impl Controller for VsaShoulder {
             self.pivot_target = Some(MotorSetpoint::move_to((pivot_mm - self.p.pivot_offset_mm) / self.p.pivot_mm_per_rad));
         }
         out[PIVOT_DRIVE] = self.pivot_target.unwrap_or(MotorSetpoint::HOLD);
-        if !any_moving {
+        let (true, [Some(t0), Some(t1)]) = (any_moving, target) else {
             out[ACTUATOR_A] = MotorSetpoint::HOLD;
             out[ACTUATOR_B] = MotorSetpoint::HOLD;
             return Ok(());
-        }
+        };
         // Inverse of eq. 3.3 (assumed differential), anchored at the activation pose.
-        let (da, db) = eq_3_3_shoulder_actuators(target[0] - self.joint_origin.0, target[1] - self.joint_origin.1);
+        let (da, db) = eq_3_3_shoulder_actuators(t0 - self.joint_origin.0, t1 - self.joint_origin.1);
         out[ACTUATOR_A] = MotorSetpoint::move_to(self.actuator_origin.0 + da);
         out[ACTUATOR_B] = MotorSetpoint::move_to(self.actuator_origin.1 + db);
         Ok(())

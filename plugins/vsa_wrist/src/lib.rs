@@ -20,10 +20,10 @@
 //! stiffness sets the pivot drive through the inverse of the axis' stiffness table.
 
 use jointctl_api::{
-    Controller, ControlMode, JointCommand, JointContext, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Controller, ControlMode, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
-use jointctl_control::{Pi, PiGains, VelocityEstimator};
+use jointctl_control::{PiGains, PositionLoop, VelocityEstimator};
 use jointctl_models::characteristic::{CharacteristicSpec, WristCharacteristic, invert_table};
 use jointctl_models::transmission::{eq_3_7_bevel, eq_3_7_bevel_inverse, eq_3_8_deflection, eq_3_8_expected_bevel_input};
 use serde::Deserialize;
@@ -56,16 +56,13 @@ struct Params {
     pivot_offset_mm: f64,
     /// Section 4.3's position PI per DOF [rad -> rad].
     position_pi: PiGains,
-    /// Oldest stale reading still used [s]. Assumption: 0.1 s.
-    #[serde(default = "default_max_age")]
+    /// Oldest stale reading still used [s] (default: `jointctl_control::default_max_age_s`).
+    #[serde(default = "jointctl_control::default_max_age_s")]
     max_age_s: f64,
 }
 
 fn belt() -> f64 {
     30.0 / 40.0
-}
-fn default_max_age() -> f64 {
-    0.1
 }
 
 /// The wrist: q6 and q7 with one shared VSA.
@@ -77,9 +74,7 @@ pub struct VsaWrist {
     motor_origin: [f64; 2],
     joint_origin: [f64; 2],
     velocity: [VelocityEstimator; 2],
-    pi: [Pi; 2],
-    hold_target: [f64; 2],
-    last_mode: [ControlMode; 2],
+    position: [PositionLoop; 2],
     axis_stiffness: [Vec<f64>; 2],
     pivot_target: Option<MotorSetpoint>,
 }
@@ -122,8 +117,7 @@ impl JointPlugin for VsaWrist {
         if !(p.pivot_mm_per_rad.is_finite() && p.pivot_mm_per_rad != 0.0) {
             return Err(PluginError::at("pivot_mm_per_rad", "must be finite and non-zero"));
         }
-        p.position_pi.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
-        let pi = Pi::new(p.position_pi);
+        let position = PositionLoop::from_params(p.position_pi)?;
         Ok(VsaWrist {
             characteristic: characteristic.clone(),
             carrier_origin: [0.0; 2],
@@ -131,21 +125,13 @@ impl JointPlugin for VsaWrist {
             motor_origin: [0.0; 2],
             joint_origin: [0.0; 2],
             velocity: [VelocityEstimator::new(0.5); 2],
-            pi: [pi; 2],
-            hold_target: [0.0; 2],
-            last_mode: [ControlMode::HOLD; 2],
+            position: [position; 2],
             axis_stiffness: [characteristic.axis_stiffness_table(true), characteristic.axis_stiffness_table(false)],
             pivot_target: None,
             p,
         })
     }
 
-    fn configure(&mut self, ctx: &JointContext) -> Result<(), PluginError> {
-        if ctx.dof != 2 {
-            return Err(PluginError::new("the wrist plugin serves q6 and q7: give both under `dofs`"));
-        }
-        Ok(())
-    }
 
     fn activate(&mut self, raw: &RawJointView) -> Result<(), PluginError> {
         let need = |r: Option<f64>, what: &str| r.ok_or_else(|| PluginError::new(format!("cannot activate: {what} is not readable")));
@@ -156,7 +142,8 @@ impl JointPlugin for VsaWrist {
         }
         let (q6, q7) = self.positions(raw).ok_or_else(|| PluginError::new("cannot activate: the bevel inputs are not readable"))?;
         self.joint_origin = [q6, q7];
-        self.hold_target = [q6, q7];
+        self.position[0].hold_at(q6);
+        self.position[1].hold_at(q7);
         Ok(())
     }
 }
@@ -207,26 +194,10 @@ impl Controller for VsaWrist {
         raw: &RawJointView,
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
-        let mut target = [0.0; 2];
-        let mut any_moving = false;
-        for i in 0..2 {
-            let q = state[i].position().unwrap_or(self.hold_target[i]);
-            if command[i].mode != self.last_mode[i] {
-                self.pi[i].reset();
-                if command[i].mode == ControlMode::HOLD {
-                    self.hold_target[i] = q;
-                }
-                self.last_mode[i] = command[i].mode;
-            }
-            target[i] = match command[i].mode {
-                ControlMode::POSITION => {
-                    any_moving = true;
-                    let correction = if command[i].feedback() { self.pi[i].update(command[i].position_rad - q, raw.dt_s) } else { 0.0 };
-                    command[i].position_rad + correction
-                }
-                _ => self.hold_target[i],
-            };
-        }
+        // Section 4.3 per DOF; a DOF not in position mode holds still while the other moves,
+        // and an unknown target (a position not read) holds both motors.
+        let target: [Option<f64>; 2] = std::array::from_fn(|i| self.position[i].target_rad(&command[i], state[i].position(), raw.dt_s));
+        let any_moving = command[..2].iter().any(|c| c.mode == ControlMode::POSITION);
         // One pivot sets both joints' stiffness: a request for q6 (along its axis) wins over one
         // for q7 in the same cycle. The pivot stays until the next request.
         for (i, cmd) in command.iter().enumerate().take(2) {
@@ -238,14 +209,14 @@ impl Controller for VsaWrist {
             }
         }
         out[PIVOT_DRIVE] = self.pivot_target.unwrap_or(MotorSetpoint::HOLD);
-        if !any_moving {
+        let (true, [Some(t0), Some(t1)]) = (any_moving, target) else {
             out[MOTOR_A] = MotorSetpoint::HOLD;
             out[MOTOR_B] = MotorSetpoint::HOLD;
             return Ok(());
-        }
+        };
         // Eq. 3.7 inverse to the bevel inputs, then eq. 3.8's ratio back to the carrier inputs
         // (the motors' gearbox outputs), anchored at the activation pose.
-        let (b1, b2) = eq_3_7_bevel_inverse(target[0] - self.joint_origin[0], target[1] - self.joint_origin[1]);
+        let (b1, b2) = eq_3_7_bevel_inverse(t0 - self.joint_origin[0], t1 - self.joint_origin[1]);
         let k = self.ratio();
         out[MOTOR_A] = MotorSetpoint::move_to(self.motor_origin[0] + b1 / k);
         out[MOTOR_B] = MotorSetpoint::move_to(self.motor_origin[1] + b2 / k);
