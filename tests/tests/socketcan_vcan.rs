@@ -73,13 +73,8 @@ impl SimNode {
             let mut target: i32 = position;
             let mut operational = false;
             let mut last_hb = Instant::now();
-            let mut rng: u64 = 0x2545_f491_4f6c_dd1d ^ node as u64;
-            let mut roll = || {
-                rng ^= rng << 13;
-                rng ^= rng >> 7;
-                rng ^= rng << 17;
-                (rng % 1000) as u32
-            };
+            let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d ^ node as u64);
+            let mut roll = || (rng.next_u64() % 1000) as u32;
             while !s.load(Ordering::Relaxed) {
                 if f.swap(false, Ordering::Relaxed) {
                     statusword = 0x0218; // fault

@@ -354,8 +354,8 @@ impl ErrorBuf {
 
     /// Stores a message and optional field path, truncated at a character boundary.
     pub fn write(&mut self, message: &str, field: Option<&str>) {
-        self.message_len = copy_truncated(&mut self.message, message);
-        self.field_len = copy_truncated(&mut self.field, field.unwrap_or(""));
+        self.message_len = copy_utf8_prefix(&mut self.message, message) as u32;
+        self.field_len = copy_utf8_prefix(&mut self.field, field.unwrap_or("")) as u32;
     }
 
     /// The stored message. The length was written by the plugin's copy of this code, so it is
@@ -389,13 +389,23 @@ fn utf8_prefix(buf: &[u8], len: u32) -> &str {
     }
 }
 
-fn copy_truncated(dst: &mut [u8], src: &str) -> u32 {
+/// Copies the longest prefix of `src` that fits `dst` and ends at a character boundary, so the
+/// bytes copied are always valid UTF-8; returns how many were copied. Every fixed-size text
+/// field that crosses a process or plugin boundary is written with it.
+///
+/// ```
+/// let mut buf = [0u8; 3];
+/// assert_eq!(jointctl_api::abi::copy_utf8_prefix(&mut buf, "aü!"), 3);
+/// assert_eq!(&buf, "aü".as_bytes());
+/// assert_eq!(jointctl_api::abi::copy_utf8_prefix(&mut buf[..2], "aü"), 1, "ü does not fit whole");
+/// ```
+pub fn copy_utf8_prefix(dst: &mut [u8], src: &str) -> usize {
     let mut n = src.len().min(dst.len());
     while !src.is_char_boundary(n) {
         n -= 1;
     }
     dst[..n].copy_from_slice(&src.as_bytes()[..n]);
-    n as u32
+    n
 }
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> &str {

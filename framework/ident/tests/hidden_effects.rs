@@ -5,22 +5,7 @@
 use jointctl_ident::csv::Data;
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.next().max(1e-12), self.next());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
+use jointctl_test_support::XorShift64 as Rng;
 
 const EFFECTS: [&str; 9] =
     ["none", "viscous_friction", "hysteresis", "dead_zone", "stiffness_nonlinearity", "time_delay", "dropout", "sensor_offset", "vibration"];
@@ -35,7 +20,7 @@ struct Case {
 /// One synthetic characterisation: a sine deflection, the thesis' baseline (linear spring +
 /// eq. 3.5 arctan friction) plus `effect`, 14-bit deflection, noisy torque sensor.
 fn generate(effect: &'static str, seed: u64) -> Case {
-    let mut r = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+    let mut r = Rng::new(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     let rate = 200.0;
     let n = 12_000;
     let amp = r.range(0.05, 0.15);
@@ -66,7 +51,7 @@ fn generate(effect: &'static str, seed: u64) -> Case {
             (0.0, 0.0, 1.0, w, 0.0, 0.0, 0.0, (0.0, 0.0))
         }
         "stiffness_nonlinearity" => {
-            let k3 = r.range(0.1, 0.3) * k / (amp * amp) * if r.next() < 0.5 { -1.0 } else { 1.0 };
+            let k3 = r.range(0.1, 0.3) * k / (amp * amp) * if r.uniform() < 0.5 { -1.0 } else { 1.0 };
             truth = ("k3_nm_per_rad3", k3);
             (0.0, 0.0, 1.0, 0.0, k3, 0.0, 0.0, (0.0, 0.0))
         }
@@ -76,7 +61,7 @@ fn generate(effect: &'static str, seed: u64) -> Case {
             (0.0, 0.0, 1.0, 0.0, 0.0, d, 0.0, (0.0, 0.0))
         }
         "sensor_offset" => {
-            let o = r.range(0.3, 1.0) * if r.next() < 0.5 { -1.0 } else { 1.0 };
+            let o = r.range(0.3, 1.0) * if r.uniform() < 0.5 { -1.0 } else { 1.0 };
             truth = ("offset_nm", o);
             (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, o, (0.0, 0.0))
         }
@@ -111,7 +96,7 @@ fn generate(effect: &'static str, seed: u64) -> Case {
     if effect == "dropout" {
         let count = (n as f64 * r.range(0.005, 0.02)) as usize;
         for _ in 0..count {
-            let i = 1 + (r.next() * (n - 2) as f64) as usize;
+            let i = 1 + (r.uniform() * (n - 2) as f64) as usize;
             if deflection[i].abs() > 0.01 {
                 deflection[i] = 0.0;
             }

@@ -173,8 +173,8 @@ pub const JITTER_BUCKET_UPPER_US: [u64; 16] =
 /// ```
 pub fn encode_name(name: &str) -> [u8; NAME_LEN] {
     let mut out = [0u8; NAME_LEN];
-    let n = name.len().min(NAME_LEN - 1);
-    out[..n].copy_from_slice(&name.as_bytes()[..n]);
+    // The last byte stays NUL: readers may treat the field as a C string.
+    jointctl_api::abi::copy_utf8_prefix(&mut out[..NAME_LEN - 1], name);
     out
 }
 
@@ -647,11 +647,7 @@ impl CommandResponse {
     /// ```
     pub fn new(accepted: bool, message: &str) -> Self {
         let mut m = [0u8; 240];
-        let mut n = message.len().min(240);
-        while !message.is_char_boundary(n) {
-            n -= 1;
-        }
-        m[..n].copy_from_slice(&message.as_bytes()[..n]);
+        let n = jointctl_api::abi::copy_utf8_prefix(&mut m, message);
         CommandResponse { accepted: accepted as u32, message_len: n as u32, message: m }
     }
 

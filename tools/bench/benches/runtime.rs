@@ -235,13 +235,8 @@ fn main() {
         let (amp, f, k, fc, lambda) = (0.1, 0.2, 120.0, 1.0, 0.008);
         let mut z: f64 = 0.0;
         let mut prev = 0.0;
-        let mut seed: u64 = 0x1234_5678_9abc_def1;
-        let mut noise = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.05
-        };
+        let mut rng = jointctl_test_support::XorShift64::new(0x1234_5678_9abc_def1);
+        let mut noise = || (rng.uniform() - 0.5) * 0.05;
         let mut data = jointctl_ident::csv::Data::default();
         for i in 0..n {
             let t = i as f64 / 200.0;

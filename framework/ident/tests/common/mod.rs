@@ -11,21 +11,14 @@ pub fn sine_experiment(extra: impl Fn(f64, f64, f64) -> f64) -> Data {
     // real ripple in torque against measured deflection.
     let (rate, n, amp, f, k) = (200.0, 16_000, 0.1, 0.2371, 120.0);
     let q = std::f64::consts::TAU / 16384.0;
-    let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
-    let mut uniform = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d);
     let mut data = Data::default();
     for i in 0..n {
         let t = i as f64 / rate;
         let x = amp * (std::f64::consts::TAU * f * t).sin();
         let v = amp * std::f64::consts::TAU * f * (std::f64::consts::TAU * f * t).cos();
         // Gaussian noise of 0.02 Nm (Box-Muller).
-        let (u1, u2) = (uniform().max(1e-12), uniform());
-        let noise = 0.02 * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+        let noise = 0.02 * rng.normal();
         data.t.push(t);
         data.deflection.push((x / q).round() * q);
         data.torque.push(k * x + 0.3 * (80.0 * v).atan() + extra(t, x, v) + noise);
