@@ -1,61 +1,14 @@
 //! The loop: zero allocations per cycle, deadline overruns detected and counted.
 
 use jointctl_modes::Mode;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
 use jointctl_runtime::timing::monotonic_ns;
 use jointctl_runtime::{ArmPublisher, ControlLoop, PluginLoader, RunOptions};
+use jointctl_test_support::{CountingAlloc, count_allocations};
 use jointctl_tests::{arm_name, rig_yaml};
 
-/// Counts allocations made by the thread that set `COUNTING` (the control thread). The
-/// publisher thread allocates inside iceoryx2 by design; it is not the control cycle.
-struct CountingAlloc;
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    // Per thread too: tests run in parallel, and one test's allocations must not count in another's.
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn count_one() {
-    let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
-}
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
-
-fn reset_count() {
-    ALLOCATIONS.with(|a| a.set(0));
-}
-
-fn counting() -> bool {
-    COUNTING.try_with(Cell::get).unwrap_or(false)
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; counting touches only a
-// thread-local flag and an atomic, neither of which allocates.
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if counting() {
-            count_one();
-        }
-        // SAFETY: forwarded unchanged.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if counting() {
-            count_one();
-        }
-        // SAFETY: forwarded unchanged.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
+/// Counts the control thread's allocations; the publisher thread allocates inside iceoryx2 by
+/// design and is not the control cycle.
 #[global_allocator]
 static GLOBAL: CountingAlloc = CountingAlloc;
 
@@ -83,14 +36,12 @@ fn a_cycle_allocates_nothing() {
         let t = monotonic_ns();
         lp.step(t, t, None);
     }
-    reset_count();
-    COUNTING.with(|c| c.set(true));
-    for _ in 0..10_000 {
-        let t = monotonic_ns();
-        lp.step(t, t, None);
-    }
-    COUNTING.with(|c| c.set(false));
-    let n = allocations();
+    let ((), n) = count_allocations(|| {
+        for _ in 0..10_000 {
+            let t = monotonic_ns();
+            lp.step(t, t, None);
+        }
+    });
     assert_eq!(lp.stats.cycles, 10_100);
     assert!(lp.arm.states[0].position().is_some_and(|q| (q - 0.4).abs() < 1e-3), "the loop really ran: {:?}", lp.arm.states[0]);
     assert_eq!(n, 0, "{n} allocations in 10 000 cycles");
@@ -149,16 +100,12 @@ fn each_sample_carries_the_mode_and_reference_used_in_its_own_cycle() {
     }
 }
 
-
 #[test]
 fn the_counting_allocator_sees_allocations() {
     // Guards the test above: a counter that never counts would pass it.
-    reset_count();
-    COUNTING.with(|c| c.set(true));
-    let v: Vec<u64> = std::hint::black_box(Vec::with_capacity(16));
-    COUNTING.with(|c| c.set(false));
+    let (v, n) = count_allocations(|| std::hint::black_box(Vec::<u64>::with_capacity(16)));
     drop(v);
-    assert!(allocations() >= 1);
+    assert!(n >= 1);
 }
 
 #[test]
@@ -213,17 +160,15 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
         let t = monotonic_ns();
         lp.step(t, t, None);
     }
-    reset_count();
-    COUNTING.with(|c| c.set(true));
-    for _ in 0..5_000 {
-        let t = monotonic_ns();
-        lp.step(t, t, None);
-    }
-    COUNTING.with(|c| c.set(false));
+    let ((), n) = count_allocations(|| {
+        for _ in 0..5_000 {
+            let t = monotonic_ns();
+            lp.step(t, t, None);
+        }
+    });
     assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
-    assert_eq!(allocations(), 0);
+    assert_eq!(n, 0);
 }
-
 
 fn position(target_rad: f64) -> Mode {
     Mode::Position { target_rad }

@@ -4,7 +4,9 @@
 //! any crate's dev-dependencies can use it without a cycle (the workspace test crate depends on
 //! every framework crate; this one on none).
 
-#![forbid(unsafe_code)]
+mod counting_alloc;
+
+pub use counting_alloc::{CountingAlloc, count_allocations};
 
 /// Marsaglia's xorshift64 (shifts 13, 7, 17): fast, seeded, reproducible across platforms.
 /// Not for cryptography; for synthetic noise and fault patterns in tests.
