@@ -1,0 +1,64 @@
+//! The arm as a whole: its loop rate, timing and shared-memory domain.
+
+use super::*;
+
+/// One robot arm: its loop, its hardware and its joints.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ArmConfig {
+    /// Arm name: letters, digits, `_` and `-` (at most 32). Shared-memory service names are
+    /// derived from it (`<arm>/joint_state`, `<arm>/diagnostics`).
+    pub arm: String,
+    /// Control loop rate [Hz]. Default 40 Hz, the thesis' loop rate (sections 2.3 and 4.1).
+    #[serde(default = "default_rate_hz", deserialize_with = "finite")]
+    pub rate_hz: f64,
+    /// Which hardware backend the loop talks to.
+    pub hal: HalConfig,
+    /// Extra folders searched for plugin libraries, relative to this file.
+    #[serde(default)]
+    pub plugin_dirs: Vec<PathBuf>,
+    /// Loop timing.
+    #[serde(default)]
+    pub timing: TimingConfig,
+    /// Shared-memory (iceoryx2) settings.
+    #[serde(default)]
+    pub ipc: IpcConfig,
+    /// CAN and SPI buses with the devices on them.
+    #[serde(default)]
+    pub buses: BusesConfig,
+    /// The joints, each served by one plugin instance.
+    pub joints: Vec<JointConfig>,
+}
+
+fn default_rate_hz() -> f64 {
+    40.0
+}
+
+/// Loop timing.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct TimingConfig {
+    /// The loop sleeps until this long before each deadline, then spins [us], trading CPU for
+    /// jitter. Assumption: 200 us.
+    pub spin_us: u32,
+    /// Run the loop thread with SCHED_FIFO at this priority (1-99) when permitted.
+    pub realtime_priority: Option<u8>,
+    /// Pin the loop thread to this CPU.
+    pub cpu: Option<usize>,
+}
+
+impl Default for TimingConfig {
+    fn default() -> Self {
+        TimingConfig { spin_us: 200, realtime_priority: None, cpu: None }
+    }
+}
+
+/// Shared-memory settings.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct IpcConfig {
+    /// iceoryx2 domain (its file prefix). All processes of one arm must use the same; default:
+    /// iceoryx2's own default, which its other-language clients also use.
+    #[serde(default)]
+    pub domain: Option<String>,
+}

@@ -1,0 +1,296 @@
+//! The simulated arm: drives, joints, elastic elements, environments and plant effects.
+
+use super::*;
+
+/// Settings of the simulated backend.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimConfig {
+    /// Seed of every random process in the simulation (noise, frame loss).
+    #[serde(default)]
+    pub seed: u64,
+    /// Standard deviation of absolute-encoder noise [rad]. Assumption: 0.
+    #[serde(default, deserialize_with = "finite")]
+    pub encoder_noise_rad: f64,
+    /// Pass encoder readings through the 14-bit AS5048A frame codec (section 2.2), so that
+    /// they are quantised to 2 pi / 16384 rad as on the robot.
+    #[serde(default = "yes")]
+    pub quantize_encoders: bool,
+    /// Fraction of drive TPDO frames lost on the simulated CAN bus (appendix A), 0-1.
+    #[serde(default, deserialize_with = "finite")]
+    pub can_loss_rate: f64,
+    /// What a lost frame becomes: `missing` (nothing arrives) or `zero` (appendix A's failure:
+    /// the host read a lost encoder value as zero).
+    #[serde(default)]
+    pub can_loss_mode: CanLossMode,
+    /// SPI latency [s]: readings are this old (section 2.3: about 15 ms). Default 0.
+    #[serde(default, deserialize_with = "finite")]
+    pub spi_latency_s: f64,
+    /// CAN latency [s] (section 2.3: about 30 ms). Default 0.
+    #[serde(default, deserialize_with = "finite")]
+    pub can_latency_s: f64,
+    /// Integration step of the simulated physics [s]. Assumption: 0.5 ms.
+    #[serde(default = "default_substep", deserialize_with = "finite")]
+    pub substep_s: f64,
+    /// The simulated ELMO drives (section 3.2).
+    #[serde(default)]
+    pub elmo: ElmoConfig,
+}
+
+fn default_substep() -> f64 {
+    0.0005
+}
+
+/// The simulated ELMO drive (thesis section 3.2: a trapezoidal motion profile from the maximal
+/// acceleration and velocity, deceleration started in time to avoid overshoot, followed by a
+/// PID on the motor encoder). The thesis gives no gains: every default is an assumption.
+/// Positions are at the gearbox output [rad].
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ElmoConfig {
+    /// Profile velocity limit [rad/s]. Assumption: 3 rad/s.
+    #[serde(deserialize_with = "finite")]
+    pub max_velocity_rad_s: f64,
+    /// Profile acceleration limit [rad/s^2]. Assumption: 30 rad/s^2.
+    #[serde(deserialize_with = "finite")]
+    pub max_acceleration_rad_s2: f64,
+    /// PID proportional gain [Nm/rad]. Assumption: 4000.
+    #[serde(deserialize_with = "finite")]
+    pub kp: f64,
+    /// PID integral gain [Nm/(rad s)]. Assumption: 20000.
+    #[serde(deserialize_with = "finite")]
+    pub ki: f64,
+    /// PID derivative gain [Nms/rad]. Assumption: 80.
+    #[serde(deserialize_with = "finite")]
+    pub kd: f64,
+    /// Motor + gearbox inertia at the gearbox output [kg m^2]. Assumption: 0.5.
+    #[serde(deserialize_with = "finite")]
+    pub inertia_kgm2: f64,
+    /// Torque (current) limit at the gearbox output [Nm]. Assumption: 150 Nm.
+    #[serde(deserialize_with = "finite")]
+    pub torque_limit_nm: f64,
+    /// Eq. 3.5 gear friction `k_a atan(k_b omega)`: k_a [Nm]. Assumption: 0.5.
+    #[serde(deserialize_with = "finite")]
+    pub friction_ka_nm: f64,
+    /// Eq. 3.5: k_b [s/rad]. Assumption: 50.
+    #[serde(deserialize_with = "finite")]
+    pub friction_kb_s_per_rad: f64,
+}
+
+
+impl Default for ElmoConfig {
+    fn default() -> Self {
+        ElmoConfig {
+            max_velocity_rad_s: 3.0,
+            max_acceleration_rad_s2: 30.0,
+            kp: 4000.0,
+            ki: 20000.0,
+            kd: 80.0,
+            inertia_kgm2: 0.5,
+            torque_limit_nm: 150.0,
+            friction_ka_nm: 0.5,
+            friction_kb_s_per_rad: 50.0,
+        }
+    }
+}
+
+/// How a joint is simulated (YAML `sim:` of a joint). Without it, the joint's encoders follow
+/// its drives kinematically (`buses.spi[].encoders[].sim`).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct JointSimConfig {
+    /// The drives moving this joint, in the columns' order of `matrix`.
+    pub drives: Vec<String>,
+    /// Per DOF, the motor-side joint angle `theta = sum(matrix[dof][i] * drive_i)` [rad/rad]: the
+    /// joint's transmission (eq. 3.1 ratio 2 for the elbow, eq. 3.3 for the shoulder, eq. 3.7
+    /// with the eq. 3.8 ratio for the wrist).
+    pub matrix: Vec<Vec<f64>>,
+    /// The elastic element between theta and the output, the same for every DOF...
+    #[serde(default)]
+    pub element: Option<ElementSimConfig>,
+    /// ... or one per DOF (the shoulder: q2's VSA and rigid q3). A `wrist_table` covers both
+    /// of its DOFs and stands alone.
+    #[serde(default)]
+    pub elements: Vec<ElementSimConfig>,
+    /// Where the VSA's pivot is: `pivot_mm = offset_mm + mm_per_rad * drive`.
+    #[serde(default)]
+    pub pivot: Option<PivotSimConfig>,
+    /// What the output is attached to, the same for every DOF...
+    #[serde(default)]
+    pub environment: Option<EnvironmentConfig>,
+    /// ... or one per DOF.
+    #[serde(default)]
+    pub environments: Vec<EnvironmentConfig>,
+    /// Plant effects the observer does not model, each off unless given.
+    #[serde(default)]
+    pub effects: EffectsConfig,
+}
+
+/// The elastic element, e.g. `{kind: linear, stiffness_nm_per_rad: 113.78}` or `{kind: rigid}`.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ElementSimConfig {
+    /// Rigid (theta is the output); a clamped output then holds the drives too.
+    Rigid,
+    /// `tau = K delta`.
+    Linear {
+        /// K [Nm/rad].
+        stiffness_nm_per_rad: f64,
+    },
+    /// The characteristic in the joint's `params.characteristic` (the same table the observer
+    /// uses), 1-DOF over pivot settings.
+    PivotTable,
+    /// The 2-DOF wrist characteristic in `params.characteristic` (q6, q7).
+    WristTable,
+    /// Eq. 2.6 with these lever-arm parameters, `tau = K(pivot) delta`.
+    LeverArm {
+        /// Lever length l [m].
+        lever_length_m: f64,
+        /// Crank R [m].
+        crank_radius_m: f64,
+        /// Spring k_s [N/m].
+        spring_n_per_m: f64,
+        /// Pivot q at setting 0 mm [m].
+        pivot_offset_m: f64,
+    },
+}
+
+/// Pivot position of a simulated VSA.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PivotSimConfig {
+    /// The pivot drive.
+    pub drive: String,
+    /// [mm/rad]
+    pub mm_per_rad: f64,
+    /// [mm]
+    pub offset_mm: f64,
+}
+
+/// What a simulated joint's output is attached to, e.g. `{kind: fixed, position_rad: 0}` or
+/// `{kind: free, inertia_kgm2: 0.3}`.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum EnvironmentConfig {
+    /// Clamped (the thesis' validation set-ups, figures 5.1, 5.14).
+    Fixed {
+        /// Where [rad].
+        #[serde(default)]
+        position_rad: f64,
+    },
+    /// A free link.
+    Free {
+        /// Output inertia [kg m^2].
+        inertia_kgm2: f64,
+        /// Output damping [Nms/rad].
+        #[serde(default)]
+        damping_nms_per_rad: f64,
+        /// Gravity torque amplitude `m g l` [Nm] (torque `-mgl sin(q)`); 0: none.
+        #[serde(default)]
+        gravity_nm: f64,
+    },
+    /// A spring contact (the environment as a spring) on a link.
+    Spring {
+        /// Contact stiffness [Nm/rad].
+        stiffness_nm_per_rad: f64,
+        /// Where the contact is at rest [rad].
+        rest_rad: f64,
+        /// Output inertia [kg m^2].
+        inertia_kgm2: f64,
+        /// Damping [Nms/rad].
+        #[serde(default)]
+        damping_nms_per_rad: f64,
+    },
+    /// The output moved by a flow source (sections 3.3.1, 3.4.1, 3.5.1: characterisation), a
+    /// sine of this amplitude [rad] and frequency [Hz] per DOF, along `angle_deg` for the wrist.
+    Flow {
+        /// Amplitude [rad].
+        amplitude_rad: f64,
+        /// Frequency [Hz].
+        frequency_hz: f64,
+        /// Deflection direction for a 2-DOF joint [deg] (0 = the second DOF only, 90 = the first).
+        #[serde(default)]
+        angle_deg: f64,
+        /// The source starts moving at this simulated time [s] (the joint at rest before).
+        #[serde(default)]
+        start_s: f64,
+    },
+}
+
+/// Plant effects the observer does not model (all off by default).
+#[derive(Clone, Copy, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EffectsConfig {
+    /// Viscous friction in the element [Nms/rad].
+    #[serde(default)]
+    pub viscous_nms_per_rad: f64,
+    /// Dahl hysteresis: `dz/dt = sigma (1 - z/fc sgn(v)) v`, torque `z` [Nm].
+    #[serde(default)]
+    pub hysteresis: Option<DahlConfig>,
+    /// Dead-zone (play) half-width around zero deflection [rad].
+    #[serde(default)]
+    pub dead_zone_rad: f64,
+    /// Stiffness non-linearity: `+ k3 delta^3` [Nm/rad^3].
+    #[serde(default)]
+    pub cubic_nm_per_rad3: f64,
+    /// A structural mode seen by the torque sensor [Hz, ratio, Nm per Nm of element torque].
+    #[serde(default)]
+    pub vibration: Option<VibrationConfig>,
+    /// Offset of the torque sensor [Nm].
+    #[serde(default)]
+    pub torque_offset_nm: f64,
+    /// Standard deviation of the torque sensor noise [Nm].
+    #[serde(default)]
+    pub torque_noise_nm: f64,
+}
+
+/// Dahl hysteresis parameters.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DahlConfig {
+    /// Rest stiffness sigma [Nm/rad].
+    pub sigma_nm_per_rad: f64,
+    /// Limit torque fc [Nm].
+    pub limit_nm: f64,
+}
+
+/// A structural vibration mode.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VibrationConfig {
+    /// Mode frequency [Hz].
+    pub frequency_hz: f64,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// Excitation: mode torque per element torque change [-].
+    pub gain: f64,
+}
+
+/// What a lost simulated CAN frame becomes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CanLossMode {
+    /// Nothing arrives.
+    #[default]
+    Missing,
+    /// A frame with an all-zero position arrives (thesis appendix A).
+    Zero,
+}
+
+
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            seed: 0,
+            encoder_noise_rad: 0.0,
+            quantize_encoders: true,
+            can_loss_rate: 0.0,
+            can_loss_mode: CanLossMode::Missing,
+            spi_latency_s: 0.0,
+            can_latency_s: 0.0,
+            substep_s: default_substep(),
+            elmo: ElmoConfig::default(),
+        }
+    }
+}
