@@ -51,3 +51,90 @@ pub fn rig_yaml(arm: &str, rate_hz: f64, extra: &str) -> String {
         "arm: {arm}\nrate_hz: {rate_hz}\nhal: {{backend: sim}}\ntiming: {{spin_us: 100}}\nbuses:\n  can:\n    - interface: can0\n      drives:\n{drives}  spi:\n    - device: /dev/spidev0\n      encoders:\n{encoders}joints:\n  - name: a\n    plugin: rigid\n    encoders: {{output: e0}}\n    drives: {{motor: m0}}\n    limits: {{position_rad: [-1.0, 1.0]}}\n    params: {{position_pi: {{kp: 0.2, ki: 0.5, output_limit: 0.05}}}}\n{extra}"
     )
 }
+
+/// One typed edit of a YAML document: set (or add) the field at a path, or remove it.
+pub enum Edit<'a> {
+    /// Set the field at this path; its parent must exist.
+    Set(&'a str, serde_yaml::Value),
+    /// Remove the field at this path; it must exist.
+    Remove(&'a str),
+}
+
+/// Applies typed edits to a YAML document and returns the new text. A path is dot-separated
+/// keys with `[i]` (an index) or `[name]` (the element whose `name` is `name`):
+/// `arm`, `hal.sim.can_loss_rate`, `joints[q4].params.stiffness_nm_per_rad`,
+/// `joints[shoulder].dofs[q2].controller.startup`. A path that does not lead anywhere panics,
+/// so an edit can never silently miss when the file is reformatted (what a text replacement did).
+///
+/// ```
+/// use jointctl_tests::{Edit, yaml_with};
+/// let text = yaml_with("arm: a\njoints: [{name: q, params: {k: 1}}]\n", &[
+///     Edit::Set("arm", "b".into()),
+///     Edit::Set("joints[q].params.k", 2.into()),
+/// ]);
+/// let v: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+/// assert_eq!(v["joints"][0]["params"]["k"], 2);
+/// ```
+pub fn yaml_with(text: &str, edits: &[Edit]) -> String {
+    let mut doc: serde_yaml::Value = serde_yaml::from_str(text).expect("the YAML to edit parses");
+    for edit in edits {
+        let path = match edit {
+            Edit::Set(p, _) | Edit::Remove(p) => *p,
+        };
+        let (parent_path, last) = path.rsplit_once('.').map_or(("", path), |(a, b)| (a, b));
+        let parent = navigate(&mut doc, parent_path, path);
+        let map = parent.as_mapping_mut().unwrap_or_else(|| panic!("`{parent_path}` is not a mapping (editing `{path}`)"));
+        match edit {
+            Edit::Set(_, value) => {
+                map.insert(last.into(), value.clone());
+            }
+            Edit::Remove(_) => {
+                map.remove(last).unwrap_or_else(|| panic!("`{path}` is not in the document"));
+            }
+        }
+    }
+    serde_yaml::to_string(&doc).expect("serialise")
+}
+
+fn navigate<'v>(mut v: &'v mut serde_yaml::Value, path: &str, full: &str) -> &'v mut serde_yaml::Value {
+    for seg in path.split('.').filter(|s| !s.is_empty()) {
+        let (key, selector) = match seg.split_once('[') {
+            Some((k, rest)) => (k, Some(rest.trim_end_matches(']'))),
+            None => (seg, None),
+        };
+        v = v.get_mut(key).unwrap_or_else(|| panic!("`{key}` is not in the document (editing `{full}`)"));
+        if let Some(sel) = selector {
+            let list = v.as_sequence_mut().unwrap_or_else(|| panic!("`{key}` is not a list (editing `{full}`)"));
+            let i = sel.parse::<usize>().ok().or_else(|| list.iter().position(|e| e.get("name").and_then(|n| n.as_str()) == Some(sel)));
+            v = i.and_then(|i| list.get_mut(i)).unwrap_or_else(|| panic!("`{key}[{sel}]` is not in the document (editing `{full}`)"));
+        }
+    }
+    v
+}
+
+/// The reference arm (`configs/sherpa_arm.yaml`) with typed edits, written to a scratch file
+/// (returns its path). The arm is renamed `arm` so that parallel tests never share services.
+pub fn sherpa_with(test: &str, arm: &str, edits: &[Edit]) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let mut all = vec![Edit::Set("arm", arm.into())];
+    all.extend(edits.iter().map(|e| match e {
+        Edit::Set(p, v) => Edit::Set(p, v.clone()),
+        Edit::Remove(p) => Edit::Remove(p),
+    }));
+    let text = yaml_with(&std::fs::read_to_string(&src).expect("configs/sherpa_arm.yaml"), &all);
+    let path = scratch(test).join("sherpa.yaml");
+    std::fs::write(&path, text).expect("write the edited arm");
+    path
+}
+
+/// Replaces the one occurrence of `from` in `text`, for tests whose subject is the text itself
+/// (error positions): panics unless `from` occurs exactly once, so it cannot silently miss.
+///
+/// ```
+/// assert_eq!(jointctl_tests::replace_once("rate_hz: 40\n", "rate_hz: 40", "rate_hz: -1"), "rate_hz: -1\n");
+/// ```
+pub fn replace_once(text: &str, from: &str, to: &str) -> String {
+    let n = text.matches(from).count();
+    assert_eq!(n, 1, "`{from}` occurs {n} times, expected once");
+    text.replacen(from, to, 1)
+}

@@ -7,14 +7,11 @@ use std::time::{Duration, Instant};
 use jointctl_ipc::JointMode;
 use jointctl_modes::{Mode, Reference, Waveform};
 use jointctl_runtime::commands::ArmCommand;
-use jointctl_tests::{arm_name, jointctl, scratch};
+use jointctl_tests::{Edit, arm_name, jointctl, sherpa_with};
 
 fn sherpa_copy(test: &str) -> (String, std::path::PathBuf) {
     let arm = arm_name(test);
-    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
-    let text = std::fs::read_to_string(&src).unwrap().replacen("arm: sherpa", &format!("arm: {arm}"), 1);
-    let path = scratch(test).join("sherpa.yaml");
-    std::fs::write(&path, text).unwrap();
+    let path = sherpa_with(test, &arm, &[]);
     (arm, path)
 }
 
@@ -213,13 +210,8 @@ fn transmission_round_trips_joint_to_motor_to_joint_for_every_plugin() {
 
 #[test]
 fn a_reference_configured_in_yaml_runs_from_the_start() {
-    let (_, path) = sherpa_copy("startup");
-    let text = std::fs::read_to_string(&path).unwrap().replacen(
-        "          watchdog_s: 0.5                 # assumption",
-        "          watchdog_s: 0.5\n          startup: {torque: {waveform: cosine, amplitude: 3.0, frequency_hz: 0.2}}",
-        1,
-    );
-    std::fs::write(&path, text).unwrap();
+    let startup = serde_yaml::from_str("{torque: {waveform: cosine, amplitude: 3.0, frequency_hz: 0.2}}").unwrap();
+    let path = sherpa_with("startup", &arm_name("startup"), &[Edit::Set("joints[shoulder].dofs[q2].controller.startup", startup)]);
     let loaded = jointctl_config::load(&path).unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
     arm.activate().unwrap();

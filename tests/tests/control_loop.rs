@@ -137,9 +137,8 @@ fn deadline_overruns_are_detected_and_counted() {
 fn a_sherpa_arm_cycle_allocates_nothing() {
     // All seven joints, VSA characteristic interpolation included, statically linked so that
     // the plugins' allocations would be counted.
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
-    let text = std::fs::read_to_string(&path).unwrap().replacen("arm: sherpa", &format!("arm: {}", arm_name("sherpa-alloc")), 1);
-    let loaded = jointctl_config::parse_str(&text, &path).unwrap();
+    let path = jointctl_tests::sherpa_with("sherpa-alloc", &arm_name("sherpa-alloc"), &[]);
+    let loaded = jointctl_config::load(&path).unwrap();
     let mut loader = PluginLoader::new([]);
     for d in [
         jointctl_plugin_rigid::plugin_descriptor(),

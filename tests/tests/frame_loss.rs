@@ -5,17 +5,15 @@
 //! accelerates), sample by sample.
 
 use jointctl_modes::Mode;
-use jointctl_tests::scratch;
+use jointctl_tests::{Edit, sherpa_with};
 
 fn run(loss_rate: f64, mode: &str) -> (f64, f64, u64) {
-    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
-    let text = std::fs::read_to_string(&src).unwrap().replacen(
-        "    encoder_noise_rad: 0.0",
-        &format!("    encoder_noise_rad: 0.0\n    can_loss_rate: {loss_rate}\n    can_loss_mode: {mode}"),
-        1,
-    );
-    let path = scratch(&format!("loss-{mode}-{loss_rate}")).join("arm.yaml");
-    std::fs::write(&path, text).unwrap();
+    let test = format!("loss-{mode}-{loss_rate}");
+    let arm = jointctl_tests::arm_name(&format!("loss-{mode}-{}pct", (loss_rate * 100.0).round()));
+    let path = sherpa_with(&test, &arm, &[
+        Edit::Set("hal.sim.can_loss_rate", loss_rate.into()),
+        Edit::Set("hal.sim.can_loss_mode", mode.into()),
+    ]);
     let loaded = jointctl_config::load(&path).unwrap();
     let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
     let mut arm = jointctl_runtime::Arm::build(&loaded, &jointctl_runtime::PluginLoader::new([]), Box::new(sim.clone())).unwrap();

@@ -77,13 +77,10 @@ fn fit_output_feeds_the_runtime_through_include_without_editing() {
     assert!(table.contains("| - | - | 4000 | 3 |"), "{table}");
     assert!(dir.join("plots/fit.svg").exists());
     // The arm description includes the fitted file instead of the linear stiffness.
-    let cfg = std::fs::read_to_string(root().join("configs/sherpa_arm.yaml")).unwrap().replacen(
-        "      stiffness_nm_per_rad: 113.78                                 # section 3.3.2, elbow",
-        &format!("      include: {}", fitted.display()),
-        1,
-    );
-    let path = dir.join("arm.yaml");
-    std::fs::write(&path, cfg).unwrap();
+    let path = jointctl_tests::sherpa_with("fit-included", &jointctl_tests::arm_name("fit-included"), &[
+        jointctl_tests::Edit::Remove("joints[q4].params.stiffness_nm_per_rad"),
+        jointctl_tests::Edit::Set("joints[q4].params.include", fitted.display().to_string().into()),
+    ]);
     let loaded = jointctl_config::load(&path).unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
     arm.activate().unwrap();

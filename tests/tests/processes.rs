@@ -143,7 +143,7 @@ fn check_exit_codes() {
     assert!(String::from_utf8_lossy(&ok.stdout).contains("OK, 40 Hz, 2 joint(s)"));
 
     let broken = yaml.with_file_name("broken.yaml");
-    let text = std::fs::read_to_string(&yaml).unwrap().replace("rate_hz: 40", "rate_hz: -1");
+    let text = jointctl_tests::replace_once(&std::fs::read_to_string(&yaml).unwrap(), "rate_hz: 40", "rate_hz: -1");
     std::fs::write(&broken, text).unwrap();
     let bad = Command::new(jointctl()).arg("check").arg(&broken).output().unwrap();
     assert_eq!(bad.status.code(), Some(1));
@@ -190,7 +190,7 @@ fn check_prints_the_can_bus_budget_and_refuses_a_rate_the_bus_cannot_carry() {
     assert!(text.contains("can0: 9 drives at 1000 kbit/s: 19 frames per cycle (1765-2135 bits) + 90 heartbeats/s"), "{text}");
     assert!(text.contains("highest loop rate 466 Hz"), "{text}");
     let fast = scratch("budget").join("fast.yaml");
-    std::fs::write(&fast, std::fs::read_to_string(&cfg).unwrap().replace("rate_hz: 40 ", "rate_hz: 1000 ")).unwrap();
+    std::fs::write(&fast, jointctl_tests::replace_once(&std::fs::read_to_string(&cfg).unwrap(), "rate_hz: 40 ", "rate_hz: 1000 ")).unwrap();
     let out = Command::new(jointctl()).arg("check").arg(&fast).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
