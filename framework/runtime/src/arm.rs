@@ -8,11 +8,11 @@ use jointctl_api::{
 use jointctl_modes::{DofLimits, JointController, Mode, Observed};
 
 use crate::commands::ArmCommand;
-use jointctl_config::{ConfigErrors, LimitsConfig, LoadedConfig};
+use jointctl_config::{ConfigError, ConfigErrors, ConfigSource, JointConfig, LimitsConfig, LoadedConfig};
 use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
 
 use crate::joint::{FfiJoint, LoadedJoint};
-use crate::loader::PluginLoader;
+use crate::loader::{PluginLoader, PluginSource};
 
 /// One plugin instance and its wiring.
 pub struct JointSlot {
@@ -133,6 +133,71 @@ fn roles(text: &str) -> Vec<(&str, bool)> {
     }).collect()
 }
 
+/// Each encoder role's and each drive role's device index in the frames.
+type RoleMaps = ([Option<usize>; MAX_ENCODERS], [Option<usize>; MAX_DRIVES]);
+
+/// Maps a joint's wired devices onto its plugin's roles: `(encoder_map, drive_map)`, each role's
+/// device index in the frames. Unknown roles and unwired required roles are errors at their
+/// place in the YAML; `None` when there was any.
+fn wire(
+    jc: &JointConfig,
+    enc_roles: &[(&str, bool)],
+    drv_roles: &[(&str, bool)],
+    devices: &DeviceIndex,
+    at: &dyn Fn(&str) -> String,
+    src: &ConfigSource,
+    errors: &mut Vec<ConfigError>,
+) -> Option<RoleMaps> {
+    let mut encoder_map = [None; MAX_ENCODERS];
+    let mut drive_map = [None; MAX_DRIVES];
+    let mut wiring_ok = true;
+    for (kind, wired, declared, lookup, map) in [
+        ("encoder", &jc.encoders, enc_roles, &devices.encoders, &mut encoder_map[..]),
+        ("drive", &jc.drives, drv_roles, &devices.drives, &mut drive_map[..]),
+    ] {
+        let field = if kind == "encoder" { "encoders" } else { "drives" };
+        for role in wired.keys() {
+            if !declared.iter().any(|(r, _)| r == role) {
+                let list: Vec<_> = declared.iter().map(|(r, _)| *r).collect();
+                errors.push(src.error(
+                    &at(&format!("{field}.{role}")),
+                    format!("plugin `{}` has no {kind} role `{role}`; its roles are: {}", jc.plugin.name, list.join(", ")),
+                ));
+                wiring_ok = false;
+            }
+        }
+        for (i, (role, required)) in declared.iter().enumerate() {
+            match wired.get(*role) {
+                Some(dev) => map[i] = lookup.iter().position(|n| n == dev),
+                None if *required => {
+                    errors.push(src.error(&at(field), format!("plugin `{}` needs {kind} role `{role}` wired to a device", jc.plugin.name)));
+                    wiring_ok = false;
+                }
+                None => {}
+            }
+        }
+    }
+    wiring_ok.then_some((encoder_map, drive_map))
+}
+
+/// Creates and configures a joint's plugin instance; an error names the param it concerns.
+fn instantiate(
+    jc: &JointConfig,
+    source: PluginSource,
+    ctx: &JointContext,
+    at: &dyn Fn(&str) -> String,
+    src: &ConfigSource,
+) -> Result<FfiJoint, ConfigError> {
+    let params = if jc.params.0.is_null() { "{}".to_string() } else { jc.params.0.to_string() };
+    let located = |e: jointctl_api::PluginError| {
+        let field = e.field.as_ref().map_or_else(|| at("params"), |f| at(&format!("params.{f}")));
+        src.error(&field, format!("plugin `{}`: {}", jc.plugin.name, e.message))
+    };
+    let mut joint = FfiJoint::create(source, &params).map_err(located)?;
+    joint.configure(ctx).map_err(located)?;
+    Ok(joint)
+}
+
 impl Arm {
     /// Loads every joint's plugin, wires it and creates and configures its instance. Every
     /// problem is reported at its place in the YAML.
@@ -171,60 +236,17 @@ impl Arm {
                 ));
                 continue;
             }
-            let mut encoder_map = [None; MAX_ENCODERS];
-            let mut drive_map = [None; MAX_DRIVES];
-            let mut wiring_ok = true;
-            for (kind, wired, declared, lookup, map) in [
-                ("encoder", &jc.encoders, &enc_roles, &devices.encoders, &mut encoder_map[..]),
-                ("drive", &jc.drives, &drv_roles, &devices.drives, &mut drive_map[..]),
-            ] {
-                let field = if kind == "encoder" { "encoders" } else { "drives" };
-                for role in wired.keys() {
-                    if !declared.iter().any(|(r, _)| r == role) {
-                        let list: Vec<_> = declared.iter().map(|(r, _)| *r).collect();
-                        errors.push(src.error(
-                            &at(&format!("{field}.{role}")),
-                            format!("plugin `{}` has no {kind} role `{role}`; its roles are: {}", jc.plugin.name, list.join(", ")),
-                        ));
-                        wiring_ok = false;
-                    }
-                }
-                for (i, (role, required)) in declared.iter().enumerate() {
-                    match wired.get(*role) {
-                        Some(dev) => map[i] = lookup.iter().position(|n| n == dev),
-                        None if *required => {
-                            errors.push(src.error(
-                                &at(field),
-                                format!("plugin `{}` needs {kind} role `{role}` wired to a device", jc.plugin.name),
-                            ));
-                            wiring_ok = false;
-                        }
-                        None => {}
-                    }
-                }
-            }
-            if !wiring_ok {
+            let Some((encoder_map, drive_map)) = wire(jc, &enc_roles, &drv_roles, &devices, &at, src, &mut errors) else {
                 continue;
-            }
-            let params = jc.params.0.to_string();
-            let params = if jc.params.0.is_null() { "{}".to_string() } else { params };
-            let mut joint = match FfiJoint::create(source, &params) {
+            };
+            let ctx = JointContext::new(d.dof(), enc_roles.len() as u32, drv_roles.len() as u32, cfg.rate_hz);
+            let joint = match instantiate(jc, source, &ctx, &at, src) {
                 Ok(j) => j,
                 Err(e) => {
-                    let field = match &e.field {
-                        Some(f) => at(&format!("params.{f}")),
-                        None => at("params"),
-                    };
-                    errors.push(src.error(&field, format!("plugin `{}`: {}", jc.plugin.name, e.message)));
+                    errors.push(e);
                     continue;
                 }
             };
-            let ctx = JointContext::new(d.dof(), enc_roles.len() as u32, drv_roles.len() as u32, cfg.rate_hz);
-            if let Err(e) = joint.configure(&ctx) {
-                let field = e.field.as_ref().map_or_else(|| at(""), |f| at(&format!("params.{f}")));
-                errors.push(src.error(&field, format!("plugin `{}`: {}", jc.plugin.name, e.message)));
-                continue;
-            }
             let first = dof_names.len();
             dof_names.extend(names.iter().map(|n| n.to_string()));
             for (l, (_, c)) in jc.dof_limits().into_iter().zip(jc.dof_controllers()) {
