@@ -34,130 +34,107 @@ pub const NAME_LEN: usize = 16;
 // A joint name the config accepts always fits its field with the NUL.
 const _: () = assert!(jointctl_api::MAX_JOINT_NAME < NAME_LEN);
 
-/// A joint DOF's control mode, as published in [`JointSample::mode`].
+/// Declares a `#[repr(C)]` `u32` newtype with named values, `ALL` (every value with its name,
+/// for clients in other languages too), `name()` and `from_name()`.
 ///
-/// A `u32` newtype with named values rather than a Rust `enum`: a subscriber reads it from
-/// memory another process wrote, and an `enum` holding a value outside its variants would be
-/// undefined behaviour; here an unknown value is just [`JointMode::name`] `"unknown"`.
-///
-/// ```
-/// use jointctl_ipc::JointMode;
-/// assert_eq!(JointMode::TORQUE.name(), "torque");
-/// assert_eq!(JointMode::from_name("impedance"), Some(JointMode::IMPEDANCE));
-/// assert_eq!(JointMode(99).name(), "unknown");
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
-#[repr(C)]
-pub struct JointMode(pub u32);
+/// Newtypes rather than Rust `enum`s: a subscriber reads them from memory another process
+/// wrote, and an `enum` holding a value outside its variants would be undefined behaviour;
+/// here an unknown value is just named `"unknown"`.
+macro_rules! named_codes {
+    ($(#[$doc:meta])* $ty:ident { $($(#[$vdoc:meta])* $konst:ident = $value:literal, $name:literal;)+ }) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
+        #[repr(C)]
+        pub struct $ty(pub u32);
 
-impl JointMode {
-    /// Holding the drives where they are.
-    pub const HOLD: JointMode = JointMode(0);
-    /// Position control with the feedback PI (section 4.3).
-    pub const POSITION: JointMode = JointMode(1);
-    /// A direct joint set-point.
-    pub const MANUAL: JointMode = JointMode(2);
-    /// Following a time-stamped trajectory.
-    pub const TRAJECTORY: JointMode = JointMode(3);
-    /// Torque control (figure 4.6).
-    pub const TORQUE: JointMode = JointMode(4);
-    /// Impedance control through the torque mode.
-    pub const IMPEDANCE: JointMode = JointMode(5);
-    /// Every mode with its name, in code order (for clients in other languages too).
-    pub const ALL: [(JointMode, &'static str); 6] = [
-        (Self::HOLD, "hold"),
-        (Self::POSITION, "position"),
-        (Self::MANUAL, "manual"),
-        (Self::TRAJECTORY, "trajectory"),
-        (Self::TORQUE, "torque"),
-        (Self::IMPEDANCE, "impedance"),
-    ];
+        impl $ty {
+            $($(#[$vdoc])* pub const $konst: $ty = $ty($value);)+
+            /// Every value with its name, in code order.
+            pub const ALL: &'static [($ty, &'static str)] = &[$(($ty::$konst, $name)),+];
 
-    /// The mode's lower-case name, `"unknown"` for a value outside [`JointMode::ALL`].
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
-    }
+            /// The value's lower-case name, `"unknown"` for a value outside `ALL`.
+            pub fn name(self) -> &'static str {
+                Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
+            }
 
-    /// The mode with this name.
-    pub fn from_name(name: &str) -> Option<JointMode> {
-        Self::ALL.iter().find(|(_, n)| *n == name).map(|(m, _)| *m)
+            /// The value with this name.
+            pub fn from_name(name: &str) -> Option<$ty> {
+                Self::ALL.iter().find(|(_, n)| *n == name).map(|(m, _)| *m)
+            }
+        }
+    };
+}
+
+named_codes! {
+    /// A joint DOF's control mode, as published in [`JointSample::mode`].
+    ///
+    /// ```
+    /// use jointctl_ipc::JointMode;
+    /// assert_eq!(JointMode::TORQUE.name(), "torque");
+    /// assert_eq!(JointMode::from_name("impedance"), Some(JointMode::IMPEDANCE));
+    /// assert_eq!(JointMode(99).name(), "unknown");
+    /// ```
+    JointMode {
+        /// Holding the drives where they are.
+        HOLD = 0, "hold";
+        /// Position control with the feedback PI (section 4.3).
+        POSITION = 1, "position";
+        /// A direct joint set-point.
+        MANUAL = 2, "manual";
+        /// Following a time-stamped trajectory.
+        TRAJECTORY = 3, "trajectory";
+        /// Torque control (figure 4.6).
+        TORQUE = 4, "torque";
+        /// Impedance control through the torque mode.
+        IMPEDANCE = 5, "impedance";
     }
 }
 
-/// The waveform of a torque reference in a [`CommandRequest`] (chapter 5's step, sine and
-/// cosine). A newtype for the same reason as [`JointMode`].
-///
-/// ```
-/// assert_eq!(jointctl_ipc::TorqueWaveform::COSINE.name(), "cosine");
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
-#[repr(C)]
-pub struct TorqueWaveform(pub u32);
-
-impl TorqueWaveform {
-    /// A step of `amplitude` at the start time.
-    pub const STEP: TorqueWaveform = TorqueWaveform(0);
-    /// `amplitude * sin(2 pi f t)`.
-    pub const SINE: TorqueWaveform = TorqueWaveform(1);
-    /// `amplitude * cos(2 pi f t)`.
-    pub const COSINE: TorqueWaveform = TorqueWaveform(2);
-    /// Every waveform with its name, in code order.
-    pub const ALL: [(TorqueWaveform, &'static str); 3] = [(Self::STEP, "step"), (Self::SINE, "sine"), (Self::COSINE, "cosine")];
-
-    /// The waveform's name, `"unknown"` outside [`TorqueWaveform::ALL`].
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
+named_codes! {
+    /// The waveform of a torque reference in a [`CommandRequest`] (chapter 5's step, sine and
+    /// cosine).
+    ///
+    /// ```
+    /// assert_eq!(jointctl_ipc::TorqueWaveform::COSINE.name(), "cosine");
+    /// ```
+    TorqueWaveform {
+        /// A step of `amplitude` at the start time.
+        STEP = 0, "step";
+        /// `amplitude * sin(2 pi f t)`.
+        SINE = 1, "sine";
+        /// `amplitude * cos(2 pi f t)`.
+        COSINE = 2, "cosine";
     }
 }
 
-/// What a [`CommandRequest`] asks for. A newtype for the same reason as [`JointMode`].
-///
-/// ```
-/// assert_eq!(jointctl_ipc::CommandKind::STIFFNESS.name(), "stiffness");
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
-#[repr(C)]
-pub struct CommandKind(pub u32);
-
-impl CommandKind {
-    /// Hold one joint (`joint` set) or all joints (`joint` empty).
-    pub const HOLD: CommandKind = CommandKind(1);
-    /// Position control to `values[0]` [rad], with the position feedback PI.
-    pub const POSITION: CommandKind = CommandKind(2);
-    /// Direct joint set-point `values[0]` [rad] (no feedback PI).
-    pub const MANUAL: CommandKind = CommandKind(3);
-    /// Follow `points[..point_count]` = (time [s], position [rad], velocity [rad/s] or NaN).
-    pub const TRAJECTORY: CommandKind = CommandKind(4);
-    /// Torque reference of [`CommandRequest::waveform`]: `values` = [amplitude [Nm], frequency
-    /// [Hz], offset [Nm], start delay [s]].
-    pub const TORQUE: CommandKind = CommandKind(5);
-    /// Impedance: `values` = [K [Nm/rad], D [Nms/rad], target [rad] or NaN for "where it is"].
-    pub const IMPEDANCE: CommandKind = CommandKind(6);
-    /// Requested stiffness `values[0]` [Nm/rad] (variable stiffness joints).
-    pub const STIFFNESS: CommandKind = CommandKind(7);
-    /// Enable a joint (it accepts commands again, starting in hold).
-    pub const ENABLE: CommandKind = CommandKind(8);
-    /// Disable a joint: it holds and refuses commands until enabled.
-    pub const DISABLE: CommandKind = CommandKind(9);
-    /// Stop the runtime (as SIGINT: joints held, final state published).
-    pub const STOP: CommandKind = CommandKind(10);
-    /// Every kind with its name, in code order.
-    pub const ALL: [(CommandKind, &'static str); 10] = [
-        (Self::HOLD, "hold"),
-        (Self::POSITION, "position"),
-        (Self::MANUAL, "manual"),
-        (Self::TRAJECTORY, "trajectory"),
-        (Self::TORQUE, "torque"),
-        (Self::IMPEDANCE, "impedance"),
-        (Self::STIFFNESS, "stiffness"),
-        (Self::ENABLE, "enable"),
-        (Self::DISABLE, "disable"),
-        (Self::STOP, "stop"),
-    ];
-
-    /// The kind's name, `"unknown"` outside [`CommandKind::ALL`].
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(m, _)| *m == self).map_or("unknown", |(_, n)| n)
+named_codes! {
+    /// What a [`CommandRequest`] asks for.
+    ///
+    /// ```
+    /// assert_eq!(jointctl_ipc::CommandKind::STIFFNESS.name(), "stiffness");
+    /// ```
+    CommandKind {
+        /// Hold one joint (`joint` set) or all joints (`joint` empty).
+        HOLD = 1, "hold";
+        /// Position control to `values[0]` [rad], with the position feedback PI.
+        POSITION = 2, "position";
+        /// Direct joint set-point `values[0]` [rad] (no feedback PI).
+        MANUAL = 3, "manual";
+        /// Follow `points[..point_count]` = (time [s], position [rad], velocity [rad/s] or NaN).
+        TRAJECTORY = 4, "trajectory";
+        /// Torque reference of [`CommandRequest::waveform`]: `values` = [amplitude [Nm],
+        /// frequency [Hz], offset [Nm], start delay [s]].
+        TORQUE = 5, "torque";
+        /// Impedance: `values` = [K [Nm/rad], D [Nms/rad], target [rad] or NaN for "where it is"].
+        IMPEDANCE = 6, "impedance";
+        /// Requested stiffness `values[0]` [Nm/rad] (variable stiffness joints).
+        STIFFNESS = 7, "stiffness";
+        /// Enable a joint (it accepts commands again, starting in hold).
+        ENABLE = 8, "enable";
+        /// Disable a joint: it holds and refuses commands until enabled.
+        DISABLE = 9, "disable";
+        /// Stop the runtime (as SIGINT: joints held, final state published).
+        STOP = 10, "stop";
     }
 }
 

@@ -149,6 +149,77 @@ pub fn published_mode(mode: &Mode) -> JointMode {
     }
 }
 
+/// What the publisher thread owns: the arm's node and ports.
+struct PublisherPorts {
+    node: Node<ipc::Service>,
+    state: Publisher<ipc::Service, ArmState, ()>,
+    diagnostics: Publisher<ipc::Service, Diagnostics, ()>,
+    server: iceoryx2::port::server::Server<ipc::Service, jointctl_ipc::CommandRequest, (), CommandResponse, ()>,
+}
+
+impl PublisherPorts {
+    /// Creates the arm's node and services; a taken publisher or server slot means another
+    /// runtime runs this arm.
+    fn open(domain: Option<&str>, arm_name: &str) -> Result<Self, RunError> {
+        let node = jointctl_ipc::create_node(domain, &format!("jointctl-run-{arm_name}"))?;
+        let names = ServiceNames::for_arm(arm_name);
+        let state = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.joint_state, e))?;
+        let diagnostics = jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
+        let command_name = jointctl_ipc::command_service_name(arm_name);
+        let server = jointctl_ipc::command_service(&node, &command_name, true)?
+            .server_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &command_name, e))?;
+        Ok(PublisherPorts { node, state, diagnostics, server })
+    }
+
+    /// Publishes the loop's records and answers commands until `stop`; returns the samples
+    /// iceoryx2 refused. Dropping the ports at the end releases the shared memory.
+    fn serve(
+        self,
+        mut records: rtrb::Consumer<CycleRecord>,
+        mut commands: rtrb::Producer<ArmCommand>,
+        mut validator: CommandValidator,
+        stop: &AtomicBool,
+    ) -> u64 {
+        let mut failures = 0u64;
+        loop {
+            let stopping = stop.load(Ordering::Acquire);
+            while let Ok(rec) = records.pop() {
+                let ok_state = self.state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
+                let ok_diag = self.diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
+                failures += u64::from(!ok_state) + u64::from(!ok_diag);
+            }
+            // Commands are validated here, outside the control thread; only valid ones reach
+            // the loop, and every request gets an answer.
+            while let Ok(Some(request)) = self.server.receive() {
+                let response = match validator.validate(request.payload()) {
+                    Ok((command, text)) => match commands.push(command) {
+                        Ok(()) => CommandResponse::new(true, &text),
+                        Err(_) => CommandResponse::new(false, "the runtime's command queue is full; try again"),
+                    },
+                    Err(reason) => CommandResponse::new(false, &reason.to_string()),
+                };
+                let _ = request.send_copy(response);
+            }
+            if stopping {
+                break;
+            }
+            std::thread::park_timeout(std::time::Duration::from_millis(5));
+        }
+        let PublisherPorts { node, state, diagnostics, server } = self;
+        // Ports before the node: shared memory released in order.
+        drop((server, state, diagnostics, node));
+        failures
+    }
+}
+
 /// The loop's shared-memory side.
 ///
 /// iceoryx2 0.10 allocates a small reference count in every `loan`, so the control thread never
@@ -169,9 +240,9 @@ impl ArmPublisher {
     /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs) on a
     /// publisher thread, and returns once they exist.
     pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
-        let (producer, mut consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
-        let (mut command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
-        let mut validator = CommandValidator::new(arm.dof_names.clone(), arm.limits.clone());
+        let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
+        let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
+        let validator = CommandValidator::new(arm.dof_names.clone(), arm.limits.clone());
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
         let arm_name = arm.name.clone();
@@ -180,26 +251,7 @@ impl ArmPublisher {
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
             .spawn(move || {
-                let setup = || -> Result<_, RunError> {
-                    let node = jointctl_ipc::create_node(domain.as_deref(), &format!("jointctl-run-{arm_name}"))?;
-                    let names = ServiceNames::for_arm(&arm_name);
-                    let state: Publisher<ipc::Service, ArmState, ()> = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
-                        .publisher_builder()
-                        .create()
-                        .map_err(|e| port_error(&arm_name, &names.joint_state, e))?;
-                    let diagnostics: Publisher<ipc::Service, Diagnostics, ()> =
-                        jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
-                            .publisher_builder()
-                            .create()
-                            .map_err(|e| port_error(&arm_name, &names.diagnostics, e))?;
-                    let command_name = jointctl_ipc::command_service_name(&arm_name);
-                    let server = jointctl_ipc::command_service(&node, &command_name, true)?
-                        .server_builder()
-                        .create()
-                        .map_err(|e| port_error(&arm_name, &command_name, e))?;
-                    Ok((node, state, diagnostics, server))
-                };
-                let (node, state, diagnostics, server) = match setup() {
+                let ports = match PublisherPorts::open(domain.as_deref(), &arm_name) {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(()));
                         ports
@@ -209,35 +261,7 @@ impl ArmPublisher {
                         return 0;
                     }
                 };
-                let mut failures = 0u64;
-                loop {
-                    let stopping = thread_stop.load(Ordering::Acquire);
-                    while let Ok(rec) = consumer.pop() {
-                        let ok_state = state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
-                        let ok_diag =
-                            diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
-                        failures += u64::from(!ok_state) + u64::from(!ok_diag);
-                    }
-                    // Commands are validated here, outside the control thread; only valid ones
-                    // reach the loop, and every request gets an answer.
-                    while let Ok(Some(request)) = server.receive() {
-                        let response = match validator.validate(request.payload()) {
-                            Ok((command, text)) => match command_producer.push(command) {
-                                Ok(()) => CommandResponse::new(true, &text),
-                                Err(_) => CommandResponse::new(false, "the runtime's command queue is full; try again"),
-                            },
-                            Err(reason) => CommandResponse::new(false, &reason.to_string()),
-                        };
-                        let _ = request.send_copy(response);
-                    }
-                    if stopping {
-                        break;
-                    }
-                    std::thread::park_timeout(std::time::Duration::from_millis(5));
-                }
-                // Ports and node are dropped here: shared memory released.
-                drop((server, state, diagnostics, node));
-                failures
+                ports.serve(consumer, command_producer, validator, &thread_stop)
             })
             .map_err(|e| RunError::Thread(e.to_string()))?;
         match ready_rx.recv() {
