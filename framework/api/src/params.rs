@@ -28,6 +28,20 @@ pub fn parse<T: serde::de::DeserializeOwned>(params_json: &str) -> Result<T, Plu
     })
 }
 
+/// Checks that a parameter (a ratio or a scale) is finite and not zero.
+///
+/// ```
+/// assert!(jointctl_api::params::nonzero("ratio", -2.0).is_ok());
+/// assert!(jointctl_api::params::nonzero("ratio", 0.0).is_err());
+/// ```
+pub fn nonzero(field: &str, value: f64) -> Result<f64, PluginError> {
+    if value.is_finite() && value != 0.0 {
+        Ok(value)
+    } else {
+        Err(PluginError::at(field, format!("must be finite and non-zero, got {value}")))
+    }
+}
+
 /// Checks that a parameter is finite and strictly positive.
 ///
 /// ```

@@ -2,7 +2,9 @@
 
 use jointctl_api::{ControlMode, JointCommand, PluginError};
 
-use crate::{Pi, PiGains};
+use jointctl_api::MotorSetpoint;
+
+use crate::{LinearTransmission, Pi, PiGains};
 
 /// Default `max_age_s` of a plugin's params: the oldest stale reading still used [s].
 /// Assumption: 0.1 s, 4 cycles at the thesis' 40 Hz (sections 2.3, 4.1), so that one or two lost
@@ -66,6 +68,25 @@ impl PositionLoop {
     pub fn from_params(gains: PiGains) -> Result<Self, PluginError> {
         gains.validate().map_err(|e| PluginError::at(format!("position_pi.{}", e.field), e.to_string()))?;
         Ok(PositionLoop::new(gains))
+    }
+
+    /// Section 4.3 for a joint with one motor behind a linear transmission: in position mode the
+    /// motor goes where the corrected target needs it; in every other mode, or with the position
+    /// unknown, the drive holds.
+    ///
+    /// ```
+    /// use jointctl_api::{JointCommand, MotorSetpoint};
+    /// use jointctl_control::{LinearTransmission, PiGains, PositionLoop};
+    /// let mut pl = PositionLoop::new(PiGains { kp: 0.0, ki: 0.0, output_limit: 1.0 });
+    /// let t = LinearTransmission::new(2.0);
+    /// assert_eq!(pl.motor_setpoint(&JointCommand::position(1.0), Some(0.0), 0.01, &t), MotorSetpoint::move_to(0.5));
+    /// assert_eq!(pl.motor_setpoint(&JointCommand::position(1.0), None, 0.01, &t), MotorSetpoint::HOLD);
+    /// ```
+    pub fn motor_setpoint(&mut self, command: &JointCommand, position_rad: Option<f64>, dt_s: f64, transmission: &LinearTransmission) -> MotorSetpoint {
+        match self.target_rad(command, position_rad, dt_s) {
+            Some(q) if command.mode == ControlMode::POSITION => MotorSetpoint::move_to(transmission.motor_for(q)),
+            _ => MotorSetpoint::HOLD,
+        }
     }
 
     /// Holds at this position from now on (e.g. the pose at activation).

@@ -13,7 +13,7 @@
 //! feed-forward deflection) and of eq. 3.8 (expected minus measured).
 
 use jointctl_api::{
-    Controller, ControlMode, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Controller, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
 use jointctl_control::{LinearTransmission, PiGains, PositionLoop, VelocityEstimator};
@@ -89,9 +89,7 @@ impl JointPlugin for ElasticJoint {
             (None, Some(c)) => c.stiffness(0.0),
             _ => return Err(PluginError::new("give either `stiffness_nm_per_rad` (linear) or `characteristic` (a fitted curve)")),
         };
-        if !(p.output_per_motor.is_finite() && p.output_per_motor != 0.0) {
-            return Err(PluginError::at("output_per_motor", "must be finite and non-zero"));
-        }
+        params::nonzero("output_per_motor", p.output_per_motor)?;
         params::positive("max_age_s", p.max_age_s)?;
         if !(p.max_deflection_age_s.is_finite() && p.max_deflection_age_s >= 0.0) {
             return Err(PluginError::at("max_deflection_age_s", "must be finite and >= 0"));
@@ -173,12 +171,7 @@ impl Controller for ElasticJoint {
         raw: &RawJointView,
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
-        // Only position mode moves the motor; every other mode leaves it to the drive's hold.
-        let target = self.position.target_rad(&command[0], state[0].position(), raw.dt_s);
-        out[MOTOR] = match target {
-            Some(q) if command[0].mode == ControlMode::POSITION => MotorSetpoint::move_to(self.transmission.motor_for(q)),
-            _ => MotorSetpoint::HOLD,
-        };
+        out[MOTOR] = self.position.motor_setpoint(&command[0], state[0].position(), raw.dt_s, &self.transmission);
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 //! output absolute encoder; deflection is 0; torque is not observed (reported unknown, not zero).
 
 use jointctl_api::{
-    Controller, ControlMode, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
+    Controller, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
 use jointctl_control::{LinearTransmission, PiGains, PositionLoop, VelocityEstimator};
@@ -51,9 +51,7 @@ pub struct RigidJoint {
 impl JointPlugin for RigidJoint {
     fn create(params_json: &str) -> Result<Self, PluginError> {
         let p: Params = params::parse(params_json)?;
-        if !(p.joint_per_motor.is_finite() && p.joint_per_motor != 0.0) {
-            return Err(PluginError::at("joint_per_motor", "must be finite and non-zero"));
-        }
+        params::nonzero("joint_per_motor", p.joint_per_motor)?;
         params::positive("stiffness_nm_per_rad", p.stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
         let position = PositionLoop::from_params(p.position_pi)?;
@@ -106,12 +104,7 @@ impl Controller for RigidJoint {
         raw: &RawJointView,
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
-        // Only position mode moves the motor; every other mode leaves it to the drive's hold.
-        let target = self.position.target_rad(&command[0], state[0].position(), raw.dt_s);
-        out[MOTOR] = match target {
-            Some(q) if command[0].mode == ControlMode::POSITION => MotorSetpoint::move_to(self.transmission.motor_for(q)),
-            _ => MotorSetpoint::HOLD,
-        };
+        out[MOTOR] = self.position.motor_setpoint(&command[0], state[0].position(), raw.dt_s, &self.transmission);
         Ok(())
     }
 }

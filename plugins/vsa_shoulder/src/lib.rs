@@ -89,9 +89,7 @@ impl JointPlugin for VsaShoulder {
         let p: Params = params::parse(params_json)?;
         let characteristic = PivotCharacteristic::from_spec(&p.characteristic)
             .map_err(|e| PluginError::at(format!("characteristic.{}", e.field), e.message))?;
-        if !(p.pivot_mm_per_rad.is_finite() && p.pivot_mm_per_rad != 0.0) {
-            return Err(PluginError::at("pivot_mm_per_rad", "must be finite and non-zero"));
-        }
+        params::nonzero("pivot_mm_per_rad", p.pivot_mm_per_rad)?;
         params::positive("q3_stiffness_nm_per_rad", p.q3_stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
         let position = PositionLoop::from_params(p.position_pi)?;

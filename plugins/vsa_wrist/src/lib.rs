@@ -114,9 +114,7 @@ impl JointPlugin for VsaWrist {
         params::positive("teeth_ring", p.teeth_ring)?;
         params::positive("belt_ratio", p.belt_ratio)?;
         params::positive("max_age_s", p.max_age_s)?;
-        if !(p.pivot_mm_per_rad.is_finite() && p.pivot_mm_per_rad != 0.0) {
-            return Err(PluginError::at("pivot_mm_per_rad", "must be finite and non-zero"));
-        }
+        params::nonzero("pivot_mm_per_rad", p.pivot_mm_per_rad)?;
         let position = PositionLoop::from_params(p.position_pi)?;
         Ok(VsaWrist {
             characteristic: characteristic.clone(),
