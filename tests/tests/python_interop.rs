@@ -69,10 +69,12 @@ fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
     }
     let positions: Vec<f64> = py_samples.iter().map(|s| s["joints"][0]["position"].as_f64().unwrap()).collect();
     assert!(positions.iter().all(|p| (-1.0..=1.0).contains(p)), "{positions:?}");
-    // Under load the Python client may start after `a` has settled, so compare with the target,
-    // not first against last: never farther from 0.3 rad, and clearly away from the start at 0.
-    let (first, last) = (positions[0], positions[positions.len() - 1]);
-    assert!((last - 0.3).abs() <= (first - 0.3).abs() + 1e-9 && last > 0.05, "a moves towards 0.3 rad: {positions:?}");
+    // The Python client may start after `a` has reached 0.3 rad (it overshoots by a few mrad
+    // and settles), so judge where it ends, not first against last: near the target, which the
+    // Rust inspector's sample, taken before the command, was not.
+    let last = positions[positions.len() - 1];
+    let before = rust_sample["joints"][0]["position"].as_f64().unwrap();
+    assert!((last - 0.3).abs() < 0.02 && (before - 0.3).abs() > 0.1, "a moves from {before} towards 0.3 rad: {positions:?}");
     // The Rust inspector ran before the Python one: an earlier cycle of the same run.
     assert!(rust_sample["cycle"].as_u64() < py_samples[0]["cycle"].as_u64());
 }
