@@ -433,6 +433,36 @@ fn plugin_error_status(err: *mut ErrorBuf, e: &PluginError) -> u32 {
     STATUS_FAILED
 }
 
+std::thread_local! {
+    /// Set while this thread is inside a plugin entry point.
+    static IN_PLUGIN_CALL: core::cell::Cell<bool> = const { core::cell::Cell::new(false) };
+}
+
+/// Installs, once per copy of std (a plugin library has its own), a panic hook that stays
+/// silent for panics inside plugin entry points and defers to the previous hook for every
+/// other panic. A plugin's panic is caught at the boundary and its message goes to the host
+/// through the [`ErrorBuf`]; the default hook would print it, with a backtrace when
+/// `RUST_BACKTRACE` is set, on the control thread and stall the loop for that long.
+fn install_quiet_panic_hook() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !IN_PLUGIN_CALL.with(core::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+}
+
+/// Runs a plugin's code with its panics caught and not printed. Allocation-free.
+fn guarded<R>(f: impl FnOnce() -> R) -> std::thread::Result<R> {
+    let outer = IN_PLUGIN_CALL.with(|c| c.replace(true));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    IN_PLUGIN_CALL.with(|c| c.set(outer));
+    result
+}
+
 fn panic_status(err: *mut ErrorBuf, payload: &(dyn std::any::Any + Send)) -> u32 {
     // SAFETY: as above.
     unsafe { report(err, panic_text(payload), None) };
@@ -442,12 +472,13 @@ fn panic_status(err: *mut ErrorBuf, payload: &(dyn std::any::Any + Send)) -> u32
 /// # Safety
 /// `params` valid for `len` bytes; `err` null or valid.
 unsafe extern "C" fn shim_create<P: JointPlugin>(params: *const u8, len: usize, err: *mut ErrorBuf) -> Handle {
-    let result = catch_unwind(AssertUnwindSafe(|| {
+    install_quiet_panic_hook();
+    let result = guarded(|| {
         // SAFETY: the host passes a valid UTF-8 buffer of `len` bytes.
         let bytes = if params.is_null() { &[][..] } else { unsafe { core::slice::from_raw_parts(params, len) } };
         let text = core::str::from_utf8(bytes).map_err(|_| PluginError::new("parameters are not UTF-8"))?;
         P::create(text)
-    }));
+    });
     match result {
         Ok(Ok(plugin)) => Box::into_raw(Box::new(plugin)).cast(),
         Ok(Err(e)) => {
@@ -466,7 +497,7 @@ unsafe extern "C" fn shim_create<P: JointPlugin>(params: *const u8, len: usize, 
 unsafe extern "C" fn shim_configure<P: JointPlugin>(h: Handle, ctx: *const JointContext, err: *mut ErrorBuf) -> u32 {
     // SAFETY: guaranteed by the host (see the vtable contract).
     let (plugin, ctx) = unsafe { (&mut *h.cast::<P>(), &*ctx) };
-    match catch_unwind(AssertUnwindSafe(|| plugin.configure(ctx))) {
+    match guarded(|| plugin.configure(ctx)) {
         Ok(Ok(())) => STATUS_OK,
         Ok(Err(e)) => plugin_error_status(err, &e),
         Err(payload) => panic_status(err, &*payload),
@@ -478,7 +509,7 @@ unsafe extern "C" fn shim_configure<P: JointPlugin>(h: Handle, ctx: *const Joint
 unsafe extern "C" fn shim_activate<P: JointPlugin>(h: Handle, raw: *const RawJointView, err: *mut ErrorBuf) -> u32 {
     // SAFETY: guaranteed by the host.
     let (plugin, raw) = unsafe { (&mut *h.cast::<P>(), &*raw) };
-    match catch_unwind(AssertUnwindSafe(|| plugin.activate(raw))) {
+    match guarded(|| plugin.activate(raw)) {
         Ok(Ok(())) => STATUS_OK,
         Ok(Err(e)) => plugin_error_status(err, &e),
         Err(payload) => panic_status(err, &*payload),
@@ -496,7 +527,7 @@ unsafe extern "C" fn shim_observe<P: JointPlugin>(
 ) -> u32 {
     // SAFETY: guaranteed by the host.
     let (plugin, raw, out) = unsafe { (&mut *h.cast::<P>(), &*raw, core::slice::from_raw_parts_mut(out, dof as usize)) };
-    match catch_unwind(AssertUnwindSafe(|| plugin.observe(raw, out))) {
+    match guarded(|| plugin.observe(raw, out)) {
         Ok(Ok(())) => STATUS_OK,
         Ok(Err(fault)) => fault.code(),
         Err(payload) => panic_status(err, &*payload),
@@ -526,7 +557,7 @@ unsafe extern "C" fn shim_control<P: JointPlugin>(
             core::slice::from_raw_parts_mut(out, drives as usize),
         )
     };
-    match catch_unwind(AssertUnwindSafe(|| plugin.control(state, command, raw, out))) {
+    match guarded(|| plugin.control(state, command, raw, out)) {
         Ok(Ok(())) => STATUS_OK,
         Ok(Err(fault)) => fault.code(),
         Err(payload) => panic_status(err, &*payload),
@@ -538,7 +569,7 @@ unsafe extern "C" fn shim_control<P: JointPlugin>(
 unsafe extern "C" fn shim_deactivate<P: JointPlugin>(h: Handle) -> u32 {
     // SAFETY: guaranteed by the host.
     let plugin = unsafe { &mut *h.cast::<P>() };
-    match catch_unwind(AssertUnwindSafe(|| plugin.deactivate())) {
+    match guarded(|| plugin.deactivate()) {
         Ok(()) => STATUS_OK,
         Err(_) => STATUS_PANICKED,
     }
@@ -553,7 +584,7 @@ unsafe extern "C" fn shim_destroy<P: JointPlugin>(h: Handle) {
     // SAFETY: `h` came from `Box::into_raw` in `shim_create::<P>`.
     let boxed = unsafe { Box::from_raw(h.cast::<P>()) };
     // A panicking Drop must not unwind into the host; the instance is gone either way.
-    let _ = catch_unwind(AssertUnwindSafe(move || drop(boxed)));
+    let _ = guarded(move || drop(boxed));
 }
 
 const fn mix_bytes(mut hash: u64, bytes: &[u8]) -> u64 {

@@ -42,6 +42,9 @@ impl JointFault {
     pub const PANICKED: JointFault = JointFault(crate::abi::STATUS_PANICKED);
     /// The plugin returned an unknown status.
     pub const BAD_STATUS: JointFault = JointFault(crate::abi::STATUS_FAILED);
+    /// Raised by the host, never by a plugin: the plugin's calls in one cycle took longer than
+    /// the joint's time budget, so it is not called again.
+    pub const OVER_BUDGET: JointFault = JointFault(3);
 
     /// A plugin-defined fault code; codes below [`JointFault::FIRST_PLUGIN_CODE`] are moved above it.
     ///

@@ -56,6 +56,17 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     {
         err("timing.realtime_priority".into(), format!("must be 1-99, got {p}"));
     }
+    let budget = c.timing.joint_budget_fraction;
+    if !(budget > 0.0 && budget <= 1.0) {
+        err("timing.joint_budget_fraction".into(), format!("must be a fraction of the period in (0, 1], got {budget}"));
+    }
+    for (j, joint) in c.joints.iter().enumerate() {
+        if let Some(b) = joint.budget_us
+            && !(b > 0.0 && b <= 1e6 / c.rate_hz)
+        {
+            err(format!("joints[{j}].budget_us"), format!("must be > 0 and at most the period ({} us), got {b}", 1e6 / c.rate_hz));
+        }
+    }
     if let Some(d) = &c.ipc.domain
         && !valid_name(d, 32)
     {

@@ -487,6 +487,19 @@ pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
     Ok(config)
 }
 
+/// Where the runtimes of a domain keep their single-runtime locks: `jointctl/<prefix>` under
+/// the domain's iceoryx2 root.
+///
+/// ```
+/// let dir = jointctl_ipc::lock_dir(Some("lab")).unwrap();
+/// assert!(dir.ends_with("jointctl/lab"));
+/// ```
+pub fn lock_dir(domain: Option<&str>) -> Result<std::path::PathBuf, IpcSetupError> {
+    let config = iceoryx2_config(domain)?;
+    let prefix = config.global.prefix.to_string();
+    Ok(std::path::PathBuf::from(config.global.root_path().to_string()).join("jointctl").join(prefix.trim_end_matches('_')))
+}
+
 /// An iceoryx2 node in the arm's domain, with iceoryx2's own signal handling off (the runtime
 /// owns its signals and timing). Dead nodes of crashed processes are cleaned up.
 pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service>, IpcSetupError> {

@@ -13,6 +13,7 @@ use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
 
 use crate::joint::{FfiJoint, LoadedJoint};
 use crate::loader::{PluginLoader, PluginSource};
+use crate::timing::monotonic_ns;
 
 /// One plugin instance and its wiring.
 pub struct JointSlot {
@@ -37,6 +38,12 @@ pub struct JointSlot {
     pub held: bool,
     /// A fault was raised this cycle and not yet reported in the log.
     pub fault_unreported: bool,
+    /// Time the plugin may take per cycle, observe and control together [ns].
+    pub budget_ns: u64,
+    /// Time the plugin took this cycle so far [ns].
+    pub used_ns: u64,
+    /// Most time the plugin took in one cycle [ns].
+    pub max_used_ns: u64,
 }
 
 impl JointSlot {
@@ -59,6 +66,18 @@ impl JointSlot {
         for (slot, map) in self.raw.drives.iter_mut().zip(self.drive_map) {
             *slot = map.map_or_else(Default::default, |i| sensor.drives[i]);
         }
+    }
+
+    /// Charges a plugin call that started at `start_ns` to this cycle's budget; over budget, the
+    /// joint is faulted (its plugin will not be called again). True when within budget.
+    fn charge(&mut self, start_ns: u64) -> bool {
+        self.used_ns += monotonic_ns().saturating_sub(start_ns);
+        self.max_used_ns = self.max_used_ns.max(self.used_ns);
+        if self.used_ns > self.budget_ns {
+            self.raise(JointFault::OVER_BUDGET);
+            return false;
+        }
+        true
     }
 
     fn raise(&mut self, fault: JointFault) {
@@ -272,6 +291,9 @@ impl Arm {
                 invalid_cycles: 0,
                 held: false,
                 fault_unreported: false,
+                budget_ns: (jc.budget_us.unwrap_or(cfg.timing.joint_budget_fraction * 1e6 / cfg.rate_hz) * 1e3) as u64,
+                used_ns: 0,
+                max_used_ns: 0,
             });
         }
         if !errors.is_empty() {
@@ -349,13 +371,20 @@ impl Arm {
         for slot in &mut self.slots {
             slot.gather(&self.sensor, stamp_s, self.dt_s);
             let out = &mut self.states[slot.dofs.clone()];
+            slot.used_ns = 0;
             if slot.fault != 0 {
                 out.fill(JointState::UNKNOWN);
                 continue;
             }
-            if let Err(f) = slot.joint.observe(&slot.raw, out) {
+            let start = monotonic_ns();
+            let result = slot.joint.observe(&slot.raw, out);
+            // A state that came too late is not used: the joint is held from this cycle on.
+            let in_time = slot.charge(start);
+            if let Err(f) = result {
                 out.fill(JointState::UNKNOWN);
                 slot.raise(f);
+            } else if !in_time {
+                out.fill(JointState::UNKNOWN);
             }
         }
     }
@@ -422,19 +451,24 @@ impl Arm {
         for slot in &mut self.slots {
             let dofs = slot.dofs.clone();
             let usable = self.states[dofs.clone()].iter().all(|s| s.position().is_some());
-            let out = &mut slot.setpoints[..slot.drive_count];
+            let n = slot.drive_count;
             slot.held = true;
             if slot.fault != 0 {
-                out.fill(MotorSetpoint::HOLD);
+                slot.setpoints[..n].fill(MotorSetpoint::HOLD);
             } else if !usable {
                 // A missing or implausible reading is never driven on: hold, count, publish.
                 slot.invalid_cycles += 1;
-                out.fill(MotorSetpoint::HOLD);
+                slot.setpoints[..n].fill(MotorSetpoint::HOLD);
             } else {
-                match slot.joint.control(&self.states[dofs.clone()], &self.commands[dofs], &slot.raw, out) {
-                    Ok(()) => slot.held = false,
+                let start = monotonic_ns();
+                let result = slot.joint.control(&self.states[dofs.clone()], &self.commands[dofs], &slot.raw, &mut slot.setpoints[..n]);
+                // Set-points computed too late are not written: the joint is held instead.
+                let in_time = slot.charge(start);
+                match result {
+                    Ok(()) if in_time => slot.held = false,
+                    Ok(()) => slot.setpoints[..n].fill(MotorSetpoint::HOLD),
                     Err(f) => {
-                        out.fill(MotorSetpoint::HOLD);
+                        slot.setpoints[..n].fill(MotorSetpoint::HOLD);
                         slot.raise(f);
                     }
                 }

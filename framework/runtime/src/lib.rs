@@ -9,7 +9,9 @@ pub mod arm;
 pub mod commands;
 pub mod joint;
 pub mod loader;
+pub mod lock;
 pub mod runner;
+pub mod signals;
 pub mod timing;
 
 pub use arm::{ActivateError, Arm, JointSlot};

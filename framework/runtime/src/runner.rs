@@ -19,6 +19,7 @@ use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, Joi
 use crate::commands::{ArmCommand, CommandValidator};
 
 use crate::arm::Arm;
+use crate::signals::StopRequest;
 use crate::timing::{LoopStats, Pacer, monotonic_ns};
 
 /// How long to run.
@@ -30,6 +31,9 @@ pub struct RunOptions {
     pub duration_s: Option<f64>,
     /// Keep this many per-cycle timings for percentiles (benchmarks).
     pub timing_samples: usize,
+    /// The stop request to follow, installed early by the caller so that a signal during setup
+    /// is not lost; when `None`, [`run`] installs one itself.
+    pub stop: Option<StopRequest>,
 }
 
 /// Why the loop could not run.
@@ -63,8 +67,8 @@ pub enum RunError {
     #[error("cannot start the publisher thread: {0}")]
     Thread(String),
     /// Signal handlers could not be installed.
-    #[error("cannot install the SIGINT/SIGTERM handlers: {0}")]
-    Signals(std::io::Error),
+    #[error("cannot install the signal handlers")]
+    Signals(#[source] std::io::Error),
 }
 
 /// A port-creation failure of iceoryx2 that may mean "another runtime holds this port".
@@ -121,8 +125,10 @@ pub struct RunReport {
     pub stats: LoopStats,
     /// Samples iceoryx2 refused (loan or send failed).
     pub publish_failures: u64,
-    /// Stopped by SIGINT/SIGTERM.
+    /// Stopped by a signal or a stop request.
     pub interrupted: bool,
+    /// The signal that stopped the loop, if one did.
+    pub signal: Option<i32>,
 }
 
 /// One cycle's record, handed from the loop thread to the publisher thread.
@@ -472,18 +478,19 @@ impl<'a> ControlLoop<'a> {
     }
 }
 
-/// Runs the loop until `opts` says stop or SIGINT/SIGTERM arrives; then holds every joint,
-/// publishes a final state and releases shared memory.
+/// Runs the loop until `opts` says stop, a stop command arrives or a terminating signal does
+/// (see [`crate::signals`]); then holds every joint, publishes a final state and releases
+/// shared memory.
 pub fn run(
     arm: &mut Arm,
     timing: &TimingConfig,
     publisher: Option<&mut ArmPublisher>,
     opts: &RunOptions,
 ) -> Result<RunReport, RunError> {
-    let stop = Arc::new(AtomicBool::new(false));
-    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register(signal, Arc::clone(&stop)).map_err(RunError::Signals)?;
-    }
+    let stop = match &opts.stop {
+        Some(s) => s.clone(),
+        None => StopRequest::install().map_err(RunError::Signals)?,
+    };
     apply_thread_settings(timing);
     let period_ns = (1e9 / arm.rate_hz).round() as u64;
     let max_cycles = opts.cycles.unwrap_or(u64::MAX);
@@ -491,16 +498,17 @@ pub fn run(
     tracing::info!(arm = %arm.name, rate_hz = arm.rate_hz, joints = arm.dof_names.len(), "loop started");
     let mut lp = ControlLoop::new(arm, publisher, opts.timing_samples);
     let mut pacer = Pacer::new(period_ns, timing.spin_us as u64 * 1000);
-    while lp.cycle < max_cycles && !stop.load(Ordering::Relaxed) && !lp.arm.stop_requested {
+    while lp.cycle < max_cycles && !stop.requested() && !lp.arm.stop_requested {
         let deadline = pacer.deadline_ns();
         let woke = pacer.wait(&stop);
-        if stop.load(Ordering::Relaxed) || end_ns.is_some_and(|e| woke >= e) {
+        if stop.requested() || end_ns.is_some_and(|e| woke >= e) {
             break;
         }
         lp.step(deadline, woke, Some(&mut pacer));
         lp.report_faults();
     }
-    let interrupted = stop.load(Ordering::Relaxed);
+    let interrupted = stop.requested();
+    let signal = stop.signal();
     let (stats, publish_failures) = lp.finish();
     tracing::info!(
         cycles = stats.cycles,
@@ -509,7 +517,8 @@ pub fn run(
         max_compute_us = stats.max_compute_ns / 1000,
         max_jitter_us = stats.max_jitter_ns / 1000,
         interrupted,
+        signal = %signal.map(crate::signals::signal_name).unwrap_or_default(),
         "loop stopped, joints held"
     );
-    Ok(RunReport { stats, publish_failures, interrupted })
+    Ok(RunReport { stats, publish_failures, interrupted, signal })
 }

@@ -41,19 +41,18 @@ impl Pacer {
     }
 
     /// Waits for the deadline; returns the wake-up time [ns]. Returns early if `stop` is set.
-    pub fn wait(&self, stop: &std::sync::atomic::AtomicBool) -> u64 {
-        use std::sync::atomic::Ordering::Relaxed;
+    pub fn wait(&self, stop: &crate::signals::StopRequest) -> u64 {
         let coarse = self.next_ns.saturating_sub(self.spin_ns);
         loop {
             let now = monotonic_ns();
-            if now >= coarse || stop.load(Relaxed) {
+            if now >= coarse || stop.requested() {
                 break;
             }
             sleep_until_ns(coarse);
         }
         loop {
             let now = monotonic_ns();
-            if now >= self.next_ns || stop.load(Relaxed) {
+            if now >= self.next_ns || stop.requested() {
                 return now;
             }
             core::hint::spin_loop();

@@ -129,7 +129,7 @@ fn main() {
         let name = format!("bench-loop-{}", rate as u64);
         let (mut arm, loaded) = build(false, rate, &name);
         let mut publisher = ArmPublisher::new(&arm, None).unwrap();
-        let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize };
+        let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize, stop: None };
         let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
         let st = &r.stats;
         let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
@@ -153,7 +153,7 @@ fn main() {
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
     let (stop, subscriber) = latency_subscriber("bench-latency");
     std::thread::sleep(Duration::from_millis(200));
-    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0 };
+    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0, stop: None };
     jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
     drop(publisher);
     std::thread::sleep(Duration::from_millis(100));

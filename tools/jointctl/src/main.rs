@@ -4,12 +4,13 @@ mod cmd;
 mod experiment;
 mod ident;
 mod inspect;
+mod run;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use jointctl_runtime::{ArmPublisher, PluginLoader, RunOptions};
+use jointctl_runtime::PluginLoader;
 
 #[derive(Parser)]
 #[command(name = "jointctl", version, about = "Run, simulate and inspect compliant robot joints")]
@@ -21,22 +22,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the observe → control → actuate loop of an arm described in YAML.
-    Run {
-        /// The arm description (e.g. configs/sherpa_arm.yaml).
-        config: PathBuf,
-        /// Stop after N cycles.
-        #[arg(long)]
-        cycles: Option<u64>,
-        /// Stop after S seconds.
-        #[arg(long)]
-        duration: Option<f64>,
-        /// Use the plugins linked into this binary instead of loading shared libraries.
-        #[arg(long)]
-        static_plugins: bool,
-        /// Do not publish to shared memory.
-        #[arg(long)]
-        no_ipc: bool,
-    },
+    Run(run::RunArgs),
     /// Validate an arm description and its plugins without running.
     Check {
         /// The arm description.
@@ -119,46 +105,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     match cli.command {
-        Command::Run { config, cycles, duration, static_plugins, no_ipc } => {
-            let loaded = match jointctl_config::load(&config) {
-                Ok(l) => l,
-                Err(e) => return fail_err(e),
-            };
-            let mut loader = jointctl_runtime::loader_for(&loaded);
-            if static_plugins && let Err(e) = static_loader(&mut loader) {
-                return fail_err(e);
-            }
-            let mut arm = match jointctl_backends::build_arm(&loaded, &loader) {
-                Ok(a) => a,
-                Err(e) => return fail_err(e),
-            };
-            if let Err(e) = arm.activate() {
-                return fail_err(e);
-            }
-            let mut publisher = if no_ipc {
-                None
-            } else {
-                match ArmPublisher::new(&arm, loaded.config.ipc.domain.as_deref()) {
-                    Ok(p) => Some(p),
-                    Err(e) => return fail_err(e),
-                }
-            };
-            let opts = RunOptions { cycles, duration_s: duration, timing_samples: 0 };
-            match jointctl_runtime::run(&mut arm, &loaded.config.timing, publisher.as_mut(), &opts) {
-                Ok(report) => {
-                    eprintln!(
-                        "{} cycles, {} overruns, {} missed deadlines, max compute {:.1} us, max wake-up lateness {:.1} us",
-                        report.stats.cycles,
-                        report.stats.overruns,
-                        report.stats.missed_deadlines,
-                        report.stats.max_compute_ns as f64 / 1e3,
-                        report.stats.max_jitter_ns as f64 / 1e3
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => fail_err(e),
-            }
-        }
+        Command::Run(args) => run::run(args),
         Command::Check { config } => {
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,

@@ -45,11 +45,19 @@ pub struct TimingConfig {
     pub realtime_priority: Option<u8>,
     /// Pin the loop thread to this CPU.
     pub cpu: Option<usize>,
+    /// Each joint's default time budget for its plugin's observe and control calls in one
+    /// cycle, as a fraction of the period (a joint's own `budget_us` overrides it). A joint over
+    /// budget is faulted and held and its plugin is not called again, so one stalling plugin
+    /// cannot freeze the other joints. Assumption: 0.5, far above what a plugin needs (the
+    /// SHERPA plugins take about 1 us per cycle) and low enough that the loop still meets the
+    /// next deadline after the overrun that faults the joint.
+    #[serde(deserialize_with = "finite")]
+    pub joint_budget_fraction: f64,
 }
 
 impl Default for TimingConfig {
     fn default() -> Self {
-        TimingConfig { spin_us: 200, realtime_priority: None, cpu: None }
+        TimingConfig { spin_us: 200, realtime_priority: None, cpu: None, joint_budget_fraction: 0.5 }
     }
 }
 

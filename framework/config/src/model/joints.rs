@@ -32,6 +32,10 @@ pub struct JointConfig {
     /// How the simulated backend models this joint.
     #[serde(default)]
     pub sim: Option<JointSimConfig>,
+    /// Time budget of this joint's plugin per cycle, observe and control together [us];
+    /// default `timing.joint_budget_fraction` of the period. Over it, the joint is faulted.
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub budget_us: Option<f64>,
 }
 
 /// One DOF of a multi-DOF joint.

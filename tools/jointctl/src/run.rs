@@ -1,0 +1,105 @@
+//! `jointctl run`: the order of the start-up is the safety argument. Signals are caught first
+//! (a signal during set-up still holds the joints), the arm's single-runtime lock is taken before
+//! any hardware is opened, the loop runs, and every way out holds the joints.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use jointctl_runtime::signals::{StopRequest, signal_name};
+use jointctl_runtime::{ArmPublisher, RunOptions};
+
+use crate::{fail, fail_err, static_loader};
+
+/// `jointctl run`'s arguments.
+#[derive(clap::Args)]
+pub struct RunArgs {
+    /// The arm description (e.g. configs/sherpa_arm.yaml).
+    config: PathBuf,
+    /// Stop after N cycles.
+    #[arg(long)]
+    cycles: Option<u64>,
+    /// Stop after S seconds.
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Use the plugins linked into this binary instead of loading shared libraries.
+    #[arg(long)]
+    static_plugins: bool,
+    /// Do not publish to shared memory.
+    #[arg(long)]
+    no_ipc: bool,
+}
+
+/// Says which signal ended set-up, after the joints were held.
+fn stopped_during_setup(stop: &StopRequest, arm: Option<&mut jointctl_runtime::Arm>) -> ExitCode {
+    if let Some(arm) = arm {
+        arm.shutdown();
+    }
+    let by = stop.signal().map_or_else(|| "a stop request".to_string(), signal_name);
+    fail(format!("stopped by {by} before the loop started; joints held"))
+}
+
+pub fn run(a: RunArgs) -> ExitCode {
+    let stop = match StopRequest::install() {
+        Ok(s) => s,
+        Err(e) => return fail(format!("cannot install the signal handlers: {e}")),
+    };
+    let loaded = match jointctl_config::load(&a.config) {
+        Ok(l) => l,
+        Err(e) => return fail_err(e),
+    };
+    let domain = loaded.config.ipc.domain.as_deref();
+    let lock_dir = match jointctl_ipc::lock_dir(domain) {
+        Ok(d) => d,
+        Err(e) => return fail_err(e),
+    };
+    // Before any bus is opened: a second runtime of this arm must not touch its drives.
+    let _lock = match jointctl_runtime::lock::ArmLock::acquire(&lock_dir, &loaded.config.arm) {
+        Ok(l) => l,
+        Err(e) => return fail_err(e),
+    };
+    let mut loader = jointctl_runtime::loader_for(&loaded);
+    if a.static_plugins && let Err(e) = static_loader(&mut loader) {
+        return fail_err(e);
+    }
+    let mut arm = match jointctl_backends::build_arm(&loaded, &loader) {
+        Ok(arm) => arm,
+        Err(e) => return fail_err(e),
+    };
+    if stop.requested() {
+        return stopped_during_setup(&stop, Some(&mut arm));
+    }
+    if let Err(e) = arm.activate() {
+        arm.shutdown();
+        return fail_err(e);
+    }
+    let mut publisher = if a.no_ipc {
+        None
+    } else {
+        match ArmPublisher::new(&arm, domain) {
+            Ok(p) => Some(p),
+            Err(e) => {
+                arm.shutdown();
+                return fail_err(e);
+            }
+        }
+    };
+    if stop.requested() {
+        return stopped_during_setup(&stop, Some(&mut arm));
+    }
+    let opts = RunOptions { cycles: a.cycles, duration_s: a.duration, timing_samples: 0, stop: Some(stop) };
+    match jointctl_runtime::run(&mut arm, &loaded.config.timing, publisher.as_mut(), &opts) {
+        Ok(report) => {
+            eprintln!(
+                "{} cycles, {} overruns, {} missed deadlines, max compute {:.1} us, max wake-up lateness {:.1} us{}",
+                report.stats.cycles,
+                report.stats.overruns,
+                report.stats.missed_deadlines,
+                report.stats.max_compute_ns as f64 / 1e3,
+                report.stats.max_jitter_ns as f64 / 1e3,
+                report.signal.map(|s| format!(", stopped by {}", signal_name(s))).unwrap_or_default(),
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail_err(e),
+    }
+}
