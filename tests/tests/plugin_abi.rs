@@ -16,7 +16,7 @@ fn a_library_with_another_abi_version_is_refused_with_the_fix() {
     assert!(matches!(err, LoadPluginError::AbiVersion { found_major: 2, host_major: 1, .. }), "{err:?}");
     let msg = err.to_string();
     assert!(msg.contains("libjointctl_fixture_wrong_abi.so"), "names the file: {msg}");
-    assert!(msg.contains("ABI 2.0") && msg.contains("ABI 1.0"), "names both versions: {msg}");
+    assert!(msg.contains("ABI 2.1") && msg.contains("speaks ABI 1.1"), "names both versions: {msg}");
     assert!(msg.contains("rebuild the plugin"), "says the fix: {msg}");
 }
 
@@ -235,4 +235,53 @@ fn role_counts_duplicates_and_dofs_are_validated_before_wiring() {
     let errs = jointctl_runtime::build_arm_for_check(&loaded, &l).map(|_| ()).unwrap_err();
     assert_eq!(errs.0[0].field, "joints[1].plugin", "{}", errs.0[0]);
     assert!(errs.0[0].message.contains("not found"), "an unregistered descriptor is simply not there: {}", errs.0[0]);
+}
+
+/// What a library built with `panic = "abort"` carries: `export_joint_plugin!` sets the flag
+/// from `cfg!(panic = "unwind")`, which is false there.
+static ABORTS: PluginDescriptor = PluginDescriptor::new::<Declares>(c"aborts", c"0", 1, c"output", c"motor", false);
+
+/// Finding: a plugin built with `panic = "abort"` was accepted although its descriptor says
+/// so; its first panic would have killed the host. Pass: refused, with the reason and the fix.
+#[test]
+fn a_plugin_built_with_panic_abort_is_refused() {
+    let err = PluginLoader::new([]).register_static(&ABORTS).unwrap_err();
+    assert!(matches!(err, LoadPluginError::PanicAbort { .. }), "{err:?}");
+    assert!(err.to_string().contains("panic = \"abort\"") && err.to_string().contains("panic = \"unwind\""), "{err}");
+}
+
+/// Finding: a truncated or corrupt plugin file killed the host (SIGBUS in `check` and `run`).
+/// Pass: the file is checked before it is mapped; this test process survives every cut and
+/// the error names the file and says it is truncated or not an ELF library; `jointctl check`
+/// and `jointctl run` exit 1 with the message instead of dying by a signal.
+#[test]
+fn a_truncated_or_corrupt_plugin_file_is_refused_before_it_is_mapped() {
+    let dir = scratch("truncated");
+    let good = std::fs::read(artifact("libjointctl_plugin_faulty.so")).unwrap();
+    let mut cases: Vec<(String, Vec<u8>)> = [1, 5, 10, 25, 50, 90, 99]
+        .iter()
+        .map(|pct| (format!("cut at {pct} %"), good[..good.len() * pct / 100].to_vec()))
+        .collect();
+    let mut garbage = good.clone();
+    garbage[64..4096].fill(0xA5);
+    cases.push(("program headers overwritten".into(), garbage));
+    cases.push(("text file".into(), b"not a library\n".to_vec()));
+    for (i, (what, bytes)) in cases.iter().enumerate() {
+        let so = dir.join(format!("libcut{i}.so"));
+        std::fs::write(&so, bytes).unwrap();
+        let err = loader().load("faulty", Some(&so)).map(|_| ()).expect_err(what);
+        assert!(matches!(err, LoadPluginError::Malformed { .. } | LoadPluginError::Open { .. }), "{what}: {err:?}");
+        assert!(err.to_string().contains(&format!("libcut{i}.so")), "{what}: {err}");
+    }
+    // The 5 % cut killed `check` with SIGBUS before.
+    let so = dir.join("libcut1.so");
+    let extra = format!("  - name: b\n    plugin: {{name: faulty, path: {}}}\n    encoders: {{output: e1}}\n    drives: {{motor: m1}}\n", so.display());
+    let yaml = dir.join("arm.yaml");
+    std::fs::write(&yaml, rig_yaml(&arm_name("truncated"), 100.0, &extra)).unwrap();
+    for args in [&["check"][..], &["run", "--cycles", "3", "--no-ipc"][..]] {
+        let out = std::process::Command::new(jointctl_tests::jointctl()).args(args).arg(&yaml).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?} exits 1, not by a signal: {:?} {err}", out.status);
+        assert!(err.contains("truncated") || err.contains("not a complete 64-bit ELF file"), "{args:?}: {err}");
+    }
 }

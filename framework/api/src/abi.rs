@@ -22,7 +22,7 @@ pub const ABI_MAGIC: u64 = u64::from_le_bytes(*b"JNTCTL\x00\x01");
 /// Bumped on any incompatible change of the shared types or entry points.
 pub const ABI_MAJOR: u32 = 1;
 /// Bumped on compatible additions; a host accepts plugins with a minor version up to its own.
-pub const ABI_MINOR: u32 = 0;
+pub const ABI_MINOR: u32 = 1;
 /// Version of the `jointctl-api` crate the library was built against.
 pub const API_VERSION: &str = env!("CARGO_PKG_VERSION");
 const API_VERSION_C: &CStr = c_string(concat!(env!("CARGO_PKG_VERSION"), "\0"));
@@ -209,7 +209,9 @@ pub struct PluginDescriptor {
     name: *const c_char,
     version: *const c_char,
     built_with_unwind: u8,
-    _reserved: [u8; 3],
+    torque_dofs: u8,
+    stiffness_dofs: u8,
+    _reserved: u8,
     dof: u32,
     encoder_roles: *const c_char,
     drive_roles: *const c_char,
@@ -241,7 +243,9 @@ impl PluginDescriptor {
             name: name.as_ptr(),
             version: version.as_ptr(),
             built_with_unwind: built_with_unwind as u8,
-            _reserved: [0; 3],
+            torque_dofs: 0,
+            stiffness_dofs: 0,
+            _reserved: 0,
             dof,
             encoder_roles: encoder_roles.as_ptr(),
             drive_roles: drive_roles.as_ptr(),
@@ -315,6 +319,38 @@ impl PluginDescriptor {
     /// Built with `panic = "unwind"`, so that its panics can be caught at the boundary.
     pub const fn built_with_unwind(&self) -> bool {
         self.built_with_unwind != 0
+    }
+
+    /// The same descriptor declaring what its DOFs can do, one bit per DOF (bit 0: the first
+    /// DOF): which observe their torque (so torque and impedance control can run on them) and
+    /// which have a stiffness that commands can set (variable stiffness joints). The host
+    /// refuses commands a DOF cannot carry out.
+    ///
+    /// ```
+    /// # use jointctl_api::*;
+    /// # struct P;
+    /// # impl Observer for P { fn observe(&mut self, _: &RawJointView, _: &mut [JointState]) -> Result<(), JointFault> { Ok(()) } }
+    /// # impl Controller for P { fn control(&mut self, _: &[JointState], _: &[JointCommand], _: &RawJointView, _: &mut [MotorSetpoint]) -> Result<(), JointFault> { Ok(()) } }
+    /// # impl JointPlugin for P { fn create(_: &str) -> Result<Self, PluginError> { Ok(P) } }
+    /// export_joint_plugin!(name: p, plugin: P, dof: 2, encoders: "a", drives: "m", torque_dofs: 0b01, stiffness_dofs: 0b01);
+    /// let d = plugin_descriptor();
+    /// assert!(d.observes_torque(0) && d.sets_stiffness(0));
+    /// assert!(!d.observes_torque(1) && !d.sets_stiffness(1));
+    /// ```
+    pub const fn with_capabilities(mut self, torque_dofs: u8, stiffness_dofs: u8) -> Self {
+        self.torque_dofs = torque_dofs;
+        self.stiffness_dofs = stiffness_dofs;
+        self
+    }
+
+    /// Whether DOF `dof` observes its torque.
+    pub const fn observes_torque(&self, dof: usize) -> bool {
+        dof < 8 && self.torque_dofs & (1 << dof) != 0
+    }
+
+    /// Whether DOF `dof`'s stiffness can be set by a command.
+    pub const fn sets_stiffness(&self, dof: usize) -> bool {
+        dof < 8 && self.stiffness_dofs & (1 << dof) != 0
     }
 
     /// Entry points. Calling them is `unsafe`: see [`PluginVTable`].
@@ -671,7 +707,7 @@ pub const LAYOUT_HASH: u64 = {
         DescriptorHeader { magic: u64, abi_major: u32, abi_minor: u32, layout_hash: u64, api_version: *const c_char }
         PluginDescriptor {
             header: DescriptorHeader, name: *const c_char, version: *const c_char, built_with_unwind: u8,
-            dof: u32, encoder_roles: *const c_char, drive_roles: *const c_char, vtable: PluginVTable,
+            torque_dofs: u8, stiffness_dofs: u8, dof: u32, encoder_roles: *const c_char, drive_roles: *const c_char, vtable: PluginVTable,
         }
     );
     // The entry points: their names, parameter names and types, in order, and the table's size.
@@ -719,7 +755,10 @@ pub const LAYOUT_HASH: u64 = {
 /// ```
 #[macro_export]
 macro_rules! export_joint_plugin {
-    (name: $name:ident, plugin: $ty:ty, dof: $dof:literal, encoders: $enc:literal, drives: $drv:literal $(,)?) => {
+    (
+        name: $name:ident, plugin: $ty:ty, dof: $dof:literal, encoders: $enc:literal, drives: $drv:literal
+        $(, torque_dofs: $torque:expr)? $(, stiffness_dofs: $stiffness:expr)? $(,)?
+    ) => {
         #[doc(hidden)]
         pub static __JOINTCTL_DESCRIPTOR: $crate::abi::PluginDescriptor = $crate::abi::PluginDescriptor::new::<$ty>(
             $crate::abi::c_string(concat!(stringify!($name), "\0")),
@@ -728,7 +767,8 @@ macro_rules! export_joint_plugin {
             $crate::abi::c_string(concat!($enc, "\0")),
             $crate::abi::c_string(concat!($drv, "\0")),
             cfg!(panic = "unwind"),
-        );
+        )
+        .with_capabilities(0 $(| $torque)?, 0 $(| $stiffness)?);
 
         /// This plugin's descriptor, for linking it statically into a host.
         pub fn plugin_descriptor() -> &'static $crate::abi::PluginDescriptor {

@@ -103,6 +103,24 @@ pub enum LoadPluginError {
         /// [`jointctl_api::MAX_DOF`].
         max_dof: usize,
     },
+    /// The file is not a complete shared library for this machine: mapping it could kill the
+    /// host (a truncated library raises SIGBUS when the loader touches a missing page).
+    #[error("{file} is not a loadable plugin library: {reason}; rebuild it or copy it again")]
+    Malformed {
+        /// Library file.
+        file: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The library was built with `panic = "abort"`: a panic in it would end the host instead
+    /// of faulting one joint.
+    #[error("{file}: plugin `{name}` was built with panic = \"abort\", so one panic in it would kill the whole runtime; build it with panic = \"unwind\" (the default)")]
+    PanicAbort {
+        /// Library file.
+        file: PathBuf,
+        /// Plugin name.
+        name: String,
+    },
     /// The descriptor's name differs from the name asked for.
     #[error("{file} exports plugin `{found}` under the entry for `{name}`")]
     NameMismatch {
@@ -156,6 +174,9 @@ pub unsafe fn check_descriptor(
     let found = d.name();
     if found != name {
         return Err(LoadPluginError::NameMismatch { file: file.into(), name: name.into(), found: found.into() });
+    }
+    if !d.built_with_unwind() {
+        return Err(LoadPluginError::PanicAbort { file: file.into(), name: name.into() });
     }
     if let Some(problem) = declaration_problem(d) {
         return Err(LoadPluginError::Roles {
@@ -278,12 +299,60 @@ impl PluginLoader {
     }
 }
 
+/// The ELF machine this host runs on.
+const HOST_MACHINE: u16 = if cfg!(target_arch = "x86_64") {
+    object::elf::EM_X86_64
+} else if cfg!(target_arch = "aarch64") {
+    object::elf::EM_AARCH64
+} else if cfg!(target_arch = "arm") {
+    object::elf::EM_ARM
+} else {
+    object::elf::EM_NONE
+};
+
+/// Checks, from the file's bytes and before the dynamic loader maps it, that a library is a
+/// complete 64-bit ELF shared object for this machine: every segment and section the loader
+/// could touch lies inside the file. A truncated library otherwise kills the host with SIGBUS.
+/// A file replaced between this check and the mapping is not caught (plugin folders are the
+/// operator's to protect).
+pub fn check_library_file(file: &Path) -> Result<(), LoadPluginError> {
+    use object::read::elf::{ElfFile64, FileHeader, ProgramHeader, SectionHeader};
+    let bad = |reason: String| LoadPluginError::Malformed { file: file.into(), reason };
+    let data = std::fs::read(file).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    let elf = ElfFile64::<object::Endianness>::parse(&*data).map_err(|e| bad(format!("not a complete 64-bit ELF file ({e})")))?;
+    let (header, endian) = (elf.elf_header(), elf.endian());
+    if header.e_type(endian) != object::elf::ET_DYN {
+        return Err(bad("not a shared library (ELF type is not ET_DYN)".into()));
+    }
+    if cfg!(target_os = "linux") && HOST_MACHINE != object::elf::EM_NONE && header.e_machine(endian) != HOST_MACHINE {
+        return Err(bad(format!("built for ELF machine {}, this host is {HOST_MACHINE}", header.e_machine(endian))));
+    }
+    let len = data.len() as u64;
+    for (i, ph) in elf.elf_program_headers().iter().enumerate() {
+        let (offset, size) = (ph.p_offset(endian), ph.p_filesz(endian));
+        if offset.checked_add(size).is_none_or(|end| end > len) {
+            return Err(bad(format!("truncated: segment {i} needs bytes {offset}..{} of a {len}-byte file", offset.saturating_add(size))));
+        }
+    }
+    for (i, sh) in elf.elf_section_table().iter().enumerate() {
+        if sh.sh_type(endian) == object::elf::SHT_NOBITS {
+            continue;
+        }
+        let (offset, size) = (sh.sh_offset(endian), sh.sh_size(endian));
+        if offset.checked_add(size).is_none_or(|end| end > len) {
+            return Err(bad(format!("truncated: section {i} needs bytes {offset}..{} of a {len}-byte file", offset.saturating_add(size))));
+        }
+    }
+    Ok(())
+}
+
 fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginError> {
     let canonical = file.canonicalize().map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     let mut loaded = LOADED.lock().unwrap_or_else(|p| p.into_inner());
     if let Some((_, lib)) = loaded.iter().find(|(p, _)| *p == canonical) {
         return Ok(lib);
     }
+    check_library_file(&canonical)?;
     // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's.
     let lib = unsafe { libloading::Library::new(&canonical) }
         .map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;

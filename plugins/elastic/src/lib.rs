@@ -176,4 +176,4 @@ impl Controller for ElasticJoint {
     }
 }
 
-export_joint_plugin!(name: elastic, plugin: ElasticJoint, dof: 1, encoders: "output,input?", drives: "motor");
+export_joint_plugin!(name: elastic, plugin: ElasticJoint, dof: 1, encoders: "output,input?", drives: "motor", torque_dofs: 0b1);

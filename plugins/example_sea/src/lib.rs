@@ -93,4 +93,4 @@ impl Controller for SeaJoint {
     }
 }
 
-export_joint_plugin!(name: example_sea, plugin: SeaJoint, dof: 1, encoders: "output,torque_sensor?", drives: "motor");
+export_joint_plugin!(name: example_sea, plugin: SeaJoint, dof: 1, encoders: "output,torque_sensor?", drives: "motor", torque_dofs: 0b1);

@@ -200,4 +200,7 @@ export_joint_plugin!(
     dof: 2,
     encoders: "q2_output,q2_deflection,pulley_a,pulley_b,pivot",
     drives: "actuator_a,actuator_b,pivot",
+    // q2 is the VSA (torque observed, stiffness set by the pivot); q3 is rigid.
+    torque_dofs: 0b01,
+    stiffness_dofs: 0b01,
 );

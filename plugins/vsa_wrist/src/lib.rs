@@ -228,4 +228,7 @@ export_joint_plugin!(
     dof: 2,
     encoders: "carrier_a,carrier_b,bevel_a,bevel_b,pivot",
     drives: "motor_a,motor_b,pivot",
+    // One pivot sets the stiffness of both DOFs (section 3.5).
+    torque_dofs: 0b11,
+    stiffness_dofs: 0b11,
 );
