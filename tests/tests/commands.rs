@@ -93,8 +93,8 @@ fn commands_from_another_process_are_acknowledged_and_change_the_published_state
     assert_eq!(code, 1);
     assert!(text.contains("outside q1's limits"), "{text}");
     let (code, text) = cmd(&arm, &["torque", "q2", "--step", "inf"]);
-    assert_eq!(code, 1, "{text}");
-    assert!(text.contains("finite"), "{text}");
+    assert_eq!(code, 2, "refused where it is typed: {text}");
+    assert!(text.contains("--step") && text.contains("finite"), "{text}");
     let (code, text) = cmd(&arm, &["torque", "q2", "--step", "60"]);
     assert_eq!(code, 1);
     assert!(text.contains("beyond q2's torque limit 40 Nm"), "{text}");
@@ -139,6 +139,55 @@ fn commands_from_another_process_are_acknowledged_and_change_the_published_state
     let (code, text) = cmd(&arm, &["hold"]);
     assert_eq!(code, 1);
     assert!(text.contains("no runtime is running"), "{text}");
+}
+
+/// Finding: commands that would never run were accepted (exit 0, "accepted", nothing
+/// happened): torque on a rigid joint, stiffness on a non-VSA joint, `--delay NaN`; and
+/// negative numbers needed `--step=-5`. Pass: each is refused with its reason (exit 1 from the
+/// runtime, exit 2 from the argument parser), and `--step -5` is a step to -5 Nm.
+#[test]
+fn commands_that_would_never_run_are_refused_and_negative_numbers_parse() {
+    let (arm, path) = sherpa_copy("cmd-capabilities");
+    let mut run = start(&path);
+    let _watch = Watch::new(&arm);
+    for (args, code, wants) in [
+        (&["torque", "q1", "--step", "1"][..], 1, "joint `q1` does not observe its torque (plugin `rigid`), so it cannot run torque control"),
+        (&["impedance", "q3", "--k", "10", "--d", "1"][..], 1, "joint `q3` does not observe its torque (plugin `vsa_shoulder`), so it cannot run impedance control"),
+        (&["stiffness", "q4", "50"][..], 1, "joint `q4` has no variable stiffness (plugin `elastic`)"),
+        (&["stiffness", "q3", "50"][..], 1, "joint `q3` has no variable stiffness"),
+        (&["torque", "q2", "--step", "1", "--delay", "NaN"][..], 2, "must be a finite number, got NaN"),
+        (&["position", "q1", "nan"][..], 2, "must be a finite number"),
+        (&["torque", "q2", "--step", "-5"][..], 0, "accepted: q2: torque"),
+        (&["torque", "q2", "--sine", "-2", "--freq", "0.5", "--offset", "-1"][..], 0, "accepted"),
+        (&["stiffness", "q6", "2.5"][..], 0, "accepted"),
+    ] {
+        let (got, text) = cmd(&arm, args);
+        assert_eq!(got, code, "{args:?}: {text}");
+        assert!(text.contains(wants), "{args:?}: {text}");
+    }
+    let _ = run.kill();
+    let _ = run.wait();
+}
+
+/// Finding: commands for a faulted joint were accepted. Pass: once joint `b` faults (fault code
+/// 42 from its plugin at cycle 5), a position command for it is refused with the code; `a` still
+/// takes commands.
+#[test]
+fn a_faulted_joint_refuses_commands() {
+    let arm = arm_name("cmd-faulted");
+    let dir = jointctl_tests::scratch("cmd-faulted");
+    let path = dir.join("rig.yaml");
+    let faulty = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {fault_at: 5}\n";
+    std::fs::write(&path, jointctl_tests::rig_yaml(&arm, 100.0, faulty)).unwrap();
+    let mut run = start(&path);
+    let watch = Watch::new(&arm);
+    watch.wait_for("b faulted", |s| s.joints[1].fault_code == 42);
+    let (code, text) = cmd(&arm, &["position", "b", "0.1"]);
+    assert_eq!(code, 1, "{text}");
+    assert!(text.contains("joint `b` is faulted (code 42: reported by its plugin)"), "{text}");
+    assert_eq!(cmd(&arm, &["position", "a", "0.1"]).0, 0);
+    let _ = run.kill();
+    let _ = run.wait();
 }
 
 #[test]

@@ -121,6 +121,8 @@ pub struct Arm {
     pub dof_names: Vec<String>,
     /// DOF limits.
     pub limits: Vec<Option<LimitsConfig>>,
+    /// What each DOF can do, as its plugin declares: `(observes torque, stiffness settable)`.
+    pub capabilities: Vec<(bool, bool)>,
     /// Observed state of each DOF this cycle.
     pub states: Vec<JointState>,
     /// The command each DOF's plugin got this cycle (derived from its controller).
@@ -229,6 +231,7 @@ impl Arm {
         let mut dof_names = Vec::new();
         let mut limits = Vec::new();
         let mut controllers = Vec::new();
+        let mut capabilities = Vec::new();
         for (j, jc) in cfg.joints.iter().enumerate() {
             let at = |field: &str| if field.is_empty() { format!("joints[{j}]") } else { format!("joints[{j}].{field}") };
             let path = jc.plugin.path.as_ref().map(|p| src.resolve(p));
@@ -268,6 +271,7 @@ impl Arm {
             };
             let first = dof_names.len();
             dof_names.extend(names.iter().map(|n| n.to_string()));
+            capabilities.extend((0..names.len()).map(|i| (d.observes_torque(i), d.sets_stiffness(i))));
             for (l, (_, c)) in jc.dof_limits().into_iter().zip(jc.dof_controllers()) {
                 let dof_limits = l.map_or(DofLimits::NONE, |l| DofLimits {
                     position_rad: l.position_rad,
@@ -307,6 +311,7 @@ impl Arm {
             slots,
             dof_names,
             limits,
+            capabilities,
             states: vec![JointState::UNKNOWN; n],
             commands: vec![JointCommand::HOLD; n],
             controllers,
@@ -499,6 +504,18 @@ impl Arm {
         for slot in &mut self.slots {
             slot.joint.deactivate();
         }
+    }
+
+    /// What commands may ask of each DOF: its name, plugin, limits and capabilities.
+    pub fn dof_specs(&self) -> Vec<crate::commands::DofSpec> {
+        let mut specs = Vec::with_capacity(self.dof_names.len());
+        for slot in &self.slots {
+            for i in slot.dofs() {
+                let (torque, stiffness) = self.capabilities[i];
+                specs.push(crate::commands::DofSpec { name: self.dof_names[i].clone(), plugin: slot.plugin.clone(), limits: self.limits[i], torque, stiffness });
+            }
+        }
+        specs
     }
 
     /// The HAL's health of each device (drives, then encoders). Allocation-free.

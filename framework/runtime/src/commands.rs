@@ -1,7 +1,11 @@
 //! Commands: validated where they arrive (the IPC thread), applied by the loop at the start of
 //! its next cycle. An invalid command changes nothing and says why.
 
+use std::sync::Arc;
+
 use jointctl_config::LimitsConfig;
+
+use crate::status::LoopStatus;
 use jointctl_modes::{Mode, Reference, Trajectory, TrajectoryPoint, Waveform};
 use jointctl_ipc::{CommandKind, CommandRequest, TorqueWaveform, decode_name};
 
@@ -66,6 +70,35 @@ pub enum CommandError {
         /// The DOF.
         joint: String,
     },
+    /// The DOF's joint is faulted and held until the runtime restarts.
+    #[error("joint `{joint}` is faulted (code {code}{}) and held until the runtime restarts; see its diagnostics", fault_name(*.code))]
+    Faulted {
+        /// The DOF.
+        joint: String,
+        /// Its fault code.
+        code: u32,
+    },
+    /// The DOF does not observe its torque, so torque and impedance control cannot run on it.
+    #[error("joint `{joint}` does not observe its torque (plugin `{plugin}`), so it cannot run {mode} control")]
+    NoTorque {
+        /// The DOF.
+        joint: String,
+        /// Its plugin.
+        plugin: String,
+        /// The mode asked for.
+        mode: &'static str,
+    },
+    /// The DOF's stiffness cannot be set.
+    #[error("joint `{joint}` has no variable stiffness (plugin `{plugin}`)")]
+    NoVariableStiffness {
+        /// The DOF.
+        joint: String,
+        /// Its plugin.
+        plugin: String,
+    },
+    /// The runtime accepted a stop and takes no more commands.
+    #[error("the runtime is stopping and takes no more commands")]
+    Stopping,
     /// A value is NaN or infinite.
     #[error("{what} must be a finite number, got {value}")]
     NotFinite {
@@ -157,12 +190,47 @@ pub enum CommandError {
     UnknownKind(u32),
 }
 
-/// Checks commands against the arm's joints and limits (outside the control thread).
+/// A host fault's name, for messages.
+fn fault_name(code: u32) -> &'static str {
+    use jointctl_api::JointFault;
+    match code {
+        c if c == JointFault::PANICKED.code() => ": its plugin panicked",
+        c if c == JointFault::BAD_STATUS.code() => ": its plugin returned an unknown status",
+        c if c == JointFault::OVER_BUDGET.code() => ": its plugin took longer than its time budget",
+        _ => ": reported by its plugin",
+    }
+}
+
+/// What a command may ask of one DOF.
+#[derive(Clone, Debug)]
+pub struct DofSpec {
+    /// Its name.
+    pub name: String,
+    /// Its plugin's name (for messages).
+    pub plugin: String,
+    /// Its limits.
+    pub limits: Option<LimitsConfig>,
+    /// It observes its torque (torque and impedance control possible).
+    pub torque: bool,
+    /// Its stiffness can be set.
+    pub stiffness: bool,
+}
+
+impl DofSpec {
+    /// A DOF that can do everything, with these limits (tests, examples).
+    pub fn any(name: &str, limits: Option<LimitsConfig>) -> Self {
+        DofSpec { name: name.into(), plugin: "any".into(), limits, torque: true, stiffness: true }
+    }
+}
+
+/// Checks commands against the arm's joints, their limits and capabilities, and the loop's
+/// status (enabled, faulted, stopping) as it publishes it (outside the control thread).
 #[derive(Clone, Debug)]
 pub struct CommandValidator {
+    dofs: Vec<DofSpec>,
     names: Vec<String>,
-    limits: Vec<Option<LimitsConfig>>,
-    enabled: Vec<bool>,
+    status: Arc<LoopStatus>,
+    stop_accepted: bool,
 }
 
 fn finite(what: &'static str, value: f64) -> Result<f64, CommandError> {
@@ -170,10 +238,15 @@ fn finite(what: &'static str, value: f64) -> Result<f64, CommandError> {
 }
 
 impl CommandValidator {
-    /// A validator for these DOFs.
-    pub fn new(names: Vec<String>, limits: Vec<Option<LimitsConfig>>) -> Self {
-        let enabled = vec![true; names.len()];
-        CommandValidator { names, limits, enabled }
+    /// A validator for these DOFs, reading the loop's status.
+    pub fn new(dofs: Vec<DofSpec>, status: Arc<LoopStatus>) -> Self {
+        let names = dofs.iter().map(|d| d.name.clone()).collect();
+        CommandValidator { dofs, names, status, stop_accepted: false }
+    }
+
+    /// The loop status this validator reads.
+    pub fn status(&self) -> &Arc<LoopStatus> {
+        &self.status
     }
 
     fn dof(&self, joint: &str) -> Result<usize, CommandError> {
@@ -188,7 +261,7 @@ impl CommandValidator {
 
     fn within_position(&self, dof: usize, q: f64) -> Result<f64, CommandError> {
         let q = finite("the position", q)?;
-        if let Some(l) = self.limits[dof]
+        if let Some(l) = self.dofs[dof].limits
             && !(l.position_rad[0]..=l.position_rad[1]).contains(&q)
         {
             return Err(CommandError::PositionOutOfLimits { joint: self.names[dof].clone(), position_rad: q, limits_rad: l.position_rad });
@@ -200,7 +273,9 @@ impl CommandValidator {
     ///
     /// ```
     /// use jointctl_ipc::{CommandKind, CommandRequest};
-    /// let mut v = jointctl_runtime::commands::CommandValidator::new(vec!["q1".into()], vec![None]);
+    /// use jointctl_runtime::commands::{CommandValidator, DofSpec};
+    /// let status = std::sync::Arc::new(jointctl_runtime::status::LoopStatus::new(1));
+    /// let mut v = CommandValidator::new(vec![DofSpec::any("q1", None)], status);
     /// assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.2])).is_ok());
     /// let e = v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[f64::NAN])).unwrap_err();
     /// assert!(e.to_string().contains("finite"));
@@ -208,23 +283,38 @@ impl CommandValidator {
     pub fn validate(&mut self, req: &CommandRequest) -> Result<(ArmCommand, String), CommandError> {
         let joint = decode_name(&req.joint);
         let v = &req.values;
+        if self.stop_accepted || self.status.stopping() {
+            return Err(CommandError::Stopping);
+        }
         match req.kind {
-            CommandKind::STOP => return Ok((ArmCommand::Stop, "stopping".into())),
+            CommandKind::STOP => {
+                self.stop_accepted = true;
+                return Ok((ArmCommand::Stop, "stopping".into()));
+            }
             CommandKind::HOLD if joint.is_empty() => return Ok((ArmCommand::HoldAll, "holding every joint".into())),
             _ => {}
         }
         let dof = self.dof(joint)?;
-        let name = &self.names[dof];
-        let disabled = !self.enabled[dof];
+        let spec = &self.dofs[dof];
+        let name = &spec.name;
+        let disabled = !self.status.enabled(dof);
+        let fault = self.status.fault(dof);
         let streamed = req.streamed != 0;
         let cmd = match req.kind {
             CommandKind::ENABLE | CommandKind::DISABLE => {
                 let enabled = req.kind == CommandKind::ENABLE;
-                self.enabled[dof] = enabled;
                 return Ok((ArmCommand::Enable { dof, enabled }, format!("{name} {}", if enabled { "enabled (holding)" } else { "disabled (holding)" })));
             }
             CommandKind::HOLD => ArmCommand::Mode { dof, mode: Mode::Hold, streamed: false },
             _ if disabled => return Err(CommandError::Disabled { joint: name.clone() }),
+            _ if fault != 0 => return Err(CommandError::Faulted { joint: name.clone(), code: fault }),
+            CommandKind::TORQUE | CommandKind::IMPEDANCE if !spec.torque => {
+                let mode = if req.kind == CommandKind::TORQUE { "torque" } else { "impedance" };
+                return Err(CommandError::NoTorque { joint: name.clone(), plugin: spec.plugin.clone(), mode });
+            }
+            CommandKind::STIFFNESS if !spec.stiffness => {
+                return Err(CommandError::NoVariableStiffness { joint: name.clone(), plugin: spec.plugin.clone() });
+            }
             CommandKind::POSITION => ArmCommand::Mode { dof, mode: Mode::Position { target_rad: self.within_position(dof, v[0])? }, streamed },
             CommandKind::MANUAL => ArmCommand::Mode { dof, mode: Mode::Manual { target_rad: self.within_position(dof, v[0])? }, streamed },
             CommandKind::TRAJECTORY => {
@@ -261,7 +351,7 @@ impl CommandValidator {
                 if reference.start_s < 0.0 {
                     return Err(CommandError::NegativeDelay { delay_s: reference.start_s });
                 }
-                if let Some(limit) = self.limits[dof].and_then(|l| l.torque_nm)
+                if let Some(limit) = spec.limits.and_then(|l| l.torque_nm)
                     && reference.peak() > limit
                 {
                     return Err(CommandError::TorqueBeyondLimit { joint: name.clone(), peak_nm: reference.peak(), limit_nm: limit });
@@ -282,7 +372,7 @@ impl CommandValidator {
                 if k <= 0.0 {
                     return Err(CommandError::NonPositiveStiffness(k));
                 }
-                if let Some([lo, hi]) = self.limits[dof].and_then(|l| l.stiffness_nm_per_rad)
+                if let Some([lo, hi]) = spec.limits.and_then(|l| l.stiffness_nm_per_rad)
                     && !(lo..=hi).contains(&k)
                 {
                     return Err(CommandError::StiffnessOutOfRange { joint: name.clone(), stiffness_nm_per_rad: k, range: [lo, hi] });
@@ -297,5 +387,83 @@ impl CommandValidator {
             _ => name.clone(),
         };
         Ok((cmd, what))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jointctl_ipc::CommandKind;
+
+    fn validator() -> CommandValidator {
+        let rigid = DofSpec { name: "q1".into(), plugin: "rigid".into(), limits: None, torque: false, stiffness: false };
+        let elastic = DofSpec { name: "q4".into(), plugin: "elastic".into(), limits: None, torque: true, stiffness: false };
+        let vsa = DofSpec { name: "q2".into(), plugin: "vsa_shoulder".into(), limits: None, torque: true, stiffness: true };
+        CommandValidator::new(vec![rigid, elastic, vsa], Arc::new(LoopStatus::new(3)))
+    }
+
+    fn refused(v: &mut CommandValidator, kind: CommandKind, joint: &str, values: &[f64]) -> CommandError {
+        v.validate(&CommandRequest::new(kind, joint, values)).map(|(c, _)| c).unwrap_err()
+    }
+
+    /// Finding: torque on a rigid joint and stiffness on a non-VSA joint were accepted (exit 0,
+    /// "accepted") and then nothing happened.
+    #[test]
+    fn commands_a_joint_cannot_carry_out_are_refused() {
+        let mut v = validator();
+        let torque = CommandRequest::torque("q1", jointctl_ipc::TorqueWaveform::STEP, &[1.0, 0.0, 0.0, 0.0]);
+        let e = v.validate(&torque).map(|(c, _)| c).unwrap_err();
+        assert_eq!(e.to_string(), "joint `q1` does not observe its torque (plugin `rigid`), so it cannot run torque control");
+        assert!(matches!(refused(&mut v, CommandKind::IMPEDANCE, "q1", &[10.0, 1.0, f64::NAN]), CommandError::NoTorque { mode: "impedance", .. }));
+        assert_eq!(refused(&mut v, CommandKind::STIFFNESS, "q4", &[50.0]).to_string(), "joint `q4` has no variable stiffness (plugin `elastic`)");
+        assert!(v.validate(&CommandRequest::new(CommandKind::STIFFNESS, "q2", &[50.0])).is_ok());
+        assert!(v.validate(&CommandRequest::torque("q4", jointctl_ipc::TorqueWaveform::STEP, &[1.0, 0.0, 0.0, 0.0])).is_ok());
+        assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.1])).is_ok(), "position is for every joint");
+    }
+
+    /// Finding: commands for a faulted joint and after `stop` were accepted.
+    #[test]
+    fn a_faulted_joint_and_a_stopping_runtime_refuse_commands() {
+        let mut v = validator();
+        v.status().set_dof(1, true, jointctl_api::JointFault::OVER_BUDGET.code());
+        let e = refused(&mut v, CommandKind::POSITION, "q4", &[0.1]);
+        assert_eq!(e.to_string(), "joint `q4` is faulted (code 3: its plugin took longer than its time budget) and held until the runtime restarts; see its diagnostics");
+        assert!(v.validate(&CommandRequest::new(CommandKind::HOLD, "q4", &[])).is_ok(), "holding a held joint is fine");
+        assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.1])).is_ok(), "other joints are not affected");
+        assert!(v.validate(&CommandRequest::new(CommandKind::STOP, "", &[])).is_ok());
+        assert_eq!(refused(&mut v, CommandKind::POSITION, "q1", &[0.1]), CommandError::Stopping);
+        assert_eq!(refused(&mut v, CommandKind::HOLD, "", &[]), CommandError::Stopping);
+        let mut v = validator();
+        v.status().set_stopping();
+        assert_eq!(refused(&mut v, CommandKind::ENABLE, "q1", &[]), CommandError::Stopping, "a stop by signal counts too");
+    }
+
+    /// Finding: the validator kept its own "enabled" flags, set before the command was queued,
+    /// so with a full command ring it believed a joint disabled that the loop never disabled.
+    /// Now it reads the loop's published status only.
+    #[test]
+    fn enabled_has_one_source_of_truth_even_when_the_queue_is_full() {
+        let v = validator();
+        let status = Arc::clone(v.status());
+        let mut desk = crate::runner::CommandDesk::new(v, 0.001);
+        let (mut queue, _loop_end) = rtrb::RingBuffer::<ArmCommand>::new(1);
+        queue.push(ArmCommand::HoldAll).unwrap();
+        let answer = desk.answer(&CommandRequest::new(CommandKind::DISABLE, "q4", &[]), &mut queue);
+        assert_eq!(answer.accepted, 0, "{}", answer.text());
+        assert!(answer.text().contains("queue is full"));
+        assert!(status.enabled(1));
+        let (mut queue, _loop_end) = rtrb::RingBuffer::<ArmCommand>::new(4);
+        let answer = desk.answer(&CommandRequest::new(CommandKind::POSITION, "q4", &[0.1]), &mut queue);
+        assert_eq!(answer.accepted, 1, "the loop never disabled q4: {}", answer.text());
+        // A disable the loop does apply: the desk waits for it, then refuses modes.
+        let loop_side = std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            status.set_dof(1, false, 0);
+        });
+        let answer = desk.answer(&CommandRequest::new(CommandKind::DISABLE, "q4", &[]), &mut queue);
+        loop_side.join().unwrap();
+        assert_eq!((answer.accepted, answer.text()), (1, "q4 disabled (holding)"));
+        let answer = desk.answer(&CommandRequest::new(CommandKind::POSITION, "q4", &[0.1]), &mut queue);
+        assert_eq!((answer.accepted, answer.text()), (0, "joint `q4` is disabled; enable it first"));
     }
 }

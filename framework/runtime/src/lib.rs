@@ -12,6 +12,7 @@ pub mod loader;
 pub mod lock;
 pub mod runner;
 pub mod signals;
+pub mod status;
 pub mod timing;
 
 pub use arm::{ActivateError, Arm, JointSlot};

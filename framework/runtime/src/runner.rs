@@ -155,6 +155,54 @@ pub fn published_mode(mode: &Mode) -> JointMode {
     }
 }
 
+/// Answers command requests: validates them against the loop's published status, queues the
+/// valid ones for the loop, and waits for the loop to apply an enable or disable before it
+/// answers (so that the next command is validated against the new state).
+pub struct CommandDesk {
+    validator: CommandValidator,
+    period: std::time::Duration,
+}
+
+impl CommandDesk {
+    /// A desk for a loop of this period.
+    pub fn new(validator: CommandValidator, period_s: f64) -> Self {
+        CommandDesk { validator, period: std::time::Duration::from_secs_f64(period_s) }
+    }
+
+    /// The answer to one request; a valid command is pushed into `queue` for the loop.
+    pub fn answer(&mut self, request: &jointctl_ipc::CommandRequest, queue: &mut rtrb::Producer<ArmCommand>) -> CommandResponse {
+        let (command, text) = match self.validator.validate(request) {
+            Ok(ok) => ok,
+            Err(reason) => return CommandResponse::new(false, &reason.to_string()),
+        };
+        if queue.push(command).is_err() {
+            return CommandResponse::new(false, "the runtime's command queue is full; try again");
+        }
+        if let ArmCommand::Enable { dof, enabled } = command
+            && !self.wait_applied(|s| s.enabled(dof) == enabled)
+        {
+            return CommandResponse::new(true, &format!("{text}; queued, the loop has not applied it yet"));
+        }
+        CommandResponse::new(true, &text)
+    }
+
+    /// Waits up to five periods (and at least 20 ms) for the loop to publish a status where
+    /// `applied` holds.
+    fn wait_applied(&self, applied: impl Fn(&crate::status::LoopStatus) -> bool) -> bool {
+        let status = self.validator.status();
+        let end = std::time::Instant::now() + (self.period * 5).max(std::time::Duration::from_millis(20));
+        loop {
+            if applied(status) {
+                return true;
+            }
+            if std::time::Instant::now() >= end || status.stopping() {
+                return false;
+            }
+            std::thread::sleep(std::time::Duration::from_micros(500));
+        }
+    }
+}
+
 /// What the publisher thread owns: the arm's node and ports.
 struct PublisherPorts {
     node: Node<ipc::Service>,
@@ -191,7 +239,7 @@ impl PublisherPorts {
         self,
         mut records: rtrb::Consumer<CycleRecord>,
         mut commands: rtrb::Producer<ArmCommand>,
-        mut validator: CommandValidator,
+        mut desk: CommandDesk,
         stop: &AtomicBool,
     ) -> u64 {
         let mut failures = 0u64;
@@ -205,13 +253,7 @@ impl PublisherPorts {
             // Commands are validated here, outside the control thread; only valid ones reach
             // the loop, and every request gets an answer.
             while let Ok(Some(request)) = self.server.receive() {
-                let response = match validator.validate(request.payload()) {
-                    Ok((command, text)) => match commands.push(command) {
-                        Ok(()) => CommandResponse::new(true, &text),
-                        Err(_) => CommandResponse::new(false, "the runtime's command queue is full; try again"),
-                    },
-                    Err(reason) => CommandResponse::new(false, &reason.to_string()),
-                };
+                let response = desk.answer(request.payload(), &mut commands);
                 let _ = request.send_copy(response);
             }
             if stopping {
@@ -236,6 +278,7 @@ pub struct ArmPublisher {
     producer: rtrb::Producer<CycleRecord>,
     health: Vec<jointctl_hal::DeviceHealth>,
     commands: rtrb::Consumer<ArmCommand>,
+    status: Arc<crate::status::LoopStatus>,
     record: Box<CycleRecord>,
     thread: Option<std::thread::JoinHandle<u64>>,
     stop: Arc<AtomicBool>,
@@ -248,7 +291,8 @@ impl ArmPublisher {
     pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
         let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
         let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
-        let validator = CommandValidator::new(arm.dof_names.clone(), arm.limits.clone());
+        let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
+        let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)), arm.dt_s);
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
         let arm_name = arm.name.clone();
@@ -267,7 +311,7 @@ impl ArmPublisher {
                         return 0;
                     }
                 };
-                ports.serve(consumer, command_producer, validator, &thread_stop)
+                ports.serve(consumer, command_producer, desk, &thread_stop)
             })
             .map_err(|e| RunError::Thread(e.to_string()))?;
         match ready_rx.recv() {
@@ -293,7 +337,7 @@ impl ArmPublisher {
         }
         record.diagnostics.device_count = devices as u32;
         let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
-        Ok(ArmPublisher { producer, health, commands, record, thread: Some(thread), stop, drops: 0 })
+        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), stop, drops: 0 })
     }
 
     /// Fills the state part of this cycle's record.
@@ -302,8 +346,12 @@ impl ArmPublisher {
         s.cycle = cycle;
         s.stamp_ns = stamp_ns;
         s.final_sample = final_sample as u32;
+        if final_sample || arm.stop_requested {
+            self.status.set_stopping();
+        }
         for slot in &arm.slots {
             for i in slot.dofs() {
+                self.status.set_dof(i, arm.enabled[i], slot.fault);
                 let st = &arm.states[i];
                 s.joints[i] = JointSample {
                     name: s.joints[i].name,
@@ -321,6 +369,12 @@ impl ArmPublisher {
                 };
             }
         }
+        self.status.set_cycle(cycle);
+    }
+
+    /// The status the command desk reads.
+    pub fn status(&self) -> &Arc<crate::status::LoopStatus> {
+        &self.status
     }
 
     /// Fills the diagnostics part and hands the record to the publisher thread.

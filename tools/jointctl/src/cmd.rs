@@ -17,7 +17,7 @@ pub struct CmdArgs {
     #[arg(long, global = true)]
     domain: Option<String>,
     /// How long to wait for the runtime's answer [s].
-    #[arg(long, global = true, default_value_t = 2.0)]
+    #[arg(long, global = true, default_value_t = 2.0, value_parser = finite)]
     timeout: f64,
     /// A streamed command: the joint falls back to holding if it is not renewed within its
     /// watchdog time.
@@ -34,22 +34,22 @@ enum Command {
         /// Joint name (e.g. q2).
         joint: String,
         /// Step to NM.
-        #[arg(long, value_name = "NM", group = "waveform")]
+        #[arg(long, value_name = "NM", group = "waveform", value_parser = finite, allow_negative_numbers = true)]
         step: Option<f64>,
         /// Sine of amplitude NM (needs --freq).
-        #[arg(long, value_name = "NM", group = "waveform", requires = "freq")]
+        #[arg(long, value_name = "NM", group = "waveform", requires = "freq", value_parser = finite, allow_negative_numbers = true)]
         sine: Option<f64>,
         /// Cosine of amplitude NM (needs --freq).
-        #[arg(long, value_name = "NM", group = "waveform", requires = "freq")]
+        #[arg(long, value_name = "NM", group = "waveform", requires = "freq", value_parser = finite, allow_negative_numbers = true)]
         cosine: Option<f64>,
         /// Frequency of the sine or cosine [Hz].
-        #[arg(long, value_name = "HZ")]
+        #[arg(long, value_name = "HZ", value_parser = finite)]
         freq: Option<f64>,
         /// Offset added to the reference [Nm].
-        #[arg(long, value_name = "NM", default_value_t = 0.0)]
+        #[arg(long, value_name = "NM", default_value_t = 0.0, value_parser = finite, allow_negative_numbers = true)]
         offset: f64,
         /// Start the reference this long after the command arrives [s].
-        #[arg(long, value_name = "S", default_value_t = 0.0)]
+        #[arg(long, value_name = "S", default_value_t = 0.0, value_parser = finite)]
         delay: f64,
     },
     /// Position control with the feedback PI (section 4.3) to RAD.
@@ -57,7 +57,7 @@ enum Command {
         /// Joint name.
         joint: String,
         /// Target [rad].
-        #[arg(allow_negative_numbers = true)]
+        #[arg(allow_negative_numbers = true, value_parser = finite)]
         rad: f64,
     },
     /// A direct joint set-point (no feedback PI), like the thesis' GUI.
@@ -65,7 +65,7 @@ enum Command {
         /// Joint name.
         joint: String,
         /// Set-point [rad].
-        #[arg(allow_negative_numbers = true)]
+        #[arg(allow_negative_numbers = true, value_parser = finite)]
         rad: f64,
     },
     /// Follow a trajectory: points "T:Q[:V]" (time [s], position [rad], velocity [rad/s]).
@@ -81,6 +81,7 @@ enum Command {
         /// Joint name.
         joint: String,
         /// [Nm/rad]
+        #[arg(value_parser = finite)]
         nm_per_rad: f64,
     },
     /// Impedance control: tau = K (target - q) - D dq/dt, through the torque mode.
@@ -88,13 +89,13 @@ enum Command {
         /// Joint name.
         joint: String,
         /// K [Nm/rad].
-        #[arg(long = "k", value_name = "NM_PER_RAD")]
+        #[arg(long = "k", value_name = "NM_PER_RAD", value_parser = finite)]
         k: f64,
         /// D [Nms/rad].
-        #[arg(long = "d", value_name = "NMS_PER_RAD")]
+        #[arg(long = "d", value_name = "NMS_PER_RAD", value_parser = finite)]
         d: f64,
         /// Target [rad]; default: where the joint is.
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_negative_numbers = true, value_parser = finite)]
         target: Option<f64>,
     },
     /// Hold one joint, or every joint.
@@ -116,6 +117,16 @@ enum Command {
     Stop,
 }
 
+/// A finite number: NaN and infinity are refused where they are typed, with the argument's
+/// name (clap adds it), instead of reaching the runtime, where NaN means "not given".
+fn finite(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(format!("must be a finite number, got {v}")),
+        Err(_) => Err(format!("`{text}` is not a number")),
+    }
+}
+
 fn parse_points(points: &[String]) -> Result<Vec<[f64; 3]>, String> {
     if points.len() > MAX_COMMAND_POINTS {
         return Err(format!("at most {MAX_COMMAND_POINTS} points, got {}", points.len()));
@@ -124,7 +135,7 @@ fn parse_points(points: &[String]) -> Result<Vec<[f64; 3]>, String> {
         .iter()
         .map(|p| {
             let parts: Vec<&str> = p.split(':').collect();
-            let num = |s: &str| s.parse::<f64>().map_err(|_| format!("point `{p}`: `{s}` is not a number"));
+            let num = |s: &str| finite(s).map_err(|e| format!("point `{p}`: {e}"));
             match parts.as_slice() {
                 [t, q] => Ok([num(t)?, num(q)?, f64::NAN]),
                 [t, q, v] => Ok([num(t)?, num(q)?, num(v)?]),
