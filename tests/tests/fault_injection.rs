@@ -60,3 +60,59 @@ fn a_joints_own_budget_overrides_the_default() {
     }
     assert_eq!(arm.slots[1].fault, JointFault::OVER_BUDGET.code());
 }
+
+/// Finding: a velocity limit documented as enforced was never read. Pass: with
+/// `limits.velocity_rad_s: 0.5` at 100 Hz, a 0.5 rad position step moves the set-point by at
+/// most 5 mrad per cycle (the controller's own rate limit, 2 rad/s, would allow 20), and the
+/// clamping is counted.
+#[test]
+fn the_velocity_limit_bounds_the_set_point_rate() {
+    let yaml = rig_yaml("velocity-limit", 100.0, "").replace("limits: {position_rad: [-1.0, 1.0]}", "limits: {position_rad: [-1.0, 1.0], velocity_rad_s: 0.5}");
+    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    assert_eq!(loaded.config.joints[0].limits.unwrap().velocity_rad_s, Some(0.5), "the edit took");
+    let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    arm.activate().unwrap();
+    arm.step(0.0);
+    arm.set_mode(0, position(0.5));
+    let mut last = arm.states[0].position().unwrap();
+    for i in 1..20 {
+        arm.step(i as f64 * 0.01);
+        let sp = arm.commands[0].position_rad;
+        assert!((sp - last).abs() <= 0.005 + 1e-12, "cycle {i}: set-point moved {} rad", sp - last);
+        last = sp;
+    }
+    assert!(last > 0.08, "it moves at the limit: {last}");
+    assert!(arm.controllers[0].events.rate_limited >= 19);
+}
+
+/// Finding: diagnostics cut device names to 15 bytes, so `enc_shoulder_pulley_a` and
+/// `enc_shoulder_pulley_b` both read `enc_shoulder_pu`. Pass: every device of the SHERPA config
+/// is published whole and the names are distinct.
+#[test]
+fn diagnostics_carry_whole_device_names() {
+    let arm_id = jointctl_tests::arm_name("device-names");
+    let path = jointctl_tests::sherpa_with("device-names", &arm_id, &[]);
+    let loaded = jointctl_config::load(&path).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::loader_for(&loaded)).unwrap();
+    arm.activate().unwrap();
+    let expected: Vec<String> = arm.device_names().map(str::to_string).collect();
+    assert!(expected.iter().any(|n| n == "enc_shoulder_pulley_a") && expected.iter().any(|n| n == "enc_shoulder_pulley_b"));
+    let mut publisher = jointctl_runtime::ArmPublisher::new(&arm, None).unwrap();
+    let node = jointctl_ipc::create_node(None, "device-names-test").unwrap();
+    let names = jointctl_ipc::ServiceNames::for_arm(&arm_id);
+    let sub = jointctl_ipc::diagnostics_service(&node, &names.diagnostics).unwrap().subscriber_builder().create().unwrap();
+    let mut lp = jointctl_runtime::ControlLoop::new(&mut arm, Some(&mut publisher), 0);
+    let t = std::time::Instant::now();
+    let d = loop {
+        let now = jointctl_runtime::timing::monotonic_ns();
+        lp.step(now, now, None);
+        if let Some(s) = sub.receive().unwrap() {
+            break *s;
+        }
+        assert!(t.elapsed() < std::time::Duration::from_secs(5), "no diagnostics");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    let published: Vec<&str> = d.devices[..d.device_count as usize].iter().map(|dev| jointctl_ipc::decode_name(&dev.name)).collect();
+    assert_eq!(published, expected);
+    let _ = lp.finish();
+}

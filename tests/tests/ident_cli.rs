@@ -194,3 +194,26 @@ fn fit_groups_a_wrist_characterisation_by_pivot_and_direction_into_the_wrist_tab
     println!("wrist 2 pivots x 4 directions: largest torque difference {:.4} Nm (largest torque compared {:.3} Nm)", worst.0, worst.1);
     assert!(worst.1 > 0.1, "the comparison covers real torques");
 }
+
+/// Finding: one 1e308 value made `fit` panic inside the SVD (and `identify` exit 0 with
+/// `null` errors). Pass: both exit 1 with the file, line and column of the value, for a huge
+/// deflection and a huge torque alike.
+#[test]
+fn a_huge_value_in_the_data_is_refused_at_its_line() {
+    let dir = scratch("huge-value");
+    let text = std::fs::read_to_string(root().join("tests/data/q4_worn_elbow.csv")).unwrap();
+    for (column, name) in [(1, "deflection"), (2, "torque")] {
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        let mut cells: Vec<String> = lines[101].split(',').map(str::to_string).collect();
+        cells[column] = "1e308".into();
+        lines[101] = cells.join(",");
+        let csv = dir.join(format!("huge_{name}.csv"));
+        std::fs::write(&csv, lines.join("\n")).unwrap();
+        for args in [vec!["fit".to_string(), csv.display().to_string()], vec!["identify".into(), "--data".into(), csv.display().to_string()]] {
+            let out = Command::new(jointctl()).args(&args).output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+            assert!(err.contains(&format!("huge_{name}.csv:102: column `{name}`: 1e308 is implausible")), "{args:?}: {err}");
+        }
+    }
+}

@@ -232,7 +232,7 @@ fn role_counts_duplicates_and_dofs_are_validated_before_wiring() {
     let _ = l.register_static(&FIVE_DRIVES);
     let extra = "  - name: b\n    plugin: five\n    encoders: {output: e1}\n    drives: {m0: m1}\n";
     let loaded = jointctl_config::parse_str(&rig_yaml("x", 40.0, extra), "rig.yaml").unwrap();
-    let errs = jointctl_runtime::build_arm_for_check(&loaded, &l).map(|_| ()).unwrap_err();
+    let errs = jointctl_backends::build_arm_for_check(&loaded, &l).map(|_| ()).unwrap_err();
     assert_eq!(errs.0[0].field, "joints[1].plugin", "{}", errs.0[0]);
     assert!(errs.0[0].message.contains("not found"), "an unregistered descriptor is simply not there: {}", errs.0[0]);
 }

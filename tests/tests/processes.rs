@@ -270,3 +270,24 @@ fn check_prints_the_can_bus_budget_and_refuses_a_rate_the_bus_cannot_carry() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("rate_hz: the CAN bus cannot carry this rate") && err.contains("load 214.1 %"), "{err}");
 }
+
+/// Finding: `check` passed what `run` refused (a simulation matrix of the wrong shape). Pass:
+/// both refuse it with the same located message; `check` builds the simulated backend as `run`
+/// does (it touches no hardware).
+#[test]
+fn check_refuses_what_run_refuses() {
+    let (_, yaml) = write_rig("check-run", 100.0);
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(&yaml, jointctl_tests::yaml_with(&text, &[jointctl_tests::Edit::Set(
+        "joints[b].sim",
+        serde_yaml::from_str("{drives: [m1], matrix: [[2.0, 1.0]]}").unwrap(),
+    )])).unwrap();
+    let check = Command::new(jointctl()).arg("check").arg(&yaml).output().unwrap();
+    let run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "3", "--no-ipc"]).output().unwrap();
+    let (check_err, run_err) = (String::from_utf8_lossy(&check.stderr), String::from_utf8_lossy(&run.stderr));
+    assert_eq!(run.status.code(), Some(1), "{run_err}");
+    assert_eq!(check.status.code(), Some(1), "check must refuse it too: {}{check_err}", String::from_utf8_lossy(&check.stdout));
+    let message = |s: &str| s.lines().find(|l| l.starts_with("error:")).map(str::to_string);
+    assert_eq!(message(&check_err), message(&run_err));
+    assert!(check_err.contains("joints[1].sim"), "{check_err}");
+}

@@ -32,3 +32,6 @@ pub const MAX_ARM_DOF: usize = 16;
 
 /// Longest joint or device name in bytes: names travel in fixed 16-byte, NUL-padded fields.
 pub const MAX_JOINT_NAME: usize = 15;
+/// Longest device (drive, encoder) name: published whole in diagnostics (a 48-byte field with
+/// its NUL), so that `enc_shoulder_pulley_a` and `enc_shoulder_pulley_b` stay apart.
+pub const MAX_DEVICE_NAME: usize = 47;

@@ -74,3 +74,26 @@ pub fn build_arm(loaded: &LoadedConfig, loader: &PluginLoader) -> Result<Arm, Co
     let hal = build_hal(loaded)?;
     Arm::build(loaded, loader, hal)
 }
+
+/// Builds the arm exactly as [`build_arm`] does, except that nothing is opened: the simulated
+/// backend is built whole (it touches no hardware), the real buses are checked as far as their
+/// description goes (bus budget) and replaced by a HAL with nothing behind it. `jointctl check`
+/// runs this, so that it refuses what `jointctl run` would.
+///
+/// ```
+/// let loaded = jointctl_config::parse_str(
+///     "arm: a\nhal: {backend: sim}\nbuses: {can: [{interface: can0, drives: [{name: m, node_id: 1}]}]}\njoints: [{name: q, plugin: rigid, drives: {motor: m}, sim: {drives: [m], matrix: [[1.0, 2.0]]}}]\n",
+///     "a.yaml").unwrap();
+/// let err = jointctl_backends::build_arm_for_check(&loaded, &jointctl_runtime::PluginLoader::new([])).map(|_| ()).unwrap_err();
+/// assert!(err.0[0].field.contains("sim"), "{err}");
+/// ```
+pub fn build_arm_for_check(loaded: &LoadedConfig, loader: &PluginLoader) -> Result<Arm, ConfigErrors> {
+    let hal: Box<dyn Hal> = match loaded.config.hal.backend {
+        HalBackend::Sim => build_hal(loaded)?,
+        HalBackend::Socketcan => {
+            check_bus_budget(loaded)?;
+            Box::new(jointctl_hal::NullHal)
+        }
+    };
+    Arm::build(loaded, loader, hal)
+}

@@ -47,3 +47,55 @@ impl From<ConfigError> for ConfigErrors {
         ConfigErrors(vec![e])
     }
 }
+
+/// Longest value quoted whole in a message [chars]; a longer one is cut and its size said.
+pub const MAX_QUOTED: usize = 64;
+/// Longest message [chars], whatever it quotes.
+const MAX_MESSAGE: usize = 2000;
+
+/// A message with every `` `quoted` `` value longer than [`MAX_QUOTED`] characters shortened
+/// to its start and its size, and the whole cut at 2000 characters: a 50 MB name in a file
+/// must not come back as a 50 MB error.
+///
+/// ```
+/// let long = "x".repeat(1000);
+/// let m = jointctl_config::bounded_message(&format!("`{long}` is not a valid name"));
+/// assert_eq!(m, format!("`{}...` (1000 bytes) is not a valid name", "x".repeat(48)));
+/// ```
+pub fn bounded_message(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(MAX_MESSAGE + 16));
+    let mut parts = message.split('`');
+    let mut quoted = false;
+    let mut first = true;
+    while let Some(part) = parts.next() {
+        if !first {
+            out.push('`');
+        }
+        first = false;
+        if quoted && part.chars().count() > MAX_QUOTED {
+            let start: String = part.chars().take(48).collect();
+            // Closing backtick and size after it.
+            out.push_str(&start);
+            out.push_str("...`");
+            out.push_str(&format!(" ({} bytes)", part.len()));
+            // The closing backtick is already written: skip the one the next part would add.
+            if let Some(next) = parts.next() {
+                out.push_str(next);
+                quoted = !quoted;
+            }
+        } else {
+            out.push_str(part);
+        }
+        quoted = !quoted;
+        if out.len() > MAX_MESSAGE {
+            let mut cut = MAX_MESSAGE;
+            while !out.is_char_boundary(cut) {
+                cut -= 1;
+            }
+            out.truncate(cut);
+            out.push_str("... (message cut)");
+            break;
+        }
+    }
+    out
+}

@@ -20,7 +20,7 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-pub use error::{ConfigError, ConfigErrors};
+pub use error::{ConfigError, ConfigErrors, bounded_message};
 pub use model::*;
 pub use spans::{Location, SpanIndex};
 pub use validate::{MAX_ARM_DOF, MAX_JOINT_NAME};
@@ -56,8 +56,8 @@ impl ConfigSource {
             file: self.file.clone(),
             line: at.line,
             column: at.column,
-            field: field.to_string(),
-            message: message.into(),
+            field: bounded_message(field),
+            message: bounded_message(&message.into()),
         }
     }
 
@@ -80,8 +80,56 @@ pub fn load(path: impl AsRef<Path>) -> Result<LoadedConfig, ConfigErrors> {
     parse_str(&text, path)
 }
 
+/// Deepest `[`/`{` nesting an arm description may have. Assumption: 64; the deepest real one
+/// (a wrist characteristic under `params`) nests 6 deep, and the YAML parser needs time and
+/// stack in proportion to the depth (100 000 brackets took 36 s to refuse).
+pub const MAX_NESTING: usize = 64;
+
+/// The first place where flow brackets nest deeper than [`MAX_NESTING`], as (line, column),
+/// 1-based. Quoted strings and comments are skipped. Linear in the text, no allocation.
+fn too_deep(text: &str) -> Option<(usize, usize)> {
+    let (mut depth, mut line, mut column) = (0usize, 1usize, 0usize);
+    let (mut quote, mut comment, mut previous) = (None::<char>, false, ' ');
+    for c in text.chars() {
+        column += 1;
+        match (quote, c) {
+            (_, '\n') => {
+                (line, column, comment) = (line + 1, 0, false);
+                // A quoted scalar may span lines; a comment ends here.
+            }
+            _ if comment => {}
+            (Some('"'), '"') if previous == '\\' => {}
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), _) => {}
+            // A quote opens a scalar only where a scalar starts (`the thesis' arm` is plain).
+            (None, '"' | '\'') if column == 1 || previous.is_whitespace() || matches!(previous, '[' | '{' | ',' | ':') => quote = Some(c),
+            (None, '#') if previous.is_whitespace() => comment = true,
+            (None, '[' | '{') => {
+                depth += 1;
+                if depth > MAX_NESTING {
+                    return Some((line, column));
+                }
+            }
+            (None, ']' | '}') => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        previous = c;
+    }
+    None
+}
+
 /// Parses and validates an arm description from text; `file` names it in errors.
 pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, ConfigErrors> {
+    if let Some((line, column)) = too_deep(text) {
+        return Err(ConfigError {
+            file: file.as_ref().to_path_buf(),
+            line,
+            column,
+            field: String::new(),
+            message: format!("brackets nest deeper than {MAX_NESTING} levels here; an arm description never needs that many"),
+        }
+        .into());
+    }
     let source = ConfigSource { file: file.as_ref().to_path_buf(), spans: SpanIndex::build(text) };
     let de = serde_yaml::Deserializer::from_str(text);
     let config: ArmConfig = serde_path_to_error::deserialize(de).map_err(|e| {
@@ -113,7 +161,7 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
                 (at.line, at.column)
             }
         };
-        ConfigError { file: source.file.clone(), line, column, field, message }
+        ConfigError { file: source.file.clone(), line, column, field: bounded_message(&field), message: bounded_message(&message) }
     })?;
     let mut config = config;
     let mut include_errors = Vec::new();

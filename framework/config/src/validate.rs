@@ -13,6 +13,29 @@ fn valid_name(s: &str, max: usize) -> bool {
     !s.is_empty() && s.len() <= max && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
 }
 
+/// The largest limits a joint description may state: beyond them a value is a typo (a unit
+/// mix-up), not a joint. Each is an assumption with its reason.
+struct Plausible {
+    /// Two turns either way [rad]: the thesis gives no joint ranges; a wider range than two
+    /// turns is almost surely degrees written for radians.
+    position_rad: f64,
+    /// 50 rad/s at the joint: about 8 turns per second, far beyond an ELMO-driven harmonic
+    /// drive joint of this class.
+    velocity_rad_s: f64,
+    /// 1000 Nm: 25 times q2's 40 Nm limit in the reference config, beyond any joint of a
+    /// 7-DOF rover arm; 1e12 Nm is a typo.
+    torque_nm: f64,
+    /// 1e6 Nm/rad: above the rigid joints' 8.3e4 Nm/rad (section 3.1).
+    stiffness_nm_per_rad: f64,
+}
+
+const PLAUSIBLE: Plausible =
+    Plausible { position_rad: 4.0 * core::f64::consts::PI, velocity_rad_s: 50.0, torque_nm: 1000.0, stiffness_nm_per_rad: 1e6 };
+
+fn device_name_problem(name: &str) -> String {
+    format!("`{name}` is not a valid device name: use 1-{} letters, digits, `_` or `-`", jointctl_api::MAX_DEVICE_NAME)
+}
+
 /// Every semantic problem as (field path, message).
 pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     let mut errs = Vec::new();
@@ -87,6 +110,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             if let Some(first) = devices.insert(&d.name, path.clone()) {
                 err(format!("{path}.name"), format!("device `{}` is already defined at {first}", d.name));
             }
+            if !valid_name(&d.name, jointctl_api::MAX_DEVICE_NAME) {
+                err(format!("{path}.name"), device_name_problem(&d.name));
+            }
             drive_names.insert(d.name.as_str());
             if !(d.counts_per_rad > 0.0) {
                 err(format!("{path}.counts_per_rad"), format!("must be > 0, got {}", d.counts_per_rad));
@@ -110,6 +136,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             let path = format!("buses.spi[{b}].encoders[{i}]");
             if let Some(first) = devices.insert(&e.name, path.clone()) {
                 err(format!("{path}.name"), format!("device `{}` is already defined at {first}", e.name));
+            }
+            if !valid_name(&e.name, jointctl_api::MAX_DEVICE_NAME) {
+                err(format!("{path}.name"), device_name_problem(&e.name));
             }
             encoder_names.insert(e.name.as_str());
             if !(e.max_velocity_rad_s > 0.0) {
@@ -192,16 +221,22 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             if lo >= hi {
                 err(format!("{p}.position_rad"), format!("lower limit {lo} must be below upper limit {hi}"));
             }
-            if let Some(v) = l.velocity_rad_s.filter(|v| *v <= 0.0) {
-                err(format!("{p}.velocity_rad_s"), format!("must be > 0, got {v}"));
+            if lo < -PLAUSIBLE.position_rad || hi > PLAUSIBLE.position_rad {
+                err(format!("{p}.position_rad"), format!("[{lo}, {hi}] rad is implausible for a joint: limits must lie within +-{} rad (two turns); a typo in the units?", PLAUSIBLE.position_rad));
             }
-            if let Some(t) = l.torque_nm.filter(|t| *t <= 0.0) {
-                err(format!("{p}.torque_nm"), format!("must be > 0, got {t}"));
+            if let Some(v) = l.velocity_rad_s.filter(|v| !(*v > 0.0 && *v <= PLAUSIBLE.velocity_rad_s)) {
+                err(format!("{p}.velocity_rad_s"), format!("must be > 0 and at most {} rad/s, got {v}", PLAUSIBLE.velocity_rad_s));
+            }
+            if let Some(t) = l.torque_nm.filter(|t| !(*t > 0.0 && *t <= PLAUSIBLE.torque_nm)) {
+                err(format!("{p}.torque_nm"), format!("must be > 0 and at most {} Nm, got {t}", PLAUSIBLE.torque_nm));
             }
             if let Some([a, b]) = l.stiffness_nm_per_rad
-                && !(a.is_finite() && b.is_finite() && a > 0.0 && a < b)
+                && !(a.is_finite() && b.is_finite() && a > 0.0 && a < b && b <= PLAUSIBLE.stiffness_nm_per_rad)
             {
-                err(format!("{p}.stiffness_nm_per_rad"), format!("must be [lowest, highest] with 0 < lowest < highest, got [{a}, {b}]"));
+                err(
+                    format!("{p}.stiffness_nm_per_rad"),
+                    format!("must be [lowest, highest] with 0 < lowest < highest <= {} Nm/rad, got [{a}, {b}]", PLAUSIBLE.stiffness_nm_per_rad),
+                );
             }
         }
         if joint.dofs.is_empty() || joint.controller.is_none() {

@@ -54,6 +54,13 @@ const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
     ("unknown backend", "  backend: sim", "  backend: ethercat", 4, "hal.backend", "unknown variant `ethercat`"),
     ("plugin of the wrong type", "plugin: rigid", "plugin: 42", 18, "joints[0].plugin", "expected a plugin name"),
     ("negative torque limit", "torque_nm: 10", "torque_nm: -10", 21, "joints[0].limits.torque_nm", "must be > 0"),
+    // Finding: limits of +-1000 rad and 1e12 Nm passed.
+    ("implausible position limits", "position_rad: [-1.0, 1.0]", "position_rad: [-1000.0, 1000.0]", 21, "joints[0].limits.position_rad", "implausible for a joint"),
+    ("implausible torque limit", "torque_nm: 10", "torque_nm: 1e12", 21, "joints[0].limits.torque_nm", "must be > 0 and at most 1000 Nm"),
+    ("implausible velocity limit", "torque_nm: 10", "torque_nm: 10, velocity_rad_s: 1e6", 21, "joints[0].limits.velocity_rad_s", "at most 50 rad/s"),
+    // Finding: device names were cut to 15 bytes in diagnostics; now whole, up to 47.
+    ("device name too long", "{name: e2, chip_select: 1}", "{name: enc_a_very_long_device_name_of_more_than_47_bytes, chip_select: 1}", 15, "buses.spi[0].encoders[1].name", "not a valid device name: use 1-47"),
+    ("joint time budget beyond the period", "    plugin: elastic\n", "    plugin: elastic\n    budget_us: 30000\n", 25, "joints[1].budget_us", "at most the period (25000 us)"),
 ];
 
 #[test]
@@ -107,4 +114,31 @@ fn the_schema_covers_the_top_level_fields() {
     for key in ["arm", "rate_hz", "hal", "buses", "joints", "timing", "ipc", "plugin_dirs"] {
         assert!(props.contains_key(key), "schema lacks `{key}`");
     }
+}
+
+/// Finding: 100 000 nested brackets under one key took 36 s to reject (with the YAML parser's
+/// own message). Pass: refused at once, at the bracket that goes one level too deep.
+#[test]
+fn deep_nesting_is_refused_before_parsing() {
+    let text = GOOD.replacen("    params: {stiffness_nm_per_rad: 113.78}", &format!("    params: {{x: {}{}}}", "[".repeat(100_000), "]".repeat(100_000)), 1);
+    let e = &parse_str(&text, "rig.yaml").unwrap_err().0[0];
+    assert!(e.message.contains("nest deeper than 64 levels"), "{e}");
+    // `params: {` opens level 1 at column 13, `x: [` level 2 at column 17: level 65 is column 80.
+    assert_eq!((e.line, e.column), (27, 80), "{e}");
+    // Quotes, comments and apostrophes in plain text do not count as brackets or hide them.
+    let fine = GOOD.replacen("arm: rig", "arm: rig # the thesis' arm [[[[ {{{{\n# ]]]]", 1).replacen("name: q2", "name: 'q2' # [[", 1);
+    assert!(parse_str(&fine, "rig.yaml").is_ok());
+    assert!(parse_str(&format!("x: \"{}\"\n{GOOD}", "[".repeat(200)), "rig.yaml").unwrap_err().0[0].message.contains("unknown field `x`"));
+}
+
+/// Finding: a 50 MB name was echoed whole into the error. Pass: the error stays short and says
+/// the value's size (5 MB here: the same path, a tenth of the test time).
+#[test]
+fn a_huge_value_is_shortened_in_the_error() {
+    let name = "q".repeat(5_000_000);
+    let text = GOOD.replacen("  - name: q2", &format!("  - name: {name}"), 1);
+    let errs = parse_str(&text, "rig.yaml").unwrap_err();
+    let rendered = errs.to_string();
+    assert!(rendered.len() < 1000, "{} bytes", rendered.len());
+    assert!(rendered.contains("(5000000 bytes)"), "{rendered}");
 }

@@ -66,6 +66,15 @@ impl Data {
 
 const KNOWN: [&str; 7] = ["t", "deflection", "torque", "pivot_mm", "angle_deg", "motor_position", "reference_torque"];
 
+/// The largest magnitude each column may hold; beyond it a value is a corrupt cell or a unit
+/// mix-up, and it would overflow the fits (a 1e308 torque made the SVD panic). Assumptions,
+/// each far beyond any joint of this class: 1e9 s of recording; two turns of deflection (the
+/// thesis' largest is a few tenths of a radian, figures 3.15-3.26); 1e4 Nm (q2's limit in the
+/// reference config is 40 Nm); 1000 mm of pivot travel (the thesis' settings span 0-50 mm,
+/// sections 3.4-3.5); +-720 degrees of direction; 1e6 rad of motor position (multi-turn motor counts); 1e4 Nm
+/// of reference.
+const PLAUSIBLE_ABS: [f64; 7] = [1e9, 4.0 * core::f64::consts::PI, 1e4, 1000.0, 720.0, 1e6, 1e4];
+
 /// Reads a CSV file.
 pub fn read(path: &Path) -> Result<Data, DataError> {
     let text = std::fs::read_to_string(path).map_err(|e| DataError { file: path.into(), line: 0, column: None, message: format!("cannot read: {e}") })?;
@@ -80,6 +89,8 @@ pub fn read(path: &Path) -> Result<Data, DataError> {
 /// assert_eq!(d.notes, ["column `extra` is not used"]);
 /// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,zero\n", "a.csv".as_ref()).unwrap_err();
 /// assert_eq!(e.to_string(), "a.csv:2: column `torque`: `zero` is not a number");
+/// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1e308\n", "a.csv".as_ref()).unwrap_err();
+/// assert_eq!(e.to_string(), "a.csv:2: column `torque`: 1e308 is implausible: this column holds values within +-10000");
 /// ```
 pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     let err = |line: usize, column: Option<&str>, message: String| DataError { file: file.into(), line, column: column.map(str::to_string), message };
@@ -116,6 +127,9 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
             let v: f64 = cell.parse().map_err(|_| err(i + 1, Some(KNOWN[k]), format!("`{cell}` is not a number")))?;
             if !v.is_finite() {
                 return Err(err(i + 1, Some(KNOWN[k]), format!("`{cell}` is not a finite number")));
+            }
+            if v.abs() > PLAUSIBLE_ABS[k] {
+                return Err(err(i + 1, Some(KNOWN[k]), format!("{cell} is implausible: this column holds values within +-{}", PLAUSIBLE_ABS[k])));
             }
             values[k] = v;
         }

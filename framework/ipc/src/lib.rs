@@ -34,6 +34,12 @@ pub const NAME_LEN: usize = 16;
 // A joint name the config accepts always fits its field with the NUL.
 const _: () = assert!(jointctl_api::MAX_JOINT_NAME < NAME_LEN);
 
+/// Bytes of a device name field (NUL-padded).
+pub const DEVICE_NAME_LEN: usize = 48;
+
+// A device name the config accepts always fits its field with the NUL.
+const _: () = assert!(jointctl_api::MAX_DEVICE_NAME < DEVICE_NAME_LEN);
+
 /// Declares a `#[repr(C)]` `u32` newtype with named values, `ALL` (every value with its name,
 /// for clients in other languages too), `name()` and `from_name()`.
 ///
@@ -142,22 +148,25 @@ named_codes! {
 pub const JITTER_BUCKET_UPPER_US: [u64; 16] =
     [1, 2, 5, 10, 20, 50, 100, 200, 500, 1_000, 2_000, 5_000, 10_000, 20_000, 50_000, u64::MAX];
 
-/// A joint name in a fixed-size, NUL-padded field.
+/// A name in a fixed-size, NUL-padded field of `N` bytes ([`NAME_LEN`] for joints,
+/// [`DEVICE_NAME_LEN`] for devices); at most `N - 1` bytes are kept.
 ///
 /// ```
-/// let n = jointctl_ipc::encode_name("q2");
+/// let n: [u8; jointctl_ipc::NAME_LEN] = jointctl_ipc::encode_name("q2");
 /// assert_eq!(jointctl_ipc::decode_name(&n), "q2");
+/// let d: [u8; jointctl_ipc::DEVICE_NAME_LEN] = jointctl_ipc::encode_name("enc_shoulder_pulley_a");
+/// assert_eq!(jointctl_ipc::decode_name(&d), "enc_shoulder_pulley_a");
 /// ```
-pub fn encode_name(name: &str) -> [u8; NAME_LEN] {
-    let mut out = [0u8; NAME_LEN];
+pub fn encode_name<const N: usize>(name: &str) -> [u8; N] {
+    let mut out = [0u8; N];
     // The last byte stays NUL: readers may treat the field as a C string.
-    jointctl_api::abi::copy_utf8_prefix(&mut out[..NAME_LEN - 1], name);
+    jointctl_api::abi::copy_utf8_prefix(&mut out[..N - 1], name);
     out
 }
 
 /// The text of a fixed-size name field.
-pub fn decode_name(bytes: &[u8; NAME_LEN]) -> &str {
-    let end = bytes.iter().position(|b| *b == 0).unwrap_or(NAME_LEN);
+pub fn decode_name<const N: usize>(bytes: &[u8; N]) -> &str {
+    let end = bytes.iter().position(|b| *b == 0).unwrap_or(N);
     core::str::from_utf8(&bytes[..end]).unwrap_or("?")
 }
 
@@ -306,8 +315,8 @@ pub const MAX_DEVICES: usize = 32;
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
 #[repr(C)]
 pub struct DeviceDiagnostics {
-    /// NUL-padded device name.
-    pub name: [u8; NAME_LEN],
+    /// NUL-padded device name, whole (see [`jointctl_api::MAX_DEVICE_NAME`]).
+    pub name: [u8; DEVICE_NAME_LEN],
     /// Cycles in which nothing arrived (lost or late frames).
     pub missing: u64,
     /// Frames that failed their checks (parity, error flag, silent node).
@@ -324,13 +333,13 @@ pub struct DeviceDiagnostics {
 impl DeviceDiagnostics {
     /// An unnamed entry.
     pub const EMPTY: DeviceDiagnostics =
-        DeviceDiagnostics { name: [0; NAME_LEN], missing: 0, invalid: 0, implausible: 0, emcy: 0, flags: 0, _reserved: 0 };
+        DeviceDiagnostics { name: [0; DEVICE_NAME_LEN], missing: 0, invalid: 0, implausible: 0, emcy: 0, flags: 0, _reserved: 0 };
 }
 
 /// Loop health, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.Diagnostics.v2")]
+#[type_name("jointctl.Diagnostics.v3")]
 pub struct Diagnostics {
     /// Cycle counter.
     pub cycle: u64,

@@ -160,11 +160,16 @@ pub struct DofLimits {
     pub position_rad: [f64; 2],
     /// Largest |torque reference| [Nm].
     pub torque_nm: f64,
+    /// Largest joint velocity a set-point may ask for [rad/s]: the set-point never moves
+    /// faster (with `max_setpoint_rate_rad_s`, the lower of the two counts) and a trajectory's
+    /// velocity feed-forward is clamped to it.
+    pub velocity_rad_s: f64,
 }
 
 impl DofLimits {
     /// No limits.
-    pub const NONE: DofLimits = DofLimits { position_rad: [f64::NEG_INFINITY, f64::INFINITY], torque_nm: f64::INFINITY };
+    pub const NONE: DofLimits =
+        DofLimits { position_rad: [f64::NEG_INFINITY, f64::INFINITY], torque_nm: f64::INFINITY, velocity_rad_s: f64::INFINITY };
 }
 
 /// What is wrong with a [`ControllerConfig`]; [`field`](Self::field) is the YAML path below
@@ -375,7 +380,7 @@ impl JointController {
             self.last_setpoint = None;
             return Output::HOLD;
         };
-        let (mut target, velocity, feedback, tau_ref) = match self.mode {
+        let (mut target, mut velocity, feedback, tau_ref) = match self.mode {
             Mode::Hold => {
                 self.last_setpoint = None;
                 return Output::HOLD;
@@ -406,10 +411,16 @@ impl JointController {
             self.events.setpoint_clamps += 1;
             clamped = true;
         }
-        let step = self.config.max_setpoint_rate_rad_s * dt_s;
+        let rate = self.config.max_setpoint_rate_rad_s.min(self.limits.velocity_rad_s);
+        let step = rate * dt_s;
         let from = self.last_setpoint.unwrap_or(q);
         if (target - from).abs() > step {
             target = from + step.copysign(target - from);
+            self.events.rate_limited += 1;
+            clamped = true;
+        }
+        if velocity.abs() > self.limits.velocity_rad_s {
+            velocity = self.limits.velocity_rad_s.copysign(velocity);
             self.events.rate_limited += 1;
             clamped = true;
         }
@@ -468,7 +479,7 @@ mod tests {
 
     fn controller(limit_nm: f64) -> JointController {
         let cfg = ControllerConfig { max_setpoint_rate_rad_s: 100.0, ..ControllerConfig::default() };
-        JointController::new(cfg, DofLimits { position_rad: [-1.0, 1.0], torque_nm: limit_nm })
+        JointController::new(cfg, DofLimits { position_rad: [-1.0, 1.0], torque_nm: limit_nm, velocity_rad_s: f64::INFINITY })
     }
 
     fn step_reference(nm: f64) -> Mode {

@@ -276,6 +276,7 @@ impl Arm {
                 let dof_limits = l.map_or(DofLimits::NONE, |l| DofLimits {
                     position_rad: l.position_rad,
                     torque_nm: l.torque_nm.unwrap_or(f64::INFINITY),
+                    velocity_rad_s: l.velocity_rad_s.unwrap_or(f64::INFINITY),
                 });
                 controllers.push(JointController::new(c, dof_limits));
                 limits.push(l);

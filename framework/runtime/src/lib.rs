@@ -19,13 +19,7 @@ pub use arm::{ActivateError, Arm, JointSlot};
 pub use loader::{LoadPluginError, PluginLoader, PluginSource};
 pub use runner::{ArmPublisher, ControlLoop, RunError, RunOptions, RunReport, run};
 
-use jointctl_config::{ConfigErrors, LoadedConfig};
-
-/// Loads the plugins of a config and builds its arm on a HAL with no hardware behind it, to
-/// validate plugins, parameters and wiring without the buses (`jointctl check`).
-pub fn build_arm_for_check(loaded: &LoadedConfig, loader: &PluginLoader) -> Result<Arm, ConfigErrors> {
-    Arm::build(loaded, loader, Box::new(jointctl_hal::NullHal))
-}
+use jointctl_config::LoadedConfig;
 
 /// A plugin loader with the config's `plugin_dirs` (relative to the config file) searched first.
 pub fn loader_for(loaded: &LoadedConfig) -> PluginLoader {

@@ -116,7 +116,7 @@ fn main() -> ExitCode {
                 Ok(w) => w,
                 Err(e) => return fail_err(e),
             };
-            match jointctl_runtime::build_arm_for_check(&loaded, &loader) {
+            match jointctl_backends::build_arm_for_check(&loaded, &loader) {
                 Ok(arm) => {
                     println!("{}: arm `{}` OK, {} Hz, {} joint(s):", config.display(), arm.name, arm.rate_hz, arm.dof_names.len());
                     for slot in &arm.slots {
