@@ -291,3 +291,46 @@ fn check_refuses_what_run_refuses() {
     assert_eq!(message(&check_err), message(&run_err));
     assert!(check_err.contains("joints[1].sim"), "{check_err}");
 }
+
+/// Finding: 16 idle clients locked out `jointctl cmd stop` (`ExceedsMaxSupportedClients`),
+/// 16 idle subscribers locked out `inspect`. Pass: with every client slot taken, `cmd stop`
+/// still stops the runtime (it signals it) and the runtime ends cleanly, joints held; with
+/// every subscriber slot taken, `inspect` says which limit to raise; and `ipc.max_subscribers`
+/// in the YAML raises it.
+#[test]
+fn idle_clients_cannot_lock_out_stop_and_the_limits_come_from_yaml() {
+    let (arm, yaml) = write_rig("lockout", 100.0);
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(&yaml, jointctl_tests::yaml_with(&text, &[jointctl_tests::Edit::Set("ipc", serde_yaml::from_str("{max_clients: 3, max_subscribers: 2}").unwrap())])).unwrap();
+    let mut run = spawn_run(&yaml, &["--duration", "30"]);
+    let node = jointctl_ipc::create_node(None, &format!("lockout-{}", std::process::id())).unwrap();
+    let names = jointctl_ipc::ServiceNames::for_arm(&arm);
+    let t = Instant::now();
+    let state = loop {
+        if let Ok(s) = jointctl_ipc::joint_state_service(&node, &names.joint_state) {
+            break s;
+        }
+        assert!(t.elapsed() < Duration::from_secs(10), "the arm never came up");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    // Idle subscribers take every slot: inspect is refused with the limit's name.
+    let idle_subs: Vec<_> = (0..2).map(|_| state.subscriber_builder().create().unwrap()).collect();
+    let out = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--count", "1", "--timeout", "2"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("every subscriber slot") && err.contains("ipc.max_subscribers"), "{err}");
+    drop(idle_subs);
+    // Idle clients take every slot: a command is refused with the limit's name, a stop is not.
+    let command = jointctl_ipc::command_service(&node, &jointctl_ipc::command_service_name(&arm), None).unwrap();
+    let idle_clients: Vec<_> = (0..3).map(|_| command.client_builder().create().unwrap()).collect();
+    let out = Command::new(jointctl()).args(["cmd", "--arm", &arm, "hold"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("ipc.max_clients"), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = Command::new(jointctl()).args(["cmd", "--arm", &arm, "stop"]).output().unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{said}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(said.contains(&format!("sent SIGTERM to the runtime, process {}", run.id())), "{said}");
+    let status = wait_with_timeout(&mut run, Duration::from_secs(5)).expect("the runtime stops");
+    let log = stderr_of(&mut run);
+    assert!(status.success() && log.contains("loop stopped, joints held") && log.contains("signal=SIGTERM"), "{log}");
+    drop(idle_clients);
+}

@@ -90,6 +90,11 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             err(format!("joints[{j}].budget_us"), format!("must be > 0 and at most the period ({} us), got {b}", 1e6 / c.rate_hz));
         }
     }
+    for (name, v) in [("max_subscribers", c.ipc.max_subscribers), ("max_clients", c.ipc.max_clients)] {
+        if !(1..=256).contains(&v) {
+            err(format!("ipc.{name}"), format!("must be 1-256, got {v}"));
+        }
+    }
     if let Some(d) = &c.ipc.domain
         && !valid_name(d, 32)
     {

@@ -468,6 +468,14 @@ pub enum IpcSetupError {
         /// iceoryx2's reason.
         source: PublishSubscribeOpenOrCreateError,
     },
+    /// A published service could not be opened by a reader (usually: no runtime runs the arm).
+    #[error("cannot open service `{service}` (is `jointctl run` running this arm in this domain?)")]
+    OpenPublishSubscribe {
+        /// Service name.
+        service: String,
+        /// iceoryx2's reason.
+        source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError,
+    },
     /// The command service could not be created.
     #[error("cannot create service `{service}`")]
     CreateRequestResponse {
@@ -535,18 +543,41 @@ fn service_name(name: &str) -> Result<ServiceName, IpcSetupError> {
     ServiceName::new(name).map_err(|source| IpcSetupError::ServiceName { service: name.to_string(), source })
 }
 
+/// How many ports the runtime's services admit (the YAML `ipc` section).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PortLimits {
+    /// Subscribers of each published service.
+    pub max_subscribers: usize,
+    /// Clients of the command service.
+    pub max_clients: usize,
+}
+
+impl Default for PortLimits {
+    fn default() -> Self {
+        PortLimits { max_subscribers: 16, max_clients: 16 }
+    }
+}
+
 macro_rules! service_opener {
-    ($fn:ident, $ty:ty, $doc:literal) => {
-        #[doc = $doc]
-        ///
-        /// One publisher (a second runtime of the same arm is refused), up to 16 subscribers,
-        /// the last sample kept for late subscribers, and overflow that drops the oldest sample
-        /// in a slow subscriber's buffer.
-        pub fn $fn(node: &Node<ipc::Service>, name: &str) -> Result<PortFactory<ipc::Service, $ty, ()>, IpcSetupError> {
+    ($open:ident, $create:ident, $ty:ty, $what:literal) => {
+        #[doc = concat!("Opens an arm's ", $what, " service as a reader: it must exist (a runtime created it), and")]
+        /// nothing is required of its limits, so a reader works with whatever the arm's YAML set.
+        pub fn $open(node: &Node<ipc::Service>, name: &str) -> Result<PortFactory<ipc::Service, $ty, ()>, IpcSetupError> {
+            node.service_builder(&service_name(name)?)
+                .publish_subscribe::<$ty>()
+                .open()
+                .map_err(|source| IpcSetupError::OpenPublishSubscribe { service: name.to_string(), source })
+        }
+
+        #[doc = concat!("Creates (or re-opens) an arm's ", $what, " service for the runtime: one publisher (a")]
+        /// second runtime of the same arm is refused), `limits.max_subscribers` subscribers, the
+        /// last sample kept for late subscribers, and overflow that drops the oldest sample in a
+        /// slow subscriber's buffer.
+        pub fn $create(node: &Node<ipc::Service>, name: &str, limits: PortLimits) -> Result<PortFactory<ipc::Service, $ty, ()>, IpcSetupError> {
             node.service_builder(&service_name(name)?)
                 .publish_subscribe::<$ty>()
                 .max_publishers(1)
-                .max_subscribers(16)
+                .max_subscribers(limits.max_subscribers)
                 .history_size(1)
                 .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
                 .enable_safe_overflow(true)
@@ -556,8 +587,8 @@ macro_rules! service_opener {
     };
 }
 
-service_opener!(joint_state_service, ArmState, "Opens (or creates) an arm's joint-state service.");
-service_opener!(diagnostics_service, Diagnostics, "Opens (or creates) an arm's diagnostics service.");
+service_opener!(joint_state_service, create_joint_state_service, ArmState, "joint-state");
+service_opener!(diagnostics_service, create_diagnostics_service, Diagnostics, "diagnostics");
 
 /// Most trajectory points one command carries.
 pub const MAX_COMMAND_POINTS: usize = 64;
@@ -661,24 +692,24 @@ pub fn command_service_name(arm: &str) -> String {
     format!("{arm}/command")
 }
 
-/// Opens an arm's command service. The runtime creates it (`create = true`); a client only opens
-/// it, so that "no runtime is running" is an error instead of a service nobody serves.
+/// Opens an arm's command service. The runtime creates it (`Some(limits)`); a client only opens
+/// it (`None`), requiring nothing of its limits, so that "no runtime is running" is an error
+/// instead of a service nobody serves.
 pub fn command_service(
     node: &Node<ipc::Service>,
     name: &str,
-    create: bool,
+    create: Option<PortLimits>,
 ) -> Result<iceoryx2::service::port_factory::request_response::PortFactory<ipc::Service, CommandRequest, (), CommandResponse, ()>, IpcSetupError> {
-    let builder = node
-        .service_builder(&service_name(name)?)
-        .request_response::<CommandRequest, CommandResponse>()
-        .max_servers(1)
-        .max_clients(16)
-        .max_active_requests_per_client(4)
-        .max_response_buffer_size(4);
+    let builder = node.service_builder(&service_name(name)?).request_response::<CommandRequest, CommandResponse>();
     let service = || name.to_string();
-    if create {
-        builder.open_or_create().map_err(|source| IpcSetupError::CreateRequestResponse { service: service(), source })
-    } else {
-        builder.open().map_err(|source| IpcSetupError::OpenRequestResponse { service: service(), source })
+    match create {
+        Some(limits) => builder
+            .max_servers(1)
+            .max_clients(limits.max_clients)
+            .max_active_requests_per_client(4)
+            .max_response_buffer_size(4)
+            .open_or_create()
+            .map_err(|source| IpcSetupError::CreateRequestResponse { service: service(), source }),
+        None => builder.open().map_err(|source| IpcSetupError::OpenRequestResponse { service: service(), source }),
     }
 }

@@ -75,3 +75,40 @@ impl ArmLock {
         &self.path
     }
 }
+
+/// The process holding arm `arm`'s lock in `dir`, if a runtime holds it: the lock is tried, not
+/// trusted from the file alone (a pid left by a crashed runtime may belong to another process
+/// by now).
+///
+/// ```
+/// let dir = std::env::temp_dir().join(format!("holder-doc-{}", std::process::id()));
+/// assert_eq!(jointctl_runtime::lock::holder(&dir, "doc-arm"), None);
+/// let lock = jointctl_runtime::lock::ArmLock::acquire(&dir, "doc-arm").unwrap();
+/// // flock locks belong to the open file: a second open sees it held, even in this process.
+/// assert_eq!(jointctl_runtime::lock::holder(&dir, "doc-arm"), Some(std::process::id()));
+/// drop(lock);
+/// ```
+pub fn holder(dir: &Path, arm: &str) -> Option<u32> {
+    let mut file = std::fs::File::open(dir.join(format!("{arm}.lock"))).ok()?;
+    // SAFETY: flock on a file descriptor this function owns.
+    if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_SH | libc::LOCK_NB) } == 0 {
+        // Nobody holds it (dropping the file releases the shared lock just taken).
+        return None;
+    }
+    let mut text = String::new();
+    file.read_to_string(&mut text).ok()?;
+    text.trim().parse().ok()
+}
+
+/// Asks the runtime holding arm `arm`'s lock to stop with SIGTERM (it holds the joints,
+/// publishes a final sample and releases shared memory, as for every terminating signal).
+/// The path `jointctl cmd stop` takes when the command service has no free client slot, so
+/// that idle clients can never lock out a stop. Returns the runtime's process id.
+pub fn signal_stop(dir: &Path, arm: &str) -> Result<u32, std::io::Error> {
+    let pid = holder(dir, arm).ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, format!("no runtime holds the lock of arm `{arm}`")))?;
+    // SAFETY: kill has no memory-safety preconditions.
+    if unsafe { libc::kill(pid as libc::pid_t, libc::SIGTERM) } != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(pid)
+}

@@ -214,19 +214,19 @@ struct PublisherPorts {
 impl PublisherPorts {
     /// Creates the arm's node and services; a taken publisher or server slot means another
     /// runtime runs this arm.
-    fn open(domain: Option<&str>, arm_name: &str) -> Result<Self, RunError> {
+    fn open(domain: Option<&str>, arm_name: &str, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
         let node = jointctl_ipc::create_node(domain, &format!("jointctl-run-{arm_name}"))?;
         let names = ServiceNames::for_arm(arm_name);
-        let state = jointctl_ipc::joint_state_service(&node, &names.joint_state)?
+        let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.joint_state, e))?;
-        let diagnostics = jointctl_ipc::diagnostics_service(&node, &names.diagnostics)?
+        let diagnostics = jointctl_ipc::create_diagnostics_service(&node, &names.diagnostics, limits)?
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
         let command_name = jointctl_ipc::command_service_name(arm_name);
-        let server = jointctl_ipc::command_service(&node, &command_name, true)?
+        let server = jointctl_ipc::command_service(&node, &command_name, Some(limits))?
             .server_builder()
             .create()
             .map_err(|e| port_error(arm_name, &command_name, e))?;
@@ -289,6 +289,12 @@ impl ArmPublisher {
     /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs) on a
     /// publisher thread, and returns once they exist.
     pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
+        Self::with_limits(arm, domain, jointctl_ipc::PortLimits::default())
+    }
+
+    /// [`ArmPublisher::new`] admitting `limits` subscribers and command clients (the YAML's
+    /// `ipc.max_subscribers`, `ipc.max_clients`).
+    pub fn with_limits(arm: &Arm, domain: Option<&str>, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
         let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
         let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
         let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
@@ -301,7 +307,7 @@ impl ArmPublisher {
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
             .spawn(move || {
-                let ports = match PublisherPorts::open(domain.as_deref(), &arm_name) {
+                let ports = match PublisherPorts::open(domain.as_deref(), &arm_name, limits) {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(()));
                         ports

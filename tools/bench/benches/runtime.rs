@@ -173,7 +173,7 @@ fn main() {
         let samples = if quick { 1_000 } else { 10_000 };
         let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
         let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
-        let publisher = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().publisher_builder().create().unwrap();
+        let publisher = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, Default::default()).unwrap().publisher_builder().create().unwrap();
         let (stop, subscriber) = latency_subscriber("bench-ipc");
         std::thread::sleep(Duration::from_millis(200));
         let mut state = jointctl_ipc::ArmState::EMPTY;

@@ -185,11 +185,19 @@ pub fn run(args: CmdArgs) -> ExitCode {
         Err(e) => return crate::fail_err(e),
     };
     let name = jointctl_ipc::command_service_name(&args.arm);
-    let Ok(service) = jointctl_ipc::command_service(&node, &name, false) else {
+    let Ok(service) = jointctl_ipc::command_service(&node, &name, None) else {
         return crate::fail(format!("no runtime is running arm `{}` (no service `{name}`): start `jointctl run`", args.arm));
     };
+    let is_stop = matches!(args.command, Command::Stop);
     let client = match service.client_builder().create() {
         Ok(c) => c,
+        Err(iceoryx2::service::port_factory::client::ClientCreateError::ExceedsMaxSupportedClients) => {
+            let why = format!("every client slot of `{name}` is taken (the YAML's ipc.max_clients)");
+            if is_stop {
+                return stop_by_signal(&args, &why);
+            }
+            return crate::fail(format!("{why}: close idle clients or raise the limit"));
+        }
         Err(e) => return crate::fail(format!("cannot connect to `{name}`: {e:?}")),
     };
     let pending = match client.send_copy(req) {
@@ -209,10 +217,27 @@ pub fn run(args: CmdArgs) -> ExitCode {
                 };
             }
             Ok(None) if start.elapsed() < Duration::from_secs_f64(args.timeout) => std::thread::sleep(Duration::from_millis(1)),
+            Ok(None) if is_stop => return stop_by_signal(&args, &format!("no answer within {} s", args.timeout)),
             Ok(None) => {
                 return crate::fail(format!("no answer from arm `{}` within {} s (is its runtime running?)", args.arm, args.timeout));
             }
             Err(e) => return crate::fail(format!("receive failed: {e:?}")),
         }
+    }
+}
+
+/// The stop that no client can lock out: SIGTERM to the process holding the arm's lock, which
+/// holds the joints and ends as for any terminating signal.
+fn stop_by_signal(args: &CmdArgs, why: &str) -> ExitCode {
+    let dir = match jointctl_ipc::lock_dir(args.domain.as_deref()) {
+        Ok(d) => d,
+        Err(e) => return crate::fail_err(e),
+    };
+    match jointctl_runtime::lock::signal_stop(&dir, &args.arm) {
+        Ok(pid) => {
+            println!("accepted: stopping ({why}; sent SIGTERM to the runtime, process {pid})");
+            ExitCode::SUCCESS
+        }
+        Err(e) => crate::fail(format!("{why}, and the runtime could not be signalled: {e}")),
     }
 }

@@ -126,9 +126,28 @@ pub fn run(command: InspectCommand) -> ExitCode {
                 Err(e) => return crate::fail_err(e),
             };
             let names = ServiceNames::for_arm(&arm);
-            let subscriber = match jointctl_ipc::joint_state_service(&node, &names.joint_state)
+            // The runtime may still be starting: wait for its service up to the timeout.
+            let opened = Instant::now();
+            let service = loop {
+                match jointctl_ipc::joint_state_service(&node, &names.joint_state) {
+                    Err(jointctl_ipc::IpcSetupError::OpenPublishSubscribe {
+                        source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist,
+                        ..
+                    }) if opened.elapsed() < Duration::from_secs_f64(timeout) => std::thread::sleep(Duration::from_millis(20)),
+                    other => break other,
+                }
+            };
+            let subscriber = match service
                 .map_err(|e| crate::chain(&e))
-                .and_then(|s| s.subscriber_builder().create().map_err(|e| format!("cannot subscribe to `{}`: {e}", names.joint_state)))
+                .and_then(|s| {
+                    s.subscriber_builder().create().map_err(|e| match e {
+                        iceoryx2::port::subscriber::SubscriberCreateError::ExceedsMaxSupportedSubscribers => format!(
+                            "every subscriber slot of `{}` is taken (the YAML's ipc.max_subscribers): close idle inspectors or raise the limit",
+                            names.joint_state
+                        ),
+                        e => format!("cannot subscribe to `{}`: {e}", names.joint_state),
+                    })
+                })
             {
                 Ok(s) => s,
                 Err(e) => return crate::fail(e),

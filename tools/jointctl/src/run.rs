@@ -75,7 +75,9 @@ pub fn run(a: RunArgs) -> ExitCode {
     let mut publisher = if a.no_ipc {
         None
     } else {
-        match ArmPublisher::new(&arm, domain) {
+        let ipc = &loaded.config.ipc;
+        let limits = jointctl_ipc::PortLimits { max_subscribers: ipc.max_subscribers, max_clients: ipc.max_clients };
+        match ArmPublisher::with_limits(&arm, domain, limits) {
             Ok(p) => Some(p),
             Err(e) => {
                 arm.shutdown();

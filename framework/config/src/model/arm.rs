@@ -62,11 +62,22 @@ impl Default for TimingConfig {
 }
 
 /// Shared-memory settings.
-#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
 pub struct IpcConfig {
     /// iceoryx2 domain (its file prefix). All processes of one arm must use the same; default:
     /// iceoryx2's own default, which its other-language clients also use.
-    #[serde(default)]
     pub domain: Option<String>,
+    /// Most readers of each published service (inspectors, recorders, bridges) at once.
+    /// Assumption: 16, a lab's worth of tools; each costs its buffer of 64 samples.
+    pub max_subscribers: usize,
+    /// Most command clients connected at once. Assumption: 16. `jointctl cmd stop` does not
+    /// need a free one: when every slot is taken it signals the runtime instead.
+    pub max_clients: usize,
+}
+
+impl Default for IpcConfig {
+    fn default() -> Self {
+        IpcConfig { domain: None, max_subscribers: 16, max_clients: 16 }
+    }
 }
