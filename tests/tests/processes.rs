@@ -334,3 +334,77 @@ fn idle_clients_cannot_lock_out_stop_and_the_limits_come_from_yaml() {
     assert!(status.success() && log.contains("loop stopped, joints held") && log.contains("signal=SIGTERM"), "{log}");
     drop(idle_clients);
 }
+
+/// Runs `jointctl` as user `nobody` (uid 65534), as another local user would.
+fn jointctl_as_nobody(args: &[&str]) -> std::process::Output {
+    Command::new("setpriv").args(["--reuid=65534", "--regid=65534", "--clear-groups"]).arg(jointctl()).args(args).output().expect("setpriv")
+}
+
+/// Finding: any local user could lock everyone out of the arm (the domain's management file
+/// in /dev/shm was mode 0666; overwriting it made every `cmd`, `inspect` and `run` fail with
+/// `UnableToGenerateUniqueNodeId`), and another user's permission failures read
+/// "InternalError". Pass, with `ipc: {domain, root}` in the YAML: the root folder is 0700 and
+/// the management segment 0600 while the arm runs; another user can neither overwrite the
+/// segment nor attach, and is told which file belongs to whom; the owner still commands the arm;
+/// a segment another user planted for a domain is refused with that reason. Needs root (to act
+/// as `nobody`), which CI has.
+#[test]
+fn another_user_can_neither_tamper_with_nor_squat_the_shared_memory() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    if jointctl_ipc::access::effective_uid() != 0 {
+        eprintln!("skipped: needs root to act as another user");
+        return;
+    }
+    let (arm, yaml) = write_rig("tamper", 100.0);
+    let domain = format!("sec{}", std::process::id());
+    let root = yaml.parent().unwrap().join("ipc-root");
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    let ipc: serde_yaml::Value = serde_yaml::from_str(&format!("{{domain: {domain}, root: {}}}", root.display())).unwrap();
+    std::fs::write(&yaml, jointctl_tests::yaml_with(&text, &[jointctl_tests::Edit::Set("ipc", ipc)])).unwrap();
+    let mut run = spawn_run(&yaml, &["--duration", "30"]);
+    let scope = jointctl_ipc::IpcScope { domain: Some(domain.clone()), root: Some(root.clone()), group: None };
+    let node = jointctl_ipc::create_node_in(&scope, "tamper-watch").unwrap();
+    let t = Instant::now();
+    while jointctl_ipc::joint_state_service(&node, &jointctl_ipc::ServiceNames::for_arm(&arm).joint_state).is_err() {
+        assert!(t.elapsed() < Duration::from_secs(10), "the arm never came up");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(std::fs::metadata(&root).unwrap().permissions().mode() & 0o777, 0o700, "root folder owner-only");
+    let segment = jointctl_ipc::access::management_segment(&domain).expect("the domain's management segment");
+    assert_eq!(std::fs::metadata(&segment).unwrap().mode() & 0o777, 0o600, "{}", segment.display());
+    // Another user cannot overwrite it...
+    let tamper = Command::new("setpriv")
+        .args(["--reuid=65534", "--regid=65534", "--clear-groups", "sh", "-c"])
+        .arg(format!("printf 0123456789abcdef > {}", segment.display()))
+        .output()
+        .unwrap();
+    assert!(!tamper.status.success(), "another user overwrote {}", segment.display());
+    // ...nor attach, and is told why.
+    let root_arg = root.display().to_string();
+    let out = jointctl_as_nobody(&["inspect", "echo", "--arm", &arm, "--domain", &domain, "--ipc-root", &root_arg, "--count", "1", "--timeout", "1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("{} belongs to uid 0 (mode 0600), this process is uid 65534: permission denied", segment.display())), "{err}");
+    // The owner still commands the arm.
+    let out = Command::new(jointctl()).args(["cmd", "--arm", &arm, "--domain", &domain, "--ipc-root", &root_arg, "hold"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let _ = run.kill();
+    let _ = run.wait();
+    // A segment planted by another user for a domain is refused, with whose it is.
+    let planted_domain = format!("sq{}", std::process::id());
+    let hash_and_rest = segment.file_name().unwrap().to_str().unwrap().strip_prefix(&domain).unwrap().to_string();
+    let planted = std::path::Path::new("/dev/shm").join(format!("{planted_domain}{hash_and_rest}"));
+    let plant = Command::new("setpriv")
+        .args(["--reuid=65534", "--regid=65534", "--clear-groups", "sh", "-c"])
+        .arg(format!("umask 0; printf 0123456789abcdef > {}", planted.display()))
+        .output()
+        .unwrap();
+    assert!(plant.status.success(), "{}", String::from_utf8_lossy(&plant.stderr));
+    let ipc: serde_yaml::Value = serde_yaml::from_str(&format!("{{domain: {planted_domain}, root: {}}}", root.display())).unwrap();
+    std::fs::write(&yaml, jointctl_tests::yaml_with(&text, &[jointctl_tests::Edit::Set("ipc", ipc)])).unwrap();
+    let out = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "3"]).output().unwrap();
+    let _ = std::fs::remove_file(&planted);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("belongs to uid 65534") && err.contains("another user created this domain's management segment"), "{err}");
+}

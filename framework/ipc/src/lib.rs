@@ -15,6 +15,8 @@
 
 #![forbid(unsafe_code)]
 
+pub mod access;
+
 use iceoryx2::config::Config;
 use iceoryx2::node::NodeCreationFailure;
 use iceoryx2::service::service_name::ServiceNameError;
@@ -426,7 +428,7 @@ impl ServiceNames {
 /// assert!(matches!(e, jointctl_ipc::IpcSetupError::Domain { .. }));
 /// assert!(std::error::Error::source(&e).is_some());
 /// ```
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum IpcSetupError {
     /// The iceoryx2 domain name is not usable as a file prefix.
     #[error("iceoryx2 domain `{domain}` is not valid")]
@@ -445,12 +447,26 @@ pub enum IpcSetupError {
         source: SemanticStringError,
     },
     /// The iceoryx2 node could not be created.
-    #[error("cannot create the iceoryx2 node `{node}`")]
+    #[error("cannot create the iceoryx2 node `{node}`{}", .segment.as_ref().map(|s| format!(" (the domain's management segment {s})")).unwrap_or_default())]
     Node {
         /// Node name.
         node: String,
+        /// The domain's management segment with its owner and mode, when it exists (what a
+        /// permission failure is about).
+        segment: Option<String>,
         /// iceoryx2's reason.
         source: NodeCreationFailure,
+    },
+    /// The domain's files are not safe or not accessible to this user.
+    #[error(transparent)]
+    Access(#[from] access::AccessError),
+    /// `ipc.root` is not a path iceoryx2 accepts.
+    #[error("`{}` is not a usable shared-memory root (ipc.root)", .root.display())]
+    Root {
+        /// The root.
+        root: std::path::PathBuf,
+        /// iceoryx2's reason.
+        source: iceoryx2::prelude::SemanticStringError,
     },
     /// The service name is not valid.
     #[error("`{service}` is not a valid iceoryx2 service name")]
@@ -494,12 +510,42 @@ pub enum IpcSetupError {
     },
 }
 
+/// Where an arm's shared memory lives: its iceoryx2 domain (file prefix), the root folder of
+/// its files (`None`: iceoryx2's default, `/tmp/iceoryx2/`) and the group given that folder
+/// when it is created. Every process of one arm must use the same (the YAML's `ipc` section).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct IpcScope {
+    /// iceoryx2 domain; `None`: iceoryx2's default prefix `iox2_`.
+    pub domain: Option<String>,
+    /// Root folder of the domain's files.
+    pub root: Option<std::path::PathBuf>,
+    /// Group given the root folder when it is created (mode 0750 instead of 0700).
+    pub group: Option<String>,
+}
+
+impl IpcScope {
+    /// The default root with this domain.
+    pub fn domain(domain: Option<&str>) -> Self {
+        IpcScope { domain: domain.map(str::to_string), ..Default::default() }
+    }
+}
+
 /// The iceoryx2 configuration of a domain: iceoryx2's defaults, with the file prefix set to
 /// `domain` when given. Built in code so that no process depends on its working directory.
 pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
+    iceoryx2_config_in(&IpcScope::domain(domain))
+}
+
+/// [`iceoryx2_config`] for a whole scope (domain and root).
+pub fn iceoryx2_config_in(scope: &IpcScope) -> Result<Config, IpcSetupError> {
     let mut config = Config::default();
-    if let Some(d) = domain {
-        config.global.prefix = d.try_into().map_err(|source| IpcSetupError::Domain { domain: d.to_string(), source })?;
+    if let Some(d) = &scope.domain {
+        config.global.prefix = d.as_str().try_into().map_err(|source| IpcSetupError::Domain { domain: d.to_string(), source })?;
+    }
+    if let Some(root) = &scope.root {
+        let text = root.to_string_lossy();
+        let path = iceoryx2::prelude::Path::new(text.as_bytes()).map_err(|source| IpcSetupError::Root { root: root.clone(), source })?;
+        config.global.set_root_path(&path);
     }
     Ok(config)
 }
@@ -512,25 +558,66 @@ pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
 /// assert!(dir.ends_with("jointctl/lab"));
 /// ```
 pub fn lock_dir(domain: Option<&str>) -> Result<std::path::PathBuf, IpcSetupError> {
-    let config = iceoryx2_config(domain)?;
+    lock_dir_in(&IpcScope::domain(domain))
+}
+
+/// [`lock_dir`] for a whole scope.
+pub fn lock_dir_in(scope: &IpcScope) -> Result<std::path::PathBuf, IpcSetupError> {
+    let config = iceoryx2_config_in(scope)?;
     let prefix = config.global.prefix.to_string();
     Ok(std::path::PathBuf::from(config.global.root_path().to_string()).join("jointctl").join(prefix.trim_end_matches('_')))
 }
 
+/// Creates the scope's root folder closed to other users, or checks the one that exists (see
+/// [`access::secure_root`]); returns it. The runtime calls it before anything else of the arm is
+/// created; [`create_node_in`] calls it too.
+pub fn prepare_root(scope: &IpcScope) -> Result<std::path::PathBuf, IpcSetupError> {
+    let config = iceoryx2_config_in(scope)?;
+    let root = std::path::PathBuf::from(config.global.root_path().to_string());
+    access::secure_root(&root, scope.group.as_deref())?;
+    Ok(root)
+}
+
 /// An iceoryx2 node in the arm's domain, with iceoryx2's own signal handling off (the runtime
 /// owns its signals and timing). Dead nodes of crashed processes are cleaned up.
+///
+/// ```
+/// let e = jointctl_ipc::create_node(Some("bad/domain"), "n").unwrap_err();
+/// assert!(e.to_string().contains("bad/domain"));
+/// ```
 pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service>, IpcSetupError> {
+    create_node_in(&IpcScope::domain(domain), name)
+}
+
+/// [`create_node`] in a whole scope. The root folder and the domain's management segment are
+/// checked and closed to other users around iceoryx2 (see [`access`]).
+pub fn create_node_in(scope: &IpcScope, name: &str) -> Result<Node<ipc::Service>, IpcSetupError> {
     // iceoryx2 warns that it found no config file, which is by design here (the config is built
     // in code); its own `IOX2_LOG_LEVEL` still overrides this.
     set_log_level_from_env_or(LogLevel::Error);
-    let config = iceoryx2_config(domain)?;
+    let config = iceoryx2_config_in(scope)?;
+    prepare_root(scope)?;
+    let prefix = config.global.prefix.to_string();
+    access::check_management_segment(&prefix)?;
     let node_name = NodeName::new(name).map_err(|source| IpcSetupError::NodeName { node: name.to_string(), source })?;
     let node = NodeBuilder::new()
         .name(&node_name)
         .config(&config)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(|source| IpcSetupError::Node { node: name.to_string(), source })?;
+        .map_err(|source| {
+            // iceoryx2 says "InternalError" or "UnableToGenerateUniqueNodeId" without a path; the
+            // management segment is the file a failing node creation could not use.
+            let segment = access::management_segment(&prefix).map(|p| {
+                use std::os::unix::fs::MetadataExt;
+                let (owner, mode) = std::fs::metadata(&p).map(|m| (m.uid(), m.mode() & 0o7777)).unwrap_or((u32::MAX, 0));
+                let me = access::effective_uid();
+                let hint = if owner != me && me != 0 { ": permission denied, run as that user" } else { "" };
+                format!("{} belongs to uid {owner} (mode {mode:04o}), this process is uid {me}{hint}", p.display())
+            });
+            IpcSetupError::Node { node: name.to_string(), segment, source }
+        })?;
+    access::close_management_segment(&prefix)?;
     let _ = node.try_cleanup_dead_nodes();
     Ok(node)
 }

@@ -214,8 +214,8 @@ struct PublisherPorts {
 impl PublisherPorts {
     /// Creates the arm's node and services; a taken publisher or server slot means another
     /// runtime runs this arm.
-    fn open(domain: Option<&str>, arm_name: &str, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
-        let node = jointctl_ipc::create_node(domain, &format!("jointctl-run-{arm_name}"))?;
+    fn open(scope: &jointctl_ipc::IpcScope, arm_name: &str, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
+        let node = jointctl_ipc::create_node_in(scope, &format!("jointctl-run-{arm_name}"))?;
         let names = ServiceNames::for_arm(arm_name);
         let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
             .publisher_builder()
@@ -289,12 +289,12 @@ impl ArmPublisher {
     /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs) on a
     /// publisher thread, and returns once they exist.
     pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
-        Self::with_limits(arm, domain, jointctl_ipc::PortLimits::default())
+        Self::with_limits(arm, &jointctl_ipc::IpcScope::domain(domain), jointctl_ipc::PortLimits::default())
     }
 
-    /// [`ArmPublisher::new`] admitting `limits` subscribers and command clients (the YAML's
-    /// `ipc.max_subscribers`, `ipc.max_clients`).
-    pub fn with_limits(arm: &Arm, domain: Option<&str>, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
+    /// [`ArmPublisher::new`] in a whole scope (domain, root), admitting `limits` subscribers and
+    /// command clients (the YAML's `ipc` section).
+    pub fn with_limits(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
         let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
         let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
         let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
@@ -302,12 +302,12 @@ impl ArmPublisher {
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
         let arm_name = arm.name.clone();
-        let domain = domain.map(str::to_string);
+        let scope = scope.clone();
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
             .spawn(move || {
-                let ports = match PublisherPorts::open(domain.as_deref(), &arm_name, limits) {
+                let ports = match PublisherPorts::open(&scope, &arm_name, limits) {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(()));
                         ports

@@ -16,6 +16,9 @@ pub struct CmdArgs {
     /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
     #[arg(long, global = true)]
     domain: Option<String>,
+    /// Shared-memory root of the arm (its YAML `ipc.root`).
+    #[arg(long, global = true, value_name = "DIR")]
+    ipc_root: Option<std::path::PathBuf>,
     /// How long to wait for the runtime's answer [s].
     #[arg(long, global = true, default_value_t = 2.0, value_parser = finite)]
     timeout: f64,
@@ -180,7 +183,7 @@ pub fn run(args: CmdArgs) -> ExitCode {
         Err(e) => return crate::fail(e),
     };
     req.streamed = args.stream as u32;
-    let node = match jointctl_ipc::create_node(args.domain.as_deref(), &format!("jointctl-cmd-{}", std::process::id())) {
+    let node = match jointctl_ipc::create_node_in(&scope(&args), &format!("jointctl-cmd-{}", std::process::id())) {
         Ok(n) => n,
         Err(e) => return crate::fail_err(e),
     };
@@ -229,7 +232,7 @@ pub fn run(args: CmdArgs) -> ExitCode {
 /// The stop that no client can lock out: SIGTERM to the process holding the arm's lock, which
 /// holds the joints and ends as for any terminating signal.
 fn stop_by_signal(args: &CmdArgs, why: &str) -> ExitCode {
-    let dir = match jointctl_ipc::lock_dir(args.domain.as_deref()) {
+    let dir = match jointctl_ipc::lock_dir_in(&scope(args)) {
         Ok(d) => d,
         Err(e) => return crate::fail_err(e),
     };
@@ -240,4 +243,8 @@ fn stop_by_signal(args: &CmdArgs, why: &str) -> ExitCode {
         }
         Err(e) => crate::fail(format!("{why}, and the runtime could not be signalled: {e}")),
     }
+}
+
+fn scope(args: &CmdArgs) -> jointctl_ipc::IpcScope {
+    jointctl_ipc::IpcScope { domain: args.domain.clone(), root: args.ipc_root.clone(), group: None }
 }

@@ -18,6 +18,9 @@ pub enum InspectCommand {
         /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
         #[arg(long)]
         domain: Option<String>,
+        /// Shared-memory root of the arm (its YAML `ipc.root`).
+        #[arg(long, value_name = "DIR")]
+        ipc_root: Option<std::path::PathBuf>,
     },
     /// Print the live joint states of a running arm.
     Echo {
@@ -27,6 +30,9 @@ pub enum InspectCommand {
         /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
         #[arg(long)]
         domain: Option<String>,
+        /// Shared-memory root of the arm (its YAML `ipc.root`).
+        #[arg(long, value_name = "DIR")]
+        ipc_root: Option<std::path::PathBuf>,
         /// One JSON object per sample.
         #[arg(long)]
         json: bool,
@@ -96,8 +102,8 @@ fn human(s: &ArmState) -> String {
 
 pub fn run(command: InspectCommand) -> ExitCode {
     match command {
-        InspectCommand::List { arm, domain } => {
-            let config = match jointctl_ipc::iceoryx2_config(domain.as_deref()) {
+        InspectCommand::List { arm, domain, ipc_root } => {
+            let config = match jointctl_ipc::iceoryx2_config_in(&jointctl_ipc::IpcScope { domain, root: ipc_root, group: None }) {
                 Ok(c) => c,
                 Err(e) => return crate::fail_err(e),
             };
@@ -120,8 +126,9 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        InspectCommand::Echo { arm, domain, json, count, timeout } => {
-            let node = match jointctl_ipc::create_node(domain.as_deref(), &format!("jointctl-inspect-{}", std::process::id())) {
+        InspectCommand::Echo { arm, domain, ipc_root, json, count, timeout } => {
+            let scope = jointctl_ipc::IpcScope { domain, root: ipc_root, group: None };
+            let node = match jointctl_ipc::create_node_in(&scope, &format!("jointctl-inspect-{}", std::process::id())) {
                 Ok(n) => n,
                 Err(e) => return crate::fail_err(e),
             };

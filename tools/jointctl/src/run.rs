@@ -47,8 +47,12 @@ pub fn run(a: RunArgs) -> ExitCode {
         Ok(l) => l,
         Err(e) => return fail_err(e),
     };
-    let domain = loaded.config.ipc.domain.as_deref();
-    let lock_dir = match jointctl_ipc::lock_dir(domain) {
+    let ipc = &loaded.config.ipc;
+    let scope = jointctl_ipc::IpcScope { domain: ipc.domain.clone(), root: ipc.root.clone(), group: ipc.group.clone() };
+    if let Err(e) = jointctl_ipc::prepare_root(&scope) {
+        return fail_err(e);
+    }
+    let lock_dir = match jointctl_ipc::lock_dir_in(&scope) {
         Ok(d) => d,
         Err(e) => return fail_err(e),
     };
@@ -75,9 +79,8 @@ pub fn run(a: RunArgs) -> ExitCode {
     let mut publisher = if a.no_ipc {
         None
     } else {
-        let ipc = &loaded.config.ipc;
         let limits = jointctl_ipc::PortLimits { max_subscribers: ipc.max_subscribers, max_clients: ipc.max_clients };
-        match ArmPublisher::with_limits(&arm, domain, limits) {
+        match ArmPublisher::with_limits(&arm, &scope, limits) {
             Ok(p) => Some(p),
             Err(e) => {
                 arm.shutdown();

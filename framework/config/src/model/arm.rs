@@ -68,6 +68,13 @@ pub struct IpcConfig {
     /// iceoryx2 domain (its file prefix). All processes of one arm must use the same; default:
     /// iceoryx2's own default, which its other-language clients also use.
     pub domain: Option<String>,
+    /// Root folder of the arm's shared-memory files (iceoryx2's `root-path`); default
+    /// `/tmp/iceoryx2/`. Created owner-only (0700, or 0750 with `group`) and refused when another
+    /// user owns it or others may write it, so that no other user can read, create or replace
+    /// the arm's files. Inspectors and `jointctl cmd` take the same with `--ipc-root`.
+    pub root: Option<PathBuf>,
+    /// Group given the root folder when it is created (e.g. `jointctl`): its members may enter it.
+    pub group: Option<String>,
     /// Most readers of each published service (inspectors, recorders, bridges) at once.
     /// Assumption: 16, a lab's worth of tools; each costs its buffer of 64 samples.
     pub max_subscribers: usize,
@@ -78,6 +85,6 @@ pub struct IpcConfig {
 
 impl Default for IpcConfig {
     fn default() -> Self {
-        IpcConfig { domain: None, max_subscribers: 16, max_clients: 16 }
+        IpcConfig { domain: None, root: None, group: None, max_subscribers: 16, max_clients: 16 }
     }
 }
