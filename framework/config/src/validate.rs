@@ -101,6 +101,16 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         err("ipc.domain".into(), format!("`{d}` is not a valid domain: use 1-32 letters, digits, `_` or `-`"));
     }
 
+    let co = &c.hal.canopen;
+    if !(1..=127).contains(&co.host_node_id) {
+        err("hal.canopen.host_node_id".into(), format!("a CANopen node id is 1-127, got {}", co.host_node_id));
+    }
+    if co.host_heartbeat_ms == 0 || co.comm_loss_timeout_ms <= co.host_heartbeat_ms {
+        err(
+            "hal.canopen.comm_loss_timeout_ms".into(),
+            format!("must exceed host_heartbeat_ms ({} ms) > 0, got {} ms", co.host_heartbeat_ms, co.comm_loss_timeout_ms),
+        );
+    }
     // Devices: unique names across all buses; node ids and chip selects unique per bus.
     let mut devices: HashMap<&str, String> = HashMap::new();
     let mut drive_names = HashSet::new();
@@ -132,6 +142,8 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
                 err(format!("{path}.node_id"), format!("a CANopen node id is 1-127, got {}", d.node_id));
             } else if let Some(other) = ids.insert(d.node_id, d.name.as_str()) {
                 err(format!("{path}.node_id"), format!("node id {} is already used by `{other}` on this bus", d.node_id));
+            } else if d.node_id == co.host_node_id {
+                err(format!("{path}.node_id"), format!("node id {} is the host's (hal.canopen.host_node_id)", d.node_id));
             }
         }
     }

@@ -5,8 +5,11 @@
 //! [`Conditioner`], carries its age, and is stale or invalid rather than zero.
 //!
 //! Start-up (blocking, before the loop): per drive, SDO writes of the mode of operation
-//! (0x6060), the heartbeat producer time (0x1017) and SYNC-triggered TPDO1 (0x1800:02 = 1);
-//! then NMT start. In the loop (never blocking): read drains the socket (TPDO1 statusword +
+//! (0x6060), the heartbeat producer time (0x1017), SYNC-triggered TPDO1 (0x1800:02 = 1), the
+//! consumer heartbeat of the host (0x1016:01) and what to do when it stops (0x6007, abort
+//! connection option: quick stop by default); then NMT start. So a host that stalls or dies
+//! cannot leave a drive moving: the drive stops on its own after `comm_loss_timeout_ms`. The
+//! write step sends the host's heartbeat every `host_heartbeat_ms`. In the loop (never blocking): read drains the socket (TPDO1 statusword +
 //! position, heartbeats, EMCY, error frames) and each encoder's pipelined SPI answer; write sends
 //! every drive's RPDO1 (controlword + target) and one SYNC with its counter. The CiA 402 enable
 //! sequence advances one step per cycle, and only once the drive's actual position is known (the
@@ -89,6 +92,9 @@ struct Encoder {
 pub struct HardwareHal {
     t0: Instant,
     mode: DriveMode,
+    host_node_id: u8,
+    host_heartbeat_s: f64,
+    last_host_heartbeat_s: f64,
     buses: Vec<CanBus>,
     encoders: Vec<Encoder>,
 }
@@ -229,6 +235,9 @@ impl HardwareHal {
                 can.sdo_write(i, 0x6060, 0, &[co_cfg.mode.code()], timeout)?;
                 can.sdo_write(i, 0x1017, 0, &d.heartbeat_ms.to_le_bytes(), timeout)?;
                 can.sdo_write(i, 0x1800, 2, &[1], timeout)?;
+                let consumer = (u32::from(co_cfg.host_node_id) << 16) | u32::from(co_cfg.comm_loss_timeout_ms);
+                can.sdo_write(i, 0x1016, 1, &consumer.to_le_bytes(), timeout)?;
+                can.sdo_write(i, 0x6007, 0, &co_cfg.on_comm_loss.code().to_le_bytes(), timeout)?;
             }
             can.send(&co::nmt(co::NmtCommand::Start, 0));
             can.socket.set_nonblocking(true).map_err(|e| HalSetupError::Config { field, message: format!("cannot make the socket non-blocking: {e}") })?;
@@ -267,7 +276,15 @@ impl HardwareHal {
                 });
             }
         }
-        let mut hal = HardwareHal { t0: Instant::now(), mode: co_cfg.mode, buses, encoders };
+        let mut hal = HardwareHal {
+            t0: Instant::now(),
+            mode: co_cfg.mode,
+            host_node_id: co_cfg.host_node_id,
+            host_heartbeat_s: f64::from(co_cfg.host_heartbeat_ms) / 1000.0,
+            last_host_heartbeat_s: f64::NEG_INFINITY,
+            buses,
+            encoders,
+        };
         // Pipelined SPI: the first command's answer arrives with the first read.
         for e in &mut hal.encoders {
             let _ = spi_word(e, as5048::READ_ANGLE);
@@ -355,6 +372,15 @@ impl Hal for HardwareHal {
     fn write(&mut self, frame: &ActuatorFrame, _dt_s: f64) -> Result<(), HalIoError> {
         let mut base = 0;
         let profile = self.mode == DriveMode::ProfilePosition;
+        let now = self.t0.elapsed().as_secs_f64();
+        // The host's heartbeat, which every drive consumes (0x1016): it stops when the loop does.
+        let heartbeat = now - self.last_host_heartbeat_s >= self.host_heartbeat_s;
+        if heartbeat {
+            self.last_host_heartbeat_s = now;
+            for bus in &mut self.buses {
+                bus.send(&co::heartbeat(self.host_node_id, co::nmt_state::OPERATIONAL));
+            }
+        }
         for bus in &mut self.buses {
             for i in 0..bus.drives.len() {
                 let sp = frame.drives[base + i];

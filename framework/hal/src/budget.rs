@@ -1,6 +1,6 @@
 //! How much of a CAN bus one control cycle uses: per drive an RPDO (controlword + target, 6
 //! bytes) and a TPDO (statusword + position, 6 bytes), one SYNC per cycle, and every drive's
-//! heartbeat at its own period. Bit counts are for base-format data frames, without stuffing and
+//! heartbeat at its own period plus the host's (which the drives consume). Bit counts are for base-format data frames, without stuffing and
 //! with worst-case stuffing ([`frame_bits`]); the load and the highest loop rate use the worst
 //! case.
 
@@ -36,18 +36,19 @@ pub struct BusBudget {
 /// ```
 /// let yaml = "arm: a\nrate_hz: 40\nhal: {backend: sim}\nbuses: {can: [{interface: can0, drives: [{name: m, node_id: 1}]}]}\njoints: [{name: q, plugin: rigid}]\n";
 /// let cfg = jointctl_config::parse_str(yaml, "a.yaml").unwrap().config;
-/// let b = jointctl_hal::budget::bus_budget(&cfg.buses.can[0], cfg.rate_hz);
+/// let b = jointctl_hal::budget::bus_budget(&cfg.buses.can[0], cfg.rate_hz, 50);
 /// // RPDO + TPDO (6 bytes: 95..115 bits) + SYNC with counter (1 byte: 55..65 bits).
 /// assert_eq!((b.frames_per_cycle, b.bits_per_cycle, b.bits_per_cycle_min), (3, 295, 245));
 /// ```
-pub fn bus_budget(bus: &CanBusConfig, rate_hz: f64) -> BusBudget {
+pub fn bus_budget(bus: &CanBusConfig, rate_hz: f64, host_heartbeat_ms: u16) -> BusBudget {
     let (pdo_min, pdo_max) = frame_bits(6);
     let (sync_min, sync_max) = frame_bits(1);
     let (_, hb_max) = frame_bits(1);
     let n = bus.drives.len();
     let bits_per_cycle = 2 * n as u32 * pdo_max + sync_max;
     let bits_per_cycle_min = 2 * n as u32 * pdo_min + sync_min;
-    let heartbeats_per_s: f64 = bus.drives.iter().map(|d| 1000.0 / d.heartbeat_ms.max(1) as f64).sum();
+    let heartbeats_per_s: f64 =
+        bus.drives.iter().map(|d| 1000.0 / d.heartbeat_ms.max(1) as f64).sum::<f64>() + 1000.0 / f64::from(host_heartbeat_ms.max(1));
     let heartbeat_bits_per_s = heartbeats_per_s * hb_max as f64;
     let bitrate = bus.bitrate as f64;
     let load = (bits_per_cycle as f64 * rate_hz + heartbeat_bits_per_s) / bitrate * 100.0;
@@ -66,7 +67,7 @@ pub fn bus_budget(bus: &CanBusConfig, rate_hz: f64) -> BusBudget {
 
 /// The budgets of every CAN bus of an arm.
 pub fn budgets(config: &ArmConfig) -> Vec<BusBudget> {
-    config.buses.can.iter().map(|b| bus_budget(b, config.rate_hz)).collect()
+    config.buses.can.iter().map(|b| bus_budget(b, config.rate_hz, config.hal.canopen.host_heartbeat_ms)).collect()
 }
 
 impl std::fmt::Display for BusBudget {

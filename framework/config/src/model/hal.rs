@@ -44,6 +44,19 @@ pub struct CanopenConfig {
     pub heartbeat_timeout_s: Option<f64>,
     /// SYNC counter overflow (0x1019); 0 sends SYNC without a counter. Assumption: 240.
     pub sync_counter_overflow: u8,
+    /// The host's own CANopen node id: it produces a heartbeat under this id, which every drive
+    /// consumes (0x1016). Assumption: 127, the highest id, which no drive uses.
+    pub host_node_id: u8,
+    /// Period of the host's heartbeat [ms] (sent from the loop's write step). Assumption: 50 ms,
+    /// two cycles at the thesis' 40 Hz.
+    pub host_heartbeat_ms: u16,
+    /// A drive that hears no host heartbeat for this long acts on its own (`on_comm_loss`) [ms]:
+    /// a host that stalls or dies cannot leave a drive moving. Assumption: 150 ms, three host
+    /// heartbeats (CiA 301 practice: the consumer time well above the producer period).
+    pub comm_loss_timeout_ms: u16,
+    /// What a drive does on its own when the host falls silent (0x6007, abort connection
+    /// option code): `quick_stop` (decelerate and hold, the default), `disable_voltage` or `fault`.
+    pub on_comm_loss: CommLossAction,
 }
 
 impl Default for CanopenConfig {
@@ -53,6 +66,34 @@ impl Default for CanopenConfig {
             sdo_timeout_s: 0.2,
             heartbeat_timeout_s: None,
             sync_counter_overflow: 240,
+            host_node_id: 127,
+            host_heartbeat_ms: 50,
+            comm_loss_timeout_ms: 150,
+            on_comm_loss: CommLossAction::default(),
+        }
+    }
+}
+
+/// A drive's own reaction when the host falls silent (CiA 402 object 0x6007).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CommLossAction {
+    /// Fault (0x6007 = 1).
+    Fault,
+    /// Disable voltage: the motor coasts (0x6007 = 2).
+    DisableVoltage,
+    /// Quick stop: decelerate and hold (0x6007 = 3).
+    #[default]
+    QuickStop,
+}
+
+impl CommLossAction {
+    /// The 0x6007 value.
+    pub fn code(self) -> i16 {
+        match self {
+            CommLossAction::Fault => 1,
+            CommLossAction::DisableVoltage => 2,
+            CommLossAction::QuickStop => 3,
         }
     }
 }
