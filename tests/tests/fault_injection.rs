@@ -116,3 +116,84 @@ fn diagnostics_carry_whole_device_names() {
     assert_eq!(published, expected);
     let _ = lp.finish();
 }
+
+/// The rig at 100 Hz on a shared simulator, so that a test can inject faults into it.
+fn rig_on_shared_sim(name: &str) -> (jointctl_runtime::Arm, jointctl_sim::SharedSim) {
+    let loaded = jointctl_config::parse_str(&rig_yaml(name, 100.0, ""), "rig.yaml").unwrap();
+    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
+    let mut arm = jointctl_runtime::Arm::build(&loaded, &PluginLoader::new([]), Box::new(sim.clone())).unwrap();
+    arm.activate().unwrap();
+    (arm, sim)
+}
+
+fn inject(sim: &jointctl_sim::SharedSim, fault: Option<jointctl_sim::EncoderFault>) {
+    sim.0.lock().unwrap().inject_encoder_fault(0, fault);
+}
+
+/// Fault suite: a silent or corrupt encoder. Pass: the joint's reading is never used as a value
+/// once unusable: within its maximum age (0.1 s, 10 cycles at 100 Hz) plus one cycle the joint
+/// is held (hold set-points, `held` published, invalid cycles counted), its drive stays within
+/// 1 mrad while held, and it resumes to its target when the encoder answers again.
+#[test]
+fn a_silent_or_corrupt_encoder_holds_its_joint_within_its_maximum_age() {
+    for fault in [jointctl_sim::EncoderFault::Silent, jointctl_sim::EncoderFault::Corrupt] {
+        let (mut arm, sim) = rig_on_shared_sim("silent-encoder");
+        arm.set_mode(0, position(0.3));
+        for i in 0..20 {
+            arm.step(i as f64 * 0.01);
+        }
+        inject(&sim, Some(fault));
+        let mut held_after = None;
+        for i in 20..60 {
+            arm.step(i as f64 * 0.01);
+            if arm.slots[0].held && held_after.is_none() {
+                held_after = Some(i - 20);
+                assert_eq!(arm.last_setpoints()[0], jointctl_api::MotorSetpoint::HOLD);
+            }
+        }
+        let held_after = held_after.unwrap_or_else(|| panic!("{fault:?}: the joint was never held"));
+        assert!(held_after <= 11, "{fault:?}: held only after {held_after} cycles");
+        let drive_before = sim.with(|s| s.drives()[0].position);
+        for i in 60..80 {
+            arm.step(i as f64 * 0.01);
+        }
+        let moved = sim.with(|s| s.drives()[0].position) - drive_before;
+        // The drive holds its last target; its own position loop still settles (43 urad seen).
+        assert!(moved.abs() < 1e-3, "{fault:?}: the held drive moved {moved} rad");
+        assert!(arm.slots[0].invalid_cycles >= 20);
+        inject(&sim, None);
+        for i in 80..400 {
+            arm.step(i as f64 * 0.01);
+        }
+        assert!(!arm.slots[0].held && (arm.states[0].position().unwrap() - 0.3).abs() < 2e-3, "{fault:?}: resumed: {:?}", arm.states[0]);
+    }
+}
+
+/// Fault suite: an implausible encoder (a 1 rad jump). Pass: the jump never reaches the
+/// observed position (it stays within 5 mrad of the truth), the device's implausible counter
+/// counts it, and a jump that persists holds the joint within its maximum age plus one cycle.
+#[test]
+fn an_implausible_encoder_jump_never_reaches_the_state() {
+    let (mut arm, sim) = rig_on_shared_sim("jumping-encoder");
+    arm.set_mode(0, position(0.3));
+    for i in 0..50 {
+        arm.step(i as f64 * 0.01);
+    }
+    inject(&sim, Some(jointctl_sim::EncoderFault::Offset(1.0)));
+    let mut held_after = None;
+    for i in 50..80 {
+        arm.step(i as f64 * 0.01);
+        let truth = sim.with(|s| s.drives()[0].position);
+        if let Some(q) = arm.states[0].position() {
+            assert!((q - truth).abs() < 5e-3, "cycle {i}: observed {q}, truth {truth}");
+        }
+        if arm.slots[0].held && held_after.is_none() {
+            held_after = Some(i - 50);
+        }
+    }
+    assert!(held_after.is_some_and(|c| c <= 11), "held after {held_after:?} cycles");
+    let mut health = vec![jointctl_hal::DeviceHealth::default(); 32];
+    arm.device_health(&mut health);
+    let e0 = arm.device_names().position(|n| n == "e0").unwrap();
+    assert!(health[e0].implausible >= 10, "{:?}", health[e0]);
+}

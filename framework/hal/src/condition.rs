@@ -6,7 +6,10 @@
 //! - a frame that failed its checks (parity, error flag) → counted, last good value stale;
 //! - a value that jumps further than the joint can move in the elapsed time, or an exact zero
 //!   after readings away from zero (an all-zero frame passes the parity check) → implausible:
-//!   counted, last good value stale.
+//!   counted, last good value stale. Time counts only up to the first rejected value: a jump
+//!   that persists (a slipped magnet) is never accepted later merely because enough time passed
+//!   for the joint to have moved that far; the reading stays stale (the joint is held) until a
+//!   value consistent with the last good one arrives.
 //!
 //! Allocation-free; runs inside the control cycle.
 
@@ -90,13 +93,15 @@ pub struct LossCounters {
 pub struct Conditioner {
     limits: Plausibility,
     last_good: Option<(f64, f64)>,
+    /// When the first value after the last good one was rejected as a jump [s].
+    rejected_at: Option<f64>,
     counters: LossCounters,
 }
 
 impl Conditioner {
     /// A conditioner that has seen nothing yet.
     pub const fn new(limits: Plausibility) -> Self {
-        Conditioner { limits, last_good: None, counters: LossCounters { missing: 0, invalid: 0, implausible: 0 } }
+        Conditioner { limits, last_good: None, rejected_at: None, counters: LossCounters { missing: 0, invalid: 0, implausible: 0 } }
     }
 
     /// The last value that passed every check [rad].
@@ -156,14 +161,44 @@ impl Conditioner {
                     Some(span) => value + span * ((last - value) / span).round(),
                     None => value,
                 };
-                let allowed = l.max_rate_rad_s * (received - t).max(0.0) + l.tolerance_rad;
+                // After a rejected jump, the clock stops at the rejection (see the module docs).
+                let horizon = self.rejected_at.unwrap_or(received).min(received);
+                let allowed = l.max_rate_rad_s * (horizon - t).max(0.0) + l.tolerance_rad;
                 if (v - last).abs() > allowed {
                     self.counters.implausible += 1;
+                    self.rejected_at.get_or_insert(received);
                     return self.hold(now_s);
                 }
+                self.rejected_at = None;
                 self.last_good = Some((v, received));
                 Reading::valid_aged(v, age_s.max(0.0))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Finding (fault suite): a persistent 1 rad jump was accepted after 0.09 s, once the
+    /// elapsed time allowed the joint to have moved that far, and became the joint's position.
+    #[test]
+    fn a_persistent_jump_is_never_accepted_by_waiting() {
+        let mut c = Conditioner::new(Plausibility::absolute_encoder(10.0));
+        let v = |value| Sample::Value { value, age_s: 0.0 };
+        assert_eq!(c.update(v(0.3), 0.0).status, ReadingStatus::VALID);
+        for k in 1..=100 {
+            let r = c.update(v(1.3), k as f64 * 0.01);
+            assert_eq!((r.status, r.value), (ReadingStatus::STALE, 0.3), "cycle {k}");
+        }
+        assert_eq!(c.counters().implausible, 100);
+        // The encoder comes back: a value consistent with the last good one is taken again.
+        assert_eq!(c.update(v(0.301), 1.01).status, ReadingStatus::VALID);
+        // Missing frames alone still widen the allowance (the joint may have moved meanwhile).
+        for k in 0..10 {
+            c.update(Sample::Missing, 1.02 + k as f64 * 0.01);
+        }
+        assert_eq!(c.update(v(1.0), 1.12).status, ReadingStatus::VALID);
     }
 }

@@ -98,6 +98,21 @@ pub struct SimHal {
     positions: Vec<f64>,
     velocities: Vec<f64>,
     loads: Vec<f64>,
+    encoder_faults: Vec<Option<EncoderFault>>,
+}
+
+/// A fault injected into one simulated encoder, as the robot's SPI bus can produce them: the
+/// fault-injection suite and fault drills use it. Every one goes through the same conditioner
+/// as a real reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EncoderFault {
+    /// No answer: the reading goes stale, then missing.
+    Silent,
+    /// Frames that fail their check (parity, error flag).
+    Corrupt,
+    /// A jump of this size [rad] on top of the true angle (a slipped magnet, a bit error that
+    /// passed parity): implausible for the joint's velocity.
+    Offset(f64),
 }
 
 fn setup(field: impl Into<String>, message: impl Into<String>) -> HalSetupError {
@@ -218,6 +233,7 @@ impl SimHal {
             counts_per_rad: drive_cfgs.iter().map(|d| d.counts_per_rad).collect(),
             encoders,
             quantized,
+            encoder_faults: vec![None; offsets.len()],
             encoder_offset_rad: offsets,
             noise_rad: sim.encoder_noise_rad,
             loss_rate: sim.can_loss_rate,
@@ -315,7 +331,14 @@ impl Hal for SimHal {
             let truth = self.encoder_history[i].at(now - self.spi_latency_s);
             let noise = if self.noise_rad > 0.0 { self.noise_rad * self.rng.normal() } else { 0.0 };
             let angle = truth + noise - self.encoder_offset_rad[i];
-            frame.encoders[i] = if self.quantized[i] {
+            frame.encoders[i] = if let Some(fault) = self.encoder_faults[i] {
+                let sample = match fault {
+                    EncoderFault::Silent => Sample::Missing,
+                    EncoderFault::Corrupt => Sample::Invalid,
+                    EncoderFault::Offset(jump) => Sample::Value { value: angle + jump, age_s: self.spi_latency_s },
+                };
+                self.encoder_conditioners[i].update(sample, now)
+            } else if self.quantized[i] {
                 // The same frames and decoder as the robot's SPI bus: 14-bit words with parity.
                 let sample = match as5048::decode(as5048::encode(as5048::rad_to_counts(angle))) {
                     Ok(counts) => Sample::Value { value: as5048::counts_to_rad(counts), age_s: self.spi_latency_s },
@@ -402,6 +425,13 @@ impl SimHal {
     pub fn set_drive_target(&mut self, drive: usize, position_rad: f64) {
         if let Some(d) = self.drives.get_mut(drive) {
             d.set_target(position_rad);
+        }
+    }
+
+    /// Injects a fault into encoder `encoder` (device order), or clears it with `None`.
+    pub fn inject_encoder_fault(&mut self, encoder: usize, fault: Option<EncoderFault>) {
+        if let Some(f) = self.encoder_faults.get_mut(encoder) {
+            *f = fault;
         }
     }
 
