@@ -409,3 +409,154 @@ fn another_user_can_neither_tamper_with_nor_squat_the_shared_memory() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("belongs to uid 65534") && err.contains("another user created this domain's management segment"), "{err}");
 }
+
+/// Subscribes to a running arm's diagnostics from this process, waiting for the arm to come up.
+fn diagnostics_of(node: &iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>, arm: &str) -> iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, jointctl_ipc::Diagnostics, ()> {
+    let names = jointctl_ipc::ServiceNames::for_arm(arm);
+    let t = Instant::now();
+    loop {
+        if let Ok(s) = jointctl_ipc::diagnostics_service(node, &names.diagnostics) {
+            return s.subscriber_builder().create().unwrap();
+        }
+        assert!(t.elapsed() < Duration::from_secs(10), "the arm never came up");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// The newest diagnostics sample, waiting up to 5 s for one.
+fn latest_diagnostics(sub: &iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, jointctl_ipc::Diagnostics, ()>) -> jointctl_ipc::Diagnostics {
+    let t = Instant::now();
+    let mut last = None;
+    loop {
+        while let Some(s) = sub.receive().unwrap() {
+            last = Some(*s);
+        }
+        if let Some(d) = last {
+            return d;
+        }
+        assert!(t.elapsed() < Duration::from_secs(5), "no diagnostics");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Fault suite: an inspector stopped (SIGSTOP) and then killed (SIGKILL). Pass: the loop never
+/// waits for it (no record dropped between loop and publisher, the cycle counter advances at the
+/// loop rate while it is stopped), and its subscriber slot is reclaimed after the kill, so a new
+/// inspector gets in even with `ipc.max_subscribers: 2`.
+#[test]
+fn a_stopped_or_killed_inspector_never_stalls_the_loop_or_keeps_its_slot() {
+    let (arm, yaml) = write_rig("stopped-inspector", 200.0);
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(&yaml, jointctl_tests::yaml_with(&text, &[jointctl_tests::Edit::Set("ipc", serde_yaml::from_str("{max_subscribers: 2}").unwrap())])).unwrap();
+    let mut run = spawn_run(&yaml, &["--duration", "30"]);
+    let node = jointctl_ipc::create_node(None, &format!("inspector-fault-{}", std::process::id())).unwrap();
+    let diag = diagnostics_of(&node, &arm);
+    let mut inspector = Command::new(jointctl())
+        .args(["inspect", "echo", "--arm", &arm, "--json", "--timeout", "20"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    // SAFETY: signals to our own children.
+    unsafe { libc::kill(inspector.id() as i32, libc::SIGSTOP) };
+    let before = latest_diagnostics(&diag);
+    std::thread::sleep(Duration::from_secs(2));
+    let during = latest_diagnostics(&diag);
+    let cycles = during.cycle - before.cycle;
+    assert!(cycles >= 360, "the loop ran {cycles} cycles in 2 s at 200 Hz while the inspector was stopped");
+    assert_eq!(during.publish_drops, 0, "the publisher thread never fell behind");
+    // The joint-state service admits 2 subscribers: the stopped inspector holds one.
+    unsafe { libc::kill(inspector.id() as i32, libc::SIGKILL) };
+    let _ = inspector.wait();
+    let mut second = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--timeout", "20"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let third = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "3", "--timeout", "5"]).output().unwrap();
+    let _ = second.kill();
+    let _ = second.wait();
+    let _ = run.kill();
+    let _ = run.wait();
+    assert!(third.status.success(), "the killed inspector's slot was reclaimed: {}", String::from_utf8_lossy(&third.stderr));
+    assert_eq!(String::from_utf8_lossy(&third.stdout).lines().count(), 3);
+}
+
+/// Fault suite: a command flood (4 clients, each with 4 requests in flight, for 3 s). Pass:
+/// every request is answered (accepted, or refused with a reason such as a full queue), the loop
+/// keeps its rate (>= 95 % of 100 Hz x elapsed) and the command after the flood takes effect.
+#[test]
+fn a_command_flood_is_answered_and_does_not_slow_the_loop() {
+    let (arm, yaml) = write_rig("flood", 100.0);
+    let mut run = spawn_run(&yaml, &["--duration", "30"]);
+    let node = jointctl_ipc::create_node(None, &format!("flood-{}", std::process::id())).unwrap();
+    let diag = diagnostics_of(&node, &arm);
+    let service = jointctl_ipc::command_service(&node, &jointctl_ipc::command_service_name(&arm), None).unwrap();
+    let clients: Vec<_> = (0..4).map(|_| service.client_builder().create().unwrap()).collect();
+    let before = latest_diagnostics(&diag);
+    let t0 = Instant::now();
+    let (mut sent, mut answered, mut accepted, mut full) = (0u64, 0u64, 0u64, 0u64);
+    while t0.elapsed() < Duration::from_secs(3) {
+        let mut pending = Vec::new();
+        for client in &clients {
+            for _ in 0..4 {
+                let target = if sent % 2 == 0 { 0.2 } else { -0.2 };
+                pending.push(client.send_copy(jointctl_ipc::CommandRequest::new(jointctl_ipc::CommandKind::POSITION, "a", &[target])).unwrap());
+                sent += 1;
+            }
+        }
+        let t = Instant::now();
+        for p in &pending {
+            loop {
+                if let Some(r) = p.receive().unwrap() {
+                    answered += 1;
+                    accepted += u64::from(r.accepted);
+                    full += u64::from(r.text().contains("queue is full"));
+                    assert!(r.accepted == 1 || r.text().contains("queue is full"), "{}", r.text());
+                    break;
+                }
+                assert!(t.elapsed() < Duration::from_secs(2), "request {sent} got no answer");
+                std::thread::sleep(Duration::from_micros(200));
+            }
+        }
+    }
+    let elapsed = t0.elapsed().as_secs_f64();
+    let after = latest_diagnostics(&diag);
+    let last = clients[0].send_copy(jointctl_ipc::CommandRequest::new(jointctl_ipc::CommandKind::POSITION, "a", &[0.3])).unwrap();
+    while last.receive().unwrap().is_none() {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let watch = jointctl_ipc::joint_state_service(&node, &jointctl_ipc::ServiceNames::for_arm(&arm).joint_state).unwrap().subscriber_builder().create().unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let mut q = f64::NAN;
+    while let Some(s) = watch.receive().unwrap() {
+        q = s.joints[0].position_rad;
+    }
+    let _ = run.kill();
+    let _ = run.wait();
+    eprintln!(
+        "flood: {sent} requests in {elapsed:.1} s, {answered} answered, {accepted} accepted, {full} refused (queue full); loop {} cycles, overruns {} -> {}, missed deadlines {} -> {}",
+        after.cycle - before.cycle,
+        before.overruns,
+        after.overruns,
+        before.missed_deadlines,
+        after.missed_deadlines
+    );
+    assert_eq!(answered, sent);
+    assert!((after.cycle - before.cycle) as f64 >= 0.95 * 100.0 * elapsed, "{} cycles in {elapsed:.2} s", after.cycle - before.cycle);
+    assert!((q - 0.3).abs() < 0.01, "the command after the flood took effect: q = {q}");
+}
+
+/// Fault suite: SIGKILL (no handler can run), then a restart. Pass: the same arm starts again at
+/// once: the lock died with the process and the dead node's shared memory is cleaned up.
+#[test]
+fn sigkill_then_restart() {
+    let (arm, yaml) = write_rig("sigkill", 100.0);
+    let mut run = spawn_run(&yaml, &["--duration", "30"]);
+    let node = jointctl_ipc::create_node(None, &format!("sigkill-{}", std::process::id())).unwrap();
+    let diag = diagnostics_of(&node, &arm);
+    latest_diagnostics(&diag);
+    drop(diag);
+    let _ = run.kill();
+    let _ = run.wait();
+    let again = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "20"]).output().unwrap();
+    assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("20 cycles"));
+}
