@@ -467,6 +467,7 @@ fn a_stopped_or_killed_inspector_never_stalls_the_loop_or_keeps_its_slot() {
     assert!(cycles >= 360, "the loop ran {cycles} cycles in 2 s at 200 Hz while the inspector was stopped");
     assert_eq!(during.publish_drops, 0, "the publisher thread never fell behind");
     // The joint-state service admits 2 subscribers: the stopped inspector holds one.
+    // SAFETY: a signal to our own child.
     unsafe { libc::kill(inspector.id() as i32, libc::SIGKILL) };
     let _ = inspector.wait();
     let mut second = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--timeout", "20"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
