@@ -21,17 +21,24 @@ fn arm_with_faulty(rate_hz: f64, params: &str) -> jointctl_runtime::Arm {
 }
 
 /// Finding: a plugin that stalls froze every joint and was never faulted (30 ms stalls gave
-/// overruns forever). Pass: at 100 Hz (budget 0.5 x 10 ms), a plugin that stalls 30 ms every
-/// 20 cycles causes exactly one overrun, is then faulted with OVER_BUDGET and never called again,
-/// and the other joint goes on to its set-point.
+/// overruns forever; one that blocks 2 s every 80 cycles missed every deadline). Pass: at
+/// 100 Hz (budget 0.5 x 10 ms), a plugin that stalls 30 ms every 20 cycles, spinning or
+/// blocked in a sleep, causes exactly one overrun, is then faulted with OVER_BUDGET and never
+/// called again, and the other joint goes on to its set-point.
 #[test]
 fn a_stalling_plugin_costs_one_overrun_then_is_faulted_and_the_loop_goes_on() {
-    let mut arm = arm_with_faulty(100.0, "{stall_us: 30000, stall_every: 20}");
+    for sleeps in [false, true] {
+        a_stall_costs_one_overrun(&format!("{{stall_us: 30000, stall_every: 20, stall_sleeps: {sleeps}}}"));
+    }
+}
+
+fn a_stall_costs_one_overrun(params: &str) {
+    let mut arm = arm_with_faulty(100.0, params);
     arm.set_mode(0, position(0.3));
     arm.set_mode(1, position(0.3));
     let report = jointctl_runtime::run(&mut arm, &Default::default(), None, &RunOptions { cycles: Some(150), ..Default::default() }).unwrap();
     let b = &arm.slots[1];
-    assert_eq!(b.fault, JointFault::OVER_BUDGET.code(), "the stalling joint is faulted");
+    assert_eq!(b.fault, JointFault::OVER_BUDGET.code(), "{params}: the stalling joint is faulted");
     assert_eq!(b.fault_count, 1, "faulted once, then never called again");
     assert!(b.max_used_ns >= 30_000_000, "the stall was measured: {} ns", b.max_used_ns);
     assert_eq!(report.stats.overruns, 1, "one overrun, then the joint faulted: {:?}", report.stats);
@@ -42,7 +49,8 @@ fn a_stalling_plugin_costs_one_overrun_then_is_faulted_and_the_loop_goes_on() {
 }
 
 /// A per-joint `budget_us` in the YAML overrides the fraction: 2 ms stalls pass the default
-/// budget at 100 Hz (5 ms) and fault a joint whose budget is 1 ms.
+/// budget at 100 Hz (5 ms) and fault a joint whose budget is 1 ms; a 6 ms block (over the 5 ms
+/// budget, within the 10 ms period) is counted, not faulted.
 #[test]
 fn a_joints_own_budget_overrides_the_default() {
     let stall = "{stall_us: 2000, stall_every: 3}";
@@ -59,6 +67,14 @@ fn a_joints_own_budget_overrides_the_default() {
         arm.step(i as f64 * 0.01);
     }
     assert_eq!(arm.slots[1].fault, JointFault::OVER_BUDGET.code());
+    // A plugin that blocks over its budget but within the period costs no deadline: counted,
+    // not faulted (the same rule keeps preemption from faulting healthy joints).
+    let mut arm = arm_with_faulty(100.0, "{stall_us: 6000, stall_every: 3, stall_sleeps: true}");
+    for i in 0..9 {
+        arm.step(i as f64 * 0.01);
+    }
+    assert_eq!(arm.slots[1].fault, 0);
+    assert_eq!(arm.slots[1].over_budget_excused, 3);
 }
 
 /// Finding: a velocity limit documented as enforced was never read. Pass: with

@@ -290,6 +290,13 @@ pub struct JointDiagnostics {
     pub watchdog_trips: u64,
     /// Cycles held because the mode needed an unknown value (torque, stiffness, velocity).
     pub missing_inputs: u64,
+    /// The joint's plugin: its time budget per cycle [ns].
+    pub plugin_budget_ns: u64,
+    /// The joint's plugin: most time it took in one cycle (observe + control) [ns].
+    pub plugin_max_ns: u64,
+    /// Cycles over budget in wall time but not faulted (preempted, a short kernel wait or a
+    /// short block: the plugin's CPU time within budget, no block past the period).
+    pub over_budget_excused: u64,
 }
 
 impl JointDiagnostics {
@@ -307,6 +314,9 @@ impl JointDiagnostics {
         rate_limited: 0,
         watchdog_trips: 0,
         missing_inputs: 0,
+        plugin_budget_ns: 0,
+        plugin_max_ns: 0,
+        over_budget_excused: 0,
     };
 }
 

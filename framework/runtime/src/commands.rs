@@ -244,6 +244,13 @@ impl CommandValidator {
         CommandValidator { dofs, names, status, stop_accepted: false }
     }
 
+    /// Refuses every command from now on: a stop was queued for the loop. Called once the stop
+    /// is in the queue, not when it is validated, so that a stop the full queue refused does
+    /// not leave a runtime that runs on but takes no command.
+    pub fn stop_queued(&mut self) {
+        self.stop_accepted = true;
+    }
+
     /// The loop status this validator reads.
     pub fn status(&self) -> &Arc<LoopStatus> {
         &self.status
@@ -287,10 +294,7 @@ impl CommandValidator {
             return Err(CommandError::Stopping);
         }
         match req.kind {
-            CommandKind::STOP => {
-                self.stop_accepted = true;
-                return Ok((ArmCommand::Stop, "stopping".into()));
-            }
+            CommandKind::STOP => return Ok((ArmCommand::Stop, "stopping".into())),
             CommandKind::HOLD if joint.is_empty() => return Ok((ArmCommand::HoldAll, "holding every joint".into())),
             _ => {}
         }
@@ -431,6 +435,8 @@ mod tests {
         assert!(v.validate(&CommandRequest::new(CommandKind::HOLD, "q4", &[])).is_ok(), "holding a held joint is fine");
         assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.1])).is_ok(), "other joints are not affected");
         assert!(v.validate(&CommandRequest::new(CommandKind::STOP, "", &[])).is_ok());
+        assert!(v.validate(&CommandRequest::new(CommandKind::POSITION, "q1", &[0.1])).is_ok(), "a stop not yet queued stops nothing");
+        v.stop_queued();
         assert_eq!(refused(&mut v, CommandKind::POSITION, "q1", &[0.1]), CommandError::Stopping);
         assert_eq!(refused(&mut v, CommandKind::HOLD, "", &[]), CommandError::Stopping);
         let mut v = validator();

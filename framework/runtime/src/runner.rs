@@ -178,6 +178,9 @@ impl CommandDesk {
         if queue.push(command).is_err() {
             return CommandResponse::new(false, "the runtime's command queue is full; try again");
         }
+        if let ArmCommand::Stop = command {
+            self.validator.stop_queued();
+        }
         if let ArmCommand::Enable { dof, enabled } = command
             && !self.wait_applied(|s| s.enabled(dof) == enabled)
         {
@@ -410,6 +413,9 @@ impl ArmPublisher {
                 j.rate_limited = e.rate_limited;
                 j.watchdog_trips = e.watchdog_trips;
                 j.missing_inputs = e.missing_inputs;
+                j.plugin_budget_ns = slot.budget_ns;
+                j.plugin_max_ns = slot.max_used_ns;
+                j.over_budget_excused = slot.over_budget_excused;
             }
         }
         arm.device_health(&mut self.health);

@@ -48,13 +48,14 @@ fn flood_requests() -> Vec<CommandRequest> {
     r
 }
 
-/// Floods the arm with commands until `stop`; returns (sent, accepted).
-fn flood(stop: Arc<AtomicBool>, sent: Arc<AtomicU64>, accepted: Arc<AtomicU64>) -> std::thread::JoinHandle<()> {
+/// Floods the arm with commands until `stop`; returns the refusals by reason.
+fn flood(stop: Arc<AtomicBool>, sent: Arc<AtomicU64>, accepted: Arc<AtomicU64>) -> std::thread::JoinHandle<std::collections::BTreeMap<String, u64>> {
     std::thread::spawn(move || {
         let node = jointctl_ipc::create_node(None, "soak-flood").unwrap();
         let service = jointctl_ipc::command_service(&node, &jointctl_ipc::command_service_name(ARM), None).unwrap();
         let clients: Vec<_> = (0..4).map(|_| service.client_builder().create().unwrap()).collect();
         let requests = flood_requests();
+        let mut refusals = std::collections::BTreeMap::new();
         let mut k = 0;
         while !stop.load(Ordering::Relaxed) {
             let mut pending = Vec::new();
@@ -70,6 +71,9 @@ fn flood(stop: Arc<AtomicBool>, sent: Arc<AtomicU64>, accepted: Arc<AtomicU64>) 
                 loop {
                     if let Ok(Some(r)) = p.receive() {
                         accepted.fetch_add(u64::from(r.accepted), Ordering::Relaxed);
+                        if r.accepted == 0 {
+                            *refusals.entry(r.text().to_string()).or_insert(0) += 1;
+                        }
                         break;
                     }
                     if t.elapsed() > Duration::from_secs(2) || stop.load(Ordering::Relaxed) {
@@ -79,6 +83,7 @@ fn flood(stop: Arc<AtomicBool>, sent: Arc<AtomicU64>, accepted: Arc<AtomicU64>) 
                 }
             }
         }
+        refusals
     })
 }
 
@@ -153,7 +158,7 @@ fn main() {
     stop.store(true, Ordering::Relaxed);
     let st = lp.stats.clone();
     let (_, refused) = lp.finish();
-    flooding.join().unwrap();
+    let refusals = flooding.join().unwrap();
     let received = inspect.join().unwrap();
     lateness_ns.sort_unstable();
     compute_ns.sort_unstable();
@@ -189,5 +194,21 @@ fn main() {
         last.0,
         last.1 as i64 - first.1 as i64
     );
+    for (reason, n) in &refusals {
+        println!("refused {n} x: {reason}");
+    }
+    println!("| joint | plugin | fault | budget us | max plugin time us | over budget, not faulted (preempted) |");
+    println!("|---|---|---|---|---|---|");
+    for slot in &arm.slots {
+        println!(
+            "| {} | {} | {} | {:.0} | {:.1} | {} |",
+            slot.name,
+            slot.plugin,
+            slot.fault,
+            slot.budget_ns as f64 / 1e3,
+            slot.max_used_ns as f64 / 1e3,
+            slot.over_budget_excused
+        );
+    }
     println!("RSS samples (s, kB): {}", rss.iter().map(|(t, kb)| format!("({t:.0}, {kb})")).collect::<Vec<_>>().join(" "));
 }

@@ -25,6 +25,9 @@ struct Params {
     /// ... every this many cycles (0 = never).
     #[serde(default)]
     stall_every: u64,
+    /// Stall by sleeping (blocking) instead of spinning.
+    #[serde(default)]
+    stall_sleeps: bool,
     /// Create this file in `deactivate`, so a test can see whether the host called it.
     #[serde(default)]
     deactivate_marker: Option<std::path::PathBuf>,
@@ -46,7 +49,9 @@ impl Observer for Faulty {
         if self.p.fault_at == Some(c) {
             return Err(JointFault::new(42));
         }
-        if self.p.stall_every > 0 && c % self.p.stall_every == self.p.stall_every - 1 {
+        if self.p.stall_every > 0 && c % self.p.stall_every == self.p.stall_every - 1 && self.p.stall_sleeps {
+            std::thread::sleep(std::time::Duration::from_micros(self.p.stall_us));
+        } else if self.p.stall_every > 0 && c % self.p.stall_every == self.p.stall_every - 1 {
             let t = std::time::Instant::now();
             while t.elapsed().as_micros() < self.p.stall_us as u128 {
                 core::hint::spin_loop();
