@@ -110,9 +110,9 @@ fn the_counting_allocator_sees_allocations() {
 
 #[test]
 fn deadline_overruns_are_detected_and_counted() {
-    // 500 Hz (2 ms period); the faulty joint stalls 5 ms on its 10th cycle and is then faulted
-    // for going over its time budget (`fault_injection.rs`), so it stalls once.
-    let extra = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stall_us: 5000, stall_every: 10}\n";
+    // 500 Hz (2 ms period); the faulty joint stalls 6 ms on its 10th cycle and is then faulted
+    // for passing its stall limit (5 ms, `fault_injection.rs`), so it stalls once.
+    let extra = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stall_us: 6000, stall_every: 10}\n";
     let yaml = rig_yaml(&arm_name("overrun"), 500.0, extra);
     let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
@@ -127,11 +127,11 @@ fn deadline_overruns_are_detected_and_counted() {
     let expected = s.cycle_samples().filter(|(late, compute)| late + compute > period_ns).count() as u64;
     assert_eq!(s.overruns, expected, "{s:?}");
     // The stalled cycle is among them.
-    assert_eq!(s.cycle_samples().filter(|(_, compute)| *compute >= 5_000_000).count(), 1);
+    assert_eq!(s.cycle_samples().filter(|(_, compute)| *compute >= 6_000_000).count(), 1);
     assert!(s.overruns >= 1, "{s:?}");
-    // A 5 ms stall in a 2 ms period ends past at least 2 deadlines.
+    // A 6 ms stall in a 2 ms period ends past at least 2 deadlines.
     assert!(s.missed_deadlines >= 2, "{s:?}");
-    assert!(s.max_compute_ns >= 5_000_000, "{s:?}");
+    assert!(s.max_compute_ns >= 6_000_000, "{s:?}");
 }
 
 #[test]

@@ -22,9 +22,9 @@ fn arm_with_faulty(rate_hz: f64, params: &str) -> jointctl_runtime::Arm {
 
 /// Finding: a plugin that stalls froze every joint and was never faulted (30 ms stalls gave
 /// overruns forever; one that blocks 2 s every 80 cycles missed every deadline). Pass: at
-/// 100 Hz (budget 0.5 x 10 ms), a plugin that stalls 30 ms every 20 cycles, spinning or
-/// blocked in a sleep, causes exactly one overrun, is then faulted with OVER_BUDGET and never
-/// called again, and the other joint goes on to its set-point.
+/// 100 Hz (budget 0.5 x 10 ms, stall limit 10 ms), a plugin that stalls 30 ms every 20 cycles,
+/// spinning or blocked in a sleep, causes exactly one overrun, is then faulted with OVER_BUDGET
+/// and never called again, and the other joint goes on to its set-point.
 #[test]
 fn a_stalling_plugin_costs_one_overrun_then_is_faulted_and_the_loop_goes_on() {
     for sleeps in [false, true] {
@@ -49,8 +49,9 @@ fn a_stall_costs_one_overrun(params: &str) {
 }
 
 /// A per-joint `budget_us` in the YAML overrides the fraction: 2 ms stalls pass the default
-/// budget at 100 Hz (5 ms) and fault a joint whose budget is 1 ms; a 6 ms block (over the 5 ms
-/// budget, within the 10 ms period) is counted, not faulted.
+/// budget at 100 Hz (5 ms) and fault a joint whose budget is 1 ms on the third (strikes). A
+/// lone excess below the stall limit (max(period, 5 ms)) is counted, not faulted, because the
+/// platform stalls threads too: a 10-minute soak at 1 kHz faulted healthy joints otherwise.
 #[test]
 fn a_joints_own_budget_overrides_the_default() {
     let stall = "{stall_us: 2000, stall_every: 3}";
@@ -67,14 +68,23 @@ fn a_joints_own_budget_overrides_the_default() {
         arm.step(i as f64 * 0.01);
     }
     assert_eq!(arm.slots[1].fault, JointFault::OVER_BUDGET.code());
-    // A plugin that blocks over its budget but within the period costs no deadline: counted,
-    // not faulted (the same rule keeps preemption from faulting healthy joints).
+    // Over budget but under the stall limit (the 10 ms period): counted, and faulted only on the
+    // third time without a second in budget between.
     let mut arm = arm_with_faulty(100.0, "{stall_us: 6000, stall_every: 3, stall_sleeps: true}");
-    for i in 0..9 {
+    for i in 0..6 {
         arm.step(i as f64 * 0.01);
     }
-    assert_eq!(arm.slots[1].fault, 0);
-    assert_eq!(arm.slots[1].over_budget_excused, 3);
+    assert_eq!((arm.slots[1].fault, arm.slots[1].over_budget_cycles), (0, 2));
+    for i in 6..9 {
+        arm.step(i as f64 * 0.01);
+    }
+    assert_eq!(arm.slots[1].fault, JointFault::OVER_BUDGET.code());
+    // A second in budget between excesses forgives them: four excesses, 1.2 s apart, no fault.
+    let mut arm = arm_with_faulty(100.0, "{stall_us: 6000, stall_every: 120, stall_sleeps: true}");
+    for i in 0..500 {
+        arm.step(i as f64 * 0.01);
+    }
+    assert_eq!((arm.slots[1].fault, arm.slots[1].over_budget_cycles), (0, 4));
 }
 
 /// Finding: a velocity limit documented as enforced was never read. Pass: with

@@ -107,9 +107,11 @@ fn a_signal_holds_the_joints_publishes_a_final_state_and_releases_shared_memory(
         assert!(t.elapsed() < Duration::from_secs(10), "no sample");
         std::thread::sleep(Duration::from_millis(5));
     }
+    let sent = Instant::now();
     // SAFETY: sending a signal to our own child.
     unsafe { libc::kill(run.id() as i32, signal) };
     let status = wait_with_timeout(&mut run, Duration::from_secs(5)).expect("stops within 5 s of the signal");
+    eprintln!("{name}: the runtime ended {:.0} ms after the signal", sent.elapsed().as_secs_f64() * 1e3);
     let log = stderr_of(&mut run);
     assert!(status.success(), "{name}: exit {status:?}: {log}");
     assert!(log.contains("loop stopped, joints held"), "{name}: {log}");
@@ -464,6 +466,7 @@ fn a_stopped_or_killed_inspector_never_stalls_the_loop_or_keeps_its_slot() {
     std::thread::sleep(Duration::from_secs(2));
     let during = latest_diagnostics(&diag);
     let cycles = during.cycle - before.cycle;
+    eprintln!("inspector stopped 2 s: {cycles} cycles at 200 Hz, {} publish drops, overruns {} -> {}", during.publish_drops, before.overruns, during.overruns);
     assert!(cycles >= 360, "the loop ran {cycles} cycles in 2 s at 200 Hz while the inspector was stopped");
     assert_eq!(during.publish_drops, 0, "the publisher thread never fell behind");
     // The joint-state service admits 2 subscribers: the stopped inspector holds one.

@@ -83,6 +83,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if !(budget > 0.0 && budget <= 1.0) {
         err("timing.joint_budget_fraction".into(), format!("must be a fraction of the period in (0, 1], got {budget}"));
     }
+    if c.timing.joint_budget_strikes == 0 {
+        err("timing.joint_budget_strikes".into(), "must be >= 1".into());
+    }
     for (j, joint) in c.joints.iter().enumerate() {
         if let Some(b) = joint.budget_us
             && !(b > 0.0 && b <= 1e6 / c.rate_hz)

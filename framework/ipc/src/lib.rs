@@ -294,9 +294,8 @@ pub struct JointDiagnostics {
     pub plugin_budget_ns: u64,
     /// The joint's plugin: most time it took in one cycle (observe + control) [ns].
     pub plugin_max_ns: u64,
-    /// Cycles over budget in wall time but not faulted (preempted, a short kernel wait or a
-    /// short block: the plugin's CPU time within budget, no block past the period).
-    pub over_budget_excused: u64,
+    /// Cycles the joint's plugin was over its budget (faulting or not).
+    pub over_budget_cycles: u64,
 }
 
 impl JointDiagnostics {
@@ -316,7 +315,7 @@ impl JointDiagnostics {
         missing_inputs: 0,
         plugin_budget_ns: 0,
         plugin_max_ns: 0,
-        over_budget_excused: 0,
+        over_budget_cycles: 0,
     };
 }
 

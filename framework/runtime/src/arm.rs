@@ -13,7 +13,7 @@ use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
 
 use crate::joint::{FfiJoint, LoadedJoint};
 use crate::loader::{PluginLoader, PluginSource};
-use crate::timing::ThreadUsage;
+use crate::timing::monotonic_ns;
 
 /// One plugin instance and its wiring.
 pub struct JointSlot {
@@ -44,13 +44,18 @@ pub struct JointSlot {
     pub used_ns: u64,
     /// Most time the plugin took in one cycle [ns].
     pub max_used_ns: u64,
-    /// The loop period [ns]: a plugin that blocks longer is faulted.
-    pub period_ns: u64,
-    /// Cycles over budget in wall time but not faulted: the plugin's CPU time stayed within the
-    /// budget and it did not block past the period, so the thread was preempted, waited briefly
-    /// in the kernel (a page fault behind another thread's memory mapping) or the plugin blocked
-    /// briefly. Counted; a loop with `timing.realtime_priority` sees few.
-    pub over_budget_excused: u64,
+    /// One cycle's plugin time above this faults the joint at once [ns].
+    pub stall_limit_ns: u64,
+    /// Over-budget cycles that fault the joint when no second of in-budget cycles separates them.
+    pub strikes_allowed: u32,
+    /// Over-budget cycles since the last second of in-budget cycles.
+    pub strikes: u32,
+    /// Consecutive in-budget cycles; a second of them forgives the strikes.
+    in_budget_cycles: u64,
+    /// Cycles in one second.
+    forgive_after: u64,
+    /// Cycles over budget so far (faulting or not).
+    pub over_budget_cycles: u64,
 }
 
 impl JointSlot {
@@ -75,33 +80,40 @@ impl JointSlot {
         }
     }
 
-    /// Charges a plugin call that started at `start_ns` to this cycle's budget. Over budget in
-    /// wall time, the joint is faulted (its plugin will not be called again) when the plugin
-    /// itself is the cause: it used more CPU than the budget, or the thread blocked (a voluntary
-    /// context switch: sleep, I/O, a lock) and the plugin's time passed the period. Otherwise the
-    /// thread was preempted and the excess is counted instead: wall time alone faulted healthy
-    /// joints in a 1 kHz soak on a shared 2-core machine. The thread's usage is read only then,
-    /// against `cycle` (taken once per cycle after the HAL read): everything else since then is
-    /// assumed on the CPU, so the plugin's CPU time is never overestimated. True when the
+    /// Starts a cycle's budget; a second of in-budget cycles forgives earlier strikes.
+    fn start_cycle(&mut self) {
+        if self.used_ns <= self.budget_ns {
+            self.in_budget_cycles += 1;
+            if self.in_budget_cycles >= self.forgive_after {
+                self.strikes = 0;
+            }
+        } else {
+            self.in_budget_cycles = 0;
+        }
+        self.used_ns = 0;
+    }
+
+    /// Charges a plugin call that started at `start_ns` to this cycle's budget. The joint is
+    /// faulted (its plugin never called again) when the cycle's plugin time passes the stall
+    /// limit (it alone missed a deadline), or when it is over budget for the `strikes_allowed`-th
+    /// time without a second in budget between; a lone shorter excess is counted, not faulted,
+    /// because the platform stalls threads too (see `timing.joint_stall_floor_us`). True when the
     /// results may be used.
-    fn charge(&mut self, start_ns: u64, cycle: &ThreadUsage) -> bool {
-        let end_ns = crate::timing::monotonic_ns();
+    fn charge(&mut self, start_ns: u64) -> bool {
         let was_within = self.used_ns <= self.budget_ns;
-        self.used_ns += end_ns.saturating_sub(start_ns);
+        self.used_ns += monotonic_ns().saturating_sub(start_ns);
         self.max_used_ns = self.max_used_ns.max(self.used_ns);
         if self.used_ns <= self.budget_ns {
             return true;
         }
-        let now = ThreadUsage::now();
-        let others_ns = now.wall_ns.saturating_sub(cycle.wall_ns).saturating_sub(self.used_ns);
-        let own_cpu_ns = now.cpu_ns.saturating_sub(cycle.cpu_ns).saturating_sub(others_ns);
-        let blocked = now.voluntary_switches > cycle.voluntary_switches;
-        if own_cpu_ns > self.budget_ns || (blocked && self.used_ns > self.period_ns) {
+        if was_within {
+            self.over_budget_cycles += 1;
+            self.strikes += 1;
+        }
+        if self.used_ns > self.stall_limit_ns || self.strikes >= self.strikes_allowed {
             self.raise(JointFault::OVER_BUDGET);
             return false;
         }
-        // Once per cycle, when the budget is first passed.
-        self.over_budget_excused += u64::from(was_within);
         true
     }
 
@@ -168,8 +180,6 @@ pub struct Arm {
     pub hal_errors: u64,
     sensor: SensorFrame,
     actuator: ActuatorFrame,
-    /// The control thread's usage after this cycle's HAL read (see `JointSlot::charge`).
-    cycle_usage: ThreadUsage,
     hal: Box<dyn Hal>,
     devices: DeviceIndex,
 }
@@ -326,8 +336,12 @@ impl Arm {
                 budget_ns: (jc.budget_us.unwrap_or(cfg.timing.joint_budget_fraction * 1e6 / cfg.rate_hz) * 1e3) as u64,
                 used_ns: 0,
                 max_used_ns: 0,
-                period_ns: (1e9 / cfg.rate_hz) as u64,
-                over_budget_excused: 0,
+                stall_limit_ns: ((1e9 / cfg.rate_hz) as u64).max(u64::from(cfg.timing.joint_stall_floor_us) * 1000),
+                strikes_allowed: cfg.timing.joint_budget_strikes,
+                strikes: 0,
+                in_budget_cycles: 0,
+                forgive_after: cfg.rate_hz.ceil() as u64,
+                over_budget_cycles: 0,
             });
         }
         if !errors.is_empty() {
@@ -353,7 +367,6 @@ impl Arm {
             hal_errors: 0,
             sensor: SensorFrame::new(&devices),
             actuator: ActuatorFrame::new(&devices),
-            cycle_usage: ThreadUsage::default(),
             hal,
             devices,
         })
@@ -404,19 +417,18 @@ impl Arm {
             // The HAL marks what it could not read as stale or missing; the count is published.
             self.hal_errors += 1;
         }
-        self.cycle_usage = ThreadUsage::now();
         for slot in &mut self.slots {
             slot.gather(&self.sensor, stamp_s, self.dt_s);
             let out = &mut self.states[slot.dofs.clone()];
-            slot.used_ns = 0;
+            slot.start_cycle();
             if slot.fault != 0 {
                 out.fill(JointState::UNKNOWN);
                 continue;
             }
-            let start = crate::timing::monotonic_ns();
+            let start = monotonic_ns();
             let result = slot.joint.observe(&slot.raw, out);
             // A state that came too late is not used: the joint is held from this cycle on.
-            let in_time = slot.charge(start, &self.cycle_usage);
+            let in_time = slot.charge(start);
             if let Err(f) = result {
                 out.fill(JointState::UNKNOWN);
                 slot.raise(f);
@@ -497,10 +509,10 @@ impl Arm {
                 slot.invalid_cycles += 1;
                 slot.setpoints[..n].fill(MotorSetpoint::HOLD);
             } else {
-                let start = crate::timing::monotonic_ns();
+                let start = monotonic_ns();
                 let result = slot.joint.control(&self.states[dofs.clone()], &self.commands[dofs], &slot.raw, &mut slot.setpoints[..n]);
                 // Set-points computed too late are not written: the joint is held instead.
-                let in_time = slot.charge(start, &self.cycle_usage);
+                let in_time = slot.charge(start);
                 match result {
                     Ok(()) if in_time => slot.held = false,
                     Ok(()) => slot.setpoints[..n].fill(MotorSetpoint::HOLD),

@@ -415,7 +415,7 @@ impl ArmPublisher {
                 j.missing_inputs = e.missing_inputs;
                 j.plugin_budget_ns = slot.budget_ns;
                 j.plugin_max_ns = slot.max_used_ns;
-                j.over_budget_excused = slot.over_budget_excused;
+                j.over_budget_cycles = slot.over_budget_cycles;
             }
         }
         arm.device_health(&mut self.health);

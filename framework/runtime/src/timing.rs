@@ -10,37 +10,6 @@ pub fn monotonic_ns() -> u64 {
     ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
 }
 
-/// What the calling thread has used so far: its CPU time (CLOCK_THREAD_CPUTIME_ID, exact; the
-/// CPU time `getrusage` reports can lag by a scheduler tick) and the times it gave up the CPU
-/// by itself (blocking: a sleep, I/O, a lock). About 350 ns on this machine; no allocation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ThreadUsage {
-    /// CLOCK_MONOTONIC when taken [ns].
-    pub wall_ns: u64,
-    /// CPU time of this thread [ns].
-    pub cpu_ns: u64,
-    /// Voluntary context switches of this thread.
-    pub voluntary_switches: u64,
-}
-
-impl ThreadUsage {
-    /// The calling thread's usage now.
-    pub fn now() -> Self {
-        let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-        // SAFETY: clock_gettime writes into a valid timespec.
-        let cpu_ok = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0;
-        // SAFETY: a zeroed rusage is valid; getrusage writes into it.
-        let mut ru: libc::rusage = unsafe { core::mem::zeroed() };
-        // SAFETY: RUSAGE_THREAD with a valid pointer.
-        let ru_ok = unsafe { libc::getrusage(libc::RUSAGE_THREAD, &mut ru) } == 0;
-        ThreadUsage {
-            wall_ns: monotonic_ns(),
-            cpu_ns: if cpu_ok { ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64 } else { 0 },
-            voluntary_switches: if ru_ok { ru.ru_nvcsw as u64 } else { 0 },
-        }
-    }
-}
-
 fn sleep_until_ns(deadline_ns: u64) {
     let ts = libc::timespec {
         tv_sec: (deadline_ns / 1_000_000_000) as libc::time_t,

@@ -197,7 +197,7 @@ fn main() {
     for (reason, n) in &refusals {
         println!("refused {n} x: {reason}");
     }
-    println!("| joint | plugin | fault | budget us | max plugin time us | over budget, not faulted (preempted) |");
+    println!("| joint | plugin | fault | budget us | max plugin time us | cycles over budget |");
     println!("|---|---|---|---|---|---|");
     for slot in &arm.slots {
         println!(
@@ -207,7 +207,7 @@ fn main() {
             slot.fault,
             slot.budget_ns as f64 / 1e3,
             slot.max_used_ns as f64 / 1e3,
-            slot.over_budget_excused
+            slot.over_budget_cycles
         );
     }
     println!("RSS samples (s, kB): {}", rss.iter().map(|(t, kb)| format!("({t:.0}, {kb})")).collect::<Vec<_>>().join(" "));
