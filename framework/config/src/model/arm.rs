@@ -57,12 +57,12 @@ pub struct TimingConfig {
     /// is longer, is faulted at once [us]: it alone made the loop miss a deadline. Shorter
     /// excesses of the budget fault it only when they repeat (`joint_budget_strikes`), because
     /// the platform can stall a thread too: inside plugin calls that compute in about 1 us,
-    /// three 10-minute soaks at 1 kHz on the project's shared 2-core VM saw single stalls of up
-    /// to 2.1 ms (host steal counts as the thread's CPU time, so no clock tells them apart).
-    /// Assumption: 5000 us, 2.4 times that.
+    /// 10-minute soaks at 1 kHz on the project's shared 2-core VM saw single stalls of up to
+    /// 3.4 ms (host steal counts as the thread's CPU time, so no clock tells them apart).
+    /// Assumption: 5000 us, about 1.5 times that.
     pub joint_stall_floor_us: u32,
     /// A joint over its budget in this many cycles, none of them a second of in-budget cycles
-    /// apart, is faulted. Assumption: 3; the soaks saw no slot over budget twice in a second.
+    /// apart, is faulted. Assumption: 3; a 10-minute soak saw at most 2 excesses per joint in all.
     pub joint_budget_strikes: u32,
 }
 
