@@ -228,7 +228,6 @@ impl DofSpec {
 #[derive(Clone, Debug)]
 pub struct CommandValidator {
     dofs: Vec<DofSpec>,
-    names: Vec<String>,
     status: Arc<LoopStatus>,
     stop_accepted: bool,
 }
@@ -240,8 +239,7 @@ fn finite(what: &'static str, value: f64) -> Result<f64, CommandError> {
 impl CommandValidator {
     /// A validator for these DOFs, reading the loop's status.
     pub fn new(dofs: Vec<DofSpec>, status: Arc<LoopStatus>) -> Self {
-        let names = dofs.iter().map(|d| d.name.clone()).collect();
-        CommandValidator { dofs, names, status, stop_accepted: false }
+        CommandValidator { dofs, status, stop_accepted: false }
     }
 
     /// Refuses every command from now on: a stop was queued for the loop. Called once the stop
@@ -257,11 +255,11 @@ impl CommandValidator {
     }
 
     fn dof(&self, joint: &str) -> Result<usize, CommandError> {
-        self.names.iter().position(|n| n == joint).ok_or_else(|| {
+        self.dofs.iter().position(|d| d.name == joint).ok_or_else(|| {
             if joint.is_empty() {
                 CommandError::NoJoint
             } else {
-                CommandError::UnknownJoint { joint: joint.into(), known: self.names.join(", ") }
+                CommandError::UnknownJoint { joint: joint.into(), known: self.dofs.iter().map(|d| d.name.as_str()).collect::<Vec<_>>().join(", ") }
             }
         })
     }
@@ -271,7 +269,7 @@ impl CommandValidator {
         if let Some(l) = self.dofs[dof].limits
             && !(l.position_rad[0]..=l.position_rad[1]).contains(&q)
         {
-            return Err(CommandError::PositionOutOfLimits { joint: self.names[dof].clone(), position_rad: q, limits_rad: l.position_rad });
+            return Err(CommandError::PositionOutOfLimits { joint: self.dofs[dof].name.clone(), position_rad: q, limits_rad: l.position_rad });
         }
         Ok(q)
     }

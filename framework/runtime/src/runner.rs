@@ -583,7 +583,7 @@ pub fn run(
         max_compute_us = stats.max_compute_ns / 1000,
         max_jitter_us = stats.max_jitter_ns / 1000,
         interrupted,
-        signal = %signal.map(crate::signals::signal_name).unwrap_or_default(),
+        signal = %signal.map_or_else(|| "none".to_string(), crate::signals::signal_name),
         "loop stopped, joints held"
     );
     Ok(RunReport { stats, publish_failures, interrupted, signal })
