@@ -81,7 +81,9 @@ pub fn read(path: &Path) -> Result<Data, DataError> {
     parse(&text, path)
 }
 
-/// Parses CSV text; `file` names it in errors.
+/// Parses CSV text; `file` names it in errors. A maintained parser (the `csv` crate) reads it:
+/// quoted fields and headers and a UTF-8 byte-order mark are fine; a duplicated column is an
+/// error (which one would be meant?), and a file separated by `;` or tabs is told so.
 ///
 /// ```
 /// let d = jointctl_ident::csv::parse("t,deflection,torque,extra\n0,0,0,x\n0.01,0.001,0.1,y\n", "a.csv".as_ref()).unwrap();
@@ -94,15 +96,32 @@ pub fn read(path: &Path) -> Result<Data, DataError> {
 /// ```
 pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     let err = |line: usize, column: Option<&str>, message: String| DataError { file: file.into(), line, column: column.map(str::to_string), message };
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
-    let Some((h, header)) = lines.next() else {
-        return Err(err(0, None, "the file is empty; expected a header `t,deflection,torque,...` and samples".into()));
+    // The parser strips a UTF-8 byte-order mark itself; `trim` takes blanks around fields.
+    let mut reader = ::csv::ReaderBuilder::new().flexible(true).trim(::csv::Trim::All).from_reader(text.as_bytes());
+    let header = match reader.headers() {
+        Ok(h) => h.clone(),
+        Err(e) => return Err(err(e.position().map_or(1, |p| p.line() as usize), None, format!("unreadable header: {e}"))),
     };
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let h = 1 + text.lines().take_while(|l| l.trim().is_empty()).count();
+    if header.iter().all(str::is_empty) {
+        return Err(err(0, None, "the file is empty; expected a header `t,deflection,torque,...` and samples".into()));
+    }
+    let names: Vec<&str> = header.iter().collect();
+    for (i, n) in names.iter().enumerate() {
+        if let Some(first) = names[..i].iter().position(|m| m == n) {
+            return Err(err(h, Some(n), format!("appears twice in the header (columns {} and {}): which one is meant?", first + 1, i + 1)));
+        }
+    }
     let col = |name: &str| names.iter().position(|n| *n == name);
     for required in ["t", "deflection", "torque"] {
         if col(required).is_none() {
-            return Err(err(h + 1, Some(required), format!("missing required column (the header is `{header}`)")));
+            let header_text: String = names.join(",");
+            let hint = [(';', "`;`"), ('\t', "tabs")]
+                .iter()
+                .find(|(c, _)| names.len() == 1 && header_text.contains(*c))
+                .map(|(_, what)| format!("; the file seems separated by {what}: separate columns by commas"))
+                .unwrap_or_default();
+            return Err(err(h, Some(required), format!("missing required column (the header is `{header_text}`){hint}")));
         }
     }
     let mut data = Data::default();
@@ -112,31 +131,44 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         }
     }
     let idx: Vec<Option<usize>> = KNOWN.iter().map(|k| col(k)).collect();
-    for (i, line) in lines {
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    // The file's line of a parser position: the parser's own line count skips blank lines, and
+    // a record's byte position can point at the blank lines before it.
+    let line_of = |p: Option<&::csv::Position>| {
+        p.map_or(0, |p| {
+            let start = (p.byte() as usize).min(text.len());
+            let blank = text[start..].bytes().take_while(|b| *b == b'\n' || *b == b'\r').count();
+            text[..start + blank].matches('\n').count() + 1
+        })
+    };
+    for record in reader.records() {
+        let record = record.map_err(|e| err(line_of(e.position()), None, format!("unreadable row: {e}")))?;
+        if record.iter().all(str::is_empty) {
+            continue;
+        }
+        let line = line_of(record.position());
         let mut values = [f64::NAN; 7];
         for (k, c) in idx.iter().enumerate() {
             let Some(c) = c else { continue };
-            let cell = cells.get(*c).copied().unwrap_or("");
+            let cell = record.get(*c).unwrap_or("");
             if cell.is_empty() {
                 if k < 3 {
-                    return Err(err(i + 1, Some(KNOWN[k]), "empty cell in a required column".into()));
+                    return Err(err(line, Some(KNOWN[k]), "empty cell in a required column".into()));
                 }
                 continue;
             }
-            let v: f64 = cell.parse().map_err(|_| err(i + 1, Some(KNOWN[k]), format!("`{cell}` is not a number")))?;
+            let v: f64 = cell.parse().map_err(|_| err(line, Some(KNOWN[k]), format!("`{cell}` is not a number")))?;
             if !v.is_finite() {
-                return Err(err(i + 1, Some(KNOWN[k]), format!("`{cell}` is not a finite number")));
+                return Err(err(line, Some(KNOWN[k]), format!("`{cell}` is not a finite number")));
             }
             if v.abs() > PLAUSIBLE_ABS[k] {
-                return Err(err(i + 1, Some(KNOWN[k]), format!("{cell} is implausible: this column holds values within +-{}", PLAUSIBLE_ABS[k])));
+                return Err(err(line, Some(KNOWN[k]), format!("{cell} is implausible: this column holds values within +-{}", PLAUSIBLE_ABS[k])));
             }
             values[k] = v;
         }
         if let Some(prev) = data.t.last()
             && values[0] <= *prev
         {
-            return Err(err(i + 1, Some("t"), format!("time {} does not increase (previous {prev})", values[0])));
+            return Err(err(line, Some("t"), format!("time {} does not increase (previous {prev})", values[0])));
         }
         data.t.push(values[0]);
         data.deflection.push(values[1]);
@@ -150,4 +182,43 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         return Err(err(h + 1, None, "the file has a header but no samples".into()));
     }
     Ok(data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_text(text: &str) -> Result<Data, DataError> {
+        parse(text, Path::new("x.csv"))
+    }
+
+    /// Findings: the reader rejected quoted headers and a UTF-8 BOM (as "missing column `t`"),
+    /// used a duplicated column silently and said nothing useful for `;`-separated files.
+    #[test]
+    fn quoted_headers_and_a_byte_order_mark_are_read() {
+        let d = parse_text("\"t\",\"deflection\",\"torque\"\n0,0.001,\"0.1\"\n0.01,0.002,0.2\n").unwrap();
+        assert_eq!((d.len(), d.torque[0]), (2, 0.1));
+        let d = parse_text("\u{feff}t,deflection,torque\n0,0.001,0.1\n").unwrap();
+        assert_eq!(d.len(), 1);
+    }
+
+    #[test]
+    fn a_duplicated_column_is_an_error() {
+        let e = parse_text("t,deflection,torque,torque\n0,0,1,2\n").unwrap_err();
+        assert_eq!(e.to_string(), "x.csv:1: column `torque`: appears twice in the header (columns 3 and 4): which one is meant?");
+    }
+
+    #[test]
+    fn another_separator_is_named() {
+        let e = parse_text("t;deflection;torque\n0;0;1\n").unwrap_err();
+        assert!(e.to_string().ends_with("the file seems separated by `;`: separate columns by commas"), "{e}");
+        let e = parse_text("t\tdeflection\ttorque\n0\t0\t1\n").unwrap_err();
+        assert!(e.to_string().contains("separated by tabs"), "{e}");
+    }
+
+    #[test]
+    fn errors_name_the_line_of_the_row() {
+        let e = parse_text("t,deflection,torque\n0,0,1\n\n0.01,0,x\n").unwrap_err();
+        assert_eq!((e.line, e.column.as_deref()), (4, Some("torque")), "{e}");
+    }
 }

@@ -27,6 +27,18 @@ pub enum FitRunError {
         /// Highest order supported.
         max: usize,
     },
+    /// A group has too few samples for the curve's parameters.
+    #[error("{group}: {samples} samples cannot fit {parameters} parameter(s); at least {needed} are needed ({SAMPLES_PER_PARAMETER} per parameter, and {MIN_SAMPLES} at least)")]
+    TooFewSamples {
+        /// The group.
+        group: String,
+        /// Samples in it.
+        samples: usize,
+        /// Parameters of its curve.
+        parameters: usize,
+        /// Samples needed.
+        needed: usize,
+    },
     /// One group's (pivot setting, direction, branch) curve cannot be fitted.
     #[error("{group}: {source}")]
     Group {
@@ -158,6 +170,21 @@ fn choose_order(x: &[f64], y: &[f64], order: Order, through: bool) -> usize {
     scores.iter().find(|s| s.1 <= best * 1.02).map_or(1, |s| s.0)
 }
 
+/// Samples a fit needs per parameter. Assumption: 5, so that the held-out fifth of the samples
+/// that chooses the order still outnumbers the parameters.
+pub const SAMPLES_PER_PARAMETER: usize = 5;
+/// Samples a group needs at least. Assumption: 20; with fewer, the held-out fifth that chooses
+/// the order holds fewer than 4 samples.
+pub const MIN_SAMPLES: usize = 20;
+
+fn enough_samples(group: &str, samples: usize, parameters: usize) -> Result<(), FitRunError> {
+    let needed = (SAMPLES_PER_PARAMETER * parameters).max(MIN_SAMPLES);
+    if samples < needed {
+        return Err(FitRunError::TooFewSamples { group: group.into(), samples, parameters, needed });
+    }
+    Ok(())
+}
+
 /// Fits every stiffness setting and direction of an experiment.
 ///
 /// ```
@@ -199,6 +226,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
             k.0.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0)),
             k.1.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0))
         );
+        enough_samples(&label, x.len(), 1)?;
         let stiffness = through_zero(&x, &y, 1).map_err(|source| FitRunError::Group { group: label.clone(), source })?[0];
         let through = opts.through_zero;
         let (curve, order, rmse, worst, branch_rmse) = if opts.branches {
@@ -206,6 +234,9 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
             let (px, py) = split(true);
             let (nx, ny) = split(false);
             let order = choose_order(&x, &y, opts.order, through);
+            let parameters = order + usize::from(!through);
+            enough_samples(&format!("{label}, positive deflection"), px.len(), parameters)?;
+            enough_samples(&format!("{label}, negative deflection"), nx.len(), parameters)?;
             let cp = fit_poly(&px, &py, order, through).map_err(|source| FitRunError::Group { group: format!("{label}, positive deflection"), source })?;
             let cn = fit_poly(&nx, &ny, order, through).map_err(|source| FitRunError::Group { group: format!("{label}, negative deflection"), source })?;
             let (rp, wp) = rmse_of(&px, &py, &cp, !through);
@@ -230,6 +261,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
             (curve, order, rmse, wp.max(wn), (rp, rn))
         } else {
             let order = choose_order(&x, &y, opts.order, through);
+            enough_samples(&label, x.len(), order + usize::from(!through))?;
             let c = fit_poly(&x, &y, order, through).map_err(|source| FitRunError::Group { group: label.clone(), source })?;
             let (rmse, worst) = rmse_of(&x, &y, &c, !through);
             let pos: (Vec<f64>, Vec<f64>) = x.iter().zip(&y).filter(|(a, _)| **a >= 0.0).map(|(a, b)| (*a, *b)).unzip();
@@ -261,4 +293,27 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
     }
     let spec = CharacteristicSpec { source: Source::Measured, curves: groups.iter().map(|g| g.curve.clone()).collect() };
     Ok(FitResult { groups, spec })
+}
+
+#[cfg(test)]
+mod too_few_samples {
+    use super::*;
+
+    /// Finding: `fit` fitted a stiffness from 2 samples.
+    #[test]
+    fn fit_refuses_fewer_samples_than_its_parameters_need() {
+        let data = crate::csv::parse("t,deflection,torque\n0,0.01,1.1\n0.01,0.02,2.3\n", "two.csv".as_ref()).unwrap();
+        let e = fit(&data, &FitOptions { order: Order::Fixed(1), ..FitOptions::default() }).unwrap_err();
+        assert!(matches!(e, FitRunError::TooFewSamples { samples: 2, needed: 20, .. }), "{e}");
+        let mut text = String::from("t,deflection,torque\n");
+        for i in 0..40 {
+            let phi = 0.1 * (i as f64 * 0.3).sin();
+            text += &format!("{},{phi},{}\n", i as f64 * 0.01, 100.0 * phi + 50.0 * phi.powi(3));
+        }
+        let data = crate::csv::parse(&text, "forty.csv".as_ref()).unwrap();
+        // Order 6 with branches: 6 parameters per branch, 30 samples each needed; about 20 each.
+        let e = fit(&data, &FitOptions { order: Order::Fixed(6), branches: true, ..FitOptions::default() }).unwrap_err();
+        assert!(matches!(e, FitRunError::TooFewSamples { parameters: 6, needed: 30, .. }), "{e}");
+        assert!(fit(&data, &FitOptions { order: Order::Fixed(3), ..FitOptions::default() }).is_ok());
+    }
 }
