@@ -37,6 +37,46 @@ enum EncoderModel {
     Fixed(f64),
 }
 
+/// Set-points on their way to one drive over the CAN bus: each is applied when its latency has
+/// passed. A fixed ring, so that the control cycle never allocates; when it is full the oldest
+/// pending set-point is dropped (a newer absolute target supersedes it anyway).
+#[derive(Clone, Debug)]
+struct InFlight {
+    /// (time due [s], target [rad]).
+    ring: [(f64, f64); InFlight::CAPACITY],
+    head: usize,
+    len: usize,
+}
+
+impl InFlight {
+    /// 30 ms of set-points at 8 kHz.
+    const CAPACITY: usize = 256;
+
+    fn new() -> Self {
+        InFlight { ring: [(0.0, 0.0); Self::CAPACITY], head: 0, len: 0 }
+    }
+
+    fn push(&mut self, due_s: f64, target: f64) {
+        if self.len == Self::CAPACITY {
+            self.head = (self.head + 1) % Self::CAPACITY;
+            self.len -= 1;
+        }
+        self.ring[(self.head + self.len) % Self::CAPACITY] = (due_s, target);
+        self.len += 1;
+    }
+
+    /// The newest set-point due by `now_s`, taking it and every older one off the ring.
+    fn arrived(&mut self, now_s: f64) -> Option<f64> {
+        let mut target = None;
+        while self.len > 0 && self.ring[self.head].0 <= now_s + 1e-12 {
+            target = Some(self.ring[self.head].1);
+            self.head = (self.head + 1) % Self::CAPACITY;
+            self.len -= 1;
+        }
+        target
+    }
+}
+
 /// Past values of one device, one per physics step, to read them with a bus latency.
 #[derive(Clone, Debug)]
 struct DelayLine {
@@ -99,6 +139,8 @@ pub struct SimHal {
     velocities: Vec<f64>,
     loads: Vec<f64>,
     encoder_faults: Vec<Option<EncoderFault>>,
+    /// Set-points on the CAN bus, per drive (they arrive `can_latency_s` after the write).
+    in_flight: Vec<InFlight>,
 }
 
 /// A fault injected into one simulated encoder, as the robot's SPI bus can produce them: the
@@ -234,6 +276,7 @@ impl SimHal {
             encoders,
             quantized,
             encoder_faults: vec![None; offsets.len()],
+            in_flight: vec![InFlight::new(); n_drives],
             encoder_offset_rad: offsets,
             noise_rad: sim.encoder_noise_rad,
             loss_rate: sim.can_loss_rate,
@@ -307,6 +350,11 @@ impl SimHal {
         let n = ((dt / self.substep_s).round() as usize).max(1);
         let h = dt / n as f64;
         for _ in 0..n {
+            for (d, wire) in self.drives.iter_mut().zip(&mut self.in_flight) {
+                if let Some(target) = wire.arrived(self.time_s) {
+                    d.set_target(target);
+                }
+            }
             for (i, d) in self.drives.iter().enumerate() {
                 self.positions[i] = d.position;
                 self.velocities[i] = d.velocity;
@@ -370,9 +418,11 @@ impl Hal for SimHal {
     }
 
     fn write(&mut self, frame: &ActuatorFrame, dt_s: f64) -> Result<(), HalIoError> {
-        for (d, sp) in self.drives.iter_mut().zip(&frame.drives) {
-            if sp.action == DriveAction::MOVE {
-                d.set_target(sp.position_rad);
+        // Set-points cross the CAN bus as readings do: they reach the drive `can_latency_s` later.
+        let due = self.time_s + self.can_latency_s;
+        for (wire, sp) in self.in_flight.iter_mut().zip(&frame.drives) {
+            if sp.action == DriveAction::MOVE && sp.position_rad.is_finite() {
+                wire.push(due, sp.position_rad);
             }
         }
         self.advance(dt_s);
