@@ -77,7 +77,12 @@ fn the_experiment_command_prints_the_documented_json() {
     assert_eq!(rows.len(), 3);
     for r in rows {
         let keys: Vec<&str> = r.as_object().unwrap().keys().map(String::as_str).collect();
-        assert_eq!(keys, ["joint", "scenario", "reference", "frequency_hz", "pivot_mm", "nrmse_observed", "nrmse_sensor", "phase_lag_deg"]);
+        assert_eq!(keys, ["joint", "scenario", "reference", "frequency_hz", "pivot_mm", "nrmse_observed", "nrmse_sensor", "nrmse_observer_vs_sensor", "offset_nm", "phase_lag_deg"]);
+        // The observer-vs-sensor figures are the two torques' difference, not either's error.
+        let (o, s) = (r["nrmse_observed"].as_f64().unwrap(), r["nrmse_sensor"].as_f64().unwrap());
+        let gap = r["nrmse_observer_vs_sensor"].as_f64().unwrap();
+        assert!(gap >= 0.0 && gap <= o + s + 1e-9, "{r}");
+        assert!(r["offset_nm"].as_f64().is_some_and(f64::is_finite), "{r}");
         assert_eq!(r["joint"], "q2");
         assert_eq!(r["scenario"], "thesis");
         assert!(r["pivot_mm"].is_f64());

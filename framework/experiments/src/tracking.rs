@@ -64,6 +64,11 @@ pub struct Row {
     pub nrmse_observed: f64,
     /// RMSE(sensor - reference) / amplitude.
     pub nrmse_sensor: f64,
+    /// RMSE(observed - sensor) / amplitude: how far the observer is from the F/T sensor, the
+    /// offset the thesis reports (sections 5.1, 5.2).
+    pub nrmse_observer_vs_sensor: f64,
+    /// Mean(observed - sensor) [Nm]: the offset's constant part.
+    pub offset_nm: f64,
     /// Phase lag of the sensor torque behind the reference [deg] (sine and cosine).
     pub phase_lag_deg: Option<f64>,
     /// Sensor amplitude / reference amplitude at the reference frequency (sine and cosine).
@@ -170,6 +175,10 @@ fn run_one(
         let v: Vec<f64> = scored.iter().map(|p| sel(p) - p.1).filter(|e| e.is_finite()).collect();
         (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt()
     };
+    let gap: Vec<f64> = scored.iter().map(|p| p.2 - p.3).filter(|e| e.is_finite()).collect();
+    let gap_n = gap.len().max(1) as f64;
+    let nrmse_observer_vs_sensor = (gap.iter().map(|e| e * e).sum::<f64>() / gap_n).sqrt() / amplitude;
+    let offset_nm = gap.iter().sum::<f64>() / gap_n;
     let (phase_lag_deg, gain) = if waveform == Waveform::Step {
         (None, None)
     } else {
@@ -192,6 +201,8 @@ fn run_one(
         pivot_mm: arm.states[dof].pivot(),
         nrmse_observed: rmse(|p| p.2) / amplitude,
         nrmse_sensor: rmse(|p| p.3) / amplitude,
+        nrmse_observer_vs_sensor,
+        offset_nm,
         phase_lag_deg,
         gain,
         trace,

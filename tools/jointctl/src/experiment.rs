@@ -71,11 +71,13 @@ pub enum SimCommand {
 }
 
 fn table(rows: &[Row]) -> String {
-    let mut t = String::from("| joint | scenario | reference | f [Hz] | pivot [mm] | NRMSE observed | NRMSE sensor | phase lag [deg] | gain |\n|---|---|---|---|---|---|---|---|---|\n");
+    let mut t = String::from(
+        "| joint | scenario | reference | f [Hz] | pivot [mm] | NRMSE observed | NRMSE sensor | NRMSE observed vs sensor | offset [Nm] | phase lag [deg] | gain |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
     for r in rows {
         let _ = writeln!(
             t,
-            "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |",
             r.joint,
             r.scenario,
             r.reference,
@@ -83,6 +85,8 @@ fn table(rows: &[Row]) -> String {
             r.pivot_mm.map_or("-".into(), |p| format!("{p:.1}")),
             r.nrmse_observed,
             r.nrmse_sensor,
+            r.nrmse_observer_vs_sensor,
+            r.offset_nm,
             r.phase_lag_deg.map_or("-".into(), |p| format!("{p:.1}")),
             r.gain.map_or("-".into(), |g| format!("{g:.2}"))
         );
