@@ -190,7 +190,7 @@ fn enough_samples(group: &str, samples: usize, parameters: usize) -> Result<(), 
 /// ```
 /// use jointctl_ident::fit::{fit, FitOptions, Order};
 ///
-/// // A 113.78 Nm/rad spring (the elbow's eq. 3.8 stiffness) deflected over +-0.1 rad.
+/// // A 113.78 Nm/rad spring (the elbow's stiffness, section 3.3.2) deflected over +-0.1 rad.
 /// let mut csv = String::from("t,deflection,torque\n");
 /// for i in 0..200 {
 ///     let phi = 0.1 * (i as f64 * 0.05).sin();
