@@ -233,12 +233,21 @@ fn q2_observed_torque_follows_a_0_1_hz_sine() {
 
 #[test]
 fn transmission_round_trips_joint_to_motor_to_joint_for_every_plugin() {
-    // Manual set-points (no feedback PI) go through each plugin's transmission to the motors;
+    // Manual set-points without the feedback PI (`manual_position_feedback: false`; the thesis
+    // has it on by default) go through each plugin's transmission to the motors;
     // the simulated encoders (configured from eq. 3.1, 3.3, 3.7/3.8 in the YAML) read them back
     // and the observers must return the commanded joint positions (to one encoder count): rigid q1, the shoulder
     // differential's q3, elbow q4 (ratio 2), q5, and the wrist's q6/q7 through the bevel and
     // planetary ratios. (q2's output is clamped in this configuration.)
-    let (_, path) = sherpa_copy("round-trip");
+    let no_pi = || serde_yaml::from_str::<serde_yaml::Value>("{manual_position_feedback: false}").unwrap();
+    let path = sherpa_with("round-trip", &arm_name("round-trip"), &[
+        Edit::Set("joints[q1].controller", no_pi()),
+        Edit::Set("joints[shoulder].dofs[q3].controller", no_pi()),
+        Edit::Set("joints[q4].controller", no_pi()),
+        Edit::Set("joints[q5].controller", no_pi()),
+        Edit::Set("joints[wrist].dofs[q6].controller", no_pi()),
+        Edit::Set("joints[wrist].dofs[q7].controller", no_pi()),
+    ]);
     let loaded = jointctl_config::load(&path).unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();
     arm.activate().unwrap();

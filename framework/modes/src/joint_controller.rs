@@ -45,6 +45,15 @@ pub struct ControllerConfig {
     /// YAML alone.
     #[serde(default)]
     pub startup: Option<StartupMode>,
+    /// Manual set-points go through the joint's position feedback PI, as in the thesis, where
+    /// "in case of ... manual manipulation the feedback PI loop is by default activated"
+    /// (section 4.3). `false`: the set-point goes to the drive as it is.
+    #[serde(default = "default_true")]
+    pub manual_position_feedback: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 /// A DOF's mode at start, from YAML: exactly one of `position_rad` or `torque`. Times are from
@@ -89,6 +98,7 @@ impl Default for ControllerConfig {
             max_setpoint_rate_rad_s: default_rate(),
             watchdog_s: default_watchdog(),
             startup: None,
+            manual_position_feedback: true,
         }
     }
 }
@@ -227,7 +237,8 @@ pub enum Mode {
         /// [rad]
         target_rad: f64,
     },
-    /// Direct joint set-points (the thesis' dynamic-reconfigure GUI), no feedback PI.
+    /// Direct joint set-points (the thesis' dynamic-reconfigure GUI), through the feedback PI
+    /// unless `controller.manual_position_feedback` is false (section 4.3).
     Manual {
         /// [rad]
         target_rad: f64,
@@ -386,7 +397,7 @@ impl JointController {
                 return Output::HOLD;
             }
             Mode::Position { target_rad } => (target_rad, 0.0, true, f64::NAN),
-            Mode::Manual { target_rad } => (target_rad, 0.0, false, f64::NAN),
+            Mode::Manual { target_rad } => (target_rad, 0.0, self.config.manual_position_feedback, f64::NAN),
             Mode::Trajectory { trajectory, start_s } => {
                 let (p, v) = trajectory.sample(now_s - start_s);
                 (p, v, true, f64::NAN)
@@ -559,6 +570,20 @@ mod tests {
         let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: Some(100.0) };
         assert!(c.update(&obs, 0.0, 0.01).hold);
         assert_eq!(c.events.missing_inputs, 1);
+    }
+
+    /// Issue finding (the thesis' arm): manual set-points skipped the feedback PI, which the
+    /// thesis has on by default in manual manipulation (section 4.3).
+    #[test]
+    fn manual_mode_uses_the_feedback_pi_unless_the_yaml_turns_it_off() {
+        let observed = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: None, stiffness_nm_per_rad: None };
+        let mut c = JointController::new(ControllerConfig::default(), DofLimits::NONE);
+        c.set_mode(Mode::Manual { target_rad: 0.01 }, 0.0, false);
+        assert!(c.update(&observed, 0.0, 0.025).position_feedback);
+        let cfg: ControllerConfig = serde_json::from_str(r#"{"manual_position_feedback": false}"#).unwrap();
+        let mut c = JointController::new(cfg, DofLimits::NONE);
+        c.set_mode(Mode::Manual { target_rad: 0.01 }, 0.0, false);
+        assert!(!c.update(&observed, 0.0, 0.025).position_feedback);
     }
 
     #[test]

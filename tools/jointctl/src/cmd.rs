@@ -63,7 +63,8 @@ enum Command {
         #[arg(allow_negative_numbers = true, value_parser = finite)]
         rad: f64,
     },
-    /// A direct joint set-point (no feedback PI), like the thesis' GUI.
+    /// A direct joint set-point, like the thesis' GUI (through the feedback PI unless the joint's
+    /// `controller.manual_position_feedback` is false, section 4.3).
     Manual {
         /// Joint name.
         joint: String,
