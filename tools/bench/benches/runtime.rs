@@ -32,10 +32,7 @@ fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::Lo
     let loaded = sherpa(rate_hz, arm);
     let mut loader = PluginLoader::new([plugin_dir()]);
     if statically {
-        loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
-        loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
-        loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
-        loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
+        jointctl_bench::register_sherpa_plugins(&mut loader);
     }
     let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| {
         panic!("{e}\n(build the plugins first: cargo build --release --workspace)")
@@ -205,10 +202,7 @@ fn main() {
         text = text.replacen("    encoder_noise_rad: 0.0", "    encoder_noise_rad: 0.0001\n    can_loss_rate: 0.02\n    spi_latency_s: 0.001\n    can_latency_s: 0.001", 1);
         let loaded = jointctl_config::parse_str(&text, &path).expect("sim config with effects");
         let mut loader = PluginLoader::new([plugin_dir()]);
-        loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
-        loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
-        loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
-        loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
+        jointctl_bench::register_sherpa_plugins(&mut loader);
         let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap();
         arm.activate().unwrap();
         for i in 0..arm.dof_names.len() {

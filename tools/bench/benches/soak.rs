@@ -118,10 +118,7 @@ fn main() {
     let loaded = jointctl_config::parse_str(&text, &path).unwrap();
     let mut loader = PluginLoader::new([]);
     // Statically linked, so that a plugin's allocation would be counted here too.
-    loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
-    loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
-    loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
-    loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
+    jointctl_bench::register_sherpa_plugins(&mut loader);
     let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap();
     arm.activate().unwrap();
     let mut publisher = ArmPublisher::new(&arm, None).unwrap();
