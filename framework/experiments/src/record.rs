@@ -82,7 +82,10 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     let mut out = Vec::with_capacity(steps);
     for k in 0..steps {
         let t = k as f64 / opts.rate_hz;
-        arm.step(t);
+        // The sensor and the motor are sampled at the instant the observer reads, between
+        // observe and control: after `control` the simulation has advanced one period, and the
+        // torque led the deflection by it (10 ms at 100 Hz, a delay identify then reported).
+        arm.observe(t);
         let (torque, motor) = sim.with(|s| {
             let tq = |name: &str| s.joint_torque(name).map_or(f64::NAN, |x| x.1);
             let torque = if two {
@@ -93,6 +96,7 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
             };
             (torque, s.drives()[first_drive].position)
         });
+        arm.control();
         let st = &arm.states;
         let deflection = if two {
             let first = arm.slots.iter().find(|s| s.dofs().contains(&dof)).map(|s| s.dofs().start).unwrap_or(dof);
