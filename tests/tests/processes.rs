@@ -564,3 +564,24 @@ fn sigkill_then_restart() {
     assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
     assert!(String::from_utf8_lossy(&again.stderr).contains("20 cycles"));
 }
+
+/// A negative or NaN duration panicked in `Duration` (`inspect --timeout=-1`, `cmd
+/// --timeout=-1`) or ended a run at once without a word (`run --duration NaN`). Pass: each is
+/// refused where it is typed (exit 2) with the reason.
+#[test]
+fn bad_durations_are_refused_where_they_are_typed() {
+    let (_, yaml) = write_rig("bad-durations", 100.0);
+    let yaml = yaml.display().to_string();
+    for args in [
+        vec!["inspect", "echo", "--timeout=-1"],
+        vec!["cmd", "--timeout=-1", "hold"],
+        vec!["cmd", "--timeout", "NaN", "hold"],
+        vec!["run", yaml.as_str(), "--duration", "NaN"],
+        vec!["run", yaml.as_str(), "--duration=-2"],
+    ] {
+        let out = Command::new(jointctl()).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("must be >= 0 s") || err.contains("must be a finite number"), "{args:?}: {err}");
+    }
+}

@@ -9,7 +9,9 @@
 //! consumer heartbeat of the host (0x1016:01) and what to do when it stops (0x6007, abort
 //! connection option: quick stop by default); then NMT start. So a host that stalls or dies
 //! cannot leave a drive moving: the drive stops on its own after `comm_loss_timeout_ms`. The
-//! write step sends the host's heartbeat every `host_heartbeat_ms`. In the loop (never blocking): read drains the socket (TPDO1 statusword +
+//! write step sends the host's heartbeat every `host_heartbeat_ms`.
+//!
+//! In the loop (never blocking): read drains the socket (TPDO1 statusword +
 //! position, heartbeats, EMCY, error frames) and each encoder's pipelined SPI answer; write sends
 //! every drive's RPDO1 (controlword + target) and one SYNC with its counter. The CiA 402 enable
 //! sequence advances one step per cycle, and only once the drive's actual position is known (the
@@ -374,8 +376,7 @@ impl Hal for HardwareHal {
         let profile = self.mode == DriveMode::ProfilePosition;
         let now = self.t0.elapsed().as_secs_f64();
         // The host's heartbeat, which every drive consumes (0x1016): it stops when the loop does.
-        let heartbeat = now - self.last_host_heartbeat_s >= self.host_heartbeat_s;
-        if heartbeat {
+        if now - self.last_host_heartbeat_s >= self.host_heartbeat_s {
             self.last_host_heartbeat_s = now;
             for bus in &mut self.buses {
                 bus.send(&co::heartbeat(self.host_node_id, co::nmt_state::OPERATIONAL));

@@ -10,7 +10,7 @@
 //! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v2`), so that
 //! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
 //! name, size and alignment but not field order, hence the version in the name. Every process of
-//! one arm builds its iceoryx2 config with [`iceoryx2_config`] rather than looking for a config
+//! one arm builds its iceoryx2 config with [`iceoryx2_config_in`] rather than looking for a config
 //! file relative to its working directory, so that all of them meet in one domain.
 
 #![forbid(unsafe_code)]
@@ -539,13 +539,9 @@ impl IpcScope {
     }
 }
 
-/// The iceoryx2 configuration of a domain: iceoryx2's defaults, with the file prefix set to
-/// `domain` when given. Built in code so that no process depends on its working directory.
-pub fn iceoryx2_config(domain: Option<&str>) -> Result<Config, IpcSetupError> {
-    iceoryx2_config_in(&IpcScope::domain(domain))
-}
-
-/// [`iceoryx2_config`] for a whole scope (domain and root).
+/// The iceoryx2 configuration of a scope: iceoryx2's defaults, with the file prefix set to the
+/// domain and the root path to the root when given. Built in code so that no process depends on
+/// its working directory.
 pub fn iceoryx2_config_in(scope: &IpcScope) -> Result<Config, IpcSetupError> {
     let mut config = Config::default();
     if let Some(d) = &scope.domain {
@@ -563,14 +559,9 @@ pub fn iceoryx2_config_in(scope: &IpcScope) -> Result<Config, IpcSetupError> {
 /// the domain's iceoryx2 root.
 ///
 /// ```
-/// let dir = jointctl_ipc::lock_dir(Some("lab")).unwrap();
+/// let dir = jointctl_ipc::lock_dir_in(&jointctl_ipc::IpcScope::domain(Some("lab"))).unwrap();
 /// assert!(dir.ends_with("jointctl/lab"));
 /// ```
-pub fn lock_dir(domain: Option<&str>) -> Result<std::path::PathBuf, IpcSetupError> {
-    lock_dir_in(&IpcScope::domain(domain))
-}
-
-/// [`lock_dir`] for a whole scope.
 pub fn lock_dir_in(scope: &IpcScope) -> Result<std::path::PathBuf, IpcSetupError> {
     let config = iceoryx2_config_in(scope)?;
     let prefix = config.global.prefix.to_string();

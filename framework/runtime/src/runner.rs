@@ -378,7 +378,6 @@ impl ArmPublisher {
                 };
             }
         }
-        self.status.set_cycle(cycle);
     }
 
     /// The status the command desk reads.

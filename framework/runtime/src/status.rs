@@ -3,7 +3,7 @@
 //! stores, no lock, no allocation), read by the IPC thread. The loop's own `Arm::enabled` and
 //! slot faults stay the single source of truth; this is their published copy.
 
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// One DOF as the loop last saw it.
 #[derive(Debug, Default)]
@@ -17,21 +17,19 @@ struct DofStatus {
 /// ```
 /// let s = jointctl_runtime::status::LoopStatus::new(2);
 /// s.set_dof(1, false, 3);
-/// s.set_cycle(7);
-/// assert!(!s.enabled(1) && s.fault(1) == 3 && s.cycle() == 7);
+/// assert!(!s.enabled(1) && s.fault(1) == 3 && s.enabled(0));
 /// ```
 #[derive(Debug)]
 pub struct LoopStatus {
     dofs: Box<[DofStatus]>,
     stopping: AtomicBool,
-    cycle: AtomicU64,
 }
 
 impl LoopStatus {
     /// A status of `n` DOFs, every one enabled and without fault (the state before the first cycle).
     pub fn new(n: usize) -> Self {
         let dofs = (0..n).map(|_| DofStatus { enabled: AtomicBool::new(true), fault: AtomicU32::new(0) }).collect();
-        LoopStatus { dofs, stopping: AtomicBool::new(false), cycle: AtomicU64::new(0) }
+        LoopStatus { dofs, stopping: AtomicBool::new(false) }
     }
 
     /// Publishes one DOF. Allocation-free.
@@ -43,12 +41,6 @@ impl LoopStatus {
     /// Publishes that the loop is stopping.
     pub fn set_stopping(&self) {
         self.stopping.store(true, Ordering::Relaxed);
-    }
-
-    /// Publishes the cycle whose status this is (stored last, released: a reader that sees it
-    /// sees that cycle's DOFs).
-    pub fn set_cycle(&self, cycle: u64) {
-        self.cycle.store(cycle, Ordering::Release);
     }
 
     /// Whether DOF `dof` is enabled.
@@ -64,10 +56,5 @@ impl LoopStatus {
     /// Whether the loop is stopping.
     pub fn stopping(&self) -> bool {
         self.stopping.load(Ordering::Relaxed)
-    }
-
-    /// The last published cycle.
-    pub fn cycle(&self) -> u64 {
-        self.cycle.load(Ordering::Acquire)
     }
 }

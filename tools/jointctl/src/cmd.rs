@@ -6,6 +6,8 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::{Args, Subcommand};
+
+use crate::{finite, seconds};
 use jointctl_ipc::{CommandKind as kind, CommandRequest, MAX_COMMAND_POINTS, TorqueWaveform};
 
 #[derive(Args)]
@@ -20,7 +22,7 @@ pub struct CmdArgs {
     #[arg(long, global = true, value_name = "DIR")]
     ipc_root: Option<std::path::PathBuf>,
     /// How long to wait for the runtime's answer [s].
-    #[arg(long, global = true, default_value_t = 2.0, value_parser = finite)]
+    #[arg(long, global = true, default_value_t = 2.0, value_parser = seconds)]
     timeout: f64,
     /// A streamed command: the joint falls back to holding if it is not renewed within its
     /// watchdog time.
@@ -52,7 +54,7 @@ enum Command {
         #[arg(long, value_name = "NM", default_value_t = 0.0, value_parser = finite, allow_negative_numbers = true)]
         offset: f64,
         /// Start the reference this long after the command arrives [s].
-        #[arg(long, value_name = "S", default_value_t = 0.0, value_parser = finite)]
+        #[arg(long, value_name = "S", default_value_t = 0.0, value_parser = seconds)]
         delay: f64,
     },
     /// Position control with the feedback PI (section 4.3) to RAD.
@@ -119,16 +121,6 @@ enum Command {
     },
     /// Stop the runtime: joints held, final state published.
     Stop,
-}
-
-/// A finite number: NaN and infinity are refused where they are typed, with the argument's
-/// name (clap adds it), instead of reaching the runtime, where NaN means "not given".
-fn finite(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(v) => Err(format!("must be a finite number, got {v}")),
-        Err(_) => Err(format!("`{text}` is not a number")),
-    }
 }
 
 fn parse_points(points: &[String]) -> Result<Vec<[f64; 3]>, String> {

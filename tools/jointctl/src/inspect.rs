@@ -40,7 +40,7 @@ pub enum InspectCommand {
         #[arg(long)]
         count: Option<u64>,
         /// Give up when no sample arrives for this long [s].
-        #[arg(long, default_value_t = 5.0)]
+        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
     },
 }

@@ -70,6 +70,25 @@ fn experiment_loader(loaded: &jointctl_config::LoadedConfig) -> Result<PluginLoa
     Ok(loader)
 }
 
+/// A finite number: NaN and infinity are refused where they are typed, with the argument's
+/// name (clap adds it), instead of reaching the runtime, where NaN means "not given".
+fn finite(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(format!("must be a finite number, got {v}")),
+        Err(_) => Err(format!("`{text}` is not a number")),
+    }
+}
+
+/// A duration [s]: finite and >= 0 (a negative or NaN one would panic in `Duration` or end a
+/// run at once without saying so).
+fn seconds(text: &str) -> Result<f64, String> {
+    match finite(text)? {
+        v if v >= 0.0 => Ok(v),
+        v => Err(format!("must be >= 0 s, got {v}")),
+    }
+}
+
 fn fail(message: impl std::fmt::Display) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(1)

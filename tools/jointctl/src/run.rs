@@ -19,7 +19,7 @@ pub struct RunArgs {
     #[arg(long)]
     cycles: Option<u64>,
     /// Stop after S seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::seconds)]
     duration: Option<f64>,
     /// Use the plugins linked into this binary instead of loading shared libraries.
     #[arg(long)]
