@@ -7,6 +7,13 @@ use jointctl_modes::Mode;
 use jointctl_runtime::{PluginLoader, RunOptions};
 use jointctl_tests::rig_yaml;
 
+/// Steps an arm through cycles `cycles` at 100 Hz (unpaced).
+fn step_100hz(arm: &mut jointctl_runtime::Arm, cycles: std::ops::Range<usize>) {
+    for i in cycles {
+        arm.step(i as f64 * 0.01);
+    }
+}
+
 fn position(target_rad: f64) -> Mode {
     Mode::Position { target_rad }
 }
@@ -56,34 +63,24 @@ fn a_stall_costs_one_overrun(params: &str) {
 fn a_joints_own_budget_overrides_the_default() {
     let stall = "{stall_us: 2000, stall_every: 3}";
     let mut arm = arm_with_faulty(100.0, stall);
-    for i in 0..9 {
-        arm.step(i as f64 * 0.01);
-    }
+    step_100hz(&mut arm, 0..9);
     assert_eq!(arm.slots[1].fault, 0, "2 ms is within 5 ms");
     let extra = format!("  - name: b\n    plugin: faulty\n    budget_us: 1000\n    encoders: {{output: e1}}\n    drives: {{motor: m1}}\n    params: {stall}\n");
     let loaded = jointctl_config::parse_str(&rig_yaml("fault-injection", 100.0, &extra), "rig.yaml").unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
     arm.activate().unwrap();
-    for i in 0..9 {
-        arm.step(i as f64 * 0.01);
-    }
+    step_100hz(&mut arm, 0..9);
     assert_eq!(arm.slots[1].fault, JointFault::OVER_BUDGET.code());
     // Over budget but under the stall limit (the 10 ms period): counted, and faulted only on the
     // third time without a second in budget between.
     let mut arm = arm_with_faulty(100.0, "{stall_us: 6000, stall_every: 3, stall_sleeps: true}");
-    for i in 0..6 {
-        arm.step(i as f64 * 0.01);
-    }
+    step_100hz(&mut arm, 0..6);
     assert_eq!((arm.slots[1].fault, arm.slots[1].over_budget_cycles), (0, 2));
-    for i in 6..9 {
-        arm.step(i as f64 * 0.01);
-    }
+    step_100hz(&mut arm, 6..9);
     assert_eq!(arm.slots[1].fault, JointFault::OVER_BUDGET.code());
     // A second in budget between excesses forgives them: four excesses, 1.2 s apart, no fault.
     let mut arm = arm_with_faulty(100.0, "{stall_us: 6000, stall_every: 120, stall_sleeps: true}");
-    for i in 0..500 {
-        arm.step(i as f64 * 0.01);
-    }
+    step_100hz(&mut arm, 0..500);
     assert_eq!((arm.slots[1].fault, arm.slots[1].over_budget_cycles), (0, 4));
 }
 
