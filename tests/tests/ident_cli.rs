@@ -24,12 +24,15 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("exactly one JSON object");
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(keys, ["samples", "dropped_samples", "rmse_before", "rmse_after", "causes"]);
+    assert_eq!(keys, ["samples", "dropped_samples", "rmse_before", "rmse_after", "causes", "significance"]);
     assert_eq!(v["samples"], 4000);
     let first = &v["causes"][0];
     let ckeys: Vec<&str> = first.as_object().unwrap().keys().map(String::as_str).collect();
     assert_eq!(ckeys, ["effect", "params", "rmse_gain", "evidence"]);
     assert_eq!(first["effect"], "hysteresis");
+    // Finding: the example also got a 0.003 Nm "vibration" and a 0.001 Nm "time_delay".
+    assert_eq!(v["causes"].as_array().unwrap().len(), 1, "hysteresis alone: {}", v["causes"]);
+    assert_eq!(v["significance"]["level"], 0.001);
     let limit = first["params"]["limit_nm"].as_f64().unwrap();
     assert!((limit - 1.2).abs() < 0.2, "limit {limit} Nm, the plant has 1.2");
     let (before, after) = (v["rmse_before"].as_f64().unwrap(), v["rmse_after"].as_f64().unwrap());

@@ -5,7 +5,7 @@
 mod common;
 
 use jointctl_ident::csv::Data;
-use jointctl_ident::identify::{CandidateCause, Excitation, IdentifyError, IdentifyOptions, Samples, identify};
+use jointctl_ident::identify::{CandidateCause, IdentifyError, IdentifyOptions, Parameter, Refine, Samples, SearchContext, identify};
 
 /// A gear-tooth ripple: torque periodic in deflection, `a sin(w phi) + b cos(w phi)`.
 struct ToothRipple;
@@ -17,15 +17,13 @@ impl CandidateCause for ToothRipple {
     fn coefficient_names(&self) -> Vec<String> {
         vec!["sin_nm".into(), "cos_nm".into()]
     }
-    fn parameter_name(&self) -> Option<&str> {
-        Some("ripples_per_rad")
-    }
-    fn grid(&self, e: &Excitation) -> Vec<f64> {
+    fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         // Ripple periods from the whole amplitude down to a hundredth of it, 1.2 % apart.
-        let (lo, hi) = (2.0 / e.amplitude_rad, 200.0 / e.amplitude_rad);
-        (0..400).map(|i| lo * (hi / lo).powf(i as f64 / 399.0)).collect()
+        let (lo, hi) = (2.0 / c.excitation.amplitude_rad, 200.0 / c.excitation.amplitude_rad);
+        vec![Parameter { name: "ripples_per_rad".into(), grid: (0..400).map(|i| lo * (hi / lo).powf(i as f64 / 399.0)).collect(), refine: Refine::Between }]
     }
-    fn columns(&self, w: f64, s: &Samples) -> Vec<Vec<f64>> {
+    fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        let w = p[0];
         vec![s.deflection_rad.iter().map(|x| (w * x).sin()).collect(), s.deflection_rad.iter().map(|x| (w * x).cos()).collect()]
     }
 }
@@ -40,10 +38,10 @@ impl CandidateCause for BoundedDamping {
     fn coefficient_names(&self) -> Vec<String> {
         vec!["extra_damping_nms_per_rad".into()]
     }
-    fn columns(&self, _: f64, s: &Samples) -> Vec<Vec<f64>> {
+    fn columns(&self, _: &[f64], s: &Samples) -> Vec<Vec<f64>> {
         vec![s.velocity_rad_per_s.to_vec()]
     }
-    fn impossible(&self, _: f64, c: &[f64]) -> Option<String> {
+    fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
         (c[0] > 0.01).then(|| format!("damping {:.3} above the design bound", c[0]))
     }
 }
@@ -101,7 +99,7 @@ impl CandidateCause for MissingColumn {
     fn coefficient_names(&self) -> Vec<String> {
         vec!["a_nm".into(), "b_nm".into()]
     }
-    fn columns(&self, _: f64, s: &Samples) -> Vec<Vec<f64>> {
+    fn columns(&self, _: &[f64], s: &Samples) -> Vec<Vec<f64>> {
         vec![s.deflection_rad.to_vec()]
     }
 }

@@ -165,6 +165,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         Ok(d) => d,
         Err(e) => return crate::fail_err(e),
     };
+    // A configured joint's model has no eq. 3.5 friction (the joint plugins observe torque from
+    // the characteristic alone): friction is then a cause to name, not part of the baseline.
+    let baseline_friction = a.config.is_none();
     let baseline = match (&a.config, &a.joint) {
         (Some(c), Some(j)) => match config_baseline(c, j) {
             Ok(b) => b,
@@ -180,7 +183,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         s.enable_steady_tick(std::time::Duration::from_millis(100));
         s
     });
-    let result = identify(&data, &IdentifyOptions { baseline, ..IdentifyOptions::default() });
+    let result = identify(&data, &IdentifyOptions { baseline, baseline_friction, ..IdentifyOptions::default() });
     if let Some(s) = spinner {
         s.finish_and_clear();
     }
@@ -196,6 +199,11 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.rmse_before,
         report.rmse_after
     );
+    let _ = writeln!(
+        md,
+        "A cause is reported when BIC on the training part proposes it and its held-out gain passes a {} at level {} ({} blocks).\n",
+        report.significance.test, report.significance.level, report.significance.blocks
+    );
     if report.causes.is_empty() {
         md.push_str("No cause found: the baseline explains the data.\n");
     } else {
@@ -206,7 +214,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         }
     }
     if !report.rejected.is_empty() {
-        let _ = writeln!(md, "\nRejected (physically impossible, or not confirmed on the held-out part): {}.", report.rejected.join(", "));
+        let _ = writeln!(md, "\nRejected (physically impossible, or not significant on the held-out part): {}.", report.rejected.join(", "));
     }
     if let Some(dir) = &a.report {
         if let Err(e) = std::fs::create_dir_all(dir) {

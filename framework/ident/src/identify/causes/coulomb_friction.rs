@@ -1,0 +1,33 @@
+//! Friction of eq. 3.5, `k_a atan(k_b dphi/dt)`: Coulomb-like friction smoothed through zero
+//! velocity. In the baseline only when the configured model has it; otherwise a cause to name.
+
+use serde_json::json;
+
+use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
+
+/// `+ k_a atan(k_b dphi/dt)` [Nm], `k_a >= 0`.
+pub struct CoulombFriction;
+
+impl CandidateCause for CoulombFriction {
+    fn name(&self) -> &str {
+        "coulomb_friction"
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["friction_ka_nm".into()]
+    }
+    fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+        // k_b from "linear over the whole speed range" to "a step at a hundredth of the peak
+        // speed" (the peak speed from the data): beyond, the arctan is a sign function.
+        let peak = c.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
+        vec![Parameter { name: "friction_kb_s_per_rad".into(), grid: log_grid(0.3 / peak, 300.0 / peak, 13), refine: Refine::Between }]
+    }
+    fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        vec![s.velocity_rad_per_s.iter().map(|v| (p[0] * v).atan()).collect()]
+    }
+    fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
+        (c[0] < 0.0).then(|| "negative friction".into())
+    }
+    fn fragments(&self, p: &[f64], c: &[f64]) -> Fragments {
+        Fragments { plant: Default::default(), observer: object([("friction", json!({"ka_nm": c[0], "kb_s_per_rad": p[0]}))]) }
+    }
+}

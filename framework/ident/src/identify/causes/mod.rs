@@ -1,0 +1,227 @@
+//! The vocabulary of causes: one module per physical effect, each implementing
+//! [`CandidateCause`]. Adding a cause means adding one file here and one line in [`builtin`].
+
+use std::collections::BTreeMap;
+
+use serde_json::{Map, Value};
+
+mod coulomb_friction;
+mod reversals;
+mod dead_zone;
+mod hysteresis;
+mod reversal_ringing;
+mod sensor_offset;
+mod speed_vibration;
+mod stiffness_nonlinearity;
+mod time_delay;
+mod vibration;
+mod viscous_friction;
+
+pub use coulomb_friction::CoulombFriction;
+pub use reversals::reversals;
+pub use dead_zone::DeadZone;
+pub use hysteresis::{Hysteresis, dahl_unit};
+pub use reversal_ringing::ReversalRinging;
+pub use sensor_offset::SensorOffset;
+pub use speed_vibration::SpeedVibration;
+pub use stiffness_nonlinearity::StiffnessNonlinearity;
+pub use time_delay::TimeDelay;
+pub use vibration::Vibration;
+pub use viscous_friction::ViscousFriction;
+
+/// The built-in vocabulary, in the order candidates are tried (ties go to the earlier one).
+pub fn builtin() -> Vec<Box<dyn CandidateCause>> {
+    vec![
+        Box::new(ViscousFriction),
+        Box::new(CoulombFriction),
+        Box::new(SensorOffset),
+        Box::new(StiffnessNonlinearity),
+        Box::new(Hysteresis),
+        Box::new(DeadZone),
+        Box::new(TimeDelay),
+        Box::new(Vibration),
+        Box::new(SpeedVibration),
+        Box::new(ReversalRinging),
+    ]
+}
+
+/// Scales of the experiment, for a candidate's parameter grid.
+#[derive(Clone, Copy, Debug)]
+pub struct Excitation {
+    /// Largest |deflection| [rad].
+    pub amplitude_rad: f64,
+    /// Fundamental frequency of the deflection (zero crossings per second) [Hz].
+    pub frequency_hz: f64,
+    /// Sample period of the data the search runs on [s].
+    pub sample_period_s: f64,
+}
+
+/// What a candidate sees when it chooses its parameter grid: the experiment's scales and the
+/// current model's residual on the (decimated) training part.
+pub struct SearchContext<'a> {
+    /// The experiment's scales.
+    pub excitation: Excitation,
+    /// Time [s].
+    pub t_s: &'a [f64],
+    /// Deflection rate [rad/s].
+    pub velocity_rad_per_s: &'a [f64],
+    /// The current model's residual, measured minus predicted torque [Nm].
+    pub residual_nm: &'a [f64],
+}
+
+/// A non-linear parameter of a cause and the values to search.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameter {
+    /// Name with its SI unit, as reported.
+    pub name: String,
+    /// Values to try.
+    pub grid: Vec<f64>,
+    /// How the best grid value is refined.
+    pub refine: Refine,
+}
+
+/// How the best value of a parameter's grid is refined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refine {
+    /// Golden-section search between the best value's neighbours (a positive grid, log scale).
+    Between,
+    /// A whole number of full-rate sample periods: every one within a grid step of the best is
+    /// tried on the full-rate training data.
+    Samples,
+    /// The grid value as it is (already refined by the cause).
+    Not,
+}
+
+/// The inputs of the model, as the torque channel sees them. A cause may transform them (a delay
+/// shifts the channel, a dead zone maps the deflection the spring sees) before columns are built.
+#[derive(Clone, Debug)]
+pub struct Inputs {
+    /// Deflection [rad] as the torque channel sees it.
+    pub deflection_rad: Vec<f64>,
+    /// Deflection rate [rad/s] as the torque channel sees it.
+    pub velocity_rad_per_s: Vec<f64>,
+    /// Deflection the elastic element transmits torque for [rad] (after play).
+    pub elastic_rad: Vec<f64>,
+    /// Sample period of these inputs [s] (uniform).
+    pub sample_period_s: f64,
+}
+
+/// What a candidate sees of one part of the data (training or held out).
+pub struct Samples<'a> {
+    /// Time [s].
+    pub t_s: &'a [f64],
+    /// Deflection [rad] as the torque channel sees it (shifted when a time delay is in the model).
+    pub deflection_rad: &'a [f64],
+    /// Deflection rate [rad/s] as the torque channel sees it.
+    pub velocity_rad_per_s: &'a [f64],
+    /// Deflection the elastic element transmits torque for [rad] (after a dead zone).
+    pub elastic_rad: &'a [f64],
+    /// Stiffness setting [mm] (0 when the data has none).
+    pub pivot_mm: &'a [f64],
+    /// Deflections before this part, oldest first: the history a stateful effect starts from.
+    pub history_rad: &'a [f64],
+}
+
+/// What a cause adds to the observer's and the simulation's configuration, in the keys they load
+/// (`sim.effects` for the plant; the joint plugin's `model_extension` for the observer).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Fragments {
+    /// Keys of the simulated joint's `sim.effects`.
+    pub plant: Map<String, Value>,
+    /// Keys of the joint plugin's observer model extension.
+    pub observer: Map<String, Value>,
+}
+
+/// A cause: a model extension linear in its coefficients, with non-linear parameters searched on
+/// grids. Built-in causes and user causes ([`crate::identify::IdentifyOptions::extra_candidates`])
+/// implement the same trait and compete under the same criteria.
+///
+/// ```
+/// use jointctl_ident::identify::{CandidateCause, Parameter, Refine, SearchContext, Samples};
+///
+/// /// Cogging: a torque ripple periodic in deflection, `a sin(w phi) + b cos(w phi)`.
+/// struct Cogging;
+///
+/// impl CandidateCause for Cogging {
+///     fn name(&self) -> &str { "cogging" }
+///     fn coefficient_names(&self) -> Vec<String> { vec!["sin_nm".into(), "cos_nm".into()] }
+///     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+///         let grid = (1..=40).map(|k| k as f64 * 4.0 / c.excitation.amplitude_rad).collect();
+///         vec![Parameter { name: "ripples_per_rad".into(), grid, refine: Refine::Between }]
+///     }
+///     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+///         vec![
+///             s.deflection_rad.iter().map(|x| (p[0] * x).sin()).collect(),
+///             s.deflection_rad.iter().map(|x| (p[0] * x).cos()).collect(),
+///         ]
+///     }
+/// }
+/// assert_eq!(Cogging.coefficient_names().len(), 2);
+/// ```
+pub trait CandidateCause: Send + Sync {
+    /// The name reported in the `effect` field.
+    fn name(&self) -> &str;
+    /// Names of the linear coefficients, SI units in the names.
+    fn coefficient_names(&self) -> Vec<String>;
+    /// The non-linear parameters and their grids (none by default).
+    fn parameters(&self, context: &SearchContext) -> Vec<Parameter> {
+        let _ = context;
+        Vec::new()
+    }
+    /// Changes what the torque channel sees (a delay, a dead zone); nothing by default.
+    fn transform(&self, parameters: &[f64], inputs: &mut Inputs) {
+        let _ = (parameters, inputs);
+    }
+    /// One column per coefficient, one value per sample.
+    fn columns(&self, parameters: &[f64], samples: &Samples) -> Vec<Vec<f64>>;
+    /// Why a fit is physically impossible (it is then rejected, not reported), or `None`.
+    fn impossible(&self, parameters: &[f64], coefficients: &[f64]) -> Option<String> {
+        let _ = (parameters, coefficients);
+        None
+    }
+    /// Segments (start indices) on each of which the coefficients are fitted anew, when they
+    /// cannot carry over from one stretch of data to the next (the amplitude and phase of each
+    /// ring of a structure, rung at random by each reversal). They are fitted on every part, the
+    /// held-out one included, and every coefficient so fitted is charged for (Mallows' Cp on the
+    /// held-out part, BIC on the training part). `None` (the default): one set of coefficients.
+    fn segments(&self, parameters: &[f64], samples: &Samples) -> Option<Vec<usize>> {
+        let _ = (parameters, samples);
+        None
+    }
+    /// The parameters reported, SI units in the names (by default every coefficient and every
+    /// non-linear parameter under its own name).
+    fn report(&self, parameters: &[f64], parameter_names: &[String], coefficients: &[f64]) -> BTreeMap<String, f64> {
+        let mut out: BTreeMap<String, f64> = self.coefficient_names().into_iter().zip(coefficients.iter().copied()).collect();
+        out.extend(parameter_names.iter().cloned().zip(parameters.iter().copied()));
+        out
+    }
+    /// A remark for the evidence column (a known confound), or `None`.
+    fn remark(&self, parameters: &[f64], excitation: &Excitation, duration_s: f64) -> Option<String> {
+        let _ = (parameters, excitation, duration_s);
+        None
+    }
+    /// What the cause adds to the observer and the simulation (nothing by default).
+    fn fragments(&self, parameters: &[f64], coefficients: &[f64]) -> Fragments {
+        let _ = (parameters, coefficients);
+        Fragments::default()
+    }
+    /// Look-elsewhere charge [BIC units] for a parameter chosen as the best of many resolvable
+    /// values on the current residual (a frequency scan); 0 for ordinary grids.
+    fn look_elsewhere(&self, context: &SearchContext) -> f64 {
+        let _ = context;
+        0.0
+    }
+}
+
+/// A log-spaced grid of `n` values from `lo` to `hi` (both > 0).
+pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    if n < 2 {
+        return vec![lo];
+    }
+    (0..n).map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64)).collect()
+}
+
+/// A JSON object from pairs, for fragments.
+pub(crate) fn object<const N: usize>(pairs: [(&str, Value); N]) -> Map<String, Value> {
+    pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+}

@@ -1,0 +1,40 @@
+//! A vibration whose amplitude grows with speed: `|dphi/dt| (a sin(2 pi f t) + b cos(2 pi f t))`
+//! (gear meshing, a rubbing cable: the faster the joint moves, the harder it shakes).
+
+use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext};
+use crate::identify::spectrum;
+
+/// `+ |dphi/dt| (a sin(2 pi f t) + b cos(2 pi f t))` [Nm].
+pub struct SpeedVibration;
+
+impl CandidateCause for SpeedVibration {
+    fn name(&self) -> &str {
+        "speed_vibration"
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["sin_nms_per_rad".into(), "cos_nms_per_rad".into()]
+    }
+    fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+        // The matched filter for an amplitude that follows the speed: the residual weighted by it.
+        let weighted: Vec<f64> = c.residual_nm.iter().zip(c.velocity_rad_per_s).map(|(r, v)| r * v.abs()).collect();
+        let f = spectrum::dominant_frequency(c.t_s, &weighted, c.excitation.frequency_hz);
+        vec![Parameter { name: "frequency_hz".into(), grid: vec![f], refine: Refine::Not }]
+    }
+    fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        let w = std::f64::consts::TAU * p[0];
+        let speed = s.velocity_rad_per_s;
+        vec![
+            s.t_s.iter().zip(speed).map(|(t, v)| v.abs() * (w * t).sin()).collect(),
+            s.t_s.iter().zip(speed).map(|(t, v)| v.abs() * (w * t).cos()).collect(),
+        ]
+    }
+    fn report(&self, p: &[f64], _: &[String], c: &[f64]) -> std::collections::BTreeMap<String, f64> {
+        [("frequency_hz".to_string(), p[0]), ("amplitude_nms_per_rad".to_string(), c[0].hypot(c[1]))].into_iter().collect()
+    }
+    fn remark(&self, p: &[f64], e: &Excitation, duration_s: f64) -> Option<String> {
+        super::vibration::harmonic_remark(p[0], e, duration_s)
+    }
+    fn look_elsewhere(&self, c: &SearchContext) -> f64 {
+        2.0 * spectrum::resolvable(c.t_s, c.excitation.frequency_hz).ln()
+    }
+}

@@ -1,0 +1,26 @@
+//! Viscous friction in the element: `+ b dphi/dt`.
+
+use serde_json::json;
+
+use super::{CandidateCause, Fragments, Samples, object};
+
+/// `+ b * dphi/dt` [Nm], `b >= 0`.
+pub struct ViscousFriction;
+
+impl CandidateCause for ViscousFriction {
+    fn name(&self) -> &str {
+        "viscous_friction"
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["damping_nms_per_rad".into()]
+    }
+    fn columns(&self, _: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        vec![s.velocity_rad_per_s.to_vec()]
+    }
+    fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
+        (c[0] < 0.0).then(|| "negative viscous damping".into())
+    }
+    fn fragments(&self, _: &[f64], c: &[f64]) -> Fragments {
+        Fragments { plant: object([("viscous_nms_per_rad", json!(c[0]))]), observer: object([("viscous_nms_per_rad", json!(c[0]))]) }
+    }
+}

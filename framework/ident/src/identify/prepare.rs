@@ -1,0 +1,208 @@
+//! Preparation: dropouts out, the deflection rate, enough excitation, and the split into the
+//! training part and the held-out part.
+
+use super::causes::{Excitation, reversals};
+use super::design::Part;
+use crate::csv::Data;
+
+/// One count of the SHERPA joints' 14-bit absolute encoders [rad] (thesis section 3.1).
+pub const ENCODER_LSB_RAD: f64 = std::f64::consts::TAU / 16384.0;
+
+/// Quantisation levels a deflection must span for a curve's shape to be told from its
+/// quantisation (an assumption: 16 levels resolve a cubic's bend to a few percent).
+pub const MIN_SPAN_LSB: f64 = 16.0;
+
+/// Velocity reversals needed: one full cycle and a half, so that both directions of a
+/// hysteresis loop and the held-out part see motion.
+pub const MIN_REVERSALS: usize = 3;
+
+/// Why the data cannot be identified.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PrepareError {
+    /// Too few samples to identify anything.
+    #[error("{samples} samples are too few to identify anything (at least {needed})")]
+    TooFewSamples {
+        /// Samples given.
+        samples: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// The deflection hardly moves: nothing can be told from its quantisation.
+    #[error(
+        "too little excitation: the deflection spans {span_rad:.3e} rad ({lsb:.1} encoder counts) with {reversals} reversals; identification needs at least {MIN_SPAN_LSB} counts and {MIN_REVERSALS} reversals (a sine of a few times the play, over one and a half cycles)"
+    )]
+    TooLittleExcitation {
+        /// Range of the deflection [rad].
+        span_rad: f64,
+        /// The range in 14-bit encoder counts.
+        lsb: f64,
+        /// Velocity reversals found.
+        reversals: usize,
+    },
+    /// One side of the split has too few samples.
+    #[error("too few samples on one side of the {train_percent:.0}/{:.0} fit/held-out split ({train} and {held_out})", 100.0 - train_percent)]
+    UnevenSplit {
+        /// Fraction for fitting [%].
+        train_percent: f64,
+        /// Samples for fitting.
+        train: usize,
+        /// Samples held out.
+        held_out: usize,
+    },
+}
+
+/// The data ready for the search.
+pub(crate) struct Prepared {
+    pub train: Part,
+    pub test: Part,
+    /// The training part, decimated to at most [`SEARCH_SAMPLES`] samples, for grid searches.
+    pub coarse: Part,
+    pub excitation: Excitation,
+    pub samples: usize,
+    pub dropped: usize,
+}
+
+/// Grid searches run on at most this many samples; final fits on all of them.
+pub const SEARCH_SAMPLES: usize = 8000;
+
+/// Exact zeros that the signal cannot have reached: a run of zeros between two readings farther
+/// from zero than three encoder counts plus five typical steps per sample of the run. (A signal
+/// that really crosses zero passes it within a step or two; thesis appendix A's lost CAN frames
+/// jump there from anywhere.)
+fn dropouts(series: &[f64], lsb: f64) -> Vec<bool> {
+    let n = series.len();
+    let mut steps: Vec<f64> = series.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let typical = if steps.is_empty() {
+        0.0
+    } else {
+        let mid = steps.len() / 2;
+        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let mut dropped = vec![false; n];
+    let mut i = 1;
+    while i + 1 < n {
+        if series[i] != 0.0 {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < n && series[j] == 0.0 {
+            j += 1;
+        }
+        let reach = 3.0 * lsb + 5.0 * typical * (j - i + 1) as f64;
+        if j < n && series[i - 1].abs() > reach && series[j].abs() > reach {
+            dropped[i..j].iter_mut().for_each(|d| *d = true);
+        }
+        i = j;
+    }
+    dropped
+}
+
+/// Deflection rate: the slope of a local least-squares line (a Savitzky-Golay derivative) over
+/// about a fiftieth of the excitation period: no lag, and it averages out the quantisation.
+/// Prefix sums make it one pass whatever the window.
+fn velocity(t: &[f64], d: &[f64], half: usize) -> Vec<f64> {
+    let n = d.len();
+    let prefix = |f: &dyn Fn(usize) -> f64| {
+        let mut p = Vec::with_capacity(n + 1);
+        p.push(0.0);
+        for i in 0..n {
+            p.push(p[i] + f(i));
+        }
+        p
+    };
+    // Centred on t[0] to keep the sums well conditioned.
+    let t0 = t[0];
+    let (st, sd, stt, std_) = (prefix(&|i| t[i] - t0), prefix(&|i| d[i]), prefix(&|i| (t[i] - t0).powi(2)), prefix(&|i| (t[i] - t0) * d[i]));
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(half), (i + half).min(n - 1) + 1);
+            let m = (b - a) as f64;
+            let (sum_t, sum_d) = (st[b] - st[a], sd[b] - sd[a]);
+            let den = (stt[b] - stt[a]) - sum_t * sum_t / m;
+            let num = (std_[b] - std_[a]) - sum_t * sum_d / m;
+            if den > 1e-300 { num / den } else { 0.0 }
+        })
+        .collect()
+}
+
+pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
+    let n_all = data.len();
+    if n_all < 50 {
+        return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
+    }
+    let (dd, dt) = (dropouts(&data.deflection, ENCODER_LSB_RAD), dropouts(&data.torque, 0.0));
+    let keep: Vec<usize> = (0..n_all).filter(|i| !dd[*i] && !dt[*i]).collect();
+    let dropped = n_all - keep.len();
+    let d: Vec<f64> = keep.iter().map(|i| data.deflection[*i]).collect();
+    let t: Vec<f64> = keep.iter().map(|i| data.t[*i]).collect();
+    let tau: Vec<f64> = keep.iter().map(|i| data.torque[*i]).collect();
+    let pivot: Vec<f64> = keep.iter().map(|i| if data.pivot_mm[*i].is_finite() { data.pivot_mm[*i] } else { 0.0 }).collect();
+    let period_samples = {
+        let crossings = d.windows(2).filter(|w| w[0] < 0.0 && w[1] >= 0.0).count().max(1) as f64;
+        d.len() as f64 / crossings
+    };
+    let v = velocity(&t, &d, ((period_samples / 50.0).round() as usize).clamp(2, 25));
+    let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+    let span = hi - lo;
+    let turns = reversals(&d).len();
+    let torque_moves = tau.iter().any(|x| *x != tau[0]);
+    if span < MIN_SPAN_LSB * ENCODER_LSB_RAD || turns < MIN_REVERSALS || !torque_moves {
+        return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / ENCODER_LSB_RAD, reversals: turns });
+    }
+    let spacing = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    let t_split = t[0] + train_fraction * (t[t.len() - 1] - t[0]);
+    let split = t.partition_point(|x| *x < t_split);
+    let part = |r: std::ops::Range<usize>| Part {
+        warm: d[..r.start].to_vec(),
+        t: t[r.clone()].to_vec(),
+        d: d[r.clone()].to_vec(),
+        v: v[r.clone()].to_vec(),
+        tau: tau[r.clone()].to_vec(),
+        pivot: pivot[r].to_vec(),
+        dt: spacing,
+    };
+    let (train, test) = (part(0..split), part(split..t.len()));
+    if train.len() < 30 || test.len() < 20 {
+        return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: train.len(), held_out: test.len() });
+    }
+    let coarse = train.every(train.len().div_ceil(SEARCH_SAMPLES));
+    let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
+    let frequency_hz = (d.windows(2).filter(|w| w[0] < 0.0 && w[1] >= 0.0).count() as f64 / (t[t.len() - 1] - t[0])).max(0.01);
+    let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
+    Ok(Prepared { train, test, coarse, excitation, samples: n_all, dropped })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_prefix_sum_derivative_equals_the_local_line_slope() {
+        let t: Vec<f64> = (0..500).map(|i| 10.0 + i as f64 * 0.01).collect();
+        let d: Vec<f64> = t.iter().map(|t| (1.3 * t).sin()).collect();
+        let v = velocity(&t, &d, 5);
+        for i in [0usize, 3, 250, 499] {
+            let (a, b) = (i.saturating_sub(5), (i + 5).min(499));
+            let n = (b - a + 1) as f64;
+            let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
+            let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();
+            let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
+            assert!((v[i] - num / den).abs() < 1e-6, "{i}: {} vs {}", v[i], num / den);
+        }
+    }
+
+    #[test]
+    fn a_zero_the_signal_passes_through_is_not_a_dropout_but_a_jump_to_zero_is() {
+        // A slow ramp through zero, sampled so that one reading is exactly zero.
+        let ramp: Vec<f64> = (-50..50).map(|i| i as f64 * ENCODER_LSB_RAD).collect();
+        assert!(!dropouts(&ramp, ENCODER_LSB_RAD).iter().any(|d| *d));
+        // Two counts either side of an exact zero: quantisation explains it.
+        let near = [0.1, 2.0 * ENCODER_LSB_RAD, 0.0, -2.0 * ENCODER_LSB_RAD, -0.1];
+        assert!(!dropouts(&near, ENCODER_LSB_RAD)[2]);
+        // A zero in the middle of 0.05 rad: a lost frame.
+        let mut lost = vec![0.05; 100];
+        lost[40] = 0.0;
+        assert_eq!(dropouts(&lost, ENCODER_LSB_RAD).iter().filter(|d| **d).count(), 1);
+    }
+}

@@ -1,0 +1,124 @@
+//! The search for a cause's non-linear parameters: its grid on the decimated training part,
+//! refined as the parameter asks, coordinate by coordinate.
+
+use super::causes::{Refine, SearchContext};
+use super::design::{Model, Part, Spec, Term};
+
+/// Golden-section minimum of `f` over [lo, hi] on a log scale (both > 0).
+pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: usize) -> f64 {
+    let (mut a, mut b) = (lo.ln(), hi.ln());
+    let g = 0.618_033_988_749_895;
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (f(c.exp()), f(d.exp()));
+    for _ in 0..iterations {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c.exp());
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d.exp());
+        }
+    }
+    (0.5 * (a + b)).exp()
+}
+
+/// Full-rate samples a delay scan runs on: a contiguous stretch keeps the one-sample resolution
+/// at a fraction of the cost.
+const SCAN_SAMPLES: usize = 16_000;
+
+/// The best parameters of `cause` added to `spec`: `None` when no value gives a fit.
+pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, train: &Part) -> Option<Vec<f64>> {
+    let params = model.causes[cause].parameters(ctx);
+    let term = |p: &[f64]| Term { cause, params: p.to_vec(), baseline: false };
+    let rss = |p: &[f64], part: &Part| model.fit(&spec.with(term(p)), part).map_or(f64::INFINITY, |f| f.rss);
+    if params.iter().any(|p| p.grid.is_empty()) {
+        return None;
+    }
+    let mut best: Vec<f64> = params.iter().map(|p| p.grid[p.grid.len() / 2]).collect();
+    // Two passes for two parameters (a ring's frequency and damping interact); one otherwise.
+    for _ in 0..params.len().min(2) {
+        for (j, p) in params.iter().enumerate() {
+            let at = |x: f64| {
+                let mut q = best.clone();
+                q[j] = x;
+                rss(&q, coarse)
+            };
+            let scores: Vec<f64> = p.grid.iter().map(|x| at(*x)).collect();
+            let i = (0..p.grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
+            let chosen = match p.refine {
+                Refine::Between => {
+                    let (lo, hi) = (p.grid[i.saturating_sub(1)], p.grid[(i + 1).min(p.grid.len() - 1)]);
+                    let x = if lo > 0.0 && hi > lo { refine_log(at, lo, hi, 25) } else { p.grid[i] };
+                    if at(x) < scores[i] { x } else { p.grid[i] }
+                }
+                Refine::Samples => {
+                    // Every full-rate sample period between the grid's neighbours of the best.
+                    let scan = truncate(train, SCAN_SAMPLES);
+                    let reach = p.grid.iter().enumerate().filter(|(k, _)| *k != i).map(|(_, g)| (g - p.grid[i]).abs()).fold(f64::INFINITY, f64::min);
+                    let span = ((reach / train.dt).ceil() as i64).clamp(1, 200);
+                    let centre = (p.grid[i] / train.dt).round() as i64;
+                    let at_full = |k: i64| {
+                        let mut q = best.clone();
+                        q[j] = k as f64 * train.dt;
+                        rss(&q, &scan)
+                    };
+                    ((centre - span)..=(centre + span)).filter(|k| *k != 0).min_by(|a, b| at_full(*a).total_cmp(&at_full(*b)))? as f64 * train.dt
+                }
+                Refine::Not => p.grid[i],
+            };
+            best[j] = chosen;
+        }
+    }
+    Some(best)
+}
+
+/// The first `n` samples of a part.
+pub(crate) fn truncate(p: &Part, n: usize) -> Part {
+    let n = n.min(p.len());
+    Part { warm: p.warm.clone(), t: p.t[..n].to_vec(), d: p.d[..n].to_vec(), v: p.v[..n].to_vec(), tau: p.tau[..n].to_vec(), pivot: p.pivot[..n].to_vec(), dt: p.dt }
+}
+
+/// Every parameter of every term refined once more with the others in place (a cause added
+/// later may take over part of what an earlier one explained: eq. 3.5's `k_b` and viscous
+/// friction, a delay and the friction it was fitted with).
+pub(crate) fn polish(model: &Model, spec: &Spec, ctx: &SearchContext, coarse: &Part, train: &Part) -> Spec {
+    let mut spec = spec.clone();
+    let scan = truncate(train, SCAN_SAMPLES);
+    for t in 0..spec.terms.len() {
+        let grids = model.causes[spec.terms[t].cause].parameters(ctx);
+        for (j, p) in grids.iter().enumerate() {
+            if j >= spec.terms[t].params.len() {
+                continue;
+            }
+            let now = spec.terms[t].params[j];
+            let at = |x: f64, part: &Part| {
+                let mut s = spec.clone();
+                s.terms[t].params[j] = x;
+                model.fit(&s, part).map_or(f64::INFINITY, |f| f.rss)
+            };
+            let better = match p.refine {
+                Refine::Between if now > 0.0 => refine_log(|x| at(x, coarse), now / 4.0, now * 4.0, 18),
+                Refine::Samples => {
+                    // Three search steps either way, every full-rate sample.
+                    let centre = (now / train.dt).round() as i64;
+                    let span = ((3.0 * coarse.dt / train.dt).ceil() as i64).clamp(1, 60);
+                    let k = ((centre - span)..=(centre + span)).filter(|k| *k != 0).min_by(|a, b| at(*a as f64 * train.dt, &scan).total_cmp(&at(*b as f64 * train.dt, &scan)));
+                    k.map_or(now, |k| k as f64 * train.dt)
+                }
+                _ => now,
+            };
+            let part = if p.refine == Refine::Samples { &scan } else { coarse };
+            if at(better, part) < at(now, part) {
+                spec.terms[t].params[j] = better;
+            }
+        }
+    }
+    spec
+}

@@ -1,0 +1,131 @@
+//! Selection: forward, one cause a step. On the training part BIC proposes (the best candidate
+//! by more than [`BIC_THRESHOLD`]); on the held-out part the block test decides. At the end every
+//! cause must still be significant given the others, or it goes (the weakest first).
+
+use super::causes::SearchContext;
+use super::design::{Model, Part, Spec, Term};
+use super::prepare::Prepared;
+use super::search::{polish, search};
+use super::significance::{BlockTest, block_test};
+
+/// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
+/// 1995: "very strong" evidence).
+pub const BIC_THRESHOLD: f64 = 10.0;
+
+/// Candidates proposed by BIC that are tested on the held-out part per step, best first.
+const TESTED_PER_STEP: usize = 3;
+
+pub(crate) struct Chosen {
+    pub cause: usize,
+    pub evidence: String,
+}
+
+pub(crate) struct Selection {
+    pub spec: Spec,
+    pub chosen: Vec<Chosen>,
+    pub rejected: Vec<String>,
+}
+
+pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
+    n as f64 * (rss / n as f64).max(1e-300).ln() + parameters as f64 * (n as f64).ln()
+}
+
+/// Held-out squared errors of `spec` fitted on the training part, each with the Cp charge of
+/// the coefficients fitted on the held-out part itself (segment-wise terms).
+pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<Vec<f64>> {
+    let fit = model.fit(spec, &p.train)?;
+    let pred = model.predict(spec, &fit, &p.test);
+    let sigma2 = fit.rss / (p.train.len().saturating_sub(fit.parameters)).max(1) as f64;
+    Some(p.test.tau.iter().zip(&pred.torque_nm).zip(&pred.leverage).map(|((y, m), h)| (y - m).powi(2) + 2.0 * sigma2 * h).collect())
+}
+
+pub(crate) fn rmse(errors: &[f64]) -> f64 {
+    (errors.iter().sum::<f64>() / errors.len().max(1) as f64).sqrt()
+}
+
+/// Does `full` predict the held-out part significantly better than `reduced`?
+pub(crate) fn compare(model: &Model, reduced: &Spec, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
+    let (r, f) = (held_out_errors(model, reduced, p)?, held_out_errors(model, full, p)?);
+    let diff: Vec<f64> = r.iter().zip(&f).map(|(a, b)| a - b).collect();
+    Some((block_test(&diff), rmse(&r) - rmse(&f)))
+}
+
+fn describe(t: &BlockTest) -> String {
+    format!("held-out block t = {:.1} (critical {:.2}, {} blocks, one-sided {} %)", t.t, t.critical, t.blocks, super::significance::LEVEL * 100.0)
+}
+
+pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residual: &'a mut Vec<f64>) -> SearchContext<'a> {
+    *residual = match model.fit(spec, &p.coarse) {
+        Some(fit) => {
+            let pred = model.predict(spec, &fit, &p.coarse);
+            p.coarse.tau.iter().zip(&pred.torque_nm).map(|(y, m)| y - m).collect()
+        }
+        None => p.coarse.tau.clone(),
+    };
+    SearchContext { excitation: p.excitation, t_s: &p.coarse.t, velocity_rad_per_s: &p.coarse.v, residual_nm: residual }
+}
+
+pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String) -> Selection {
+    let coarse: &Part = &p.coarse;
+    let mut spec = base;
+    let mut chosen: Vec<Chosen> = Vec::new();
+    let mut rejected = Vec::new();
+    let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
+    let mut current = score(&spec, 0.0);
+    for _ in 0..max_causes {
+        let mut residual = Vec::new();
+        let ctx = context(model, &spec, p, &mut residual);
+        let mut proposals: Vec<(f64, Spec, usize)> = Vec::new();
+        for c in (0..model.causes.len()).filter(|c| spec.term(*c).is_none()) {
+            let cause = model.causes[c];
+            let Some(params) = search(model, &spec, c, &ctx, coarse, &p.train) else { continue };
+            let s = spec.with(Term { cause: c, params, baseline: false });
+            let Some(fit) = model.fit(&s, coarse) else { continue };
+            let last = s.terms.len() - 1;
+            if let Some(why) = cause.impossible(&s.terms[last].params, fit.of(last)) {
+                rejected.push(format!("{} ({why})", name(c)));
+                continue;
+            }
+            proposals.push((score(&s, cause.look_elsewhere(&ctx)), s, c));
+        }
+        proposals.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut accepted = false;
+        for (b, s, c) in proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP) {
+            let s = polish(model, &s, &ctx, coarse, &p.train);
+            match compare(model, &spec, &s, p) {
+                Some((test, _)) if test.significant() => {
+                    chosen.push(Chosen { cause: c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", describe(&test)) });
+                    current = score(&s, 0.0);
+                    spec = s;
+                    accepted = true;
+                    break;
+                }
+                Some((test, _)) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(c), describe(&test))),
+                None => {}
+            }
+        }
+        if !accepted {
+            break;
+        }
+    }
+    // Every cause must still earn its place given the others.
+    loop {
+        let tests: Vec<(usize, f64)> = chosen
+            .iter()
+            .enumerate()
+            .map(|(i, ch)| {
+                let reduced = spec.without(ch.cause);
+                (i, compare(model, &reduced, &spec, p).map_or(f64::NEG_INFINITY, |(t, _)| t.t - t.critical))
+            })
+            .collect();
+        match tests.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)) {
+            Some((i, margin)) if margin <= 0.0 => {
+                let gone = chosen.remove(i);
+                rejected.push(format!("{} (not significant once the others were in the model)", name(gone.cause)));
+                spec = spec.without(gone.cause);
+            }
+            _ => break,
+        }
+    }
+    Selection { spec, chosen, rejected }
+}

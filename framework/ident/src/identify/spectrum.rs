@@ -1,0 +1,86 @@
+//! Frequency scans of a residual, for the vibration causes.
+
+use super::causes::log_grid;
+
+/// `(sum r sin(w t), sum r cos(w t))`. On uniformly spaced samples the phasor is rotated by a
+/// constant step (two multiplications a sample instead of a sine and a cosine), re-anchored
+/// every 1024 samples so that rounding cannot accumulate.
+pub(crate) fn projection(t: &[f64], r: &[f64], w: f64) -> (f64, f64) {
+    let n = t.len();
+    let uniform = n > 2 && {
+        let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
+        t.windows(2).all(|p| ((p[1] - p[0]) - dt).abs() <= 1e-9 * dt.abs().max(1e-12))
+    };
+    let (mut s, mut c) = (0.0, 0.0);
+    if !uniform {
+        for (ti, ri) in t.iter().zip(r) {
+            let (si, ci) = (w * ti).sin_cos();
+            s += ri * si;
+            c += ri * ci;
+        }
+        return (s, c);
+    }
+    let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
+    let (ds, dc) = (w * dt).sin_cos();
+    let (mut zs, mut zc) = (0.0, 0.0);
+    for (i, ri) in r.iter().enumerate() {
+        if i % 1024 == 0 {
+            (zs, zc) = (w * (t[0] + i as f64 * dt)).sin_cos();
+        }
+        s += ri * zs;
+        c += ri * zc;
+        (zs, zc) = (zs * dc + zc * ds, zc * dc - zs * ds);
+    }
+    (s, c)
+}
+
+/// The band a mode is looked for in [Hz]: above the excitation's eighth harmonic (or 0.5 Hz),
+/// below 90 % of Nyquist (at most 200 Hz).
+pub(crate) fn band(t: &[f64], excitation_hz: f64) -> (f64, f64) {
+    let n = t.len().max(2);
+    let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
+    ((8.0 * excitation_hz).max(0.5), (0.5 / dt).min(200.0) * 0.9)
+}
+
+/// The number of resolvable frequencies in the band over the record: the look-elsewhere count.
+pub(crate) fn resolvable(t: &[f64], excitation_hz: f64) -> f64 {
+    let (lo, hi) = band(t, excitation_hz);
+    let duration = t[t.len() - 1] - t[0];
+    ((hi - lo) * duration).max(1.0)
+}
+
+/// The frequency of the strongest component of `r` in the band [Hz]: a periodogram on a 1.3 %
+/// grid, then refined to well within the record's resolution.
+pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> f64 {
+    let (lo, hi) = band(t, excitation_hz);
+    let power = |f: f64| {
+        let (s, c) = projection(t, r, std::f64::consts::TAU * f);
+        s * s + c * c
+    };
+    let grid = log_grid(lo, hi.max(lo * 1.01), 240);
+    let best = grid.iter().copied().max_by(|a, b| power(*a).total_cmp(&power(*b))).unwrap_or(lo);
+    super::search::refine_log(|f| -power(f), best * 0.985, best * 1.015, 40)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::projection;
+
+    #[test]
+    fn the_rotated_phasor_projection_equals_the_direct_one() {
+        let t: Vec<f64> = (0..20_000).map(|i| 3.0 + i as f64 * 0.005).collect();
+        let r: Vec<f64> = t.iter().map(|t| (7.3 * t).sin() + 0.2 * (1.1 * t).cos()).collect();
+        for w in [0.7, 45.9, 300.0] {
+            let fast = projection(&t, &r, w);
+            let direct = t.iter().zip(&r).fold((0.0, 0.0), |(s, c), (t, r)| (s + r * (w * t).sin(), c + r * (w * t).cos()));
+            assert!((fast.0 - direct.0).abs() < 1e-6 * (1.0 + direct.0.abs()), "{w}: {fast:?} vs {direct:?}");
+            assert!((fast.1 - direct.1).abs() < 1e-6 * (1.0 + direct.1.abs()), "{w}: {fast:?} vs {direct:?}");
+        }
+        // A gap (a dropout) takes the direct path, which is exact by construction.
+        let mut gappy = t.clone();
+        gappy.remove(100);
+        let rg: Vec<f64> = r[..gappy.len()].to_vec();
+        let direct = gappy.iter().zip(&rg).fold((0.0, 0.0), |(s, c), (t, r)| (s + r * (2.0 * t).sin(), c + r * (2.0 * t).cos()));
+        assert_eq!(projection(&gappy, &rg, 2.0), direct);
+    }
+}
