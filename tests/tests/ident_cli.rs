@@ -220,3 +220,87 @@ fn a_huge_value_in_the_data_is_refused_at_its_line() {
         }
     }
 }
+
+/// A recording of q4 from the simulated arm with `effects` in its plant (not in the config), at
+/// `rate_hz`, identified against the configured model.
+fn q4_recording(effects: impl Fn(&mut jointctl_config::EffectsConfig), rate_hz: f64) -> jointctl_ident::identify::Report {
+    let mut loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
+    let q4 = loaded.config.joints.iter_mut().find(|j| j.name == "q4").unwrap();
+    effects(&mut q4.sim.as_mut().unwrap().effects);
+    let opts = RecordOptions { joint: "q4".into(), amplitude_rad: 0.08, frequency_hz: 0.25, duration_s: 40.0, pivot_mm: None, angle_deg: 0.0, rate_hz };
+    let samples = record(&loaded, &PluginLoader::new([]), &opts).unwrap();
+    let mut csv = Vec::new();
+    write_csv(&samples, None, &mut csv).unwrap();
+    let data = jointctl_ident::csv::parse(std::str::from_utf8(&csv).unwrap(), "q4.csv".as_ref()).unwrap();
+    let baseline = BaselineModel::Given(Box::new(|d, _| 113.78 * d));
+    identify(&data, &IdentifyOptions { baseline, baseline_friction: false, ..IdentifyOptions::default() }).unwrap()
+}
+
+/// Findings: a clean simulated plant with Mini40-class noise (0.01 Nm) got
+/// `stiffness_nonlinearity` at 100 Hz and `time_delay` + `vibration` at 1 kHz, none with a
+/// measurable gain.
+#[test]
+fn a_clean_simulated_recording_gets_no_cause_at_100_hz_or_1_khz() {
+    for rate in [100.0, 1000.0] {
+        let report = q4_recording(|e| e.torque_noise_nm = 0.01, rate);
+        assert!(report.causes.is_empty(), "{rate} Hz: {:?}", report.causes);
+    }
+}
+
+/// Finding: 1.6 Nms/rad of viscous friction in the plant, none in the config, gave no friction
+/// cause: the baseline's eq. 3.5 arctan term absorbed it silently.
+#[test]
+fn viscous_friction_the_config_lacks_is_named_not_absorbed() {
+    let report = q4_recording(
+        |e| {
+            e.torque_noise_nm = 0.01;
+            e.viscous_nms_per_rad = 1.6;
+        },
+        100.0,
+    );
+    let first = report.causes.first().unwrap_or_else(|| panic!("no cause; rejected {:?}", report.rejected));
+    assert_eq!(first.effect, "viscous_friction", "{:?}", report.causes);
+    let b = first.params["damping_nms_per_rad"];
+    assert!((b - 1.6).abs() < 0.16, "damping {b} Nms/rad, the plant has 1.6");
+}
+
+/// Findings: a plant with hysteresis also got a 2.2 Hz "vibration" and a +10 ms delay, one with
+/// a dead zone a -10 ms delay (the recorder sampled torque and deflection a period apart).
+#[test]
+fn hysteresis_and_dead_zone_in_the_plant_come_without_a_delay_or_a_vibration() {
+    use jointctl_config::DahlConfig;
+    let hysteresis = q4_recording(
+        |e| {
+            e.torque_noise_nm = 0.01;
+            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2 });
+        },
+        100.0,
+    );
+    let names: Vec<&str> = hysteresis.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert_eq!(names, ["hysteresis"], "{:?}", hysteresis.causes);
+    let dead = q4_recording(
+        |e| {
+            e.torque_noise_nm = 0.01;
+            e.dead_zone_rad = 0.01;
+        },
+        100.0,
+    );
+    let names: Vec<&str> = dead.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert_eq!(names, ["dead_zone"], "{:?}", dead.causes);
+}
+
+/// Finding: a constant signal gave `dead_zone` and `stiffness_nonlinearity` with gains of 1e-14.
+#[test]
+fn data_with_too_little_excitation_is_an_error_that_says_so() {
+    let dir = scratch("ident-still");
+    let csv = dir.join("still.csv");
+    let mut text = String::from("t,deflection,torque\n");
+    for i in 0..2000 {
+        text += &format!("{},0.01,1.1378\n", i as f64 * 0.01);
+    }
+    std::fs::write(&csv, text).unwrap();
+    let out = Command::new(jointctl()).arg("identify").arg("--data").arg(&csv).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+    assert!(err.contains("too little excitation"), "{err}");
+}
