@@ -174,8 +174,8 @@ impl Model<'_> {
         let has_segments = d.segmented.iter().any(Option::is_some);
         let mut coefs = Vec::new();
         // Backfitting: the ordinary columns on what the rings leave, the rings on what the
-        // ordinary columns leave (three rounds; the rings are short and nearly orthogonal).
-        for _ in 0..if has_segments { 3 } else { 1 } {
+        // ordinary columns leave (two rounds; the rings are short and nearly orthogonal to the rest).
+        for _ in 0..if has_segments { 2 } else { 1 } {
             let y: Vec<f64> = (0..n).map(|i| p.tau[i] - d.fixed[i] - segment_fit[i]).collect();
             coefs = least_squares(&d.cols, &y)?;
             // A baseline term whose fit is impossible (negative friction) is at its bound: zero.
@@ -260,30 +260,46 @@ pub(crate) fn least_squares(cols: &[Vec<f64>], y: &[f64]) -> Option<Vec<f64>> {
 }
 
 /// Fits `cols` to `r` anew on every segment: the fitted values, every segment's coefficients
-/// (segment after segment) and each sample's leverage.
+/// (segment after segment) and each sample's leverage. Normal equations per segment are fine
+/// here: a segment's two ring columns are near-orthogonal (sine and cosine under one envelope).
 fn fit_segments(cols: &[Vec<f64>], starts: &[usize], r: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let n = r.len();
     let k = cols.len();
     let mut fitted = vec![0.0; n];
     let mut leverage = vec![0.0; n];
     let mut coefs = Vec::with_capacity(starts.len() * k);
+    let mut gram = DMatrix::<f64>::zeros(k, k);
+    let mut rhs = DVector::<f64>::zeros(k);
+    let mut x = DVector::<f64>::zeros(k);
     for (s, &a) in starts.iter().enumerate() {
         let b = starts.get(s + 1).copied().unwrap_or(n).min(n);
-        if a >= b {
-            coefs.extend(std::iter::repeat_n(0.0, k));
-            continue;
+        gram.fill(0.0);
+        rhs.fill(0.0);
+        for i in a..b.max(a) {
+            for p in 0..k {
+                rhs[p] += cols[p][i] * r[i];
+                for q in 0..=p {
+                    gram[(p, q)] += cols[p][i] * cols[q][i];
+                }
+            }
         }
-        let g = DMatrix::from_fn(k, k, |p, q| (a..b).map(|i| cols[p][i] * cols[q][i]).sum::<f64>());
-        let rhs = DVector::from_fn(k, |p, _| (a..b).map(|i| cols[p][i] * r[i]).sum::<f64>());
-        let Some(inv) = g.clone().try_inverse().filter(|_| g.determinant().abs() > 1e-300) else {
+        for p in 0..k {
+            for q in 0..p {
+                gram[(q, p)] = gram[(p, q)];
+            }
+        }
+        let Some(chol) = (a < b).then(|| gram.clone().cholesky()).flatten() else {
             coefs.extend(std::iter::repeat_n(0.0, k));
             continue;
         };
-        let c = &inv * rhs;
+        let c = chol.solve(&rhs);
+        let inv = chol.inverse();
         for i in a..b {
-            let x = DVector::from_fn(k, |p, _| cols[p][i]);
+            for p in 0..k {
+                x[p] = cols[p][i];
+            }
             fitted[i] = x.dot(&c);
-            leverage[i] = x.dot(&(&inv * &x));
+            leverage[i] = (&inv * &x).dot(&x);
         }
         coefs.extend(c.iter());
     }

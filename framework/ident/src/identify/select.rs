@@ -45,9 +45,14 @@ pub(crate) fn rmse(errors: &[f64]) -> f64 {
 
 /// Does `full` predict the held-out part significantly better than `reduced`?
 pub(crate) fn compare(model: &Model, reduced: &Spec, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
-    let (r, f) = (held_out_errors(model, reduced, p)?, held_out_errors(model, full, p)?);
+    compare_with(&held_out_errors(model, reduced, p)?, model, full, p)
+}
+
+/// [`compare`] with the reduced model's held-out errors known.
+fn compare_with(r: &[f64], model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
+    let f = held_out_errors(model, full, p)?;
     let diff: Vec<f64> = r.iter().zip(&f).map(|(a, b)| a - b).collect();
-    Some((block_test(&diff), rmse(&r) - rmse(&f)))
+    Some((block_test(&diff), rmse(r) - rmse(&f)))
 }
 
 fn describe(t: &BlockTest) -> String {
@@ -90,9 +95,10 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         }
         proposals.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut accepted = false;
+        let Some(reduced) = held_out_errors(model, &spec, p) else { break };
         for (b, s, c) in proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP) {
             let s = polish(model, &s, &ctx, coarse, &p.train);
-            match compare(model, &spec, &s, p) {
+            match compare_with(&reduced, model, &s, p) {
                 Some((test, _)) if test.significant() => {
                     chosen.push(Chosen { cause: c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", describe(&test)) });
                     current = score(&s, 0.0);
