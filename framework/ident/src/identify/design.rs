@@ -41,6 +41,8 @@ impl Part {
 pub(crate) struct Term {
     pub cause: usize,
     pub params: Vec<f64>,
+    /// The parameters' names, grids and refinement, as the search had them.
+    pub grids: Vec<super::causes::Parameter>,
     /// Part of the baseline (the configured model), not a cause found in the data.
     pub baseline: bool,
 }
@@ -89,6 +91,13 @@ impl Fit {
     }
 }
 
+/// A fitted model's orthonormal design basis and residual on one part (see [`Model::projector`]).
+pub(crate) struct Projector {
+    q: DMatrix<f64>,
+    residual: Vec<f64>,
+    inputs: Inputs,
+}
+
 /// Predictions on a part, with the Cp charge of segment-wise coefficients fitted on it.
 pub(crate) struct Prediction {
     pub torque_nm: Vec<f64>,
@@ -100,6 +109,7 @@ pub(crate) struct Prediction {
 type Segmented = (Vec<Vec<f64>>, Vec<usize>);
 
 struct Design {
+    inputs: Inputs,
     fixed: Vec<f64>,
     cols: Vec<Vec<f64>>,
     spans: Vec<Range<usize>>,
@@ -162,7 +172,62 @@ impl Model<'_> {
                 }
             }
         }
-        Design { fixed, cols, spans, segmented, nonlinear }
+        Design { inputs, fixed, cols, spans, segmented, nonlinear }
+    }
+
+    /// The model fitted on a part, ready to score one more term at the cost of projecting its
+    /// columns (Frisch-Waugh-Lovell: adding columns `C` to a least-squares fit lowers its RSS by
+    /// what `C`, made orthogonal to the design, explains of the residual). `None` when the
+    /// shortcut does not hold: segment-wise terms, or a baseline term held at its bound.
+    pub fn projector(&self, spec: &Spec, p: &Part) -> Option<Projector> {
+        let d = self.design(spec, p);
+        if d.segmented.iter().any(Option::is_some) {
+            return None;
+        }
+        let n = p.len();
+        let y: Vec<f64> = (0..n).map(|i| p.tau[i] - d.fixed[i]).collect();
+        let coefs = least_squares(&d.cols, &y)?;
+        for (term, span) in spec.terms.iter().zip(&d.spans) {
+            if term.baseline && !span.is_empty() && self.causes[term.cause].impossible(&term.params, &coefs[span.clone()]).is_some() {
+                return None;
+            }
+        }
+        let residual: Vec<f64> = (0..n).map(|i| y[i] - dot_row(&d.cols, &coefs, i)).collect();
+        let live: Vec<&Vec<f64>> = d.cols.iter().filter(|c| c.iter().any(|x| *x != 0.0)).collect();
+        let q = if live.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_fn(n, live.len(), |i, j| live[j][i]).qr().q() };
+        Some(Projector { q, residual, inputs: d.inputs })
+    }
+
+    /// The RSS of the projector's model with `term` added (a term without an input transform).
+    pub fn rss_with(&self, proj: &Projector, term: &Term, p: &Part) -> f64 {
+        let cause = self.causes[term.cause];
+        let samples = Samples {
+            t_s: &p.t,
+            deflection_rad: &proj.inputs.deflection_rad,
+            velocity_rad_per_s: &proj.inputs.velocity_rad_per_s,
+            elastic_rad: &proj.inputs.elastic_rad,
+            pivot_mm: &p.pivot,
+            history_rad: &p.warm,
+        };
+        let cols = cause.columns(&term.params, &samples);
+        let r = &proj.residual;
+        if let Some(starts) = cause.segments(&term.params, &samples) {
+            // Rings are short and near-orthogonal to the smooth design: fitted on the residual.
+            let (fitted, _, _) = fit_segments(&cols, &starts, r, false);
+            return r.iter().zip(&fitted).map(|(a, b)| (a - b).powi(2)).sum();
+        }
+        let orthogonal: Vec<Vec<f64>> = cols
+            .iter()
+            .map(|c| {
+                let cv = DVector::from_column_slice(c);
+                let along = &proj.q * proj.q.tr_mul(&cv);
+                (cv - along).iter().copied().collect()
+            })
+            .collect();
+        match least_squares(&orthogonal, r) {
+            Some(k) => (0..r.len()).map(|i| (r[i] - dot_row(&orthogonal, &k, i)).powi(2)).sum(),
+            None => f64::INFINITY,
+        }
     }
 
     /// Least squares on a part (QR); `None` when the design is singular.
@@ -196,7 +261,7 @@ impl Model<'_> {
                 for (k, seg) in d.segmented.iter().enumerate() {
                     if let Some((cols, starts)) = seg {
                         let rest: Vec<f64> = r.iter().zip(&segment_fit).map(|(a, b)| a - b).collect();
-                        let (fitted, c, _) = fit_segments(cols, starts, &rest);
+                        let (fitted, c, _) = fit_segments(cols, starts, &rest, false);
                         segment_fit.iter_mut().zip(&fitted).for_each(|(a, b)| *a += b);
                         segment_coefs[k] = c;
                     }
@@ -217,7 +282,7 @@ impl Model<'_> {
         let mut leverage = vec![0.0; n];
         for (cols, starts) in d.segmented.iter().flatten() {
             let r: Vec<f64> = p.tau.iter().zip(&torque).map(|(y, m)| y - m).collect();
-            let (fitted, _, lev) = fit_segments(cols, starts, &r);
+            let (fitted, _, lev) = fit_segments(cols, starts, &r, true);
             torque.iter_mut().zip(&fitted).for_each(|(a, b)| *a += b);
             leverage.iter_mut().zip(&lev).for_each(|(a, b)| *a += b);
         }
@@ -260,9 +325,9 @@ pub(crate) fn least_squares(cols: &[Vec<f64>], y: &[f64]) -> Option<Vec<f64>> {
 }
 
 /// Fits `cols` to `r` anew on every segment: the fitted values, every segment's coefficients
-/// (segment after segment) and each sample's leverage. Normal equations per segment are fine
+/// (segment after segment) and, when asked, each sample's leverage. Normal equations per segment are fine
 /// here: a segment's two ring columns are near-orthogonal (sine and cosine under one envelope).
-fn fit_segments(cols: &[Vec<f64>], starts: &[usize], r: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+fn fit_segments(cols: &[Vec<f64>], starts: &[usize], r: &[f64], want_leverage: bool) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let n = r.len();
     let k = cols.len();
     let mut fitted = vec![0.0; n];
@@ -293,13 +358,15 @@ fn fit_segments(cols: &[Vec<f64>], starts: &[usize], r: &[f64]) -> (Vec<f64>, Ve
             continue;
         };
         let c = chol.solve(&rhs);
-        let inv = chol.inverse();
+        let inv = if want_leverage { chol.inverse() } else { DMatrix::zeros(k, k) };
         for i in a..b {
             for p in 0..k {
                 x[p] = cols[p][i];
             }
             fitted[i] = x.dot(&c);
-            leverage[i] = (&inv * &x).dot(&x);
+            if want_leverage {
+                leverage[i] = (&inv * &x).dot(&x);
+            }
         }
         coefs.extend(c.iter());
     }

@@ -210,8 +210,8 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
         let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         let mut residual = Vec::new();
         let ctx = select::context(&model, &base, &p, &mut residual);
-        let params = search::search(&model, &base, friction, &ctx, &p.coarse, &p.train).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
-        base.terms.push(Term { cause: friction, params, baseline: true });
+        let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.train).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
+        base.terms.push(Term { baseline: true, ..term });
     }
     let before = select::held_out_errors(&model, &base, &p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let selection = select::select(&model, &p, base.clone(), opts.max_causes, name);
@@ -225,9 +225,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     for chosen in &selection.chosen {
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
         let (cause, term) = (all[chosen.cause], &spec.terms[i]);
-        let mut residual = Vec::new();
-        let ctx = select::context(&model, &spec, &p, &mut residual);
-        let names: Vec<String> = cause.parameters(&ctx).into_iter().map(|p| p.name).collect();
+        let names: Vec<String> = term.grids.iter().map(|p| p.name.clone()).collect();
         let gain = select::held_out_errors(&model, &spec.without(chosen.cause), &p).map_or(0.0, |e| select::rmse(&e) - rmse_after);
         let mut evidence = chosen.evidence.clone();
         if let Some(remark) = cause.remark(&term.params, &p.excitation, duration) {

@@ -3,7 +3,7 @@
 //! cause must still be significant given the others, or it goes (the weakest first).
 
 use super::causes::SearchContext;
-use super::design::{Model, Part, Spec, Term};
+use super::design::{Model, Part, Spec};
 use super::prepare::Prepared;
 use super::search::{polish, search};
 use super::significance::{BlockTest, block_test};
@@ -83,8 +83,8 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         let mut proposals: Vec<(f64, Spec, usize)> = Vec::new();
         for c in (0..model.causes.len()).filter(|c| spec.term(*c).is_none()) {
             let cause = model.causes[c];
-            let Some(params) = search(model, &spec, c, &ctx, coarse, &p.train) else { continue };
-            let s = spec.with(Term { cause: c, params, baseline: false });
+            let Some(term) = search(model, &spec, c, &ctx, coarse, &p.train) else { continue };
+            let s = spec.with(term);
             let Some(fit) = model.fit(&s, coarse) else { continue };
             let last = s.terms.len() - 1;
             if let Some(why) = cause.impossible(&s.terms[last].params, fit.of(last)) {
@@ -97,7 +97,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         let mut accepted = false;
         let Some(reduced) = held_out_errors(model, &spec, p) else { break };
         for (b, s, c) in proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP) {
-            let s = polish(model, &s, &ctx, coarse, &p.train);
+            let s = polish(model, &s, coarse, &p.train);
             match compare_with(&reduced, model, &s, p) {
                 Some((test, _)) if test.significant() => {
                     chosen.push(Chosen { cause: c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", describe(&test)) });

@@ -18,6 +18,9 @@ impl CandidateCause for DeadZone {
         let a = c.excitation.amplitude_rad;
         vec![Parameter { name: "half_width_rad".into(), grid: log_grid(a * 2e-3, a * 0.5, 16), refine: Refine::Between }]
     }
+    fn transforms(&self) -> bool {
+        true
+    }
     fn transform(&self, p: &[f64], inputs: &mut Inputs) {
         for x in &mut inputs.elastic_rad {
             *x = x.signum() * (x.abs() - p[0]).max(0.0);

@@ -172,6 +172,11 @@ pub trait CandidateCause: Send + Sync {
     fn transform(&self, parameters: &[f64], inputs: &mut Inputs) {
         let _ = (parameters, inputs);
     }
+    /// Whether [`CandidateCause::transform`] changes the inputs (the search then refits the
+    /// whole model for every value instead of projecting the cause's columns).
+    fn transforms(&self) -> bool {
+        false
+    }
     /// One column per coefficient, one value per sample.
     fn columns(&self, parameters: &[f64], samples: &Samples) -> Vec<Vec<f64>>;
     /// Why a fit is physically impossible (it is then rejected, not reported), or `None`.

@@ -27,8 +27,8 @@ impl CandidateCause for ReversalRinging {
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         let f = spectrum::dominant_frequency(c.t_s, c.residual_nm, c.excitation.frequency_hz);
         vec![
-            // The periodogram's peak of a decaying ring is broad: refined by the search.
-            Parameter { name: "frequency_hz".into(), grid: log_grid(f * 0.9, f * 1.1, 9), refine: Refine::Between },
+            // The periodogram's peak of rings of random phase sits at the damped frequency.
+            Parameter { name: "frequency_hz".into(), grid: vec![f], refine: Refine::Not },
             Parameter { name: "damping_ratio".into(), grid: log_grid(0.003, 0.3, 13), refine: Refine::Between },
         ]
     }

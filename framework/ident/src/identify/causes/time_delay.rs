@@ -15,12 +15,15 @@ impl CandidateCause for TimeDelay {
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         // Up to a tenth of the excitation period either way, every sample near zero and about
-        // 40 steps further out; the search refines the best on every sample around it.
+        // 20 steps further out; the search refines the best on every full-rate sample around it.
         let dt = c.excitation.sample_period_s;
         let max = ((0.1 / c.excitation.frequency_hz / dt).min(400.0)) as i64;
-        let step = (max / 40).max(1);
+        let step = (max / 20).max(1);
         let grid = (1..=max.max(1)).filter(|k| k % step == 0 || *k <= 3).flat_map(|k| [k as f64 * dt, -(k as f64) * dt]).collect();
         vec![Parameter { name: "delay_s".into(), grid, refine: Refine::Samples }]
+    }
+    fn transforms(&self) -> bool {
+        true
     }
     fn transform(&self, p: &[f64], inputs: &mut Inputs) {
         let k = (p[0] / inputs.sample_period_s).round() as i64;
