@@ -1,25 +1,60 @@
-//! Synthetic experiments with one hidden effect (or none) must be identified correctly:
-//! the right cause first, parameters within tolerance, the residual near the noise floor, and
-//! nothing found in the clean controls.
+//! Synthetic experiments with hidden effects (one, two, or none) must be identified correctly:
+//! the right causes named, parameters within tolerance, and nothing found in the clean
+//! controls. The cases cover every effect of the vocabulary, both vibration kinds (a mode whose
+//! amplitude grows with speed; a mode rung by each reversal with a random phase), a delay on the
+//! encoder side, pairs of effects, and a lower signal-to-noise ratio (noise 1.5-3 % of the peak
+//! torque).
+
+use std::collections::BTreeMap;
+use std::f64::consts::TAU;
 
 use jointctl_ident::csv::Data;
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
 use jointctl_test_support::XorShift64 as Rng;
 
-const EFFECTS: [&str; 9] =
-    ["none", "viscous_friction", "hysteresis", "dead_zone", "stiffness_nonlinearity", "time_delay", "dropout", "sensor_offset", "vibration"];
+const SINGLE: [&str; 11] = [
+    "viscous_friction",
+    "hysteresis",
+    "dead_zone",
+    "stiffness_nonlinearity",
+    "time_delay",
+    "encoder_delay",
+    "dropout",
+    "sensor_offset",
+    "vibration",
+    "speed_vibration",
+    "reversal_ringing",
+];
+
+/// Pairs, including the confounds the issue names (delay vs viscous friction, hysteresis vs
+/// eq. 3.5 friction is in every case's baseline, dead zone vs offset, cubic stiffness vs delay).
+const PAIRS: [(&str, &str); 8] = [
+    ("time_delay", "viscous_friction"),
+    ("dead_zone", "sensor_offset"),
+    ("stiffness_nonlinearity", "time_delay"),
+    ("hysteresis", "vibration"),
+    ("hysteresis", "sensor_offset"),
+    ("viscous_friction", "stiffness_nonlinearity"),
+    ("dead_zone", "reversal_ringing"),
+    ("hysteresis", "speed_vibration"),
+];
+
+/// The effect's name as identify reports it (an encoder-side delay is a negative time delay).
+fn reported(effect: &str) -> &str {
+    if effect == "encoder_delay" { "time_delay" } else { effect }
+}
 
 struct Case {
-    effect: &'static str,
+    effects: Vec<&'static str>,
     data: Data,
-    truth: (&'static str, f64),
-    noise_nm: f64,
+    /// (effect, parameter, true value).
+    truths: Vec<(&'static str, &'static str, f64)>,
 }
 
 /// One synthetic characterisation: a sine deflection, the thesis' baseline (linear spring +
-/// eq. 3.5 arctan friction) plus `effect`, 14-bit deflection, noisy torque sensor.
-fn generate(effect: &'static str, seed: u64) -> Case {
+/// eq. 3.5 arctan friction) plus `effects`, 14-bit deflection, noisy torque sensor.
+fn generate(effects: &[&'static str], seed: u64, low_snr: bool) -> Case {
     let mut r = Rng::new(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     let rate = 200.0;
     let n = 12_000;
@@ -28,55 +63,48 @@ fn generate(effect: &'static str, seed: u64) -> Case {
     let k = r.range(30.0, 200.0);
     let ka = r.range(0.1, 0.6);
     let kb = r.range(20.0, 200.0);
-    let noise = r.range(0.01, 0.04);
-    let q = std::f64::consts::TAU / 16384.0;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 / rate).collect();
-    let phi = |t: f64| amp * (std::f64::consts::TAU * f * t).sin();
-    let dphi = |t: f64| amp * std::f64::consts::TAU * f * (std::f64::consts::TAU * f * t).cos();
-    let mut truth = ("", 0.0);
-    let (b, fc, lambda, w, k3, delay, offset, vib) = match effect {
-        "viscous_friction" => {
-            let b = r.range(0.1, 0.4) * k / (std::f64::consts::TAU * f) * 0.1;
-            truth = ("damping_nms_per_rad", b);
-            (b, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0))
+    let noise = if low_snr { r.range(0.015, 0.03) * k * amp } else { r.range(0.01, 0.04) };
+    let q = TAU / 16384.0;
+    let has = |e: &str| effects.contains(&e);
+    let mut truths = Vec::new();
+    let mut pick = |e: &'static str, p: &'static str, v: f64, on: bool| {
+        if on {
+            truths.push((e, p, v));
+            v
+        } else {
+            0.0
         }
-        "hysteresis" => {
-            let fc = r.range(0.5, 2.0);
-            truth = ("limit_nm", fc);
-            (0.0, fc, amp * r.range(0.03, 0.15), 0.0, 0.0, 0.0, 0.0, (0.0, 0.0))
-        }
-        "dead_zone" => {
-            let w = amp * r.range(0.1, 0.25);
-            truth = ("half_width_rad", w);
-            (0.0, 0.0, 1.0, w, 0.0, 0.0, 0.0, (0.0, 0.0))
-        }
-        "stiffness_nonlinearity" => {
-            let k3 = r.range(0.1, 0.3) * k / (amp * amp) * if r.uniform() < 0.5 { -1.0 } else { 1.0 };
-            truth = ("k3_nm_per_rad3", k3);
-            (0.0, 0.0, 1.0, 0.0, k3, 0.0, 0.0, (0.0, 0.0))
-        }
-        "time_delay" => {
-            let d = (r.range(0.02, 0.1) * rate).round() / rate;
-            truth = ("delay_s", d);
-            (0.0, 0.0, 1.0, 0.0, 0.0, d, 0.0, (0.0, 0.0))
-        }
-        "sensor_offset" => {
-            let o = r.range(0.3, 1.0) * if r.uniform() < 0.5 { -1.0 } else { 1.0 };
-            truth = ("offset_nm", o);
-            (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, o, (0.0, 0.0))
-        }
-        "vibration" => {
-            let fv = r.range(5.0, 20.0);
-            truth = ("frequency_hz", fv);
-            (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, (r.range(0.3, 1.0), fv))
-        }
-        _ => (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0)),
     };
+    let b = pick("viscous_friction", "damping_nms_per_rad", r.range(0.1, 0.4) * k / (TAU * f) * 0.1, has("viscous_friction"));
+    let fc = pick("hysteresis", "limit_nm", r.range(0.5, 2.0), has("hysteresis"));
+    let lambda = amp * r.range(0.03, 0.15);
+    let w = pick("dead_zone", "half_width_rad", amp * r.range(0.1, 0.25), has("dead_zone"));
+    let k3 = pick("stiffness_nonlinearity", "k3_nm_per_rad3", r.range(0.1, 0.3) * k / (amp * amp) * if r.uniform() < 0.5 { -1.0 } else { 1.0 }, has("stiffness_nonlinearity"));
+    let torque_delay = pick("time_delay", "delay_s", (r.range(0.02, 0.1) * rate).round() / rate, has("time_delay"));
+    let encoder_delay = (r.range(0.02, 0.1) * rate).round() / rate;
+    pick("encoder_delay", "delay_s", -encoder_delay, has("encoder_delay"));
+    let offset = pick("sensor_offset", "offset_nm", r.range(0.3, 1.0) * if r.uniform() < 0.5 { -1.0 } else { 1.0 }, has("sensor_offset"));
+    let vib = (r.range(0.3, 1.0), pick("vibration", "frequency_hz", r.range(5.0, 20.0), has("vibration")));
+    let peak_speed = amp * TAU * f;
+    let speed_vib = (r.range(0.3, 1.0) / peak_speed, pick("speed_vibration", "frequency_hz", r.range(5.0, 20.0), has("speed_vibration")), r.range(0.0, TAU));
+    let ring_f = pick("reversal_ringing", "frequency_hz", r.range(5.0, 20.0), has("reversal_ringing"));
+    let ring_zeta = pick("reversal_ringing", "damping_ratio", r.range(0.02, 0.1), has("reversal_ringing"));
+    // Rings: every reversal of the sine (cos = 0) starts one with its own amplitude and phase.
+    let reversals: Vec<(f64, f64, f64)> = (0..((n as f64 / rate) * 2.0 * f) as usize + 2)
+        .map(|i| ((i as f64 + 0.5) / (2.0 * f), r.range(0.3, 1.0), r.range(0.0, TAU)))
+        .collect();
+    // A delay on the encoder side is, on one sine, exactly a stiffness change plus viscous
+    // friction (`x(t + d) = cos(w d) x + sin(w d) / w x'`): only a second, faster component of the
+    // excitation tells them apart. Those cases get one (a fifth of the amplitude at 7x the
+    // frequency), as a characterisation with a fast segment would.
+    let fast = if has("encoder_delay") || (has("time_delay") && has("viscous_friction")) { 0.2 } else { 0.0 };
+    let phi = |t: f64| amp * ((TAU * f * t).sin() + fast * (TAU * 7.0 * f * t).sin());
+    let dphi = |t: f64| amp * TAU * f * ((TAU * f * t).cos() + 7.0 * fast * (TAU * 7.0 * f * t).cos());
     let mut z = 0.0;
     let mut prev = phi(0.0);
-    let mut deflection = Vec::with_capacity(n);
-    let mut torque = Vec::with_capacity(n);
-    for &ti in &t {
+    let (mut deflection, mut torque, mut t_all) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+    for i in 0..n {
+        let ti = i as f64 / rate;
         let x = phi(ti);
         let step = x - prev;
         if step != 0.0 {
@@ -84,16 +112,31 @@ fn generate(effect: &'static str, seed: u64) -> Case {
             z = s + (z - s) * (-step.abs() / lambda).exp();
         }
         prev = x;
-        // The torque channel may lag the deflection channel by `delay`.
-        let xd = phi(ti - delay);
+        // The torque channel may lag the deflection (torque_delay) or lead it (the encoder lags).
+        let xd = phi(ti - torque_delay);
         let xe = xd.signum() * (xd.abs() - w).max(0.0);
-        let tau = k * xe + k3 * xe.powi(3) + ka * (kb * dphi(ti - delay)).atan() + b * dphi(ti - delay) + fc * z + offset
-            + vib.0 * (std::f64::consts::TAU * vib.1 * ti).sin()
-            + noise * r.normal();
-        deflection.push((x / q).round() * q);
+        let v = dphi(ti - torque_delay);
+        let mut tau = k * xe + k3 * xe.powi(3) + ka * (kb * v).atan() + b * v + fc * z + offset + noise * r.normal();
+        if vib.1 > 0.0 {
+            tau += vib.0 * (TAU * vib.1 * ti).sin();
+        }
+        if speed_vib.1 > 0.0 {
+            tau += speed_vib.0 * v.abs() * (TAU * speed_vib.1 * ti + speed_vib.2).sin();
+        }
+        if ring_f > 0.0 {
+            let wn = TAU * ring_f;
+            let wd = wn * (1.0 - ring_zeta * ring_zeta).sqrt();
+            if let Some((t0, a, ph)) = reversals.iter().rev().find(|(t0, ..)| *t0 <= ti) {
+                let tau_s = ti - t0;
+                tau += a * (-ring_zeta * wn * tau_s).exp() * (wd * tau_s + ph).sin();
+            }
+        }
+        let measured = if has("encoder_delay") { phi(ti - encoder_delay) } else { x };
+        deflection.push((measured / q).round() * q);
         torque.push(tau);
+        t_all.push(ti);
     }
-    if effect == "dropout" {
+    if has("dropout") {
         let count = (n as f64 * r.range(0.005, 0.02)) as usize;
         for _ in 0..count {
             let i = 1 + (r.uniform() * (n - 2) as f64) as usize;
@@ -101,84 +144,96 @@ fn generate(effect: &'static str, seed: u64) -> Case {
                 deflection[i] = 0.0;
             }
         }
-        truth = ("fraction", count as f64 / n as f64);
+        truths.push(("dropout", "fraction", count as f64 / n as f64));
     }
     let nan = vec![f64::NAN; n];
     Case {
-        effect,
-        truth,
-        noise_nm: noise,
-        data: Data { t, deflection, torque, pivot_mm: nan.clone(), angle_deg: nan.clone(), motor_position: nan.clone(), reference_torque: nan, notes: vec![] },
+        effects: effects.to_vec(),
+        truths,
+        data: Data { t: t_all, deflection, torque, pivot_mm: nan.clone(), angle_deg: nan.clone(), motor_position: nan.clone(), reference_torque: nan, notes: vec![] },
     }
 }
 
 fn tolerance(param: &str) -> f64 {
     match param {
-        "frequency_hz" => 0.03,
+        // Issue 13: a mode's frequency within 5 %.
+        "frequency_hz" => 0.05,
+        "damping_ratio" => 0.5,
         // The Dahl limit and the arctan friction of eq. 3.5 overlap away from reversals.
         "limit_nm" => 0.5,
-        "delay_s" => 0.15,
+        "delay_s" => 0.2,
         "fraction" => 0.5,
         _ => 0.3,
     }
 }
 
 #[test]
-fn hidden_effects_are_named_first_with_their_parameters_and_controls_yield_nothing() {
-    // Identification is statistical: this test states the rates it requires over 60 seeded
-    // cases (6 per effect, 12 clean controls) and prints the confusion matrix.
-    let cases_per_effect = 6;
-    let mut confusion: std::collections::BTreeMap<(&str, String), usize> = Default::default();
-    let mut misnamed = Vec::new();
-    let mut param_misses = Vec::new();
-    let mut residual_misses = Vec::new();
-    let (mut total, mut named, mut control_hits) = (0, 0, 0);
+fn hidden_effects_and_pairs_are_named_with_their_parameters_and_controls_yield_nothing() {
+    let mut cases: Vec<(String, Vec<&'static str>, bool)> = Vec::new();
+    for effect in SINGLE {
+        for rep in 0..4 {
+            cases.push((format!("{effect} #{rep}"), vec![effect], false));
+        }
+        // One more at the lower signal-to-noise ratio.
+        cases.push((format!("{effect} low-SNR"), vec![effect], true));
+    }
+    for (a, b) in PAIRS {
+        for rep in 0..2 {
+            cases.push((format!("{a}+{b} #{rep}"), vec![a, b], false));
+        }
+    }
+    for rep in 0..20 {
+        cases.push((format!("clean #{rep}"), vec![], rep % 4 == 3));
+    }
+    let mut confusion: BTreeMap<(String, String), usize> = BTreeMap::new();
+    let (mut with_effects, mut named, mut control_hits) = (0, 0, 0);
+    let (mut params_checked, mut params_ok) = (0, 0);
+    let mut misses = Vec::new();
     let start = std::time::Instant::now();
-    for (e, effect) in EFFECTS.iter().enumerate() {
-        let reps = if *effect == "none" { 12 } else { cases_per_effect };
-        for rep in 0..reps {
-            total += 1;
-            let case = generate(effect, (e * 100 + rep) as u64 + 7);
-            let report = identify(&case.data, &IdentifyOptions::default()).unwrap();
-            let found = report.causes.first().map_or("none".to_string(), |c| c.effect.clone());
-            *confusion.entry((case.effect, found.clone())).or_default() += 1;
-            let label = format!("{effect} #{rep}");
-            if found != case.effect {
-                if case.effect == "none" {
-                    control_hits += 1;
-                }
-                misnamed.push(format!("{label}: found {found}; causes {:?}", report.causes.iter().map(|c| &c.effect).collect::<Vec<_>>()));
-                continue;
+    for (i, (label, effects, low_snr)) in cases.iter().enumerate() {
+        let case = generate(effects, i as u64 * 7919 + 13, *low_snr);
+        let report = identify(&case.data, &IdentifyOptions::default()).unwrap();
+        let found: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+        let truth = if effects.is_empty() { "none".to_string() } else { effects.join("+") };
+        let mut sorted = found.clone();
+        sorted.sort();
+        *confusion.entry((truth, if found.is_empty() { "none".into() } else { sorted.join("+") })).or_default() += 1;
+        if case.effects.is_empty() {
+            if !found.is_empty() {
+                control_hits += 1;
+                misses.push(format!("{label}: found {found:?}"));
             }
-            if case.effect == "none" {
-                continue;
-            }
+            continue;
+        }
+        with_effects += 1;
+        let all_named = case.effects.iter().all(|e| found.contains(&reported(e)));
+        if all_named {
             named += 1;
-            let (param, value) = case.truth;
-            let got = report.causes[0].params.get(param).copied().unwrap_or(f64::NAN);
-            if !((got - value).abs() <= tolerance(param) * value.abs()) {
-                param_misses.push(format!("{label}: {param} {got} vs {value}"));
-            }
-            // Near the noise floor: within 1.5x the sensor noise (+ quantisation), or most of the
-            // way from the baseline's error down to it.
-            let floor = (1.5 * case.noise_nm + 0.01).max(case.noise_nm + 0.25 * (report.rmse_before - case.noise_nm));
-            if case.effect != "dropout" && report.rmse_after > floor {
-                residual_misses.push(format!("{label}: rmse_after {} (before {}, noise {})", report.rmse_after, report.rmse_before, case.noise_nm));
+        } else {
+            misses.push(format!("{label}: found {found:?}; rejected {:?}", report.rejected));
+        }
+        for (effect, param, value) in &case.truths {
+            let Some(cause) = report.causes.iter().find(|c| c.effect == reported(effect)) else { continue };
+            params_checked += 1;
+            let got = cause.params.get(*param).copied().unwrap_or(f64::NAN);
+            if (got - value).abs() <= tolerance(param) * value.abs() {
+                params_ok += 1;
+            } else {
+                misses.push(format!("{label}: {effect}.{param} {got:.4} vs {value:.4}"));
             }
         }
     }
-    println!("confusion matrix (hidden -> named first), {total} cases in {:.2} s:", start.elapsed().as_secs_f64());
+    println!("confusion matrix (hidden -> named), {} cases in {:.2} s:", cases.len(), start.elapsed().as_secs_f64());
     for ((truth, found), count) in &confusion {
-        println!("  {truth:>24} -> {found:<24} {count}");
+        println!("  {truth:>40} -> {found:<40} {count}");
     }
-    let correct = total - misnamed.len();
-    println!("named first correctly: {correct} of {total}; false causes in clean controls: {control_hits} of 12");
-    println!("parameters within tolerance: {} of {named}; residual near the noise floor: {} of {}", named - param_misses.len(), named - residual_misses.len(), named);
-    for m in misnamed.iter().chain(&param_misses).chain(&residual_misses) {
+    println!("named: {named} of {with_effects}; false causes in 20 clean controls: {control_hits}; parameters within tolerance: {params_ok} of {params_checked}");
+    for m in &misses {
         println!("  {m}");
     }
-    assert!(correct as f64 >= 0.9 * total as f64, "named first correctly in {correct} of {total} cases (need 90 %)");
-    assert!(control_hits <= 1, "{control_hits} of 12 clean controls produced a cause");
-    assert!((named - param_misses.len()) as f64 >= 0.85 * named as f64, "{} parameter misses of {named}", param_misses.len());
-    assert!((named - residual_misses.len()) as f64 >= 0.85 * named as f64, "{} residual misses of {named}", residual_misses.len());
+    assert!(named as f64 >= 0.95 * with_effects as f64, "named in {named} of {with_effects} cases (need 95 %)");
+    assert!(control_hits <= 1, "{control_hits} of 20 clean controls produced a cause");
+    assert!(params_ok as f64 >= 0.9 * params_checked as f64, "{params_ok} of {params_checked} parameters within tolerance (need 90 %)");
 }
+
+

@@ -218,7 +218,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let spec = selection.spec;
     let fit = model.fit(&spec, &p.train).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let after = select::held_out_errors(&model, &spec, &p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
-    let rmse_after = select::rmse(&after);
+    let rmse_after = select::rmse(&after.errors);
 
     let duration = p.train.t[p.train.len() - 1] - p.train.t[0] + p.test.t[p.test.len() - 1] - p.test.t[0];
     let mut found = Vec::new();
@@ -226,7 +226,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
         let (cause, term) = (all[chosen.cause], &spec.terms[i]);
         let names: Vec<String> = term.grids.iter().map(|p| p.name.clone()).collect();
-        let gain = select::held_out_errors(&model, &spec.without(chosen.cause), &p).map_or(0.0, |e| select::rmse(&e) - rmse_after);
+        let gain = select::held_out_errors(&model, &spec.without(chosen.cause), &p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
         let mut evidence = chosen.evidence.clone();
         if let Some(remark) = cause.remark(&term.params, &p.excitation, duration) {
             evidence += &format!("; {remark}");
@@ -263,11 +263,11 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     Ok(Report {
         samples: p.samples,
         dropped_samples: p.dropped,
-        rmse_before: select::rmse(&before),
+        rmse_before: select::rmse(&before.errors),
         rmse_after,
         causes: found,
         significance: Significance {
-            test: "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided".into(),
+            test: "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; for coefficients fitted on each ring, a chi-square test of the held-out error drop".into(),
             level: significance::LEVEL,
             blocks: test.blocks,
         },

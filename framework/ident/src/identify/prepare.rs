@@ -126,6 +126,39 @@ fn velocity(t: &[f64], d: &[f64], half: usize) -> Vec<f64> {
         .collect()
 }
 
+/// The excitation's fundamental [Hz]: the slope of the upward mean-crossing times (each
+/// interpolated between samples) against their count, a least-squares line. Exact to a small
+/// fraction of 1/duration even when the amplitude varies, which harmonics of it (periodic model
+/// errors) must be told from modes by. Falls back to crossings per second with fewer than three.
+fn fundamental_hz(t: &[f64], d: &[f64]) -> f64 {
+    let mean = d.iter().sum::<f64>() / d.len() as f64;
+    let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+    // Debounced like the reversals: a crossing counts after the signal went a tenth of its
+    // range below the mean.
+    let band = 0.1 * (hi - lo);
+    let mut armed = false;
+    let mut times = Vec::new();
+    for i in 1..d.len() {
+        let (a, b) = (d[i - 1] - mean, d[i] - mean);
+        if a < -band {
+            armed = true;
+        }
+        if armed && a < 0.0 && b >= 0.0 {
+            times.push(t[i - 1] + (t[i] - t[i - 1]) * (-a / (b - a)));
+            armed = false;
+        }
+    }
+    let duration = (t[t.len() - 1] - t[0]).max(1e-9);
+    if times.len() < 3 {
+        return (times.len() as f64 / duration).max(0.01);
+    }
+    let n = times.len() as f64;
+    let km = (n - 1.0) / 2.0;
+    let tm = times.iter().sum::<f64>() / n;
+    let (num, den) = times.iter().enumerate().fold((0.0, 0.0), |(p, q), (k, x)| (p + (k as f64 - km) * (x - tm), q + (k as f64 - km).powi(2)));
+    if num > 0.0 { den / num } else { (n / duration).max(0.01) }
+}
+
 pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
@@ -168,7 +201,7 @@ pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, Prep
     }
     let coarse = train.every(train.len().div_ceil(SEARCH_SAMPLES));
     let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
-    let frequency_hz = (d.windows(2).filter(|w| w[0] < 0.0 && w[1] >= 0.0).count() as f64 / (t[t.len() - 1] - t[0])).max(0.01);
+    let frequency_hz = fundamental_hz(&t, &d);
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
     Ok(Prepared { train, test, coarse, excitation, samples: n_all, dropped })
 }

@@ -138,7 +138,12 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) ->
                 model.fit(&s, part).map_or(f64::INFINITY, |f| f.rss)
             };
             let better = match p.refine {
-                Refine::Between if now > 0.0 => refine_log(|x| at(x, coarse), now / 4.0, now * 4.0, 18),
+                // Within the grid's range: a parameter outside it is outside what the cause
+                // claims to model (a ring damped beyond 0.3 is no ring).
+                Refine::Between if now > 0.0 => {
+                    let (lo, hi) = (p.grid.iter().copied().fold(f64::INFINITY, f64::min), p.grid.iter().copied().fold(0.0, f64::max));
+                    refine_log(|x| at(x, coarse), (now / 4.0).max(lo), (now * 4.0).min(hi).max(now), 18)
+                }
                 Refine::Samples => {
                     // Three search steps either way, every full-rate sample.
                     let centre = (now / train.dt).round() as i64;

@@ -6,7 +6,7 @@ use super::causes::SearchContext;
 use super::design::{Model, Part, Spec};
 use super::prepare::Prepared;
 use super::search::{polish, search};
-use super::significance::{BlockTest, block_test};
+use super::significance::{BlockTest, added_coefficients_test, block_test};
 
 /// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
 /// 1995: "very strong" evidence).
@@ -30,13 +30,31 @@ pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
     n as f64 * (rss / n as f64).max(1e-300).ln() + parameters as f64 * (n as f64).ln()
 }
 
-/// Held-out squared errors of `spec` fitted on the training part, each with the Cp charge of
-/// the coefficients fitted on the held-out part itself (segment-wise terms).
-pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<Vec<f64>> {
+/// A model's errors on the held-out part.
+pub(crate) struct HeldOut {
+    /// Squared error per sample, with the Cp charge of coefficients fitted on the held-out part
+    /// itself (segment-wise terms) [Nm^2].
+    pub errors: Vec<f64>,
+    /// Residual sum of squares without the charge [Nm^2].
+    pub rss: f64,
+    /// Coefficients fitted on the held-out part.
+    pub fitted_here: usize,
+}
+
+/// Held-out errors of `spec` fitted on the training part.
+pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut> {
     let fit = model.fit(spec, &p.train)?;
     let pred = model.predict(spec, &fit, &p.test);
     let sigma2 = fit.rss / (p.train.len().saturating_sub(fit.parameters)).max(1) as f64;
-    Some(p.test.tau.iter().zip(&pred.torque_nm).zip(&pred.leverage).map(|((y, m), h)| (y - m).powi(2) + 2.0 * sigma2 * h).collect())
+    let raw: Vec<f64> = p.test.tau.iter().zip(&pred.torque_nm).map(|(y, m)| (y - m).powi(2)).collect();
+    let errors = raw.iter().zip(&pred.leverage).map(|(e, h)| e + 2.0 * sigma2 * h).collect();
+    Some(HeldOut { errors, rss: raw.iter().sum(), fitted_here: pred.leverage.iter().sum::<f64>().round() as usize })
+}
+
+/// Why a model's fit on the training part is physically impossible (a term's own rule), if it is.
+fn impossible(model: &Model, spec: &Spec, p: &Prepared, name: &dyn Fn(usize) -> String) -> Option<String> {
+    let fit = model.fit(spec, &p.train)?;
+    spec.terms.iter().enumerate().filter(|(_, t)| !t.baseline).find_map(|(i, t)| model.causes[t.cause].impossible(&t.params, fit.of(i)).map(|why| format!("{} ({why} with the others in the model)", name(t.cause))))
 }
 
 pub(crate) fn rmse(errors: &[f64]) -> f64 {
@@ -48,15 +66,22 @@ pub(crate) fn compare(model: &Model, reduced: &Spec, full: &Spec, p: &Prepared) 
     compare_with(&held_out_errors(model, reduced, p)?, model, full, p)
 }
 
-/// [`compare`] with the reduced model's held-out errors known.
-fn compare_with(r: &[f64], model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
+/// [`compare`] with the reduced model's held-out errors known. A full model with more
+/// coefficients fitted on the held-out part (a segment-wise cause) takes the chi-square test of
+/// added coefficients; otherwise the block t-test.
+fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
     let f = held_out_errors(model, full, p)?;
-    let diff: Vec<f64> = r.iter().zip(&f).map(|(a, b)| a - b).collect();
-    Some((block_test(&diff), rmse(r) - rmse(&f)))
+    let gain = rmse(&r.errors) - rmse(&f.errors);
+    if f.fitted_here > r.fitted_here {
+        let noise = f.rss / p.test.len().saturating_sub(f.fitted_here).max(1) as f64;
+        return Some((added_coefficients_test(r.rss, f.rss, noise, f.fitted_here - r.fitted_here), gain));
+    }
+    let diff: Vec<f64> = r.errors.iter().zip(&f.errors).map(|(a, b)| a - b).collect();
+    Some((block_test(&diff), gain))
 }
 
 fn describe(t: &BlockTest) -> String {
-    format!("held-out block t = {:.1} (critical {:.2}, {} blocks, one-sided {} %)", t.t, t.critical, t.blocks, super::significance::LEVEL * 100.0)
+    t.to_string()
 }
 
 pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residual: &'a mut Vec<f64>) -> SearchContext<'a> {
@@ -94,20 +119,50 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
             proposals.push((score(&s, cause.look_elsewhere(&ctx)), s, c));
         }
         proposals.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let top: Vec<(f64, Spec, usize)> = proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP).collect();
         let mut accepted = false;
         let Some(reduced) = held_out_errors(model, &spec, p) else { break };
-        for (b, s, c) in proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP) {
-            let s = polish(model, &s, coarse, &p.train);
+        for (b, s, c) in &top {
+            let s = polish(model, s, coarse, &p.train);
+            if let Some(why) = impossible(model, &s, p, &name) {
+                rejected.push(why);
+                continue;
+            }
             match compare_with(&reduced, model, &s, p) {
                 Some((test, _)) if test.significant() => {
-                    chosen.push(Chosen { cause: c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", describe(&test)) });
+                    chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", describe(&test)) });
                     current = score(&s, 0.0);
                     spec = s;
                     accepted = true;
                     break;
                 }
-                Some((test, _)) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(c), describe(&test))),
+                Some((test, _)) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(*c), describe(&test))),
                 None => {}
+            }
+        }
+        // Two effects can hide each other on the held-out part (a dead zone behind an offset):
+        // when no proposal passes alone, the best pair of proposals is tested together; each must
+        // still pass given the other at the end.
+        if !accepted {
+            'pairs: for (i, (_, first, a)) in top.iter().enumerate() {
+                for (_, second, c) in &top[i + 1..] {
+                    let Some(term) = second.term(*c).cloned() else { continue };
+                    let both = polish(model, &first.with(term), coarse, &p.train);
+                    if let Some(why) = impossible(model, &both, p, &name) {
+                        rejected.push(why);
+                        continue;
+                    }
+                    if let Some((test, _)) = compare_with(&reduced, model, &both, p).filter(|(t, _)| t.significant()) {
+                        let b = score(&both, 0.0);
+                        for k in [*a, *c] {
+                            chosen.push(Chosen { cause: k, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(*a), name(*c), describe(&test)) });
+                        }
+                        current = b;
+                        spec = both;
+                        accepted = true;
+                        break 'pairs;
+                    }
+                }
             }
         }
         if !accepted {

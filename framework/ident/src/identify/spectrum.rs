@@ -52,8 +52,10 @@ pub(crate) fn resolvable(t: &[f64], excitation_hz: f64) -> f64 {
 /// The frequency of the strongest component of `r` in the band [Hz]: the peak of a periodogram
 /// (an FFT zero-padded to four times the record, bins a quarter of the resolution apart), refined
 /// by golden section on the exact projection within a bin either side. Samples with gaps (after
-/// dropouts) take a 240-point grid of projections instead.
-pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> f64 {
+/// dropouts) take a 240-point grid of projections instead. `None` when the strongest component
+/// sits at the band's lower edge (the tail of slower model errors) or cannot be told from a
+/// harmonic of the excitation (a periodic model error): neither is a mode.
+pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> Option<f64> {
     let (lo, hi) = band(t, excitation_hz);
     let power = |f: f64| {
         let (s, c) = projection(t, r, std::f64::consts::TAU * f);
@@ -70,14 +72,38 @@ pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> f6
         let bin_hz = 1.0 / (size as f64 * dt);
         let (first, last) = ((lo / bin_hz).ceil() as usize, ((hi / bin_hz).floor() as usize).min(size / 2));
         let peak = (first..=last.max(first)).max_by(|a, b| buffer[*a].norm_sqr().total_cmp(&buffer[*b].norm_sqr())).unwrap_or(first);
+        if peak <= first + 1 {
+            return None;
+        }
         (peak as f64 * bin_hz, bin_hz)
     } else {
         let grid = log_grid(lo, hi.max(lo * 1.01), 240);
         let best = grid.iter().map(|f| (power(*f), *f)).max_by(|a, b| a.0.total_cmp(&b.0)).map_or(lo, |(_, f)| f);
+        if best <= grid[1] {
+            return None;
+        }
         (best, best * 0.015)
     };
     let (a, b) = ((best - half_width).max(lo * 0.5), best + half_width);
-    super::search::refine_log(|f| -power(f), a, b, 30)
+    let f = super::search::refine_log(|f| -power(f), a, b, 30);
+    // At a harmonic of the excitation a component may be a periodic model error (the 14-bit
+    // quantisation of a periodic deflection makes them), not a mode of the structure. "At" is
+    // within three standard deviations of the line's frequency estimate (the Cramer-Rao bound of
+    // a sinusoid in white noise, sigma_f = sqrt(3) sigma / (pi A T sqrt(N))), at most the
+    // record's resolution: a strong line a hair off a harmonic is a mode; a weak one that cannot
+    // be told from the harmonic is not named.
+    let duration = t[n - 1] - t[0];
+    let harmonic = (f / excitation_hz).round();
+    if harmonic >= 1.0 {
+        let amplitude = 2.0 * power(f).sqrt() / n as f64;
+        let mean = r.iter().sum::<f64>() / n as f64;
+        let sigma = (r.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64 - 0.5 * amplitude * amplitude).max(0.0).sqrt();
+        let sigma_f = 3f64.sqrt() * sigma / (std::f64::consts::PI * amplitude.max(1e-300) * duration * (n as f64).sqrt());
+        if (f - harmonic * excitation_hz).abs() <= (3.0 * sigma_f).min(1.0 / duration) {
+            return None;
+        }
+    }
+    Some(f)
 }
 
 #[cfg(test)]
@@ -90,7 +116,7 @@ mod tests {
         let t: Vec<f64> = (0..4000).map(|i| i as f64 * 0.01).collect();
         for f in [2.37, 11.113, 40.5] {
             let r: Vec<f64> = t.iter().map(|t| 0.1 * (std::f64::consts::TAU * f * t + 0.3).sin() + 0.02 * (7.0 * t).cos()).collect();
-            let found = super::dominant_frequency(&t, &r, 0.2);
+            let found = super::dominant_frequency(&t, &r, 0.2).unwrap();
             assert!((found - f).abs() < 0.002, "{f}: {found}");
         }
     }

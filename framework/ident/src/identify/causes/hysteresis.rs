@@ -37,8 +37,11 @@ impl CandidateCause for Hysteresis {
         vec!["limit_nm".into()]
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+        // Deflection scales up to a third of the amplitude (an assumption: a loop that has not
+        // reached its limit within a third of the stroke is, on a sine, a phase lag that viscous
+        // friction explains as well; such a fit names the wrong cause).
         let a = c.excitation.amplitude_rad;
-        vec![Parameter { name: "lambda_rad".into(), grid: log_grid(a * 1e-3, a, 16), refine: Refine::Between }]
+        vec![Parameter { name: "lambda_rad".into(), grid: log_grid(a * 1e-3, a / 3.0, 16), refine: Refine::Between }]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
         let mut history = s.history_rad.to_vec();

@@ -163,7 +163,8 @@ pub trait CandidateCause: Send + Sync {
     fn name(&self) -> &str;
     /// Names of the linear coefficients, SI units in the names.
     fn coefficient_names(&self) -> Vec<String>;
-    /// The non-linear parameters and their grids (none by default).
+    /// The non-linear parameters and their grids (none by default). A parameter with an empty
+    /// grid says the cause has nothing to look for in this data (no mode in the band).
     fn parameters(&self, context: &SearchContext) -> Vec<Parameter> {
         let _ = context;
         Vec::new()

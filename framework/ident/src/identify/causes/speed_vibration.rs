@@ -17,7 +17,10 @@ impl CandidateCause for SpeedVibration {
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         // The matched filter for an amplitude that follows the speed: the residual weighted by it.
         let weighted: Vec<f64> = c.residual_nm.iter().zip(c.velocity_rad_per_s).map(|(r, v)| r * v.abs()).collect();
-        let f = spectrum::dominant_frequency(c.t_s, &weighted, c.excitation.frequency_hz);
+        let Some(f) = spectrum::dominant_frequency(c.t_s, &weighted, c.excitation.frequency_hz) else {
+            // No mode in the band: nothing to search.
+            return vec![Parameter { name: "frequency_hz".into(), grid: Vec::new(), refine: Refine::Not }];
+        };
         vec![Parameter { name: "frequency_hz".into(), grid: vec![f], refine: Refine::Not }]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
