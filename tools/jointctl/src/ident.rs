@@ -13,10 +13,12 @@ use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
 pub struct FitArgs {
     /// Measured experiment (CSV: t, deflection, torque[, pivot_mm, angle_deg, ...]).
     data: PathBuf,
-    /// Moving-average window [samples] (the thesis: 8 for the shoulder, 5 for the wrist).
-    #[arg(long, default_value_t = 1)]
-    smooth: usize,
-    /// Polynomial order 1-6, or `auto` (lowest within 2 % of the best held-out error).
+    /// Moving-average window [samples]; default the thesis': 8 for a shoulder characterisation
+    /// (by pivot), 5 for the wrist's (by pivot and direction), none otherwise.
+    #[arg(long)]
+    smooth: Option<usize>,
+    /// Polynomial order 1-6, or `auto` (the lowest whose curve runs through the middle of the
+    /// hysteresis band and the dead zone as well as higher orders, section 3.3.2).
     #[arg(long, default_value = "auto")]
     order: String,
     /// Separate fits for positive and negative deflection.
@@ -71,7 +73,8 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
             Err(_) => return crate::fail(format!("--order must be 1-6 or `auto`, got `{s}`")),
         },
     };
-    let opts = FitOptions { smoothing_window: a.smooth.max(1), order, branches: a.branches, through_zero: !a.no_through_zero };
+    let smoothing_window = a.smooth.unwrap_or_else(|| jointctl_ident::fit::thesis_smoothing(&data)).max(1);
+    let opts = FitOptions { smoothing_window, order, branches: a.branches, through_zero: !a.no_through_zero };
     let result = match fit(&data, &opts) {
         Ok(r) => r,
         Err(e) => return crate::fail(format!("{}: {e}", a.data.display())),
