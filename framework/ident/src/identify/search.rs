@@ -58,8 +58,22 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
                 q[j] = x;
                 rss(&q, coarse)
             };
-            let scores: Vec<f64> = p.grid.iter().map(|x| at(*x)).collect();
-            let i = (0..p.grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
+            // A whole-sample parameter (a delay) has a long grid over which its RSS is smooth:
+            // searched coarse to fine over the sorted grid; other grids are evaluated whole.
+            let mut scores = vec![f64::INFINITY; p.grid.len()];
+            let i = if p.refine == Refine::Samples {
+                let mut order: Vec<usize> = (0..p.grid.len()).collect();
+                order.sort_by(|a, b| p.grid[*a].total_cmp(&p.grid[*b]));
+                let at_index = |k: i64| at(p.grid[order[k as usize]]);
+                let k = integer_search(|k| at_index(k - 1), 1, order.len() as i64)? - 1;
+                scores[order[k as usize]] = at_index(k);
+                order[k as usize]
+            } else {
+                for (k, x) in p.grid.iter().enumerate() {
+                    scores[k] = at(*x);
+                }
+                (0..p.grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?
+            };
             let chosen = match p.refine {
                 Refine::Between => {
                     let (lo, hi) = (p.grid[i.saturating_sub(1)], p.grid[(i + 1).min(p.grid.len() - 1)]);
@@ -142,7 +156,7 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) ->
                 // claims to model (a ring damped beyond 0.3 is no ring).
                 Refine::Between if now > 0.0 => {
                     let (lo, hi) = (p.grid.iter().copied().fold(f64::INFINITY, f64::min), p.grid.iter().copied().fold(0.0, f64::max));
-                    refine_log(|x| at(x, coarse), (now / 4.0).max(lo), (now * 4.0).min(hi).max(now), 18)
+                    refine_log(|x| at(x, coarse), (now / 4.0).max(lo), (now * 4.0).min(hi).max(now), 10)
                 }
                 Refine::Samples => {
                     // Three search steps either way, every full-rate sample.

@@ -61,23 +61,23 @@ pub(crate) fn rmse(errors: &[f64]) -> f64 {
     (errors.iter().sum::<f64>() / errors.len().max(1) as f64).sqrt()
 }
 
-/// Does `full` predict the held-out part significantly better than `reduced`?
-pub(crate) fn compare(model: &Model, reduced: &Spec, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
-    compare_with(&held_out_errors(model, reduced, p)?, model, full, p)
-}
-
-/// [`compare`] with the reduced model's held-out errors known. A full model with more
+/// Does `full` predict the held-out part significantly better than the reduced model whose
+/// held-out errors are `r`? A full model with more
 /// coefficients fitted on the held-out part (a segment-wise cause) takes the chi-square test of
 /// added coefficients; otherwise the block t-test.
 fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
-    let f = held_out_errors(model, full, p)?;
+    Some(verdict(r, &held_out_errors(model, full, p)?, p))
+}
+
+/// The test of a full model's held-out errors `f` against a reduced model's `r`, and the RMSE gain.
+fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> (BlockTest, f64) {
     let gain = rmse(&r.errors) - rmse(&f.errors);
     if f.fitted_here > r.fitted_here {
         let noise = f.rss / p.test.len().saturating_sub(f.fitted_here).max(1) as f64;
-        return Some((added_coefficients_test(r.rss, f.rss, noise, f.fitted_here - r.fitted_here), gain));
+        return (added_coefficients_test(r.rss, f.rss, noise, f.fitted_here - r.fitted_here), gain);
     }
     let diff: Vec<f64> = r.errors.iter().zip(&f.errors).map(|(a, b)| a - b).collect();
-    Some((block_test(&diff), gain))
+    (block_test(&diff), gain)
 }
 
 fn describe(t: &BlockTest) -> String {
@@ -171,12 +171,16 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     }
     // Every cause must still earn its place given the others.
     loop {
+        let Some(full) = held_out_errors(model, &spec, p) else { break };
         let tests: Vec<(usize, f64)> = chosen
             .iter()
             .enumerate()
             .map(|(i, ch)| {
-                let reduced = spec.without(ch.cause);
-                (i, compare(model, &reduced, &spec, p).map_or(f64::NEG_INFINITY, |(t, _)| t.t - t.critical))
+                let reduced = held_out_errors(model, &spec.without(ch.cause), p);
+                (i, reduced.map_or(f64::NEG_INFINITY, |r| {
+                    let (t, _) = verdict(&r, &full, p);
+                    t.t - t.critical
+                }))
             })
             .collect();
         match tests.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)) {
