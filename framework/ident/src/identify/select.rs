@@ -170,8 +170,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         }
     }
     // Every cause must still earn its place given the others.
-    loop {
-        let Some(full) = held_out_errors(model, &spec, p) else { break };
+    while let Some(full) = held_out_errors(model, &spec, p) {
         let tests: Vec<(usize, f64)> = chosen
             .iter()
             .enumerate()
