@@ -259,7 +259,6 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let mut rejected = selection.rejected;
     rejected.sort();
     rejected.dedup();
-    let test = significance::block_test(&vec![0.0; t.len()]);
     Ok(Report {
         samples: p.samples,
         dropped_samples: p.dropped,
@@ -269,7 +268,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
         significance: Significance {
             test: "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; for coefficients fitted on each ring, a chi-square test of the held-out error drop".into(),
             level: significance::LEVEL,
-            blocks: test.blocks,
+            blocks: significance::blocks_for(t.len()),
         },
         held_out,
         rejected,

@@ -95,9 +95,15 @@ fn student_t(df: f64) -> f64 {
     z + (z3 + z) / (4.0 * df) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * df * df) + (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * df.powi(3))
 }
 
+/// Blocks a held-out part of `samples` samples is cut into: [`BLOCKS`], fewer when a block would
+/// hold fewer than 10 samples, at least 2.
+pub fn blocks_for(samples: usize) -> usize {
+    BLOCKS.min(samples / 10).max(2)
+}
+
 /// Tests per-sample gains `diff` (squared error without minus with the cause).
 pub fn block_test(diff: &[f64]) -> BlockTest {
-    let blocks = BLOCKS.min(diff.len() / 10).max(2);
+    let blocks = blocks_for(diff.len());
     let means: Vec<f64> = (0..blocks)
         .map(|b| {
             let (lo, hi) = (b * diff.len() / blocks, (b + 1) * diff.len() / blocks);

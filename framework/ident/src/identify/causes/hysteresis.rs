@@ -54,9 +54,6 @@ impl CandidateCause for Hysteresis {
     fn report(&self, p: &[f64], _: &[String], c: &[f64]) -> std::collections::BTreeMap<String, f64> {
         [("limit_nm".to_string(), c[0]), ("sigma_nm_per_rad".to_string(), c[0] / p[0])].into_iter().collect()
     }
-    fn remark(&self, _: &[f64], _: &super::Excitation, _: f64) -> Option<String> {
-        None
-    }
     fn fragments(&self, p: &[f64], c: &[f64]) -> Fragments {
         let h = json!({"sigma_nm_per_rad": c[0] / p[0], "limit_nm": c[0]});
         Fragments { plant: object([("hysteresis", h.clone())]), observer: object([("hysteresis", h)]) }

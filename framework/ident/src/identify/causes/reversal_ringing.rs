@@ -8,13 +8,13 @@
 //! each ring's start is seen, less the Cp charge for the two coefficients of every ring: an honest
 //! measure of the mode, not a prediction of the rings.
 
-use serde_json::json;
-
-use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object, reversals};
+use super::{CandidateCause, Parameter, Refine, Samples, SearchContext, log_grid, reversals};
 use crate::identify::spectrum;
 
 /// Rings after velocity reversals: frequency [Hz] and damping ratio [-] shared, amplitude and
-/// phase per ring.
+/// phase per ring. It writes no fragment yet: the simulation's mode (`sim.effects.vibration`) is
+/// rung by changes of the element torque and needs a gain (mode torque per element torque) that
+/// is not measured here.
 pub struct ReversalRinging;
 
 impl CandidateCause for ReversalRinging {
@@ -65,10 +65,5 @@ impl CandidateCause for ReversalRinging {
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
         2.0 * spectrum::resolvable(c.t_s, c.excitation.frequency_hz).ln()
-    }
-    fn fragments(&self, p: &[f64], _: &[f64]) -> Fragments {
-        // The simulation's mode is rung by changes of the element torque; its gain (mode torque
-        // per element torque) is not measured here, so only what is measured is written.
-        Fragments { plant: object([("vibration", json!({"frequency_hz": p[0], "damping_ratio": p[1]}))]), observer: Default::default() }
     }
 }
