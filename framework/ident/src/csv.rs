@@ -53,6 +53,19 @@ pub struct Data {
 }
 
 impl Data {
+    /// An experiment of the three required columns (time [s], deflection [rad], torque [Nm]);
+    /// the optional ones not given.
+    ///
+    /// ```
+    /// let d = jointctl_ident::csv::Data::from_columns(vec![0.0, 0.01], vec![0.1, 0.2], vec![1.0, 2.0]);
+    /// assert_eq!(d.len(), 2);
+    /// assert!(d.pivot_mm[1].is_nan());
+    /// ```
+    pub fn from_columns(t: Vec<f64>, deflection: Vec<f64>, torque: Vec<f64>) -> Data {
+        let nan = vec![f64::NAN; t.len()];
+        Data { t, deflection, torque, pivot_mm: nan.clone(), angle_deg: nan.clone(), motor_position: nan.clone(), reference_torque: nan, notes: Vec::new() }
+    }
+
     /// Samples.
     pub fn len(&self) -> usize {
         self.t.len()

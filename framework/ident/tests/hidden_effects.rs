@@ -6,28 +6,14 @@
 
 use jointctl_ident::csv::Data;
 use jointctl_ident::identify::{IdentifyOptions, identify};
-use jointctl_test_support::hidden_effects::{self, Case};
-
-/// A case as the CSV reader would give it.
-fn data(case: &Case) -> Data {
-    let nan = vec![f64::NAN; case.t.len()];
-    Data {
-        t: case.t.clone(),
-        deflection: case.deflection.clone(),
-        torque: case.torque.clone(),
-        pivot_mm: nan.clone(),
-        angle_deg: nan.clone(),
-        motor_position: nan.clone(),
-        reference_torque: nan,
-        notes: vec![],
-    }
-}
+use jointctl_test_support::hidden_effects;
 
 #[test]
 fn hidden_effects_and_pairs_are_named_with_their_parameters_and_controls_yield_nothing() {
     let start = std::time::Instant::now();
     let score = hidden_effects::run(|case| {
-        let report = identify(&data(case), &IdentifyOptions::default()).unwrap();
+        let data = Data::from_columns(case.t.clone(), case.deflection.clone(), case.torque.clone());
+        let report = identify(&data, &IdentifyOptions::default()).unwrap();
         (report.causes.into_iter().map(|c| (c.effect, c.params)).collect(), report.rejected)
     });
     println!("confusion matrix (hidden -> named), in {:.2} s:\n{}", start.elapsed().as_secs_f64(), score.report());

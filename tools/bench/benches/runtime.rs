@@ -274,17 +274,7 @@ fn main() {
     {
         let start = Instant::now();
         let score = jointctl_test_support::hidden_effects::run(|case| {
-            let nan = vec![f64::NAN; case.t.len()];
-            let data = jointctl_ident::csv::Data {
-                t: case.t.clone(),
-                deflection: case.deflection.clone(),
-                torque: case.torque.clone(),
-                pivot_mm: nan.clone(),
-                angle_deg: nan.clone(),
-                motor_position: nan.clone(),
-                reference_torque: nan,
-                notes: vec![],
-            };
+            let data = jointctl_ident::csv::Data::from_columns(case.t.clone(), case.deflection.clone(), case.torque.clone());
             match jointctl_ident::identify::identify(&data, &Default::default()) {
                 Ok(r) => (r.causes.into_iter().map(|c| (c.effect, c.params)).collect(), r.rejected),
                 Err(e) => (Vec::new(), vec![e.to_string()]),
