@@ -121,6 +121,19 @@ struct Design {
 pub(crate) struct Model<'a> {
     pub baseline: &'a BaselineModel,
     pub causes: &'a [&'a dyn CandidateCause],
+    /// Held-out errors of the models evaluated so far (selection, the final check and the report
+    /// ask for the same models again).
+    pub held_out: std::cell::RefCell<std::collections::HashMap<SpecKey, std::rc::Rc<super::select::HeldOut>>>,
+}
+
+/// A model's identity: its terms and their parameters, bit for bit.
+pub(crate) type SpecKey = Vec<(usize, Vec<u64>, bool)>;
+
+impl Spec {
+    /// The key of this model in a cache.
+    pub fn key(&self) -> SpecKey {
+        self.terms.iter().map(|t| (t.cause, t.params.iter().map(|x| x.to_bits()).collect(), t.baseline)).collect()
+    }
 }
 
 impl Model<'_> {

@@ -201,7 +201,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let builtin = causes::builtin();
     check_registered(&builtin, &opts.extra_candidates, &p)?;
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
-    let model = Model { baseline: &opts.baseline, causes: &all };
+    let model = Model { baseline: &opts.baseline, causes: &all, held_out: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
@@ -210,7 +210,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
         let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         let mut residual = Vec::new();
         let ctx = select::context(&model, &base, &p, &mut residual);
-        let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.train).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
+        let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.train, None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         base.terms.push(Term { baseline: true, ..term });
     }
     let before = select::held_out_errors(&model, &base, &p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;

@@ -34,9 +34,22 @@ pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: u
 const SCAN_SAMPLES: usize = 16_000;
 
 /// The term of `cause` with its best parameters, added to `spec`: `None` when no value gives a
-/// fit.
-pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, train: &Part) -> Option<Term> {
-    let params = model.causes[cause].parameters(ctx);
+/// fit. With `warm` (the best of the previous step, before one more cause was added), each grid
+/// is narrowed to the five values nearest it: a cause added elsewhere moves a parameter a little,
+/// not across its grid.
+pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, train: &Part, warm: Option<&[f64]>) -> Option<Term> {
+    let mut params = model.causes[cause].parameters(ctx);
+    if let Some(warm) = warm.filter(|w| w.len() == params.len()) {
+        for (p, w) in params.iter_mut().zip(warm) {
+            if p.grid.len() > 5 {
+                let mut sorted = p.grid.clone();
+                sorted.sort_by(f64::total_cmp);
+                let at = sorted.iter().enumerate().min_by(|a, b| (a.1 - w).abs().total_cmp(&(b.1 - w).abs())).map_or(0, |(i, _)| i);
+                let lo = at.saturating_sub(2).min(sorted.len() - 5);
+                p.grid = sorted[lo..lo + 5].to_vec();
+            }
+        }
+    }
     let term = |p: &[f64]| Term { cause, params: p.to_vec(), grids: Vec::new(), baseline: false };
     // The grid on the decimated part by projection when the cause leaves the inputs alone; full
     // refits otherwise.
@@ -77,7 +90,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
             let chosen = match p.refine {
                 Refine::Between => {
                     let (lo, hi) = (p.grid[i.saturating_sub(1)], p.grid[(i + 1).min(p.grid.len() - 1)]);
-                    let x = if lo > 0.0 && hi > lo { refine_log(at, lo, hi, 15) } else { p.grid[i] };
+                    let x = if lo > 0.0 && hi > lo { refine_log(at, lo, hi, 12) } else { p.grid[i] };
                     if at(x) < scores[i] { x } else { p.grid[i] }
                 }
                 Refine::Samples => {
@@ -156,7 +169,19 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) ->
                 // claims to model (a ring damped beyond 0.3 is no ring).
                 Refine::Between if now > 0.0 => {
                     let (lo, hi) = (p.grid.iter().copied().fold(f64::INFINITY, f64::min), p.grid.iter().copied().fold(0.0, f64::max));
-                    refine_log(|x| at(x, coarse), (now / 4.0).max(lo), (now * 4.0).min(hi).max(now), 10)
+                    // The rest of the model fitted once; the term's columns projected on it
+                    // for each value (as in the search), when the term leaves the inputs alone.
+                    let cause = spec.terms[t].cause;
+                    let projector = if model.causes[cause].transforms() { None } else { model.projector(&spec.without(cause), coarse) };
+                    let at_coarse = |x: f64| match &projector {
+                        Some(proj) => {
+                            let mut term = spec.terms[t].clone();
+                            term.params[j] = x;
+                            model.rss_with(proj, &term, coarse)
+                        }
+                        None => at(x, coarse),
+                    };
+                    refine_log(at_coarse, (now / 4.0).max(lo), (now * 4.0).min(hi).max(now), 10)
                 }
                 Refine::Samples => {
                     // Three search steps either way, every full-rate sample.

@@ -41,8 +41,18 @@ pub(crate) struct HeldOut {
     pub fitted_here: usize,
 }
 
-/// Held-out errors of `spec` fitted on the training part.
-pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut> {
+/// Held-out errors of `spec` fitted on the training part (each model computed once).
+pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<std::rc::Rc<HeldOut>> {
+    let key = spec.key();
+    if let Some(known) = model.held_out.borrow().get(&key) {
+        return Some(known.clone());
+    }
+    let computed = std::rc::Rc::new(compute_held_out(model, spec, p)?);
+    model.held_out.borrow_mut().insert(key, computed.clone());
+    Some(computed)
+}
+
+fn compute_held_out(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut> {
     let fit = model.fit(spec, &p.train)?;
     let pred = model.predict(spec, &fit, &p.test);
     let sigma2 = fit.rss / (p.train.len().saturating_sub(fit.parameters)).max(1) as f64;
@@ -66,7 +76,7 @@ pub(crate) fn rmse(errors: &[f64]) -> f64 {
 /// coefficients fitted on the held-out part (a segment-wise cause) takes the chi-square test of
 /// added coefficients; otherwise the block t-test.
 fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
-    Some(verdict(r, &held_out_errors(model, full, p)?, p))
+    Some(verdict(r, &*held_out_errors(model, full, p)?, p))
 }
 
 /// The test of a full model's held-out errors `f` against a reduced model's `r`, and the RMSE gain.
@@ -102,13 +112,16 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     let mut rejected = Vec::new();
     let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
     let mut current = score(&spec, 0.0);
+    // Each candidate's best parameters of the previous step: the next search starts there.
+    let mut warm: std::collections::HashMap<usize, Vec<f64>> = std::collections::HashMap::new();
     for _ in 0..max_causes {
         let mut residual = Vec::new();
         let ctx = context(model, &spec, p, &mut residual);
         let mut proposals: Vec<(f64, Spec, usize)> = Vec::new();
         for c in (0..model.causes.len()).filter(|c| spec.term(*c).is_none()) {
             let cause = model.causes[c];
-            let Some(term) = search(model, &spec, c, &ctx, coarse, &p.train) else { continue };
+            let Some(term) = search(model, &spec, c, &ctx, coarse, &p.train, warm.get(&c).map(Vec::as_slice)) else { continue };
+            warm.insert(c, term.params.clone());
             let s = spec.with(term);
             let Some(fit) = model.fit(&s, coarse) else { continue };
             let last = s.terms.len() - 1;
