@@ -265,7 +265,7 @@ fn main() {
         println!("## Identification of a {n}-sample file (hidden hysteresis), one core");
         println!("| identify median s | fit median s (baseline) | ratio | first cause | target |");
         println!("|---|---|---|---|---|");
-        println!("| {ident_s:.3} | {fit_s:.4} | {:.0}x | {found} | identify within about 2x the fit step; 2 M rows <= 5 s (issue 13) |", ident_s / fit_s);
+        println!("| {ident_s:.3} | {fit_s:.4} | {:.1}x | {found} | identify within about 2x the fit step; 2 M rows <= 5 s (issue 13) |", ident_s / fit_s);
         println!();
     }
 

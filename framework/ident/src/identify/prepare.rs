@@ -104,30 +104,41 @@ fn dropouts(series: &[f64], lsb: f64) -> Vec<bool> {
 
 /// Deflection rate: the slope of a local least-squares line (a Savitzky-Golay derivative) over
 /// about a fiftieth of the excitation period: no lag, and it averages out the quantisation.
-/// Prefix sums make it one pass whatever the window.
+/// Running window sums make it one pass whatever the window; they are summed afresh around a new
+/// time origin every 1024 samples so that rounding cannot build up over a long record.
 fn velocity(t: &[f64], d: &[f64], half: usize) -> Vec<f64> {
     let n = d.len();
-    let prefix = |f: &dyn Fn(usize) -> f64| {
-        let mut p = Vec::with_capacity(n + 1);
-        p.push(0.0);
-        for i in 0..n {
-            p.push(p[i] + f(i));
+    let mut out = Vec::with_capacity(n);
+    let (mut st, mut sd, mut stt, mut std_) = (0.0, 0.0, 0.0, 0.0);
+    let (mut a, mut b, mut t0) = (0usize, 0usize, t[0]);
+    for i in 0..n {
+        let (lo, hi) = (i.saturating_sub(half), (i + half).min(n - 1) + 1);
+        if i % 1024 == 0 {
+            // Afresh: the window [lo, hi) around the origin t[lo].
+            t0 = t[lo];
+            (st, sd, stt, std_) = (0.0, 0.0, 0.0, 0.0);
+            for k in lo..hi {
+                let x = t[k] - t0;
+                (st, sd, stt, std_) = (st + x, sd + d[k], stt + x * x, std_ + x * d[k]);
+            }
+            (a, b) = (lo, hi);
         }
-        p
-    };
-    // Centred on t[0] to keep the sums well conditioned.
-    let t0 = t[0];
-    let (st, sd, stt, std_) = (prefix(&|i| t[i] - t0), prefix(&|i| d[i]), prefix(&|i| (t[i] - t0).powi(2)), prefix(&|i| (t[i] - t0) * d[i]));
-    (0..n)
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(half), (i + half).min(n - 1) + 1);
-            let m = (b - a) as f64;
-            let (sum_t, sum_d) = (st[b] - st[a], sd[b] - sd[a]);
-            let den = (stt[b] - stt[a]) - sum_t * sum_t / m;
-            let num = (std_[b] - std_[a]) - sum_t * sum_d / m;
-            if den > 1e-300 { num / den } else { 0.0 }
-        })
-        .collect()
+        while b < hi {
+            let x = t[b] - t0;
+            (st, sd, stt, std_) = (st + x, sd + d[b], stt + x * x, std_ + x * d[b]);
+            b += 1;
+        }
+        while a < lo {
+            let x = t[a] - t0;
+            (st, sd, stt, std_) = (st - x, sd - d[a], stt - x * x, std_ - x * d[a]);
+            a += 1;
+        }
+        let m = (hi - lo) as f64;
+        let den = stt - st * st / m;
+        let num = std_ - st * sd / m;
+        out.push(if den > 1e-300 { num / den } else { 0.0 });
+    }
+    out
 }
 
 /// The excitation's fundamental [Hz]: the slope of the upward mean-crossing times (each
@@ -190,8 +201,12 @@ pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, Prep
     let spacing = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
     let t_split = t[0] + train_fraction * (t[t.len() - 1] - t[0]);
     let split = t.partition_point(|x| *x < t_split);
+    // A stateful effect's history: two cycles before the part (a Dahl state forgets within a
+    // stroke far longer than its deflection scale, which the search keeps below a third of the
+    // amplitude), not the whole record before it.
+    let history = (2.0 * period_samples).max(100.0) as usize;
     let part = |r: std::ops::Range<usize>| Part {
-        warm: d[..r.start].to_vec(),
+        warm: d[r.start.saturating_sub(history)..r.start].to_vec(),
         t: t[r.clone()].to_vec(),
         d: d[r.clone()].to_vec(),
         v: v[r.clone()].to_vec(),
@@ -199,17 +214,16 @@ pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, Prep
         pivot: pivot[r].to_vec(),
         dt: spacing,
     };
-    let (train, test) = (part(0..split), part(split..t.len()));
-    if train.len() < 30 || test.len() < 20 {
-        return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: train.len(), held_out: test.len() });
+    if split < 30 || t.len() - split < 20 {
+        return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: split, held_out: t.len() - split });
     }
     // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
     // an alias of it): decimated up to that, then the first SEARCH_SAMPLES of them.
-    let k = train.len().div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
-    let coarse = super::search::truncate(&train.every(k), SEARCH_SAMPLES);
+    let k = split.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
+    let coarse = part(0..split.min(k * SEARCH_SAMPLES)).every(k);
     // Final fits on at most FIT_SAMPLES contiguous training samples: parameters no longer move
     // beyond (their standard errors shrink as 1/sqrt(n)), and a long record stays fast.
-    let train = super::search::truncate(&train, FIT_SAMPLES);
+    let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len()));
     let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
     let frequency_hz = fundamental_hz(&t, &d);
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
@@ -221,12 +235,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_prefix_sum_derivative_equals_the_local_line_slope() {
-        let t: Vec<f64> = (0..500).map(|i| 10.0 + i as f64 * 0.01).collect();
+    fn the_running_sum_derivative_equals_the_local_line_slope_over_a_long_record() {
+        // 2 million samples at 200 Hz: 10 000 s, where sums of t^2 would lose the window's spread.
+        let t: Vec<f64> = (0..2_000_000).map(|i| 10.0 + i as f64 * 0.005).collect();
         let d: Vec<f64> = t.iter().map(|t| (1.3 * t).sin()).collect();
         let v = velocity(&t, &d, 5);
-        for i in [0usize, 3, 250, 499] {
-            let (a, b) = (i.saturating_sub(5), (i + 5).min(499));
+        for i in [0usize, 3, 250, 1023, 1024, 1_999_990, 1_999_999] {
+            let (a, b) = (i.saturating_sub(5), (i + 5).min(1_999_999));
             let n = (b - a + 1) as f64;
             let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
             let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();

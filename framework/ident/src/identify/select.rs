@@ -1,6 +1,9 @@
-//! Selection: forward, one cause a step. On the training part BIC proposes (the best candidate
-//! by more than [`BIC_THRESHOLD`]); on the held-out part the block test decides. At the end every
-//! cause must still be significant given the others, or it goes (the weakest first).
+//! Selection: forward, one cause a step. On the training part BIC proposes (the best candidates
+//! by more than [`BIC_THRESHOLD`]); on the held-out part a significance test decides (see
+//! [`super::significance`]); when no single proposal passes, the best pair is tried together.
+//! At the end every cause must still be significant given the others, or it goes (the weakest
+//! first). The held-out part thus also serves selection: the gains reported are those of causes
+//! that passed on it, so they are what this data shows, not an estimate for new data.
 
 use super::causes::SearchContext;
 use super::design::{Model, Part, Spec};
@@ -72,9 +75,9 @@ pub(crate) fn rmse(errors: &[f64]) -> f64 {
 }
 
 /// Does `full` predict the held-out part significantly better than the reduced model whose
-/// held-out errors are `r`? A full model with more
-/// coefficients fitted on the held-out part (a segment-wise cause) takes the chi-square test of
-/// added coefficients; otherwise the block t-test.
+/// held-out errors are `r`? A full model with more coefficients fitted on the held-out part (a
+/// segment-wise cause) takes the chi-square test of added coefficients; otherwise the block
+/// t-test.
 fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
     Some(verdict(r, &*held_out_errors(model, full, p)?, p))
 }
