@@ -123,7 +123,7 @@ pub(crate) struct Model<'a> {
     pub causes: &'a [&'a dyn CandidateCause],
     /// Held-out errors of the models evaluated so far (selection, the final check and the report
     /// ask for the same models again).
-    pub held_out: std::cell::RefCell<std::collections::HashMap<SpecKey, std::rc::Rc<super::select::HeldOut>>>,
+    pub held_out: std::sync::Mutex<std::collections::HashMap<SpecKey, std::sync::Arc<super::select::HeldOut>>>,
 }
 
 /// A model's identity: its terms and their parameters, bit for bit.

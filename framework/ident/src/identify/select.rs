@@ -5,6 +5,8 @@
 //! first). The held-out part thus also serves selection: the gains reported are those of causes
 //! that passed on it, so they are what this data shows, not an estimate for new data.
 
+use std::sync::Arc;
+
 use super::causes::SearchContext;
 use super::design::{Model, Part, Spec};
 use super::prepare::Prepared;
@@ -45,13 +47,14 @@ pub(crate) struct HeldOut {
 }
 
 /// Held-out errors of `spec` fitted on the training part (each model computed once).
-pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<std::rc::Rc<HeldOut>> {
+pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<Arc<HeldOut>> {
     let key = spec.key();
-    if let Some(known) = model.held_out.borrow().get(&key) {
+    // A poisoned cache (a panic elsewhere) is still a valid cache: its entries are complete.
+    if let Some(known) = model.held_out.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
         return Some(known.clone());
     }
-    let computed = std::rc::Rc::new(compute_held_out(model, spec, p)?);
-    model.held_out.borrow_mut().insert(key, computed.clone());
+    let computed = Arc::new(compute_held_out(model, spec, p)?);
+    model.held_out.lock().unwrap_or_else(|e| e.into_inner()).insert(key, computed.clone());
     Some(computed)
 }
 
@@ -93,6 +96,28 @@ fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> (BlockTest, f64) {
     (block_test(&diff), gain)
 }
 
+/// What a candidate's search came to.
+enum Candidate {
+    /// No parameter value gives a fit.
+    NoFit,
+    /// Its best fit is physically impossible (parameters, why).
+    Impossible(Vec<f64>, String),
+    /// The model with it, to be scored.
+    Proposed(Spec),
+}
+
+/// Searches candidate `c`'s parameters with `spec` in place and checks the fit's physics.
+fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepared, warm: Option<&[f64]>) -> Candidate {
+    let Some(term) = search(model, spec, c, ctx, &p.coarse, &p.train, warm) else { return Candidate::NoFit };
+    let s = spec.with(term);
+    let Some(fit) = model.fit(&s, &p.coarse) else { return Candidate::NoFit };
+    let last = s.terms.len() - 1;
+    match model.causes[c].impossible(&s.terms[last].params, fit.of(last)) {
+        Some(why) => Candidate::Impossible(s.terms[last].params.clone(), why),
+        None => Candidate::Proposed(s),
+    }
+}
+
 fn describe(t: &BlockTest) -> String {
     t.to_string()
 }
@@ -121,18 +146,38 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         let mut residual = Vec::new();
         let ctx = context(model, &spec, p, &mut residual);
         let mut proposals: Vec<(f64, Spec, usize)> = Vec::new();
-        for c in (0..model.causes.len()).filter(|c| spec.term(*c).is_none()) {
-            let cause = model.causes[c];
-            let Some(term) = search(model, &spec, c, &ctx, coarse, &p.train, warm.get(&c).map(Vec::as_slice)) else { continue };
-            warm.insert(c, term.params.clone());
-            let s = spec.with(term);
-            let Some(fit) = model.fit(&s, coarse) else { continue };
-            let last = s.terms.len() - 1;
-            if let Some(why) = cause.impossible(&s.terms[last].params, fit.of(last)) {
-                rejected.push(format!("{} ({why})", name(c)));
-                continue;
+        // Every candidate's search is independent of the others': spread over the cores,
+        // candidates dealt in turn so that the costly ones (delay, dead zone) do not share one.
+        let candidates: Vec<usize> = (0..model.causes.len()).filter(|c| spec.term(*c).is_none()).collect();
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(candidates.len()).max(1);
+        let (spec_ref, ctx_ref, warm_ref) = (&spec, &ctx, &warm);
+        let outcomes: Vec<(usize, Candidate)> = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|w| {
+                    let mine: Vec<usize> = candidates.iter().copied().skip(w).step_by(threads).collect();
+                    scope.spawn(move || mine.into_iter().map(|c| (c, propose(model, spec_ref, c, ctx_ref, p, warm_ref.get(&c).map(Vec::as_slice)))).collect::<Vec<_>>())
+                })
+                .collect();
+            // A worker that panicked lost its candidates; the others still count.
+            workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
+        });
+        let mut outcomes = outcomes;
+        outcomes.sort_by_key(|(c, _)| *c);
+        for (c, outcome) in outcomes {
+            match outcome {
+                Candidate::NoFit => {}
+                Candidate::Impossible(params, why) => {
+                    warm.insert(c, params);
+                    rejected.push(format!("{} ({why})", name(c)));
+                }
+                Candidate::Proposed(s) => {
+                    if let Some(t) = s.term(c) {
+                        warm.insert(c, t.params.clone());
+                    }
+                    let extra = model.causes[c].look_elsewhere(&ctx);
+                    proposals.push((score(&s, extra), s, c));
+                }
             }
-            proposals.push((score(&s, cause.look_elsewhere(&ctx)), s, c));
         }
         proposals.sort_by(|a, b| a.0.total_cmp(&b.0));
         let top: Vec<(f64, Spec, usize)> = proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP).collect();
