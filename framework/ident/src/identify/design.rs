@@ -28,6 +28,12 @@ impl Part {
         self.t.len()
     }
 
+    /// The first `n` samples (a contiguous stretch keeps the full rate at a fraction of the cost).
+    pub fn first(&self, n: usize) -> Part {
+        let n = n.min(self.len());
+        Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), dt: self.dt }
+    }
+
     /// Every `k`-th sample (for searches on long records).
     pub fn every(&self, k: usize) -> Part {
         let k = k.max(1);

@@ -95,7 +95,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
                 }
                 Refine::Samples => {
                     // Every full-rate sample period between the grid's neighbours of the best.
-                    let scan = truncate(train, SCAN_SAMPLES);
+                    let scan = train.first(SCAN_SAMPLES);
                     let reach = p.grid.iter().enumerate().filter(|(k, _)| *k != i).map(|(_, g)| (g - p.grid[i]).abs()).fold(f64::INFINITY, f64::min);
                     let span = ((reach / train.dt).ceil() as i64).clamp(1, 200);
                     let centre = (p.grid[i] / train.dt).round() as i64;
@@ -140,18 +140,12 @@ pub(crate) fn integer_search(f: impl Fn(i64) -> f64, lo: i64, hi: i64) -> Option
     best.0.is_finite().then_some(best.1)
 }
 
-/// The first `n` samples of a part.
-pub(crate) fn truncate(p: &Part, n: usize) -> Part {
-    let n = n.min(p.len());
-    Part { warm: p.warm.clone(), t: p.t[..n].to_vec(), d: p.d[..n].to_vec(), v: p.v[..n].to_vec(), tau: p.tau[..n].to_vec(), pivot: p.pivot[..n].to_vec(), dt: p.dt }
-}
-
 /// Every parameter of every term refined once more with the others in place (a cause added
 /// later may take over part of what an earlier one explained: eq. 3.5's `k_b` and viscous
 /// friction, a delay and the friction it was fitted with).
 pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) -> Spec {
     let mut spec = spec.clone();
-    let scan = truncate(train, SCAN_SAMPLES);
+    let scan = train.first(SCAN_SAMPLES);
     for t in 0..spec.terms.len() {
         let grids = spec.terms[t].grids.clone();
         for (j, p) in grids.iter().enumerate() {
