@@ -206,10 +206,8 @@ impl Model<'_> {
         let n = p.len();
         let y: Vec<f64> = (0..n).map(|i| p.tau[i] - d.fixed[i]).collect();
         let coefs = least_squares(&d.cols, &y)?;
-        for (term, span) in spec.terms.iter().zip(&d.spans) {
-            if term.baseline && !span.is_empty() && self.causes[term.cause].impossible(&term.params, &coefs[span.clone()]).is_some() {
-                return None;
-            }
+        if self.at_bound(spec, &d.spans, &coefs).is_some() {
+            return None;
         }
         let residual: Vec<f64> = (0..n).map(|i| y[i] - dot_row(&d.cols, &coefs, i)).collect();
         let live: Vec<&Vec<f64>> = d.cols.iter().filter(|c| c.iter().any(|x| *x != 0.0)).collect();
@@ -249,6 +247,16 @@ impl Model<'_> {
         }
     }
 
+    /// The columns of a baseline term whose unconstrained fit is physically impossible (negative
+    /// friction): the constrained optimum holds it at its bound, zero.
+    fn at_bound(&self, spec: &Spec, spans: &[Range<usize>], coefs: &[f64]) -> Option<Range<usize>> {
+        spec.terms
+            .iter()
+            .zip(spans)
+            .find(|(term, span)| term.baseline && !span.is_empty() && self.causes[term.cause].impossible(&term.params, &coefs[(*span).clone()]).is_some())
+            .map(|(_, span)| span.clone())
+    }
+
     /// Least squares on a part (QR); `None` when the design is singular.
     pub fn fit(&self, spec: &Spec, p: &Part) -> Option<Fit> {
         let d = self.design(spec, p);
@@ -263,15 +271,13 @@ impl Model<'_> {
             let y: Vec<f64> = (0..n).map(|i| p.tau[i] - d.fixed[i] - segment_fit[i]).collect();
             coefs = least_squares(&d.cols, &y)?;
             // A baseline term whose fit is impossible (negative friction) is at its bound: zero.
-            for (term, span) in spec.terms.iter().zip(&d.spans) {
-                if term.baseline && !span.is_empty() && self.causes[term.cause].impossible(&term.params, &coefs[span.clone()]).is_some() {
-                    let keep: Vec<usize> = (0..d.cols.len()).filter(|j| !span.contains(j)).collect();
-                    let sub: Vec<Vec<f64>> = keep.iter().map(|j| d.cols[*j].clone()).collect();
-                    let solved = least_squares(&sub, &y)?;
-                    coefs = vec![0.0; d.cols.len()];
-                    for (k, j) in keep.iter().enumerate() {
-                        coefs[*j] = solved[k];
-                    }
+            if let Some(span) = self.at_bound(spec, &d.spans, &coefs) {
+                let keep: Vec<usize> = (0..d.cols.len()).filter(|j| !span.contains(j)).collect();
+                let sub: Vec<Vec<f64>> = keep.iter().map(|j| d.cols[*j].clone()).collect();
+                let solved = least_squares(&sub, &y)?;
+                coefs = vec![0.0; d.cols.len()];
+                for (k, j) in keep.iter().enumerate() {
+                    coefs[*j] = solved[k];
                 }
             }
             if has_segments {

@@ -118,10 +118,6 @@ fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepar
     }
 }
 
-fn describe(t: &BlockTest) -> String {
-    t.to_string()
-}
-
 pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residual: &'a mut Vec<f64>) -> SearchContext<'a> {
     *residual = match model.fit(spec, &p.coarse) {
         Some(fit) => {
@@ -191,13 +187,13 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
             }
             match compare_with(&reduced, model, &s, p) {
                 Some((test, _)) if test.significant() => {
-                    chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", describe(&test)) });
+                    chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", test) });
                     current = score(&s, 0.0);
                     spec = s;
                     accepted = true;
                     break;
                 }
-                Some((test, _)) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(*c), describe(&test))),
+                Some((test, _)) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(*c), test)),
                 None => {}
             }
         }
@@ -216,7 +212,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                     if let Some((test, _)) = compare_with(&reduced, model, &both, p).filter(|(t, _)| t.significant()) {
                         let b = score(&both, 0.0);
                         for k in [*a, *c] {
-                            chosen.push(Chosen { cause: k, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(*a), name(*c), describe(&test)) });
+                            chosen.push(Chosen { cause: k, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(*a), name(*c), test) });
                         }
                         current = b;
                         spec = both;
