@@ -40,13 +40,14 @@ pub struct Data {
     pub deflection: Vec<f64>,
     /// Torque [Nm].
     pub torque: Vec<f64>,
-    /// Pivot setting [mm] per sample (NaN when not given).
+    /// Pivot setting [mm] per sample: empty when the data has no such column, NaN where a
+    /// sample has no value (the optional columns alike; see [`Data::pivot_mm_at`]).
     pub pivot_mm: Vec<f64>,
-    /// Deflection direction [deg] per sample (NaN when not given).
+    /// Deflection direction [deg] per sample (empty or NaN when not given).
     pub angle_deg: Vec<f64>,
-    /// Motor position [rad] (NaN when not given).
+    /// Motor position [rad] (empty or NaN when not given).
     pub motor_position: Vec<f64>,
-    /// Reference torque [Nm] (NaN when not given).
+    /// Reference torque [Nm] (empty or NaN when not given).
     pub reference_torque: Vec<f64>,
     /// Notes for the user (ignored columns).
     pub notes: Vec<String>,
@@ -54,16 +55,53 @@ pub struct Data {
 
 impl Data {
     /// An experiment of the three required columns (time [s], deflection [rad], torque [Nm]);
-    /// the optional ones not given.
+    /// the optional ones not given (empty: a long record holds no columns of NaN).
     ///
     /// ```
     /// let d = jointctl_ident::csv::Data::from_columns(vec![0.0, 0.01], vec![0.1, 0.2], vec![1.0, 2.0]);
     /// assert_eq!(d.len(), 2);
-    /// assert!(d.pivot_mm[1].is_nan());
+    /// assert!(d.pivot_mm.is_empty() && d.pivot_mm_at(1).is_nan());
     /// ```
     pub fn from_columns(t: Vec<f64>, deflection: Vec<f64>, torque: Vec<f64>) -> Data {
-        let nan = vec![f64::NAN; t.len()];
-        Data { t, deflection, torque, pivot_mm: nan.clone(), angle_deg: nan.clone(), motor_position: nan.clone(), reference_torque: nan, notes: Vec::new() }
+        Data { t, deflection, torque, ..Data::default() }
+    }
+
+    /// Sample `i`'s pivot setting [mm]; NaN when not given.
+    ///
+    /// ```
+    /// let d = jointctl_ident::csv::parse("t,deflection,torque,pivot_mm\n0,0.1,1,40\n0.01,0.1,1,\n", "d.csv".as_ref()).unwrap();
+    /// assert_eq!(d.pivot_mm_at(0), 40.0);
+    /// assert!(d.pivot_mm_at(1).is_nan());
+    /// ```
+    pub fn pivot_mm_at(&self, i: usize) -> f64 {
+        self.pivot_mm.get(i).copied().unwrap_or(f64::NAN)
+    }
+
+    /// Sample `i`'s deflection direction [deg]; NaN when not given.
+    ///
+    /// ```
+    /// let d = jointctl_ident::csv::Data::from_columns(vec![0.0], vec![0.1], vec![1.0]);
+    /// assert!(d.angle_deg_at(0).is_nan());
+    /// ```
+    pub fn angle_deg_at(&self, i: usize) -> f64 {
+        self.angle_deg.get(i).copied().unwrap_or(f64::NAN)
+    }
+
+    /// The first column whose length is neither the samples' nor zero (a given optional column),
+    /// with its length: data built in code can get this wrong; the reader cannot.
+    ///
+    /// ```
+    /// let mut d = jointctl_ident::csv::Data::from_columns(vec![0.0, 0.01], vec![0.1, 0.2], vec![1.0, 2.0]);
+    /// assert_eq!(d.uneven_column(), None);
+    /// d.pivot_mm = vec![40.0];
+    /// assert_eq!(d.uneven_column(), Some(("pivot_mm", 1)));
+    /// ```
+    pub fn uneven_column(&self) -> Option<(&'static str, usize)> {
+        let n = self.len();
+        [("deflection", &self.deflection, false), ("torque", &self.torque, false), ("pivot_mm", &self.pivot_mm, true), ("angle_deg", &self.angle_deg, true), ("motor_position", &self.motor_position, true), ("reference_torque", &self.reference_torque, true)]
+            .into_iter()
+            .find(|(_, c, optional)| c.len() != n && !(*optional && c.is_empty()))
+            .map(|(name, c, _)| (name, c.len()))
     }
 
     /// Samples.
@@ -145,12 +183,22 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     }
     let idx: Vec<Option<usize>> = KNOWN.iter().map(|k| col(k)).collect();
     // The file's line of a parser position: the parser's own line count skips blank lines, and
-    // a record's byte position can point at the blank lines before it.
+    // a record's byte position can point at the blank lines before it. Positions only grow:
+    // newlines are counted from the previous one (counting from the start made a long file
+    // quadratic: hours for 2 million rows).
+    let counted = std::cell::Cell::new((0usize, 0usize));
     let line_of = |p: Option<&::csv::Position>| {
         p.map_or(0, |p| {
             let start = (p.byte() as usize).min(text.len());
             let blank = text[start..].bytes().take_while(|b| *b == b'\n' || *b == b'\r').count();
-            text[..start + blank].matches('\n').count() + 1
+            let end = start + blank;
+            let (mut at, mut lines) = counted.get();
+            if end < at {
+                (at, lines) = (0, 0);
+            }
+            lines += text.as_bytes()[at..end].iter().filter(|b| **b == b'\n').count();
+            counted.set((end, lines));
+            lines + 1
         })
     };
     for record in reader.records() {
@@ -186,10 +234,12 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         data.t.push(values[0]);
         data.deflection.push(values[1]);
         data.torque.push(values[2]);
-        data.pivot_mm.push(values[3]);
-        data.angle_deg.push(values[4]);
-        data.motor_position.push(values[5]);
-        data.reference_torque.push(values[6]);
+        // An optional column the file does not have stays empty.
+        for (k, column) in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque].into_iter().enumerate() {
+            if idx[k + 3].is_some() {
+                column.push(values[k + 3]);
+            }
+        }
     }
     if data.is_empty() {
         return Err(err(h + 1, None, "the file has a header but no samples".into()));

@@ -40,6 +40,16 @@ pub enum FitRunError {
         /// Samples needed.
         needed: usize,
     },
+    /// A column's length is neither the samples' nor (an optional column) zero.
+    #[error("column `{column}` has {len} values for {samples} samples")]
+    UnevenColumn {
+        /// The column.
+        column: &'static str,
+        /// Its length.
+        len: usize,
+        /// Samples (the time column's length).
+        samples: usize,
+    },
     /// One group's (pivot setting, direction, branch) curve cannot be fitted.
     #[error("{group}: {source}")]
     Group {
@@ -275,10 +285,13 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
     {
         return Err(FitRunError::Order { got: n, max: MAX_ORDER });
     }
+    if let Some((column, len)) = data.uneven_column() {
+        return Err(FitRunError::UnevenColumn { column, len, samples: data.len() });
+    }
     // Groups in the order of their pivot setting, then direction.
     let mut keys: Vec<(Option<i64>, Option<i64>)> = Vec::new();
     for i in 0..data.len() {
-        let k = (key(data.pivot_mm[i]), key(data.angle_deg[i]));
+        let k = (key(data.pivot_mm_at(i)), key(data.angle_deg_at(i)));
         if !keys.contains(&k) {
             keys.push(k);
         }
@@ -286,7 +299,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
     keys.sort();
     let mut groups = Vec::new();
     for k in &keys {
-        let idx: Vec<usize> = (0..data.len()).filter(|i| (key(data.pivot_mm[*i]), key(data.angle_deg[*i])) == *k).collect();
+        let idx: Vec<usize> = (0..data.len()).filter(|i| (key(data.pivot_mm_at(*i)), key(data.angle_deg_at(*i))) == *k).collect();
         let x = smooth(&idx.iter().map(|i| data.deflection[*i]).collect::<Vec<_>>(), opts.smoothing_window);
         let y = smooth(&idx.iter().map(|i| data.torque[*i]).collect::<Vec<_>>(), opts.smoothing_window);
         let label = format!(

@@ -1,6 +1,8 @@
 //! Preparation: dropouts out, the deflection rate, enough excitation, and the split into the
 //! training part and the held-out part.
 
+use std::borrow::Cow;
+
 use super::causes::{Excitation, reversals};
 use super::design::Part;
 use crate::csv::Data;
@@ -38,6 +40,16 @@ pub enum PrepareError {
         lsb: f64,
         /// Velocity reversals found.
         reversals: usize,
+    },
+    /// A column's length is neither the samples' nor (an optional column) zero.
+    #[error("column `{column}` has {len} values for {samples} samples")]
+    UnevenColumn {
+        /// The column.
+        column: &'static str,
+        /// Its length.
+        len: usize,
+        /// Samples (the time column's length).
+        samples: usize,
     },
     /// One side of the split has too few samples.
     #[error("too few samples on one side of the {train_percent:.0}/{:.0} fit/held-out split ({train} and {held_out})", 100.0 - train_percent)]
@@ -174,18 +186,23 @@ fn fundamental_hz(t: &[f64], d: &[f64]) -> f64 {
     if num > 0.0 { den / num } else { (n / duration).max(0.01) }
 }
 
-pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
+pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
         return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
     }
-    let (dd, dt) = (dropouts(&data.deflection, ENCODER_LSB_RAD), dropouts(&data.torque, 0.0));
-    let keep: Vec<usize> = (0..n_all).filter(|i| !dd[*i] && !dt[*i]).collect();
-    let dropped = n_all - keep.len();
-    let d: Vec<f64> = keep.iter().map(|i| data.deflection[*i]).collect();
-    let t: Vec<f64> = keep.iter().map(|i| data.t[*i]).collect();
-    let tau: Vec<f64> = keep.iter().map(|i| data.torque[*i]).collect();
-    let pivot: Vec<f64> = keep.iter().map(|i| if data.pivot_mm[*i].is_finite() { data.pivot_mm[*i] } else { 0.0 }).collect();
+    if let Some((column, len)) = data.uneven_column() {
+        return Err(PrepareError::UnevenColumn { column, len, samples: n_all });
+    }
+    let mut lost = dropouts(&data.deflection, ENCODER_LSB_RAD);
+    lost.iter_mut().zip(dropouts(&data.torque, 0.0)).for_each(|(a, b)| *a |= b);
+    let dropped = lost.iter().filter(|l| **l).count();
+    // The columns without the dropouts: borrowed when there are none (a long record is not
+    // copied whole).
+    let kept = |column: &'a [f64]| -> Cow<'a, [f64]> {
+        if dropped == 0 { Cow::Borrowed(column) } else { Cow::Owned(column.iter().zip(&lost).filter(|(_, l)| !**l).map(|(x, _)| *x).collect()) }
+    };
+    let (d, t, tau, pivot) = (kept(&data.deflection), kept(&data.t), kept(&data.torque), kept(&data.pivot_mm));
     let period_samples = {
         let crossings = d.windows(2).filter(|w| w[0] < 0.0 && w[1] >= 0.0).count().max(1) as f64;
         d.len() as f64 / crossings
@@ -211,7 +228,8 @@ pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, Prep
         d: d[r.clone()].to_vec(),
         v: v[r.clone()].to_vec(),
         tau: tau[r.clone()].to_vec(),
-        pivot: pivot[r].to_vec(),
+        // A pivot not given is none: the configured characteristic's own.
+        pivot: if pivot.is_empty() { vec![0.0; r.len()] } else { pivot[r].iter().map(|p| if p.is_finite() { *p } else { 0.0 }).collect() },
         dt: spacing,
     };
     if split < 30 || t.len() - split < 20 {
@@ -223,7 +241,8 @@ pub(crate) fn prepare(data: &Data, train_fraction: f64) -> Result<Prepared, Prep
     let coarse = part(0..split.min(k * SEARCH_SAMPLES)).every(k);
     // Final fits on at most FIT_SAMPLES contiguous training samples: parameters no longer move
     // beyond (their standard errors shrink as 1/sqrt(n)), and a long record stays fast.
-    let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len()));
+    // The held-out part likewise: its first FIT_SAMPLES after the split.
+    let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len().min(split + FIT_SAMPLES)));
     let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
     let frequency_hz = fundamental_hz(&t, &d);
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
@@ -248,6 +267,19 @@ mod tests {
             let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
             assert!((v[i] - num / den).abs() < 1e-6, "{i}: {} vs {}", v[i], num / den);
         }
+    }
+
+    #[test]
+    fn an_optional_column_of_another_length_is_an_error_and_an_absent_one_is_none() {
+        let t: Vec<f64> = (0..400).map(|i| i as f64 * 0.01).collect();
+        let d: Vec<f64> = t.iter().map(|t| 0.05 * (std::f64::consts::TAU * 1.1 * t).sin()).collect();
+        let tau = d.iter().map(|x| 80.0 * x).collect();
+        let mut data = Data::from_columns(t, d, tau);
+        assert!(prepare(&data, 0.7).is_ok());
+        data.pivot_mm = vec![40.0; 10];
+        let e = prepare(&data, 0.7).err().unwrap();
+        assert_eq!(e, PrepareError::UnevenColumn { column: "pivot_mm", len: 10, samples: 400 });
+        assert_eq!(e.to_string(), "column `pivot_mm` has 10 values for 400 samples");
     }
 
     #[test]
