@@ -201,7 +201,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let builtin = causes::builtin();
     check_registered(&builtin, &opts.extra_candidates, &p)?;
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
-    let model = Model { baseline: &opts.baseline, causes: &all, held_out: Default::default() };
+    let model = Model { baseline: &opts.baseline, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
@@ -216,8 +216,8 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let before = select::held_out_errors(&model, &base, &p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let selection = select::select(&model, &p, base.clone(), opts.max_causes, name);
     let spec = selection.spec;
-    let fit = model.fit(&spec, &p.train).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let after = select::held_out_errors(&model, &spec, &p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
+    let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);
 
     let duration = p.train.t[p.train.len() - 1] - p.train.t[0] + p.test.t[p.test.len() - 1] - p.test.t[0];
@@ -251,9 +251,8 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     }
     found.sort_by(|a, b| b.rmse_gain.total_cmp(&a.rmse_gain));
 
-    let base_fit = model.fit(&base, &p.train).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
-    let base_pred = model.predict(&base, &base_fit, &p.test).torque_nm;
-    let ext_pred = model.predict(&spec, &fit, &p.test).torque_nm;
+    let base_pred = model.predict(&base, &before.fit, &p.test).torque_nm;
+    let ext_pred = model.predict(&spec, fit, &p.test).torque_nm;
     let t = &p.test;
     let held_out = (0..t.len()).map(|i| [t.t[i], t.d[i], t.v[i], t.tau[i], base_pred[i], ext_pred[i]]).collect();
     let mut rejected = selection.rejected;

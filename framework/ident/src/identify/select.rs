@@ -44,9 +44,12 @@ pub(crate) struct HeldOut {
     pub rss: f64,
     /// Coefficients fitted on the held-out part.
     pub fitted_here: usize,
+    /// The model fitted on the training part.
+    pub fit: super::design::Fit,
 }
 
-/// Held-out errors of `spec` fitted on the training part (each model computed once).
+/// Held-out errors of `spec` fitted on the training part (each model fitted once: selection,
+/// the physics check, the final check and the report ask for the same models again).
 pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<Arc<HeldOut>> {
     let key = spec.key();
     // A poisoned cache (a panic elsewhere) is still a valid cache: its entries are complete.
@@ -64,12 +67,12 @@ fn compute_held_out(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut>
     let sigma2 = fit.rss / (p.train.len().saturating_sub(fit.parameters)).max(1) as f64;
     let raw: Vec<f64> = p.test.tau.iter().zip(&pred.torque_nm).map(|(y, m)| (y - m).powi(2)).collect();
     let errors = raw.iter().zip(&pred.leverage).map(|(e, h)| e + 2.0 * sigma2 * h).collect();
-    Some(HeldOut { errors, rss: raw.iter().sum(), fitted_here: pred.leverage.iter().sum::<f64>().round() as usize })
+    Some(HeldOut { errors, rss: raw.iter().sum(), fitted_here: pred.leverage.iter().sum::<f64>().round() as usize, fit })
 }
 
 /// Why a model's fit on the training part is physically impossible (a term's own rule), if it is.
 fn impossible(model: &Model, spec: &Spec, p: &Prepared, name: &dyn Fn(usize) -> String) -> Option<String> {
-    let fit = model.fit(spec, &p.train)?;
+    let fit = &held_out_errors(model, spec, p)?.fit;
     spec.terms.iter().enumerate().filter(|(_, t)| !t.baseline).find_map(|(i, t)| model.causes[t.cause].impossible(&t.params, fit.of(i)).map(|why| format!("{} ({why} with the others in the model)", name(t.cause))))
 }
 
@@ -142,16 +145,24 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         let mut residual = Vec::new();
         let ctx = context(model, &spec, p, &mut residual);
         let mut proposals: Vec<(f64, Spec, usize)> = Vec::new();
-        // Every candidate's search is independent of the others': spread over the cores,
-        // candidates dealt in turn so that the costly ones (delay, dead zone) do not share one.
-        let candidates: Vec<usize> = (0..model.causes.len()).filter(|c| spec.term(*c).is_none()).collect();
+        // Every candidate's search is independent of the others': spread over the cores, each
+        // worker taking the next candidate left, the costly ones (input transforms: every value
+        // refits the whole model) first, so that no core waits on one long search at the end.
+        let mut candidates: Vec<usize> = (0..model.causes.len()).filter(|c| spec.term(*c).is_none()).collect();
+        candidates.sort_by_key(|c| !model.causes[*c].transforms());
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(candidates.len()).max(1);
-        let (spec_ref, ctx_ref, warm_ref) = (&spec, &ctx, &warm);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let (spec_ref, ctx_ref, warm_ref, next, candidates) = (&spec, &ctx, &warm, &next, &candidates);
         let outcomes: Vec<(usize, Candidate)> = std::thread::scope(|scope| {
             let workers: Vec<_> = (0..threads)
-                .map(|w| {
-                    let mine: Vec<usize> = candidates.iter().copied().skip(w).step_by(threads).collect();
-                    scope.spawn(move || mine.into_iter().map(|c| (c, propose(model, spec_ref, c, ctx_ref, p, warm_ref.get(&c).map(Vec::as_slice)))).collect::<Vec<_>>())
+                .map(|_| {
+                    scope.spawn(move || {
+                        let mut mine = Vec::new();
+                        while let Some(&c) = candidates.get(next.fetch_add(1, std::sync::atomic::Ordering::Relaxed)) {
+                            mine.push((c, propose(model, spec_ref, c, ctx_ref, p, warm_ref.get(&c).map(Vec::as_slice))));
+                        }
+                        mine
+                    })
                 })
                 .collect();
             // A worker that panicked lost its candidates; the others still count.
