@@ -244,9 +244,6 @@ fn main() {
             data.t.push(t);
             data.deflection.push((x / q).round() * q);
             data.torque.push(k * x + 0.3 * (80.0 * amp * std::f64::consts::TAU * f * (std::f64::consts::TAU * f * t).cos()).atan() + fc * z + noise());
-            for v in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
-                v.push(f64::NAN);
-            }
         }
         // Baseline measured in the same run: the thesis' fit step (auto order) on the same file.
         let (mut times, mut fit_times) = (Vec::new(), Vec::new());
@@ -268,6 +265,29 @@ fn main() {
         println!("|---|---|---|---|---|");
         println!("| {ident_s:.3} | {fit_s:.4} | {:.1}x | {found} | identify within about 2x the fit step; 2 M rows <= 5 s (issue 13) |", ident_s / fit_s);
         println!();
+        // The same rows as a file through the command a user runs: reading the CSV included,
+        // wall time and peak resident memory from GNU time.
+        let exe = plugin_dir().join("jointctl");
+        if n > 100_000 && exe.exists() && Path::new("/usr/bin/time").exists() {
+            use std::io::Write;
+            let file = std::env::temp_dir().join(format!("jointctl-bench-{}-rows.csv", n));
+            let mut w = std::io::BufWriter::new(std::fs::File::create(&file).unwrap());
+            writeln!(w, "t,deflection,torque").unwrap();
+            for i in 0..n {
+                writeln!(w, "{},{},{}", data.t[i], data.deflection[i], data.torque[i]).unwrap();
+            }
+            drop(w);
+            let out = Command::new("/usr/bin/time").args(["-f", "%e %M"]).arg(&exe).args(["identify", "--json", "--data"]).arg(&file).output().unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            let last: Vec<&str> = stderr.lines().last().unwrap_or("").split_whitespace().collect();
+            println!("## `jointctl identify --data` on the same {n} rows as a CSV file ({} MB)", std::fs::metadata(&file).map_or(0, |m| m.len()) >> 20);
+            println!("| wall s | peak resident MB | exit | target |");
+            println!("|---|---|---|---|");
+            let mb = last.get(1).and_then(|k| k.parse::<f64>().ok()).map_or("?".into(), |k| format!("{:.0}", k / 1024.0));
+            println!("| {} | {mb} | {} | <= 5 s, <= 150 MB (issue 13) |", last.first().unwrap_or(&"?"), out.status);
+            println!();
+            let _ = std::fs::remove_file(&file);
+        }
     }
 
     // 5b. The hidden-effect suite of identify (issue 13), its confusion matrix: the same cases
