@@ -29,15 +29,23 @@ pub const SHOULDER_MAX_TORQUE_NM: f64 = 25.0;
 /// See [`SHOULDER_MAX_TORQUE_NM`].
 pub const WRIST_MAX_TORQUE_NM: f64 = 3.0;
 
-/// A smooth dead-zone: slope 0 at zero deflection, slope 1 beyond about two half-widths.
-fn dead_zone(x: f64, d: f64) -> f64 {
-    x - d * (x / d).tanh()
+/// A smooth dead-zone of half-width `d` [rad]: slope 0 at zero deflection, slope 1 beyond about
+/// two half-widths (none when `d` is not positive).
+///
+/// ```
+/// use jointctl_models::assumed::smooth_dead_zone;
+/// assert_eq!(smooth_dead_zone(0.0, 0.01), 0.0);
+/// assert!((smooth_dead_zone(0.1, 0.01) - (0.1 - 0.01)).abs() < 1e-9);
+/// assert_eq!(smooth_dead_zone(0.3, 0.0), 0.3);
+/// ```
+pub fn smooth_dead_zone(x: f64, d: f64) -> f64 {
+    if d > 0.0 { x - d * (x / d).tanh() } else { x }
 }
 
 /// The generating "true" characteristic of one setting/direction: stiffness `k` beyond the dead-zone.
 pub fn true_torque(k: f64, dead_zone_rad: f64, x: f64) -> f64 {
     let scale = if x >= 0.0 { 1.0 } else { NEGATIVE_BRANCH_SCALE };
-    scale * k * dead_zone(x, dead_zone_rad)
+    scale * k * smooth_dead_zone(x, dead_zone_rad)
 }
 
 fn samples(k: f64, d: f64, max_torque: f64, negative: bool) -> (Vec<f64>, Vec<f64>) {

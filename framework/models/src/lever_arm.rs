@@ -49,10 +49,49 @@ pub fn eq_2_6_stiffness(l: f64, q: f64, r: f64, k_s: f64) -> f64 {
     ratio * ratio * k_s
 }
 
+/// Eq. 2.1-2.4 without eq. 2.5's small-deflection step: the crank's moment arm shrinks as it
+/// turns (`x = R sin(phi)`, so `dx/dphi = R cos(phi)`), and the output torque is
+/// `tau = F_o R cos(phi) = ((l - q)/q R)^2 k_s sin(phi) cos(phi)` [Nm]: eq. 2.5 near zero, softer
+/// beyond (about `K (phi - 2 phi^3 / 3)`). The simulated VSAs' "true" element.
+///
+/// ```
+/// use jointctl_models::lever_arm::{eq_2_1_to_2_4_torque, eq_2_5_torque};
+/// let (l, q, r, k_s) = (0.15, 0.03, 0.03, 30_000.0);
+/// // Near zero, eq. 2.5; at 0.2 rad, 2.6 % softer (sin(2 phi) / (2 phi) = 0.974).
+/// assert!((eq_2_1_to_2_4_torque(l, q, r, k_s, 1e-4) / eq_2_5_torque(l, q, r, k_s, 1e-4) - 1.0).abs() < 1e-7);
+/// let ratio = eq_2_1_to_2_4_torque(l, q, r, k_s, 0.2) / eq_2_5_torque(l, q, r, k_s, 0.2);
+/// assert!((ratio - 0.4f64.sin() / 0.4).abs() < 1e-12);
+/// ```
+pub fn eq_2_1_to_2_4_torque(l: f64, q: f64, r: f64, k_s: f64, phi: f64) -> f64 {
+    let (s, c) = phi.sin_cos();
+    eq_2_6_stiffness(l, q, r, k_s) * s * c
+}
+
 impl LeverArm {
     /// Stiffness [Nm/rad] at a pivot setting [mm], eq. 2.6.
+    ///
+    /// ```
+    /// let k = jointctl_models::assumed::SHOULDER_LEVER.stiffness_at(0.0);
+    /// assert!((k - 432.0).abs() < 1e-9);
+    /// ```
     pub fn stiffness_at(&self, pivot_mm: f64) -> f64 {
-        let q = self.pivot_offset_m + pivot_mm / 1000.0;
-        eq_2_6_stiffness(self.lever_length_m, q, self.crank_radius_m, self.spring_n_per_m)
+        eq_2_6_stiffness(self.lever_length_m, self.pivot_m(pivot_mm), self.crank_radius_m, self.spring_n_per_m)
+    }
+
+    /// Output torque [Nm] at a pivot setting [mm] and deflection [rad], without the
+    /// small-deflection approximation ([`eq_2_1_to_2_4_torque`]).
+    ///
+    /// ```
+    /// let lever = jointctl_models::assumed::SHOULDER_LEVER;
+    /// let (k, phi) = (lever.stiffness_at(20.0), 0.05);
+    /// assert!((lever.torque_at(20.0, phi) - k * phi.sin() * phi.cos()).abs() < 1e-12);
+    /// ```
+    pub fn torque_at(&self, pivot_mm: f64, phi_rad: f64) -> f64 {
+        eq_2_1_to_2_4_torque(self.lever_length_m, self.pivot_m(pivot_mm), self.crank_radius_m, self.spring_n_per_m, phi_rad)
+    }
+
+    /// The pivot position `q` [m] of a setting [mm].
+    fn pivot_m(&self, pivot_mm: f64) -> f64 {
+        self.pivot_offset_m + pivot_mm / 1000.0
     }
 }

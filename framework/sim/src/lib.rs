@@ -123,6 +123,9 @@ pub struct SimHal {
     quantized: Vec<bool>,
     encoder_offset_rad: Vec<f64>,
     encoder_history: Vec<DelayLine>,
+    /// Torque-sensor readings per unit and DOF (unit-major, [`MAX_UNIT_DOF`] each), to sample
+    /// them at the instant the encoders' readings were taken.
+    sensor_history: Vec<DelayLine>,
     drive_history: Vec<DelayLine>,
     encoder_conditioners: Vec<Conditioner>,
     drive_conditioners: Vec<Conditioner>,
@@ -207,6 +210,7 @@ impl SimHal {
                 Some(p) => Some((drive_index(&p.drive, at("pivot.drive"))?, p.mm_per_rad, p.offset_mm)),
                 None => None,
             };
+            unit::check_effects(&s.effects).map_err(|(f, m)| setup(at(&format!("effects.{f}")), m))?;
             units.push(Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects));
         }
         let signal = |name: &str, field: String| -> Result<Term, HalSetupError> {
@@ -265,9 +269,11 @@ impl SimHal {
             }
         }
         let n_drives = drives.len();
+        let sensor_history = vec![DelayLine::new(); units.len() * unit::MAX_UNIT_DOF];
         let mut hal = SimHal {
             drives,
             units,
+            sensor_history,
             encoder_history: vec![DelayLine::new(); encoders.len()],
             drive_history: vec![DelayLine::new(); n_drives],
             encoder_conditioners: rates.iter().map(|r| Conditioner::new(Plausibility::absolute_encoder(*r))).collect(),
@@ -323,6 +329,11 @@ impl SimHal {
         for (h, d) in self.drive_history.iter_mut().zip(&self.drives) {
             h.push(self.time_s, d.position);
         }
+        for (lines, u) in self.sensor_history.chunks_mut(unit::MAX_UNIT_DOF).zip(&self.units) {
+            for (h, tau) in lines.iter_mut().zip(&u.sensor_torque[..u.dof_names.len()]) {
+                h.push(self.time_s, *tau);
+            }
+        }
     }
 
     /// Simulated time [s].
@@ -343,6 +354,22 @@ impl SimHal {
     /// The true element torque and the torque sensor's reading of DOF `name` [Nm].
     pub fn joint_torque(&self, name: &str) -> Option<(f64, f64)> {
         self.units.iter().find_map(|u| u.dof_names.iter().position(|n| n == name).map(|i| (u.torque[i], u.sensor_torque[i])))
+    }
+
+    /// The torque sensor's reading of DOF `name` as it was `age_s` ago [Nm] (within one physics
+    /// step; at most about 0.25 s back): a recording pairs it with encoder readings of that age,
+    /// so that the channels stay aligned when the SPI bus has latency.
+    pub fn sensor_torque_aged(&self, name: &str, age_s: f64) -> Option<f64> {
+        let (unit, dof) = self.units.iter().enumerate().find_map(|(k, u)| u.dof_names.iter().position(|n| n == name).map(|i| (k, i)))?;
+        if age_s <= 0.0 {
+            return Some(self.units[unit].sensor_torque[dof]);
+        }
+        Some(self.sensor_history[unit * unit::MAX_UNIT_DOF + dof].at(self.time_s - age_s))
+    }
+
+    /// The configured SPI latency [s]: the age of every encoder reading.
+    pub fn spi_latency_s(&self) -> f64 {
+        self.spi_latency_s
     }
 
     /// Advances the physics by `dt` with the drives' current set-points.

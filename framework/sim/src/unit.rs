@@ -5,6 +5,7 @@
 
 use jointctl_config::{EffectsConfig, ElementSimConfig, EnvironmentConfig};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
+use jointctl_models::assumed::smooth_dead_zone;
 use jointctl_models::lever_arm::LeverArm;
 
 use crate::rng::SplitMix64;
@@ -21,8 +22,8 @@ pub enum Element {
     Pivot(PivotCharacteristic),
     /// The 2-DOF wrist characteristic.
     Wrist(WristCharacteristic),
-    /// Eq. 2.6: stiffness from the pivot setting.
-    LeverArm(LeverArm),
+    /// The lever-arm VSA (eq. 2.1-2.4), its play [rad] and its negative branch's scale.
+    LeverArm(LeverArm, f64, f64),
 }
 
 /// A problem building a unit.
@@ -46,12 +47,20 @@ impl Element {
                 WristCharacteristic::from_spec(&table()?).map_err(|e| (format!("params.characteristic.{}", e.field), e.message))?,
             ),
             ElementSimConfig::WristTable => return Err(("sim.element".into(), "wrist_table needs a 2-DOF joint".into())),
-            ElementSimConfig::LeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m } => Element::LeverArm(LeverArm {
-                lever_length_m: *lever_length_m,
-                crank_radius_m: *crank_radius_m,
-                spring_n_per_m: *spring_n_per_m,
-                pivot_offset_m: *pivot_offset_m,
-            }),
+            ElementSimConfig::LeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m, dead_zone_rad, negative_branch_scale } => {
+                let lengths = [("lever_length_m", lever_length_m), ("crank_radius_m", crank_radius_m), ("spring_n_per_m", spring_n_per_m), ("pivot_offset_m", pivot_offset_m)];
+                if let Some((name, v)) = lengths.iter().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
+                    return Err((format!("sim.element.lever_arm.{name}"), format!("must be > 0, got {v}")));
+                }
+                if !(dead_zone_rad.is_finite() && *dead_zone_rad >= 0.0) {
+                    return Err(("sim.element.lever_arm.dead_zone_rad".into(), format!("must be >= 0, got {dead_zone_rad}")));
+                }
+                if !(negative_branch_scale.is_finite() && *negative_branch_scale > 0.0) {
+                    return Err(("sim.element.lever_arm.negative_branch_scale".into(), format!("must be > 0, got {negative_branch_scale}")));
+                }
+                let lever = LeverArm { lever_length_m: *lever_length_m, crank_radius_m: *crank_radius_m, spring_n_per_m: *spring_n_per_m, pivot_offset_m: *pivot_offset_m };
+                Element::LeverArm(lever, *dead_zone_rad, *negative_branch_scale)
+            }
         })
     }
 
@@ -60,10 +69,10 @@ impl Element {
         match self {
             Element::Linear(k) => out.iter_mut().zip(d).for_each(|(t, d)| *t = k * d),
             Element::Pivot(c) => out.iter_mut().zip(d).for_each(|(t, d)| *t = c.evaluate(pivot_mm, *d).torque_nm),
-            Element::LeverArm(l) => {
-                let k = l.stiffness_at(pivot_mm);
-                out.iter_mut().zip(d).for_each(|(t, d)| *t = k * d);
-            }
+            Element::LeverArm(lever, play_rad, negative_scale) => out.iter_mut().zip(d).for_each(|(t, d)| {
+                let torque = lever.torque_at(pivot_mm, smooth_dead_zone(*d, *play_rad));
+                *t = if *d < 0.0 { negative_scale * torque } else { torque };
+            }),
             Element::Wrist(c) => {
                 let e = c.evaluate(pivot_mm, d[0], d[1]);
                 out[0] = e.torque_q6_nm;
@@ -71,6 +80,36 @@ impl Element {
             }
         }
     }
+}
+
+/// Refuses plant effects that are not numbers or not physical (a negative friction, a noise of
+/// negative spread), naming the field: a NaN here would run as a plant that is silently wrong.
+pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
+    let mut values = vec![
+        ("viscous_nms_per_rad", fx.viscous_nms_per_rad, true),
+        ("dead_zone_rad", fx.dead_zone_rad, true),
+        ("cubic_nm_per_rad3", fx.cubic_nm_per_rad3, false),
+        ("torque_offset_nm", fx.torque_offset_nm, false),
+        ("torque_noise_nm", fx.torque_noise_nm, true),
+    ];
+    if let Some(f) = fx.arctan_friction {
+        values.extend([("arctan_friction.k_a_nm", f.k_a_nm, true), ("arctan_friction.k_b_s_per_rad", f.k_b_s_per_rad, true)]);
+    }
+    if let Some(h) = fx.hysteresis {
+        values.extend([("hysteresis.sigma_nm_per_rad", h.sigma_nm_per_rad, true), ("hysteresis.limit_nm", h.limit_nm, true)]);
+    }
+    if let Some(m) = fx.vibration {
+        values.extend([("vibration.frequency_hz", m.frequency_hz, true), ("vibration.damping_ratio", m.damping_ratio, true), ("vibration.gain", m.gain, false)]);
+    }
+    for (name, v, non_negative) in values {
+        if !v.is_finite() || (non_negative && v < 0.0) {
+            return Err((name.into(), format!("must be a finite number{}, got {v}", if non_negative { " >= 0" } else { "" })));
+        }
+    }
+    if fx.hysteresis.is_some_and(|h| h.limit_nm == 0.0) {
+        return Err(("hysteresis.limit_nm".into(), "must be > 0 (the Dahl state is scaled by it)".into()));
+    }
+    Ok(())
 }
 
 /// Most DOFs of one unit.
@@ -218,6 +257,9 @@ impl Unit {
         for i in 0..n {
             let st = &mut self.state[i];
             let mut t = base[i] + fx.cubic_nm_per_rad3 * d_eff[i].powi(3) + fx.viscous_nms_per_rad * rate[i];
+            if let Some(f) = fx.arctan_friction {
+                t += f.k_a_nm * (f.k_b_s_per_rad * rate[i]).atan();
+            }
             if let Some(h) = fx.hysteresis {
                 // Dahl: dz/dt = sigma (1 - z/fc sgn(v)) v.
                 let v = rate[i];

@@ -131,3 +131,69 @@ fn set_points_reach_the_drive_after_the_can_latency() {
         assert!(t > earliest_s - 1e-9 && t <= latest_s + 1e-9, "latency {latency_s} s: arrived by {t} s");
     }
 }
+
+/// One clamped 1-DOF unit with `element` and `effects`, its drive at `theta` moving at `rate`:
+/// the element torque after one step.
+fn clamped_torque(element: Element, effects: EffectsConfig, theta: f64, rate: f64) -> f64 {
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let mut unit = Unit::new(vec!["q".into()], vec![0], vec![vec![1.0]], vec![element], None, vec![fixed], effects);
+    unit.start(&[0.0]);
+    let mut loads = [0.0];
+    unit.step(&[theta], &[rate], &mut loads, 0.0005, &mut SplitMix64(1));
+    unit.torque[0]
+}
+
+#[test]
+fn the_lever_arm_plant_is_eq_2_1_to_2_4_with_play_and_a_softer_negative_branch() {
+    let cfg = jointctl_config::ElementSimConfig::LeverArm {
+        lever_length_m: 0.15,
+        crank_radius_m: 0.03,
+        spring_n_per_m: 30_000.0,
+        pivot_offset_m: 0.03,
+        dead_zone_rad: 0.01,
+        negative_branch_scale: 0.9,
+    };
+    let lever = || Element::from_config(&cfg, &serde_json::Value::Null, 1).unwrap();
+    // At pivot 0 mm (no pivot drive: setting 0), K = 432 Nm/rad (eq. 2.6).
+    let k = 432.0;
+    let play = |x: f64| x - 0.01 * (x / 0.01).tanh();
+    for d in [0.05, 0.2] {
+        let expected = k * play(d).sin() * play(d).cos();
+        let got = clamped_torque(lever(), EffectsConfig::default(), d, 0.0);
+        assert!((got - expected).abs() < 1e-9 * expected, "{d} rad: {got} vs {expected}");
+        let negative = clamped_torque(lever(), EffectsConfig::default(), -d, 0.0);
+        assert!((negative + 0.9 * expected).abs() < 1e-9 * expected, "-{d} rad: {negative}");
+    }
+    // Inside the play almost nothing (K x^3 / (3 d^2) = 0.012 Nm at 2 mrad, against 0.86 Nm
+    // without play); at 0.2 rad softer than eq. 2.5's straight line.
+    assert!(clamped_torque(lever(), EffectsConfig::default(), 0.002, 0.0).abs() < 0.02 * k * 0.002);
+    assert!(clamped_torque(lever(), EffectsConfig::default(), 0.2, 0.0) < k * (0.2 - 0.01));
+    // A geometry that is not one is refused, by field.
+    let bad = jointctl_config::ElementSimConfig::LeverArm { lever_length_m: 0.15, crank_radius_m: -0.03, spring_n_per_m: 30_000.0, pivot_offset_m: 0.03, dead_zone_rad: 0.0, negative_branch_scale: 1.0 };
+    let err = Element::from_config(&bad, &serde_json::Value::Null, 1).unwrap_err();
+    assert_eq!(err.0, "sim.element.lever_arm.crank_radius_m");
+}
+
+#[test]
+fn arctan_friction_is_eq_3_5_on_the_deflection_rate() {
+    let friction = EffectsConfig { arctan_friction: Some(jointctl_config::ArctanFrictionConfig { k_a_nm: 0.1, k_b_s_per_rad: 50.0 }), ..EffectsConfig::default() };
+    for rate in [0.001, 0.02, 0.5, -0.5] {
+        let got = clamped_torque(Element::Linear(100.0), friction, 0.0, rate);
+        let expected = 0.1 * (50.0f64 * rate).atan();
+        assert!((got - expected).abs() < 1e-12, "{rate} rad/s: {got} vs {expected}");
+    }
+}
+
+#[test]
+fn plant_effects_that_are_not_numbers_or_not_physical_are_refused_by_field() {
+    use jointctl_sim::unit::check_effects;
+    let nan = EffectsConfig { viscous_nms_per_rad: f64::NAN, ..EffectsConfig::default() };
+    assert_eq!(check_effects(&nan).unwrap_err().0, "viscous_nms_per_rad");
+    let negative = EffectsConfig { arctan_friction: Some(jointctl_config::ArctanFrictionConfig { k_a_nm: -0.1, k_b_s_per_rad: 50.0 }), ..EffectsConfig::default() };
+    let (field, message) = check_effects(&negative).unwrap_err();
+    assert_eq!(field, "arctan_friction.k_a_nm");
+    assert_eq!(message, "must be a finite number >= 0, got -0.1");
+    let zero_limit = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.0 }), ..EffectsConfig::default() };
+    assert_eq!(check_effects(&zero_limit).unwrap_err().0, "hysteresis.limit_nm");
+    assert!(check_effects(&EffectsConfig::default()).is_ok());
+}

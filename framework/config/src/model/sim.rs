@@ -142,7 +142,10 @@ pub enum ElementSimConfig {
     PivotTable,
     /// The 2-DOF wrist characteristic in `params.characteristic` (q6, q7).
     WristTable,
-    /// Eq. 2.6 with these lever-arm parameters, `tau = K(pivot) delta`.
+    /// The lever-arm VSA itself (section 2.4): eq. 2.1-2.4 without eq. 2.5's small-deflection
+    /// step, `tau = K(pivot) sin(delta) cos(delta)` with eq. 2.6's K, after a smooth play of
+    /// `dead_zone_rad` and with the negative branch scaled (figures 3.14-3.16 show both). A
+    /// plant that is not the observer's table: the table is fitted to recordings of it.
     LeverArm {
         /// Lever length l [m].
         lever_length_m: f64,
@@ -152,7 +155,17 @@ pub enum ElementSimConfig {
         spring_n_per_m: f64,
         /// Pivot q at setting 0 mm [m].
         pivot_offset_m: f64,
+        /// Half-width of the play around zero deflection [rad] (0: none).
+        #[serde(default)]
+        dead_zone_rad: f64,
+        /// Negative-branch torque over the positive one's at the same |deflection| (1: symmetric).
+        #[serde(default = "one")]
+        negative_branch_scale: f64,
     },
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// Pivot position of a simulated VSA.
@@ -224,6 +237,10 @@ pub struct EffectsConfig {
     /// Viscous friction in the element [Nms/rad].
     #[serde(default)]
     pub viscous_nms_per_rad: f64,
+    /// Eq. 3.5's arctan friction on the element's deflection rate: `k_a atan(k_b d(delta)/dt)`
+    /// (Coulomb-like beyond `1 / k_b` rad/s, the gear friction the thesis models).
+    #[serde(default)]
+    pub arctan_friction: Option<ArctanFrictionConfig>,
     /// Dahl hysteresis: `dz/dt = sigma (1 - z/fc sgn(v)) v`, torque `z` [Nm].
     #[serde(default)]
     pub hysteresis: Option<DahlConfig>,
@@ -242,6 +259,16 @@ pub struct EffectsConfig {
     /// Standard deviation of the torque sensor noise [Nm].
     #[serde(default)]
     pub torque_noise_nm: f64,
+}
+
+/// Eq. 3.5: `F = k_a atan(k_b w)`.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ArctanFrictionConfig {
+    /// `k_a` [Nm] (the friction torque tends to `k_a pi / 2`).
+    pub k_a_nm: f64,
+    /// `k_b` [s/rad].
+    pub k_b_s_per_rad: f64,
 }
 
 /// Dahl hysteresis parameters.
