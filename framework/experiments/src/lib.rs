@@ -4,11 +4,14 @@
 //! - [`record`]: characterisation (sections 3.3.1, 3.4.1, 3.5.1): the output moved by a flow
 //!   source while the drives hold, deflection from the observer, torque from the torque sensor;
 //!   written as the CSV `jointctl fit` and `jointctl identify` read;
+//! - [`characterise`]: a variable-stiffness joint recorded over its pivot settings (section
+//!   3.4.2), the data its observer's table is fitted to;
 //! - [`tracking`]: torque tracking (chapter 5): references (step, sine, cosine, a frequency
 //!   sweep) at several stiffness settings, with NRMSE and phase lag, in two scenarios.
 
 #![forbid(unsafe_code)]
 
+pub mod characterise;
 pub mod plot;
 pub mod record;
 pub mod tracking;

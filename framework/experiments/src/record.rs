@@ -85,9 +85,12 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
         // The sensor and the motor are sampled at the instant the observer reads, between
         // observe and control: after `control` the simulation has advanced one period, and the
         // torque led the deflection by it (10 ms at 100 Hz, a delay identify then reported).
+        // The torque is the sensor's reading from when the encoders were read (the SPI bus's
+        // latency ago), so that a bus latency does not shift one channel against the other.
         arm.observe(t);
         let (torque, motor) = sim.with(|s| {
-            let tq = |name: &str| s.joint_torque(name).map_or(f64::NAN, |x| x.1);
+            let age = s.spi_latency_s();
+            let tq = |name: &str| s.sensor_torque_aged(name, age).unwrap_or(f64::NAN);
             let torque = if two {
                 let first = arm.slots.iter().find(|s| s.dofs().contains(&dof)).map(|s| s.dofs().start).unwrap_or(dof);
                 tq(&arm.dof_names[first]) * sa + tq(&arm.dof_names[first + 1]) * ca

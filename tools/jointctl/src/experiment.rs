@@ -68,6 +68,18 @@ pub enum SimCommand {
         #[arg(long, default_value_t = 100.0)]
         rate: f64,
     },
+    /// Characterise a variable-stiffness DOF over its pivot settings (section 3.4.2: the shoulder
+    /// at 0-45 mm in 5 mm steps) into one CSV for `jointctl fit --branches --order 3`.
+    Characterise {
+        /// The arm description (simulated backend).
+        config: PathBuf,
+        /// The DOF (q2).
+        #[arg(long)]
+        joint: String,
+        /// Output CSV file.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn table(rows: &[Row]) -> String {
@@ -219,6 +231,30 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                 return crate::fail(format!("cannot write {}: {e}", out.display()));
             }
             eprintln!("{} samples written to {}", samples.len(), out.display());
+            ExitCode::SUCCESS
+        }
+        SimCommand::Characterise { config, joint, out } => {
+            let loaded = match jointctl_config::load(&config) {
+                Ok(l) => l,
+                Err(e) => return crate::fail_err(e),
+            };
+            let loader = match crate::experiment_loader(&loaded) {
+                Ok(l) => l,
+                Err(e) => return crate::fail_err(e),
+            };
+            let plan = jointctl_experiments::characterise::Plan::shoulder();
+            let samples = match jointctl_experiments::characterise::characterise(&loaded, &loader, &joint, &plan) {
+                Ok(s) => s,
+                Err(e) => return crate::fail_err(e),
+            };
+            let file = match std::fs::File::create(&out) {
+                Ok(f) => f,
+                Err(e) => return crate::fail(format!("cannot create {}: {e}", out.display())),
+            };
+            if let Err(e) = write_csv(&samples, None, std::io::BufWriter::new(file)) {
+                return crate::fail(format!("cannot write {}: {e}", out.display()));
+            }
+            eprintln!("{} samples at {} pivot settings written to {}", samples.len(), plan.pivots_mm.len(), out.display());
             ExitCode::SUCCESS
         }
     }
