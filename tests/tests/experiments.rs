@@ -48,11 +48,15 @@ fn the_thesis_loop_degrades_above_0_2_hz_where_the_modern_loop_still_tracks() {
     let plan = Plan { stiffness_nm_per_rad: vec![89.0], references: vec![(Waveform::Sine, 0.2), (Waveform::Sine, 4.0)], periods: 2.0 };
     let thesis = run(&sherpa(), &PluginLoader::new([]), "q2", Scenario::Thesis, &plan, |_, _| {}).unwrap();
     let modern = run(&sherpa(), &PluginLoader::new([]), "q2", Scenario::Modern, &plan, |_, _| {}).unwrap();
-    let (t02, t4) = (thesis[0].nrmse_sensor, thesis[1].nrmse_sensor);
+    let (t02, t4) = (thesis[0].nrmse_observed, thesis[1].nrmse_sensor);
     let m4 = modern[1].nrmse_sensor;
     // Chapter 5: good at 0.1-0.2 Hz, poor above: at 4 Hz the 40 Hz loop with 15/30 ms
-    // latencies is worse than no control at all (NRMSE > 1).
-    assert!(t02 < 0.05, "thesis at 0.2 Hz: NRMSE {t02}");
+    // latencies is worse than no control at all (NRMSE > 1). At 0.2 Hz the loop follows the
+    // torque its observer sees; the F/T sensor differs from that by the observer's offset
+    // (sections 5.1, 6.1: a table fitted through the plant's hysteresis and friction band).
+    assert!(t02 < 0.05, "thesis at 0.2 Hz: NRMSE of the observed torque {t02}");
+    let gap = thesis[0].nrmse_observer_vs_sensor;
+    assert!((0.02..0.3).contains(&gap), "thesis at 0.2 Hz: observer vs F/T sensor {gap}");
     assert!(t4 > 1.0, "thesis at 4 Hz: NRMSE {t4}");
     // The same hardware at 1 kHz with a direct bus still follows 4 Hz, if less well (the ELMO
     // profile's acceleration limit binds next).
@@ -96,6 +100,13 @@ fn the_experiment_command_prints_the_documented_json() {
     assert_eq!(svgs, 3);
 }
 
+/// The reference arm with the elbow's plant effects off: a bare 113.78 Nm/rad spring.
+fn plain_elbow() -> jointctl_config::LoadedConfig {
+    let mut loaded = sherpa();
+    loaded.config.joints[2].sim.as_mut().unwrap().effects = Default::default();
+    loaded
+}
+
 fn record_with(loaded: &jointctl_config::LoadedConfig, joint: &str, pivot_mm: Option<f64>, angle_deg: f64) -> Vec<jointctl_experiments::record::Sample> {
     let opts = RecordOptions { joint: joint.into(), amplitude_rad: 0.1, frequency_hz: 0.2, duration_s: 10.0, pivot_mm, angle_deg, rate_hz: 100.0 };
     record(loaded, &PluginLoader::new([]), &opts).unwrap()
@@ -114,18 +125,23 @@ fn a_vsa_recording_reproduces_its_table_at_the_held_pivot() {
     let spec: jointctl_models::characteristic::CharacteristicSpec =
         serde_json::from_value(loaded.config.joints[1].params.0["characteristic"].clone()).unwrap();
     let table = jointctl_models::characteristic::PivotCharacteristic::from_spec(&spec).unwrap();
-    let mut worst: f64 = 0.0;
+    let mut gaps = Vec::new();
     for s in &samples[100..] {
         assert!((s.pivot_mm - 20.0).abs() < 0.01, "pivot held at 20 mm: {}", s.pivot_mm);
-        worst = worst.max((s.torque - table.evaluate(20.0, s.deflection).torque_nm).abs());
+        gaps.push(s.torque - table.evaluate(20.0, s.deflection).torque_nm);
     }
-    // The torque sensor and the table agree up to the quantised deflection (14 bits).
-    assert!(worst < 0.3, "largest difference from the table {worst} Nm");
+    // The table was fitted through the middle of the plant's loop (section 3.3.2), so the
+    // sensor scatters around it by the hysteresis and friction band (0.4 + 0.16 + 0.09 Nm in
+    // the config) and the 12 Hz mode, with no systematic offset.
+    let mean = gaps.iter().sum::<f64>() / gaps.len() as f64;
+    let worst = gaps.iter().fold(0.0f64, |m, g| m.max(g.abs()));
+    assert!(mean.abs() < 0.05, "mean difference from the table {mean} Nm");
+    assert!(worst < 1.5, "largest difference from the table {worst} Nm");
 }
 
 #[test]
 fn hysteresis_and_dead_zone_in_the_plant_show_in_the_recording() {
-    let base = sherpa();
+    let base = plain_elbow();
     let plain = loop_area(&record_with(&base, "q4", None, 0.0));
     let mut with = base.clone();
     let sim = with.config.joints[2].sim.as_mut().unwrap();
@@ -147,9 +163,16 @@ fn hysteresis_and_dead_zone_in_the_plant_show_in_the_recording() {
 /// 100 Hz). Pass: on the plain elastic joint (a 113.78 Nm/rad spring, no plant effect), the
 /// recorded torque is K x deflection to within the 14-bit quantisation, sample by sample: a
 /// 10 ms shift at 0.2 Hz and 0.1 rad leaves up to 113.78 x 0.1 x 2 pi x 0.2 x 0.01 = 0.14 Nm.
+///
+/// Finding (issue 10, latency on the thesis' arm): with the reference config's SPI latency
+/// (15 ms, section 2.3) the deflection the observer reads is 15 ms old while the torque sensor
+/// was sampled now: a delay of 15 ms again. Pass: the recorder takes the sensor's reading from
+/// when the encoders were read.
 #[test]
 fn the_recording_samples_torque_and_deflection_at_the_same_instant() {
-    let samples = record_with(&sherpa(), "q4", None, 0.0);
+    let elbow = plain_elbow();
+    assert!(elbow.config.hal.sim.spi_latency_s >= 0.015, "the reference config reads its encoders late (section 2.3)");
+    let samples = record_with(&elbow, "q4", None, 0.0);
     let count = std::f64::consts::TAU / 16384.0;
     let worst = samples[100..].iter().map(|s| (s.torque - 113.78 * s.deflection).abs()).fold(0.0, f64::max);
     assert!(worst < 113.78 * count * 1.5, "largest |torque - K deflection| {worst} Nm");

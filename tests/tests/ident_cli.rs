@@ -95,7 +95,10 @@ fn fit_output_feeds_the_runtime_through_include_without_editing() {
 
 #[test]
 fn fit_groups_a_vsa_characterisation_by_pivot_into_a_table_the_shoulder_loads() {
-    let loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
+    // The lever-arm element alone (its hysteresis, friction and mode off), so that the fit's
+    // error is the cubic's, not the plant's loop.
+    let mut loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
+    loaded.config.joints[1].sim.as_mut().unwrap().effects = Default::default();
     let mut text = String::from("t,deflection,torque,pivot_mm\n");
     let mut t0 = 0.0;
     for pivot in [10.0, 30.0] {
@@ -221,12 +224,15 @@ fn a_huge_value_in_the_data_is_refused_at_its_line() {
     }
 }
 
-/// A recording of q4 from the simulated arm with `effects` in its plant (not in the config), at
-/// `rate_hz`, identified against the configured model.
+/// A recording of q4 from the simulated arm with only `effects` in its plant (not in the
+/// config; the reference plant's own effects off), at `rate_hz`, identified against the
+/// configured model.
 fn q4_recording(effects: impl Fn(&mut jointctl_config::EffectsConfig), rate_hz: f64) -> jointctl_ident::identify::Report {
     let mut loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
     let q4 = loaded.config.joints.iter_mut().find(|j| j.name == "q4").unwrap();
-    effects(&mut q4.sim.as_mut().unwrap().effects);
+    let plant = &mut q4.sim.as_mut().unwrap().effects;
+    *plant = Default::default();
+    effects(plant);
     let opts = RecordOptions { joint: "q4".into(), amplitude_rad: 0.08, frequency_hz: 0.25, duration_s: 40.0, pivot_mm: None, angle_deg: 0.0, rate_hz };
     let samples = record(&loaded, &PluginLoader::new([]), &opts).unwrap();
     let mut csv = Vec::new();
