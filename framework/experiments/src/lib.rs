@@ -6,6 +6,8 @@
 //!   written as the CSV `jointctl fit` and `jointctl identify` read;
 //! - [`characterise`]: a variable-stiffness joint recorded over its pivot settings (section
 //!   3.4.2), the data its observer's table is fitted to;
+//! - [`sensitivity`]: the thesis scenario's tracking with one factor changed at a time (what
+//!   limited the thesis' arm, section 6.2);
 //! - [`tracking`]: torque tracking (chapter 5): references (step, sine, cosine, a frequency
 //!   sweep) at several stiffness settings, with NRMSE and phase lag, in two scenarios.
 
@@ -14,6 +16,7 @@
 pub mod characterise;
 pub mod plot;
 pub mod record;
+pub mod sensitivity;
 pub mod tracking;
 
 use jointctl_config::{EnvironmentConfig, LoadedConfig};

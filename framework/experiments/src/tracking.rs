@@ -216,6 +216,38 @@ pub fn run(
     joint: &str,
     scenario: Scenario,
     plan: &Plan,
+    progress: impl FnMut(usize, usize),
+) -> Result<Vec<Row>, ExperimentError> {
+    let mut cfg = loaded.clone();
+    scenario.apply(&mut cfg);
+    run_as_configured(&cfg, loader, joint, scenario, plan, progress)
+}
+
+impl Scenario {
+    /// Sets the scenario's loop rate and bus latencies in `cfg`.
+    ///
+    /// ```
+    /// use jointctl_experiments::tracking::Scenario;
+    /// let mut cfg = jointctl_config::parse_str("arm: a\nhal: {backend: sim}\njoints: []\n", std::path::Path::new("a.yaml")).unwrap();
+    /// Scenario::Thesis.apply(&mut cfg);
+    /// assert_eq!((cfg.config.rate_hz, cfg.config.hal.sim.can_latency_s), (40.0, 0.030));
+    /// ```
+    pub fn apply(self, cfg: &mut LoadedConfig) {
+        let (rate, spi, can) = self.timing();
+        cfg.config.rate_hz = rate;
+        cfg.config.hal.sim.spi_latency_s = spi;
+        cfg.config.hal.sim.can_latency_s = can;
+    }
+}
+
+/// Runs a plan on `loaded` as it is (its loop rate and latencies; `scenario` only names the rows),
+/// the joint's output clamped.
+pub fn run_as_configured(
+    loaded: &LoadedConfig,
+    loader: &PluginLoader,
+    joint: &str,
+    scenario: Scenario,
+    plan: &Plan,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Row>, ExperimentError> {
     let mut cfg = loaded.clone();
@@ -223,10 +255,6 @@ pub fn run(
     // Chapter 5's set-ups clamp the joint's output (figures 5.1, 5.14).
     let clamp = EnvironmentConfig::Fixed { position_rad: 0.0 };
     set_environment(&mut cfg, j, i, clamp.clone(), clamp);
-    let (rate, spi, can) = scenario.timing();
-    cfg.config.rate_hz = rate;
-    cfg.config.hal.sim.spi_latency_s = spi;
-    cfg.config.hal.sim.can_latency_s = can;
     let settings: Vec<Option<f64>> = if plan.stiffness_nm_per_rad.is_empty() { vec![None] } else { plan.stiffness_nm_per_rad.iter().map(|k| Some(*k)).collect() };
     let total = settings.len() * plan.references.len();
     let mut rows = Vec::new();

@@ -35,6 +35,25 @@ pub enum ExperimentCommand {
         #[arg(long)]
         quick: bool,
     },
+    /// What limited the thesis' arm (section 6.2): the `thesis` scenario's sine sweep (0.1-4 Hz)
+    /// with one factor changed at a time (loop rate, each latency, drive profile limits, PI
+    /// gains and gain scheduling, the plant's effects), bandwidth and errors in one table.
+    Sensitivity {
+        /// The arm description (simulated backend).
+        config: PathBuf,
+        /// The DOF (e.g. q2).
+        #[arg(long)]
+        joint: String,
+        /// Stiffness setting [Nm/rad]; default the geometric middle of the DOF's stiffness limits.
+        #[arg(long, value_parser = crate::finite)]
+        stiffness: Option<f64>,
+        /// Print one JSON object `{"variants": [...]}` instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Also write the table here (Markdown).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -142,6 +161,45 @@ fn plots(dir: &Path, rows: &[Row]) -> Result<(), String> {
 
 pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
     match cmd {
+        ExperimentCommand::Sensitivity { config, joint, stiffness, json, out } => {
+            let loaded = match jointctl_config::load(&config) {
+                Ok(l) => l,
+                Err(e) => return crate::fail_err(e),
+            };
+            let middle = loaded.config.joints.iter().find_map(|j| {
+                let names = j.dof_names();
+                names.iter().position(|n| *n == joint).and_then(|i| j.dof_limits()[i]).and_then(|l| l.stiffness_nm_per_rad).map(|[lo, hi]| (lo * hi).sqrt())
+            });
+            let Some(k) = stiffness.or(middle) else {
+                return crate::fail(format!("`{joint}` has no stiffness limits: give --stiffness"));
+            };
+            let loader = match crate::experiment_loader(&loaded) {
+                Ok(l) => l,
+                Err(e) => return crate::fail_err(e),
+            };
+            let variants = match jointctl_experiments::sensitivity::run(&loaded, &loader, &joint, k, |done, total| eprint!("\r{done}/{total} variants")) {
+                Ok(v) => v,
+                Err(e) => return crate::fail_err(e),
+            };
+            eprintln!();
+            let table = format!(
+                "# What limits torque tracking of {joint} at {k:.1} Nm/rad\n\nConfig: `{}`. The `thesis` scenario's sine sweep (0.1-4 Hz, output clamped) with one factor changed at a time. \"Good up to\": the highest swept frequency up to which the F/T sensor's NRMSE stays within {} (an assumption: the thesis says \"good at 0.1-0.2 Hz, poor above\" without a number).\n\n{}",
+                config.display(),
+                jointctl_experiments::sensitivity::POOR_NRMSE,
+                jointctl_experiments::sensitivity::table(&variants)
+            );
+            if let Some(path) = &out
+                && let Err(e) = std::fs::write(path, &table)
+            {
+                return crate::fail(format!("cannot write {}: {e}", path.display()));
+            }
+            if json {
+                println!("{}", serde_json::json!({ "joint": joint, "stiffness_nm_per_rad": k, "variants": variants }));
+            } else {
+                print!("{table}");
+            }
+            ExitCode::SUCCESS
+        }
         ExperimentCommand::TorqueTracking { config, joint, scenario, stiffness, json, report, quick } => {
             let Some(scn) = Scenario::parse(&scenario) else {
                 return crate::fail(format!("--scenario must be `thesis` or `modern`, got `{scenario}`"));

@@ -1,0 +1,171 @@
+//! What limited the thesis' arm (section 6.2 blames the 40 Hz loop and the bus latency, and
+//! recommends gain scheduling and tuning the ELMO drives): the torque-tracking sweep of the
+//! `thesis` scenario repeated with one factor changed at a time, towards the modern set-up or
+//! away from it, each run's bandwidth and errors side by side.
+
+use jointctl_config::LoadedConfig;
+use jointctl_modes::Waveform;
+use jointctl_runtime::PluginLoader;
+
+use crate::tracking::{Plan, Row, Scenario, bandwidth_hz, run_as_configured};
+use crate::{ExperimentError, locate};
+
+/// "Poor" tracking: the F/T sensor's NRMSE against the reference above this (a fifth of the
+/// amplitude). An assumption: the thesis says "good at 0.1-0.2 Hz, poor above" without a number.
+pub const POOR_NRMSE: f64 = 0.2;
+
+/// One factor at one value.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Variant {
+    /// The factor changed (`loop rate`, `feedback latency`, ...).
+    pub factor: String,
+    /// Its value in this run.
+    pub value: String,
+    /// -3 dB and < 90 degrees lag bandwidth of the sensor torque [Hz] (see [`bandwidth_hz`]).
+    pub bandwidth_hz: Option<f64>,
+    /// The highest swept frequency up to which the sensor's NRMSE stays within [`POOR_NRMSE`] [Hz].
+    pub good_up_to_hz: f64,
+    /// Sensor NRMSE at 0.2 Hz (the thesis' limit) and at 2 Hz.
+    pub nrmse_sensor_at_0_2_hz: f64,
+    /// See `nrmse_sensor_at_0_2_hz`.
+    pub nrmse_sensor_at_2_hz: f64,
+    /// Observer vs F/T sensor NRMSE at 0.2 Hz: the observer's offset, which no loop setting removes.
+    pub nrmse_observer_vs_sensor_at_0_2_hz: f64,
+}
+
+type Change = Box<dyn Fn(&mut LoadedConfig, usize, usize)>;
+
+/// The factors and values tried, each a change of the thesis scenario's configuration (joint
+/// entry `j`, DOF `i`). Values are assumptions spanning the thesis' set-up and a modern one.
+fn changes() -> Vec<(&'static str, String, Change)> {
+    let mut out: Vec<(&'static str, String, Change)> = vec![("none (thesis scenario)", "40 Hz, SPI 15 ms, CAN 30 ms".into(), Box::new(|_, _, _| {}))];
+    for rate in [100.0, 250.0, 1000.0] {
+        out.push(("loop rate", format!("{rate} Hz"), Box::new(move |c, _, _| c.config.rate_hz = rate)));
+    }
+    for s in [0.001, 0.030, 0.045, 0.060] {
+        out.push(("feedback latency (SPI)", format!("{} ms", s * 1e3), Box::new(move |c, _, _| c.config.hal.sim.spi_latency_s = s)));
+    }
+    for s in [0.001, 0.060, 0.120] {
+        out.push(("command latency (CAN)", format!("{} ms", s * 1e3), Box::new(move |c, _, _| c.config.hal.sim.can_latency_s = s)));
+    }
+    for f in [0.1, 0.25, 4.0] {
+        out.push((
+            "drive profile limits",
+            format!("velocity and acceleration x{f}"),
+            Box::new(move |c, _, _| {
+                c.config.hal.sim.elmo.max_velocity_rad_s *= f;
+                c.config.hal.sim.elmo.max_acceleration_rad_s2 *= f;
+                // Faster drives need a plausibility bound that lets their readings through
+                // (10 rad/s by default: at 12 rad/s the readings were rejected and the joint
+                // held, which is a fault, not a bandwidth).
+                if f > 1.0 {
+                    for bus in &mut c.config.buses.can {
+                        bus.drives.iter_mut().for_each(|d| d.max_velocity_rad_s *= f);
+                    }
+                    for bus in &mut c.config.buses.spi {
+                        bus.encoders.iter_mut().for_each(|e| e.max_velocity_rad_s *= f);
+                    }
+                }
+            }),
+        ));
+    }
+    out.push(("PI gains", "no gain scheduling (section 6.2 off)".into(), Box::new(|c, j, i| with_controller(c, j, i, |ctl| ctl.torque_pi_schedule.clear()))));
+    for f in [0.5, 1.5, 2.0] {
+        out.push((
+            "PI gains",
+            format!("kp and ki x{f}"),
+            Box::new(move |c, j, i| {
+                with_controller(c, j, i, |ctl| {
+                    ctl.torque_pi.kp *= f;
+                    ctl.torque_pi.ki *= f;
+                    for p in &mut ctl.torque_pi_schedule {
+                        p.kp *= f;
+                        p.ki *= f;
+                    }
+                })
+            }),
+        ));
+    }
+    out.push((
+        "plant",
+        "no hysteresis, friction, mode or noise".into(),
+        Box::new(|c, j, _| {
+            if let Some(sim) = c.config.joints[j].sim.as_mut() {
+                sim.effects = Default::default();
+            }
+        }),
+    ));
+    out.push(("all (modern scenario)", "1 kHz, SPI 1 ms, CAN 1 ms".into(), Box::new(|c, _, _| Scenario::Modern.apply(c))));
+    out
+}
+
+fn with_controller(c: &mut LoadedConfig, j: usize, i: usize, f: impl Fn(&mut jointctl_config::ControllerConfig)) {
+    let joint = &mut c.config.joints[j];
+    if let Some(ctl) = joint.dofs.get_mut(i).and_then(|d| d.controller.as_mut()).or(joint.controller.as_mut()) {
+        f(ctl);
+    }
+}
+
+/// The sweep each variant runs: sines from 0.1 to 4 Hz at one stiffness setting.
+pub fn plan(stiffness_nm_per_rad: f64) -> Plan {
+    Plan { stiffness_nm_per_rad: vec![stiffness_nm_per_rad], references: [0.1, 0.2, 0.5, 1.0, 2.0, 4.0].iter().map(|f| (Waveform::Sine, *f)).collect(), periods: 2.0 }
+}
+
+fn summary(factor: &str, value: String, rows: &[Row]) -> Variant {
+    let at = |f: f64| rows.iter().find(|r| (r.frequency_hz - f).abs() < 1e-9);
+    let good_up_to_hz = rows.iter().take_while(|r| r.nrmse_sensor <= POOR_NRMSE).map(|r| r.frequency_hz).fold(0.0, f64::max);
+    Variant {
+        factor: factor.into(),
+        value,
+        bandwidth_hz: bandwidth_hz(rows),
+        good_up_to_hz,
+        nrmse_sensor_at_0_2_hz: at(0.2).map_or(f64::NAN, |r| r.nrmse_sensor),
+        nrmse_sensor_at_2_hz: at(2.0).map_or(f64::NAN, |r| r.nrmse_sensor),
+        nrmse_observer_vs_sensor_at_0_2_hz: at(0.2).map_or(f64::NAN, |r| r.nrmse_observer_vs_sensor),
+    }
+}
+
+/// Runs every variant on DOF `joint` at one stiffness; `progress(done, total)` after each.
+///
+/// ```no_run
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let loaded = jointctl_config::load(std::path::Path::new("configs/sherpa_arm.yaml"))?;
+/// let loader = jointctl_runtime::loader_for(&loaded);
+/// let table = jointctl_experiments::sensitivity::run(&loaded, &loader, "q2", 89.0, |_, _| {})?;
+/// assert_eq!(table[0].factor, "none (thesis scenario)");
+/// # Ok(()) }
+/// ```
+pub fn run(loaded: &LoadedConfig, loader: &PluginLoader, joint: &str, stiffness_nm_per_rad: f64, mut progress: impl FnMut(usize, usize)) -> Result<Vec<Variant>, ExperimentError> {
+    let (j, i) = locate(loaded, joint)?;
+    let all = changes();
+    let mut out = Vec::new();
+    for (k, (factor, value, change)) in all.iter().enumerate() {
+        let mut cfg = loaded.clone();
+        Scenario::Thesis.apply(&mut cfg);
+        change(&mut cfg, j, i);
+        let rows = run_as_configured(&cfg, loader, joint, Scenario::Thesis, &plan(stiffness_nm_per_rad), |_, _| {})?;
+        out.push(summary(factor, value.clone(), &rows));
+        progress(k + 1, all.len());
+    }
+    Ok(out)
+}
+
+/// The table, Markdown.
+pub fn table(variants: &[Variant]) -> String {
+    let mut t = format!(
+        "| factor changed | value | bandwidth [Hz] | good up to [Hz] (sensor NRMSE <= {POOR_NRMSE}) | sensor NRMSE at 0.2 Hz | at 2 Hz | observer vs sensor at 0.2 Hz |\n|---|---|---|---|---|---|---|\n"
+    );
+    for v in variants {
+        t += &format!(
+            "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} |\n",
+            v.factor,
+            v.value,
+            v.bandwidth_hz.map_or("-".into(), |b| b.to_string()),
+            v.good_up_to_hz,
+            v.nrmse_sensor_at_0_2_hz,
+            v.nrmse_sensor_at_2_hz,
+            v.nrmse_observer_vs_sensor_at_0_2_hz
+        );
+    }
+    t
+}
