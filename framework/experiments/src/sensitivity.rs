@@ -99,16 +99,20 @@ fn changes() -> Vec<(&'static str, String, Change)> {
     out
 }
 
+/// Changes DOF `i`'s controller settings; a DOF without any gets the defaults first (so that a
+/// change of gains is not silently a change of nothing).
 fn with_controller(c: &mut LoadedConfig, j: usize, i: usize, f: impl Fn(&mut jointctl_config::ControllerConfig)) {
     let joint = &mut c.config.joints[j];
-    if let Some(ctl) = joint.dofs.get_mut(i).and_then(|d| d.controller.as_mut()).or(joint.controller.as_mut()) {
-        f(ctl);
-    }
+    let ctl = match joint.dofs.get_mut(i) {
+        Some(d) => d.controller.get_or_insert_with(Default::default),
+        None => joint.controller.get_or_insert_with(Default::default),
+    };
+    f(ctl);
 }
 
 /// The sweep each variant runs: sines from 0.1 to 4 Hz at one stiffness setting.
 pub fn plan(stiffness_nm_per_rad: f64) -> Plan {
-    Plan { stiffness_nm_per_rad: vec![stiffness_nm_per_rad], references: [0.1, 0.2, 0.5, 1.0, 2.0, 4.0].iter().map(|f| (Waveform::Sine, *f)).collect(), periods: 2.0 }
+    Plan { stiffness_nm_per_rad: vec![stiffness_nm_per_rad], references: [0.1, 0.2, 0.5, 1.0, 2.0, 4.0].iter().map(|f| (Waveform::Sine, *f)).collect(), periods: 2.0, ..Plan::default() }
 }
 
 fn summary(factor: &str, value: String, rows: &[Row]) -> Variant {

@@ -60,6 +60,8 @@ pub struct Row {
     pub frequency_hz: f64,
     /// Pivot setting [mm], if the joint has one.
     pub pivot_mm: Option<f64>,
+    /// The reference's amplitude [Nm] (the step's height).
+    pub amplitude_nm: f64,
     /// RMSE(observed - reference) / amplitude.
     pub nrmse_observed: f64,
     /// RMSE(sensor - reference) / amplitude.
@@ -77,21 +79,36 @@ pub struct Row {
     /// Samples for plotting: (t, reference, observed, sensor).
     #[serde(skip)]
     pub trace: Vec<(f64, f64, f64, f64)>,
+    /// The other DOFs' references in the same run (the wrist's pairs), e.g. `q7 cosine 0.1 Hz`;
+    /// empty when this DOF ran alone.
+    #[serde(skip)]
+    pub together: String,
 }
 
 /// Which runs to make.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Plan {
     /// Requested stiffness settings [Nm/rad] (variable stiffness joints); empty: as configured.
     pub stiffness_nm_per_rad: Vec<f64>,
-    /// (waveform, frequency [Hz]) pairs.
+    /// Reference amplitude [Nm] per stiffness setting (`None`, or none given: 0.05 rad of
+    /// deflection at the setting's stiffness, within half the torque limit; an assumption).
+    pub amplitudes_nm: Vec<Option<f64>>,
+    /// (waveform, frequency [Hz]) pairs, one DOF driven at a time.
     pub references: Vec<(Waveform, f64)>,
+    /// Runs of a multi-DOF joint (the wrist): in each, these DOFs (index within the joint) follow
+    /// these references together; the joint's other DOFs hold zero torque.
+    pub together: Vec<Vec<(usize, Waveform, f64)>>,
     /// Periods per sine/cosine run (at least 10 s for a step).
     pub periods: f64,
 }
 
 impl Plan {
     /// Chapter 5 references (step; sine and cosine at 0.1 and 0.2 Hz) and a sweep to 8 Hz.
+    ///
+    /// ```
+    /// let plan = jointctl_experiments::tracking::Plan::thesis(vec![27.0, 89.4, 320.0]);
+    /// assert_eq!(plan.references.len(), 10);
+    /// ```
     pub fn thesis(stiffness_nm_per_rad: Vec<f64>) -> Self {
         let mut references = vec![(Waveform::Step, 0.0)];
         for f in [0.1, 0.2] {
@@ -101,7 +118,35 @@ impl Plan {
         for f in [0.5, 1.0, 2.0, 4.0, 8.0] {
             references.push((Waveform::Sine, f));
         }
-        Plan { stiffness_nm_per_rad, references, periods: 2.0 }
+        Plan { stiffness_nm_per_rad, references, periods: 2.0, ..Plan::default() }
+    }
+
+    /// Section 5.2's wrist runs (figures 5.15-5.26), q6 and q7 together: two cosines, two
+    /// sines, a sine on q6 with a cosine on q7 (all 0.1 Hz), a step on q6, a step on q7, and a
+    /// sine on q7 alone at 0.1 and 0.2 Hz; plus the sweep on q7 to find the bandwidth.
+    ///
+    /// ```
+    /// let plan = jointctl_experiments::tracking::Plan::wrist(vec![2.0, 8.0, 28.0]);
+    /// assert_eq!(plan.together[0].len(), 2);
+    /// ```
+    pub fn wrist(stiffness_nm_per_rad: Vec<f64>) -> Self {
+        let (sine, cosine, step) = (Waveform::Sine, Waveform::Cosine, Waveform::Step);
+        let mut together = vec![
+            vec![(0, cosine, 0.1), (1, cosine, 0.1)],
+            vec![(0, sine, 0.1), (1, sine, 0.1)],
+            vec![(0, sine, 0.1), (1, cosine, 0.1)],
+            vec![(0, step, 0.0)],
+            vec![(1, step, 0.0)],
+            vec![(1, sine, 0.1)],
+            vec![(1, sine, 0.2)],
+        ];
+        together.extend([0.5, 1.0, 2.0, 4.0].map(|f| vec![(1, sine, f)]));
+        Plan { stiffness_nm_per_rad, together, periods: 2.0, ..Plan::default() }
+    }
+
+    /// How many runs the plan makes.
+    pub fn runs(&self) -> usize {
+        self.stiffness_nm_per_rad.len().max(1) * if self.together.is_empty() { self.references.len() } else { self.together.len() }
     }
 }
 
@@ -123,27 +168,29 @@ fn sine_fit(t: &[f64], y: &[f64], f: f64) -> (f64, f64) {
     (a.hypot(b), b.atan2(a))
 }
 
-/// Runs one reference at one stiffness setting.
+/// One run: `drives` (arm DOF names with their references) at one stiffness setting (asked of
+/// the joint's first DOF, whichever DOFs are driven: the wrist's pivot is shared); the other
+/// DOFs in `hold` stay in torque control at zero. One row per driven DOF.
 #[allow(clippy::too_many_arguments)]
 fn run_one(
     cfg: &LoadedConfig,
     loader: &PluginLoader,
-    joint: &str,
     scenario: Scenario,
-    stiffness: Option<f64>,
-    waveform: Waveform,
-    frequency_hz: f64,
+    stiffness: Option<(&str, f64)>,
+    amplitude_nm: Option<f64>,
+    drives: &[(String, Waveform, f64)],
+    hold: &[String],
     periods: f64,
-) -> Result<Row, ExperimentError> {
+) -> Result<Vec<Row>, ExperimentError> {
     let sim = SharedSim::new(SimHal::new(&cfg.config).map_err(|e| ExperimentError(e.to_string()))?);
     let mut arm = Arm::build(cfg, loader, Box::new(sim.clone()))?;
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
-    let dof = arm_dof(&arm, joint);
+    let dofs: Vec<usize> = drives.iter().map(|(name, ..)| arm_dof(&arm, name)).collect();
     let dt = 1.0 / arm.rate_hz;
     let mut t = 0.0;
     arm.observe(t);
-    if let Some(k) = stiffness {
-        arm.apply(ArmCommand::Stiffness { dof, stiffness_nm_per_rad: k });
+    if let Some((name, k)) = stiffness {
+        arm.apply(ArmCommand::Stiffness { dof: arm_dof(&arm, name), stiffness_nm_per_rad: k });
     }
     // Let the pivot settle with the joint held.
     for _ in 0..(3.0 / dt) as usize {
@@ -151,25 +198,46 @@ fn run_one(
         t += dt;
         arm.observe(t);
     }
-    let k = arm.states[dof].stiffness().unwrap_or(100.0);
-    let limit = arm.controllers[dof].limits().torque_nm;
-    // Chapter 5: the stiffer the joint, the larger the torque amplitude (0.05 rad of deflection,
-    // an assumption), within half the torque limit.
-    let amplitude = (0.05 * k).min(0.5 * if limit.is_finite() { limit } else { f64::INFINITY });
-    let reference = Reference { waveform, amplitude, frequency_hz, offset: 0.0, start_s: 0.5 };
-    arm.apply(ArmCommand::Mode { dof, mode: Mode::Torque { reference }, streamed: false });
-    let duration = if waveform == Waveform::Step { 10.0 } else { (periods / frequency_hz).max(4.0) };
+    let mut references = Vec::new();
+    for (&dof, (_, waveform, frequency_hz)) in dofs.iter().zip(drives) {
+        let k = arm.states[dof].stiffness().unwrap_or(100.0);
+        let limit = arm.controllers[dof].limits().torque_nm;
+        let amplitude = amplitude_nm.unwrap_or_else(|| (0.05 * k).min(0.5 * if limit.is_finite() { limit } else { f64::INFINITY }));
+        let reference = Reference { waveform: *waveform, amplitude, frequency_hz: *frequency_hz, offset: 0.0, start_s: 0.5 };
+        arm.apply(ArmCommand::Mode { dof, mode: Mode::Torque { reference }, streamed: false });
+        references.push(reference);
+    }
+    for name in hold {
+        let zero = Reference { waveform: Waveform::Step, amplitude: 0.0, frequency_hz: 0.0, offset: 0.0, start_s: 0.0 };
+        arm.apply(ArmCommand::Mode { dof: arm_dof(&arm, name), mode: Mode::Torque { reference: zero }, streamed: false });
+    }
+    let duration = references.iter().map(|r| if r.waveform == Waveform::Step { 10.0 } else { (periods / r.frequency_hz).max(4.0) }).fold(0.0, f64::max);
     let start = t;
-    let mut trace = Vec::new();
+    let mut traces: Vec<Vec<(f64, f64, f64, f64)>> = vec![Vec::new(); dofs.len()];
     for _ in 0..(duration / dt) as usize {
         arm.control();
         t += dt;
         arm.observe(t);
-        let sensor = sim.with(|s| s.joint_torque(joint).map_or(f64::NAN, |x| x.1));
-        let r = arm.torque_references[dof];
-        trace.push((t - start, if r.is_finite() { r } else { reference.value(t) }, arm.states[dof].torque().unwrap_or(f64::NAN), sensor));
+        for (k, &dof) in dofs.iter().enumerate() {
+            let sensor = sim.with(|s| s.joint_torque(&drives[k].0).map_or(f64::NAN, |x| x.1));
+            let r = arm.torque_references[dof];
+            traces[k].push((t - start, if r.is_finite() { r } else { references[k].value(t) }, arm.states[dof].torque().unwrap_or(f64::NAN), sensor));
+        }
     }
-    // Scored from the reference's start (0.5 s after the mode switch).
+    let mut rows = Vec::new();
+    for (k, trace) in traces.into_iter().enumerate() {
+        let (dof, reference) = (dofs[k], references[k]);
+        let mut row = score(&drives[k].0, scenario, reference, arm.states[dof].pivot(), trace);
+        row.together = drives.iter().enumerate().filter(|(o, _)| *o != k).map(|(_, (name, w, f))| format!("{name} {} {f} Hz", waveform_name(*w))).collect::<Vec<_>>().join(", ");
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// A run's row from its trace (t, reference, observed, sensor), scored from the reference's
+/// start (0.5 s after the mode switch).
+fn score(joint: &str, scenario: Scenario, reference: Reference, pivot_mm: Option<f64>, trace: Vec<(f64, f64, f64, f64)>) -> Row {
+    let (waveform, frequency_hz, amplitude) = (reference.waveform, reference.frequency_hz, reference.amplitude);
     let scored: Vec<(f64, f64, f64, f64)> = trace.iter().copied().filter(|p| p.0 >= 0.5).collect();
     let rmse = |sel: fn(&(f64, f64, f64, f64)) -> f64| {
         let v: Vec<f64> = scored.iter().map(|p| sel(p) - p.1).filter(|e| e.is_finite()).collect();
@@ -188,17 +256,13 @@ fn run_one(
         let lag = (pr - ps).to_degrees().rem_euclid(360.0);
         (Some(if lag > 180.0 { lag - 360.0 } else { lag }), Some(asn / ar))
     };
-    Ok(Row {
+    Row {
         joint: joint.to_string(),
         scenario: scenario.name().to_string(),
-        reference: match waveform {
-            Waveform::Step => "step",
-            Waveform::Sine => "sine",
-            Waveform::Cosine => "cosine",
-        }
-        .to_string(),
+        reference: waveform_name(waveform).to_string(),
         frequency_hz,
-        pivot_mm: arm.states[dof].pivot(),
+        pivot_mm,
+        amplitude_nm: amplitude,
         nrmse_observed: rmse(|p| p.2) / amplitude,
         nrmse_sensor: rmse(|p| p.3) / amplitude,
         nrmse_observer_vs_sensor,
@@ -206,7 +270,16 @@ fn run_one(
         phase_lag_deg,
         gain,
         trace,
-    })
+        together: String::new(),
+    }
+}
+
+fn waveform_name(w: Waveform) -> &'static str {
+    match w {
+        Waveform::Step => "step",
+        Waveform::Sine => "sine",
+        Waveform::Cosine => "cosine",
+    }
 }
 
 /// Runs a plan; `progress(done, total)` after each run.
@@ -251,17 +324,40 @@ pub fn run_as_configured(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Row>, ExperimentError> {
     let mut cfg = loaded.clone();
-    let (j, i) = locate(&cfg, joint)?;
+    // A joint entry of several DOFs (`wrist`) runs its DOFs together; anything else is a DOF.
+    let entry = cfg.config.joints.iter().position(|e| e.name == joint && e.dof_names().len() > 1);
+    let (j, i, names) = match entry {
+        Some(j) => (j, 0, cfg.config.joints[j].dof_names().iter().map(|n| n.to_string()).collect::<Vec<_>>()),
+        None => {
+            let (j, i) = locate(&cfg, joint)?;
+            (j, i, vec![joint.to_string()])
+        }
+    };
     // Chapter 5's set-ups clamp the joint's output (figures 5.1, 5.14).
     let clamp = EnvironmentConfig::Fixed { position_rad: 0.0 };
     set_environment(&mut cfg, j, i, clamp.clone(), clamp);
+    let runs: Vec<Vec<(usize, Waveform, f64)>> = if names.len() > 1 {
+        if plan.together.is_empty() {
+            return Err(ExperimentError(format!("`{joint}` has {} DOFs: its plan needs runs of them together (Plan::wrist)", names.len())));
+        }
+        plan.together.clone()
+    } else {
+        plan.references.iter().map(|(w, f)| vec![(0, *w, *f)]).collect()
+    };
+    if let Some(bad) = runs.iter().flatten().find(|(d, ..)| *d >= names.len()) {
+        return Err(ExperimentError(format!("`{joint}` has no DOF {} (it has {})", bad.0, names.len())));
+    }
     let settings: Vec<Option<f64>> = if plan.stiffness_nm_per_rad.is_empty() { vec![None] } else { plan.stiffness_nm_per_rad.iter().map(|k| Some(*k)).collect() };
-    let total = settings.len() * plan.references.len();
-    let mut rows = Vec::new();
-    for k in &settings {
-        for (w, f) in &plan.references {
-            rows.push(run_one(&cfg, loader, joint, scenario, *k, *w, *f, plan.periods)?);
-            progress(rows.len(), total);
+    let total = settings.len() * runs.len();
+    let (mut rows, mut done) = (Vec::new(), 0);
+    for (s, k) in settings.iter().enumerate() {
+        let amplitude = plan.amplitudes_nm.get(s).copied().flatten();
+        for run in &runs {
+            let drives: Vec<(String, Waveform, f64)> = run.iter().map(|(d, w, f)| (names[*d].clone(), *w, *f)).collect();
+            let hold: Vec<String> = (0..names.len()).filter(|d| !run.iter().any(|r| r.0 == *d)).map(|d| names[d].clone()).collect();
+            rows.extend(run_one(&cfg, loader, scenario, k.map(|k| (names[0].as_str(), k)), amplitude, &drives, &hold, plan.periods)?);
+            done += 1;
+            progress(done, total);
         }
     }
     Ok(rows)

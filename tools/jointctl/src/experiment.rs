@@ -111,7 +111,7 @@ fn table(rows: &[Row]) -> String {
             "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |",
             r.joint,
             r.scenario,
-            r.reference,
+            if r.together.is_empty() { r.reference.clone() } else { format!("{} (with {})", r.reference, r.together) },
             r.frequency_hz,
             r.pivot_mm.map_or("-".into(), |p| format!("{p:.1}")),
             r.nrmse_observed,
@@ -127,8 +127,11 @@ fn table(rows: &[Row]) -> String {
 
 fn plots(dir: &Path, rows: &[Row]) -> Result<(), String> {
     for r in rows {
+        // A DOF that ran with others (the wrist's pairs) names them: q6's sine ran with q7's sine
+        // and with q7's cosine, two plots.
+        let with = if r.together.is_empty() { String::new() } else { format!("-with-{}", r.together.replace(", ", "-").replace(' ', "-")) };
         let name = format!(
-            "{}-{}-{}Hz-pivot{}.svg",
+            "{}-{}-{}Hz{with}-pivot{}.svg",
             r.joint,
             r.reference,
             r.frequency_hz,
@@ -136,10 +139,11 @@ fn plots(dir: &Path, rows: &[Row]) -> Result<(), String> {
         );
         let pick = |f: fn(&(f64, f64, f64, f64)) -> f64| r.trace.iter().map(|p| (p.0, f(p))).collect::<Vec<_>>();
         let title = format!(
-            "{} torque, {} {} Hz, pivot {} mm ({} scenario)",
+            "{} torque, {} {} Hz{}, pivot {} mm ({} scenario)",
             r.joint,
             r.reference,
             r.frequency_hz,
+            if r.together.is_empty() { String::new() } else { format!(" with {}", r.together) },
             r.pivot_mm.map_or("-".into(), |p| format!("{p:.1}")),
             r.scenario
         );
@@ -208,20 +212,39 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
                 Ok(l) => l,
                 Err(e) => return crate::fail_err(e),
             };
-            let settings = if stiffness.is_empty() {
-                let limits = loaded.config.joints.iter().find_map(|j| {
-                    let names = j.dof_names();
-                    names.iter().position(|n| *n == joint).and_then(|i| j.dof_limits()[i]).and_then(|l| l.stiffness_nm_per_rad)
-                });
+            // A joint entry of several DOFs (the wrist) runs them together; its first DOF's
+            // stiffness limits choose the settings.
+            let entry = loaded.config.joints.iter().find(|j| j.name == joint && j.dof_names().len() > 1);
+            let defaults = stiffness.is_empty();
+            let settings = if defaults {
+                let limits = match entry {
+                    Some(e) => e.dof_limits()[0].and_then(|l| l.stiffness_nm_per_rad),
+                    None => loaded.config.joints.iter().find_map(|j| {
+                        let names = j.dof_names();
+                        names.iter().position(|n| *n == joint).and_then(|i| j.dof_limits()[i]).and_then(|l| l.stiffness_nm_per_rad)
+                    }),
+                };
                 limits.map_or_else(Vec::new, |[lo, hi]| vec![lo, (lo * hi).sqrt(), hi])
             } else {
                 stiffness
             };
-            let mut plan = Plan::thesis(settings);
-            if quick {
-                plan.references = vec![(jointctl_modes::Waveform::Step, 0.0), (jointctl_modes::Waveform::Sine, 0.1), (jointctl_modes::Waveform::Sine, 1.0)];
+            let (sine, cosine, step) = (jointctl_modes::Waveform::Sine, jointctl_modes::Waveform::Cosine, jointctl_modes::Waveform::Step);
+            let mut plan = if entry.is_some() { Plan::wrist(settings) } else { Plan::thesis(settings) };
+            // Chapter 5's amplitudes at the low, middle and high settings: the wrist's steps of
+            // 1, 1.5 and 2 Nm (figures 5.24, 5.20, 5.16); the shoulder's of 7.5 and 20 Nm at
+            // middle and high (figures 5.7, 5.2; none at low: 0.05 rad of deflection, assumed).
+            if defaults && plan.stiffness_nm_per_rad.len() == 3 {
+                plan.amplitudes_nm = match (entry.is_some(), joint.as_str()) {
+                    (true, _) => vec![Some(1.0), Some(1.5), Some(2.0)],
+                    (false, "q2") => vec![None, Some(7.5), Some(20.0)],
+                    _ => Vec::new(),
+                };
             }
-            let bar = indicatif::ProgressBar::new((plan.references.len() * plan.stiffness_nm_per_rad.len().max(1)) as u64);
+            if quick {
+                plan.references = vec![(step, 0.0), (sine, 0.1), (sine, 1.0)];
+                plan.together.retain(|run| matches!(run.as_slice(), [(0, w, _), (1, v, _)] if *w == cosine && *v == cosine) || matches!(run.as_slice(), [(0, w, _)] if *w == step) || matches!(run.as_slice(), [(1, w, f)] if *w == sine && *f == 1.0));
+            }
+            let bar = indicatif::ProgressBar::new(plan.runs() as u64);
             bar.set_style(indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} runs {elapsed}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
             bar.set_prefix(format!("torque tracking {joint} ({})", scn.name()));
             let loader = match crate::experiment_loader(&loaded) {
