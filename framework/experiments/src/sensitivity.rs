@@ -173,3 +173,23 @@ pub fn table(variants: &[Variant]) -> String {
     }
     t
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Finding: a DOF without `controller:` settings (the wrist's) kept its default gains when
+    /// a row scaled them, so the gain rows silently measured nothing. Pass: the scaled gains are
+    /// twice the defaults.
+    #[test]
+    fn scaling_the_gains_of_a_dof_without_controller_settings_scales_the_defaults() {
+        let yaml = "arm: a\nhal: {backend: sim}\njoints: [{name: w, plugin: p, dofs: [{name: q6}, {name: q7}]}]\n";
+        let mut cfg = jointctl_config::parse_str(yaml, std::path::Path::new("a.yaml")).unwrap();
+        let defaults = jointctl_config::ControllerConfig::default().torque_pi;
+        let (_, _, double) = changes().into_iter().find(|(f, v, _)| *f == "PI gains" && v == "kp and ki x2").unwrap();
+        double(&mut cfg, 0, 1);
+        let got = cfg.config.joints[0].dofs[1].controller.as_ref().expect("the DOF got controller settings").torque_pi;
+        assert_eq!((got.kp, got.ki), (2.0 * defaults.kp, 2.0 * defaults.ki));
+        assert!(cfg.config.joints[0].dofs[0].controller.is_none(), "only the DOF asked for");
+    }
+}
