@@ -301,7 +301,8 @@ impl Scenario {
     ///
     /// ```
     /// use jointctl_experiments::tracking::Scenario;
-    /// let mut cfg = jointctl_config::parse_str("arm: a\nhal: {backend: sim}\njoints: []\n", std::path::Path::new("a.yaml")).unwrap();
+    /// let yaml = "arm: a\nhal: {backend: sim}\njoints: [{name: q, plugin: p}]\n";
+    /// let mut cfg = jointctl_config::parse_str(yaml, std::path::Path::new("a.yaml")).unwrap();
     /// Scenario::Thesis.apply(&mut cfg);
     /// assert_eq!((cfg.config.rate_hz, cfg.config.hal.sim.can_latency_s), (40.0, 0.030));
     /// ```

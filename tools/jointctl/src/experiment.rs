@@ -101,6 +101,36 @@ pub enum SimCommand {
     },
 }
 
+/// The thesis' validation settings of a VSA as stiffness requests, with their amplitudes: q2 at
+/// 13 pivots (section 5.1), the wrist at 14 (section 5.2), evenly from 0 mm to the last the
+/// thesis names (q2: 44.9549 mm, figure 5.13) or to the wrist table's last (50 mm); the thesis
+/// lists neither set, so even spacing is an assumption. Amplitudes: q2 the medium step's 0.084 rad
+/// of deflection (7.5 Nm at 89 Nm/rad, figure 5.7) within the high step's 20 Nm (figure 5.2); the
+/// wrist from 1 Nm at its softest to 2 Nm at its stiffest (figures 5.24, 5.16), linear in the
+/// pivot. `None` for other joints.
+fn thesis_settings(loaded: &jointctl_config::LoadedConfig, joint: &str, wrist: bool) -> Option<(Vec<f64>, Vec<Option<f64>>)> {
+    use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
+    let entry = loaded.config.joints.iter().find(|j| j.name == joint || j.dof_names().contains(&joint))?;
+    let spec: CharacteristicSpec = serde_json::from_value(entry.params.0.get("characteristic")?.clone()).ok()?;
+    let even = |n: usize, last: f64| (0..n).map(move |k| last * k as f64 / (n - 1) as f64);
+    if wrist {
+        let table = WristCharacteristic::from_spec(&spec).ok()?;
+        let last = *table.pivots_mm().last()?;
+        let pivots: Vec<f64> = even(14, last).collect();
+        let stiffness = pivots.iter().map(|p| table.evaluate(*p, 0.0, 0.0).stiffness_q6_nm_per_rad).collect();
+        let amplitudes = pivots.iter().map(|p| Some(2.0 - p / last)).collect();
+        return Some((stiffness, amplitudes));
+    }
+    if joint != "q2" {
+        return None;
+    }
+    let table = PivotCharacteristic::from_spec(&spec).ok()?;
+    let pivots: Vec<f64> = even(13, 44.9549).collect();
+    let stiffness: Vec<f64> = pivots.iter().map(|p| table.stiffness(*p)).collect();
+    let amplitudes = stiffness.iter().map(|k| Some((7.5 / 89.0 * k).min(20.0))).collect();
+    Some((stiffness, amplitudes))
+}
+
 fn table(rows: &[Row]) -> String {
     let mut t = String::from(
         "| joint | scenario | reference | f [Hz] | pivot [mm] | NRMSE observed | NRMSE sensor | NRMSE observed vs sensor | offset [Nm] | phase lag [deg] | gain |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
@@ -229,6 +259,9 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
                 stiffness
             };
             let (sine, cosine, step) = (jointctl_modes::Waveform::Sine, jointctl_modes::Waveform::Cosine, jointctl_modes::Waveform::Step);
+            // The full run covers the thesis' settings (section 5.1: 13 shoulder pivots;
+            // section 5.2: 14 wrist pivots); --quick the low, middle and high ones.
+            let full = if defaults && !quick { thesis_settings(&loaded, &joint, entry.is_some()) } else { None };
             let mut plan = if entry.is_some() { Plan::wrist(settings) } else { Plan::thesis(settings) };
             // Chapter 5's amplitudes at the low, middle and high settings: the wrist's steps of
             // 1, 1.5 and 2 Nm (figures 5.24, 5.20, 5.16); the shoulder's of 7.5 and 20 Nm at
@@ -239,6 +272,10 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
                     (false, "q2") => vec![None, Some(7.5), Some(20.0)],
                     _ => Vec::new(),
                 };
+            }
+            if let Some((stiffness, amplitudes)) = full {
+                plan.stiffness_nm_per_rad = stiffness;
+                plan.amplitudes_nm = amplitudes;
             }
             if quick {
                 plan.references = vec![(step, 0.0), (sine, 0.1), (sine, 1.0)];
