@@ -228,3 +228,27 @@ fn an_elastic_joint_with_an_input_encoder_ignores_the_drive_reading() {
 fn position(target_rad: f64) -> Mode {
     Mode::Position { target_rad }
 }
+
+/// Issue 10: eq. 3.3 as printed gives q2 and q3 the same row; the arm's differential is an
+/// assumption that must be checked on the arm before torque control is trusted. Pass:
+/// `jointctl check-transmission` finds the assumed differential on the reference arm (exit 0),
+/// and on an arm wired as printed (q2 = (a2 - a3)/2) it names the actuator whose sign differs
+/// (exit 1).
+#[test]
+fn check_transmission_tells_the_assumed_differential_from_the_printed_one() {
+    let ok = std::process::Command::new(jointctl_tests::jointctl())
+        .arg("check-transmission")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml"))
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&ok.stdout);
+    assert_eq!(ok.status.code(), Some(0), "{table}{}", String::from_utf8_lossy(&ok.stderr));
+    assert!(table.contains("| actuator_a | +0.0100 | +0.0100 | as assumed |"), "{table}");
+    let printed: serde_yaml::Value = serde_yaml::from_str("[[0.5, -0.5], [0.5, -0.5]]").unwrap();
+    let path = jointctl_tests::sherpa_with("printed-eq-3-3", &jointctl_tests::arm_name("printed-eq-3-3"), &[jointctl_tests::Edit::Set("joints[shoulder].sim.matrix", printed)]);
+    let wrong = std::process::Command::new(jointctl_tests::jointctl()).arg("check-transmission").arg(&path).output().unwrap();
+    let table = String::from_utf8_lossy(&wrong.stdout);
+    assert_eq!(wrong.status.code(), Some(1), "{table}");
+    assert!(table.contains("| actuator_b | +0.0100 | -0.0100 | OPPOSITE SIGN |"), "{table}");
+    assert!(table.contains("| actuator_a | +0.0100 | +0.0100 | as assumed |"), "{table}");
+}

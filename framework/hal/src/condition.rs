@@ -93,6 +93,8 @@ pub struct LossCounters {
 pub struct Conditioner {
     limits: Plausibility,
     last_good: Option<(f64, f64)>,
+    /// The good value before the last one (value, time), for the direction of motion.
+    before_last: Option<(f64, f64)>,
     /// When the first value after the last good one was rejected as a jump [s].
     rejected_at: Option<f64>,
     counters: LossCounters,
@@ -101,7 +103,7 @@ pub struct Conditioner {
 impl Conditioner {
     /// A conditioner that has seen nothing yet.
     pub const fn new(limits: Plausibility) -> Self {
-        Conditioner { limits, last_good: None, rejected_at: None, counters: LossCounters { missing: 0, invalid: 0, implausible: 0 } }
+        Conditioner { limits, last_good: None, before_last: None, rejected_at: None, counters: LossCounters { missing: 0, invalid: 0, implausible: 0 } }
     }
 
     /// The last value that passed every check [rad].
@@ -152,7 +154,15 @@ impl Conditioner {
                     return Reading::valid_aged(first, age_s.max(0.0));
                 };
                 let l = self.limits;
-                if value == 0.0 && l.zero_band_rad.is_some_and(|band| last.abs() > band) {
+                // Appendix A: a zero from far off zero is a lost frame, not a value, unless the
+                // motion so far was carrying the joint through zero by now (a deflection that
+                // springs back to exactly zero counts within one cycle; rejecting that zero held
+                // the joint stale for as long as it rested there).
+                let arriving = self.before_last.is_some_and(|(pv, pt)| {
+                    let predicted = last + (last - pv) / (t - pt).max(1e-9) * (received - t);
+                    predicted.signum() != last.signum() || l.zero_band_rad.is_some_and(|band| predicted.abs() <= band)
+                });
+                if value == 0.0 && !arriving && l.zero_band_rad.is_some_and(|band| last.abs() > band) {
                     self.counters.implausible += 1;
                     return self.hold(now_s);
                 }
@@ -170,6 +180,7 @@ impl Conditioner {
                     return self.hold(now_s);
                 }
                 self.rejected_at = None;
+                self.before_last = self.last_good;
                 self.last_good = Some((v, received));
                 Reading::valid_aged(v, age_s.max(0.0))
             }
@@ -180,6 +191,31 @@ impl Conditioner {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Finding (issue 10, checking the shoulder's transmission): a deflection encoder that sprang
+    /// back from 9 counts to exactly 0 within one 40 Hz cycle read as appendix A's lost-frame
+    /// zero, and every later 0 too: the joint's deflection stayed stale for as long as it rested
+    /// at zero. Pass: a zero that the motion so far reaches by now is a value; a zero from a
+    /// joint at rest, or moving but far from zero, is still a lost frame.
+    #[test]
+    fn a_zero_the_motion_reaches_is_a_value_and_a_zero_from_rest_is_not() {
+        let v = |value| Sample::Value { value, age_s: 0.0 };
+        let mut back = Conditioner::new(Plausibility::absolute_encoder(10.0));
+        back.update(v(0.00997), 0.000);
+        back.update(v(0.00345), 0.025);
+        for k in 2..40 {
+            let r = back.update(v(0.0), k as f64 * 0.025);
+            assert_eq!((r.status, r.value), (ReadingStatus::VALID, 0.0), "cycle {k}");
+        }
+        assert_eq!(back.counters().implausible, 0);
+        for (a, b) in [(0.1, 0.1), (0.5, 0.49)] {
+            let mut c = Conditioner::new(Plausibility::absolute_encoder(10.0));
+            c.update(v(a), 0.000);
+            c.update(v(b), 0.025);
+            let r = c.update(v(0.0), 0.050);
+            assert_eq!((r.status, r.value), (ReadingStatus::STALE, b), "{a} -> {b} -> 0");
+        }
+    }
 
     /// Finding (fault suite): a persistent 1 rad jump was accepted after 0.09 s, once the
     /// elapsed time allowed the joint to have moved that far, and became the joint's position.

@@ -5,6 +5,7 @@ mod experiment;
 mod ident;
 mod inspect;
 mod run;
+mod transmission;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -30,6 +31,16 @@ enum Command {
     },
     /// Print the JSON Schema of arm descriptions (for editors).
     Schema,
+    /// Check eq. 3.3's assumed shoulder differential on the arm before trusting torque control:
+    /// each shoulder actuator moves alone by a small step, q2 is read from its own encoders
+    /// (exit 0 as assumed, 1 not). Uses the config's backend: the real arm with `socketcan`.
+    CheckTransmission {
+        /// The arm description.
+        config: PathBuf,
+        /// How far each actuator moves [rad, at the gearbox output].
+        #[arg(long, default_value_t = 0.02, value_parser = finite)]
+        step_rad: f64,
+    },
     /// Run the thesis' experiments on the simulated arm.
     Experiment {
         #[command(subcommand)]
@@ -125,6 +136,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Run(args) => run::run(args),
+        Command::CheckTransmission { config, step_rad } => transmission::run(&config, step_rad),
         Command::Check { config } => {
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
