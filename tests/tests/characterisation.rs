@@ -17,34 +17,52 @@ fn sherpa() -> jointctl_config::LoadedConfig {
     jointctl_config::load(config_dir().join("sherpa_arm.yaml")).unwrap()
 }
 
-/// The pipeline the config's comment names, as library calls: `jointctl sim characterise`, then
-/// `jointctl fit --branches --order 3` with the thesis' smoothing.
-fn pipeline(loaded: &jointctl_config::LoadedConfig) -> CharacteristicSpec {
-    let samples = characterise(loaded, &PluginLoader::new([]), "q2", &Plan::shoulder()).unwrap();
+/// The pipeline the config's comments name, as library calls: `jointctl sim characterise`, then
+/// `jointctl fit` with the thesis' smoothing and order (shoulder: `--branches --order 3`, section
+/// 3.4.2; wrist: `--order 4`, continuous, section 3.5.2).
+fn pipeline(loaded: &jointctl_config::LoadedConfig, dof: &str, plan: &Plan, order: usize, branches: bool) -> CharacteristicSpec {
+    let samples = characterise(loaded, &PluginLoader::new([]), dof, plan).unwrap();
     let mut data = Data::from_columns(samples.iter().map(|s| s.t).collect(), samples.iter().map(|s| s.deflection).collect(), samples.iter().map(|s| s.torque).collect());
     data.pivot_mm = samples.iter().map(|s| s.pivot_mm).collect();
-    let opts = FitOptions { smoothing_window: thesis_smoothing(&data), order: Order::Fixed(3), branches: true, through_zero: true };
-    assert_eq!(opts.smoothing_window, 8, "section 3.4.2: a moving average of 8 samples");
+    if !plan.angles_deg.is_empty() {
+        data.angle_deg = samples.iter().map(|s| s.angle_deg).collect();
+    }
+    let opts = FitOptions { smoothing_window: thesis_smoothing(&data), order: Order::Fixed(order), branches, through_zero: true };
+    assert_eq!(opts.smoothing_window, if branches { 8 } else { 5 }, "sections 3.4.2 and 3.5.2: moving averages of 8 and 5 samples");
     fit(&data, &opts).unwrap().spec
+}
+
+fn committed(file: &str) -> CharacteristicSpec {
+    let text = std::fs::read_to_string(config_dir().join(file)).unwrap();
+    let value: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    serde_yaml::from_value(value["characteristic"].clone()).unwrap()
+}
+
+fn assert_same(made: &CharacteristicSpec, kept: &CharacteristicSpec, file: &str) {
+    assert_eq!(made.curves.len(), kept.curves.len());
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0);
+    for (m, c) in made.curves.iter().zip(&kept.curves) {
+        let (mp, cp) = (m.pivot_mm.unwrap(), c.pivot_mm.unwrap());
+        assert!(close(mp, cp) && m.angle_deg == c.angle_deg, "pivot {mp} vs {cp}, direction {:?} vs {:?}", m.angle_deg, c.angle_deg);
+        for (made, kept) in [(&m.positive, &c.positive), (&m.negative, &c.negative), (&m.coefficients, &c.coefficients)] {
+            let (made, kept) = (made.clone().unwrap_or_default(), kept.clone().unwrap_or_default());
+            assert!(made.len() == kept.len() && made.iter().zip(&kept).all(|(a, b)| close(*a, *b)), "pivot {cp} mm: {made:?} vs committed {kept:?}: rerun the pipeline that made configs/{file}");
+        }
+    }
 }
 
 #[test]
 fn the_committed_shoulder_table_is_the_characterisation_pipelines_output() {
-    let text = std::fs::read_to_string(config_dir().join("sherpa_q2_characteristic.yaml")).unwrap();
-    let committed: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
-    let committed: CharacteristicSpec = serde_yaml::from_value(committed["characteristic"].clone()).unwrap();
-    let made = pipeline(&sherpa());
-    assert_eq!(committed.curves.len(), 10, "section 3.4.2: ten pivot settings");
-    assert_eq!(made.curves.len(), committed.curves.len());
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0);
-    for (m, c) in made.curves.iter().zip(&committed.curves) {
-        let (mp, cp) = (m.pivot_mm.unwrap(), c.pivot_mm.unwrap());
-        assert!(close(mp, cp), "pivot {mp} vs {cp}");
-        for (made, kept) in [(&m.positive, &c.positive), (&m.negative, &c.negative)] {
-            let (made, kept) = (made.as_ref().unwrap(), kept.as_ref().unwrap());
-            assert!(made.iter().zip(kept).all(|(a, b)| close(*a, *b)), "pivot {cp} mm: {made:?} vs committed {kept:?}: rerun the pipeline in configs/sherpa_arm.yaml");
-        }
-    }
+    let kept = committed("sherpa_q2_characteristic.yaml");
+    assert_eq!(kept.curves.len(), 10, "section 3.4.2: ten pivot settings");
+    assert_same(&pipeline(&sherpa(), "q2", &Plan::shoulder(), 3, true), &kept, "sherpa_q2_characteristic.yaml");
+}
+
+#[test]
+fn the_committed_wrist_table_is_the_characterisation_pipelines_output() {
+    let kept = committed("sherpa_wrist_characteristic.yaml");
+    assert_eq!(kept.curves.len(), 44, "section 3.5.2: eleven pivot settings, four directions");
+    assert_same(&pipeline(&sherpa(), "q6", &Plan::wrist(), 4, false), &kept, "sherpa_wrist_characteristic.yaml");
 }
 
 #[test]

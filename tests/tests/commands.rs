@@ -248,6 +248,10 @@ fn transmission_round_trips_joint_to_motor_to_joint_for_every_plugin() {
         Edit::Set("joints[q5].controller", no_pi()),
         Edit::Set("joints[wrist].dofs[q6].controller", no_pi()),
         Edit::Set("joints[wrist].dofs[q7].controller", no_pi()),
+        // The kinematics alone: the wrist's plant is its own table, without friction or
+        // hysteresis (which move the output off a position commanded without feedback).
+        Edit::Set("joints[wrist].sim.element", serde_yaml::from_str("{kind: wrist_table}").unwrap()),
+        Edit::Remove("joints[wrist].sim.effects"),
     ]);
     let loaded = jointctl_config::load(&path).unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &jointctl_runtime::PluginLoader::new([])).unwrap();

@@ -26,6 +26,9 @@ pub struct Plan {
     pub cycles: f64,
     /// Sample rate [Hz].
     pub rate_hz: f64,
+    /// Deflection directions [deg] of a 2-DOF joint (0 = its second DOF only, 90 = its first);
+    /// empty for a 1-DOF joint.
+    pub angles_deg: Vec<f64>,
 }
 
 impl Plan {
@@ -49,14 +52,33 @@ impl Plan {
             frequency_hz: 0.2,
             cycles: 2.0,
             rate_hz: 100.0,
+            angles_deg: Vec::new(),
+        }
+    }
+
+    /// Section 3.5.2's wrist characterisation: eleven settings, 0 to 50 mm in 5 mm steps, each
+    /// along four directions (0, 45, 90, 135 deg). Assumed as for the shoulder: the torque aimed
+    /// at is the wrist's largest characterised one (3 Nm, [`jointctl_models::assumed::WRIST_MAX_TORQUE_NM`];
+    /// figure 5.16 steps to 2 Nm), at most 0.35 rad, two cycles of 0.2 Hz at 100 Hz.
+    ///
+    /// ```
+    /// let plan = jointctl_experiments::characterise::Plan::wrist();
+    /// assert_eq!((plan.pivots_mm.len(), plan.angles_deg.len()), (11, 4));
+    /// ```
+    pub fn wrist() -> Plan {
+        Plan {
+            pivots_mm: (0..11).map(|k| 5.0 * k as f64).collect(),
+            target_torque_nm: jointctl_models::assumed::WRIST_MAX_TORQUE_NM,
+            angles_deg: vec![0.0, 45.0, 90.0, 135.0],
+            ..Plan::shoulder()
         }
     }
 }
 
-/// The simulated element's stiffness near zero deflection at a pivot setting [Nm/rad] and its
-/// play [rad]: what the person characterising the joint knows beforehand to choose deflections
-/// (from the joint's design, eq. 2.6), not the table being made.
-fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64) -> Result<(f64, f64), ExperimentError> {
+/// The simulated element's stiffness near zero deflection at a pivot setting (and direction,
+/// for the wrist) [Nm/rad] and its play [rad]: what the person characterising the joint knows
+/// beforehand to choose deflections (from the joint's design, eq. 2.6), not the table being made.
+fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64, angle_deg: f64) -> Result<(f64, f64), ExperimentError> {
     let (j, i) = locate(loaded, joint)?;
     let sim = loaded.config.joints[j].sim.as_ref().ok_or_else(|| ExperimentError(format!("`{joint}` has no simulated hardware")))?;
     let element = sim.elements.get(i).or(sim.element.as_ref());
@@ -64,6 +86,10 @@ fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64) -> Result<
         Some(ElementSimConfig::LeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m, dead_zone_rad, .. }) => {
             let lever = LeverArm { lever_length_m: *lever_length_m, crank_radius_m: *crank_radius_m, spring_n_per_m: *spring_n_per_m, pivot_offset_m: *pivot_offset_m };
             Ok((lever.stiffness_at(pivot_mm), *dead_zone_rad))
+        }
+        Some(ElementSimConfig::WristLeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m, dead_zone_rad, anisotropy, .. }) => {
+            let lever = LeverArm { lever_length_m: *lever_length_m, crank_radius_m: *crank_radius_m, spring_n_per_m: *spring_n_per_m, pivot_offset_m: *pivot_offset_m };
+            Ok((lever.stiffness_at(pivot_mm) * (1.0 + anisotropy * (2.0 * angle_deg.to_radians()).cos()), *dead_zone_rad))
         }
         Some(ElementSimConfig::Linear { stiffness_nm_per_rad }) => Ok((*stiffness_nm_per_rad, 0.0)),
         _ => Err(ExperimentError(format!(
@@ -85,20 +111,23 @@ fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64) -> Result<
 /// ```
 pub fn characterise(loaded: &LoadedConfig, loader: &PluginLoader, joint: &str, plan: &Plan) -> Result<Vec<Sample>, ExperimentError> {
     let mut out: Vec<Sample> = Vec::new();
+    let angles = if plan.angles_deg.is_empty() { vec![0.0] } else { plan.angles_deg.clone() };
     for &pivot_mm in &plan.pivots_mm {
-        let (k, play) = plant_stiffness(loaded, joint, pivot_mm)?;
-        let amplitude_rad = (plan.target_torque_nm / k + play).min(plan.max_deflection_rad);
-        let opts = RecordOptions {
-            joint: joint.to_string(),
-            amplitude_rad,
-            frequency_hz: plan.frequency_hz,
-            duration_s: plan.cycles / plan.frequency_hz,
-            pivot_mm: Some(pivot_mm),
-            angle_deg: 0.0,
-            rate_hz: plan.rate_hz,
-        };
-        let start = out.last().map_or(0.0, |s| s.t + 1.0 / plan.rate_hz);
-        out.extend(record(loaded, loader, &opts)?.into_iter().map(|s| Sample { t: s.t + start, ..s }));
+        for &angle_deg in &angles {
+            let (k, play) = plant_stiffness(loaded, joint, pivot_mm, angle_deg)?;
+            let amplitude_rad = (plan.target_torque_nm / k + play).min(plan.max_deflection_rad);
+            let opts = RecordOptions {
+                joint: joint.to_string(),
+                amplitude_rad,
+                frequency_hz: plan.frequency_hz,
+                duration_s: plan.cycles / plan.frequency_hz,
+                pivot_mm: Some(pivot_mm),
+                angle_deg,
+                rate_hz: plan.rate_hz,
+            };
+            let start = out.last().map_or(0.0, |s| s.t + 1.0 / plan.rate_hz);
+            out.extend(record(loaded, loader, &opts)?.into_iter().map(|s| Sample { t: s.t + start, ..s }));
+        }
     }
     Ok(out)
 }

@@ -42,6 +42,8 @@ pub struct Sample {
     pub pivot_mm: f64,
     /// Drive (gearbox output) position of the joint's first drive [rad].
     pub motor_position: f64,
+    /// Deflection direction [deg] of a 2-DOF joint's recording (NaN for a 1-DOF joint).
+    pub angle_deg: f64,
 }
 
 /// Runs a characterisation on the simulated arm.
@@ -54,7 +56,7 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     let settle_s = if opts.pivot_mm.is_some() { 3.0 } else { 0.0 };
     let flow = EnvironmentConfig::Flow { amplitude_rad: opts.amplitude_rad, frequency_hz: opts.frequency_hz, angle_deg: opts.angle_deg, start_s: settle_s };
     // The 2-DOF wrist is deflected along a direction (both DOFs move); any other joint's DOF alone.
-    let directional = n == 2 && matches!(cfg.config.joints[j].sim.as_ref().and_then(|s| s.element.as_ref()), Some(jointctl_config::ElementSimConfig::WristTable));
+    let directional = n == 2 && is_directional(&cfg.config.joints[j]);
     if directional {
         // The wrist is deflected along a direction: both DOFs move.
         if let Some(sim) = cfg.config.joints[j].sim.as_mut() {
@@ -110,10 +112,26 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
         // A cycle whose deflection the observer could not form (a reading not usable this
         // cycle) is not a measurement.
         if deflection.is_finite() && torque.is_finite() {
-            out.push(Sample { t, deflection, torque, pivot_mm: st[dof].pivot().unwrap_or(f64::NAN), motor_position: motor });
+            out.push(Sample { t, deflection, torque, pivot_mm: st[dof].pivot().unwrap_or(f64::NAN), motor_position: motor, angle_deg: if two { opts.angle_deg } else { f64::NAN } });
         }
     }
     Ok(out)
+}
+
+/// Whether a joint's element couples its two DOFs along a deflection direction (the wrist),
+/// rather than one element per DOF (the shoulder's VSA q2 beside rigid q3).
+///
+/// ```
+/// let loaded = jointctl_config::load(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml"))).unwrap();
+/// let by_name = |n: &str| loaded.config.joints.iter().find(|j| j.name == n).unwrap();
+/// assert!(jointctl_experiments::record::is_directional(by_name("wrist")));
+/// assert!(!jointctl_experiments::record::is_directional(by_name("shoulder")));
+/// ```
+pub fn is_directional(joint: &jointctl_config::JointConfig) -> bool {
+    matches!(
+        joint.sim.as_ref().and_then(|s| s.element.as_ref()),
+        Some(jointctl_config::ElementSimConfig::WristTable | jointctl_config::ElementSimConfig::WristLeverArm { .. })
+    )
 }
 
 fn jointctl_hal_index(loaded: &LoadedConfig, drive: &str) -> Result<usize, ExperimentError> {
@@ -128,12 +146,13 @@ fn jointctl_hal_index(loaded: &LoadedConfig, drive: &str) -> Result<usize, Exper
 }
 
 /// Writes samples as the CSV `jointctl fit` and `jointctl identify` read: `t, deflection,
-/// torque, pivot_mm, angle_deg, motor_position` (SI units; pivot in mm, angle in degrees).
+/// torque, pivot_mm, angle_deg, motor_position` (SI units; pivot in mm, angle in degrees). The
+/// angle is `angle_deg` when given, else each sample's own (empty for a 1-DOF joint).
 pub fn write_csv(samples: &[Sample], angle_deg: Option<f64>, mut w: impl Write) -> std::io::Result<()> {
     writeln!(w, "t,deflection,torque,pivot_mm,angle_deg,motor_position")?;
     for s in samples {
         let pivot = if s.pivot_mm.is_finite() { format!("{}", s.pivot_mm) } else { String::new() };
-        let angle = angle_deg.map_or(String::new(), |a| format!("{a}"));
+        let angle = angle_deg.or(Some(s.angle_deg).filter(|a| a.is_finite())).map_or(String::new(), |a| format!("{a}"));
         writeln!(w, "{},{},{},{},{},{}", s.t, s.deflection, s.torque, pivot, angle, s.motor_position)?;
     }
     Ok(())

@@ -24,6 +24,9 @@ pub enum Element {
     Wrist(WristCharacteristic),
     /// The lever-arm VSA (eq. 2.1-2.4), its play [rad] and its negative branch's scale.
     LeverArm(LeverArm, f64, f64),
+    /// The wrist's lever-arm VSA on both DOFs: lever, play [rad], negative branch's scale,
+    /// anisotropy.
+    WristLever(LeverArm, f64, f64, f64),
 }
 
 /// A problem building a unit.
@@ -48,18 +51,18 @@ impl Element {
             ),
             ElementSimConfig::WristTable => return Err(("sim.element".into(), "wrist_table needs a 2-DOF joint".into())),
             ElementSimConfig::LeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m, dead_zone_rad, negative_branch_scale } => {
-                let lengths = [("lever_length_m", lever_length_m), ("crank_radius_m", crank_radius_m), ("spring_n_per_m", spring_n_per_m), ("pivot_offset_m", pivot_offset_m)];
-                if let Some((name, v)) = lengths.iter().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
-                    return Err((format!("sim.element.lever_arm.{name}"), format!("must be > 0, got {v}")));
-                }
-                if !(dead_zone_rad.is_finite() && *dead_zone_rad >= 0.0) {
-                    return Err(("sim.element.lever_arm.dead_zone_rad".into(), format!("must be >= 0, got {dead_zone_rad}")));
-                }
-                if !(negative_branch_scale.is_finite() && *negative_branch_scale > 0.0) {
-                    return Err(("sim.element.lever_arm.negative_branch_scale".into(), format!("must be > 0, got {negative_branch_scale}")));
-                }
-                let lever = LeverArm { lever_length_m: *lever_length_m, crank_radius_m: *crank_radius_m, spring_n_per_m: *spring_n_per_m, pivot_offset_m: *pivot_offset_m };
+                let lever = lever_arm("lever_arm", [*lever_length_m, *crank_radius_m, *spring_n_per_m, *pivot_offset_m], *dead_zone_rad, *negative_branch_scale)?;
                 Element::LeverArm(lever, *dead_zone_rad, *negative_branch_scale)
+            }
+            ElementSimConfig::WristLeverArm { lever_length_m, crank_radius_m, spring_n_per_m, pivot_offset_m, dead_zone_rad, negative_branch_scale, anisotropy } => {
+                if dof != 2 {
+                    return Err(("sim.element".into(), "wrist_lever_arm needs a 2-DOF joint".into()));
+                }
+                let lever = lever_arm("wrist_lever_arm", [*lever_length_m, *crank_radius_m, *spring_n_per_m, *pivot_offset_m], *dead_zone_rad, *negative_branch_scale)?;
+                if !(anisotropy.is_finite() && anisotropy.abs() < 1.0) {
+                    return Err(("sim.element.wrist_lever_arm.anisotropy".into(), format!("must be within (-1, 1), got {anisotropy}")));
+                }
+                Element::WristLever(lever, *dead_zone_rad, *negative_branch_scale, *anisotropy)
             }
         })
     }
@@ -73,6 +76,24 @@ impl Element {
                 let torque = lever.torque_at(pivot_mm, smooth_dead_zone(*d, *play_rad));
                 *t = if *d < 0.0 { negative_scale * torque } else { torque };
             }),
+            Element::WristLever(lever, play_rad, negative_scale, anisotropy) => {
+                // The deflection (q6, q7) as a signed length along a direction in [0, pi)
+                // (0 = q7 only), as the wrist's table reads it (appendix B's polar form).
+                let (q6, q7) = (d[0], d[1]);
+                let (mut r, mut theta) = (q6.hypot(q7), q6.atan2(q7));
+                if theta < 0.0 {
+                    theta += std::f64::consts::PI;
+                    r = -r;
+                }
+                if theta >= std::f64::consts::PI {
+                    theta -= std::f64::consts::PI;
+                    r = -r;
+                }
+                let along = lever.torque_at(pivot_mm, smooth_dead_zone(r, *play_rad)) * (1.0 + anisotropy * (2.0 * theta).cos());
+                let along = if r < 0.0 { negative_scale * along } else { along };
+                out[0] = along * theta.sin();
+                out[1] = along * theta.cos();
+            }
             Element::Wrist(c) => {
                 let e = c.evaluate(pivot_mm, d[0], d[1]);
                 out[0] = e.torque_q6_nm;
@@ -80,6 +101,23 @@ impl Element {
             }
         }
     }
+}
+
+/// A lever arm from its four lengths and constants, checked: every one positive, the play not
+/// negative, the negative branch's scale positive.
+fn lever_arm(kind: &str, [l, r, k, q]: [f64; 4], play_rad: f64, negative_scale: f64) -> Result<LeverArm, UnitError> {
+    for (name, v) in [("lever_length_m", l), ("crank_radius_m", r), ("spring_n_per_m", k), ("pivot_offset_m", q)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err((format!("sim.element.{kind}.{name}"), format!("must be > 0, got {v}")));
+        }
+    }
+    if !(play_rad.is_finite() && play_rad >= 0.0) {
+        return Err((format!("sim.element.{kind}.dead_zone_rad"), format!("must be >= 0, got {play_rad}")));
+    }
+    if !(negative_scale.is_finite() && negative_scale > 0.0) {
+        return Err((format!("sim.element.{kind}.negative_branch_scale"), format!("must be > 0, got {negative_scale}")));
+    }
+    Ok(LeverArm { lever_length_m: l, crank_radius_m: r, spring_n_per_m: k, pivot_offset_m: q })
 }
 
 /// Refuses plant effects that are not numbers or not physical (a negative friction, a noise of

@@ -197,3 +197,40 @@ fn plant_effects_that_are_not_numbers_or_not_physical_are_refused_by_field() {
     assert_eq!(check_effects(&zero_limit).unwrap_err().0, "hysteresis.limit_nm");
     assert!(check_effects(&EffectsConfig::default()).is_ok());
 }
+
+#[test]
+fn the_wrist_lever_plant_acts_along_the_deflection_with_its_anisotropy() {
+    let cfg = jointctl_config::ElementSimConfig::WristLeverArm {
+        lever_length_m: 0.15,
+        crank_radius_m: 0.012,
+        spring_n_per_m: 20_000.0,
+        pivot_offset_m: 0.03,
+        dead_zone_rad: 0.0,
+        negative_branch_scale: 0.9,
+        anisotropy: 0.1,
+    };
+    let k = jointctl_models::assumed::WRIST_LEVER.stiffness_at(0.0);
+    let wrist = Element::from_config(&cfg, &serde_json::Value::Null, 2).unwrap();
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let torques = |q6: f64, q7: f64| {
+        let mut unit = Unit::new(vec!["q6".into(), "q7".into()], vec![0, 1], vec![vec![1.0, 0.0], vec![0.0, 1.0]], vec![wrist.clone()], None, vec![fixed.clone(), fixed.clone()], EffectsConfig::default());
+        unit.start(&[0.0, 0.0]);
+        let mut loads = [0.0, 0.0];
+        unit.step(&[q6, q7], &[0.0, 0.0], &mut loads, 0.0005, &mut SplitMix64(1));
+        (unit.torque[0], unit.torque[1])
+    };
+    let along = |r: f64| r.sin() * r.cos();
+    // 0 deg: q7 alone, 10 % stiffer; 90 deg: q6 alone, 10 % softer; the negative branch 0.9.
+    let (q6, q7) = torques(0.0, 0.1);
+    assert!(q6.abs() < 1e-12 && (q7 - 1.1 * k * along(0.1)).abs() < 1e-9, "{q6} {q7}");
+    let (q6, q7) = torques(0.1, 0.0);
+    assert!((q6 - 0.9 * k * along(0.1)).abs() < 1e-9 && q7.abs() < 1e-9, "{q6} {q7}");
+    let (q6, q7) = torques(0.0, -0.1);
+    assert!(q6.abs() < 1e-9 && (q7 + 0.9 * 1.1 * k * along(0.1)).abs() < 1e-9, "{q6} {q7}");
+    // 45 deg: both, equal, along the diagonal with the isotropic stiffness.
+    let (q6, q7) = torques(0.1, 0.1);
+    let r = 0.1f64.hypot(0.1);
+    assert!((q6 - q7).abs() < 1e-9 && (q6.hypot(q7) - k * along(r)).abs() < 1e-9, "{q6} {q7}");
+    // A 1-DOF joint cannot have it.
+    assert!(Element::from_config(&cfg, &serde_json::Value::Null, 1).is_err());
+}

@@ -87,12 +87,14 @@ pub enum SimCommand {
         #[arg(long, default_value_t = 100.0)]
         rate: f64,
     },
-    /// Characterise a variable-stiffness DOF over its pivot settings (section 3.4.2: the shoulder
-    /// at 0-45 mm in 5 mm steps) into one CSV for `jointctl fit --branches --order 3`.
+    /// Characterise a variable-stiffness joint over its pivot settings into one CSV for
+    /// `jointctl fit`: the shoulder (q2) at 0-45 mm in 5 mm steps (section 3.4.2; fit with
+    /// `--branches --order 3`), the wrist at 0-50 mm along 0/45/90/135 deg (section 3.5.2; fit
+    /// with `--order 4`).
     Characterise {
         /// The arm description (simulated backend).
         config: PathBuf,
-        /// The DOF (q2).
+        /// The joint: q2, or the wrist (`wrist`, q6 or q7).
         #[arg(long)]
         joint: String,
         /// Output CSV file.
@@ -360,8 +362,16 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                 Ok(l) => l,
                 Err(e) => return crate::fail_err(e),
             };
-            let plan = jointctl_experiments::characterise::Plan::shoulder();
-            let samples = match jointctl_experiments::characterise::characterise(&loaded, &loader, &joint, &plan) {
+            // A 2-DOF joint (the wrist, by its name or a DOF's) gets section 3.5.2's plan, along
+            // four directions; a 1-DOF VSA section 3.4.2's.
+            let entry = loaded.config.joints.iter().find(|j| j.name == joint || j.dof_names().contains(&joint.as_str()));
+            let two = entry.is_some_and(|e| e.dof_names().len() == 2 && jointctl_experiments::record::is_directional(e));
+            let dof = match entry {
+                Some(e) if two => e.dof_names()[0].to_string(),
+                _ => joint.clone(),
+            };
+            let plan = if two { jointctl_experiments::characterise::Plan::wrist() } else { jointctl_experiments::characterise::Plan::shoulder() };
+            let samples = match jointctl_experiments::characterise::characterise(&loaded, &loader, &dof, &plan) {
                 Ok(s) => s,
                 Err(e) => return crate::fail_err(e),
             };
@@ -372,7 +382,7 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
             if let Err(e) = write_csv(&samples, None, std::io::BufWriter::new(file)) {
                 return crate::fail(format!("cannot write {}: {e}", out.display()));
             }
-            eprintln!("{} samples at {} pivot settings written to {}", samples.len(), plan.pivots_mm.len(), out.display());
+            eprintln!("{} samples at {} pivot settings{} written to {}", samples.len(), plan.pivots_mm.len(), if two { " and 4 directions" } else { "" }, out.display());
             ExitCode::SUCCESS
         }
     }

@@ -162,6 +162,29 @@ pub enum ElementSimConfig {
         #[serde(default = "one")]
         negative_branch_scale: f64,
     },
+    /// The wrist's lever-arm VSA acting on both DOFs (q6, q7; section 3.5): the deflection
+    /// vector's length `r` along direction `theta` (0 = q7 only, 90 deg = q6 only) meets
+    /// `K(pivot) (1 + anisotropy cos 2 theta) sin(r) cos(r)` after the play, along the same
+    /// direction; the plant the wrist's table is fitted to.
+    WristLeverArm {
+        /// Lever length l [m].
+        lever_length_m: f64,
+        /// Crank R [m].
+        crank_radius_m: f64,
+        /// Spring k_s [N/m].
+        spring_n_per_m: f64,
+        /// Pivot q at setting 0 mm [m].
+        pivot_offset_m: f64,
+        /// Half-width of the play around zero deflection [rad] (0: none).
+        #[serde(default)]
+        dead_zone_rad: f64,
+        /// Negative-branch torque over the positive one's (1: symmetric).
+        #[serde(default = "one")]
+        negative_branch_scale: f64,
+        /// Relative stiffness change with the direction, `a` in `1 + a cos 2 theta` (0: isotropic).
+        #[serde(default)]
+        anisotropy: f64,
+    },
 }
 
 fn one() -> f64 {
