@@ -41,23 +41,25 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
 
 #[test]
 fn identify_finds_an_effect_switched_on_in_the_simulated_plant_but_not_in_the_config() {
-    // Play (a dead-zone of 0.01 rad) in the q5 plant; the configured model is the linear
-    // 70.0966 Nm/rad. (Viscous friction would not do here: eq. 3.5's arctan friction in the
-    // baseline becomes viscous friction for a small k_b, as the thesis notes in section 3.5.)
+    // Play (a dead-zone of 0.01 rad) in the elbow's plant, its other effects off; the configured
+    // model is the linear 113.78 Nm/rad. (Viscous friction would not do here: eq. 3.5's arctan
+    // friction in the baseline becomes viscous friction for a small k_b, as the thesis notes in
+    // section 3.5.) q5, which this test used, has no element for play since its compliance became
+    // its drive's gain (section 3.3.2).
     let mut loaded = jointctl_config::load(root().join("configs/sherpa_arm.yaml")).unwrap();
-    let q5 = loaded.config.joints.iter_mut().find(|j| j.name == "q5").unwrap();
-    q5.sim.as_mut().unwrap().effects.dead_zone_rad = 0.01;
-    let opts = RecordOptions { joint: "q5".into(), amplitude_rad: 0.08, frequency_hz: 0.3, duration_s: 40.0, pivot_mm: None, angle_deg: 0.0, rate_hz: 100.0 };
+    let q4 = loaded.config.joints.iter_mut().find(|j| j.name == "q4").unwrap();
+    q4.sim.as_mut().unwrap().effects = jointctl_config::EffectsConfig { dead_zone_rad: 0.01, ..Default::default() };
+    let opts = RecordOptions { joint: "q4".into(), amplitude_rad: 0.08, frequency_hz: 0.3, duration_s: 40.0, pivot_mm: None, angle_deg: 0.0, rate_hz: 100.0 };
     let samples = record(&loaded, &PluginLoader::new([]), &opts).unwrap();
     let mut csv = Vec::new();
     write_csv(&samples, None, &mut csv).unwrap();
-    let data = jointctl_ident::csv::parse(std::str::from_utf8(&csv).unwrap(), "q5.csv".as_ref()).unwrap();
-    let baseline = BaselineModel::Given(Box::new(|d, _| 70.0966 * d));
+    let data = jointctl_ident::csv::parse(std::str::from_utf8(&csv).unwrap(), "q4.csv".as_ref()).unwrap();
+    let baseline = BaselineModel::Given(Box::new(|d, _| 113.78 * d));
     let report = identify(&data, &IdentifyOptions { baseline, ..IdentifyOptions::default() }).unwrap();
     let first = report.causes.first().expect("a cause");
     assert_eq!(first.effect, "dead_zone", "{:?}", report.causes);
     let w = first.params["half_width_rad"];
-    println!("q5 play: half width {w:.5} rad (plant 0.01), held-out RMSE {:.4} -> {:.4} Nm", report.rmse_before, report.rmse_after);
+    println!("q4 play: half width {w:.5} rad (plant 0.01), held-out RMSE {:.4} -> {:.4} Nm", report.rmse_before, report.rmse_after);
     assert!((w - 0.01).abs() / 0.01 < 0.2, "half width {w}");
     assert!(report.rmse_after < report.rmse_before / 3.0);
 }

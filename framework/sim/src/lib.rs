@@ -170,8 +170,17 @@ impl SimHal {
         let devices = DeviceIndex::of(config);
         let sim = &config.hal.sim;
         let drive_cfgs: Vec<_> = config.buses.can.iter().flat_map(|b| b.drives.iter()).collect();
-        let drives: Vec<ElmoDrive> = drive_cfgs.iter().map(|_| ElmoDrive::new(sim.elmo, 0.0)).collect();
         let drive_index = |name: &str, field: String| devices.drive(name).ok_or_else(|| setup(field, format!("no drive named `{name}`")));
+        let mut elmo = vec![sim.elmo; drive_cfgs.len()];
+        for (name, g) in &sim.drive_gains {
+            let at = format!("hal.sim.drive_gains.{name}");
+            let d = drive_index(name, at.clone())?;
+            if !(g.kp > 0.0 && g.ki >= 0.0 && g.kd >= 0.0) {
+                return Err(setup(at, format!("kp must be > 0, ki and kd >= 0 (got {}, {}, {})", g.kp, g.ki, g.kd)));
+            }
+            (elmo[d].kp, elmo[d].ki, elmo[d].kd) = (g.kp, g.ki, g.kd);
+        }
+        let drives: Vec<ElmoDrive> = elmo.iter().map(|e| ElmoDrive::new(*e, 0.0)).collect();
 
         let mut units = Vec::new();
         for (j, joint) in config.joints.iter().enumerate() {

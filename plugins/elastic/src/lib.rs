@@ -11,6 +11,14 @@
 //! angles subtracted (section 3.4.1) so that the joint may start anywhere. A positive deflection
 //! is a positive torque on the output, the convention of figure 4.6 (set-point = position +
 //! feed-forward deflection) and of eq. 3.8 (expected minus measured).
+//!
+//! q5 has no compliant element: its compliance is its ELMO's proportional gain (section 3.3.2).
+//! With `compliance: drive_gain` the "deflection" is the drive's following error seen from the
+//! joint, `r * (set-point - motor position)`, and the torque `K` times it. What that cannot
+//! know, the observer does not claim: while the drive is still moving to a new set-point (its
+//! profile, the bus latency; `settle_s` after the last change) the following error is motion,
+//! not load, and the torque is unknown; a drive with integral action hides a steady load (the
+//! simulated q5 drive has none, an assumption the config states).
 
 use jointctl_api::{
     Controller, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
@@ -53,6 +61,27 @@ struct Params {
     /// and the torque is unknown otherwise.
     #[serde(default)]
     max_deflection_age_s: f64,
+    /// Where the compliance is: `element` (an elastic element between motor and output, the
+    /// default) or `drive_gain` (the drive's position loop, q5).
+    #[serde(default)]
+    compliance: Compliance,
+    /// `drive_gain`: how long after a set-point change the following error is load, not motion
+    /// [s]. Assumption: 0.25 s, a small move of the simulated ELMO's profile plus the thesis' CAN
+    /// latency both ways (section 2.3).
+    #[serde(default = "default_settle_s")]
+    settle_s: f64,
+}
+
+fn default_settle_s() -> f64 {
+    0.25
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum Compliance {
+    #[default]
+    Element,
+    DriveGain,
 }
 
 
@@ -67,6 +96,9 @@ pub struct ElasticJoint {
     input_wired: bool,
     input_origin: f64,
     output_origin: f64,
+    /// `drive_gain`: the last motor set-point sent [rad] and the time since it changed [s].
+    setpoint_rad: f64,
+    since_change_s: f64,
 }
 
 impl ElasticJoint {
@@ -94,6 +126,12 @@ impl JointPlugin for ElasticJoint {
         if !(p.max_deflection_age_s.is_finite() && p.max_deflection_age_s >= 0.0) {
             return Err(PluginError::at("max_deflection_age_s", "must be finite and >= 0"));
         }
+        if !(p.settle_s.is_finite() && p.settle_s >= 0.0) {
+            return Err(PluginError::at("settle_s", "must be finite and >= 0"));
+        }
+        if p.compliance == Compliance::DriveGain && curve.is_some() {
+            return Err(PluginError::at("compliance", "`drive_gain` takes a linear `stiffness_nm_per_rad` (the drive's gain at the joint), not a characteristic"));
+        }
         let position = PositionLoop::from_params(p.position_pi)?;
         Ok(ElasticJoint {
             stiffness_nm_per_rad: stiffness,
@@ -104,6 +142,8 @@ impl JointPlugin for ElasticJoint {
             input_wired: false,
             input_origin: 0.0,
             output_origin: 0.0,
+            setpoint_rad: 0.0,
+            since_change_s: 0.0,
             params: p,
         })
     }
@@ -121,6 +161,9 @@ impl JointPlugin for ElasticJoint {
                 self.transmission = self.transmission.anchored(q, m);
                 self.input_origin = input;
                 self.output_origin = q;
+                // The drive holds where it is: its set-point is its position.
+                self.setpoint_rad = m;
+                self.since_change_s = self.params.settle_s;
                 Ok(())
             }
             _ => Err(PluginError::new(
@@ -145,7 +188,15 @@ impl Observer for ElasticJoint {
             s.set_position(q);
             s.set_stiffness(self.stiffness_nm_per_rad);
         }
-        if let (Some(q), Some(input)) = (q_for_deflection, input) {
+        if self.params.compliance == Compliance::DriveGain {
+            // The drive's following error as the joint sees it, once the drive has settled.
+            let motor = raw.drive(MOTOR).position_rad.usable(age);
+            if let Some(m) = motor.filter(|_| self.since_change_s >= self.params.settle_s) {
+                let deflection = self.transmission.ratio() * (self.setpoint_rad - m);
+                s.set_deflection(deflection);
+                s.set_torque(self.stiffness_nm_per_rad * deflection);
+            }
+        } else if let (Some(q), Some(input)) = (q_for_deflection, input) {
             let deflection = self.deflection(q, input);
             s.set_deflection(deflection);
             // Section 3.3.2: first-order fit, torque = K * deflection (or the fitted curve).
@@ -172,6 +223,14 @@ impl Controller for ElasticJoint {
         out: &mut [MotorSetpoint],
     ) -> Result<(), JointFault> {
         out[MOTOR] = self.position.motor_setpoint(&command[0], state[0].position(), raw.dt_s, &self.transmission);
+        self.since_change_s += raw.dt_s;
+        if out[MOTOR].action == jointctl_api::DriveAction::MOVE && out[MOTOR].position_rad != self.setpoint_rad {
+            // A change below one encoder count is not a move (a held PI output jitters).
+            if (out[MOTOR].position_rad - self.setpoint_rad).abs() > std::f64::consts::TAU / 16384.0 {
+                self.since_change_s = 0.0;
+            }
+            self.setpoint_rad = out[MOTOR].position_rad;
+        }
         Ok(())
     }
 }

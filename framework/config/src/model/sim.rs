@@ -35,6 +35,25 @@ pub struct SimConfig {
     /// The simulated ELMO drives (section 3.2).
     #[serde(default)]
     pub elmo: ElmoConfig,
+    /// A drive's own position-loop gains, by drive name (the rest from `elmo`): section 3.3.2's
+    /// q5 has no compliant element, its compliance is its ELMO's proportional gain.
+    #[serde(default)]
+    pub drive_gains: std::collections::BTreeMap<String, DriveGainsConfig>,
+}
+
+/// One simulated drive's position-loop gains at the gearbox output.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DriveGainsConfig {
+    /// Proportional gain [Nm/rad].
+    #[serde(deserialize_with = "finite")]
+    pub kp: f64,
+    /// Integral gain [Nm/(rad s)] (0: the load shows as following error, as a spring).
+    #[serde(deserialize_with = "finite")]
+    pub ki: f64,
+    /// Derivative gain [Nms/rad].
+    #[serde(deserialize_with = "finite")]
+    pub kd: f64,
 }
 
 fn default_substep() -> f64 {
@@ -341,6 +360,7 @@ impl Default for SimConfig {
             can_latency_s: 0.0,
             substep_s: default_substep(),
             elmo: ElmoConfig::default(),
+            drive_gains: Default::default(),
         }
     }
 }
