@@ -20,8 +20,14 @@ const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: 
 /// allocator can see.
 #[test]
 fn a_cycle_allocates_nothing() {
+    // The runtime faults a joint whose plugin call outlasts its budget (a stall above 5 ms, or a
+    // third excess within a second); on a loaded machine a preempted call did (2 runs in 6 with
+    // three busy loops beside this test: 17 ms once). That is the stall guard working, not what
+    // this test measures: here it tolerates the platform's stalls.
     let yaml = rig_yaml(&arm_name("alloc"), 1000.0, ELASTIC);
-    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    let mut loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    loaded.config.timing.joint_stall_floor_us = 10_000_000;
+    loaded.config.timing.joint_budget_strikes = u32::MAX;
     let mut loader = PluginLoader::new([]);
     loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
     loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
