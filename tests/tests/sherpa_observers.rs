@@ -44,7 +44,11 @@ impl Hal for ScriptedHal {
 
 fn sherpa() -> (Arm, ScriptedHal, jointctl_config::LoadedConfig) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
-    let loaded = jointctl_config::load(&path).unwrap();
+    scripted(jointctl_config::load(&path).unwrap())
+}
+
+/// An arm of `loaded` on scripted readings, every one 0 at first.
+fn scripted(loaded: jointctl_config::LoadedConfig) -> (Arm, ScriptedHal, jointctl_config::LoadedConfig) {
     let devices = DeviceIndex::of(&loaded.config);
     let mut frame = SensorFrame::new(&devices);
     frame.encoders.fill(Reading::valid(0.0));
@@ -293,4 +297,38 @@ fn q5_observes_its_torque_from_the_drives_following_error_and_says_when_it_canno
         unknown += usize::from(arm.states[q5].torque().is_none());
     }
     assert!(unknown >= 5, "torque claimed during the move in {} of 10 cycles", 10 - unknown);
+}
+
+/// Issue 10 ("the observer's filtering" as a factor): the shoulder's `torque_filter_s` low-passes
+/// q2's observed torque, `alpha = 1 - exp(-dt / tau)` per cycle, from the first known torque.
+#[test]
+fn the_shoulder_torque_filter_is_a_first_order_low_pass() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let mut loaded = jointctl_config::load(&path).unwrap();
+    let shoulder = loaded.config.joints.iter_mut().find(|j| j.name == "shoulder").unwrap();
+    shoulder.params.0.as_object_mut().unwrap().insert("torque_filter_s".into(), 0.1.into());
+    let (mut arm, hal, loaded) = scripted(loaded);
+    arm.activate().unwrap();
+    hal.set_encoder("enc_q2_deflection", Reading::valid(0.03));
+    let table = PivotCharacteristic::from_spec(&params_characteristic(&loaded, "shoulder")).unwrap();
+    let alpha = 1.0 - (-0.025f64 / 0.1).exp();
+    arm.step(0.025);
+    let first = arm.states[1].torque().unwrap();
+    let target = table.evaluate(arm.states[1].pivot().unwrap(), 0.03).torque_nm;
+    // The first known torque starts the filter (no lag behind an arbitrary zero)...
+    assert!((first - target).abs() < 1e-9, "{first} vs {target}");
+    // ... and a change then arrives at alpha a cycle.
+    hal.set_encoder("enc_q2_deflection", Reading::valid(0.06));
+    arm.step(0.05);
+    let second = arm.states[1].torque().unwrap();
+    let target2 = table.evaluate(arm.states[1].pivot().unwrap(), 0.06).torque_nm;
+    assert!((second - (first + alpha * (target2 - first))).abs() < 1e-9, "{second} vs {}", first + alpha * (target2 - first));
+    // A negative time constant is refused at creation, by name.
+    let mut bad = jointctl_config::load(&path).unwrap();
+    bad.config.joints.iter_mut().find(|j| j.name == "shoulder").unwrap().params.0.as_object_mut().unwrap().insert("torque_filter_s".into(), (-1.0).into());
+    let err = match Arm::build(&bad, &PluginLoader::new([]), Box::new(jointctl_hal::NullHal)) {
+        Ok(_) => panic!("a negative filter time was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("torque_filter_s"), "{err}");
 }

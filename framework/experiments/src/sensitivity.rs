@@ -86,6 +86,19 @@ fn changes() -> Vec<(&'static str, String, Change)> {
             }),
         ));
     }
+    for tau in [0.02, 0.1] {
+        out.push((
+            "observer filtering",
+            format!("torque low-pass {} ms", tau * 1e3),
+            Box::new(move |c, j, _| {
+                // Only the shoulder's observer has a filter to set (`torque_filter_s`); the row
+                // is left out for other joints (see `applies`).
+                if let Some(params) = c.config.joints[j].params.0.as_object_mut() {
+                    params.insert("torque_filter_s".into(), tau.into());
+                }
+            }),
+        ));
+    }
     out.push((
         "plant",
         "no hysteresis, friction, mode or noise".into(),
@@ -108,6 +121,12 @@ fn with_controller(c: &mut LoadedConfig, j: usize, i: usize, f: impl Fn(&mut joi
         None => joint.controller.get_or_insert_with(Default::default),
     };
     f(ctl);
+}
+
+/// Whether a factor can be changed on joint entry `j`: the observer's filter exists in the
+/// shoulder's plugin only.
+fn applies(loaded: &LoadedConfig, j: usize, factor: &str) -> bool {
+    factor != "observer filtering" || loaded.config.joints[j].plugin.name == "vsa_shoulder"
 }
 
 /// The sweep each variant runs: sines from 0.1 to 4 Hz at one stiffness setting.
@@ -141,7 +160,7 @@ fn summary(factor: &str, value: String, rows: &[Row]) -> Variant {
 /// ```
 pub fn run(loaded: &LoadedConfig, loader: &PluginLoader, joint: &str, stiffness_nm_per_rad: f64, mut progress: impl FnMut(usize, usize)) -> Result<Vec<Variant>, ExperimentError> {
     let (j, i) = locate(loaded, joint)?;
-    let all = changes();
+    let all: Vec<_> = changes().into_iter().filter(|(factor, ..)| applies(loaded, j, factor)).collect();
     let mut out = Vec::new();
     for (k, (factor, value, change)) in all.iter().enumerate() {
         let mut cfg = loaded.clone();

@@ -54,6 +54,11 @@ struct Params {
     /// Oldest stale reading still used [s] (default: `jointctl_control::default_max_age_s`).
     #[serde(default = "jointctl_control::default_max_age_s")]
     max_age_s: f64,
+    /// Time constant of a first-order low-pass on q2's observed torque [s] (0, the default: none).
+    /// It smooths the deflection encoder's quantisation and structural ringing at the price of
+    /// lag in the torque loop; the sensitivity study measures that price.
+    #[serde(default)]
+    torque_filter_s: f64,
 }
 
 fn harmonic_drive() -> f64 {
@@ -70,11 +75,25 @@ pub struct VsaShoulder {
     velocity: [VelocityEstimator; 2],
     position: [PositionLoop; 2],
     pivot_target: Option<MotorSetpoint>,
+    /// The low-passed q2 torque [Nm]; `None` until a torque is known (and after one is not).
+    filtered_torque_nm: Option<f64>,
 }
 
 impl VsaShoulder {
     fn pivot_mm(&self, raw: &RawJointView) -> Option<f64> {
         raw.encoder(PIVOT).usable(self.p.max_age_s).map(|a| self.p.pivot_offset_mm + self.p.pivot_mm_per_rad * a)
+    }
+
+    /// The observed torque through the configured first-order low-pass (discretised exactly
+    /// for a held input: `alpha = 1 - exp(-dt / tau)`); unchanged without a filter.
+    fn low_pass(&mut self, torque_nm: f64, dt_s: f64) -> f64 {
+        let tau = self.p.torque_filter_s;
+        let out = match self.filtered_torque_nm {
+            Some(f) if tau > 0.0 => f + (1.0 - (-dt_s / tau).exp()) * (torque_nm - f),
+            _ => torque_nm,
+        };
+        self.filtered_torque_nm = Some(out);
+        out
     }
 
     fn q3(&self, raw: &RawJointView) -> Option<f64> {
@@ -92,8 +111,12 @@ impl JointPlugin for VsaShoulder {
         params::nonzero("pivot_mm_per_rad", p.pivot_mm_per_rad)?;
         params::positive("q3_stiffness_nm_per_rad", p.q3_stiffness_nm_per_rad)?;
         params::positive("max_age_s", p.max_age_s)?;
+        if !(p.torque_filter_s.is_finite() && p.torque_filter_s >= 0.0) {
+            return Err(PluginError::at("torque_filter_s", "must be finite and >= 0"));
+        }
         let position = PositionLoop::from_params(p.position_pi)?;
         Ok(VsaShoulder {
+            filtered_torque_nm: None,
             characteristic,
             deflection_origin_rad: 0.0,
             actuator_origin: (0.0, 0.0),
@@ -138,7 +161,9 @@ impl Observer for VsaShoulder {
             q2.set_stiffness(e.stiffness_nm_per_rad);
             if let Some(d) = deflection {
                 q2.set_deflection(d);
-                q2.set_torque(e.torque_nm);
+                q2.set_torque(self.low_pass(e.torque_nm, raw.dt_s));
+            } else {
+                self.filtered_torque_nm = None;
             }
             if e.clamped {
                 q2.mark_clamped();
