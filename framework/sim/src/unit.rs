@@ -67,6 +67,18 @@ impl Element {
         })
     }
 
+    /// The element's stiffness near zero deflection at a pivot setting [Nm/rad] (a 2-DOF
+    /// element's along its first DOF).
+    fn stiffness(&self, pivot_mm: f64) -> f64 {
+        match self {
+            Element::Linear(k) => *k,
+            Element::Pivot(c) => c.stiffness(pivot_mm),
+            Element::Wrist(c) => c.evaluate(pivot_mm, 0.0, 0.0).stiffness_q6_nm_per_rad,
+            Element::LeverArm(lever, ..) => lever.stiffness_at(pivot_mm),
+            Element::WristLever(lever, _, _, anisotropy) => lever.stiffness_at(pivot_mm) * (1.0 - anisotropy),
+        }
+    }
+
     /// Element torque per DOF for the (effective) deflections, at a pivot setting.
     fn torques(&self, pivot_mm: f64, d: &[f64], out: &mut [f64]) {
         match self {
@@ -138,6 +150,11 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
     }
     if let Some(m) = fx.vibration {
         values.extend([("vibration.frequency_hz", m.frequency_hz, true), ("vibration.damping_ratio", m.damping_ratio, true), ("vibration.gain", m.gain, false)]);
+        if let Some(k) = m.reference_stiffness_nm_per_rad
+            && !(k.is_finite() && k > 0.0)
+        {
+            return Err(("vibration.reference_stiffness_nm_per_rad".into(), format!("must be a finite number > 0, got {k}")));
+        }
     }
     for (name, v, non_negative) in values {
         if !v.is_finite() || (non_negative && v < 0.0) {
@@ -309,7 +326,11 @@ impl Unit {
             // The torque sensor: a structural mode rings on changes of the torque.
             let mut sensed = t;
             if let Some(m) = fx.vibration {
-                let w = std::f64::consts::TAU * m.frequency_hz;
+                let scale = m.reference_stiffness_nm_per_rad.map_or(1.0, |k_ref| {
+                    let element = self.elements.get(i).unwrap_or(&self.elements[0]);
+                    (element.stiffness(self.pivot_mm) / k_ref).max(0.0).sqrt()
+                });
+                let w = std::f64::consts::TAU * m.frequency_hz * scale;
                 let acc = -w * w * (st.mode_y - t) - 2.0 * m.damping_ratio * w * st.mode_v;
                 st.mode_v += acc * dt;
                 st.mode_y += st.mode_v * dt;

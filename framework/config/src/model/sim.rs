@@ -333,6 +333,13 @@ pub struct VibrationConfig {
     pub damping_ratio: f64,
     /// Excitation: mode torque per element torque change [-].
     pub gain: f64,
+    /// When given, `frequency_hz` is the mode's frequency at this element stiffness [Nm/rad],
+    /// and the mode follows the element as a spring with the link: `f = frequency_hz *
+    /// sqrt(K / reference)`, K the element's stiffness at the current pivot setting (a VSA's
+    /// softer settings ring lower, nearer the loop's band: the thesis saw the shoulder ring at low
+    /// stiffness, section 3.4.2).
+    #[serde(default)]
+    pub reference_stiffness_nm_per_rad: Option<f64>,
 }
 
 /// What a lost simulated CAN frame becomes.
