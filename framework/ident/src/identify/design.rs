@@ -102,6 +102,8 @@ pub(crate) struct Projector {
     q: DMatrix<f64>,
     residual: Vec<f64>,
     inputs: Inputs,
+    /// The given characteristic's torque on the inputs (zeros for a fitted baseline).
+    model_nm: Vec<f64>,
 }
 
 /// Predictions on a part, with the Cp charge of segment-wise coefficients fitted on it.
@@ -209,14 +211,6 @@ impl Model<'_> {
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
         }
-        let samples = Samples {
-            t_s: &p.t,
-            deflection_rad: &inputs.deflection_rad,
-            velocity_rad_per_s: &inputs.velocity_rad_per_s,
-            elastic_rad: &inputs.elastic_rad,
-            pivot_mm: &p.pivot,
-            history_rad: &p.warm,
-        };
         let mut fixed = vec![0.0; n];
         let mut cols: Vec<Vec<f64>> = Vec::new();
         match self.baseline {
@@ -231,6 +225,15 @@ impl Model<'_> {
                 }
             }
         }
+        let samples = Samples {
+            t_s: &p.t,
+            deflection_rad: &inputs.deflection_rad,
+            velocity_rad_per_s: &inputs.velocity_rad_per_s,
+            elastic_rad: &inputs.elastic_rad,
+            pivot_mm: &p.pivot,
+            history_rad: &p.warm,
+            model_nm: &fixed,
+        };
         let mut spans = Vec::new();
         let mut segmented = Vec::new();
         let mut nonlinear = 0;
@@ -275,7 +278,7 @@ impl Model<'_> {
         let residual: Vec<f64> = (0..n).map(|i| y[i] - dot_row(&d.cols, &coefs, i)).collect();
         let live: Vec<&Vec<f64>> = d.cols.iter().filter(|c| c.iter().any(|x| *x != 0.0)).collect();
         let q = if live.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_fn(n, live.len(), |i, j| live[j][i]).qr().q() };
-        Some(Projector { q, residual, inputs: d.inputs })
+        Some(Projector { q, residual, inputs: d.inputs, model_nm: d.fixed })
     }
 
     /// The RSS of the projector's model with `term` added (a term without an input transform).
@@ -288,6 +291,7 @@ impl Model<'_> {
             elastic_rad: &proj.inputs.elastic_rad,
             pivot_mm: &p.pivot,
             history_rad: &p.warm,
+            model_nm: &proj.model_nm,
         };
         let cols = cause.columns(&term.params, &samples);
         let r = &proj.residual;

@@ -151,7 +151,7 @@ pub enum IdentifyError {
 /// A registered cause must not reuse a name and must give one column per coefficient, one value
 /// per sample: checked once, up front, so that a mistake is an error rather than a cause that
 /// silently contributes nothing.
-fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn CandidateCause>], p: &prepare::Prepared) -> Result<(), IdentifyError> {
+fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn CandidateCause>], p: &prepare::Prepared, baseline_fitted: bool) -> Result<(), IdentifyError> {
     let taken: Vec<&str> = builtin.iter().map(|c| c.name()).chain(["dropout"]).collect();
     let part = &p.coarse;
     for (i, c) in registered.iter().enumerate() {
@@ -159,9 +159,10 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         if taken.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
-        let ctx = SearchContext { excitation: p.excitation, t_s: &part.t, velocity_rad_per_s: &part.v, residual_nm: &part.tau };
+        let ctx = SearchContext { excitation: p.excitation, t_s: &part.t, velocity_rad_per_s: &part.v, residual_nm: &part.tau, baseline_fitted };
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
-        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm };
+        let model_nm = vec![0.0; part.len()];
+        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm, model_nm: &model_nm };
         let columns = c.columns(&values, &samples);
         let expected = c.coefficient_names().len();
         if columns.len() != expected || columns.iter().any(|col| col.len() != part.len()) {
@@ -199,7 +200,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let p = prepare::prepare(data, opts.train_fraction)?;
     let builtin = causes::builtin();
-    check_registered(&builtin, &opts.extra_candidates, &p)?;
+    check_registered(&builtin, &opts.extra_candidates, &p, matches!(opts.baseline, BaselineModel::Polynomial(_)))?;
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     let model = Model { baseline: &opts.baseline, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();

@@ -38,6 +38,9 @@ const SCAN_SAMPLES: usize = 16_000;
 /// is narrowed to the five values nearest it: a cause added elsewhere moves a parameter a little,
 /// not across its grid.
 pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, train: &Part, warm: Option<&[f64]>) -> Option<Term> {
+    if !model.causes[cause].applicable(ctx) {
+        return None;
+    }
     let mut params = model.causes[cause].parameters(ctx);
     if let Some(warm) = warm.filter(|w| w.len() == params.len()) {
         for (p, w) in params.iter_mut().zip(warm) {

@@ -129,7 +129,7 @@ pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residual:
         }
         None => p.coarse.tau.clone(),
     };
-    SearchContext { excitation: p.excitation, t_s: &p.coarse.t, velocity_rad_per_s: &p.coarse.v, residual_nm: residual }
+    SearchContext { excitation: p.excitation, t_s: &p.coarse.t, velocity_rad_per_s: &p.coarse.v, residual_nm: residual, baseline_fitted: matches!(model.baseline, super::BaselineModel::Polynomial(_)) }
 }
 
 pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String) -> Selection {

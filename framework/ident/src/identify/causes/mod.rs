@@ -12,6 +12,7 @@ mod hysteresis;
 mod reversal_ringing;
 mod sensor_offset;
 mod speed_vibration;
+mod stiffness_error;
 mod stiffness_nonlinearity;
 mod time_delay;
 mod vibration;
@@ -24,6 +25,7 @@ pub use hysteresis::{Hysteresis, dahl_unit};
 pub use reversal_ringing::ReversalRinging;
 pub use sensor_offset::SensorOffset;
 pub use speed_vibration::SpeedVibration;
+pub use stiffness_error::StiffnessError;
 pub use stiffness_nonlinearity::StiffnessNonlinearity;
 pub use time_delay::TimeDelay;
 pub use vibration::Vibration;
@@ -35,6 +37,7 @@ pub fn builtin() -> Vec<Box<dyn CandidateCause>> {
         Box::new(ViscousFriction),
         Box::new(CoulombFriction),
         Box::new(SensorOffset),
+        Box::new(StiffnessError),
         Box::new(StiffnessNonlinearity),
         Box::new(Hysteresis),
         Box::new(DeadZone),
@@ -67,6 +70,9 @@ pub struct SearchContext<'a> {
     pub velocity_rad_per_s: &'a [f64],
     /// The current model's residual, measured minus predicted torque [Nm].
     pub residual_nm: &'a [f64],
+    /// The baseline's characteristic is fitted on the data (its stiffness is already free), not
+    /// given by a configured joint.
+    pub baseline_fitted: bool,
 }
 
 /// A non-linear parameter of a cause and the values to search.
@@ -120,6 +126,9 @@ pub struct Samples<'a> {
     pub pivot_mm: &'a [f64],
     /// Deflections before this part, oldest first: the history a stateful effect starts from.
     pub history_rad: &'a [f64],
+    /// The configured characteristic's torque at `elastic_rad` [Nm]; zeros when the baseline is
+    /// fitted on the data.
+    pub model_nm: &'a [f64],
 }
 
 /// What a cause adds to the observer's and the simulation's configuration, in the keys they load
@@ -168,6 +177,13 @@ pub trait CandidateCause: Send + Sync {
     fn parameters(&self, context: &SearchContext) -> Vec<Parameter> {
         let _ = context;
         Vec::new()
+    }
+    /// Whether the cause can be told apart in this set-up at all (by default it can). A cause
+    /// the baseline already contains (a stiffness error when the characteristic is fitted on the
+    /// data) is not tried.
+    fn applicable(&self, context: &SearchContext) -> bool {
+        let _ = context;
+        true
     }
     /// Changes what the torque channel sees (a delay, a dead zone); nothing by default.
     fn transform(&self, parameters: &[f64], inputs: &mut Inputs) {
