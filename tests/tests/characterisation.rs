@@ -1,7 +1,8 @@
-//! The reference arm's shoulder table is made the thesis' way from the simulated plant
-//! (section 3.4.2: ten pivot settings, moving average of 8, 3rd-order branches through zero), not
-//! copied from it; the plant is the lever-arm VSA with play, asymmetry, hysteresis, friction and
-//! a structural mode, so the observer's table is a model of it, not the plant itself.
+//! The reference arm's observer tables are made the thesis' way from the simulated plant, not
+//! copied from it: the shoulder's (section 3.4.2: ten pivot settings, moving average of 8,
+//! 3rd-order branches through zero), the wrist's (section 3.5.2) and the elbow's line (section
+//! 3.3.2). The plant is the lever-arm VSA with play, asymmetry, hysteresis, friction and a
+//! structural mode (the elbow: a stiffening tendon), so each table is a model of it.
 
 use jointctl_experiments::characterise::{Plan, characterise};
 use jointctl_ident::csv::Data;
@@ -23,12 +24,19 @@ fn sherpa() -> jointctl_config::LoadedConfig {
 fn pipeline(loaded: &jointctl_config::LoadedConfig, dof: &str, plan: &Plan, order: usize, branches: bool) -> CharacteristicSpec {
     let samples = characterise(loaded, &PluginLoader::new([]), dof, plan).unwrap();
     let mut data = Data::from_columns(samples.iter().map(|s| s.t).collect(), samples.iter().map(|s| s.deflection).collect(), samples.iter().map(|s| s.torque).collect());
-    data.pivot_mm = samples.iter().map(|s| s.pivot_mm).collect();
+    if !plan.pivots_mm.is_empty() {
+        data.pivot_mm = samples.iter().map(|s| s.pivot_mm).collect();
+    }
     if !plan.angles_deg.is_empty() {
         data.angle_deg = samples.iter().map(|s| s.angle_deg).collect();
     }
     let opts = FitOptions { smoothing_window: thesis_smoothing(&data), order: Order::Fixed(order), branches, through_zero: true };
-    assert_eq!(opts.smoothing_window, if branches { 8 } else { 5 }, "sections 3.4.2 and 3.5.2: moving averages of 8 and 5 samples");
+    let window = match (plan.pivots_mm.is_empty(), branches) {
+        (true, _) => 1,
+        (false, true) => 8,
+        (false, false) => 5,
+    };
+    assert_eq!(opts.smoothing_window, window, "sections 3.3.2, 3.4.2 and 3.5.2: none, moving averages of 8 and 5 samples");
     fit(&data, &opts).unwrap().spec
 }
 
@@ -63,6 +71,27 @@ fn the_committed_wrist_table_is_the_characterisation_pipelines_output() {
     let kept = committed("sherpa_wrist_characteristic.yaml");
     assert_eq!(kept.curves.len(), 44, "section 3.5.2: eleven pivot settings, four directions");
     assert_same(&pipeline(&sherpa(), "q6", &Plan::wrist(), 4, false), &kept, "sherpa_wrist_characteristic.yaml");
+}
+
+/// Issue 10: q4's simulated element was the observer's own 113.78 Nm/rad line. Pass: the plant
+/// stiffens (a cubic of its own), and the elbow's params include a first-order fit (section
+/// 3.3.2, no smoothing for an elastic joint) of a characterisation recorded on it, equal to the
+/// pipeline's output and not the plant's slope.
+#[test]
+fn the_committed_elbow_fit_is_the_characterisation_pipelines_output() {
+    let kept = committed("sherpa_q4_characteristic.yaml");
+    assert_eq!(kept.curves.len(), 1, "section 3.3.2: one curve, no pivot");
+    let loaded = sherpa();
+    assert!(loaded.config.joints[2].sim.as_ref().unwrap().effects.cubic_nm_per_rad3 > 0.0, "the elbow's plant has a curve of its own");
+    let made = pipeline(&loaded, "q4", &Plan::elastic(), 1, false);
+    assert_eq!(made.curves[0].pivot_mm, None);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
+    let (m, k) = (made.curves[0].coefficients.clone().unwrap(), kept.curves[0].coefficients.clone().unwrap());
+    assert!(m.len() == 1 && k.len() == 1 && close(m[0], k[0]), "{m:?} vs committed {k:?}: rerun the pipeline that made configs/sherpa_q4_characteristic.yaml");
+    // The fit is the plant's line plus what the stiffening adds over the sweep, not the plant.
+    assert!(k[0] > 113.78 + 1.0 && k[0] < 113.78 * 1.1, "fitted {} Nm/rad", k[0]);
+    let spec: CharacteristicSpec = serde_json::from_value(loaded.config.joints[2].params.0["characteristic"].clone()).unwrap();
+    assert_eq!(spec.curves[0].coefficients, kept.curves[0].coefficients, "the elbow's params include the file");
 }
 
 #[test]

@@ -29,14 +29,17 @@ fn run(loss_rate: f64, mode: &str) -> Run {
     let test = format!("loss-{mode}-{loss_rate}");
     let arm = jointctl_tests::arm_name(&format!("loss-{mode}-{}pct", (loss_rate * 100.0).round()));
     // What frame loss adds, alone: the reference arm's bus latency (the observer then sees the
-    // torque of 15-30 ms ago) and the elbow's plant effects (hysteresis, friction, sensor noise
-    // the observer does not model) are off, so that observed and sensor torque agree without loss.
+    // torque of 15-30 ms ago) and the elbow's plant effects (stiffening, hysteresis, friction,
+    // sensor noise the observer does not model) are off, and the observer takes the plant's own
+    // line instead of its fitted one, so that observed and sensor torque agree without loss.
     let path = sherpa_with(&test, &arm, &[
         Edit::Set("hal.sim.can_loss_rate", loss_rate.into()),
         Edit::Set("hal.sim.can_loss_mode", mode.into()),
         Edit::Set("hal.sim.spi_latency_s", 0.0.into()),
         Edit::Set("hal.sim.can_latency_s", 0.0.into()),
         Edit::Remove("joints[q4].sim.effects"),
+        Edit::Remove("joints[q4].params.include"),
+        Edit::Set("joints[q4].params.stiffness_nm_per_rad", 113.78.into()),
     ]);
     let loaded = jointctl_config::load(&path).unwrap();
     let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());

@@ -88,7 +88,7 @@ fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
     hal.set_encoder("enc_shoulder_pulley_a", Reading::valid(0.5));
     hal.set_encoder("enc_shoulder_pulley_b", Reading::valid(0.1));
     // Elbow: output 0.25, motor 0.1 -> deflection 2 * 0.1 - 0.25 = -0.05 (eq. 3.2, motor side
-    // minus output), 113.78 * -0.05.
+    // minus output), times the first-order fit the elbow's params include (section 3.3.2).
     hal.set_encoder("enc_q4_out", Reading::valid(0.25));
     hal.set_drive("elmo_q4", 0.1);
     // Wrist q5: its compliance is its drive's P gain (section 3.3.2): the deflection is the
@@ -123,7 +123,9 @@ fn every_joint_of_the_sherpa_config_is_observed_from_raw_readings() {
     close(s[2].stiffness(), 8.3e4, "q3 stiffness");
 
     close(s[3].deflection(), -0.05, "q4 deflection");
-    close(s[3].torque(), 113.78 * -0.05, "q4 torque");
+    let elbow = PivotCharacteristic::from_spec(&params_characteristic(&loaded, "q4")).unwrap();
+    close(s[3].torque(), elbow.evaluate(0.0, -0.05).torque_nm, "q4 torque");
+    assert!((elbow.evaluate(0.0, -0.05).stiffness_nm_per_rad - 113.78).abs() < 10.0, "the elbow's fitted stiffness is near section 3.3.2's 113.78 Nm/rad");
     close(s[4].deflection(), -0.08, "q5 deflection");
     close(s[4].torque(), 70.0966 * -0.08, "q5 torque");
 

@@ -14,7 +14,8 @@ use crate::{ExperimentError, locate};
 /// The settings and motion of a characterisation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
-    /// Pivot settings [mm], in the order recorded.
+    /// Pivot settings [mm], in the order recorded; empty for a joint without one (an elastic
+    /// joint: one recording).
     pub pivots_mm: Vec<f64>,
     /// Torque the deflection amplitude aims at [Nm]: `amplitude = torque / K(pivot) + play`.
     pub target_torque_nm: f64,
@@ -56,6 +57,19 @@ impl Plan {
         }
     }
 
+    /// Section 3.3.2's characterisation of an elastic joint (the elbow q4): one setting, the
+    /// output deflected back and forth. Assumed as for the shoulder: 20 Nm (figure 3.9 prints
+    /// no range; two thirds of the elbow's assumed 30 Nm limit), at most 0.35 rad, two cycles of
+    /// 0.2 Hz at 100 Hz.
+    ///
+    /// ```
+    /// let plan = jointctl_experiments::characterise::Plan::elastic();
+    /// assert!(plan.pivots_mm.is_empty() && plan.angles_deg.is_empty());
+    /// ```
+    pub fn elastic() -> Plan {
+        Plan { pivots_mm: Vec::new(), target_torque_nm: 20.0, ..Plan::shoulder() }
+    }
+
     /// Section 3.5.2's wrist characterisation: eleven settings, 0 to 50 mm in 5 mm steps, each
     /// along four directions (0, 45, 90, 135 deg). Assumed as for the shoulder: the torque aimed
     /// at is the wrist's largest characterised one (3 Nm, [`jointctl_models::assumed::WRIST_MAX_TORQUE_NM`];
@@ -91,7 +105,7 @@ fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64, angle_deg:
             let lever = LeverArm { lever_length_m: *lever_length_m, crank_radius_m: *crank_radius_m, spring_n_per_m: *spring_n_per_m, pivot_offset_m: *pivot_offset_m };
             Ok((lever.stiffness_at(pivot_mm) * (1.0 + anisotropy * (2.0 * angle_deg.to_radians()).cos()), *dead_zone_rad))
         }
-        Some(ElementSimConfig::Linear { stiffness_nm_per_rad }) => Ok((*stiffness_nm_per_rad, 0.0)),
+        Some(ElementSimConfig::Linear { stiffness_nm_per_rad }) => Ok((*stiffness_nm_per_rad, sim.effects.dead_zone_rad)),
         _ => Err(ExperimentError(format!(
             "`{joint}`: a characterisation over pivot settings needs a simulated `lever_arm` (or `linear`) element, whose stiffness chooses the deflections; a `pivot_table` element is the observer's own table"
         ))),
@@ -112,16 +126,17 @@ fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64, angle_deg:
 pub fn characterise(loaded: &LoadedConfig, loader: &PluginLoader, joint: &str, plan: &Plan) -> Result<Vec<Sample>, ExperimentError> {
     let mut out: Vec<Sample> = Vec::new();
     let angles = if plan.angles_deg.is_empty() { vec![0.0] } else { plan.angles_deg.clone() };
-    for &pivot_mm in &plan.pivots_mm {
+    let settings: Vec<Option<f64>> = if plan.pivots_mm.is_empty() { vec![None] } else { plan.pivots_mm.iter().map(|&p| Some(p)).collect() };
+    for &pivot_mm in &settings {
         for &angle_deg in &angles {
-            let (k, play) = plant_stiffness(loaded, joint, pivot_mm, angle_deg)?;
+            let (k, play) = plant_stiffness(loaded, joint, pivot_mm.unwrap_or(0.0), angle_deg)?;
             let amplitude_rad = (plan.target_torque_nm / k + play).min(plan.max_deflection_rad);
             let opts = RecordOptions {
                 joint: joint.to_string(),
                 amplitude_rad,
                 frequency_hz: plan.frequency_hz,
                 duration_s: plan.cycles / plan.frequency_hz,
-                pivot_mm: Some(pivot_mm),
+                pivot_mm,
                 angle_deg,
                 rate_hz: plan.rate_hz,
             };

@@ -71,6 +71,11 @@ pub struct Row {
     pub nrmse_observer_vs_sensor: f64,
     /// Mean(observed - sensor) [Nm]: the offset's constant part.
     pub offset_nm: f64,
+    /// Vibration the F/T sensor sees [Nm]: the RMS of its torque less its centred 0.2 s moving
+    /// average (what lies above about 5 Hz: structural modes, a ringing loop, noise), for sine
+    /// and cosine references of at most 1 Hz, whose own content the average keeps. Sections 5.1
+    /// and 5.2 saw the shoulder vibrate at low stiffness and the wrist at high stiffness.
+    pub ripple_nm: Option<f64>,
     /// Phase lag of the sensor torque behind the reference [deg] (sine and cosine).
     pub phase_lag_deg: Option<f64>,
     /// Sensor amplitude / reference amplitude at the reference frequency (sine and cosine).
@@ -256,6 +261,7 @@ fn score(joint: &str, scenario: Scenario, reference: Reference, pivot_mm: Option
         let lag = (pr - ps).to_degrees().rem_euclid(360.0);
         (Some(if lag > 180.0 { lag - 360.0 } else { lag }), Some(asn / ar))
     };
+    let ripple_nm = (waveform != Waveform::Step && frequency_hz <= 1.0).then(|| ripple(&scored.iter().map(|p| p.3).collect::<Vec<_>>(), &scored.iter().map(|p| p.0).collect::<Vec<_>>())).flatten();
     Row {
         joint: joint.to_string(),
         scenario: scenario.name().to_string(),
@@ -267,11 +273,30 @@ fn score(joint: &str, scenario: Scenario, reference: Reference, pivot_mm: Option
         nrmse_sensor: rmse(|p| p.3) / amplitude,
         nrmse_observer_vs_sensor,
         offset_nm,
+        ripple_nm,
         phase_lag_deg,
         gain,
         trace,
         together: String::new(),
     }
+}
+
+/// RMS of `x` less its centred moving average over 0.2 s [x's unit]; `None` when a reading is
+/// missing or the record is shorter than two windows.
+fn ripple(x: &[f64], t: &[f64]) -> Option<f64> {
+    let dt = (t.last()? - t.first()?) / (t.len().max(2) - 1) as f64;
+    let half = ((0.1 / dt).round() as usize).max(1);
+    if x.len() < 4 * half + 1 || x.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mut prefix = vec![0.0; x.len() + 1];
+    for (i, v) in x.iter().enumerate() {
+        prefix[i + 1] = prefix[i] + v;
+    }
+    let inner = half..x.len() - half;
+    let count = inner.len() as f64;
+    let sum: f64 = inner.map(|i| (x[i] - (prefix[i + half + 1] - prefix[i - half]) / (2 * half + 1) as f64).powi(2)).sum();
+    Some((sum / count).sqrt())
 }
 
 fn waveform_name(w: Waveform) -> &'static str {

@@ -87,14 +87,14 @@ pub enum SimCommand {
         #[arg(long, default_value_t = 100.0)]
         rate: f64,
     },
-    /// Characterise a variable-stiffness joint over its pivot settings into one CSV for
-    /// `jointctl fit`: the shoulder (q2) at 0-45 mm in 5 mm steps (section 3.4.2; fit with
-    /// `--branches --order 3`), the wrist at 0-50 mm along 0/45/90/135 deg (section 3.5.2; fit
-    /// with `--order 4`).
+    /// Characterise a joint into one CSV for `jointctl fit`: the shoulder (q2) at 0-45 mm in
+    /// 5 mm steps (section 3.4.2; fit with `--branches --order 3`), the wrist at 0-50 mm along
+    /// 0/45/90/135 deg (section 3.5.2; fit with `--order 4`), an elastic joint (the elbow q4) at
+    /// its one setting (section 3.3.2; fit with `--order 1`).
     Characterise {
         /// The arm description (simulated backend).
         config: PathBuf,
-        /// The joint: q2, or the wrist (`wrist`, q6 or q7).
+        /// The joint: q2, the wrist (`wrist`, q6 or q7), or q4.
         #[arg(long)]
         joint: String,
         /// Output CSV file.
@@ -135,12 +135,12 @@ fn thesis_settings(loaded: &jointctl_config::LoadedConfig, joint: &str, wrist: b
 
 fn table(rows: &[Row]) -> String {
     let mut t = String::from(
-        "| joint | scenario | reference | f [Hz] | pivot [mm] | NRMSE observed | NRMSE sensor | NRMSE observed vs sensor | offset [Nm] | phase lag [deg] | gain |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| joint | scenario | reference | f [Hz] | pivot [mm] | NRMSE observed | NRMSE sensor | NRMSE observed vs sensor | offset [Nm] | ripple [Nm] | phase lag [deg] | gain |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(
             t,
-            "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} | {} |",
             r.joint,
             r.scenario,
             if r.together.is_empty() { r.reference.clone() } else { format!("{} (with {})", r.reference, r.together) },
@@ -150,6 +150,7 @@ fn table(rows: &[Row]) -> String {
             r.nrmse_sensor,
             r.nrmse_observer_vs_sensor,
             r.offset_nm,
+            r.ripple_nm.map_or("-".into(), |p| format!("{p:.3}")),
             r.phase_lag_deg.map_or("-".into(), |p| format!("{p:.1}")),
             r.gain.map_or("-".into(), |g| format!("{g:.2}"))
         );
@@ -363,14 +364,20 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                 Err(e) => return crate::fail_err(e),
             };
             // A 2-DOF joint (the wrist, by its name or a DOF's) gets section 3.5.2's plan, along
-            // four directions; a 1-DOF VSA section 3.4.2's.
+            // four directions; a 1-DOF VSA section 3.4.2's; a joint without a pivot (the elbow)
+            // section 3.3.2's single setting.
             let entry = loaded.config.joints.iter().find(|j| j.name == joint || j.dof_names().contains(&joint.as_str()));
             let two = entry.is_some_and(|e| e.dof_names().len() == 2 && jointctl_experiments::record::is_directional(e));
             let dof = match entry {
                 Some(e) if two => e.dof_names()[0].to_string(),
                 _ => joint.clone(),
             };
-            let plan = if two { jointctl_experiments::characterise::Plan::wrist() } else { jointctl_experiments::characterise::Plan::shoulder() };
+            let has_pivot = entry.and_then(|e| e.sim.as_ref()).is_some_and(|s| s.pivot.is_some());
+            let plan = match (two, has_pivot) {
+                (true, _) => jointctl_experiments::characterise::Plan::wrist(),
+                (false, true) => jointctl_experiments::characterise::Plan::shoulder(),
+                (false, false) => jointctl_experiments::characterise::Plan::elastic(),
+            };
             let samples = match jointctl_experiments::characterise::characterise(&loaded, &loader, &dof, &plan) {
                 Ok(s) => s,
                 Err(e) => return crate::fail_err(e),
@@ -382,7 +389,8 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
             if let Err(e) = write_csv(&samples, None, std::io::BufWriter::new(file)) {
                 return crate::fail(format!("cannot write {}: {e}", out.display()));
             }
-            eprintln!("{} samples at {} pivot settings{} written to {}", samples.len(), plan.pivots_mm.len(), if two { " and 4 directions" } else { "" }, out.display());
+            let settings = if plan.pivots_mm.is_empty() { "one setting".to_string() } else { format!("{} pivot settings", plan.pivots_mm.len()) };
+            eprintln!("{} samples at {settings}{} written to {}", samples.len(), if two { " and 4 directions" } else { "" }, out.display());
             ExitCode::SUCCESS
         }
     }
