@@ -30,6 +30,12 @@ pub const MAX_DOF: usize = 4;
 /// and every shared-memory payload is sized by it.
 pub const MAX_ARM_DOF: usize = 16;
 
+/// Most encoders of one arm (the SHERPA arm has 13, section 2.2): every shared-memory payload
+/// of raw readings is sized by it and the config validates against it.
+pub const MAX_ARM_ENCODERS: usize = 32;
+/// Most drives of one arm (the SHERPA arm has 9, section 2.2).
+pub const MAX_ARM_DRIVES: usize = 16;
+
 /// Longest joint or device name in bytes: names travel in fixed 16-byte, NUL-padded fields.
 pub const MAX_JOINT_NAME: usize = 15;
 /// Longest device (drive, encoder) name: published whole in diagnostics (a 48-byte field with

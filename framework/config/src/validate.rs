@@ -284,5 +284,14 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if total_dof > MAX_ARM_DOF {
         err("joints".into(), format!("{total_dof} DOFs exceed the maximum of {MAX_ARM_DOF}"));
     }
+    // Raw readings travel in fixed-size shared-memory samples.
+    let encoders: usize = c.buses.spi.iter().map(|b| b.encoders.len()).sum();
+    if encoders > jointctl_api::MAX_ARM_ENCODERS {
+        err("buses.spi".into(), format!("{encoders} encoders exceed the maximum of {}", jointctl_api::MAX_ARM_ENCODERS));
+    }
+    let drives: usize = c.buses.can.iter().map(|b| b.drives.len()).sum();
+    if drives > jointctl_api::MAX_ARM_DRIVES {
+        err("buses.can".into(), format!("{drives} drives exceed the maximum of {}", jointctl_api::MAX_ARM_DRIVES));
+    }
     errs
 }

@@ -142,3 +142,14 @@ fn a_huge_value_is_shortened_in_the_error() {
     assert!(rendered.len() < 1000, "{} bytes", rendered.len());
     assert!(rendered.contains("(5000000 bytes)"), "{rendered}");
 }
+
+#[test]
+fn more_encoders_than_a_raw_frame_carries_are_refused_at_the_bus() {
+    // Raw readings travel in fixed-size shared-memory samples (`<arm>/raw`): an arm with more
+    // devices than they hold would lose some silently.
+    let extra: String = (2..=jointctl_api::MAX_ARM_ENCODERS).map(|i| format!("        - {{name: x{i}, chip_select: {}}}\n", i + 10)).collect();
+    let text = GOOD.replacen("        - {name: e2, chip_select: 1}\n", &format!("        - {{name: e2, chip_select: 1}}\n{extra}"), 1);
+    let errs = parse_str(&text, "rig.yaml").unwrap_err();
+    let e = errs.0.iter().find(|e| e.field == "buses.spi").unwrap_or_else(|| panic!("{errs:?}"));
+    assert!(e.message.contains("33 encoders exceed the maximum of 32"), "{}", e.message);
+}

@@ -5,7 +5,10 @@
 //!
 //! Services per arm (`<arm>` is the YAML `arm:` name):
 //! - `<arm>/joint_state`: one [`ArmState`] per cycle;
-//! - `<arm>/diagnostics`: one [`Diagnostics`] per cycle.
+//! - `<arm>/diagnostics`: one [`Diagnostics`] per cycle;
+//! - `<arm>/raw`, `<arm>/raw_descriptor`, `<arm>/commands`: what the loop read and wrote, and the
+//!   commands it accepted ([`raw`]);
+//! - `<arm>/command`: requests (request-response).
 //!
 //! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v2`), so that
 //! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
@@ -72,6 +75,8 @@ macro_rules! named_codes {
         }
     };
 }
+
+pub mod raw;
 
 named_codes! {
     /// A joint DOF's control mode, as published in [`JointSample::mode`].
@@ -414,6 +419,7 @@ impl Diagnostics {
 /// ```
 /// let n = jointctl_ipc::ServiceNames::for_arm("sherpa");
 /// assert_eq!(n.joint_state, "sherpa/joint_state");
+/// assert_eq!(n.raw, "sherpa/raw");
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ServiceNames {
@@ -421,12 +427,24 @@ pub struct ServiceNames {
     pub joint_state: String,
     /// [`Diagnostics`] publish-subscribe service.
     pub diagnostics: String,
+    /// [`raw::RawFrame`] publish-subscribe service.
+    pub raw: String,
+    /// [`raw::RawDescriptor`] publish-subscribe service (one sample, kept).
+    pub raw_descriptor: String,
+    /// [`raw::CommandRecord`] publish-subscribe service: the accepted commands.
+    pub commands: String,
 }
 
 impl ServiceNames {
     /// Names derived from the arm's name.
     pub fn for_arm(arm: &str) -> Self {
-        ServiceNames { joint_state: format!("{arm}/joint_state"), diagnostics: format!("{arm}/diagnostics") }
+        ServiceNames {
+            joint_state: format!("{arm}/joint_state"),
+            diagnostics: format!("{arm}/diagnostics"),
+            raw: format!("{arm}/raw"),
+            raw_descriptor: format!("{arm}/raw_descriptor"),
+            commands: format!("{arm}/commands"),
+        }
     }
 }
 
@@ -676,6 +694,9 @@ macro_rules! service_opener {
 
 service_opener!(joint_state_service, create_joint_state_service, ArmState, "joint-state");
 service_opener!(diagnostics_service, create_diagnostics_service, Diagnostics, "diagnostics");
+service_opener!(raw_service, create_raw_service, raw::RawFrame, "raw-readings");
+service_opener!(raw_descriptor_service, create_raw_descriptor_service, raw::RawDescriptor, "raw-descriptor");
+service_opener!(commands_service, create_commands_service, raw::CommandRecord, "accepted-commands");
 
 /// Most trajectory points one command carries.
 pub const MAX_COMMAND_POINTS: usize = 64;

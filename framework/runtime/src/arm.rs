@@ -182,6 +182,10 @@ pub struct Arm {
     actuator: ActuatorFrame,
     hal: Box<dyn Hal>,
     devices: DeviceIndex,
+    /// Bus index of each encoder and each drive, in [`DeviceIndex`] order.
+    device_buses: (Vec<u32>, Vec<u32>),
+    /// The arm description's file, absolute when it could be resolved.
+    config_path: Option<std::path::PathBuf>,
 }
 
 fn roles(text: &str) -> Vec<(&str, bool)> {
@@ -369,6 +373,11 @@ impl Arm {
             actuator: ActuatorFrame::new(&devices),
             hal,
             devices,
+            device_buses: (
+                cfg.buses.spi.iter().enumerate().flat_map(|(b, bus)| bus.encoders.iter().map(move |_| b as u32)).collect(),
+                cfg.buses.can.iter().enumerate().flat_map(|(b, bus)| bus.drives.iter().map(move |_| b as u32)).collect(),
+            ),
+            config_path: std::fs::canonicalize(&src.file).ok(),
         })
     }
 
@@ -575,5 +584,23 @@ impl Arm {
     /// The set-points written in the last cycle, in device order.
     pub fn last_setpoints(&self) -> &[MotorSetpoint] {
         &self.actuator.drives
+    }
+
+    /// This cycle's readings as the HAL gave them, before any observer (in [`DeviceIndex`] order).
+    pub fn last_readings(&self) -> &SensorFrame {
+        &self.sensor
+    }
+
+    /// Encoders and drives with their bus index (`buses.spi[i]`, `buses.can[i]`), in the
+    /// frames' order.
+    pub fn raw_devices(&self) -> (Vec<(&str, u32)>, Vec<(&str, u32)>) {
+        let encoders = self.devices.encoders.iter().map(String::as_str).zip(self.device_buses.0.iter().copied()).collect();
+        let drives = self.devices.drives.iter().map(String::as_str).zip(self.device_buses.1.iter().copied()).collect();
+        (encoders, drives)
+    }
+
+    /// The arm description's file (absolute), when known.
+    pub fn config_path(&self) -> Option<&std::path::Path> {
+        self.config_path.as_deref()
     }
 }

@@ -12,8 +12,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::service::port_factory::server::ServerCreateError;
 use iceoryx2::prelude::*;
+use iceoryx2::port::update_connections::UpdateConnections;
 use jointctl_config::TimingConfig;
 use jointctl_modes::Mode;
+use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDrive, RawFrame, RawReading};
 use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, JointMode, JointSample, ServiceNames, encode_name};
 
 use crate::commands::{ArmCommand, CommandValidator};
@@ -136,6 +138,7 @@ pub struct RunReport {
 struct CycleRecord {
     state: ArmState,
     diagnostics: Diagnostics,
+    raw: RawFrame,
 }
 
 /// Capacity of the loop → publisher ring [cycles]: 64 ms at 1 kHz before records are dropped.
@@ -211,13 +214,17 @@ struct PublisherPorts {
     node: Node<ipc::Service>,
     state: Publisher<ipc::Service, ArmState, ()>,
     diagnostics: Publisher<ipc::Service, Diagnostics, ()>,
+    raw: Publisher<ipc::Service, RawFrame, ()>,
+    /// Kept so that its one sample stays in the service's history for late subscribers.
+    descriptor: Publisher<ipc::Service, RawDescriptor, ()>,
+    accepted: Publisher<ipc::Service, CommandRecord, ()>,
     server: iceoryx2::port::server::Server<ipc::Service, jointctl_ipc::CommandRequest, (), CommandResponse, ()>,
 }
 
 impl PublisherPorts {
     /// Creates the arm's node and services; a taken publisher or server slot means another
     /// runtime runs this arm.
-    fn open(scope: &jointctl_ipc::IpcScope, arm_name: &str, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
+    fn open(scope: &jointctl_ipc::IpcScope, arm_name: &str, limits: jointctl_ipc::PortLimits, description: &RawDescriptor) -> Result<Self, RunError> {
         let node = jointctl_ipc::create_node_in(scope, &format!("jointctl-run-{arm_name}"))?;
         let names = ServiceNames::for_arm(arm_name);
         let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
@@ -228,12 +235,28 @@ impl PublisherPorts {
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
+        let raw = jointctl_ipc::create_raw_service(&node, &names.raw, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.raw, e))?;
+        let descriptor = jointctl_ipc::create_raw_descriptor_service(&node, &names.raw_descriptor, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.raw_descriptor, e))?;
+        let sent = descriptor.loan_uninit().map(|s| s.write_payload(*description).send().is_ok()).unwrap_or(false);
+        if !sent {
+            tracing::warn!(service = %names.raw_descriptor, "could not publish the raw-reading descriptor");
+        }
+        let accepted = jointctl_ipc::create_commands_service(&node, &names.commands, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.commands, e))?;
         let command_name = jointctl_ipc::command_service_name(arm_name);
         let server = jointctl_ipc::command_service(&node, &command_name, Some(limits))?
             .server_builder()
             .create()
             .map_err(|e| port_error(arm_name, &command_name, e))?;
-        Ok(PublisherPorts { node, state, diagnostics, server })
+        Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, accepted, server })
     }
 
     /// Publishes the loop's records and answers commands until `stop`; returns the samples
@@ -246,27 +269,38 @@ impl PublisherPorts {
         stop: &AtomicBool,
     ) -> u64 {
         let mut failures = 0u64;
+        let mut accepted_count = 0u64;
         loop {
             let stopping = stop.load(Ordering::Acquire);
             while let Ok(rec) = records.pop() {
                 let ok_state = self.state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
                 let ok_diag = self.diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
-                failures += u64::from(!ok_state) + u64::from(!ok_diag);
+                let ok_raw = self.raw.loan_uninit().map(|s| s.write_payload(rec.raw).send().is_ok()).unwrap_or(false);
+                failures += u64::from(!ok_state) + u64::from(!ok_diag) + u64::from(!ok_raw);
             }
             // Commands are validated here, outside the control thread; only valid ones reach
-            // the loop, and every request gets an answer.
+            // the loop, and every request gets an answer. The accepted ones are published for
+            // recorders, numbered so that a lost one shows.
             while let Ok(Some(request)) = self.server.receive() {
                 let response = desk.answer(request.payload(), &mut commands);
+                if response.accepted == 1 {
+                    accepted_count += 1;
+                    let record = CommandRecord { sequence: accepted_count, stamp_ns: crate::timing::monotonic_ns(), request: *request.payload(), response };
+                    let ok = self.accepted.loan_uninit().map(|s| s.write_payload(record).send().is_ok()).unwrap_or(false);
+                    failures += u64::from(!ok);
+                }
                 let _ = request.send_copy(response);
             }
+            // A subscriber that arrived since gets the descriptor from the history now.
+            let _ = self.descriptor.update_connections();
             if stopping {
                 break;
             }
             std::thread::park_timeout(std::time::Duration::from_millis(5));
         }
-        let PublisherPorts { node, state, diagnostics, server } = self;
+        let PublisherPorts { node, state, diagnostics, raw, descriptor, accepted, server } = self;
         // Ports before the node: shared memory released in order.
-        drop((server, state, diagnostics, node));
+        drop((server, state, diagnostics, raw, descriptor, accepted, node));
         failures
     }
 }
@@ -306,11 +340,13 @@ impl ArmPublisher {
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
         let arm_name = arm.name.clone();
         let scope = scope.clone();
+        let (encoders, drives) = arm.raw_devices();
+        let description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, arm.config_path());
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
             .spawn(move || {
-                let ports = match PublisherPorts::open(&scope, &arm_name, limits) {
+                let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description) {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(()));
                         ports
@@ -331,7 +367,9 @@ impl ArmPublisher {
             }
             Err(_) => return Err(RunError::Thread("the publisher thread ended during setup".into())),
         }
-        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY });
+        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: RawFrame::EMPTY });
+        record.raw.encoder_count = description.encoder_count;
+        record.raw.drive_count = description.drive_count;
         record.state.joint_count = arm.dof_names.len() as u32;
         record.diagnostics.joint_count = record.state.joint_count;
         record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
@@ -349,8 +387,18 @@ impl ArmPublisher {
         Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), stop, drops: 0 })
     }
 
-    /// Fills the state part of this cycle's record.
+    /// Fills the state and raw parts of this cycle's record.
     pub fn publish_state(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64, final_sample: bool) {
+        let raw = &mut self.record.raw;
+        raw.cycle = cycle;
+        raw.stamp_ns = stamp_ns;
+        let readings = arm.last_readings();
+        for (out, r) in raw.encoders.iter_mut().zip(&readings.encoders) {
+            *out = RawReading::from_reading(r);
+        }
+        for ((out, r), sp) in raw.drives.iter_mut().zip(&readings.drives).zip(arm.last_setpoints()) {
+            *out = RawDrive::new(r, sp);
+        }
         let s = &mut self.record.state;
         s.cycle = cycle;
         s.stamp_ns = stamp_ns;
