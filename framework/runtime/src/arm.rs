@@ -195,6 +195,9 @@ fn roles(text: &str) -> Vec<(&str, bool)> {
     }).collect()
 }
 
+/// A device's name and its bus index in the YAML.
+pub type DeviceOnBus<'a> = (&'a str, u32);
+
 /// Each encoder role's and each drive role's device index in the frames.
 type RoleMaps = ([Option<usize>; MAX_ENCODERS], [Option<usize>; MAX_DRIVES]);
 
@@ -593,7 +596,7 @@ impl Arm {
 
     /// Encoders and drives with their bus index (`buses.spi[i]`, `buses.can[i]`), in the
     /// frames' order.
-    pub fn raw_devices(&self) -> (Vec<(&str, u32)>, Vec<(&str, u32)>) {
+    pub fn raw_devices(&self) -> (Vec<DeviceOnBus<'_>>, Vec<DeviceOnBus<'_>>) {
         let encoders = self.devices.encoders.iter().map(String::as_str).zip(self.device_buses.0.iter().copied()).collect();
         let drives = self.devices.drives.iter().map(String::as_str).zip(self.device_buses.1.iter().copied()).collect();
         (encoders, drives)
