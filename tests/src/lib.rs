@@ -25,6 +25,15 @@ pub fn jointctl() -> PathBuf {
     artifact("jointctl")
 }
 
+/// The interop venv's Python (`.ci/setup-python-venv` makes it; the README's test command runs
+/// it), or `JOINTCTL_PYTHON`.
+pub fn interop_python() -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let p = std::env::var_os("JOINTCTL_PYTHON").map(PathBuf::from).unwrap_or_else(|| root.join(".venv-interop/bin/python"));
+    assert!(p.exists(), "{} is missing: run `bash .ci/setup-python-venv` first (the README's test command does)", p.display());
+    p
+}
+
 /// A fresh scratch folder for one test.
 pub fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("jointctl-test-{}-{name}", std::process::id()));

@@ -12,11 +12,8 @@ fn root() -> PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// The interop venv's Python (`.ci/setup-python-venv` makes it; the README's test command runs it).
 fn python() -> PathBuf {
-    let p = std::env::var_os("JOINTCTL_PYTHON").map(PathBuf::from).unwrap_or_else(|| root().join(".venv-interop/bin/python"));
-    assert!(p.exists(), "{} is missing: run `bash .ci/setup-python-venv` first (the README's test command does)", p.display());
-    p
+    jointctl_tests::interop_python()
 }
 
 const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";

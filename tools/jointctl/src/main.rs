@@ -4,6 +4,7 @@ mod cmd;
 mod experiment;
 mod ident;
 mod inspect;
+mod record;
 mod run;
 mod transmission;
 
@@ -57,6 +58,9 @@ enum Command {
     Identify(ident::IdentifyArgs),
     /// Send a command to a running arm (exit 0 accepted, 1 refused or no runtime).
     Cmd(cmd::CmdArgs),
+    /// Record a running arm (raw readings, set-points, joint states, diagnostics, accepted
+    /// commands) into one MCAP file that Foxglove opens.
+    Record(record::RecordArgs),
     /// Read a running arm's shared memory from this separate process.
     Inspect {
         #[command(subcommand)]
@@ -174,6 +178,7 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Inspect { command } => inspect::run(command),
+        Command::Record(args) => record::run(args),
         Command::Cmd(args) => cmd::run(args),
         Command::Fit(args) => ident::run_fit(args),
         Command::Identify(args) => ident::run_identify(args),

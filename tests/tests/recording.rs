@@ -1,0 +1,172 @@
+//! `jointctl record`: a running arm into one MCAP file, read back by the `mcap` crate and by
+//! an outside client (PyPI `mcap`, in the interop venv).
+
+use std::process::{Child, Command, Stdio};
+
+use jointctl_tests::{arm_name, interop_python, jointctl, scratch, sherpa_with};
+
+fn spawn_run(config: &std::path::Path) -> Child {
+    Command::new(jointctl()).arg("run").arg(config).args(["--duration", "30"]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap()
+}
+
+fn stop(mut run: Child) {
+    let _ = run.kill();
+    let _ = run.wait();
+}
+
+/// The arm runs, q2 follows a torque sine, and `record --duration 3 --json` writes the file.
+fn record_sine(test: &str) -> (std::path::PathBuf, serde_json::Value, String) {
+    let arm = arm_name(test);
+    let config = sherpa_with(test, &arm, &[]);
+    let run = spawn_run(&config);
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
+    let out = scratch(&format!("{test}-out")).join("r.mcap");
+    let mut record = Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "3", "--json", "--out"]).arg(&out).stdout(Stdio::piped()).spawn().unwrap();
+    // The command after the recorder has subscribed: it is in the file.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let cmd = Command::new(jointctl()).args(["cmd", "torque", "q2", "--sine", "5", "--freq", "0.5", "--arm", &arm]).output().unwrap();
+    let recorded = record.wait().unwrap();
+    let mut stdout = String::new();
+    std::io::Read::read_to_string(record.stdout.as_mut().unwrap(), &mut stdout).unwrap();
+    stop(run);
+    assert!(cmd.status.success(), "{}", String::from_utf8_lossy(&cmd.stderr));
+    assert!(recorded.success(), "record failed");
+    let summary: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON object");
+    (out, summary, arm)
+}
+
+#[test]
+fn a_recording_holds_every_channel_gapless_with_its_schema_metadata_and_config() {
+    let (file, summary, arm) = record_sine("record");
+    for key in ["file", "duration_s", "messages", "lost"] {
+        assert!(summary.get(key).is_some(), "{key} in {summary}");
+    }
+    assert_eq!(summary["lost"], 0, "{summary}");
+    let duration = summary["duration_s"].as_f64().unwrap();
+    assert!((3.0..3.2).contains(&duration), "{summary}");
+    // 40 Hz for 3 s: about 121 samples per cycle channel.
+    for channel in ["raw", "joint_state", "diagnostics"] {
+        let n = summary["messages"][channel].as_u64().unwrap();
+        assert!((115..=125).contains(&n), "{channel}: {n} messages");
+    }
+    assert_eq!(summary["messages"]["commands"], 1, "the torque command");
+
+    let bytes = std::fs::read(&file).unwrap();
+    let summary_section = mcap::Summary::read(&bytes).unwrap().expect("an indexed file with a summary");
+    let topics: std::collections::BTreeMap<String, (String, String, String)> = summary_section
+        .channels
+        .values()
+        .map(|c| {
+            let s = c.schema.as_ref().unwrap();
+            (c.topic.clone(), (c.message_encoding.clone(), s.encoding.clone(), String::from_utf8_lossy(&s.data).into_owned()))
+        })
+        .collect();
+    assert_eq!(topics.keys().collect::<Vec<_>>(), ["commands", "diagnostics", "joint_state", "raw"]);
+    for (encoding, schema_encoding, schema) in topics.values() {
+        assert_eq!((encoding.as_str(), schema_encoding.as_str()), ("json", "jsonschema"));
+        let s: serde_json::Value = serde_json::from_str(schema).unwrap();
+        assert_eq!(s["type"], "object");
+    }
+    let mut states = Vec::new();
+    let mut raws = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        assert_eq!(m.log_time, v["stamp_ns"].as_u64().unwrap(), "log time is the cycle's stamp");
+        match m.channel.topic.as_str() {
+            "joint_state" => states.push(v),
+            "raw" => raws.push(v),
+            _ => {}
+        }
+    }
+    // Consecutive cycles, and q2 in torque mode with its reference once the command arrived.
+    assert!(states.windows(2).all(|w| w[1]["cycle"].as_u64() == w[0]["cycle"].as_u64().map(|c| c + 1)));
+    let q2 = |s: &serde_json::Value| s["joints"].as_array().unwrap().iter().find(|j| j["name"] == "q2").unwrap().clone();
+    let last = q2(states.last().unwrap());
+    assert_eq!(last["mode"], "torque", "{last}");
+    assert!(last["reference_torque_nm"].is_f64() && last["deflection_rad"].is_f64(), "{last}");
+    // The raw frames name their 13 encoders and 9 drives, and the drives were sent set-points.
+    let frame = raws.last().unwrap();
+    assert_eq!(frame["encoders"].as_array().unwrap().len(), 13);
+    assert_eq!(frame["drives"][1]["name"], "elmo_shoulder_a");
+    assert!(raws.iter().any(|f| f["drives"][1]["action"] == "move"), "the shoulder's drives moved");
+    // Metadata: the wall clock at the start; attachments: the arm's YAML and its includes.
+    let metadata: Vec<(String, std::collections::BTreeMap<String, String>)> = summary_section
+        .metadata_indexes
+        .iter()
+        .map(|i| {
+            let m = mcap::read::metadata(&bytes, i).unwrap();
+            (m.name, m.metadata)
+        })
+        .collect();
+    assert_eq!(metadata.len(), 1);
+    assert_eq!(metadata[0].1["arm"], arm);
+    let start: u64 = metadata[0].1["start_unix_ns"].parse().unwrap();
+    assert!(start > 1_700_000_000_000_000_000, "wall-clock time in ns: {start}");
+    let attached: Vec<String> = summary_section.attachment_indexes.iter().map(|a| a.name.clone()).collect();
+    assert!(attached.iter().any(|n| n.ends_with(".yaml")) && attached.iter().any(|n| n == "sherpa_q2_characteristic.yaml"), "{attached:?}");
+}
+
+#[test]
+fn sigint_finishes_a_valid_indexed_file() {
+    let test = "record-sigint";
+    let arm = arm_name(test);
+    let config = sherpa_with(test, &arm, &[]);
+    let run = spawn_run(&config);
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success());
+    let out = scratch(&format!("{test}-out")).join("r.mcap");
+    let record = Command::new(jointctl()).args(["record", "--arm", &arm, "--json", "--out"]).arg(&out).stdout(Stdio::piped()).spawn().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    // SAFETY: kill() with a child's pid and a valid signal number.
+    unsafe { libc::kill(record.id() as i32, libc::SIGINT) };
+    let done = record.wait_with_output().unwrap();
+    stop(run);
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&done.stdout).unwrap();
+    let n = summary["messages"]["joint_state"].as_u64().unwrap();
+    assert!(n > 20, "{summary}");
+    let bytes = std::fs::read(&out).unwrap();
+    let index = mcap::Summary::read(&bytes).unwrap().expect("SIGINT still writes the summary and index");
+    let stats = index.stats.expect("statistics");
+    assert_eq!(stats.channel_message_counts.values().sum::<u64>(), summary["messages"].as_object().unwrap().values().map(|v| v.as_u64().unwrap()).sum::<u64>());
+}
+
+#[test]
+fn recording_an_arm_that_is_not_running_says_so() {
+    let out = scratch("record-none").join("r.mcap");
+    let r = Command::new(jointctl()).args(["record", "--arm", &arm_name("record-none"), "--timeout", "0.2", "--out"]).arg(&out).output().unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("is `jointctl run` running this arm in this domain?"), "{err}");
+    assert!(!out.exists(), "no file for nothing");
+}
+
+/// Issue item 6: an outside client reads the file as it is.
+#[test]
+fn pypi_mcap_reads_the_recording() {
+    let (file, summary, _) = record_sine("record-py");
+    let script = r#"
+import json, sys
+from mcap.reader import make_reader
+with open(sys.argv[1], "rb") as f:
+    reader = make_reader(f)
+    s = reader.get_summary()
+    counts = {s.channels[c].topic: n for c, n in s.statistics.channel_message_counts.items()}
+    encodings = sorted({(c.message_encoding, s.schemas[c.schema_id].encoding) for c in s.channels.values()})
+    state = None
+    for schema, channel, message in reader.iter_messages(topics=["joint_state"]):
+        state = json.loads(message.data)
+    q2 = [j for j in state["joints"] if j["name"] == "q2"][0]
+    print(json.dumps({"counts": counts, "encodings": encodings, "q2_mode": q2["mode"], "joints": len(state["joints"])}))
+"#;
+    let py = Command::new(interop_python()).args(["-c", script]).arg(&file).output().unwrap();
+    assert!(py.status.success(), "{}", String::from_utf8_lossy(&py.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
+    for channel in ["raw", "joint_state", "diagnostics", "commands"] {
+        assert_eq!(v["counts"][channel], summary["messages"][channel], "{v}");
+    }
+    assert_eq!(v["encodings"], serde_json::json!([["json", "jsonschema"]]));
+    assert_eq!((v["q2_mode"].as_str(), v["joints"].as_u64()), (Some("torque"), Some(7)));
+}

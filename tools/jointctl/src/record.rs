@@ -1,0 +1,68 @@
+//! `jointctl record`: a running arm's raw readings, joint states, diagnostics and accepted
+//! commands into one MCAP file (see `jointctl_record`).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use clap::Args;
+
+#[derive(Args)]
+pub struct RecordArgs {
+    /// The arm (its YAML `arm:` name).
+    #[arg(long, default_value = "sherpa")]
+    arm: String,
+    /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
+    #[arg(long)]
+    domain: Option<String>,
+    /// Shared-memory root of the arm (its YAML `ipc.root`).
+    #[arg(long, value_name = "DIR")]
+    ipc_root: Option<PathBuf>,
+    /// The MCAP file to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// Stop after this long [s] of the arm's time; without it, until SIGINT/SIGTERM or the arm
+    /// stops.
+    #[arg(long, value_parser = crate::seconds)]
+    duration: Option<f64>,
+    /// Give up when the arm's services do not appear, or nothing arrives, for this long [s].
+    #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
+    timeout: f64,
+    /// Print one JSON object: `{"file", "duration_s", "messages": {...}, "lost", ...}`.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: RecordArgs) -> ExitCode {
+    // SIGINT and SIGTERM end the recording with a valid, indexed file.
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        if let Err(e) = signal_hook::flag::register(signal, Arc::clone(&stop)) {
+            return crate::fail(format!("cannot install the signal handlers: {e}"));
+        }
+    }
+    let opts = jointctl_record::recorder::RecordOptions {
+        arm: a.arm,
+        scope: jointctl_ipc::IpcScope { domain: a.domain, root: a.ipc_root, group: None },
+        out: a.out,
+        duration_s: a.duration,
+        timeout_s: a.timeout,
+    };
+    let summary = match jointctl_record::recorder::record(&opts, &stop) {
+        Ok(s) => s,
+        Err(e) => return crate::fail_err(e),
+    };
+    if a.json {
+        println!("{}", summary.json());
+    } else {
+        eprintln!("{}: {:.2} s of arm `{}`, {} bytes", summary.file.display(), summary.duration_s, opts.arm, summary.bytes);
+        for (channel, n) in &summary.messages {
+            eprintln!("  {channel:<12} {n:>8} messages, {} lost", summary.lost_by_channel.get(channel).copied().unwrap_or(0));
+        }
+    }
+    if summary.lost() > 0 {
+        eprintln!("warning: {} samples lost (the recorder fell behind, or the runtime dropped records: see diagnostics.publish_drops)", summary.lost());
+    }
+    ExitCode::SUCCESS
+}
