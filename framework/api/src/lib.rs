@@ -35,6 +35,8 @@ pub const MAX_ARM_DOF: usize = 16;
 pub const MAX_ARM_ENCODERS: usize = 32;
 /// Most drives of one arm (the SHERPA arm has 9, section 2.2).
 pub const MAX_ARM_DRIVES: usize = 16;
+/// Most force/torque sensor axes of one arm (chapter 5 validated with one ATI Mini40 at a time).
+pub const MAX_ARM_TORQUE_SENSORS: usize = 8;
 
 /// Longest joint or device name in bytes: names travel in fixed 16-byte, NUL-padded fields.
 pub const MAX_JOINT_NAME: usize = 15;

@@ -21,3 +21,9 @@ pub fn finite_pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error
     let [a, b] = <[f64; 2]>::deserialize(d)?;
     Ok([check(a)?, check(b)?])
 }
+
+/// Three finite `f64` (a vector).
+pub fn finite_triple<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    let [a, b, c] = <[f64; 3]>::deserialize(d)?;
+    Ok([check(a)?, check(b)?, check(c)?])
+}

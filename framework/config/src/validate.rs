@@ -171,6 +171,47 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             }
         }
     }
+    let mut torque_sensor_names = HashSet::new();
+    for (i, f) in c.buses.force_torque.iter().enumerate() {
+        let path = format!("buses.force_torque[{i}]");
+        if let Some(first) = devices.insert(&f.name, path.clone()) {
+            err(format!("{path}.name"), format!("device `{}` is already defined at {first}", f.name));
+        }
+        if !valid_name(&f.name, jointctl_api::MAX_DEVICE_NAME) {
+            err(format!("{path}.name"), device_name_problem(&f.name));
+        }
+        torque_sensor_names.insert(f.name.as_str());
+        if !(f.axis.iter().map(|a| a * a).sum::<f64>() > 1e-12) {
+            err(format!("{path}.axis"), format!("must be a direction (not zero), got {:?}", f.axis));
+        }
+        if !(f.range_nm > 0.0) {
+            err(format!("{path}.range_nm"), format!("must be > 0, got {}", f.range_nm));
+        }
+        if let Some(n) = &f.netft {
+            if !n.address.rsplit_once(':').is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok_and(|p| p > 0)) {
+                err(format!("{path}.netft.address"), format!("must be HOST:PORT (ATI's default 192.168.1.1:49152), got `{}`", n.address));
+            }
+            for (field, v) in [("counts_per_force", n.counts_per_force), ("counts_per_torque", n.counts_per_torque), ("timeout_s", n.timeout_s)] {
+                if !(v > 0.0) {
+                    err(format!("{path}.netft.{field}"), format!("must be > 0, got {v}"));
+                }
+            }
+        }
+    }
+    if c.buses.force_torque.len() > jointctl_api::MAX_ARM_TORQUE_SENSORS {
+        err("buses.force_torque".into(), format!("{} force/torque sensors exceed the maximum of {}", c.buses.force_torque.len(), jointctl_api::MAX_ARM_TORQUE_SENSORS));
+    }
+    for (j, joint) in c.joints.iter().enumerate() {
+        if !joint.dofs.is_empty() && joint.torque_sensor.is_some() {
+            err(format!("joints[{j}].torque_sensor"), "with `dofs`, give each DOF its `torque_sensor` under `dofs[i]`".into());
+            continue;
+        }
+        for (field, sensor) in joint.dof_torque_sensors() {
+            if let Some(s) = sensor.filter(|s| !torque_sensor_names.contains(s)) {
+                err(format!("joints[{j}].{field}"), format!("no force/torque sensor named `{s}` is defined under buses.force_torque"));
+            }
+        }
+    }
     for (b, bus) in c.buses.spi.iter().enumerate() {
         for (i, e) in bus.encoders.iter().enumerate() {
             let Some(s) = &e.sim else { continue };

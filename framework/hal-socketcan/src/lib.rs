@@ -11,11 +11,15 @@
 //! cannot leave a drive moving: the drive stops on its own after `comm_loss_timeout_ms`. The
 //! write step sends the host's heartbeat every `host_heartbeat_ms`.
 //!
+//! Force/torque sensors are read from ATI Net F/T boxes over UDP ([`netft`]).
+//!
 //! In the loop (never blocking): read drains the socket (TPDO1 statusword +
 //! position, heartbeats, EMCY, error frames) and each encoder's pipelined SPI answer; write sends
 //! every drive's RPDO1 (controlword + target) and one SYNC with its counter. The CiA 402 enable
 //! sequence advances one step per cycle, and only once the drive's actual position is known (the
 //! first target is where the drive is). A faulted drive stays faulted until [`Hal::reset_faults`].
+
+pub mod netft;
 
 use std::io::ErrorKind;
 use std::time::{Duration, Instant};
@@ -99,6 +103,7 @@ pub struct HardwareHal {
     last_host_heartbeat_s: f64,
     buses: Vec<CanBus>,
     encoders: Vec<Encoder>,
+    torque_sensors: netft::NetFtSensors,
 }
 
 fn to_socketcan(f: &Frame) -> Option<CanFrame> {
@@ -286,6 +291,7 @@ impl HardwareHal {
             last_host_heartbeat_s: f64::NEG_INFINITY,
             buses,
             encoders,
+            torque_sensors: netft::NetFtSensors::new(&config.buses.force_torque, 0.0)?,
         };
         // Pipelined SPI: the first command's answer arrives with the first read.
         for e in &mut hal.encoders {
@@ -368,6 +374,7 @@ impl Hal for HardwareHal {
             };
             frame.encoders[i] = e.conditioner.update(sample, now);
         }
+        self.torque_sensors.read(&mut frame.torque_sensors, now);
         result
     }
 
@@ -445,9 +452,9 @@ impl Hal for HardwareHal {
                 i += 1;
             }
         }
-        for e in &self.encoders {
+        let encoders = self.encoders.iter().map(|e| e.conditioner.counters());
+        for l in encoders.chain(self.torque_sensors.counters()) {
             if let Some(h) = out.get_mut(i) {
-                let l = e.conditioner.counters();
                 *h = jointctl_hal::DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };
             }
             i += 1;

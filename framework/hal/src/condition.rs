@@ -58,6 +58,12 @@ impl Plausibility {
         }
     }
 
+    /// Limits for a force/torque sensor's torque [Nm]: any change is plausible (a contact can
+    /// change it at once); the range check is the sensor's own, before the conditioner.
+    pub fn torque_sensor() -> Self {
+        Plausibility { max_rate_rad_s: 0.0, tolerance_rad: f64::INFINITY, wrap_rad: None, zero_band_rad: None }
+    }
+
     /// Limits for a drive position reported over CAN.
     pub fn drive_position(max_rate_rad_s: f64) -> Self {
         Plausibility { max_rate_rad_s, tolerance_rad: 1e-3, wrap_rad: None, zero_band_rad: Some(1e-3) }

@@ -29,6 +29,8 @@ pub struct DeviceIndex {
     pub encoders: Vec<String>,
     /// Drive names; `SensorFrame::drives[i]` and `ActuatorFrame::drives[i]` are `drives[i]`.
     pub drives: Vec<String>,
+    /// Force/torque sensor names; `SensorFrame::torque_sensors[i]` is `torque_sensors[i]`.
+    pub torque_sensors: Vec<String>,
 }
 
 impl DeviceIndex {
@@ -45,7 +47,13 @@ impl DeviceIndex {
         DeviceIndex {
             encoders: config.buses.spi.iter().flat_map(|b| b.encoders.iter().map(|e| e.name.clone())).collect(),
             drives: config.buses.can.iter().flat_map(|b| b.drives.iter().map(|d| d.name.clone())).collect(),
+            torque_sensors: config.buses.force_torque.iter().map(|f| f.name.clone()).collect(),
         }
+    }
+
+    /// Index of a force/torque sensor by name.
+    pub fn torque_sensor(&self, name: &str) -> Option<usize> {
+        self.torque_sensors.iter().position(|n| n == name)
     }
 
     /// Index of an encoder by name.
@@ -66,6 +74,8 @@ pub struct SensorFrame {
     pub encoders: Vec<Reading>,
     /// Drives in [`DeviceIndex`] order.
     pub drives: Vec<DriveReading>,
+    /// Torques about the configured joint axes [Nm], in [`DeviceIndex`] order.
+    pub torque_sensors: Vec<Reading>,
 }
 
 impl SensorFrame {
@@ -74,6 +84,7 @@ impl SensorFrame {
         SensorFrame {
             encoders: vec![Reading::MISSING; devices.encoders.len()],
             drives: vec![DriveReading::default(); devices.drives.len()],
+            torque_sensors: vec![Reading::MISSING; devices.torque_sensors.len()],
         }
     }
 }
@@ -112,6 +123,7 @@ impl Hal for NullHal {
     fn read(&mut self, frame: &mut SensorFrame) -> Result<(), HalIoError> {
         frame.encoders.fill(Reading::MISSING);
         frame.drives.fill(DriveReading::default());
+        frame.torque_sensors.fill(Reading::MISSING);
         Ok(())
     }
 
@@ -146,7 +158,8 @@ pub trait Hal: Send {
     /// Asks faulted drives to reset at the next write (CiA 402 fault reset). Default: nothing.
     fn reset_faults(&mut self) {}
 
-    /// Fills the health of each device, drives first then encoders, in [`DeviceIndex`] order.
+    /// Fills the health of each device, drives first, then encoders, then force/torque
+    /// sensors, in [`DeviceIndex`] order.
     /// Called every cycle: must not allocate. Default: nothing to report.
     fn device_health(&self, _out: &mut [DeviceHealth]) {}
 }

@@ -1,6 +1,6 @@
 //! The decoders never panic on any input, and round-trip what they encode.
 
-use jointctl_hal::codec::{as5048, canopen::*};
+use jointctl_hal::codec::{as5048, canopen::*, netft};
 use jointctl_hal::condition::{Conditioner, Plausibility, Sample};
 use proptest::prelude::*;
 
@@ -54,6 +54,28 @@ proptest! {
             let s = match kind { 0 => Sample::Value { value: v, age_s: 0.0 }, 1 => Sample::Missing, _ => Sample::Invalid };
             let r = c.update(s, i as f64 * 0.025);
             if let Some(x) = r.usable(1.0) { prop_assert!(x.is_finite()); }
+        }
+    }
+
+    #[test]
+    fn the_rdt_decoder_never_panics_and_round_trips(bytes in proptest::collection::vec(any::<u8>(), 0..80), counts in any::<[i32; 6]>(), seq in any::<u32>()) {
+        let _ = netft::decode(&bytes);
+        let _ = netft::decode_request(&bytes);
+        let r = netft::RdtRecord { rdt_sequence: seq, ft_sequence: seq.wrapping_mul(3), status: seq & netft::STATUS_ERROR, counts };
+        prop_assert_eq!(netft::decode(&netft::encode(&r)), Ok(r));
+        let t = netft::torque_about_axis(&r, 1e6, 1e6, [0.3, -0.2, 1.0], [0.01, 0.02, 0.03]);
+        prop_assert!(t.is_finite());
+    }
+
+    #[test]
+    fn a_torque_sensor_conditioner_passes_any_finite_change_and_no_non_finite_value(values in proptest::collection::vec(any::<f64>(), 1..50)) {
+        let mut c = Conditioner::new(Plausibility::torque_sensor());
+        for (i, v) in values.into_iter().enumerate() {
+            let r = c.update(Sample::Value { value: v, age_s: 0.0 }, i as f64 * 0.025);
+            match r.usable(0.0) {
+                Some(x) => prop_assert_eq!(x, v),
+                None => prop_assert!(!v.is_finite()),
+            }
         }
     }
 }

@@ -129,6 +129,9 @@ pub struct SimHal {
     drive_history: Vec<DelayLine>,
     encoder_conditioners: Vec<Conditioner>,
     drive_conditioners: Vec<Conditioner>,
+    /// Force/torque sensors: (unit, DOF) whose torque sensor each reads, its range [Nm] and its
+    /// conditioner.
+    torque_sensors: Vec<((usize, usize), f64, Conditioner)>,
     counts_per_rad: Vec<f64>,
     noise_rad: f64,
     loss_rate: f64,
@@ -277,6 +280,19 @@ impl SimHal {
                 rates.push(e.max_velocity_rad_s);
             }
         }
+        let mut torque_sensors = Vec::new();
+        for (i, f) in config.buses.force_torque.iter().enumerate() {
+            let field = format!("buses.force_torque[{i}].sim");
+            let Some(sim_cfg) = &f.sim else {
+                return Err(setup(field, format!("the simulated backend needs to know what sensor `{}` measures: add `sim: {{dof: NAME}}`", f.name)));
+            };
+            let at = units
+                .iter()
+                .enumerate()
+                .find_map(|(u, unit)| unit.dof_names.iter().position(|n| *n == sim_cfg.dof).map(|d| (u, d)))
+                .ok_or_else(|| setup(format!("{field}.dof"), format!("no simulated joint has a DOF `{}` (give that joint a `sim:` section)", sim_cfg.dof)))?;
+            torque_sensors.push((at, f.range_nm, Conditioner::new(Plausibility::torque_sensor())));
+        }
         let n_drives = drives.len();
         let sensor_history = vec![DelayLine::new(); units.len() * unit::MAX_UNIT_DOF];
         let mut hal = SimHal {
@@ -287,6 +303,7 @@ impl SimHal {
             drive_history: vec![DelayLine::new(); n_drives],
             encoder_conditioners: rates.iter().map(|r| Conditioner::new(Plausibility::absolute_encoder(*r))).collect(),
             drive_conditioners: drive_cfgs.iter().map(|d| Conditioner::new(Plausibility::drive_position(d.max_velocity_rad_s))).collect(),
+            torque_sensors,
             counts_per_rad: drive_cfgs.iter().map(|d| d.counts_per_rad).collect(),
             encoders,
             quantized,
@@ -450,6 +467,14 @@ impl Hal for SimHal {
             let reading = self.drive_conditioners[i].update(sample, now);
             *d = DriveReading::new(reading, Reading::valid(self.drives[i].velocity), true, false);
         }
+        // Force/torque sensors: the simulated sensor's torque (effects and noise included), read
+        // as it is now (a Net F/T box streams at kHz rates: no bus latency modelled), beyond its
+        // range invalid.
+        for (out, ((unit, dof), range, conditioner)) in frame.torque_sensors.iter_mut().zip(&mut self.torque_sensors) {
+            let tau = self.units[*unit].sensor_torque[*dof];
+            let sample = if tau.abs() <= *range { Sample::Value { value: tau, age_s: 0.0 } } else { Sample::Invalid };
+            *out = conditioner.update(sample, now);
+        }
         Ok(())
     }
 
@@ -466,7 +491,7 @@ impl Hal for SimHal {
     }
 
     fn device_health(&self, out: &mut [DeviceHealth]) {
-        let all = self.drive_conditioners.iter().chain(&self.encoder_conditioners);
+        let all = self.drive_conditioners.iter().chain(&self.encoder_conditioners).chain(self.torque_sensors.iter().map(|t| &t.2));
         for (h, c) in out.iter_mut().zip(all) {
             let l = c.counters();
             *h = DeviceHealth { missing: l.missing, invalid: l.invalid, implausible: l.implausible, emcy: 0, flags: 0 };

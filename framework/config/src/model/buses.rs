@@ -12,6 +12,77 @@ pub struct BusesConfig {
     /// SPI buses with their absolute encoders (section 2.2: 13 14-bit magnetic encoders).
     #[serde(default)]
     pub spi: Vec<SpiBusConfig>,
+    /// Force/torque sensors, each read as the torque about one joint axis (chapter 5 validates
+    /// the observed torque against an ATI Mini40). Joints wire them with `torque_sensor`; the
+    /// observers never use them: they are for validation and recording.
+    #[serde(default)]
+    pub force_torque: Vec<ForceTorqueConfig>,
+}
+
+/// One force/torque sensor axis: the torque about a joint axis from a 6-axis sensor, `a . (T -
+/// p x F)` with `a` the axis and `p` a point of it, in the sensor frame. Two entries may name the
+/// same physical sensor (the wrist's q6 and q7 about two axes).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ForceTorqueConfig {
+    /// Device name, referenced by joints (`torque_sensor`).
+    pub name: String,
+    /// The real sensor: an ATI Net F/T box streaming RDT over UDP (the Mini40's usual interface).
+    #[serde(default)]
+    pub netft: Option<NetFtConfig>,
+    /// The joint axis in the sensor frame (normalised when loaded). Default: the sensor's z.
+    #[serde(default = "z_axis", deserialize_with = "finite_triple")]
+    pub axis: [f64; 3],
+    /// A point of the joint axis in the sensor frame [m]. Default: the sensor's origin.
+    #[serde(default, deserialize_with = "finite_triple")]
+    pub axis_point_m: [f64; 3],
+    /// Largest plausible |torque| about the axis [Nm]; beyond it a reading is invalid.
+    /// Assumption: 50 Nm, above the shoulder's 40 Nm limit.
+    #[serde(default = "default_ft_range", deserialize_with = "finite")]
+    pub range_nm: f64,
+    /// What the simulated backend makes this sensor read: a simulated DOF's torque sensor
+    /// (`{dof: q2}`: the element's torque with the configured plant effects and F/T noise).
+    #[serde(default)]
+    pub sim: Option<ForceTorqueSimConfig>,
+}
+
+fn z_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+fn default_ft_range() -> f64 {
+    50.0
+}
+
+/// An ATI Net F/T box.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct NetFtConfig {
+    /// `host:port` of its RDT server (ATI's defaults: 192.168.1.1:49152).
+    pub address: String,
+    /// Counts per N in its RDT records (the box's calibration page; ATI's usual 1 000 000).
+    #[serde(default = "million", deserialize_with = "finite")]
+    pub counts_per_force: f64,
+    /// Counts per Nm in its RDT records.
+    #[serde(default = "million", deserialize_with = "finite")]
+    pub counts_per_torque: f64,
+    /// A reading older than this is missing rather than stale [s]. Assumption: 0.1 s.
+    #[serde(default = "default_ft_timeout", deserialize_with = "finite")]
+    pub timeout_s: f64,
+}
+
+fn million() -> f64 {
+    1_000_000.0
+}
+fn default_ft_timeout() -> f64 {
+    0.1
+}
+
+/// A simulated force/torque sensor.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ForceTorqueSimConfig {
+    /// The simulated DOF whose torque sensor this is.
+    pub dof: String,
 }
 
 /// One CAN bus.

@@ -23,6 +23,10 @@ pub struct JointConfig {
     /// Drive role → drive device name.
     #[serde(default)]
     pub drives: BTreeMap<String, String>,
+    /// The force/torque sensor that measures this 1-DOF joint's torque (`buses.force_torque`),
+    /// for validation and recording; never used by the observer.
+    #[serde(default)]
+    pub torque_sensor: Option<String>,
     /// Parameters for the plugin, checked by the plugin.
     #[serde(default)]
     pub params: Params,
@@ -50,6 +54,9 @@ pub struct DofConfig {
     /// Its controller.
     #[serde(default)]
     pub controller: Option<ControllerConfig>,
+    /// The force/torque sensor that measures its torque (`buses.force_torque`).
+    #[serde(default)]
+    pub torque_sensor: Option<String>,
 }
 
 /// Limits enforced by the runtime on every command.
@@ -189,6 +196,15 @@ impl JointConfig {
     /// The names of the DOFs this instance serves, in order.
     pub fn dof_names(&self) -> Vec<&str> {
         if self.dofs.is_empty() { vec![self.name.as_str()] } else { self.dofs.iter().map(|d| d.name.as_str()).collect() }
+    }
+
+    /// The force/torque sensor of each DOF, in order, with its field path relative to the joint.
+    pub fn dof_torque_sensors(&self) -> Vec<(String, Option<&str>)> {
+        if self.dofs.is_empty() {
+            vec![("torque_sensor".into(), self.torque_sensor.as_deref())]
+        } else {
+            self.dofs.iter().enumerate().map(|(i, d)| (format!("dofs[{i}].torque_sensor"), d.torque_sensor.as_deref())).collect()
+        }
     }
 
     /// The limits of each DOF, in order.

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, de};
 
-use crate::num::{finite, finite_opt, finite_pair};
+use crate::num::{finite, finite_opt, finite_pair, finite_triple};
 pub use jointctl_control::PiGains;
 pub use jointctl_modes::{ControllerConfig, GainPoint};
 

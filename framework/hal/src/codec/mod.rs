@@ -4,3 +4,4 @@
 
 pub mod as5048;
 pub mod canopen;
+pub mod netft;
