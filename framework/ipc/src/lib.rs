@@ -10,7 +10,7 @@
 //!   commands it accepted ([`raw`]);
 //! - `<arm>/command`: requests (request-response).
 //!
-//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v2`), so that
+//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v3`), so that
 //! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
 //! name, size and alignment but not field order, hence the version in the name. Every process of
 //! one arm builds its iceoryx2 config with [`iceoryx2_config_in`] rather than looking for a config
@@ -198,6 +198,10 @@ pub struct JointSample {
     pub pivot_mm: f64,
     /// The torque reference in use [Nm] (torque and impedance modes), NaN otherwise.
     pub reference_torque_nm: f64,
+    /// The torque its force/torque sensor measures [Nm] (the joint's `torque_sensor`; for
+    /// validation and recording, never used by the observer), NaN when it has none or the
+    /// reading is not usable this cycle.
+    pub sensor_torque_nm: f64,
     /// [`FieldMask`] bits of the observed fields.
     pub valid_mask: u32,
     /// 0, or the fault that holds this joint (1 = its plugin panicked; >= 16 plugin codes).
@@ -219,6 +223,7 @@ impl JointSample {
         stiffness_nm_per_rad: f64::NAN,
         pivot_mm: f64::NAN,
         reference_torque_nm: f64::NAN,
+        sensor_torque_nm: f64::NAN,
         valid_mask: 0,
         fault_code: 0,
         mode: JointMode::HOLD,
@@ -243,7 +248,7 @@ impl JointSample {
 /// Every joint of the arm, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.ArmState.v2")]
+#[type_name("jointctl.ArmState.v3")]
 pub struct ArmState {
     /// Cycle counter, from 0 at start.
     pub cycle: u64,

@@ -16,6 +16,8 @@ use crate::{CommandRequest, DEVICE_NAME_LEN, NAME_LEN, encode_name};
 pub const MAX_RAW_ENCODERS: usize = jointctl_api::MAX_ARM_ENCODERS;
 /// Most drives in a [`RawFrame`].
 pub const MAX_RAW_DRIVES: usize = jointctl_api::MAX_ARM_DRIVES;
+/// Most force/torque sensor axes in a [`RawFrame`].
+pub const MAX_RAW_TORQUE_SENSORS: usize = jointctl_api::MAX_ARM_TORQUE_SENSORS;
 /// Bytes of the config path in a [`RawDescriptor`] (NUL-padded).
 pub const PATH_LEN: usize = 512;
 
@@ -157,6 +159,11 @@ pub struct RawFrame {
     pub encoders: [RawReading; MAX_RAW_ENCODERS],
     /// Drives.
     pub drives: [RawDrive; MAX_RAW_DRIVES],
+    /// Valid entries in `torque_sensors`.
+    pub torque_sensor_count: u32,
+    _reserved: u32,
+    /// Force/torque sensors: the torque about each one's joint axis [Nm].
+    pub torque_sensors: [RawReading; MAX_RAW_TORQUE_SENSORS],
 }
 
 impl RawFrame {
@@ -168,7 +175,15 @@ impl RawFrame {
         drive_count: 0,
         encoders: [RawReading::MISSING; MAX_RAW_ENCODERS],
         drives: [RawDrive::EMPTY; MAX_RAW_DRIVES],
+        torque_sensor_count: 0,
+        _reserved: 0,
+        torque_sensors: [RawReading::MISSING; MAX_RAW_TORQUE_SENSORS],
     };
+
+    /// The valid force/torque sensors.
+    pub fn torque_sensors(&self) -> &[RawReading] {
+        &self.torque_sensors[..(self.torque_sensor_count as usize).min(MAX_RAW_TORQUE_SENSORS)]
+    }
 
     /// The valid encoders.
     pub fn encoders(&self) -> &[RawReading] {
@@ -192,6 +207,8 @@ named_codes! {
         ABSOLUTE_ENCODER = 1, "absolute_encoder";
         /// An ELMO drive on CAN (CANopen CiA 402); position [rad], velocity [rad/s].
         DRIVE = 2, "drive";
+        /// A force/torque sensor axis (an ATI Net F/T box, chapter 5); torque [Nm].
+        FORCE_TORQUE = 3, "force_torque";
     }
 }
 
@@ -240,6 +257,11 @@ pub struct RawDescriptor {
     pub encoders: [DeviceDescriptor; MAX_RAW_ENCODERS],
     /// Drives, in the order of [`RawFrame::drives`].
     pub drives: [DeviceDescriptor; MAX_RAW_DRIVES],
+    /// Valid entries in `torque_sensors`.
+    pub torque_sensor_count: u32,
+    _reserved: u32,
+    /// Force/torque sensors, in the order of [`RawFrame::torque_sensors`].
+    pub torque_sensors: [DeviceDescriptor; MAX_RAW_TORQUE_SENSORS],
     /// NUL-padded absolute path of the arm's YAML, empty when unknown (a recorder attaches it).
     pub config_path: [u8; PATH_LEN],
 }
@@ -252,18 +274,22 @@ impl RawDescriptor {
         drive_count: 0,
         encoders: [DeviceDescriptor::EMPTY; MAX_RAW_ENCODERS],
         drives: [DeviceDescriptor::EMPTY; MAX_RAW_DRIVES],
+        torque_sensor_count: 0,
+        _reserved: 0,
+        torque_sensors: [DeviceDescriptor::EMPTY; MAX_RAW_TORQUE_SENSORS],
         config_path: [0; PATH_LEN],
     };
 
-    /// The descriptor of `encoders` and `drives` (name, bus index each), at `rate_hz`; names past
-    /// the frames' capacity are left out (the config refuses such arms).
+    /// The descriptor of `encoders`, `drives` (name, bus index each) and `torque_sensors`, at
+    /// `rate_hz`; names past the frames' capacity are left out (the config refuses such arms).
     ///
     /// ```
-    /// let d = jointctl_ipc::raw::RawDescriptor::of(40.0, &[("enc_a", 0)], &[("elmo_a", 0), ("elmo_b", 0)], None);
-    /// assert_eq!((d.encoder_count, d.drive_count), (1, 2));
+    /// let d = jointctl_ipc::raw::RawDescriptor::of(40.0, &[("enc_a", 0)], &[("elmo_a", 0), ("elmo_b", 0)], &["ft_q2"], None);
+    /// assert_eq!((d.encoder_count, d.drive_count, d.torque_sensor_count), (1, 2, 1));
     /// assert_eq!(jointctl_ipc::decode_name(&d.drives[1].name), "elmo_b");
+    /// assert_eq!(jointctl_ipc::decode_name(&d.torque_sensors[0].unit), "Nm");
     /// ```
-    pub fn of(rate_hz: f64, encoders: &[(&str, u32)], drives: &[(&str, u32)], config_path: Option<&std::path::Path>) -> Self {
+    pub fn of(rate_hz: f64, encoders: &[(&str, u32)], drives: &[(&str, u32)], torque_sensors: &[&str], config_path: Option<&std::path::Path>) -> Self {
         let mut d = RawDescriptor { rate_hz, ..RawDescriptor::EMPTY };
         for (slot, (name, bus)) in d.encoders.iter_mut().zip(encoders) {
             *slot = DeviceDescriptor::new(name, DeviceKind::ABSOLUTE_ENCODER, *bus, "rad");
@@ -271,6 +297,10 @@ impl RawDescriptor {
         for (slot, (name, bus)) in d.drives.iter_mut().zip(drives) {
             *slot = DeviceDescriptor::new(name, DeviceKind::DRIVE, *bus, "rad");
         }
+        for (slot, name) in d.torque_sensors.iter_mut().zip(torque_sensors) {
+            *slot = DeviceDescriptor::new(name, DeviceKind::FORCE_TORQUE, 0, "Nm");
+        }
+        d.torque_sensor_count = torque_sensors.len().min(MAX_RAW_TORQUE_SENSORS) as u32;
         d.encoder_count = encoders.len().min(MAX_RAW_ENCODERS) as u32;
         d.drive_count = drives.len().min(MAX_RAW_DRIVES) as u32;
         if let Some(p) = config_path {

@@ -43,6 +43,7 @@ pub fn joint_state(s: &ArmState) -> Value {
                 "stiffness_nm_per_rad": known(j, FieldMask::STIFFNESS, j.stiffness_nm_per_rad),
                 "pivot_mm": known(j, FieldMask::PIVOT, j.pivot_mm),
                 "reference_torque_nm": finite(j.reference_torque_nm),
+                "sensor_torque_nm": finite(j.sensor_torque_nm),
                 "mode": j.mode.name(),
                 "enabled": j.enabled != 0,
                 "fault_code": j.fault_code,
@@ -112,7 +113,7 @@ fn reading(r: &RawReading) -> Value {
 ///
 /// ```
 /// use jointctl_ipc::raw::{RawDescriptor, RawFrame, RawReading};
-/// let d = RawDescriptor::of(40.0, &[("enc_q2_out", 0)], &[], None);
+/// let d = RawDescriptor::of(40.0, &[("enc_q2_out", 0)], &[], &[], None);
 /// let mut f = RawFrame::EMPTY;
 /// f.encoder_count = 1;
 /// f.encoders[0] = RawReading::from_reading(&jointctl_api::Reading::valid(0.25));
@@ -148,7 +149,17 @@ pub fn raw(f: &RawFrame, d: &RawDescriptor) -> Value {
             })
         })
         .collect();
-    json!({"cycle": f.cycle, "stamp_ns": f.stamp_ns, "encoders": encoders, "drives": drives})
+    let torque_sensors: Vec<Value> = f
+        .torque_sensors()
+        .iter()
+        .zip(&d.torque_sensors)
+        .map(|(r, dev)| {
+            let mut v = reading(r);
+            v["name"] = decode_name(&dev.name).into();
+            v
+        })
+        .collect();
+    json!({"cycle": f.cycle, "stamp_ns": f.stamp_ns, "encoders": encoders, "drives": drives, "torque_sensors": torque_sensors})
 }
 
 /// An accepted command.
@@ -206,7 +217,7 @@ pub fn schema(topic: &str) -> Option<Value> {
     let joint = json!({"type": "object", "properties": {
         "name": {"type": "string"},
         "position_rad": number(), "velocity_rad_s": number(), "deflection_rad": number(), "torque_nm": number(),
-        "stiffness_nm_per_rad": number(), "pivot_mm": number(), "reference_torque_nm": number(),
+        "stiffness_nm_per_rad": number(), "pivot_mm": number(), "reference_torque_nm": number(), "sensor_torque_nm": number(),
         "mode": {"type": "string"}, "enabled": {"type": "boolean"}, "fault_code": count,
     }});
     let body = match topic {
@@ -220,6 +231,7 @@ pub fn schema(topic: &str) -> Option<Value> {
                 "name": {"type": "string"}, "position_rad": reading_schema(), "velocity_rad_s": reading_schema(),
                 "enabled": {"type": "boolean"}, "fault": {"type": "boolean"}, "action": {"type": "string"}, "setpoint_rad": number(), "velocity_ff_rad_s": number(),
             }}},
+            "torque_sensors": {"type": "array", "items": {"type": "object", "properties": {"name": {"type": "string"}, "value": number(), "status": {"type": "string"}, "age_s": number()}}},
         }}),
         "diagnostics" => json!({"description": "Loop health, once per cycle", "properties": {
             "cycle": count, "stamp_ns": count, "period_ns": count, "overruns": count, "missed_deadlines": count, "hal_errors": count,

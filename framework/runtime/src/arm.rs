@@ -182,6 +182,8 @@ pub struct Arm {
     actuator: ActuatorFrame,
     hal: Box<dyn Hal>,
     devices: DeviceIndex,
+    /// Each DOF's force/torque sensor (index in the frame), if it has one.
+    torque_sensor_of: Vec<Option<usize>>,
     /// Bus index of each encoder and each drive, in [`DeviceIndex`] order.
     device_buses: (Vec<u32>, Vec<u32>),
     /// The arm description's file, absolute when it could be resolved.
@@ -276,6 +278,7 @@ impl Arm {
         let mut limits = Vec::new();
         let mut controllers = Vec::new();
         let mut capabilities = Vec::new();
+        let mut torque_sensor_of = Vec::new();
         for (j, jc) in cfg.joints.iter().enumerate() {
             let at = |field: &str| if field.is_empty() { format!("joints[{j}]") } else { format!("joints[{j}].{field}") };
             let path = jc.plugin.path.as_ref().map(|p| src.resolve(p));
@@ -316,6 +319,7 @@ impl Arm {
             let first = dof_names.len();
             dof_names.extend(names.iter().map(|n| n.to_string()));
             capabilities.extend((0..names.len()).map(|i| (d.observes_torque(i), d.sets_stiffness(i))));
+            torque_sensor_of.extend(jc.dof_torque_sensors().into_iter().map(|(_, s)| s.and_then(|s| devices.torque_sensor(s))));
             for (l, (_, c)) in jc.dof_limits().into_iter().zip(jc.dof_controllers()) {
                 let dof_limits = l.map_or(DofLimits::NONE, |l| DofLimits {
                     position_rad: l.position_rad,
@@ -376,6 +380,7 @@ impl Arm {
             actuator: ActuatorFrame::new(&devices),
             hal,
             devices,
+            torque_sensor_of,
             device_buses: (
                 cfg.buses.spi.iter().enumerate().flat_map(|(b, bus)| bus.encoders.iter().map(move |_| b as u32)).collect(),
                 cfg.buses.can.iter().enumerate().flat_map(|(b, bus)| bus.drives.iter().map(move |_| b as u32)).collect(),
@@ -579,9 +584,18 @@ impl Arm {
         self.hal.device_health(out);
     }
 
-    /// Device names: drives, then encoders.
+    /// Device names: drives, then encoders, then force/torque sensors (the order of
+    /// [`Arm::device_health`]).
     pub fn device_names(&self) -> impl Iterator<Item = &str> {
-        self.devices.drives.iter().chain(&self.devices.encoders).map(String::as_str)
+        self.devices.drives.iter().chain(&self.devices.encoders).chain(&self.devices.torque_sensors).map(String::as_str)
+    }
+
+    /// The torque DOF `dof`'s force/torque sensor measured this cycle [Nm]: `None` when it has
+    /// no sensor or the reading is not usable (missing, invalid, or stale beyond two periods).
+    /// Allocation-free.
+    pub fn sensor_torque(&self, dof: usize) -> Option<f64> {
+        let i = (*self.torque_sensor_of.get(dof)?)?;
+        self.sensor.torque_sensors.get(i)?.usable(2.0 * self.dt_s)
     }
 
     /// The set-points written in the last cycle, in device order.
@@ -600,6 +614,11 @@ impl Arm {
         let encoders = self.devices.encoders.iter().map(String::as_str).zip(self.device_buses.0.iter().copied()).collect();
         let drives = self.devices.drives.iter().map(String::as_str).zip(self.device_buses.1.iter().copied()).collect();
         (encoders, drives)
+    }
+
+    /// Force/torque sensor names, in the frames' order.
+    pub fn torque_sensor_names(&self) -> Vec<&str> {
+        self.devices.torque_sensors.iter().map(String::as_str).collect()
     }
 
     /// The arm description's file (absolute), when known.

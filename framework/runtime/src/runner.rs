@@ -341,7 +341,7 @@ impl ArmPublisher {
         let arm_name = arm.name.clone();
         let scope = scope.clone();
         let (encoders, drives) = arm.raw_devices();
-        let description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, arm.config_path());
+        let description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
@@ -370,6 +370,7 @@ impl ArmPublisher {
         let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: RawFrame::EMPTY });
         record.raw.encoder_count = description.encoder_count;
         record.raw.drive_count = description.drive_count;
+        record.raw.torque_sensor_count = description.torque_sensor_count;
         record.state.joint_count = arm.dof_names.len() as u32;
         record.diagnostics.joint_count = record.state.joint_count;
         record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
@@ -399,6 +400,9 @@ impl ArmPublisher {
         for ((out, r), sp) in raw.drives.iter_mut().zip(&readings.drives).zip(arm.last_setpoints()) {
             *out = RawDrive::new(r, sp);
         }
+        for (out, r) in raw.torque_sensors.iter_mut().zip(&readings.torque_sensors) {
+            *out = RawReading::from_reading(r);
+        }
         let s = &mut self.record.state;
         s.cycle = cycle;
         s.stamp_ns = stamp_ns;
@@ -413,6 +417,7 @@ impl ArmPublisher {
                 s.joints[i] = JointSample {
                     name: s.joints[i].name,
                     reference_torque_nm: arm.torque_references[i],
+                    sensor_torque_nm: arm.sensor_torque(i).unwrap_or(f64::NAN),
                     mode: published_mode(arm.controllers[i].mode()),
                     enabled: arm.enabled[i] as u32,
                     position_rad: st.position_rad,
