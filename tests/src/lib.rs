@@ -25,6 +25,11 @@ pub fn jointctl() -> PathBuf {
     artifact("jointctl")
 }
 
+/// The repository's root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
 /// The interop venv's Python (`.ci/setup-python-venv` makes it; the README's test command runs
 /// it), or `JOINTCTL_PYTHON`.
 pub fn interop_python() -> PathBuf {

@@ -25,7 +25,7 @@ fn record_sine(test: &str) -> (std::path::PathBuf, serde_json::Value, String) {
     let mut record = Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "3", "--json", "--out"]).arg(&out).stdout(Stdio::piped()).spawn().unwrap();
     // The command after the recorder has subscribed: it is in the file.
     std::thread::sleep(std::time::Duration::from_millis(500));
-    let cmd = Command::new(jointctl()).args(["cmd", "torque", "q2", "--sine", "5", "--freq", "0.5", "--arm", &arm]).output().unwrap();
+    let cmd = Command::new(jointctl()).args(["cmd", "torque", "q2", "--sine", "5", "--freq", "1", "--arm", &arm]).output().unwrap();
     let recorded = record.wait().unwrap();
     let mut stdout = String::new();
     std::io::Read::read_to_string(record.stdout.as_mut().unwrap(), &mut stdout).unwrap();
@@ -169,4 +169,39 @@ with open(sys.argv[1], "rb") as f:
     }
     assert_eq!(v["encodings"], serde_json::json!([["json", "jsonschema"]]));
     assert_eq!((v["q2_mode"].as_str(), v["joints"].as_u64()), (Some("torque"), Some(7)));
+}
+
+/// Issue item 4: `fit` and `identify` read a recording directly, one joint's deflection against
+/// its F/T torque; a joint that is not there, or has no F/T sensor, is an error that says so.
+#[test]
+fn fit_and_identify_read_a_joint_from_the_recording() {
+    let (file, summary, _) = record_sine("record-ident");
+    let states = summary["messages"]["joint_state"].as_u64().unwrap();
+    let out = Command::new(jointctl()).args(["identify", "--joint", "q2", "--json", "--data"]).arg(&file).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // Every joint-state sample but the final one (the runtime stopping) has both signals.
+    let samples = v["samples"].as_u64().unwrap();
+    assert!(samples + 1 >= states && samples <= states, "{samples} samples of {states} states");
+    let with_config = Command::new(jointctl())
+        .args(["identify", "--joint", "q2", "--json", "--config"])
+        .arg(jointctl_tests::root().join("configs/sherpa_arm.yaml"))
+        .arg("--data")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(with_config.status.success(), "{}", String::from_utf8_lossy(&with_config.stderr));
+    let fit = Command::new(jointctl()).arg("fit").arg(&file).args(["--joint", "q2", "--order", "3"]).output().unwrap();
+    assert!(fit.status.success(), "{}", String::from_utf8_lossy(&fit.stderr));
+    assert!(String::from_utf8_lossy(&fit.stdout).contains("characteristic:"));
+    for (args, expected) in [
+        (vec!["identify", "--data"], "say which with --joint"),
+        (vec!["identify", "--joint", "q9", "--data"], "no joint `q9` in the recording (joints: q1, q2, q3, q4, q5, q6, q7)"),
+        (vec!["identify", "--joint", "q1", "--data"], "has no F/T torque (wire a `torque_sensor` to the joint)"),
+    ] {
+        let r = Command::new(jointctl()).args(&args).arg(&file).output().unwrap();
+        assert_eq!(r.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
 }

@@ -11,3 +11,4 @@
 
 pub mod messages;
 pub mod recorder;
+pub mod reader;

@@ -11,8 +11,12 @@ use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
 
 #[derive(Args)]
 pub struct FitArgs {
-    /// Measured experiment (CSV: t, deflection, torque[, pivot_mm, angle_deg, ...]).
+    /// Measured experiment: CSV (t, deflection, torque[, pivot_mm, angle_deg, ...]) or a
+    /// recording (`jointctl record`, .mcap, with --joint).
     data: PathBuf,
+    /// The joint to take from a recording (.mcap): its deflection and F/T torque.
+    #[arg(long)]
+    joint: Option<String>,
     /// Moving-average window [samples]; default the thesis': 8 for a shoulder characterisation
     /// (by pivot), 5 for the wrist's (by pivot and direction), none otherwise.
     #[arg(long)]
@@ -38,14 +42,14 @@ pub struct FitArgs {
 
 #[derive(Args)]
 pub struct IdentifyArgs {
-    /// Measured experiment (CSV).
+    /// Measured experiment: CSV, or a recording (`jointctl record`, .mcap, with --joint).
     #[arg(long)]
     data: PathBuf,
     /// The arm description whose joint model is the baseline (with --joint).
     #[arg(long, requires = "joint")]
     config: Option<PathBuf>,
-    /// The DOF in the config.
-    #[arg(long, requires = "config")]
+    /// The DOF: in the config (its model is the baseline) and in a recording (its signals).
+    #[arg(long)]
     joint: Option<String>,
     /// Baseline characteristic order when no config is given.
     #[arg(long, default_value_t = 1, conflicts_with = "config")]
@@ -58,10 +62,39 @@ pub struct IdentifyArgs {
     json: bool,
 }
 
+/// Measured data from a CSV file, or from a recording (.mcap) for one joint: its observed
+/// deflection against its F/T sensor's torque, time from the cycle stamps; samples where either
+/// is unknown are left out (and said so), never used as values.
+fn load_data(path: &Path, joint: Option<&str>) -> Result<jointctl_ident::csv::Data, String> {
+    if !jointctl_record::reader::is_mcap(path) {
+        return jointctl_ident::csv::read(path).map_err(|e| e.to_string());
+    }
+    let joint = joint.ok_or_else(|| format!("{}: a recording holds every joint: say which with --joint", path.display()))?;
+    let s = jointctl_record::reader::joint_series(path, joint).map_err(|e| crate::chain(&e))?;
+    let keep: Vec<usize> = (0..s.len()).filter(|&i| s.deflection_rad[i].is_finite() && s.sensor_torque_nm[i].is_finite()).collect();
+    if keep.is_empty() {
+        let why = if s.sensor_torque_nm.iter().all(|t| t.is_nan()) { ": it has no F/T torque (wire a `torque_sensor` to the joint)" } else { "" };
+        return Err(format!("{}: joint `{joint}` has no sample with both a deflection and an F/T torque{why}", path.display()));
+    }
+    let pick = |col: &[f64]| keep.iter().map(|&i| col[i]).collect::<Vec<f64>>();
+    let mut data = jointctl_ident::csv::Data::from_columns(pick(&s.t_s), pick(&s.deflection_rad), pick(&s.sensor_torque_nm));
+    // The observer's pivot carries its encoder's quantisation: settings are told apart to 0.1 mm.
+    if s.pivot_mm.iter().any(|p| p.is_finite()) {
+        data.pivot_mm = keep.iter().map(|&i| (s.pivot_mm[i] * 10.0).round() / 10.0).collect();
+    }
+    if s.reference_torque_nm.iter().any(|r| r.is_finite()) {
+        data.reference_torque = pick(&s.reference_torque_nm);
+    }
+    if keep.len() < s.len() {
+        data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection or F/T torque unknown", s.len() - keep.len(), s.len()));
+    }
+    Ok(data)
+}
+
 pub fn run_fit(a: FitArgs) -> ExitCode {
-    let data = match jointctl_ident::csv::read(&a.data) {
+    let data = match load_data(&a.data, a.joint.as_deref()) {
         Ok(d) => d,
-        Err(e) => return crate::fail_err(e),
+        Err(e) => return crate::fail(e),
     };
     for n in &data.notes {
         eprintln!("note: {n}");
@@ -164,10 +197,16 @@ fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> 
 }
 
 pub fn run_identify(a: IdentifyArgs) -> ExitCode {
-    let data = match jointctl_ident::csv::read(&a.data) {
+    if a.joint.is_some() && a.config.is_none() && !jointctl_record::reader::is_mcap(&a.data) {
+        return crate::fail("--joint without --config picks a joint of a recording (.mcap); a CSV file holds one joint");
+    }
+    let data = match load_data(&a.data, a.joint.as_deref()) {
         Ok(d) => d,
-        Err(e) => return crate::fail_err(e),
+        Err(e) => return crate::fail(e),
     };
+    for n in &data.notes {
+        eprintln!("note: {n}");
+    }
     // A configured joint's model has no eq. 3.5 friction (the joint plugins observe torque from
     // the characteristic alone): friction is then a cause to name, not part of the baseline.
     let baseline_friction = a.config.is_none();
@@ -176,7 +215,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             Ok(b) => b,
             Err(e) => return crate::fail(e),
         },
-        // clap makes --config and --joint come together.
+        // Without --config (--joint alone picks a recording's joint): the thesis' structure.
         _ if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
