@@ -100,8 +100,11 @@ fn a_recording_holds_every_channel_gapless_with_its_schema_metadata_and_config()
             (m.name, m.metadata)
         })
         .collect();
-    assert_eq!(metadata.len(), 1);
+    let names: Vec<&str> = metadata.iter().map(|m| m.0.as_str()).collect();
+    assert_eq!(names, ["jointctl", "activation"], "the start's metadata, and the readings the joints were activated with");
     assert_eq!(metadata[0].1["arm"], arm);
+    let activation: serde_json::Value = serde_json::from_str(&metadata[1].1["raw"]).unwrap();
+    assert_eq!(activation["encoders"].as_array().unwrap().len(), 13);
     let start: u64 = metadata[0].1["start_unix_ns"].parse().unwrap();
     assert!(start > 1_700_000_000_000_000_000, "wall-clock time in ns: {start}");
     let attached: Vec<String> = summary_section.attachment_indexes.iter().map(|a| a.name.clone()).collect();
@@ -204,4 +207,62 @@ fn fit_and_identify_read_a_joint_from_the_recording() {
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(err.contains(expected), "{args:?}: {err}");
     }
+}
+
+fn channels(out: &std::process::Output) -> Vec<serde_json::Value> {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    v["channels"].as_array().unwrap().clone()
+}
+
+fn rmse(channels: &[serde_json::Value], joint: &str, channel: &str) -> f64 {
+    channels.iter().find(|c| c["joint"] == joint && c["channel"] == channel).unwrap_or_else(|| panic!("no {joint} {channel}"))["rmse"].as_f64().unwrap()
+}
+
+/// Issue item 5: the recorded readings through the recorded arm's own observers give back the
+/// recorded observed torque exactly (the observers' zeros come from the recorded activation); a
+/// changed model gives its own, measured against the F/T sensor.
+#[test]
+fn replay_feeds_the_recorded_readings_through_a_configs_observers() {
+    let (file, _, arm) = record_sine("replay");
+    let config = std::env::temp_dir().join(format!("jointctl-test-{}-replay/sherpa.yaml", std::process::id()));
+    assert!(config.exists(), "{}", config.display());
+    let same = channels(&Command::new(jointctl()).arg("replay").arg(&file).arg("--config").arg(&config).arg("--json").output().unwrap());
+    for c in same.iter().filter(|c| c["channel"] == "observed_torque" && c["rmse"].is_f64()) {
+        assert!(c["rmse"].as_f64().unwrap() < 1e-9, "the recorded arm's own observers reproduce the recording: {c}");
+    }
+    // A changed model: the shoulder's observer with a 100 ms low-pass on its torque.
+    let filtered = sherpa_with("replay-filtered", &arm, &[jointctl_tests::Edit::Set("joints[shoulder].params.torque_filter_s", 0.1.into())]);
+    let changed = channels(&Command::new(jointctl()).arg("replay").arg(&file).arg("--config").arg(&filtered).arg("--json").output().unwrap());
+    let (own, replayed) = (rmse(&changed, "q2", "recorded_observer_vs_ft"), rmse(&changed, "q2", "replayed_observer_vs_ft"));
+    println!("q2 observer vs F/T: {own:.3} Nm recorded, {replayed:.3} Nm with a 100 ms filter");
+    assert!(rmse(&changed, "q2", "observed_torque") > 0.05, "the filter lags a 1 Hz, 5 Nm sine");
+    assert!(replayed > own, "a lagging observer is farther from the F/T sensor");
+    assert!(rmse(&changed, "q4", "observed_torque") < 1e-9, "only the shoulder changed");
+}
+
+/// Issue item 5: the recorded commands re-run on the simulated arm; the same simulated arm
+/// differs from its own recording only by the F/T sensor's noise; a different plant shows as
+/// the channel it changes.
+#[test]
+fn sim_replay_reports_what_the_simulation_gets_wrong_per_channel() {
+    let (file, _, arm) = record_sine("sim-replay");
+    let config = std::env::temp_dir().join(format!("jointctl-test-{}-sim-replay/sherpa.yaml", std::process::id()));
+    let same = channels(&Command::new(jointctl()).args(["sim", "replay"]).arg(&file).arg("--config").arg(&config).arg("--json").output().unwrap());
+    let keys: Vec<&str> = same[0].as_object().unwrap().keys().map(String::as_str).collect();
+    assert_eq!(keys, ["joint", "channel", "rmse", "max_abs", "unit"]);
+    // Two draws of the simulated Mini40's 0.01 Nm noise: about 0.014 Nm apart.
+    let ft = rmse(&same, "q2", "ft_torque");
+    assert!(ft < 0.03, "q2 F/T torque {ft} Nm");
+    assert!(rmse(&same, "q2", "deflection") < 1e-3);
+    // A plant with twice the shoulder's hysteresis band: the replay says where it shows.
+    let wider = sherpa_with("sim-replay-wider", &arm, &[jointctl_tests::Edit::Set("joints[shoulder].sim.effects.hysteresis.limit_nm", 1.5.into())]);
+    let changed = channels(&Command::new(jointctl()).args(["sim", "replay"]).arg(&file).arg("--config").arg(&wider).arg("--json").output().unwrap());
+    let ft_changed = rmse(&changed, "q2", "ft_torque");
+    assert!(ft_changed > 3.0 * ft, "q2 F/T torque {ft_changed} Nm with a wider band, {ft} Nm without");
+    // A recording at another rate than the config is refused, with both rates.
+    let fast = sherpa_with("sim-replay-fast", &arm, &[jointctl_tests::Edit::Set("rate_hz", 100.0.into())]);
+    let r = Command::new(jointctl()).args(["sim", "replay"]).arg(&file).arg("--config").arg(&fast).output().unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("recorded at 40.0 Hz, the config runs at 100 Hz"), "{}", String::from_utf8_lossy(&r.stderr));
 }

@@ -16,6 +16,7 @@
 pub mod characterise;
 pub mod plot;
 pub mod record;
+pub mod replay;
 pub mod sensitivity;
 pub mod tracking;
 

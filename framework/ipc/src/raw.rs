@@ -262,6 +262,9 @@ pub struct RawDescriptor {
     _reserved: u32,
     /// Force/torque sensors, in the order of [`RawFrame::torque_sensors`].
     pub torque_sensors: [DeviceDescriptor; MAX_RAW_TORQUE_SENSORS],
+    /// The readings the joints were activated with (observers take their zeros there, section
+    /// 3.4.1): a replay of a recording that starts later activates with them.
+    pub activation: RawFrame,
     /// NUL-padded absolute path of the arm's YAML, empty when unknown (a recorder attaches it).
     pub config_path: [u8; PATH_LEN],
 }
@@ -277,6 +280,7 @@ impl RawDescriptor {
         torque_sensor_count: 0,
         _reserved: 0,
         torque_sensors: [DeviceDescriptor::EMPTY; MAX_RAW_TORQUE_SENSORS],
+        activation: RawFrame::EMPTY,
         config_path: [0; PATH_LEN],
     };
 

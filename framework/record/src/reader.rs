@@ -4,6 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
+use jointctl_api::{DriveReading, Reading, ReadingStatus};
+use jointctl_ipc::{CommandKind, CommandRequest, MAX_COMMAND_POINTS, TorqueWaveform, encode_name};
 use serde_json::Value;
 
 /// One DOF's signals over a recording, one entry per `joint_state` message (SI units; NaN where
@@ -148,4 +150,134 @@ pub fn joint_series(path: &Path, joint: &str) -> Result<JointSeries, ReadError> 
 /// ```
 pub fn is_mcap(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+}
+
+/// One recorded `raw` message: every device's reading by name, and the set-points sent.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawSample {
+    /// Cycle counter.
+    pub cycle: u64,
+    /// The cycle's stamp [ns].
+    pub stamp_ns: u64,
+    /// Encoders: name, reading [rad].
+    pub encoders: Vec<(String, Reading)>,
+    /// Drives: name, reading, set-point sent [rad] (NaN when holding).
+    pub drives: Vec<(String, DriveReading, f64)>,
+    /// Force/torque sensors: name, reading [Nm].
+    pub torque_sensors: Vec<(String, Reading)>,
+}
+
+/// A recorded accepted command.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordedCommand {
+    /// When the runtime accepted it [ns] (it was applied at the next cycle).
+    pub stamp_ns: u64,
+    /// The request, rebuilt from its JSON.
+    pub request: CommandRequest,
+}
+
+fn reading(v: &Value) -> Reading {
+    let status = match v["status"].as_str() {
+        Some("valid") => ReadingStatus::VALID,
+        Some("stale") => ReadingStatus::STALE,
+        Some("invalid") => ReadingStatus::INVALID,
+        _ => ReadingStatus::MISSING,
+    };
+    let value = number(&v["value"]);
+    let age_s = v["age_s"].as_f64().unwrap_or(f64::INFINITY);
+    match status {
+        ReadingStatus::VALID if value.is_finite() => Reading::valid_aged(value, age_s),
+        ReadingStatus::STALE if value.is_finite() => Reading::stale(value, age_s),
+        ReadingStatus::INVALID => Reading::invalid(),
+        _ => Reading::MISSING,
+    }
+}
+
+fn named(list: &Value) -> Vec<(String, Reading)> {
+    list.as_array().map_or_else(Vec::new, |a| a.iter().map(|e| (e["name"].as_str().unwrap_or("").to_string(), reading(e))).collect())
+}
+
+/// Every message of `topic`, decoded: (sequence, JSON).
+fn messages(path: &Path, topic: &str) -> Result<Vec<(u32, Value)>, ReadError> {
+    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let mut out = Vec::new();
+    let stream = mcap::MessageStream::new(&bytes).map_err(|source| ReadError::Mcap { file: path.into(), source })?;
+    for message in stream {
+        let m = message.map_err(|source| ReadError::Mcap { file: path.into(), source })?;
+        if m.channel.topic != topic {
+            continue;
+        }
+        let v: Value = serde_json::from_slice(&m.data)
+            .map_err(|e| ReadError::Message { file: path.into(), topic: topic.into(), sequence: m.sequence, reason: e.to_string() })?;
+        out.push((m.sequence, v));
+    }
+    Ok(out)
+}
+
+fn raw_sample(v: &Value) -> Result<RawSample, &'static str> {
+    let drives = v["drives"]
+        .as_array()
+        .ok_or("no `drives` array")?
+        .iter()
+        .map(|d| {
+            let r = DriveReading::new(reading(&d["position_rad"]), reading(&d["velocity_rad_s"]), d["enabled"] == true, d["fault"] == true);
+            (d["name"].as_str().unwrap_or("").to_string(), r, number(&d["setpoint_rad"]))
+        })
+        .collect();
+    Ok(RawSample {
+        cycle: v["cycle"].as_u64().ok_or("no `cycle`")?,
+        stamp_ns: v["stamp_ns"].as_u64().ok_or("no `stamp_ns`")?,
+        encoders: named(&v["encoders"]),
+        drives,
+        torque_sensors: named(&v["torque_sensors"]),
+    })
+}
+
+/// The recording's `raw` messages, in order.
+pub fn raw_samples(path: &Path) -> Result<Vec<RawSample>, ReadError> {
+    messages(path, "raw")?
+        .into_iter()
+        .map(|(sequence, v)| raw_sample(&v).map_err(|reason| ReadError::Message { file: path.into(), topic: "raw".into(), sequence, reason: reason.into() }))
+        .collect()
+}
+
+/// The readings the recorded arm's joints were activated with (the `activation` metadata), if
+/// the recording has them.
+pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
+    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
+    let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
+    for index in summary.metadata_indexes.iter().filter(|i| i.name == "activation") {
+        let m = mcap::read::metadata(&bytes, index).map_err(mcap_error)?;
+        let Some(text) = m.metadata.get("raw") else { continue };
+        let bad = |reason: String| ReadError::Message { file: path.into(), topic: "activation".into(), sequence: 0, reason };
+        let v: Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        return raw_sample(&v).map(Some).map_err(|r| bad(r.into()));
+    }
+    Ok(None)
+}
+
+/// The recording's accepted commands, in order, rebuilt as requests.
+pub fn commands(path: &Path) -> Result<Vec<RecordedCommand>, ReadError> {
+    messages(path, "commands")?
+        .into_iter()
+        .map(|(sequence, v)| {
+            let bad = |reason: String| ReadError::Message { file: path.into(), topic: "commands".into(), sequence, reason };
+            let kind = v["kind"].as_str().and_then(CommandKind::from_name).ok_or_else(|| bad(format!("unknown kind {}", v["kind"])))?;
+            let values: Vec<f64> = v["values"].as_array().map_or_else(Vec::new, |a| a.iter().map(number).collect());
+            let mut request = CommandRequest::new(kind, v["joint"].as_str().unwrap_or(""), &values);
+            request.joint = encode_name(v["joint"].as_str().unwrap_or(""));
+            request.streamed = u32::from(v["streamed"] == true);
+            request.waveform = v["waveform"].as_str().and_then(TorqueWaveform::from_name).unwrap_or(TorqueWaveform::STEP);
+            let points = v["points"].as_array().cloned().unwrap_or_default();
+            if points.len() > MAX_COMMAND_POINTS {
+                return Err(bad(format!("{} trajectory points, at most {MAX_COMMAND_POINTS}", points.len())));
+            }
+            for (slot, p) in request.points.iter_mut().zip(&points) {
+                *slot = [number(&p[0]), number(&p[1]), number(&p[2])];
+            }
+            request.point_count = points.len() as u32;
+            Ok(RecordedCommand { stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?, request })
+        })
+        .collect()
 }

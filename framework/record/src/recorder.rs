@@ -266,6 +266,9 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         metadata.insert("config".to_string(), path.display().to_string());
     }
     writer.write_metadata(&mcap::records::Metadata { name: "jointctl".into(), metadata }).map_err(mcap_error)?;
+    // The readings the joints were activated with: a replay activates its observers with them.
+    let activation = messages::raw(&descriptor.activation, &descriptor).to_string();
+    writer.write_metadata(&mcap::records::Metadata { name: "activation".into(), metadata: BTreeMap::from([("raw".to_string(), activation)]) }).map_err(mcap_error)?;
     if let Some(path) = descriptor.config_path() {
         for (name, data) in config_files(&path) {
             let attachment = mcap::Attachment { log_time: start_monotonic_ns, create_time: start_unix_ns, name, media_type: "application/yaml".into(), data: data.into() };

@@ -305,6 +305,20 @@ impl PublisherPorts {
     }
 }
 
+/// The arm's last readings and set-points into a raw frame. Allocation-free.
+fn fill_raw(raw: &mut RawFrame, arm: &Arm) {
+    let readings = arm.last_readings();
+    for (out, r) in raw.encoders.iter_mut().zip(&readings.encoders) {
+        *out = RawReading::from_reading(r);
+    }
+    for ((out, r), sp) in raw.drives.iter_mut().zip(&readings.drives).zip(arm.last_setpoints()) {
+        *out = RawDrive::new(r, sp);
+    }
+    for (out, r) in raw.torque_sensors.iter_mut().zip(&readings.torque_sensors) {
+        *out = RawReading::from_reading(r);
+    }
+}
+
 /// The loop's shared-memory side.
 ///
 /// iceoryx2 0.10 allocates a small reference count in every `loan`, so the control thread never
@@ -341,7 +355,11 @@ impl ArmPublisher {
         let arm_name = arm.name.clone();
         let scope = scope.clone();
         let (encoders, drives) = arm.raw_devices();
-        let description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
+        let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
+        description.activation.encoder_count = description.encoder_count;
+        description.activation.drive_count = description.drive_count;
+        description.activation.torque_sensor_count = description.torque_sensor_count;
+        fill_raw(&mut description.activation, arm);
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
@@ -393,16 +411,7 @@ impl ArmPublisher {
         let raw = &mut self.record.raw;
         raw.cycle = cycle;
         raw.stamp_ns = stamp_ns;
-        let readings = arm.last_readings();
-        for (out, r) in raw.encoders.iter_mut().zip(&readings.encoders) {
-            *out = RawReading::from_reading(r);
-        }
-        for ((out, r), sp) in raw.drives.iter_mut().zip(&readings.drives).zip(arm.last_setpoints()) {
-            *out = RawDrive::new(r, sp);
-        }
-        for (out, r) in raw.torque_sensors.iter_mut().zip(&readings.torque_sensors) {
-            *out = RawReading::from_reading(r);
-        }
+        fill_raw(raw, arm);
         let s = &mut self.record.state;
         s.cycle = cycle;
         s.stamp_ns = stamp_ns;

@@ -80,6 +80,11 @@ impl ElmoDrive {
         ElmoDrive { cfg, profile: Profile { position, velocity: 0.0 }, target: position, integral: 0.0, position, velocity: 0.0, torque: 0.0 }
     }
 
+    /// The drive's settings.
+    pub fn config(&self) -> ElmoConfig {
+        self.cfg
+    }
+
     /// A new set-point (the ELMO replans its profile from where the profile is).
     pub fn set_target(&mut self, target: f64) {
         if target.is_finite() {

@@ -546,6 +546,24 @@ impl SimHal {
         }
     }
 
+    /// Starts the simulated arm from these drive positions [rad] (`None`: where it is), at rest,
+    /// with every joint's element relaxed there: a replay starts from a recording's first state.
+    pub fn start_at(&mut self, positions: &[Option<f64>]) {
+        for (d, p) in self.drives.iter_mut().zip(positions) {
+            if let Some(p) = p.filter(|p| p.is_finite()) {
+                *d = ElmoDrive::new(d.config(), p);
+            }
+        }
+        for (i, d) in self.drives.iter().enumerate() {
+            self.positions[i] = d.position;
+            self.velocities[i] = 0.0;
+        }
+        for u in &mut self.units {
+            u.start(&self.positions);
+        }
+        self.record();
+    }
+
     /// Lets the drives move for `seconds` of simulated time without reading (settling).
     pub fn settle_drives(&mut self, seconds: f64) {
         self.advance(seconds);

@@ -58,6 +58,9 @@ pub enum ExperimentCommand {
 
 #[derive(Subcommand)]
 pub enum SimCommand {
+    /// Re-run a recording's commands on the simulated arm of a config, from the recorded drive
+    /// positions: per joint and channel, the error between simulation and recording.
+    Replay(crate::replay::ReplayArgs),
     /// Record a characterisation (sections 3.3.1, 3.4.1, 3.5.1) as CSV for `jointctl fit`.
     Record {
         /// The arm description (simulated backend).
@@ -329,6 +332,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
 
 pub fn sim(cmd: SimCommand) -> ExitCode {
     match cmd {
+        SimCommand::Replay(args) => crate::replay::run_sim(args),
         SimCommand::Record { config, joint, out, amplitude, frequency, duration, pivot_mm, angle_deg, rate } => {
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,

@@ -5,6 +5,7 @@ mod experiment;
 mod ident;
 mod inspect;
 mod record;
+mod replay;
 mod run;
 mod transmission;
 
@@ -61,6 +62,9 @@ enum Command {
     /// Record a running arm (raw readings, set-points, joint states, diagnostics, accepted
     /// commands) into one MCAP file that Foxglove opens.
     Record(record::RecordArgs),
+    /// Feed a recording's raw readings (and its commands) through a config's joint plugins: the
+    /// observed torque they give against the recorded one and the F/T sensor.
+    Replay(replay::ReplayArgs),
     /// Read a running arm's shared memory from this separate process.
     Inspect {
         #[command(subcommand)]
@@ -179,6 +183,7 @@ fn main() -> ExitCode {
         }
         Command::Inspect { command } => inspect::run(command),
         Command::Record(args) => record::run(args),
+        Command::Replay(args) => replay::run(args),
         Command::Cmd(args) => cmd::run(args),
         Command::Fit(args) => ident::run_fit(args),
         Command::Identify(args) => ident::run_identify(args),
