@@ -151,19 +151,13 @@ impl CommandFeed {
     }
 }
 
-/// The recorded joint states by DOF.
+/// The recorded joint states by DOF; a DOF of the config the recording lacks is noted.
 fn recorded_joints(path: &Path, arm: &Arm, notes: &mut Vec<String>) -> Result<HashMap<String, JointSeries>, ExperimentError> {
-    let mut out = HashMap::new();
-    for name in &arm.dof_names {
-        match jointctl_record::reader::joint_series(path, name) {
-            Ok(s) => {
-                out.insert(name.clone(), s);
-            }
-            Err(jointctl_record::reader::ReadError::NoJoint { .. }) => notes.push(format!("joint `{name}` is not in the recording")),
-            Err(e) => return Err(ExperimentError(crate_chain(&e))),
-        }
+    let (all, _) = jointctl_record::reader::all_joint_series(path).map_err(|e| ExperimentError(crate_chain(&e)))?;
+    for name in arm.dof_names.iter().filter(|n| !all.contains_key(*n)) {
+        notes.push(format!("joint `{name}` is not in the recording"));
     }
-    Ok(out)
+    Ok(all)
 }
 
 fn crate_chain(e: &(dyn std::error::Error + 'static)) -> String {

@@ -102,18 +102,17 @@ fn number(v: &Value) -> f64 {
 /// # Ok(()) }
 /// ```
 pub fn joint_series(path: &Path, joint: &str) -> Result<JointSeries, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
-    let mut out = JointSeries::default();
+    let (mut all, known) = all_joint_series(path)?;
+    all.remove(joint).ok_or_else(|| ReadError::NoJoint { file: path.into(), joint: joint.into(), known })
+}
+
+/// Every DOF's signals in one pass over the file, and the DOF names in the recording's order.
+pub fn all_joint_series(path: &Path) -> Result<(std::collections::HashMap<String, JointSeries>, Vec<String>), ReadError> {
+    let mut out: std::collections::HashMap<String, JointSeries> = std::collections::HashMap::new();
     let mut first_stamp = None;
     let mut known: Vec<String> = Vec::new();
-    let stream = mcap::MessageStream::new(&bytes).map_err(|source| ReadError::Mcap { file: path.into(), source })?;
-    for message in stream {
-        let m = message.map_err(|source| ReadError::Mcap { file: path.into(), source })?;
-        if m.channel.topic != "joint_state" {
-            continue;
-        }
-        let bad = |reason: &str| ReadError::Message { file: path.into(), topic: m.channel.topic.clone(), sequence: m.sequence, reason: reason.into() };
-        let v: Value = serde_json::from_slice(&m.data).map_err(|e| bad(&e.to_string()))?;
+    for (sequence, v) in messages(path, "joint_state")? {
+        let bad = |reason: &str| ReadError::Message { file: path.into(), topic: "joint_state".into(), sequence, reason: reason.into() };
         let stamp = v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`"))?;
         let joints = v["joints"].as_array().ok_or_else(|| bad("no `joints` array"))?;
         if known.is_empty() {
@@ -123,23 +122,24 @@ pub fn joint_series(path: &Path, joint: &str) -> Result<JointSeries, ReadError> 
         if v["final"].as_bool() == Some(true) {
             continue;
         }
-        let Some(j) = joints.iter().find(|j| j["name"] == joint) else { continue };
         let t0 = *first_stamp.get_or_insert(stamp);
-        out.t_s.push(stamp.saturating_sub(t0) as f64 * 1e-9);
-        out.cycle.push(v["cycle"].as_u64().unwrap_or(0));
-        out.position_rad.push(number(&j["position_rad"]));
-        out.deflection_rad.push(number(&j["deflection_rad"]));
-        out.observed_torque_nm.push(number(&j["torque_nm"]));
-        out.sensor_torque_nm.push(number(&j["sensor_torque_nm"]));
-        out.reference_torque_nm.push(number(&j["reference_torque_nm"]));
-        out.pivot_mm.push(number(&j["pivot_mm"]));
-        out.stiffness_nm_per_rad.push(number(&j["stiffness_nm_per_rad"]));
-        out.mode.push(j["mode"].as_str().unwrap_or("unknown").to_string());
+        let cycle = v["cycle"].as_u64().unwrap_or(0);
+        for j in joints {
+            let Some(name) = j["name"].as_str() else { continue };
+            let s = out.entry(name.to_string()).or_default();
+            s.t_s.push(stamp.saturating_sub(t0) as f64 * 1e-9);
+            s.cycle.push(cycle);
+            s.position_rad.push(number(&j["position_rad"]));
+            s.deflection_rad.push(number(&j["deflection_rad"]));
+            s.observed_torque_nm.push(number(&j["torque_nm"]));
+            s.sensor_torque_nm.push(number(&j["sensor_torque_nm"]));
+            s.reference_torque_nm.push(number(&j["reference_torque_nm"]));
+            s.pivot_mm.push(number(&j["pivot_mm"]));
+            s.stiffness_nm_per_rad.push(number(&j["stiffness_nm_per_rad"]));
+            s.mode.push(j["mode"].as_str().unwrap_or("unknown").to_string());
+        }
     }
-    if out.is_empty() {
-        return Err(ReadError::NoJoint { file: path.into(), joint: joint.into(), known });
-    }
-    Ok(out)
+    Ok((out, known))
 }
 
 /// Whether `path` names an MCAP file (by its extension).

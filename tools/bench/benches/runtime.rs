@@ -12,20 +12,15 @@ use jointctl_runtime::timing::monotonic_ns;
 use jointctl_runtime::{Arm, ArmPublisher, PluginLoader, RunOptions};
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+    jointctl_bench::root()
 }
 
 fn sherpa(rate_hz: f64, arm: &str) -> jointctl_config::LoadedConfig {
-    let path = root().join("configs/sherpa_arm.yaml");
-    let text = std::fs::read_to_string(&path).expect("configs/sherpa_arm.yaml");
-    let text = text.replacen("arm: sherpa", &format!("arm: {arm}"), 1).replacen("rate_hz: 40 ", &format!("rate_hz: {rate_hz} "), 1);
-    jointctl_config::parse_str(&text, &path).expect("sherpa config")
+    jointctl_bench::sherpa(rate_hz, arm)
 }
 
 fn plugin_dir() -> PathBuf {
-    // target/release/deps/runtime-xxxx -> target/release, where `cargo build --release` puts the .so files.
-    let exe = std::env::current_exe().unwrap();
-    exe.parent().unwrap().parent().unwrap().to_path_buf()
+    jointctl_bench::release_dir()
 }
 
 fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::LoadedConfig) {

@@ -1,0 +1,119 @@
+//! `cargo bench -p jointctl-bench --bench recording`: the recorder against the full SHERPA arm
+//! at 1 kHz. One run of the loop without a recorder, then one with `jointctl record` attached
+//! (a separate process, as in use), side by side: the loop's lateness and overruns, the
+//! recorder's losses, CPU time and file size per minute; then `jointctl sim replay`'s speed on
+//! that recording.
+//!
+//! Environment: `BENCH_RECORD_S` (default 60) seconds per run; `BENCH_QUICK=1` for 5 s.
+//! Needs `cargo build --release --workspace` first (the `jointctl` binary and the plugins).
+
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use jointctl_runtime::{ArmPublisher, PluginLoader, RunOptions};
+
+/// CPU time [s] of the children waited for so far (user + system).
+fn children_cpu_s() -> f64 {
+    // SAFETY: getrusage writes into a valid rusage.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: a valid `who` and a valid pointer.
+    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
+    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
+    t(u.ru_utime) + t(u.ru_stime)
+}
+
+struct LoopRun {
+    cycles: u64,
+    p50_us: f64,
+    p99_us: f64,
+    max_us: f64,
+    overruns: u64,
+    drops: u64,
+}
+
+fn run_loop(seconds: f64, arm_name: &str) -> LoopRun {
+    let loaded = jointctl_bench::sherpa(1000.0, arm_name);
+    let loader = PluginLoader::new([jointctl_bench::release_dir()]);
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| panic!("{e}\n(build first: cargo build --release --workspace)"));
+    arm.activate().unwrap();
+    // q2 tracks a torque sine, the others hold: the recording's content is the usual one.
+    let reference = jointctl_modes::Reference { waveform: jointctl_modes::Waveform::Sine, amplitude: 5.0, frequency_hz: 0.5, offset: 0.0, start_s: 0.0 };
+    arm.set_mode(1, jointctl_modes::Mode::Torque { reference });
+    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
+    let cycles = (seconds * 1000.0) as u64;
+    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize, stop: None };
+    let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
+    let st = &r.stats;
+    let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
+    LoopRun {
+        cycles: st.cycles,
+        p50_us: us(st.jitter_percentile_ns(50.0)),
+        p99_us: us(st.jitter_percentile_ns(99.0)),
+        max_us: st.max_jitter_ns as f64 / 1e3,
+        overruns: st.overruns,
+        drops: publisher.drops(),
+    }
+}
+
+fn main() {
+    let quick = std::env::var("BENCH_QUICK").is_ok();
+    let seconds: f64 = std::env::var("BENCH_RECORD_S").ok().and_then(|v| v.parse().ok()).unwrap_or(if quick { 5.0 } else { 60.0 });
+    let exe = jointctl_bench::release_dir().join("jointctl");
+    assert!(exe.exists(), "{} is missing: cargo build --release --workspace", exe.display());
+    println!("jointctl recording benchmark ({} cores), full SHERPA arm at 1 kHz, {seconds} s per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
+    println!();
+
+    let alone = run_loop(seconds, "bench-rec-alone");
+    let file = std::env::temp_dir().join(format!("jointctl-bench-{}.mcap", std::process::id()));
+    let cpu_before = children_cpu_s();
+    // The recorder stops on the arm's final sample, when the loop below ends.
+    let recorder = Command::new(&exe)
+        .args(["record", "--arm", "bench-rec-with", "--json", "--timeout", "10", "--out"])
+        .arg(&file)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let with = run_loop(seconds, "bench-rec-with");
+    let out = recorder.wait_with_output().unwrap();
+    let recorder_cpu_s = children_cpu_s() - cpu_before;
+    assert!(out.status.success(), "record: {}", String::from_utf8_lossy(&out.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let duration = summary["duration_s"].as_f64().unwrap_or(f64::NAN);
+    let bytes = summary["bytes"].as_f64().unwrap_or(f64::NAN);
+
+    println!("## The loop with and without a recorder (lateness = wake-up time - deadline)");
+    println!("| run | cycles | p50 lateness us | p99 lateness us | max lateness us | overruns | records dropped by the runtime |");
+    println!("|---|---|---|---|---|---|---|");
+    for (name, r) in [("no recorder", &alone), ("`jointctl record` attached", &with)] {
+        println!("| {name} | {} | {:.1} | {:.1} | {:.1} | {} | {} |", r.cycles, r.p50_us, r.p99_us, r.max_us, r.overruns, r.drops);
+    }
+    println!("| with / without, p99 lateness | | | {:.2} | | | |", with.p99_us / alone.p99_us);
+    println!();
+    println!("## The recorder");
+    println!("| recorded s | messages (raw / joint_state / diagnostics / commands) | lost | CPU time s | CPU, % of one core | MB per minute | target |");
+    println!("|---|---|---|---|---|---|---|");
+    let m = &summary["messages"];
+    println!(
+        "| {duration:.1} | {} / {} / {} / {} | {} | {recorder_cpu_s:.2} | {:.1} | {:.1} | 0 lost, <= 5 % of one core |",
+        m["raw"], m["joint_state"], m["diagnostics"], m["commands"], summary["lost"], 100.0 * recorder_cpu_s / duration, bytes / duration * 60.0 / 1e6
+    );
+    println!();
+
+    // `jointctl sim replay` on this recording: the whole arm's commands re-run at 1 kHz.
+    let config = std::env::temp_dir().join(format!("jointctl-bench-{}-sherpa.yaml", std::process::id()));
+    let text = std::fs::read_to_string(jointctl_bench::root().join("configs/sherpa_arm.yaml")).unwrap().replacen("rate_hz: 40 ", "rate_hz: 1000 ", 1);
+    // Includes stay next to the original file.
+    let text = text.replace("include: sherpa_", &format!("include: {}/configs/sherpa_", jointctl_bench::root().display()));
+    std::fs::write(&config, text).unwrap();
+    let t = Instant::now();
+    let replay = Command::new(&exe).args(["sim", "replay", "--json", "--config"]).arg(&config).arg(&file).output().unwrap();
+    let wall = t.elapsed().as_secs_f64();
+    assert!(replay.status.success(), "sim replay: {}", String::from_utf8_lossy(&replay.stderr));
+    println!("## `jointctl sim replay` of that recording (7 joints, 1 kHz, reading the file included)");
+    println!("| recorded s | wall s | times real time | target |");
+    println!("|---|---|---|---|");
+    println!("| {duration:.1} | {wall:.2} | {:.0} | >= 100 for one joint |", duration / wall);
+    let _ = std::fs::remove_file(&file);
+    let _ = std::fs::remove_file(&config);
+}
