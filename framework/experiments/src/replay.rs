@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use jointctl_config::LoadedConfig;
 use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, HalIoError, SensorFrame};
-use jointctl_record::reader::{JointSeries, RawSample, RecordedCommand};
+use jointctl_record::reader::{JointSeries, RawSample, RecordedCommand, Recording};
 use jointctl_runtime::commands::CommandValidator;
 use jointctl_runtime::status::LoopStatus;
 use jointctl_runtime::{Arm, PluginLoader};
@@ -152,12 +152,11 @@ impl CommandFeed {
 }
 
 /// The recorded joint states by DOF; a DOF of the config the recording lacks is noted.
-fn recorded_joints(path: &Path, arm: &Arm, notes: &mut Vec<String>) -> Result<HashMap<String, JointSeries>, ExperimentError> {
-    let (all, _) = jointctl_record::reader::all_joint_series(path).map_err(|e| ExperimentError(crate_chain(&e)))?;
-    for name in arm.dof_names.iter().filter(|n| !all.contains_key(*n)) {
+fn recorded_joints(recording: &mut Recording, arm: &Arm, notes: &mut Vec<String>) -> HashMap<String, JointSeries> {
+    for name in arm.dof_names.iter().filter(|n| !recording.joints.contains_key(*n)) {
         notes.push(format!("joint `{name}` is not in the recording"));
     }
-    Ok(all)
+    std::mem::take(&mut recording.joints)
 }
 
 fn crate_chain(e: &(dyn std::error::Error + 'static)) -> String {
@@ -175,23 +174,21 @@ fn by_cycle(series: &JointSeries) -> HashMap<u64, usize> {
     series.cycle.iter().enumerate().map(|(i, c)| (*c, i)).collect()
 }
 
-/// The recording's raw frames, commands, and the frame to activate the joints with (the
-/// recorded activation, else the first frame, with a note).
-fn read_recording(path: &Path, notes: &mut Vec<String>) -> Result<(Vec<RawSample>, Vec<RecordedCommand>, RawSample), ExperimentError> {
-    let err = |e: jointctl_record::reader::ReadError| ExperimentError(crate_chain(&e));
-    let raw = jointctl_record::reader::raw_samples(path).map_err(err)?;
-    if raw.is_empty() {
+/// The recording, and the frame to activate the joints with (the recorded activation, else
+/// the first frame, with a note).
+fn read_recording(path: &Path, notes: &mut Vec<String>) -> Result<(Recording, RawSample), ExperimentError> {
+    let recording = jointctl_record::reader::read(path).map_err(|e| ExperimentError(crate_chain(&e)))?;
+    let Some(first) = recording.raw.first() else {
         return Err(ExperimentError(format!("{}: no raw readings in the recording", path.display())));
-    }
-    let commands = jointctl_record::reader::commands(path).map_err(err)?;
-    let activation = match jointctl_record::reader::activation(path).map_err(err)? {
-        Some(a) => a,
+    };
+    let activation = match &recording.activation {
+        Some(a) => a.clone(),
         None => {
             notes.push("the recording has no activation readings: the joints were activated on its first frame, so observers that take their zero at activation may differ".into());
-            raw[0].clone()
+            first.clone()
         }
     };
-    Ok((raw, commands, activation))
+    Ok((recording, activation))
 }
 
 /// The recorded raw readings through `loaded`'s joint plugins, with the recorded commands.
@@ -206,7 +203,8 @@ fn read_recording(path: &Path, notes: &mut Vec<String>) -> Result<(Vec<RawSample
 /// ```
 pub fn replay_observers(path: &Path, loaded: &LoadedConfig, loader: &PluginLoader) -> Result<ReplayReport, ExperimentError> {
     let mut report = ReplayReport::default();
-    let (raw, commands, activation) = read_recording(path, &mut report.notes)?;
+    let (mut recording, activation) = read_recording(path, &mut report.notes)?;
+    let (raw, commands) = (std::mem::take(&mut recording.raw), std::mem::take(&mut recording.commands));
     report.cycles = raw.len();
     let devices = DeviceIndex::of(&loaded.config);
     // The first frame read is activation's.
@@ -214,7 +212,7 @@ pub fn replay_observers(path: &Path, loaded: &LoadedConfig, loader: &PluginLoade
     let hal = ReplayHal { frames: frames(&all, &devices, &mut report.notes).into_iter() };
     let mut arm = Arm::build(loaded, loader, Box::new(hal))?;
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
-    let recorded = recorded_joints(path, &arm, &mut report.notes)?;
+    let recorded = recorded_joints(&mut recording, &arm, &mut report.notes);
     let mut feed = CommandFeed::new(commands, &arm);
     let n = arm.dof_names.len();
     let mut replayed: Vec<Vec<(u64, f64, f64, f64)>> = vec![Vec::new(); n];
@@ -268,7 +266,8 @@ pub fn replay_observers(path: &Path, loaded: &LoadedConfig, loader: &PluginLoade
 /// ```
 pub fn replay_on_sim(path: &Path, loaded: &LoadedConfig, loader: &PluginLoader) -> Result<ReplayReport, ExperimentError> {
     let mut report = ReplayReport::default();
-    let (raw, commands, activation) = read_recording(path, &mut report.notes)?;
+    let (mut recording, activation) = read_recording(path, &mut report.notes)?;
+    let (raw, commands) = (std::mem::take(&mut recording.raw), std::mem::take(&mut recording.commands));
     report.cycles = raw.len();
     let devices = DeviceIndex::of(&loaded.config);
     // The recording's rate must be the config's: the loop is re-run cycle by cycle.
@@ -286,7 +285,7 @@ pub fn replay_on_sim(path: &Path, loaded: &LoadedConfig, loader: &PluginLoader) 
     sim.start_at(&start);
     let mut arm = Arm::build(loaded, loader, Box::new(sim))?;
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
-    let recorded = recorded_joints(path, &arm, &mut report.notes)?;
+    let recorded = recorded_joints(&mut recording, &arm, &mut report.notes);
     for name in &arm.dof_names {
         if let Some(mode) = recorded.get(name).and_then(|r| r.mode.first()).filter(|m| *m != "hold") {
             report.notes.push(format!(

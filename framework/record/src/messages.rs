@@ -11,12 +11,114 @@ use serde_json::{Value, json};
 pub const CHANNELS: [(&str, &str); 4] =
     [("raw", "jointctl.RawFrame"), ("joint_state", "jointctl.ArmState"), ("diagnostics", "jointctl.Diagnostics"), ("commands", "jointctl.CommandRecord")];
 
-fn known(sample: &JointSample, bit: u32, value: f64) -> Value {
-    sample.get(bit, value).filter(|v| v.is_finite()).map_or(Value::Null, Value::from)
+/// Writes JSON text into a buffer that is reused from sample to sample: the recorder encodes
+/// three messages per cycle at up to 1 kHz, and building `serde_json::Value` trees for them cost
+/// a third of a core (a map allocation per field).
+struct Json<'a>(&'a mut String);
+
+impl Json<'_> {
+    fn raw(&mut self, text: &str) -> &mut Self {
+        self.0.push_str(text);
+        self
+    }
+
+    /// `"key":` after a comma unless it opens an object.
+    fn key(&mut self, k: &str) -> &mut Self {
+        if !self.0.ends_with('{') {
+            self.0.push(',');
+        }
+        self.0.push('"');
+        self.0.push_str(k);
+        self.0.push_str("\":");
+        self
+    }
+
+    /// A number (shortest text that reads back the same, as serde_json writes it); not
+    /// finite: `null` (a value that is not known is not a number).
+    fn num(&mut self, k: &str, x: f64) -> &mut Self {
+        self.key(k);
+        if x.is_finite() {
+            self.0.push_str(ryu::Buffer::new().format_finite(x));
+        } else {
+            self.0.push_str("null");
+        }
+        self
+    }
+
+    fn int(&mut self, k: &str, x: u64) -> &mut Self {
+        self.key(k);
+        self.0.push_str(itoa::Buffer::new().format(x));
+        self
+    }
+
+    fn bool(&mut self, k: &str, b: bool) -> &mut Self {
+        self.key(k).raw(if b { "true" } else { "false" })
+    }
+
+    fn str(&mut self, k: &str, text: &str) -> &mut Self {
+        self.key(k);
+        self.0.push('"');
+        // Names and codes need no escaping: copied whole.
+        if !text.bytes().any(|b| b == b'"' || b == b'\\' || b < 0x20) {
+            self.0.push_str(text);
+            self.0.push('"');
+            return self;
+        }
+        for c in text.chars() {
+            match c {
+                '"' => self.0.push_str("\\\""),
+                '\\' => self.0.push_str("\\\\"),
+                c if (c as u32) < 0x20 => {
+                    use std::fmt::Write as _;
+                    let _ = write!(self.0, "\\u{:04x}", c as u32);
+                }
+                c => self.0.push(c),
+            }
+        }
+        self.0.push('"');
+        self
+    }
+
+    /// `"k":[` + one object per item + `]`.
+    fn objects<T>(&mut self, k: &str, items: impl IntoIterator<Item = T>, mut each: impl FnMut(&mut Self, T)) -> &mut Self {
+        self.key(k).raw("[");
+        for (i, item) in items.into_iter().enumerate() {
+            self.raw(if i == 0 { "{" } else { ",{" });
+            each(self, item);
+            self.raw("}");
+        }
+        self.raw("]")
+    }
 }
 
 fn finite(x: f64) -> Value {
     if x.is_finite() { Value::from(x) } else { Value::Null }
+}
+
+fn known(sample: &JointSample, bit: u32, value: f64) -> f64 {
+    sample.get(bit, value).unwrap_or(f64::NAN)
+}
+
+/// A joint-state sample as JSON text, into `out` (cleared first).
+pub fn write_joint_state(out: &mut String, s: &ArmState) {
+    out.clear();
+    let mut j = Json(out);
+    j.raw("{").int("cycle", s.cycle).int("stamp_ns", s.stamp_ns).bool("final", s.final_sample != 0);
+    j.objects("joints", s.joints(), |j, x| {
+        j.str("name", decode_name(&x.name))
+            .num("position_rad", known(x, FieldMask::POSITION, x.position_rad))
+            .num("velocity_rad_s", known(x, FieldMask::VELOCITY, x.velocity_rad_s))
+            .num("deflection_rad", known(x, FieldMask::DEFLECTION, x.deflection_rad))
+            .num("torque_nm", known(x, FieldMask::TORQUE, x.torque_nm))
+            .num("stiffness_nm_per_rad", known(x, FieldMask::STIFFNESS, x.stiffness_nm_per_rad))
+            .num("pivot_mm", known(x, FieldMask::PIVOT, x.pivot_mm))
+            .num("reference_torque_nm", x.reference_torque_nm)
+            .num("sensor_torque_nm", x.sensor_torque_nm)
+            .str("mode", x.mode.name())
+            .bool("enabled", x.enabled != 0)
+            .int("fault_code", u64::from(x.fault_code));
+    });
+    j.raw("}");
 }
 
 /// A joint-state sample.
@@ -30,27 +132,57 @@ fn finite(x: f64) -> Value {
 /// assert!(v["joints"][0]["torque_nm"].is_null(), "an unobserved torque is not a number");
 /// ```
 pub fn joint_state(s: &ArmState) -> Value {
-    let joints: Vec<Value> = s
-        .joints()
-        .iter()
-        .map(|j| {
-            json!({
-                "name": decode_name(&j.name),
-                "position_rad": known(j, FieldMask::POSITION, j.position_rad),
-                "velocity_rad_s": known(j, FieldMask::VELOCITY, j.velocity_rad_s),
-                "deflection_rad": known(j, FieldMask::DEFLECTION, j.deflection_rad),
-                "torque_nm": known(j, FieldMask::TORQUE, j.torque_nm),
-                "stiffness_nm_per_rad": known(j, FieldMask::STIFFNESS, j.stiffness_nm_per_rad),
-                "pivot_mm": known(j, FieldMask::PIVOT, j.pivot_mm),
-                "reference_torque_nm": finite(j.reference_torque_nm),
-                "sensor_torque_nm": finite(j.sensor_torque_nm),
-                "mode": j.mode.name(),
-                "enabled": j.enabled != 0,
-                "fault_code": j.fault_code,
-            })
-        })
-        .collect();
-    json!({"cycle": s.cycle, "stamp_ns": s.stamp_ns, "final": s.final_sample != 0, "joints": joints})
+    let mut out = String::new();
+    write_joint_state(&mut out, s);
+    serde_json::from_str(&out).unwrap_or(Value::Null)
+}
+
+/// A diagnostics sample as JSON text, into `out` (cleared first).
+pub fn write_diagnostics(out: &mut String, d: &Diagnostics) {
+    out.clear();
+    let mut j = Json(out);
+    j.raw("{")
+        .int("cycle", d.cycle)
+        .int("stamp_ns", d.stamp_ns)
+        .int("period_ns", d.period_ns)
+        .int("overruns", d.overruns)
+        .int("missed_deadlines", d.missed_deadlines)
+        .int("hal_errors", d.hal_errors)
+        .int("publish_drops", d.publish_drops)
+        .int("last_compute_ns", d.last_compute_ns)
+        .int("max_compute_ns", d.max_compute_ns)
+        .int("max_lateness_ns", d.max_jitter_ns);
+    j.objects("lateness_histogram", JITTER_BUCKET_UPPER_US.iter().zip(&d.jitter_histogram), |j, (upper, n)| {
+        if *upper == u64::MAX {
+            j.key("upper_us").raw("null");
+        } else {
+            j.int("upper_us", *upper);
+        }
+        j.int("cycles", *n);
+    });
+    j.objects("joints", &d.joints[..(d.joint_count as usize).min(d.joints.len())], |j, x| {
+        j.str("name", decode_name(&x.name))
+            .int("fault_code", u64::from(x.fault_code))
+            .bool("held", x.held != 0)
+            .int("invalid_cycles", x.invalid_cycles)
+            .int("fault_count", x.fault_count)
+            .int("setpoint_clamps", x.setpoint_clamps)
+            .int("torque_clamps", x.torque_clamps)
+            .int("rate_limited", x.rate_limited)
+            .int("watchdog_trips", x.watchdog_trips)
+            .int("missing_inputs", x.missing_inputs)
+            .int("plugin_max_ns", x.plugin_max_ns)
+            .int("over_budget_cycles", x.over_budget_cycles);
+    });
+    j.objects("devices", &d.devices[..(d.device_count as usize).min(d.devices.len())], |j, x| {
+        j.str("name", decode_name(&x.name))
+            .int("missing", x.missing)
+            .int("invalid", x.invalid)
+            .int("implausible", x.implausible)
+            .int("emcy", x.emcy)
+            .int("flags", u64::from(x.flags));
+    });
+    j.raw("}");
 }
 
 /// A diagnostics sample.
@@ -58,55 +190,44 @@ pub fn joint_state(s: &ArmState) -> Value {
 /// ```
 /// let v = jointctl_record::messages::diagnostics(&jointctl_ipc::Diagnostics::EMPTY);
 /// assert_eq!(v["lateness_histogram"].as_array().unwrap().len(), 16);
+/// assert!(v["lateness_histogram"][15]["upper_us"].is_null(), "the last bucket has no bound");
 /// ```
 pub fn diagnostics(d: &Diagnostics) -> Value {
-    let joints: Vec<Value> = d.joints[..(d.joint_count as usize).min(d.joints.len())]
-        .iter()
-        .map(|j| {
-            json!({
-                "name": decode_name(&j.name),
-                "fault_code": j.fault_code,
-                "held": j.held != 0,
-                "invalid_cycles": j.invalid_cycles,
-                "fault_count": j.fault_count,
-                "setpoint_clamps": j.setpoint_clamps,
-                "torque_clamps": j.torque_clamps,
-                "rate_limited": j.rate_limited,
-                "watchdog_trips": j.watchdog_trips,
-                "missing_inputs": j.missing_inputs,
-                "plugin_max_ns": j.plugin_max_ns,
-                "over_budget_cycles": j.over_budget_cycles,
-            })
-        })
-        .collect();
-    let devices: Vec<Value> = d.devices[..(d.device_count as usize).min(d.devices.len())]
-        .iter()
-        .map(|x| json!({"name": decode_name(&x.name), "missing": x.missing, "invalid": x.invalid, "implausible": x.implausible, "emcy": x.emcy, "flags": x.flags}))
-        .collect();
-    let histogram: Vec<Value> = JITTER_BUCKET_UPPER_US
-        .iter()
-        .zip(&d.jitter_histogram)
-        .map(|(upper, n)| json!({"upper_us": if *upper == u64::MAX { Value::Null } else { Value::from(*upper) }, "cycles": n}))
-        .collect();
-    json!({
-        "cycle": d.cycle,
-        "stamp_ns": d.stamp_ns,
-        "period_ns": d.period_ns,
-        "overruns": d.overruns,
-        "missed_deadlines": d.missed_deadlines,
-        "hal_errors": d.hal_errors,
-        "publish_drops": d.publish_drops,
-        "last_compute_ns": d.last_compute_ns,
-        "max_compute_ns": d.max_compute_ns,
-        "max_lateness_ns": d.max_jitter_ns,
-        "lateness_histogram": histogram,
-        "joints": joints,
-        "devices": devices,
-    })
+    let mut out = String::new();
+    write_diagnostics(&mut out, d);
+    serde_json::from_str(&out).unwrap_or(Value::Null)
 }
 
-fn reading(r: &RawReading) -> Value {
-    json!({"value": finite(r.value), "status": r.status.name(), "age_s": finite(r.age_s)})
+fn reading(j: &mut Json, r: &RawReading) {
+    j.num("value", r.value).str("status", r.status.name()).num("age_s", r.age_s);
+}
+
+/// A raw frame as JSON text, its devices named by the descriptor, into `out` (cleared first).
+pub fn write_raw(out: &mut String, f: &RawFrame, d: &RawDescriptor) {
+    out.clear();
+    let mut j = Json(out);
+    j.raw("{").int("cycle", f.cycle).int("stamp_ns", f.stamp_ns);
+    j.objects("encoders", f.encoders().iter().zip(&d.encoders), |j, (r, dev)| {
+        j.str("name", decode_name(&dev.name));
+        reading(j, r);
+    });
+    j.objects("drives", f.drives().iter().zip(&d.drives), |j, (r, dev)| {
+        j.str("name", decode_name(&dev.name)).key("position_rad").raw("{");
+        reading(j, &r.position_rad);
+        j.raw("}").key("velocity_rad_s").raw("{");
+        reading(j, &r.velocity_rad_s);
+        j.raw("}")
+            .bool("enabled", r.enabled != 0)
+            .bool("fault", r.fault != 0)
+            .str("action", r.action.name())
+            .num("setpoint_rad", r.setpoint_rad)
+            .num("velocity_ff_rad_s", r.velocity_ff_rad_s);
+    });
+    j.objects("torque_sensors", f.torque_sensors().iter().zip(&d.torque_sensors), |j, (r, dev)| {
+        j.str("name", decode_name(&dev.name));
+        reading(j, r);
+    });
+    j.raw("}");
 }
 
 /// A raw frame, its devices named by the descriptor.
@@ -122,44 +243,9 @@ fn reading(r: &RawReading) -> Value {
 /// assert_eq!(v["encoders"][0]["value"], 0.25);
 /// ```
 pub fn raw(f: &RawFrame, d: &RawDescriptor) -> Value {
-    let encoders: Vec<Value> = f
-        .encoders()
-        .iter()
-        .zip(&d.encoders)
-        .map(|(r, dev)| {
-            let mut v = reading(r);
-            v["name"] = decode_name(&dev.name).into();
-            v
-        })
-        .collect();
-    let drives: Vec<Value> = f
-        .drives()
-        .iter()
-        .zip(&d.drives)
-        .map(|(r, dev)| {
-            json!({
-                "name": decode_name(&dev.name),
-                "position_rad": reading(&r.position_rad),
-                "velocity_rad_s": reading(&r.velocity_rad_s),
-                "enabled": r.enabled != 0,
-                "fault": r.fault != 0,
-                "action": r.action.name(),
-                "setpoint_rad": finite(r.setpoint_rad),
-                "velocity_ff_rad_s": finite(r.velocity_ff_rad_s),
-            })
-        })
-        .collect();
-    let torque_sensors: Vec<Value> = f
-        .torque_sensors()
-        .iter()
-        .zip(&d.torque_sensors)
-        .map(|(r, dev)| {
-            let mut v = reading(r);
-            v["name"] = decode_name(&dev.name).into();
-            v
-        })
-        .collect();
-    json!({"cycle": f.cycle, "stamp_ns": f.stamp_ns, "encoders": encoders, "drives": drives, "torque_sensors": torque_sensors})
+    let mut out = String::new();
+    write_raw(&mut out, f, d);
+    serde_json::from_str(&out).unwrap_or(Value::Null)
 }
 
 /// An accepted command.
@@ -250,4 +336,20 @@ pub fn schema(topic: &str) -> Option<Value> {
         out.extend(body.clone());
     }
     Some(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Json;
+
+    #[test]
+    fn the_json_writer_escapes_text_and_writes_no_non_finite_number() {
+        let mut out = String::new();
+        let mut j = Json(&mut out);
+        j.raw("{").str("name", "a\"b\\c\u{1}").num("x", f64::NAN).num("y", f64::INFINITY).num("z", -0.25).int("n", u64::MAX).bool("b", true).raw("}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{out}: {e}"));
+        assert_eq!(v["name"], "a\"b\\c\u{1}");
+        assert!(v["x"].is_null() && v["y"].is_null());
+        assert_eq!((v["z"].as_f64(), v["n"].as_u64(), v["b"].as_bool()), (Some(-0.25), Some(u64::MAX), Some(true)));
+    }
 }

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use jointctl_api::{DriveReading, Reading, ReadingStatus};
+use jointctl_api::{DriveReading, Reading};
 use jointctl_ipc::{CommandKind, CommandRequest, MAX_COMMAND_POINTS, TorqueWaveform, encode_name};
 use serde_json::Value;
 
@@ -93,6 +93,194 @@ fn number(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)
 }
 
+// The per-cycle messages, typed: reading tens of thousands of them through `serde_json::Value`
+// maps made a replay four times slower than real time.
+
+#[derive(serde::Deserialize)]
+struct ReadingJson<'a> {
+    #[serde(default, borrow)]
+    name: &'a str,
+    value: Option<f64>,
+    #[serde(borrow)]
+    status: &'a str,
+    age_s: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+struct DriveJson<'a> {
+    #[serde(borrow)]
+    name: &'a str,
+    #[serde(borrow)]
+    position_rad: ReadingJson<'a>,
+    #[serde(borrow)]
+    velocity_rad_s: ReadingJson<'a>,
+    enabled: bool,
+    fault: bool,
+    setpoint_rad: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+struct RawJson<'a> {
+    cycle: u64,
+    stamp_ns: u64,
+    #[serde(borrow)]
+    encoders: Vec<ReadingJson<'a>>,
+    #[serde(borrow)]
+    drives: Vec<DriveJson<'a>>,
+    #[serde(default, borrow)]
+    torque_sensors: Vec<ReadingJson<'a>>,
+}
+
+#[derive(serde::Deserialize)]
+struct JointJson<'a> {
+    #[serde(borrow)]
+    name: &'a str,
+    position_rad: Option<f64>,
+    deflection_rad: Option<f64>,
+    torque_nm: Option<f64>,
+    #[serde(default)]
+    sensor_torque_nm: Option<f64>,
+    reference_torque_nm: Option<f64>,
+    pivot_mm: Option<f64>,
+    stiffness_nm_per_rad: Option<f64>,
+    #[serde(borrow)]
+    mode: &'a str,
+}
+
+#[derive(serde::Deserialize)]
+struct StateJson<'a> {
+    cycle: u64,
+    stamp_ns: u64,
+    #[serde(default, rename = "final")]
+    final_sample: bool,
+    #[serde(borrow)]
+    joints: Vec<JointJson<'a>>,
+}
+
+impl ReadingJson<'_> {
+    fn reading(&self) -> Reading {
+        let value = self.value.unwrap_or(f64::NAN);
+        let age_s = self.age_s.unwrap_or(f64::INFINITY);
+        match self.status {
+            "valid" if value.is_finite() => Reading::valid_aged(value, age_s),
+            "stale" if value.is_finite() => Reading::stale(value, age_s),
+            "invalid" => Reading::invalid(),
+            _ => Reading::MISSING,
+        }
+    }
+}
+
+impl RawJson<'_> {
+    fn sample(&self) -> RawSample {
+        RawSample {
+            cycle: self.cycle,
+            stamp_ns: self.stamp_ns,
+            encoders: self.encoders.iter().map(|e| (e.name.to_string(), e.reading())).collect(),
+            drives: self
+                .drives
+                .iter()
+                .map(|d| (d.name.to_string(), DriveReading::new(d.position_rad.reading(), d.velocity_rad_s.reading(), d.enabled, d.fault), d.setpoint_rad.unwrap_or(f64::NAN)))
+                .collect(),
+            torque_sensors: self.torque_sensors.iter().map(|e| (e.name.to_string(), e.reading())).collect(),
+        }
+    }
+}
+
+/// Calls `each(topic, sequence, data)` for every message of one of `topics`, in file order
+/// (the file is read and decompressed once).
+fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
+    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let stream = mcap::MessageStream::new(&bytes).map_err(|source| ReadError::Mcap { file: path.into(), source })?;
+    for message in stream {
+        let m = message.map_err(|source| ReadError::Mcap { file: path.into(), source })?;
+        if topics.contains(&m.channel.topic.as_str()) {
+            each(&m.channel.topic, m.sequence, &m.data)?;
+        }
+    }
+    Ok(())
+}
+
+/// The joint states, DOF by DOF, as they are read.
+#[derive(Default)]
+struct JointStates {
+    series: std::collections::HashMap<String, JointSeries>,
+    first_stamp: Option<u64>,
+    names: Vec<String>,
+}
+
+impl JointStates {
+    fn add(&mut self, path: &Path, sequence: u32, data: &[u8]) -> Result<(), ReadError> {
+        let v: StateJson = serde_json::from_slice(data).map_err(|e| ReadError::Message { file: path.into(), topic: "joint_state".into(), sequence, reason: e.to_string() })?;
+        if self.names.is_empty() {
+            self.names = v.joints.iter().map(|j| j.name.to_string()).collect();
+        }
+        // The final sample (the runtime stopping) holds every joint: not part of the experiment.
+        if v.final_sample {
+            return Ok(());
+        }
+        let t0 = *self.first_stamp.get_or_insert(v.stamp_ns);
+        for j in &v.joints {
+            let s = match self.series.get_mut(j.name) {
+                Some(s) => s,
+                None => self.series.entry(j.name.to_string()).or_default(),
+            };
+            let nan = |x: Option<f64>| x.unwrap_or(f64::NAN);
+            s.t_s.push(v.stamp_ns.saturating_sub(t0) as f64 * 1e-9);
+            s.cycle.push(v.cycle);
+            s.position_rad.push(nan(j.position_rad));
+            s.deflection_rad.push(nan(j.deflection_rad));
+            s.observed_torque_nm.push(nan(j.torque_nm));
+            s.sensor_torque_nm.push(nan(j.sensor_torque_nm));
+            s.reference_torque_nm.push(nan(j.reference_torque_nm));
+            s.pivot_mm.push(nan(j.pivot_mm));
+            s.stiffness_nm_per_rad.push(nan(j.stiffness_nm_per_rad));
+            s.mode.push(j.mode.to_string());
+        }
+        Ok(())
+    }
+}
+
+fn parse_raw(path: &Path, sequence: u32, data: &[u8]) -> Result<RawSample, ReadError> {
+    let v: RawJson = serde_json::from_slice(data).map_err(|e| ReadError::Message { file: path.into(), topic: "raw".into(), sequence, reason: e.to_string() })?;
+    Ok(v.sample())
+}
+
+/// A whole recording, read in one pass: what a replay needs.
+#[derive(Clone, Debug, Default)]
+pub struct Recording {
+    /// The `raw` messages, in order.
+    pub raw: Vec<RawSample>,
+    /// Each DOF's joint states.
+    pub joints: std::collections::HashMap<String, JointSeries>,
+    /// The DOF names, in the recording's order.
+    pub joint_names: Vec<String>,
+    /// The accepted commands, in order.
+    pub commands: Vec<RecordedCommand>,
+    /// The readings the joints were activated with, if recorded.
+    pub activation: Option<RawSample>,
+}
+
+/// Reads a whole recording (raw frames, joint states, commands, activation).
+///
+/// ```no_run
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let r = jointctl_record::reader::read(std::path::Path::new("r.mcap"))?;
+/// println!("{} cycles, {} commands", r.raw.len(), r.commands.len());
+/// # Ok(()) }
+/// ```
+pub fn read(path: &Path) -> Result<Recording, ReadError> {
+    let (mut raw, mut states, mut commands) = (Vec::new(), JointStates::default(), Vec::new());
+    for_each_message(path, &["raw", "joint_state", "commands"], |topic, sequence, data| {
+        match topic {
+            "raw" => raw.push(parse_raw(path, sequence, data)?),
+            "joint_state" => states.add(path, sequence, data)?,
+            _ => commands.push(parse_command(path, sequence, data)?),
+        }
+        Ok(())
+    })?;
+    Ok(Recording { raw, joints: states.series, joint_names: states.names, commands, activation: activation(path)? })
+}
+
 /// The signals of DOF `joint` in the recording `path`.
 ///
 /// ```no_run
@@ -108,38 +296,9 @@ pub fn joint_series(path: &Path, joint: &str) -> Result<JointSeries, ReadError> 
 
 /// Every DOF's signals in one pass over the file, and the DOF names in the recording's order.
 pub fn all_joint_series(path: &Path) -> Result<(std::collections::HashMap<String, JointSeries>, Vec<String>), ReadError> {
-    let mut out: std::collections::HashMap<String, JointSeries> = std::collections::HashMap::new();
-    let mut first_stamp = None;
-    let mut known: Vec<String> = Vec::new();
-    for (sequence, v) in messages(path, "joint_state")? {
-        let bad = |reason: &str| ReadError::Message { file: path.into(), topic: "joint_state".into(), sequence, reason: reason.into() };
-        let stamp = v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`"))?;
-        let joints = v["joints"].as_array().ok_or_else(|| bad("no `joints` array"))?;
-        if known.is_empty() {
-            known = joints.iter().filter_map(|j| j["name"].as_str().map(str::to_string)).collect();
-        }
-        // The final sample (the runtime stopping) holds every joint: not part of the experiment.
-        if v["final"].as_bool() == Some(true) {
-            continue;
-        }
-        let t0 = *first_stamp.get_or_insert(stamp);
-        let cycle = v["cycle"].as_u64().unwrap_or(0);
-        for j in joints {
-            let Some(name) = j["name"].as_str() else { continue };
-            let s = out.entry(name.to_string()).or_default();
-            s.t_s.push(stamp.saturating_sub(t0) as f64 * 1e-9);
-            s.cycle.push(cycle);
-            s.position_rad.push(number(&j["position_rad"]));
-            s.deflection_rad.push(number(&j["deflection_rad"]));
-            s.observed_torque_nm.push(number(&j["torque_nm"]));
-            s.sensor_torque_nm.push(number(&j["sensor_torque_nm"]));
-            s.reference_torque_nm.push(number(&j["reference_torque_nm"]));
-            s.pivot_mm.push(number(&j["pivot_mm"]));
-            s.stiffness_nm_per_rad.push(number(&j["stiffness_nm_per_rad"]));
-            s.mode.push(j["mode"].as_str().unwrap_or("unknown").to_string());
-        }
-    }
-    Ok((out, known))
+    let mut states = JointStates::default();
+    for_each_message(path, &["joint_state"], |_, sequence, data| states.add(path, sequence, data))?;
+    Ok((states.series, states.names))
 }
 
 /// Whether `path` names an MCAP file (by its extension).
@@ -176,69 +335,16 @@ pub struct RecordedCommand {
     pub request: CommandRequest,
 }
 
-fn reading(v: &Value) -> Reading {
-    let status = match v["status"].as_str() {
-        Some("valid") => ReadingStatus::VALID,
-        Some("stale") => ReadingStatus::STALE,
-        Some("invalid") => ReadingStatus::INVALID,
-        _ => ReadingStatus::MISSING,
-    };
-    let value = number(&v["value"]);
-    let age_s = v["age_s"].as_f64().unwrap_or(f64::INFINITY);
-    match status {
-        ReadingStatus::VALID if value.is_finite() => Reading::valid_aged(value, age_s),
-        ReadingStatus::STALE if value.is_finite() => Reading::stale(value, age_s),
-        ReadingStatus::INVALID => Reading::invalid(),
-        _ => Reading::MISSING,
-    }
-}
 
-fn named(list: &Value) -> Vec<(String, Reading)> {
-    list.as_array().map_or_else(Vec::new, |a| a.iter().map(|e| (e["name"].as_str().unwrap_or("").to_string(), reading(e))).collect())
-}
-
-/// Every message of `topic`, decoded: (sequence, JSON).
-fn messages(path: &Path, topic: &str) -> Result<Vec<(u32, Value)>, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
-    let mut out = Vec::new();
-    let stream = mcap::MessageStream::new(&bytes).map_err(|source| ReadError::Mcap { file: path.into(), source })?;
-    for message in stream {
-        let m = message.map_err(|source| ReadError::Mcap { file: path.into(), source })?;
-        if m.channel.topic != topic {
-            continue;
-        }
-        let v: Value = serde_json::from_slice(&m.data)
-            .map_err(|e| ReadError::Message { file: path.into(), topic: topic.into(), sequence: m.sequence, reason: e.to_string() })?;
-        out.push((m.sequence, v));
-    }
-    Ok(out)
-}
-
-fn raw_sample(v: &Value) -> Result<RawSample, &'static str> {
-    let drives = v["drives"]
-        .as_array()
-        .ok_or("no `drives` array")?
-        .iter()
-        .map(|d| {
-            let r = DriveReading::new(reading(&d["position_rad"]), reading(&d["velocity_rad_s"]), d["enabled"] == true, d["fault"] == true);
-            (d["name"].as_str().unwrap_or("").to_string(), r, number(&d["setpoint_rad"]))
-        })
-        .collect();
-    Ok(RawSample {
-        cycle: v["cycle"].as_u64().ok_or("no `cycle`")?,
-        stamp_ns: v["stamp_ns"].as_u64().ok_or("no `stamp_ns`")?,
-        encoders: named(&v["encoders"]),
-        drives,
-        torque_sensors: named(&v["torque_sensors"]),
-    })
-}
 
 /// The recording's `raw` messages, in order.
 pub fn raw_samples(path: &Path) -> Result<Vec<RawSample>, ReadError> {
-    messages(path, "raw")?
-        .into_iter()
-        .map(|(sequence, v)| raw_sample(&v).map_err(|reason| ReadError::Message { file: path.into(), topic: "raw".into(), sequence, reason: reason.into() }))
-        .collect()
+    let mut out = Vec::new();
+    for_each_message(path, &["raw"], |_, sequence, data| {
+        out.push(parse_raw(path, sequence, data)?);
+        Ok(())
+    })?;
+    Ok(out)
 }
 
 /// The readings the recorded arm's joints were activated with (the `activation` metadata), if
@@ -251,33 +357,38 @@ pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
         let m = mcap::read::metadata(&bytes, index).map_err(mcap_error)?;
         let Some(text) = m.metadata.get("raw") else { continue };
         let bad = |reason: String| ReadError::Message { file: path.into(), topic: "activation".into(), sequence: 0, reason };
-        let v: Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
-        return raw_sample(&v).map(Some).map_err(|r| bad(r.into()));
+        let v: RawJson = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        return Ok(Some(v.sample()));
     }
     Ok(None)
 }
 
 /// The recording's accepted commands, in order, rebuilt as requests.
 pub fn commands(path: &Path) -> Result<Vec<RecordedCommand>, ReadError> {
-    messages(path, "commands")?
-        .into_iter()
-        .map(|(sequence, v)| {
-            let bad = |reason: String| ReadError::Message { file: path.into(), topic: "commands".into(), sequence, reason };
-            let kind = v["kind"].as_str().and_then(CommandKind::from_name).ok_or_else(|| bad(format!("unknown kind {}", v["kind"])))?;
-            let values: Vec<f64> = v["values"].as_array().map_or_else(Vec::new, |a| a.iter().map(number).collect());
-            let mut request = CommandRequest::new(kind, v["joint"].as_str().unwrap_or(""), &values);
-            request.joint = encode_name(v["joint"].as_str().unwrap_or(""));
-            request.streamed = u32::from(v["streamed"] == true);
-            request.waveform = v["waveform"].as_str().and_then(TorqueWaveform::from_name).unwrap_or(TorqueWaveform::STEP);
-            let points = v["points"].as_array().cloned().unwrap_or_default();
-            if points.len() > MAX_COMMAND_POINTS {
-                return Err(bad(format!("{} trajectory points, at most {MAX_COMMAND_POINTS}", points.len())));
-            }
-            for (slot, p) in request.points.iter_mut().zip(&points) {
-                *slot = [number(&p[0]), number(&p[1]), number(&p[2])];
-            }
-            request.point_count = points.len() as u32;
-            Ok(RecordedCommand { stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?, request })
-        })
-        .collect()
+    let mut out = Vec::new();
+    for_each_message(path, &["commands"], |_, sequence, data| {
+        out.push(parse_command(path, sequence, data)?);
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+fn parse_command(path: &Path, sequence: u32, data: &[u8]) -> Result<RecordedCommand, ReadError> {
+    let bad = |reason: String| ReadError::Message { file: path.into(), topic: "commands".into(), sequence, reason };
+    let v: Value = serde_json::from_slice(data).map_err(|e| bad(e.to_string()))?;
+    let kind = v["kind"].as_str().and_then(CommandKind::from_name).ok_or_else(|| bad(format!("unknown kind {}", v["kind"])))?;
+    let values: Vec<f64> = v["values"].as_array().map_or_else(Vec::new, |a| a.iter().map(number).collect());
+    let mut request = CommandRequest::new(kind, v["joint"].as_str().unwrap_or(""), &values);
+    request.joint = encode_name(v["joint"].as_str().unwrap_or(""));
+    request.streamed = u32::from(v["streamed"] == true);
+    request.waveform = v["waveform"].as_str().and_then(TorqueWaveform::from_name).unwrap_or(TorqueWaveform::STEP);
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    if points.len() > MAX_COMMAND_POINTS {
+        return Err(bad(format!("{} trajectory points, at most {MAX_COMMAND_POINTS}", points.len())));
+    }
+    for (slot, p) in request.points.iter_mut().zip(&points) {
+        *slot = [number(&p[0]), number(&p[1]), number(&p[2])];
+    }
+    request.point_count = points.len() as u32;
+    Ok(RecordedCommand { stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?, request })
 }

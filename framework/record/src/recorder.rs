@@ -242,6 +242,9 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     let mcap_error = |source| RecordError::Mcap { file: opts.out.clone(), source };
     let mut writer = mcap::WriteOptions::new()
         .compression(Some(mcap::Compression::Zstd))
+        // zstd's fastest level: the JSON of successive cycles differs little, so level 1 still
+        // compresses it about tenfold, at half the CPU of the default.
+        .compression_level(1)
         .profile("")
         .library(format!("jointctl-record {}", env!("CARGO_PKG_VERSION")))
         .create(BufWriter::new(file))
@@ -281,34 +284,38 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     let (mut first_stamp, mut last_stamp) = (None::<u64>, 0u64);
     let mut arm_stopped = false;
     let mut last_sample = Instant::now();
-    let mut write = |writer: &mut mcap::Writer<BufWriter<std::fs::File>>, topic: &'static str, number: u64, stamp_ns: u64, body: Value| -> Result<(), RecordError> {
+    // One text buffer, reused: at 1 kHz, three messages a cycle.
+    let mut text = String::with_capacity(16 * 1024);
+    let mut write = |writer: &mut mcap::Writer<BufWriter<std::fs::File>>, topic: &'static str, number: u64, stamp_ns: u64, body: &str| -> Result<(), RecordError> {
         let count = counts.entry(topic).or_default();
         let header = mcap::records::MessageHeader { channel_id: channel[topic], sequence: *count as u32, log_time: stamp_ns, publish_time: stamp_ns };
         *count += 1;
         gaps.entry(topic).or_default().see(number);
-        let bytes = serde_json::to_vec(&body).unwrap_or_default();
-        writer.write_to_known_channel(&header, &bytes).map_err(|source| RecordError::Mcap { file: opts.out.clone(), source })
+        writer.write_to_known_channel(&header, body.as_bytes()).map_err(|source| RecordError::Mcap { file: opts.out.clone(), source })
     };
     loop {
         let mut got = false;
         while let Some(s) = raw.receive().map_err(receive_error(&names.raw))? {
             got = true;
-            write(&mut writer, "raw", s.cycle, s.stamp_ns, messages::raw(&s, &descriptor))?;
+            messages::write_raw(&mut text, &s, &descriptor);
+            write(&mut writer, "raw", s.cycle, s.stamp_ns, &text)?;
         }
         while let Some(s) = state.receive().map_err(receive_error(&names.joint_state))? {
             got = true;
             first_stamp.get_or_insert(s.stamp_ns);
             last_stamp = last_stamp.max(s.stamp_ns);
             arm_stopped |= s.final_sample != 0;
-            write(&mut writer, "joint_state", s.cycle, s.stamp_ns, messages::joint_state(&s))?;
+            messages::write_joint_state(&mut text, &s);
+            write(&mut writer, "joint_state", s.cycle, s.stamp_ns, &text)?;
         }
         while let Some(s) = diagnostics.receive().map_err(receive_error(&names.diagnostics))? {
             got = true;
-            write(&mut writer, "diagnostics", s.cycle, s.stamp_ns, messages::diagnostics(&s))?;
+            messages::write_diagnostics(&mut text, &s);
+            write(&mut writer, "diagnostics", s.cycle, s.stamp_ns, &text)?;
         }
         while let Some(s) = commands.receive().map_err(receive_error(&names.commands))? {
             got = true;
-            write(&mut writer, "commands", s.sequence, s.stamp_ns, messages::command(&s))?;
+            write(&mut writer, "commands", s.sequence, s.stamp_ns, &messages::command(&s).to_string())?;
         }
         let elapsed_s = first_stamp.map_or(0.0, |f| last_stamp.saturating_sub(f) as f64 * 1e-9);
         if stop.load(Ordering::Acquire) || arm_stopped || opts.duration_s.is_some_and(|d| elapsed_s >= d) {
@@ -319,7 +326,9 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         } else if last_sample.elapsed() > timeout {
             break;
         } else {
-            std::thread::sleep(Duration::from_micros(500));
+            // Each service buffers 64 samples (64 ms at 1 kHz): waking every 2 ms keeps up with
+            // room to spare, at a quarter of the wake-ups of a tighter poll.
+            std::thread::sleep(Duration::from_millis(2));
         }
     }
     writer.finish().map_err(mcap_error)?;
