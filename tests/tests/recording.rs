@@ -197,6 +197,16 @@ fn fit_and_identify_read_a_joint_from_the_recording() {
     let fit = Command::new(jointctl()).arg("fit").arg(&file).args(["--joint", "q2", "--order", "3"]).output().unwrap();
     assert!(fit.status.success(), "{}", String::from_utf8_lossy(&fit.stderr));
     assert!(String::from_utf8_lossy(&fit.stdout).contains("characteristic:"));
+    // The columns: a VSA's pivot to 0.1 mm, the reference, a 1-DOF joint's motor drive from the
+    // attached arm description (the elbow's elmo_q4); a shoulder DOF has no single motor.
+    let q2 = jointctl_record::reader::measured(&file, "q2").unwrap();
+    assert_eq!(q2.t_s.len(), samples as usize);
+    assert!(q2.pivot_mm.iter().all(|p| (p * 10.0 - (p * 10.0).round()).abs() < 1e-9) && !q2.pivot_mm.is_empty());
+    assert!(q2.reference_torque_nm.iter().any(|r| r.is_finite()));
+    assert!(q2.motor_position_rad.is_empty());
+    let q4 = jointctl_record::reader::measured(&file, "q4").unwrap();
+    assert_eq!(q4.motor_position_rad.len(), q4.t_s.len());
+    assert!(q4.motor_position_rad.iter().all(|m| m.is_finite()), "the elbow's drive was read every cycle");
     for (args, expected) in [
         (vec!["identify", "--data"], "say which with --joint"),
         (vec!["identify", "--joint", "q9", "--data"], "no joint `q9` in the recording (joints: q1, q2, q3, q4, q5, q6, q7)"),

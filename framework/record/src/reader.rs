@@ -363,6 +363,80 @@ pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
     Ok(None)
 }
 
+/// One joint's measured data from a recording, as `fit` and `identify` take it: its observed
+/// deflection against its F/T sensor's torque, only where both are known.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Measured {
+    /// Time [s] from the cycle stamps.
+    pub t_s: Vec<f64>,
+    /// Observed deflection [rad].
+    pub deflection_rad: Vec<f64>,
+    /// The F/T sensor's torque [Nm].
+    pub torque_nm: Vec<f64>,
+    /// Pivot setting [mm] to 0.1 mm (a VSA), else empty.
+    pub pivot_mm: Vec<f64>,
+    /// Torque reference [Nm] (NaN outside torque modes), empty when never set.
+    pub reference_torque_nm: Vec<f64>,
+    /// The position of a 1-DOF joint's `motor` drive [rad] (its wiring from the attached arm
+    /// description), empty when it has none.
+    pub motor_position_rad: Vec<f64>,
+    /// Samples of the joint left out: deflection or F/T torque unknown.
+    pub left_out: usize,
+    /// Samples of the joint in the recording.
+    pub samples: usize,
+    /// Samples with a usable F/T torque (0: the joint has no `torque_sensor`).
+    pub ft_samples: usize,
+}
+
+/// `joint`'s measured data in the recording `path`.
+///
+/// ```no_run
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let m = jointctl_record::reader::measured(std::path::Path::new("r.mcap"), "q2")?;
+/// assert_eq!(m.t_s.len(), m.torque_nm.len());
+/// # Ok(()) }
+/// ```
+pub fn measured(path: &Path, joint: &str) -> Result<Measured, ReadError> {
+    let s = joint_series(path, joint)?;
+    let keep: Vec<usize> = (0..s.len()).filter(|&i| s.deflection_rad[i].is_finite() && s.sensor_torque_nm[i].is_finite()).collect();
+    let pick = |col: &[f64]| keep.iter().map(|&i| col[i]).collect::<Vec<f64>>();
+    let mut m = Measured { t_s: pick(&s.t_s), deflection_rad: pick(&s.deflection_rad), torque_nm: pick(&s.sensor_torque_nm), left_out: s.len() - keep.len(), samples: s.len(), ft_samples: s.sensor_torque_nm.iter().filter(|t| t.is_finite()).count(), ..Measured::default() };
+    // The observer's pivot carries its encoder's quantisation: settings are told apart to 0.1 mm.
+    if s.pivot_mm.iter().any(|p| p.is_finite()) {
+        m.pivot_mm = keep.iter().map(|&i| (s.pivot_mm[i] * 10.0).round() / 10.0).collect();
+    }
+    if s.reference_torque_nm.iter().any(|r| r.is_finite()) {
+        m.reference_torque_nm = pick(&s.reference_torque_nm);
+    }
+    if let Some(drive) = motor_drive(path, joint)? {
+        let by_cycle: std::collections::HashMap<u64, f64> = raw_samples(path)?
+            .iter()
+            .map(|f| (f.cycle, f.drives.iter().find(|(n, ..)| *n == drive).and_then(|(_, r, _)| r.position_rad.usable(f64::INFINITY)).unwrap_or(f64::NAN)))
+            .collect();
+        m.motor_position_rad = keep.iter().map(|&i| by_cycle.get(&s.cycle[i]).copied().unwrap_or(f64::NAN)).collect();
+    }
+    Ok(m)
+}
+
+/// The `motor` drive of 1-DOF joint `joint` in the attached arm description, if any.
+fn motor_drive(path: &Path, joint: &str) -> Result<Option<String>, ReadError> {
+    let Some((_, text)) = config_attachment(path)? else { return Ok(None) };
+    let Ok(yaml) = serde_yaml::from_str::<serde_yaml::Value>(&text) else { return Ok(None) };
+    let entry = yaml["joints"].as_sequence().and_then(|joints| joints.iter().find(|j| j["name"].as_str() == Some(joint) && j["dofs"].is_null()));
+    Ok(entry.and_then(|j| j["drives"]["motor"].as_str()).map(str::to_string))
+}
+
+/// The arm description attached to the recording (the first attachment, the file `jointctl
+/// run` was given): its name and text.
+pub fn config_attachment(path: &Path) -> Result<Option<(String, String)>, ReadError> {
+    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
+    let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
+    let Some(index) = summary.attachment_indexes.first() else { return Ok(None) };
+    let a = mcap::read::attachment(&bytes, index).map_err(mcap_error)?;
+    Ok(Some((a.name, String::from_utf8_lossy(&a.data).into_owned())))
+}
+
 /// The recording's accepted commands, in order, rebuilt as requests.
 pub fn commands(path: &Path) -> Result<Vec<RecordedCommand>, ReadError> {
     let mut out = Vec::new();

@@ -70,23 +70,17 @@ fn load_data(path: &Path, joint: Option<&str>) -> Result<jointctl_ident::csv::Da
         return jointctl_ident::csv::read(path).map_err(|e| e.to_string());
     }
     let joint = joint.ok_or_else(|| format!("{}: a recording holds every joint: say which with --joint", path.display()))?;
-    let s = jointctl_record::reader::joint_series(path, joint).map_err(|e| crate::chain(&e))?;
-    let keep: Vec<usize> = (0..s.len()).filter(|&i| s.deflection_rad[i].is_finite() && s.sensor_torque_nm[i].is_finite()).collect();
-    if keep.is_empty() {
-        let why = if s.sensor_torque_nm.iter().all(|t| t.is_nan()) { ": it has no F/T torque (wire a `torque_sensor` to the joint)" } else { "" };
+    let m = jointctl_record::reader::measured(path, joint).map_err(|e| crate::chain(&e))?;
+    if m.t_s.is_empty() {
+        let why = if m.ft_samples == 0 { ": it has no F/T torque (wire a `torque_sensor` to the joint)" } else { ": its deflection is never known" };
         return Err(format!("{}: joint `{joint}` has no sample with both a deflection and an F/T torque{why}", path.display()));
     }
-    let pick = |col: &[f64]| keep.iter().map(|&i| col[i]).collect::<Vec<f64>>();
-    let mut data = jointctl_ident::csv::Data::from_columns(pick(&s.t_s), pick(&s.deflection_rad), pick(&s.sensor_torque_nm));
-    // The observer's pivot carries its encoder's quantisation: settings are told apart to 0.1 mm.
-    if s.pivot_mm.iter().any(|p| p.is_finite()) {
-        data.pivot_mm = keep.iter().map(|&i| (s.pivot_mm[i] * 10.0).round() / 10.0).collect();
-    }
-    if s.reference_torque_nm.iter().any(|r| r.is_finite()) {
-        data.reference_torque = pick(&s.reference_torque_nm);
-    }
-    if keep.len() < s.len() {
-        data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection or F/T torque unknown", s.len() - keep.len(), s.len()));
+    let mut data = jointctl_ident::csv::Data::from_columns(m.t_s, m.deflection_rad, m.torque_nm);
+    data.pivot_mm = m.pivot_mm;
+    data.reference_torque = m.reference_torque_nm;
+    data.motor_position = m.motor_position_rad;
+    if m.left_out > 0 {
+        data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection or F/T torque unknown", m.left_out, m.samples));
     }
     Ok(data)
 }
