@@ -207,6 +207,17 @@ fn fit_and_identify_read_a_joint_from_the_recording() {
     let q4 = jointctl_record::reader::measured(&file, "q4").unwrap();
     assert_eq!(q4.motor_position_rad.len(), q4.t_s.len());
     assert!(q4.motor_position_rad.iter().all(|m| m.is_finite()), "the elbow's drive was read every cycle");
+    // The wrist by its joint name: along the nearest of section 3.5.2's four directions, both
+    // DOFs' deflections and F/T torques projected on it.
+    let wrist = jointctl_record::reader::measured(&file, "wrist").unwrap();
+    assert_eq!(wrist.angle_deg.len(), wrist.t_s.len());
+    assert!(!wrist.t_s.is_empty() && wrist.angle_deg.iter().all(|a| [0.0, 45.0, 90.0, 135.0].contains(a)), "{:?}", &wrist.angle_deg[..5.min(wrist.angle_deg.len())]);
+    let (q6, q7) = (jointctl_record::reader::joint_series(&file, "q6").unwrap(), jointctl_record::reader::joint_series(&file, "q7").unwrap());
+    let k = wrist.t_s.len() / 2;
+    let i = q6.t_s.iter().position(|t| *t == wrist.t_s[k]).unwrap();
+    let a = wrist.angle_deg[k].to_radians();
+    assert!((wrist.torque_nm[k] - (q6.sensor_torque_nm[i] * a.sin() + q7.sensor_torque_nm[i] * a.cos())).abs() < 1e-12);
+    assert!((wrist.deflection_rad[k] - (q6.deflection_rad[i] * a.sin() + q7.deflection_rad[i] * a.cos())).abs() < 1e-12);
     for (args, expected) in [
         (vec!["identify", "--data"], "say which with --joint"),
         (vec!["identify", "--joint", "q9", "--data"], "no joint `q9` in the recording (joints: q1, q2, q3, q4, q5, q6, q7)"),

@@ -380,6 +380,10 @@ pub struct Measured {
     /// The position of a 1-DOF joint's `motor` drive [rad] (its wiring from the attached arm
     /// description), empty when it has none.
     pub motor_position_rad: Vec<f64>,
+    /// For a 2-DOF joint (the wrist, asked by its joint name): the direction of each sample's
+    /// deflection [deg] (0 = the second DOF only, 90 = the first), the nearest of section
+    /// 3.5.2's four (0, 45, 90, 135); deflection and torque are then along it. Else empty.
+    pub angle_deg: Vec<f64>,
     /// Samples of the joint left out: deflection or F/T torque unknown.
     pub left_out: usize,
     /// Samples of the joint in the recording.
@@ -397,6 +401,9 @@ pub struct Measured {
 /// # Ok(()) }
 /// ```
 pub fn measured(path: &Path, joint: &str) -> Result<Measured, ReadError> {
+    if let Some((first, second)) = two_dofs(path, joint)? {
+        return measured_along_directions(path, &first, &second);
+    }
     let s = joint_series(path, joint)?;
     let keep: Vec<usize> = (0..s.len()).filter(|&i| s.deflection_rad[i].is_finite() && s.sensor_torque_nm[i].is_finite()).collect();
     let pick = |col: &[f64]| keep.iter().map(|&i| col[i]).collect::<Vec<f64>>();
@@ -416,6 +423,54 @@ pub fn measured(path: &Path, joint: &str) -> Result<Measured, ReadError> {
         m.motor_position_rad = keep.iter().map(|&i| by_cycle.get(&s.cycle[i]).copied().unwrap_or(f64::NAN)).collect();
     }
     Ok(m)
+}
+
+/// A 2-DOF joint's data the way section 3.5.2 characterised the wrist: along the direction of
+/// the deflection, the nearest of four (0, 45, 90, 135 deg), both DOFs' deflections and F/T
+/// torques projected on it.
+fn measured_along_directions(path: &Path, first: &str, second: &str) -> Result<Measured, ReadError> {
+    let (mut all, known) = all_joint_series(path)?;
+    let no = |j: &str| ReadError::NoJoint { file: path.into(), joint: j.into(), known: known.clone() };
+    let a = all.remove(first).ok_or_else(|| no(first))?;
+    let b = all.remove(second).ok_or_else(|| no(second))?;
+    let mut m = Measured { samples: a.len().min(b.len()), ..Measured::default() };
+    for i in 0..m.samples {
+        let (d1, d2, t1, t2) = (a.deflection_rad[i], b.deflection_rad[i], a.sensor_torque_nm[i], b.sensor_torque_nm[i]);
+        if t1.is_finite() && t2.is_finite() {
+            m.ft_samples += 1;
+        }
+        if !(d1.is_finite() && d2.is_finite() && t1.is_finite() && t2.is_finite()) {
+            m.left_out += 1;
+            continue;
+        }
+        // Folded into [0, 180): a direction and its opposite are one line (the projection's sign
+        // tells them apart).
+        let direction = d1.atan2(d2).to_degrees().rem_euclid(180.0);
+        let angle = ((direction / 45.0).round() * 45.0).rem_euclid(180.0);
+        let (sa, ca) = (angle.to_radians().sin(), angle.to_radians().cos());
+        m.t_s.push(a.t_s[i]);
+        m.deflection_rad.push(d1 * sa + d2 * ca);
+        m.torque_nm.push(t1 * sa + t2 * ca);
+        m.angle_deg.push(angle);
+        if a.pivot_mm[i].is_finite() {
+            m.pivot_mm.push((a.pivot_mm[i] * 10.0).round() / 10.0);
+        }
+    }
+    if m.pivot_mm.len() != m.t_s.len() {
+        m.pivot_mm.clear();
+    }
+    Ok(m)
+}
+
+/// The two DOFs of 2-DOF joint `joint` in the attached arm description, if it is one.
+fn two_dofs(path: &Path, joint: &str) -> Result<Option<(String, String)>, ReadError> {
+    let Some((_, text)) = config_attachment(path)? else { return Ok(None) };
+    let Ok(yaml) = serde_yaml::from_str::<serde_yaml::Value>(&text) else { return Ok(None) };
+    let dofs = yaml["joints"].as_sequence().and_then(|joints| joints.iter().find(|j| j["name"].as_str() == Some(joint))).and_then(|j| j["dofs"].as_sequence());
+    Ok(match dofs.map(|d| d.iter().filter_map(|x| x["name"].as_str()).collect::<Vec<_>>()).as_deref() {
+        Some([first, second]) => Some((first.to_string(), second.to_string())),
+        _ => None,
+    })
 }
 
 /// The `motor` drive of 1-DOF joint `joint` in the attached arm description, if any.

@@ -79,6 +79,7 @@ fn load_data(path: &Path, joint: Option<&str>) -> Result<jointctl_ident::csv::Da
     data.pivot_mm = m.pivot_mm;
     data.reference_torque = m.reference_torque_nm;
     data.motor_position = m.motor_position_rad;
+    data.angle_deg = m.angle_deg;
     if m.left_out > 0 {
         data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection or F/T torque unknown", m.left_out, m.samples));
     }
