@@ -227,14 +227,13 @@ impl PublisherPorts {
     fn open(scope: &jointctl_ipc::IpcScope, arm_name: &str, limits: jointctl_ipc::PortLimits, description: &RawDescriptor) -> Result<Self, RunError> {
         let node = jointctl_ipc::create_node_in(scope, &format!("jointctl-run-{arm_name}"))?;
         let names = ServiceNames::for_arm(arm_name);
-        let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
-            .publisher_builder()
+        // The command server and the raw services first, the joint state and diagnostics last:
+        // a client that waits for the state (every inspector does) finds all of them there.
+        let command_name = jointctl_ipc::command_service_name(arm_name);
+        let server = jointctl_ipc::command_service(&node, &command_name, Some(limits))?
+            .server_builder()
             .create()
-            .map_err(|e| port_error(arm_name, &names.joint_state, e))?;
-        let diagnostics = jointctl_ipc::create_diagnostics_service(&node, &names.diagnostics, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
+            .map_err(|e| port_error(arm_name, &command_name, e))?;
         let raw = jointctl_ipc::create_raw_service(&node, &names.raw, limits)?
             .publisher_builder()
             .create()
@@ -251,11 +250,14 @@ impl PublisherPorts {
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.commands, e))?;
-        let command_name = jointctl_ipc::command_service_name(arm_name);
-        let server = jointctl_ipc::command_service(&node, &command_name, Some(limits))?
-            .server_builder()
+        let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
+            .publisher_builder()
             .create()
-            .map_err(|e| port_error(arm_name, &command_name, e))?;
+            .map_err(|e| port_error(arm_name, &names.joint_state, e))?;
+        let diagnostics = jointctl_ipc::create_diagnostics_service(&node, &names.diagnostics, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
         Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, accepted, server })
     }
 
