@@ -12,7 +12,9 @@ use jointctl_tests::{arm_name, rig_yaml};
 #[global_allocator]
 static GLOBAL: CountingAlloc = CountingAlloc;
 
-const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";
+/// The elastic joint observes with a model extension (hysteresis, friction, play, offset): its
+/// Dahl state and deflection-rate window run in the cycle too.
+const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}, model_extension: {hysteresis: {sigma_nm_per_rad: 300.0, limit_nm: 1.2}, friction: {ka_nm: 0.3, kb_s_per_rad: 80.0}, viscous_nms_per_rad: 0.5, dead_zone_rad: 0.001, torque_offset_nm: 0.1}}\n";
 
 /// The plugins are linked statically here (through the same C ABI shims as the shared
 /// libraries) so that their allocations, if any, go through this process' counting allocator;

@@ -17,6 +17,7 @@
 
 pub mod assumed;
 pub mod characteristic;
+pub mod extension;
 pub mod fit;
 pub mod lever_arm;
 pub mod transmission;

@@ -26,6 +26,7 @@ use jointctl_api::{
 };
 use jointctl_control::{LinearTransmission, PiGains, PositionLoop, VelocityEstimator};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
+use jointctl_models::extension::{ExtensionSpec, ModelExtension};
 use serde::Deserialize;
 
 /// Encoder role 0: the absolute encoder on the joint output.
@@ -70,6 +71,10 @@ struct Params {
     /// latency both ways (section 2.3).
     #[serde(default = "default_settle_s")]
     settle_s: f64,
+    /// What `jointctl identify` found beyond the characteristic (hysteresis, friction, play,
+    /// cubic stiffness, offset, scale), observed online (section 6.2); none by default.
+    #[serde(default)]
+    model_extension: Option<ExtensionSpec>,
 }
 
 fn default_settle_s() -> f64 {
@@ -99,9 +104,28 @@ pub struct ElasticJoint {
     /// `drive_gain`: the last motor set-point sent [rad] and the time since it changed [s].
     setpoint_rad: f64,
     since_change_s: f64,
+    extension: Option<ModelExtension>,
 }
 
 impl ElasticJoint {
+    /// The observed torque at deflection `phi` [Nm]: the characteristic (`k` for a line),
+    /// through the model extension when there is one (the characteristic then at the element's
+    /// deflection, after the play).
+    fn torque(&mut self, t_s: f64, phi: f64, k: f64) -> f64 {
+        let curve = |x: f64| match &self.curve {
+            Some(c) => c.evaluate(0.0, x).torque_nm,
+            None => k * x,
+        };
+        match &mut self.extension {
+            Some(e) => {
+                let phi_e = e.elastic_deflection(phi);
+                let tau = curve(phi_e);
+                e.torque(t_s, phi, tau)
+            }
+            None => curve(phi),
+        }
+    }
+
     /// Eq. 3.2 solved for the RC element's deflection, relative to the activation pose (the
     /// initial angles subtracted, section 3.4.1): motor side minus output.
     fn deflection(&self, output_rad: f64, input_rad: f64) -> f64 {
@@ -133,7 +157,12 @@ impl JointPlugin for ElasticJoint {
             return Err(PluginError::at("compliance", "`drive_gain` takes a linear `stiffness_nm_per_rad` (the drive's gain at the joint), not a characteristic"));
         }
         let position = PositionLoop::from_params(p.position_pi)?;
+        let extension = match p.model_extension {
+            Some(spec) => Some(ModelExtension::new(spec).map_err(|e| PluginError::at(format!("model_extension.{}", e.field), e.message))?),
+            None => None,
+        };
         Ok(ElasticJoint {
+            extension,
             stiffness_nm_per_rad: stiffness,
             curve,
             transmission: LinearTransmission::new(p.output_per_motor),
@@ -164,6 +193,9 @@ impl JointPlugin for ElasticJoint {
                 // The drive holds where it is: its set-point is its position.
                 self.setpoint_rad = m;
                 self.since_change_s = self.params.settle_s;
+                if let Some(e) = &mut self.extension {
+                    e.reset();
+                }
                 Ok(())
             }
             _ => Err(PluginError::new(
@@ -194,17 +226,15 @@ impl Observer for ElasticJoint {
             if let Some(m) = motor.filter(|_| self.since_change_s >= self.params.settle_s) {
                 let deflection = self.transmission.ratio() * (self.setpoint_rad - m);
                 s.set_deflection(deflection);
-                s.set_torque(self.stiffness_nm_per_rad * deflection);
+                let k = self.stiffness_nm_per_rad;
+                s.set_torque(self.torque(raw.stamp_s, deflection, k));
             }
         } else if let (Some(q), Some(input)) = (q_for_deflection, input) {
             let deflection = self.deflection(q, input);
             s.set_deflection(deflection);
             // Section 3.3.2: first-order fit, torque = K * deflection (or the fitted curve).
-            let torque = match &self.curve {
-                Some(c) => c.evaluate(0.0, deflection).torque_nm,
-                None => self.stiffness_nm_per_rad * deflection,
-            };
-            s.set_torque(torque);
+            let k = self.stiffness_nm_per_rad;
+            s.set_torque(self.torque(raw.stamp_s, deflection, k));
         }
         if let Some(v) = self.velocity.update(q, raw.dt_s) {
             s.set_velocity(v);
