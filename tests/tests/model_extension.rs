@@ -50,3 +50,23 @@ fn bad_extension_parameters_are_errors_at_their_field() {
     let e = errs.0.iter().find(|e| e.field.contains("model_extension")).unwrap_or_else(|| panic!("{errs}"));
     assert!(e.field.ends_with("model_extension.hysteresis") && e.message.contains("sigma_nm_per_rad > 0"), "{e}");
 }
+
+/// The shoulder (q2) on the reference arm, whose table was fitted through the middle of its
+/// plant's hysteresis and friction band (section 3.4.2): with those terms as its extension, the
+/// observer is closer to the F/T sensor while tracking a sine at the middle setting.
+#[test]
+fn the_shoulder_observed_with_its_plants_band_is_closer_to_the_ft_sensor() {
+    let measure = |test: &str, extension: Option<&str>| {
+        let mut edits = Vec::new();
+        if let Some(e) = extension {
+            edits.push(Edit::Set("joints[shoulder].params.model_extension", serde_yaml::from_str(e).unwrap()));
+        }
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
+        let plan = Plan { stiffness_nm_per_rad: vec![89.0], references: vec![(Waveform::Sine, 0.2)], periods: 2.0, amplitudes_nm: vec![Some(7.5)], ..Plan::default() };
+        run(&loaded, &PluginLoader::new([]), "q2", Scenario::Modern, &plan, |_, _| {}).unwrap()[0].nrmse_observer_vs_sensor
+    };
+    let without = measure("ext-q2-without", None);
+    let with = measure("ext-q2-with", Some("{hysteresis: {sigma_nm_per_rad: 200.0, limit_nm: 0.4}, friction: {ka_nm: 0.1, kb_s_per_rad: 50.0}, viscous_nms_per_rad: 0.2}"));
+    println!("q2 observer vs F/T NRMSE at 0.2 Hz, middle setting: {without:.4} without the extension, {with:.4} with the plant's band");
+    assert!(with < 0.8 * without, "with the extension {with}, without {without}");
+}

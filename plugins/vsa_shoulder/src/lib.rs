@@ -23,6 +23,7 @@ use jointctl_api::{
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
 use jointctl_control::{PiGains, PositionLoop, VelocityEstimator};
+use jointctl_models::extension::{ExtensionSpec, ModelExtension};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
 use jointctl_models::transmission::{eq_3_3_shoulder_actuators, eq_3_3_shoulder_joints};
 use serde::Deserialize;
@@ -59,6 +60,10 @@ struct Params {
     /// lag in the torque loop; the sensitivity study measures that price.
     #[serde(default)]
     torque_filter_s: f64,
+    /// What `jointctl identify` found beyond q2's table (hysteresis, friction, play, cubic,
+    /// offset, scale), observed online (section 6.2); none by default.
+    #[serde(default)]
+    model_extension: Option<ExtensionSpec>,
 }
 
 fn harmonic_drive() -> f64 {
@@ -77,6 +82,8 @@ pub struct VsaShoulder {
     pivot_target: Option<MotorSetpoint>,
     /// The low-passed q2 torque [Nm]; `None` until a torque is known (and after one is not).
     filtered_torque_nm: Option<f64>,
+    /// q2's model extension, if configured.
+    extension: Option<ModelExtension>,
 }
 
 impl VsaShoulder {
@@ -115,7 +122,12 @@ impl JointPlugin for VsaShoulder {
             return Err(PluginError::at("torque_filter_s", "must be finite and >= 0"));
         }
         let position = PositionLoop::from_params(p.position_pi)?;
+        let extension = match p.model_extension {
+            Some(spec) => Some(ModelExtension::new(spec).map_err(|e| PluginError::at(format!("model_extension.{}", e.field), e.message))?),
+            None => None,
+        };
         Ok(VsaShoulder {
+            extension,
             filtered_torque_nm: None,
             characteristic,
             deflection_origin_rad: 0.0,
@@ -141,6 +153,9 @@ impl JointPlugin for VsaShoulder {
         self.joint_origin = (q2, q3);
         self.position[0].hold_at(q2);
         self.position[1].hold_at(q3);
+        if let Some(e) = &mut self.extension {
+            e.reset();
+        }
         Ok(())
     }
 }
@@ -161,7 +176,16 @@ impl Observer for VsaShoulder {
             q2.set_stiffness(e.stiffness_nm_per_rad);
             if let Some(d) = deflection {
                 q2.set_deflection(d);
-                q2.set_torque(self.low_pass(e.torque_nm, raw.dt_s));
+                // With a model extension the table is read at the element's deflection (after
+                // the play) and the extension's terms are added.
+                let torque = match &mut self.extension {
+                    Some(x) => {
+                        let at = self.characteristic.evaluate(p, x.elastic_deflection(d)).torque_nm;
+                        x.torque(raw.stamp_s, d, at)
+                    }
+                    None => e.torque_nm,
+                };
+                q2.set_torque(self.low_pass(torque, raw.dt_s));
             } else {
                 self.filtered_torque_nm = None;
             }
