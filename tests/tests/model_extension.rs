@@ -70,3 +70,27 @@ fn the_shoulder_observed_with_its_plants_band_is_closer_to_the_ft_sensor() {
     println!("q2 observer vs F/T NRMSE at 0.2 Hz, middle setting: {without:.4} without the extension, {with:.4} with the plant's band");
     assert!(with < 0.8 * without, "with the extension {with}, without {without}");
 }
+
+/// The wrist (q6, q7): one extension per DOF; with its plant's hysteresis and friction on both,
+/// q7's observer is closer to the F/T sensor while tracking a sine; a list of the wrong length is
+/// an error at its field.
+#[test]
+fn the_wrist_takes_an_extension_per_dof() {
+    let band = "{hysteresis: {sigma_nm_per_rad: 20.0, limit_nm: 0.05}, friction: {ka_nm: 0.02, kb_s_per_rad: 50.0}, viscous_nms_per_rad: 0.02}";
+    let measure = |test: &str, extension: Option<String>| {
+        let mut edits = Vec::new();
+        if let Some(e) = extension {
+            edits.push(Edit::Set("joints[wrist].params.model_extension", serde_yaml::from_str(&e).unwrap()));
+        }
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
+        let plan = Plan { references: vec![(Waveform::Sine, 0.1)], periods: 2.0, amplitudes_nm: vec![Some(1.5)], ..Plan::default() };
+        run(&loaded, &PluginLoader::new([]), "q7", Scenario::Modern, &plan, |_, _| {}).unwrap()[0].nrmse_observer_vs_sensor
+    };
+    let without = measure("ext-wrist-without", None);
+    let with = measure("ext-wrist-with", Some(format!("[{band}, {band}]")));
+    println!("q7 observer vs F/T NRMSE at 0.1 Hz: {without:.4} without the extension, {with:.4} with the plant's band");
+    assert!(with < 0.8 * without, "with the extension {with}, without {without}");
+    let loaded = jointctl_config::load(sherpa_with("ext-wrist-bad", &arm_name("ext-wrist-bad"), &[Edit::Set("joints[wrist].params.model_extension", serde_yaml::from_str(&format!("[{band}]")).unwrap())])).unwrap();
+    let errs = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).map(|_| ()).unwrap_err();
+    assert!(errs.0.iter().any(|e| e.field.ends_with("model_extension") && e.message.contains("one entry per DOF")), "{errs}");
+}

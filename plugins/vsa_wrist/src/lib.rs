@@ -24,6 +24,7 @@ use jointctl_api::{
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
 use jointctl_control::{PiGains, PositionLoop, VelocityEstimator};
+use jointctl_models::extension::{ExtensionSpec, ModelExtension};
 use jointctl_models::characteristic::{CharacteristicSpec, WristCharacteristic, invert_table};
 use jointctl_models::transmission::{eq_3_7_bevel, eq_3_7_bevel_inverse, eq_3_8_deflection, eq_3_8_expected_bevel_input};
 use serde::Deserialize;
@@ -59,6 +60,10 @@ struct Params {
     /// Oldest stale reading still used [s] (default: `jointctl_control::default_max_age_s`).
     #[serde(default = "jointctl_control::default_max_age_s")]
     max_age_s: f64,
+    /// What `jointctl identify` found beyond the table, per DOF (`[q6, q7]`, either may be
+    /// `null`), observed online (section 6.2); none by default.
+    #[serde(default)]
+    model_extension: Vec<Option<ExtensionSpec>>,
 }
 
 fn belt() -> f64 {
@@ -68,6 +73,8 @@ fn belt() -> f64 {
 /// The wrist: q6 and q7 with one shared VSA.
 pub struct VsaWrist {
     p: Params,
+    /// q6's and q7's model extensions, if configured.
+    extension: [Option<ModelExtension>; 2],
     characteristic: WristCharacteristic,
     carrier_origin: [f64; 2],
     bevel_origin: [f64; 2],
@@ -116,7 +123,17 @@ impl JointPlugin for VsaWrist {
         params::positive("max_age_s", p.max_age_s)?;
         params::nonzero("pivot_mm_per_rad", p.pivot_mm_per_rad)?;
         let position = PositionLoop::from_params(p.position_pi)?;
+        if !matches!(p.model_extension.len(), 0 | 2) {
+            return Err(PluginError::at("model_extension", format!("give one entry per DOF, [q6, q7] (null for none), got {}", p.model_extension.len())));
+        }
+        let mut extension: [Option<ModelExtension>; 2] = [None, None];
+        for (i, spec) in p.model_extension.iter().enumerate() {
+            if let Some(spec) = spec {
+                extension[i] = Some(ModelExtension::new(*spec).map_err(|e| PluginError::at(format!("model_extension[{i}].{}", e.field), e.message))?);
+            }
+        }
         Ok(VsaWrist {
+            extension,
             characteristic: characteristic.clone(),
             carrier_origin: [0.0; 2],
             bevel_origin: [0.0; 2],
@@ -142,6 +159,9 @@ impl JointPlugin for VsaWrist {
         self.joint_origin = [q6, q7];
         self.position[0].hold_at(q6);
         self.position[1].hold_at(q7);
+        for e in self.extension.iter_mut().flatten() {
+            e.reset();
+        }
         Ok(())
     }
 }
@@ -169,8 +189,23 @@ impl Observer for VsaWrist {
             if deflection.is_some() {
                 s[0].set_deflection(d6);
                 s[1].set_deflection(d7);
-                s[0].set_torque(e.torque_q6_nm);
-                s[1].set_torque(e.torque_q7_nm);
+                let torque = if self.extension.iter().any(Option::is_some) {
+                    // The table at the elements' deflections (after each DOF's play), each
+                    // DOF's terms added.
+                    let elastic = |x: &Option<ModelExtension>, d: f64| x.as_ref().map_or(d, |x| x.elastic_deflection(d));
+                    let at = self.characteristic.evaluate(p, elastic(&self.extension[0], d6), elastic(&self.extension[1], d7));
+                    let mut out = [at.torque_q6_nm, at.torque_q7_nm];
+                    for (i, (x, d)) in self.extension.iter_mut().zip([d6, d7]).enumerate() {
+                        if let Some(x) = x {
+                            out[i] = x.torque(raw.stamp_s, d, out[i]);
+                        }
+                    }
+                    out
+                } else {
+                    [e.torque_q6_nm, e.torque_q7_nm]
+                };
+                s[0].set_torque(torque[0]);
+                s[1].set_torque(torque[1]);
             }
         }
         for (i, st) in s.iter_mut().enumerate() {
