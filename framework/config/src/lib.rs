@@ -32,6 +32,8 @@ pub struct LoadedConfig {
     pub config: ArmConfig,
     /// The file it came from and where each field is in it.
     pub source: ConfigSource,
+    /// The files its joints' `params: {include: FILE}` named, resolved, in joint order.
+    pub included: Vec<PathBuf>,
 }
 
 /// The file a config came from and the location of each field in it.
@@ -165,9 +167,11 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
     })?;
     let mut config = config;
     let mut include_errors = Vec::new();
+    let mut included = Vec::new();
     for (j, joint) in config.joints.iter_mut().enumerate() {
-        if let Err((field, message)) = include_params(&source, &mut joint.params) {
-            include_errors.push(source.error(&format!("joints[{j}].params.{field}"), message));
+        match include_params(&source, &mut joint.params) {
+            Ok(file) => included.extend(file),
+            Err((field, message)) => include_errors.push(source.error(&format!("joints[{j}].params.{field}"), message)),
         }
     }
     if !include_errors.is_empty() {
@@ -177,15 +181,15 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
     if !problems.is_empty() {
         return Err(ConfigErrors(problems.into_iter().map(|(p, m)| source.error(&p, m)).collect()));
     }
-    Ok(LoadedConfig { config, source })
+    Ok(LoadedConfig { config, source, included })
 }
 
 /// `params: {include: FILE, ...}`: the YAML mapping in FILE (relative to the config) is merged
 /// into the params; keys written next to `include` win. So that `jointctl fit --out FILE` feeds a
 /// joint without editing the arm description.
-fn include_params(source: &ConfigSource, params: &mut Params) -> Result<(), (String, String)> {
-    let Some(obj) = params.0.as_object_mut() else { return Ok(()) };
-    let Some(include) = obj.remove("include") else { return Ok(()) };
+fn include_params(source: &ConfigSource, params: &mut Params) -> Result<Option<PathBuf>, (String, String)> {
+    let Some(obj) = params.0.as_object_mut() else { return Ok(None) };
+    let Some(include) = obj.remove("include") else { return Ok(None) };
     let Some(rel) = include.as_str() else {
         return Err(("include".into(), "must be a file path".into()));
     };
@@ -198,7 +202,7 @@ fn include_params(source: &ConfigSource, params: &mut Params) -> Result<(), (Str
     for (k, v) in map {
         obj.entry(k).or_insert(v);
     }
-    Ok(())
+    Ok(Some(path))
 }
 
 /// The JSON Schema of the arm description, for editors.

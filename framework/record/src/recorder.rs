@@ -159,18 +159,16 @@ fn open_waiting<T>(timeout: Duration, mut open: impl FnMut() -> Result<T, IpcSet
     }
 }
 
-/// The files to attach: the arm's YAML and the files its `include:` lines name (relative to it).
+/// The files to attach: the arm's YAML and the files its joints include (as the config crate
+/// resolves them); a description that no longer loads is attached alone.
 fn config_files(config: &Path) -> Vec<(String, Vec<u8>)> {
     let Ok(text) = std::fs::read(config) else { return Vec::new() };
-    let mut out = vec![(config.file_name().map_or("arm.yaml".into(), |n| n.to_string_lossy().into_owned()), text.clone())];
-    for line in String::from_utf8_lossy(&text).lines() {
-        let line = line.split('#').next().unwrap_or("").trim();
-        if let Some(rest) = line.strip_prefix("include:") {
-            let rel = rest.trim().trim_matches(|c| c == '"' || c == '\'');
-            let path = config.parent().unwrap_or(Path::new(".")).join(rel);
-            if let Ok(bytes) = std::fs::read(&path) {
-                out.push((rel.to_string(), bytes));
-            }
+    let name = |p: &Path| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let mut out = vec![(name(config), text)];
+    let included = jointctl_config::load(config).map(|l| l.included).unwrap_or_default();
+    for path in included {
+        if let Ok(bytes) = std::fs::read(&path) {
+            out.push((name(&path), bytes));
         }
     }
     out
