@@ -101,6 +101,8 @@ fn accepted_commands_are_published_numbered_and_refused_ones_are_not() {
     let node = jointctl_ipc::create_node(None, "raw-commands-test").unwrap();
     let names = ServiceNames::for_arm(&arm_id);
     let accepted = jointctl_ipc::commands_service(&node, &names.commands).unwrap().subscriber_builder().create().unwrap();
+    let raw = jointctl_ipc::raw_service(&node, &names.raw).unwrap().subscriber_builder().create().unwrap();
+    let state = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
     let client = jointctl_ipc::command_service(&node, &jointctl_ipc::command_service_name(&arm_id), None).unwrap().client_builder().create().unwrap();
     let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
     let mut answers = Vec::new();
@@ -121,12 +123,34 @@ fn accepted_commands_are_published_numbered_and_refused_ones_are_not() {
         answers.push(answer.accepted);
     }
     assert_eq!(answers, [1, 0, 1], "q9 does not exist");
+    // The last one is applied at the next cycle.
+    for _ in 0..3 {
+        let t = monotonic_ns();
+        lp.step(t, t, None);
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
     std::thread::sleep(std::time::Duration::from_millis(20));
     let mut records = Vec::new();
     while let Some(sample) = accepted.receive().unwrap() {
         records.push(*sample.payload());
     }
     lp.finish();
+    // Each frame says how many accepted commands the loop had applied by then: the cycle where
+    // the count reaches 1 is the first with q1 in position mode (a replay applies them there;
+    // the answer's stamp alone leaves a cycle's doubt).
+    let mut frames = Vec::new();
+    while let Some(f) = raw.receive().unwrap() {
+        frames.push((f.cycle, f.commands_applied));
+    }
+    let mut modes = std::collections::HashMap::new();
+    while let Some(st) = state.receive().unwrap() {
+        modes.insert(st.cycle, st.joints[0].mode);
+    }
+    assert!(frames.windows(2).all(|w| w[0].1 <= w[1].1), "{frames:?}");
+    assert_eq!(frames.last().unwrap().1, 2, "two accepted commands applied");
+    let first = frames.iter().find(|f| f.1 >= 1).unwrap().0;
+    assert_eq!(modes[&first], jointctl_ipc::JointMode::POSITION);
+    assert_ne!(modes[&(first - 1)], jointctl_ipc::JointMode::POSITION);
     let seen: Vec<(u64, &str, u32)> = records.iter().map(|r| (r.sequence, decode_name(&r.request.joint), r.request.kind.0)).collect();
     assert_eq!(seen, [(1, "q1", jointctl_ipc::CommandKind::POSITION.0), (2, "q2", jointctl_ipc::CommandKind::TORQUE.0)]);
     assert!(records.iter().all(|r| r.response.accepted == 1 && r.stamp_ns > 0));

@@ -122,8 +122,9 @@ fn frames(samples: &[RawSample], devices: &DeviceIndex, notes: &mut Vec<String>)
     out
 }
 
-/// Applies, in order, the recorded commands accepted up to `stamp_ns` (the loop applied each at
-/// the cycle after its answer); a command the config refuses is noted, not applied.
+/// Applies, in order, the recorded commands the recorded loop had applied by a frame (its
+/// `commands_applied`; in a recording without it, those accepted before the frame's stamp); a
+/// command the config refuses is noted, not applied.
 struct CommandFeed {
     commands: Vec<RecordedCommand>,
     next: usize,
@@ -137,11 +138,18 @@ impl CommandFeed {
         CommandFeed { commands, next: 0, validator: CommandValidator::new(arm.dof_specs(), Arc::clone(&status)), status }
     }
 
-    fn apply_due(&mut self, arm: &mut Arm, stamp_ns: u64, notes: &mut Vec<String>) {
+    fn apply_due(&mut self, arm: &mut Arm, frame: &RawSample, notes: &mut Vec<String>) {
         for i in 0..arm.dof_names.len() {
             self.status.set_dof(i, arm.enabled[i], 0);
         }
-        while let Some(c) = self.commands.get(self.next).filter(|c| c.stamp_ns < stamp_ns) {
+        // The answer's stamp alone cannot tell whether the loop took a command in the cycle that
+        // woke just before it or in the next one: a replay a cycle off followed a 1 Hz sine
+        // 25 ms late.
+        let due = |c: &&RecordedCommand| match frame.commands_applied {
+            Some(applied) => c.sequence <= applied,
+            None => c.stamp_ns < frame.stamp_ns,
+        };
+        while let Some(c) = self.commands.get(self.next).filter(due) {
             match self.validator.validate(&c.request) {
                 Ok((command, _)) => arm.apply(command),
                 Err(e) => notes.push(format!("a recorded command was refused by this config: {e}")),
@@ -159,15 +167,6 @@ fn recorded_joints(recording: &mut Recording, arm: &Arm, notes: &mut Vec<String>
     std::mem::take(&mut recording.joints)
 }
 
-fn crate_chain(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut text = e.to_string();
-    let mut next = e.source();
-    while let Some(s) = next {
-        text = format!("{text}: {s}");
-        next = s.source();
-    }
-    text
-}
 
 /// Index of each recorded joint-state sample by cycle.
 fn by_cycle(series: &JointSeries) -> HashMap<u64, usize> {
@@ -177,7 +176,7 @@ fn by_cycle(series: &JointSeries) -> HashMap<u64, usize> {
 /// The recording, and the frame to activate the joints with (the recorded activation, else
 /// the first frame, with a note).
 fn read_recording(path: &Path, notes: &mut Vec<String>) -> Result<(Recording, RawSample), ExperimentError> {
-    let recording = jointctl_record::reader::read(path).map_err(|e| ExperimentError(crate_chain(&e)))?;
+    let recording = jointctl_record::reader::read(path).map_err(|e| ExperimentError(e.to_string()))?;
     let Some(first) = recording.raw.first() else {
         return Err(ExperimentError(format!("{}: no raw readings in the recording", path.display())));
     };
@@ -220,7 +219,7 @@ pub fn replay_observers(path: &Path, loaded: &LoadedConfig, loader: &PluginLoade
     for s in &raw {
         let t = s.stamp_ns.saturating_sub(t0) as f64 * 1e-9;
         arm.observe(t);
-        feed.apply_due(&mut arm, s.stamp_ns, &mut report.notes);
+        feed.apply_due(&mut arm, s, &mut report.notes);
         arm.control();
         for (dof, out) in replayed.iter_mut().enumerate() {
             let st = &arm.states[dof];
@@ -302,7 +301,7 @@ pub fn replay_on_sim(path: &Path, loaded: &LoadedConfig, loader: &PluginLoader) 
     for s in &raw {
         let t = s.stamp_ns.saturating_sub(t0) as f64 * 1e-9;
         arm.observe(t);
-        feed.apply_due(&mut arm, s.stamp_ns, &mut report.notes);
+        feed.apply_due(&mut arm, s, &mut report.notes);
         // What the simulated arm's own sensors read, as the recording holds the real ones'.
         for (dof, out) in simulated.iter_mut().enumerate() {
             let st = &arm.states[dof];

@@ -151,6 +151,9 @@ pub struct RawFrame {
     pub cycle: u64,
     /// CLOCK_MONOTONIC time of the cycle's sensor read [ns].
     pub stamp_ns: u64,
+    /// Accepted commands the loop has applied so far, this cycle's included: the
+    /// [`CommandRecord::sequence`] up to which a replay applies them here.
+    pub commands_applied: u64,
     /// Valid entries in `encoders`.
     pub encoder_count: u32,
     /// Valid entries in `drives`.
@@ -171,6 +174,7 @@ impl RawFrame {
     pub const EMPTY: RawFrame = RawFrame {
         cycle: 0,
         stamp_ns: 0,
+        commands_applied: 0,
         encoder_count: 0,
         drive_count: 0,
         encoders: [RawReading::MISSING; MAX_RAW_ENCODERS],
@@ -307,6 +311,8 @@ impl RawDescriptor {
         d.torque_sensor_count = torque_sensors.len().min(MAX_RAW_TORQUE_SENSORS) as u32;
         d.encoder_count = encoders.len().min(MAX_RAW_ENCODERS) as u32;
         d.drive_count = drives.len().min(MAX_RAW_DRIVES) as u32;
+        // The activation frame holds the same devices.
+        (d.activation.encoder_count, d.activation.drive_count, d.activation.torque_sensor_count) = (d.encoder_count, d.drive_count, d.torque_sensor_count);
         if let Some(p) = config_path {
             d.config_path = encode_name(&p.to_string_lossy());
         }

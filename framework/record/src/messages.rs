@@ -206,7 +206,7 @@ fn reading(j: &mut Json, r: &RawReading) {
 pub fn write_raw(out: &mut String, f: &RawFrame, d: &RawDescriptor) {
     out.clear();
     let mut j = Json(out);
-    j.raw("{").int("cycle", f.cycle).int("stamp_ns", f.stamp_ns);
+    j.raw("{").int("cycle", f.cycle).int("stamp_ns", f.stamp_ns).int("commands_applied", f.commands_applied);
     j.objects("encoders", f.encoders().iter().zip(&d.encoders), |j, (r, dev)| {
         j.str("name", decode_name(&dev.name));
         reading(j, r);
@@ -311,7 +311,7 @@ pub fn schema(topic: &str) -> Option<Value> {
             "cycle": count, "stamp_ns": count, "final": {"type": "boolean"}, "joints": {"type": "array", "items": joint},
         }}),
         "raw" => json!({"description": "Every device's reading as the HAL gave it and every set-point written, once per cycle", "properties": {
-            "cycle": count, "stamp_ns": count,
+            "cycle": count, "stamp_ns": count, "commands_applied": count,
             "encoders": {"type": "array", "items": {"type": "object", "properties": {"name": {"type": "string"}, "value": number(), "status": {"type": "string"}, "age_s": number()}}},
             "drives": {"type": "array", "items": {"type": "object", "properties": {
                 "name": {"type": "string"}, "position_rad": reading_schema(), "velocity_rad_s": reading_schema(),

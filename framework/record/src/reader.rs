@@ -50,7 +50,7 @@ impl JointSeries {
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
     /// The file could not be read.
-    #[error("cannot read {}", .file.display())]
+    #[error("cannot read {}: {source}", .file.display())]
     File {
         /// The file.
         file: PathBuf,
@@ -58,7 +58,7 @@ pub enum ReadError {
         source: std::io::Error,
     },
     /// Not an MCAP file, or a damaged one.
-    #[error("{}: not a readable MCAP file", .file.display())]
+    #[error("{}: not a readable MCAP file: {source}", .file.display())]
     Mcap {
         /// The file.
         file: PathBuf,
@@ -123,6 +123,8 @@ struct DriveJson<'a> {
 struct RawJson<'a> {
     cycle: u64,
     stamp_ns: u64,
+    #[serde(default)]
+    commands_applied: Option<u64>,
     #[serde(borrow)]
     encoders: Vec<ReadingJson<'a>>,
     #[serde(borrow)]
@@ -175,6 +177,7 @@ impl RawJson<'_> {
         RawSample {
             cycle: self.cycle,
             stamp_ns: self.stamp_ns,
+            commands_applied: self.commands_applied,
             encoders: self.encoders.iter().map(|e| (e.name.to_string(), e.reading())).collect(),
             drives: self
                 .drives
@@ -318,6 +321,8 @@ pub struct RawSample {
     pub cycle: u64,
     /// The cycle's stamp [ns].
     pub stamp_ns: u64,
+    /// Accepted commands applied up to this cycle (`None` in recordings that do not say).
+    pub commands_applied: Option<u64>,
     /// Encoders: name, reading [rad].
     pub encoders: Vec<(String, Reading)>,
     /// Drives: name, reading, set-point sent [rad] (NaN when holding).
@@ -329,6 +334,8 @@ pub struct RawSample {
 /// A recorded accepted command.
 #[derive(Clone, Copy, Debug)]
 pub struct RecordedCommand {
+    /// Its number among the accepted commands, from 1.
+    pub sequence: u64,
     /// When the runtime accepted it [ns] (it was applied at the next cycle).
     pub stamp_ns: u64,
     /// The request, rebuilt from its JSON.
@@ -519,5 +526,9 @@ fn parse_command(path: &Path, sequence: u32, data: &[u8]) -> Result<RecordedComm
         *slot = [number(&p[0]), number(&p[1]), number(&p[2])];
     }
     request.point_count = points.len() as u32;
-    Ok(RecordedCommand { stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?, request })
+    Ok(RecordedCommand {
+        sequence: v["sequence"].as_u64().ok_or_else(|| bad("no `sequence`".into()))?,
+        stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?,
+        request,
+    })
 }

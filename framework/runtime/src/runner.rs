@@ -358,9 +358,6 @@ impl ArmPublisher {
         let scope = scope.clone();
         let (encoders, drives) = arm.raw_devices();
         let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
-        description.activation.encoder_count = description.encoder_count;
-        description.activation.drive_count = description.drive_count;
-        description.activation.torque_sensor_count = description.torque_sensor_count;
         fill_raw(&mut description.activation, arm);
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
@@ -387,10 +384,8 @@ impl ArmPublisher {
             }
             Err(_) => return Err(RunError::Thread("the publisher thread ended during setup".into())),
         }
-        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: RawFrame::EMPTY });
-        record.raw.encoder_count = description.encoder_count;
-        record.raw.drive_count = description.drive_count;
-        record.raw.torque_sensor_count = description.torque_sensor_count;
+        // Every cycle's raw frame holds the described devices: the activation frame's shape.
+        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: description.activation });
         record.state.joint_count = arm.dof_names.len() as u32;
         record.diagnostics.joint_count = record.state.joint_count;
         record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
@@ -569,6 +564,8 @@ impl<'a> ControlLoop<'a> {
         if let Some(p) = self.publisher.as_deref_mut() {
             while let Ok(command) = p.commands.pop() {
                 self.arm.apply(command);
+                // Numbered as the desk numbered them when it accepted them (one queue, in order).
+                p.record.raw.commands_applied += 1;
             }
         }
         self.arm.control();
