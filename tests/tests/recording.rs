@@ -252,6 +252,11 @@ fn replay_feeds_the_recorded_readings_through_a_configs_observers() {
     for c in same.iter().filter(|c| c["channel"] == "observed_torque" && c["rmse"].is_f64()) {
         assert!(c["rmse"].as_f64().unwrap() < 1e-9, "the recorded arm's own observers reproduce the recording: {c}");
     }
+    // A reader that has gone (`| head`) is no reason to panic.
+    let mut gone = Command::new(jointctl()).arg("replay").arg(&file).arg("--config").arg(&config).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    drop(gone.stdout.take());
+    let out = gone.wait_with_output().unwrap();
+    assert!(out.status.success() && !String::from_utf8_lossy(&out.stderr).contains("panicked"), "{}", String::from_utf8_lossy(&out.stderr));
     // A changed model: the shoulder's observer with a 100 ms low-pass on its torque.
     let filtered = sherpa_with("replay-filtered", &arm, &[jointctl_tests::Edit::Set("joints[shoulder].params.torque_filter_s", 0.1.into())]);
     let changed = channels(&Command::new(jointctl()).arg("replay").arg(&file).arg("--config").arg(&filtered).arg("--json").output().unwrap());

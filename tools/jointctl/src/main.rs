@@ -108,6 +108,13 @@ fn seconds(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Writes `text` to stdout; a reader that has gone (`| head`) is not an error worth a panic,
+/// which `print!` would raise.
+fn print_out(text: &str) {
+    use std::io::Write as _;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 fn fail(message: impl std::fmt::Display) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(1)

@@ -54,7 +54,7 @@ pub fn run(a: RecordArgs) -> ExitCode {
         Err(e) => return crate::fail_err(e),
     };
     if a.json {
-        println!("{}", summary.json());
+        crate::print_out(&format!("{}\n", summary.json()));
     } else {
         eprintln!("{}: {:.2} s of arm `{}`, {} bytes", summary.file.display(), summary.duration_s, opts.arm, summary.bytes);
         for (channel, n) in &summary.messages {

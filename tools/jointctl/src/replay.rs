@@ -68,9 +68,9 @@ fn finish(r: &ReplayReport, a: &ReplayArgs, title: &str, names: [&str; 3]) -> Ex
         return crate::fail(e);
     }
     if a.json {
-        println!("{}", json(r));
+        crate::print_out(&format!("{}\n", json(r)));
     } else {
-        print!("{}", table(r, title));
+        crate::print_out(&table(r, title));
     }
     ExitCode::SUCCESS
 }
