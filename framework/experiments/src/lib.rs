@@ -1,6 +1,8 @@
 //! # jointctl-experiments
 //!
 //! The thesis' experiments, closed around the simulated arm and run faster than real time:
+//! - [`model_loop`]: what `identify` found, written as an extended observer and simulation,
+//!   with the gain of each on the data's held-out part;
 //! - [`record`]: characterisation (sections 3.3.1, 3.4.1, 3.5.1): the output moved by a flow
 //!   source while the drives hold, deflection from the observer, torque from the torque sensor;
 //!   written as the CSV `jointctl fit` and `jointctl identify` read;
@@ -14,6 +16,7 @@
 #![forbid(unsafe_code)]
 
 pub mod characterise;
+pub mod model_loop;
 pub mod plot;
 pub mod record;
 pub mod replay;

@@ -62,18 +62,39 @@ pub struct ExtensionSpec {
     /// `c` [Nm] (`sensor_offset`).
     #[serde(default)]
     pub torque_offset_nm: f64,
-    /// The window of the deflection rate's causal least-squares slope [s]. Assumption: 20 ms,
-    /// long enough to average the 14-bit quantisation at 1 kHz, short against the thesis'
-    /// references (a fiftieth of a 1 Hz period).
+    /// The shortest window of the deflection rate's causal least-squares slope [s]. Assumption:
+    /// 20 ms, short against the thesis' references (a fiftieth of a 1 Hz period).
     #[serde(default = "default_rate_window")]
     pub rate_window_s: f64,
+    /// The deflection's resolution [rad]: the window grows beyond `rate_window_s` (up to
+    /// `rate_window_max_s`) until the deflection in it spans [`RATE_STEPS`] of these, so that a
+    /// slow motion, a staircase of encoder counts, reads as a slope and not as a count now and
+    /// then (a steep eq. 3.5 friction, `k_b` = 50 s/rad, turns that noise into a torque that
+    /// flips sign). Default: one count of section 2.2's 14-bit encoders, 2 pi / 2^14.
+    #[serde(default = "default_resolution")]
+    pub rate_resolution_rad: f64,
+    /// The longest window [s]. Assumption: 100 ms, where the rate near a reversal is small
+    /// anyway.
+    #[serde(default = "default_rate_window_max")]
+    pub rate_window_max_s: f64,
 }
+
+/// Resolution steps the deflection must span in the rate's window (see
+/// [`ExtensionSpec::rate_resolution_rad`]). Assumption: 4, so that one count more or less
+/// changes the slope by a quarter at most.
+pub const RATE_STEPS: f64 = 4.0;
 
 fn one() -> f64 {
     1.0
 }
 fn default_rate_window() -> f64 {
     0.02
+}
+fn default_resolution() -> f64 {
+    std::f64::consts::TAU / 16384.0
+}
+fn default_rate_window_max() -> f64 {
+    0.1
 }
 
 impl Default for ExtensionSpec {
@@ -87,6 +108,8 @@ impl Default for ExtensionSpec {
             hysteresis: None,
             torque_offset_nm: 0.0,
             rate_window_s: default_rate_window(),
+            rate_resolution_rad: default_resolution(),
+            rate_window_max_s: default_rate_window_max(),
         }
     }
 }
@@ -143,6 +166,12 @@ impl ModelExtension {
         if !(spec.rate_window_s > 0.0 && spec.rate_window_s.is_finite()) {
             return bad("rate_window_s", format!("must be > 0, got {}", spec.rate_window_s));
         }
+        if !(spec.rate_window_max_s >= spec.rate_window_s && spec.rate_window_max_s.is_finite()) {
+            return bad("rate_window_max_s", format!("must be at least rate_window_s ({}), got {}", spec.rate_window_s, spec.rate_window_max_s));
+        }
+        if !(spec.rate_resolution_rad >= 0.0 && spec.rate_resolution_rad.is_finite()) {
+            return bad("rate_resolution_rad", format!("must be >= 0, got {}", spec.rate_resolution_rad));
+        }
         if let Some(f) = spec.friction
             && !(f.ka_nm.is_finite() && f.kb_s_per_rad > 0.0 && f.kb_s_per_rad.is_finite())
         {
@@ -192,8 +221,9 @@ impl ModelExtension {
         h.limit_nm * u
     }
 
-    /// The deflection rate [rad/s]: the slope of a least-squares line through the samples of the
-    /// last `rate_window_s` (causal: the observer has no future samples).
+    /// The deflection rate [rad/s]: the slope of a least-squares line through the last
+    /// `rate_window_s` of samples, or more (up to `rate_window_max_s`) until the deflection in
+    /// them spans [`RATE_STEPS`] resolution steps (causal: the observer has no future samples).
     pub fn deflection_rate(&mut self, t_s: f64, phi: f64) -> f64 {
         let tail = (self.head + self.len) % RATE_CAPACITY;
         self.ring[tail] = (t_s, phi);
@@ -202,17 +232,29 @@ impl ModelExtension {
         } else {
             self.len += 1;
         }
-        while self.len > 2 && t_s - self.ring[self.head].0 > self.spec.rate_window_s {
+        while self.len > 2 && t_s - self.ring[self.head].0 > self.spec.rate_window_max_s {
             self.head = (self.head + 1) % RATE_CAPACITY;
             self.len -= 1;
         }
-        if self.len < 2 {
+        // Newest first: how many samples the window takes.
+        let span = RATE_STEPS * self.spec.rate_resolution_rad;
+        let (mut lo, mut hi) = (phi, phi);
+        let mut take = self.len;
+        for k in 0..self.len {
+            let (t, d) = self.ring[(self.head + self.len - 1 - k) % RATE_CAPACITY];
+            (lo, hi) = (lo.min(d), hi.max(d));
+            if k >= 1 && t_s - t >= self.spec.rate_window_s && hi - lo >= span {
+                take = k + 1;
+                break;
+            }
+        }
+        if take < 2 {
             return 0.0;
         }
-        let n = self.len as f64;
+        let n = take as f64;
         let (mut st, mut sd, mut stt, mut std_) = (0.0, 0.0, 0.0, 0.0);
-        for k in 0..self.len {
-            let (t, d) = self.ring[(self.head + k) % RATE_CAPACITY];
+        for k in 0..take {
+            let (t, d) = self.ring[(self.head + self.len - take + k) % RATE_CAPACITY];
             let x = t - t_s;
             (st, sd, stt, std_) = (st + x, sd + d, stt + x * x, std_ + x * d);
         }
@@ -284,6 +326,30 @@ mod tests {
             w = e.deflection_rate(t, ((0.2 * t) / q).round() * q);
         }
         assert!((w - 0.2).abs() < 0.03, "{w}");
+    }
+
+    /// A slow motion seen through 14-bit counts is a staircase: a 20 ms window holds one count
+    /// or none, and its slope jumps between 0 and twice the rate. The window grows until the
+    /// deflection spans a few counts.
+    #[test]
+    fn a_slow_staircase_of_counts_reads_as_its_slope() {
+        let q = std::f64::consts::TAU / 16384.0;
+        let worst = |spec: ExtensionSpec| {
+            let mut e = ModelExtension::new(spec).unwrap();
+            let mut worst: f64 = 0.0;
+            for k in 0..2000 {
+                let t = k as f64 * 1e-3;
+                let w = e.deflection_rate(t, ((0.02 * t) / q).round() * q);
+                if t > 0.5 {
+                    worst = worst.max((w - 0.02).abs());
+                }
+            }
+            worst
+        };
+        let fixed = worst(ExtensionSpec { rate_resolution_rad: 0.0, ..Default::default() });
+        let adaptive = worst(ExtensionSpec::default());
+        assert!(fixed > 0.015, "a fixed 20 ms window misreads a count staircase by {fixed} rad/s");
+        assert!(adaptive < 0.006, "the growing window reads 0.02 rad/s within {adaptive} rad/s");
     }
 
     #[test]

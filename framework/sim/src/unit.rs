@@ -300,6 +300,46 @@ impl Unit {
             // Dead-zone (play): no torque until the play is taken up.
             d_eff[i] = d.signum() * (d.abs() - fx.dead_zone_rad).max(0.0);
         }
+        self.element_step(&d_eff, &rate, dt, Some(rng));
+        // Reaction on the drives: loads = M^T tau.
+        for (i, row) in self.matrix.iter().enumerate() {
+            for (m, d) in row.iter().zip(&self.drives) {
+                loads[*d] += m * self.torque[i];
+            }
+        }
+        // The outputs.
+        let t_now = self.time_s;
+        for i in 0..n {
+            match self.environments[i] {
+                EnvironmentConfig::Fixed { position_rad } => {
+                    self.output[i] = position_rad;
+                    self.output_velocity[i] = 0.0;
+                }
+                EnvironmentConfig::Flow { .. } => {
+                    let q = self.flow(i, t_now).unwrap_or(0.0);
+                    self.output_velocity[i] = (q - self.output[i]) / dt;
+                    self.output[i] = q;
+                }
+                EnvironmentConfig::Free { inertia_kgm2, damping_nms_per_rad, gravity_nm } => {
+                    let a = (self.torque[i] - damping_nms_per_rad * self.output_velocity[i] - gravity_nm * self.output[i].sin()) / inertia_kgm2;
+                    self.output_velocity[i] += a * dt;
+                    self.output[i] += self.output_velocity[i] * dt;
+                }
+                EnvironmentConfig::Spring { stiffness_nm_per_rad, rest_rad, inertia_kgm2, damping_nms_per_rad } => {
+                    let a = (self.torque[i] - stiffness_nm_per_rad * (self.output[i] - rest_rad) - damping_nms_per_rad * self.output_velocity[i]) / inertia_kgm2;
+                    self.output_velocity[i] += a * dt;
+                    self.output[i] += self.output_velocity[i] * dt;
+                }
+            }
+        }
+    }
+
+    /// The elements' and effects' torques for the effective deflections `d_eff` (after the
+    /// play) and the deflection rates, and what the torque sensor reads (`rng` draws its noise;
+    /// `None`: the noise-free expectation).
+    fn element_step(&mut self, d_eff: &[f64; MAX_UNIT_DOF], rate: &[f64; MAX_UNIT_DOF], dt: f64, mut rng: Option<&mut SplitMix64>) {
+        let n = self.dof();
+        let fx = self.effects;
         let mut base = [0.0; MAX_UNIT_DOF];
         if self.elements.len() == 1 && n > 1 {
             // One element for every DOF (a 2-DOF wrist table couples them).
@@ -336,42 +376,59 @@ impl Unit {
                 st.mode_y += st.mode_v * dt;
                 sensed += m.gain * (st.mode_y - t);
             }
-            if fx.torque_noise_nm > 0.0 {
-                st.sensor_noise = fx.torque_noise_nm * rng.normal();
-            }
+            // A replay predicts the sensor's expectation: no noise.
+            st.sensor_noise = match rng.as_deref_mut() {
+                Some(rng) if fx.torque_noise_nm > 0.0 => fx.torque_noise_nm * rng.normal(),
+                _ => 0.0,
+            };
             self.sensor_torque[i] = sensed + fx.torque_offset_nm + st.sensor_noise;
         }
-        // Reaction on the drives: loads = M^T tau.
-        for (i, row) in self.matrix.iter().enumerate() {
-            for (m, d) in row.iter().zip(&self.drives) {
-                loads[*d] += m * self.torque[i];
+    }
+
+    /// The simulated torque sensor's noise-free reading of DOF `dof` along a recorded motion:
+    /// the element and its effects (Dahl state from the first sample, the structural mode)
+    /// driven by the recorded deflection [rad] at the recorded pivot settings [mm] (NaN: the
+    /// unit's own), its rate a centred least-squares slope over `rate_window_s`. The other DOFs
+    /// stay undeflected. What the simulation says the sensor read, to compare with what it did.
+    ///
+    /// ```
+    /// use jointctl_config::{EffectsConfig, EnvironmentConfig};
+    /// use jointctl_sim::unit::{Element, Unit};
+    /// let fx = EffectsConfig { torque_offset_nm: 0.5, ..Default::default() };
+    /// let mut unit = Unit::new(vec!["q4".into()], vec![0], vec![vec![1.0]], vec![Element::Linear(100.0)], None,
+    ///     vec![EnvironmentConfig::Fixed { position_rad: 0.0 }], fx);
+    /// let t = [0.0, 0.01, 0.02];
+    /// let tau = unit.replay(0, &t, &[0.0, 0.01, 0.02], &[f64::NAN; 3], 0.02);
+    /// assert!((tau[2] - 2.5).abs() < 1e-12);
+    /// ```
+    pub fn replay(&mut self, dof: usize, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64], rate_window_s: f64) -> Vec<f64> {
+        let n = t_s.len().min(deflection_rad.len());
+        self.state = [EffectState::default(); MAX_UNIT_DOF];
+        let mut out = Vec::with_capacity(n);
+        let mut lo = 0;
+        let mut hi = 0;
+        for k in 0..n {
+            if let Some(p) = pivot_mm.get(k).filter(|p| p.is_finite()) {
+                self.pivot_mm = *p;
             }
-        }
-        // The outputs.
-        let t_now = self.time_s;
-        for i in 0..n {
-            match self.environments[i] {
-                EnvironmentConfig::Fixed { position_rad } => {
-                    self.output[i] = position_rad;
-                    self.output_velocity[i] = 0.0;
-                }
-                EnvironmentConfig::Flow { .. } => {
-                    let q = self.flow(i, t_now).unwrap_or(0.0);
-                    self.output_velocity[i] = (q - self.output[i]) / dt;
-                    self.output[i] = q;
-                }
-                EnvironmentConfig::Free { inertia_kgm2, damping_nms_per_rad, gravity_nm } => {
-                    let a = (self.torque[i] - damping_nms_per_rad * self.output_velocity[i] - gravity_nm * self.output[i].sin()) / inertia_kgm2;
-                    self.output_velocity[i] += a * dt;
-                    self.output[i] += self.output_velocity[i] * dt;
-                }
-                EnvironmentConfig::Spring { stiffness_nm_per_rad, rest_rad, inertia_kgm2, damping_nms_per_rad } => {
-                    let a = (self.torque[i] - stiffness_nm_per_rad * (self.output[i] - rest_rad) - damping_nms_per_rad * self.output_velocity[i]) / inertia_kgm2;
-                    self.output_velocity[i] += a * dt;
-                    self.output[i] += self.output_velocity[i] * dt;
-                }
+            // The centred window [t - w/2, t + w/2], at least one neighbour each side.
+            while lo < k && t_s[k] - t_s[lo] > rate_window_s / 2.0 && lo + 1 < k {
+                lo += 1;
             }
+            hi = hi.max(k);
+            while hi + 1 < n && (t_s[hi + 1] - t_s[k] <= rate_window_s / 2.0 || hi == k) {
+                hi += 1;
+            }
+            let rate = slope(&t_s[lo..=hi], &deflection_rad[lo..=hi]);
+            let dt = if k == 0 { 0.0 } else { t_s[k] - t_s[k - 1] };
+            let (mut d_eff, mut w) = ([0.0; MAX_UNIT_DOF], [0.0; MAX_UNIT_DOF]);
+            let d = deflection_rad[k];
+            d_eff[dof] = d.signum() * (d.abs() - self.effects.dead_zone_rad).max(0.0);
+            w[dof] = rate;
+            self.element_step(&d_eff, &w, dt, None);
+            out.push(self.sensor_torque[dof]);
         }
+        out
     }
 
     /// A named signal of DOF `i`.
@@ -413,4 +470,19 @@ impl SignalKind {
             _ => return None,
         })
     }
+}
+
+/// The least-squares slope of `y` over `t` (0 for fewer than two distinct times).
+fn slope(t: &[f64], y: &[f64]) -> f64 {
+    let n = t.len() as f64;
+    if t.len() < 2 {
+        return 0.0;
+    }
+    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (a, b) in t.iter().zip(y) {
+        sxy += (a - mt) * (b - my);
+        sxx += (a - mt) * (a - mt);
+    }
+    if sxx > 0.0 { sxy / sxx } else { 0.0 }
 }

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 use clap::Args;
 use jointctl_experiments::plot::{COLORS, Series, lines};
 use jointctl_ident::fit::{FitOptions, Order, fit};
-use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
+use jointctl_experiments::model_loop::{Extension, Found};
+use jointctl_ident::identify::{BaselineModel, IdentifyOptions, Report, identify};
 
 #[derive(Args)]
 pub struct FitArgs {
@@ -60,6 +61,11 @@ pub struct IdentifyArgs {
     /// Print exactly one JSON object.
     #[arg(long)]
     json: bool,
+    /// Write the extension into this folder (with --config): `observer.yaml` (the joint's
+    /// complete params with the extended observer: `params: {include: observer.yaml}` alone
+    /// configures it), `plant.yaml` (its `sim.effects`) and `extended.yaml` (the config with both).
+    #[arg(long, requires = "config")]
+    out: Option<PathBuf>,
 }
 
 /// Measured data from a CSV file, or from a recording (.mcap) for one joint: its observed
@@ -228,6 +234,15 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => return crate::fail(format!("{}: {e}", a.data.display())),
     };
+    // With a config: the extension written out for the observer and the simulation, and the
+    // gain of each on the held-out part.
+    let extension = match (&a.config, &a.joint) {
+        (Some(config), Some(joint)) => match extend(config, joint, &report, &data) {
+            Ok(e) => Some(e),
+            Err(e) => return crate::fail(e),
+        },
+        _ => None,
+    };
     let mut md = format!(
         "# What the model misses: {}\n\n{} samples, {} dropped as dropouts. Baseline fitted on the first 70 % of the time range, scored on the last 30 %.\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n\n",
         a.data.display(),
@@ -252,6 +267,28 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     }
     if !report.rejected.is_empty() {
         let _ = writeln!(md, "\nRejected (physically impossible, or not significant on the held-out part): {}.", report.rejected.join(", "));
+    }
+    if let Some((ext, _)) = &extension {
+        md += &gains_table(ext);
+    }
+    if let (Some(dir), Some((ext, loaded))) = (&a.out, &extension) {
+        let provenance = format!("by `jointctl identify --data {}`", a.data.display());
+        match jointctl_experiments::model_loop::write(ext, loaded, dir, &provenance) {
+            Ok(w) => {
+                let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
+            }
+            Err(e) => return crate::fail(e),
+        }
+    }
+    if let Some((ext, _)) = &extension
+        && let Some(dir) = a.report.as_ref().or(a.out.as_ref())
+    {
+        match gain_plots(dir, ext) {
+            Ok(files) => files.iter().for_each(|(title, file)| {
+                let _ = writeln!(md, "\n![{title}]({file})");
+            }),
+            Err(e) => return crate::fail(e),
+        }
     }
     if let Some(dir) = &a.report {
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -291,9 +328,64 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         }
     }
     if a.json {
-        println!("{}", serde_json::to_string(&report).unwrap_or_default());
+        let mut json = serde_json::to_value(&report).unwrap_or_default();
+        let gain = |before: f64, after: f64| serde_json::json!({"rmse_before": before, "rmse_after": after});
+        let mut gains = serde_json::json!({"static": gain(report.rmse_before, report.rmse_after)});
+        if let Some((ext, _)) = &extension {
+            gains["simulation"] = gain(ext.simulation.rmse_before, ext.simulation.rmse_after);
+            gains["observer"] = gain(ext.observer.rmse_before, ext.observer.rmse_after);
+            json["extension"] = serde_json::json!({
+                "observer": ext.observer_params.get("model_extension"),
+                "plant": ext.plant_effects,
+                "plant_causes": ext.plant_causes,
+                "notes": ext.notes,
+            });
+        }
+        json["gains"] = gains;
+        println!("{json}");
     } else {
         print!("{md}");
     }
     ExitCode::SUCCESS
+}
+
+/// The extension of `joint` in `config` from the report's causes, with the config it extends.
+fn extend(config: &Path, joint: &str, report: &Report, data: &jointctl_ident::csv::Data) -> Result<(Extension, jointctl_config::LoadedConfig), String> {
+    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
+    let found: Vec<Found> = report.causes.iter().map(|c| Found { effect: c.effect.clone(), plant: c.fragments.plant.clone(), observer: c.fragments.observer.clone() }).collect();
+    let ext = jointctl_experiments::model_loop::extend(&loaded, joint, &found, data, IdentifyOptions::default().train_fraction).map_err(|e| format!("{}: {e}", config.display()))?;
+    Ok((ext, loaded))
+}
+
+/// The gains as a Markdown table, with what was left out and why.
+fn gains_table(ext: &Extension) -> String {
+    let mut md = String::from("\n## Gains on the held-out part\n\n| | before [Nm] | after [Nm] | gain |\n|---|---|---|---|\n");
+    for (name, g) in [("simulation (replayed along the recorded motion, vs F/T)", ext.simulation), ("observer (recorded deflections, vs F/T)", ext.observer)] {
+        let _ = writeln!(md, "| {name} | {:.4} | {:.4} | {:.0} % |", g.rmse_before, g.rmse_after, 100.0 * g.relative());
+    }
+    let taken = if ext.plant_causes.is_empty() { "none".to_string() } else { ext.plant_causes.join(", ") };
+    let _ = writeln!(md, "\nInto the simulation: {taken}.");
+    for n in &ext.notes {
+        let _ = writeln!(md, "- {n}");
+    }
+    md
+}
+
+/// One plot per side: the held-out F/T torque with the configured and the extended model.
+fn gain_plots(dir: &Path, ext: &Extension) -> Result<Vec<(String, String)>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let mut files = Vec::new();
+    for (side, trace, g) in [("simulation", &ext.simulation_trace, ext.simulation), ("observer", &ext.observer_trace, ext.observer)] {
+        let pick = |v: &[f64]| trace.t_s.iter().zip(v).filter(|(_, y)| y.is_finite()).map(|(t, y)| (*t, *y)).collect::<Vec<_>>();
+        let title = format!("{} {side} vs F/T, held-out part (RMSE {:.4} -> {:.4} Nm)", ext.dof, g.rmse_before, g.rmse_after);
+        let file = format!("gain-{side}.svg");
+        lines(&dir.join(&file), &title, "t [s]", "torque [Nm]", &[
+            Series { name: "F/T sensor", points: pick(&trace.measured_nm), color: COLORS[0] },
+            Series { name: "configured", points: pick(&trace.before_nm), color: COLORS[1] },
+            Series { name: "extended", points: pick(&trace.after_nm), color: COLORS[2] },
+        ])
+        .map_err(|e| e.to_string())?;
+        files.push((title, file));
+    }
+    Ok(files)
 }

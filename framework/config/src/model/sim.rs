@@ -273,7 +273,7 @@ pub enum EnvironmentConfig {
 }
 
 /// Plant effects the observer does not model (all off by default).
-#[derive(Clone, Copy, Debug, Default, Deserialize, JsonSchema)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, JsonSchema, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EffectsConfig {
     /// Viscous friction in the element [Nms/rad].
@@ -304,7 +304,7 @@ pub struct EffectsConfig {
 }
 
 /// Eq. 3.5: `F = k_a atan(k_b w)`.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArctanFrictionConfig {
     /// `k_a` [Nm] (the friction torque tends to `k_a pi / 2`).
@@ -314,7 +314,7 @@ pub struct ArctanFrictionConfig {
 }
 
 /// Dahl hysteresis parameters.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DahlConfig {
     /// Rest stiffness sigma [Nm/rad].
@@ -324,7 +324,7 @@ pub struct DahlConfig {
 }
 
 /// A structural vibration mode.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VibrationConfig {
     /// Mode frequency [Hz].

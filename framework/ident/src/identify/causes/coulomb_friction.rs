@@ -28,6 +28,9 @@ impl CandidateCause for CoulombFriction {
         (c[0] < 0.0).then(|| "negative friction".into())
     }
     fn fragments(&self, p: &[f64], c: &[f64]) -> Fragments {
-        Fragments { plant: Default::default(), observer: object([("friction", json!({"ka_nm": c[0], "kb_s_per_rad": p[0]}))]) }
+        Fragments {
+            plant: object([("arctan_friction", json!({"k_a_nm": c[0], "k_b_s_per_rad": p[0]}))]),
+            observer: object([("friction", json!({"ka_nm": c[0], "kb_s_per_rad": p[0]}))]),
+        }
     }
 }

@@ -1,0 +1,411 @@
+//! The model loop's last step (section 6.2's first recommendation): what `jointctl identify`
+//! found in measured data, written as an extended observer (the joint's params with a
+//! `model_extension`) and an extended simulation (the joint's `sim.effects`), with the gain of
+//! each measured on the data's held-out part.
+//!
+//! - **Observer**: the recorded deflections through the joint's observer model (its
+//!   characteristic and, when it has one, its `model_extension`: the functions the plugins call
+//!   online), before and after, against the F/T sensor. `identify` compares the data with the
+//!   characteristic alone, so the causes' observer terms together *are* the new extension; an
+//!   extension already configured is replaced, never added to.
+//! - **Simulation**: the simulated joint's element and effects replayed along the recorded
+//!   motion ([`jointctl_sim::unit::Unit::replay`]), before and after, against the F/T sensor. The
+//!   causes were named against the observer's model, which need not be the plant's (the
+//!   reference arm's plant already holds the hysteresis its observer lacks): a cause's plant
+//!   terms go into the simulation only when they make its replay of the *training* part
+//!   significantly better (the block t-test of [`jointctl_ident::identify::significance`]); the
+//!   held-out part only measures.
+
+use std::path::{Path, PathBuf};
+
+use jointctl_config::{EffectsConfig, LoadedConfig};
+use jointctl_ident::csv::Data;
+use jointctl_ident::identify::significance::block_test;
+use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
+use jointctl_models::extension::{ExtensionSpec, ModelExtension};
+use serde::Serialize;
+use serde_json::{Map, Value};
+
+use crate::ExperimentError;
+
+/// The deflection rate's window in the simulation's replay [s]: the observer extension's
+/// (assumption, see [`ExtensionSpec::rate_window_s`]).
+pub const REPLAY_RATE_WINDOW_S: f64 = 0.02;
+
+/// Plant keys that add to what the simulation has (a linear term's coefficient); every other
+/// key replaces.
+const ADDITIVE: [&str; 3] = ["viscous_nms_per_rad", "cubic_nm_per_rad3", "torque_offset_nm"];
+
+/// A cause `identify` named, with what it adds to each side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Found {
+    /// The cause's name.
+    pub effect: String,
+    /// Its keys of the joint's `sim.effects`.
+    pub plant: Map<String, Value>,
+    /// Its keys of the joint's `model_extension`.
+    pub observer: Map<String, Value>,
+}
+
+/// Held-out torque RMSE before and after [Nm].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Gain {
+    /// With the configured model.
+    pub rmse_before: f64,
+    /// With the extended model.
+    pub rmse_after: f64,
+}
+
+impl Gain {
+    /// The relative drop of the error (0.6: 60 % smaller).
+    pub fn relative(&self) -> f64 {
+        1.0 - self.rmse_after / self.rmse_before
+    }
+}
+
+/// The held-out part's torques, for plots.
+#[derive(Clone, Debug, Default)]
+pub struct Trace {
+    /// Time [s].
+    pub t_s: Vec<f64>,
+    /// The F/T sensor [Nm].
+    pub measured_nm: Vec<f64>,
+    /// The configured model [Nm].
+    pub before_nm: Vec<f64>,
+    /// The extended model [Nm].
+    pub after_nm: Vec<f64>,
+}
+
+/// The extension of one DOF, and its gains.
+#[derive(Clone, Debug)]
+pub struct Extension {
+    /// The DOF.
+    pub dof: String,
+    /// Index of its joint in the config.
+    pub joint_index: usize,
+    /// The joint's complete params with the extended observer model.
+    pub observer_params: Value,
+    /// The joint's `sim.effects` with the extended simulation.
+    pub plant_effects: Value,
+    /// Causes whose plant terms went into the simulation.
+    pub plant_causes: Vec<String>,
+    /// Why other causes did not change one side or the other.
+    pub notes: Vec<String>,
+    /// The simulation's gain.
+    pub simulation: Gain,
+    /// The observer's gain.
+    pub observer: Gain,
+    /// The simulation's held-out torques.
+    pub simulation_trace: Trace,
+    /// The observer's held-out torques.
+    pub observer_trace: Trace,
+}
+
+fn err(m: impl Into<String>) -> ExperimentError {
+    ExperimentError(m.into())
+}
+
+/// The observer's torque along the recorded deflections [Nm]: the joint's characteristic
+/// (`params.characteristic` at the recorded pivot, or `params.stiffness_nm_per_rad`), through its
+/// `model_extension` when it has one, as the elastic and shoulder plugins compute it online.
+/// NaN where the deflection is unknown (and the extension's state starts again after it).
+///
+/// ```
+/// let params = serde_json::json!({"stiffness_nm_per_rad": 100.0, "model_extension": {"torque_offset_nm": 0.5}});
+/// let tau = jointctl_experiments::model_loop::observer_torque(&params, &[0.0, 0.01], &[0.0, 0.02], &[f64::NAN; 2]).unwrap();
+/// assert!((tau[1] - 2.5).abs() < 1e-12);
+/// ```
+pub fn observer_torque(params: &Value, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    let curve: Box<dyn Fn(f64, f64) -> f64> = if let Some(spec) = params.get("characteristic") {
+        let spec: CharacteristicSpec = serde_json::from_value(spec.clone()).map_err(|e| err(format!("params.characteristic: {e}")))?;
+        if spec.curves.iter().any(|c| c.angle_deg.is_some()) {
+            return Err(err("params.characteristic: a 2-DOF characteristic (the wrist) has no single-DOF observer model here"));
+        }
+        let table = PivotCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+        Box::new(move |pivot, x| table.evaluate(pivot, x).torque_nm)
+    } else if let Some(k) = params.get("stiffness_nm_per_rad").and_then(Value::as_f64) {
+        Box::new(move |_, x| k * x)
+    } else {
+        return Err(err("params: neither `characteristic` nor `stiffness_nm_per_rad`: the joint has no elastic observer model"));
+    };
+    let mut extension = match params.get("model_extension") {
+        None | Some(Value::Null) => None,
+        Some(v) => {
+            let spec: ExtensionSpec = serde_json::from_value(v.clone()).map_err(|e| err(format!("params.model_extension: {e}")))?;
+            Some(ModelExtension::new(spec).map_err(|e| err(format!("params.model_extension.{}: {}", e.field, e.message)))?)
+        }
+    };
+    let mut out = Vec::with_capacity(t_s.len());
+    for (k, (&t, &phi)) in t_s.iter().zip(deflection_rad).enumerate() {
+        let pivot = pivot_mm.get(k).copied().filter(|p| p.is_finite()).unwrap_or(0.0);
+        if !phi.is_finite() {
+            if let Some(e) = &mut extension {
+                e.reset();
+            }
+            out.push(f64::NAN);
+            continue;
+        }
+        out.push(match &mut extension {
+            Some(e) => {
+                let tau = curve(pivot, e.elastic_deflection(phi));
+                e.torque(t, phi, tau)
+            }
+            None => curve(pivot, phi),
+        });
+    }
+    Ok(out)
+}
+
+/// The simulated torque sensor's reading of `dof` replayed along the recorded motion, with the
+/// joint's `sim.effects` replaced by `effects` [Nm].
+///
+/// ```
+/// let loaded = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
+/// let effects = serde_json::json!({"torque_offset_nm": 0.5});
+/// let tau = jointctl_experiments::model_loop::simulated_torque(&loaded, "q4", &effects, &[0.0, 0.01], &[0.0, 0.0], &[f64::NAN; 2]).unwrap();
+/// assert_eq!(tau, vec![0.5, 0.5]);
+/// ```
+pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &Value, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    let (j, i) = crate::locate(loaded, dof)?;
+    let effects: EffectsConfig = serde_json::from_value(effects.clone()).map_err(|e| err(format!("joints[{j}].sim.effects: {e}")))?;
+    let mut cfg = loaded.config.clone();
+    if let Some(sim) = cfg.joints[j].sim.as_mut() {
+        sim.effects = effects;
+    }
+    let hal = jointctl_sim::SimHal::new(&cfg).map_err(|e| err(e.to_string()))?;
+    let unit = hal.units().iter().find(|u| u.dof_names.iter().any(|n| n == dof)).ok_or_else(|| err(format!("`{dof}` is not simulated")))?;
+    let mut unit = unit.clone();
+    // A NaN deflection (unknown) is replayed as the last known one: the element did not stop
+    // existing; the comparison leaves that sample out.
+    let mut last = 0.0;
+    let held: Vec<f64> = deflection_rad.iter().map(|d| if d.is_finite() { last = *d; *d } else { last }).collect();
+    let mut out = unit.replay(i, t_s, &held, pivot_mm, REPLAY_RATE_WINDOW_S);
+    for (o, d) in out.iter_mut().zip(deflection_rad) {
+        if !d.is_finite() {
+            *o = f64::NAN;
+        }
+    }
+    Ok(out)
+}
+
+/// Which samples are held out: the last `1 - train_fraction` of the time range, as `identify`
+/// splits (so that every gain is measured on data no fit has seen).
+fn held_out_mask(t_s: &[f64], train_fraction: f64) -> Vec<bool> {
+    let (t0, t1) = (t_s.first().copied().unwrap_or(0.0), t_s.last().copied().unwrap_or(0.0));
+    let split = t0 + train_fraction * (t1 - t0);
+    t_s.iter().map(|t| *t > split).collect()
+}
+
+/// Squared errors against the measurement on the samples `mask` selects (NaNs left out).
+fn squared_errors(measured: &[f64], model: &[f64], mask: &[bool], want: bool) -> Vec<f64> {
+    measured.iter().zip(model).zip(mask).filter(|((m, p), k)| **k == want && m.is_finite() && p.is_finite()).map(|((m, p), _)| (m - p) * (m - p)).collect()
+}
+
+fn rmse(sq: &[f64]) -> f64 {
+    if sq.is_empty() { f64::NAN } else { (sq.iter().sum::<f64>() / sq.len() as f64).sqrt() }
+}
+
+fn trace(data: &Data, mask: &[bool], before: &[f64], after: &[f64]) -> Trace {
+    let mut t = Trace::default();
+    for k in (0..data.t.len()).filter(|k| mask[*k]) {
+        t.t_s.push(data.t[k]);
+        t.measured_nm.push(data.torque[k]);
+        t.before_nm.push(before[k]);
+        t.after_nm.push(after[k]);
+    }
+    t
+}
+
+/// `fragment` merged into `effects`: linear coefficients add, everything else replaces.
+fn merge_plant(effects: &Value, fragment: &Map<String, Value>) -> Value {
+    let mut out = effects.as_object().cloned().unwrap_or_default();
+    for (k, v) in fragment {
+        let add = ADDITIVE.contains(&k.as_str()).then(|| out.get(k).and_then(Value::as_f64).unwrap_or(0.0) + v.as_f64().unwrap_or(0.0));
+        out.insert(k.clone(), add.map_or_else(|| v.clone(), Value::from));
+    }
+    Value::Object(out)
+}
+
+/// The extension of `dof` from the causes `identify` named on `data`, and its gains.
+///
+/// # Errors
+/// The DOF is not in the config or not simulated, or its joint has no single-DOF elastic
+/// observer model (the 2-DOF wrist), or a cause's terms are out of range.
+pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
+    let (j, i) = crate::locate(loaded, dof)?;
+    let entry = &loaded.config.joints[j];
+    if i != 0 {
+        return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
+    }
+    let (t, d, p) = (&data.t, &data.deflection, &data.pivot_mm);
+    let held_out = held_out_mask(t, train_fraction);
+    let mut notes = Vec::new();
+
+    // The observer: every cause's observer terms together.
+    let params_before = entry.params.0.clone();
+    let mut extension = Map::new();
+    for f in found {
+        if f.observer.is_empty() {
+            notes.push(format!("`{}` has no observer term (the observer models the element, not the sensor's structure or the loop)", f.effect));
+        }
+        extension.extend(f.observer.clone());
+    }
+    let mut params_after = params_before.clone();
+    if let Some(obj) = params_after.as_object_mut() {
+        if extension.is_empty() {
+            obj.remove("model_extension");
+        } else {
+            obj.insert("model_extension".into(), Value::Object(extension));
+        }
+    }
+    let obs_before = observer_torque(&params_before, t, d, p)?;
+    let obs_after = observer_torque(&params_after, t, d, p)?;
+
+    // The simulation: a cause's plant terms only when they make the training part's replay
+    // significantly better.
+    let base_effects = entry.sim.as_ref().map(|s| serde_json::to_value(s.effects)).transpose().map_err(|e| err(e.to_string()))?.unwrap_or_default();
+    let replay = |effects: &Value| simulated_torque(loaded, dof, effects, t, d, p);
+    let sim_before = replay(&base_effects)?;
+    let (mut effects, mut current) = (base_effects.clone(), sim_before.clone());
+    let mut plant_causes = Vec::new();
+    for f in found {
+        if f.plant.is_empty() {
+            notes.push(format!("`{}` has no simulation term (the simulated plant has its own curve)", f.effect));
+            continue;
+        }
+        let candidate = merge_plant(&effects, &f.plant);
+        let tried = replay(&candidate)?;
+        let (a, b) = (squared_errors(&data.torque, &current, &held_out, false), squared_errors(&data.torque, &tried, &held_out, false));
+        let diff: Vec<f64> = a.iter().zip(&b).map(|(a, b)| a - b).collect();
+        let test = block_test(&diff);
+        if test.significant() {
+            plant_causes.push(f.effect.clone());
+            (effects, current) = (candidate, tried);
+        } else {
+            notes.push(format!(
+                "`{}` left out of the simulation: its plant terms do not make the replay of the training part significantly better (block t = {:.2} < {:.2}); the simulation already has it or it is the observer's alone",
+                f.effect, test.t, test.critical
+            ));
+        }
+    }
+    let gain = |before: &[f64], after: &[f64]| Gain {
+        rmse_before: rmse(&squared_errors(&data.torque, before, &held_out, true)),
+        rmse_after: rmse(&squared_errors(&data.torque, after, &held_out, true)),
+    };
+    Ok(Extension {
+        dof: dof.into(),
+        joint_index: j,
+        observer_params: params_after,
+        plant_effects: tidy(&effects),
+        plant_causes,
+        notes,
+        simulation: gain(&sim_before, &current),
+        observer: gain(&obs_before, &obs_after),
+        simulation_trace: trace(data, &held_out, &sim_before, &current),
+        observer_trace: trace(data, &held_out, &obs_before, &obs_after),
+    })
+}
+
+/// Effects without the keys that are off (zero or none), for a readable file.
+fn tidy(effects: &Value) -> Value {
+    let mut out = effects.as_object().cloned().unwrap_or_default();
+    out.retain(|_, v| !(v.is_null() || v.as_f64() == Some(0.0)));
+    Value::Object(out)
+}
+
+/// The files [`write`] writes.
+#[derive(Clone, Debug)]
+pub struct Written {
+    /// The joint's complete params (`params: {include: ...}` alone configures it).
+    pub observer: PathBuf,
+    /// The joint's `sim.effects`.
+    pub plant: PathBuf,
+    /// The config with both in place.
+    pub extended: PathBuf,
+}
+
+/// Paths a config writes relative to its own folder, made absolute, so that the extended config
+/// in another folder names the same files.
+fn absolute_paths(doc: &mut serde_yaml::Value, config: &Path) {
+    let dir = std::path::absolute(config).ok().and_then(|p| p.parent().map(Path::to_path_buf)).unwrap_or_default();
+    let fix = |v: &mut serde_yaml::Value| {
+        if let Some(s) = v.as_str()
+            && Path::new(s).is_relative()
+        {
+            *v = serde_yaml::Value::from(dir.join(s).display().to_string());
+        }
+    };
+    if let Some(dirs) = doc.get_mut("plugin_dirs").and_then(|d| d.as_sequence_mut()) {
+        dirs.iter_mut().for_each(fix);
+    }
+    if let Some(joints) = doc.get_mut("joints").and_then(|j| j.as_sequence_mut()) {
+        for joint in joints {
+            if let Some(path) = joint.get_mut("plugin").and_then(|p| p.get_mut("path")) {
+                fix(path);
+            }
+            if let Some(include) = joint.get_mut("params").and_then(|p| p.get_mut("include")) {
+                fix(include);
+            }
+        }
+    }
+}
+
+/// Writes `dir/observer.yaml`, `dir/plant.yaml` and `dir/extended.yaml` (the config with the
+/// joint's params `{include: observer.yaml}` and its `sim.effects` those of `plant.yaml`), and
+/// checks that the last loads.
+///
+/// # Errors
+/// A file cannot be read or written, or the extended config does not load (said with its error).
+pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &str) -> Result<Written, ExperimentError> {
+    std::fs::create_dir_all(dir).map_err(|e| err(format!("cannot create {}: {e}", dir.display())))?;
+    let config = &loaded.source.file;
+    let yaml = |v: &Value| serde_yaml::to_string(v).map_err(|e| err(e.to_string()));
+    let written = Written { observer: dir.join("observer.yaml"), plant: dir.join("plant.yaml"), extended: dir.join("extended.yaml") };
+    let put = |path: &Path, text: String| std::fs::write(path, text).map_err(|e| err(format!("cannot write {}: {e}", path.display())));
+    put(
+        &written.observer,
+        format!("# The complete params of `{}`'s joint in {}, with the observer's model extension {provenance}.\n# Use: params: {{include: observer.yaml}}\n{}", ext.dof, config.display(), yaml(&ext.observer_params)?),
+    )?;
+    put(&written.plant, format!("# `sim.effects` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&ext.plant_effects)?))?;
+    let text = std::fs::read_to_string(config).map_err(|e| err(format!("cannot read {}: {e}", config.display())))?;
+    let mut doc: serde_yaml::Value = serde_yaml::from_str(&text).map_err(|e| err(format!("{}: {e}", config.display())))?;
+    absolute_paths(&mut doc, config);
+    let joint = doc.get_mut("joints").and_then(|j| j.get_mut(ext.joint_index)).ok_or_else(|| err(format!("{}: no joints[{}]", config.display(), ext.joint_index)))?;
+    let mut params = serde_yaml::Mapping::new();
+    params.insert("include".into(), "observer.yaml".into());
+    joint["params"] = serde_yaml::Value::Mapping(params);
+    let effects: serde_yaml::Value = serde_yaml::to_value(&ext.plant_effects).map_err(|e| err(e.to_string()))?;
+    match joint.get_mut("sim") {
+        Some(sim) => sim["effects"] = effects,
+        None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
+    }
+    put(
+        &written.extended,
+        format!("# {} with `{}`'s observer (observer.yaml) and simulation (plant.yaml) extended {provenance}.\n# Written, not edited: the original's comments are in the original.\n{}", config.display(), ext.dof, serde_yaml::to_string(&doc).map_err(|e| err(e.to_string()))?),
+    )?;
+    jointctl_config::load(&written.extended).map_err(|e| err(format!("the extended config does not load: {e}")))?;
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_plant_terms_add_and_the_others_replace() {
+        let effects = serde_json::json!({"viscous_nms_per_rad": 0.1, "hysteresis": {"sigma_nm_per_rad": 100.0, "limit_nm": 0.2}});
+        let fragment: Map<String, Value> = serde_json::from_value(serde_json::json!({"viscous_nms_per_rad": 0.5, "hysteresis": {"sigma_nm_per_rad": 300.0, "limit_nm": 1.0}, "dead_zone_rad": 0.01})).unwrap();
+        let merged = merge_plant(&effects, &fragment);
+        assert!((merged["viscous_nms_per_rad"].as_f64().unwrap() - 0.6).abs() < 1e-12);
+        assert_eq!(merged["hysteresis"]["limit_nm"], 1.0);
+        assert_eq!(merged["dead_zone_rad"], 0.01);
+    }
+
+    #[test]
+    fn the_held_out_part_is_identifys_last_thirty_per_cent_of_the_time_range() {
+        let t: Vec<f64> = (0..=10).map(f64::from).collect();
+        let mask = held_out_mask(&t, 0.7);
+        assert_eq!(mask.iter().filter(|m| **m).count(), 3);
+        assert!(!mask[7] && mask[8]);
+    }
+}
