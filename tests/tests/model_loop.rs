@@ -180,7 +180,7 @@ fn hidden_case(joint: Joint, seed: u64, label: &str) {
     let mut rng = SplitMix64(seed ^ 0x5eed_0000 ^ label.len() as u64);
     let (first, c1) = draw(&mut rng, None);
     // Every other seed hides a pair.
-    let (hidden, expected) = if seed % 2 == 0 {
+    let (hidden, expected) = if seed.is_multiple_of(2) {
         let (second, c2) = draw(&mut rng, Some(c1));
         (format!("{first}, {second}"), vec![c1, c2])
     } else {
