@@ -24,7 +24,14 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("exactly one JSON object");
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(keys, ["samples", "dropped_samples", "rmse_before", "rmse_after", "causes", "significance"]);
+    assert_eq!(keys, ["samples", "dropped_samples", "rmse_before", "rmse_after", "causes", "significance", "extension", "gains"]);
+    // With --config: the static gain (identify's own model), and the simulation's and the
+    // observer's on the held-out part.
+    for side in ["static", "simulation", "observer"] {
+        let g = &v["gains"][side];
+        assert!(g["rmse_before"].as_f64().is_some() && g["rmse_after"].as_f64().is_some(), "{side}: {}", v["gains"]);
+    }
+    assert_eq!(v["gains"]["static"]["rmse_before"], v["rmse_before"]);
     assert_eq!(v["samples"], 4000);
     let first = &v["causes"][0];
     let ckeys: Vec<&str> = first.as_object().unwrap().keys().map(String::as_str).collect();
