@@ -188,12 +188,12 @@ pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &Value, t_s: 
     Ok(out)
 }
 
-/// Which samples are held out: the last `1 - train_fraction` of the time range, as `identify`
-/// splits (so that every gain is measured on data no fit has seen).
+/// Which samples are held out: those `identify` holds out (see
+/// [`jointctl_ident::identify::prepare::split_time`]), so that every gain is measured on data no
+/// fit has seen.
 fn held_out_mask(t_s: &[f64], train_fraction: f64) -> Vec<bool> {
-    let (t0, t1) = (t_s.first().copied().unwrap_or(0.0), t_s.last().copied().unwrap_or(0.0));
-    let split = t0 + train_fraction * (t1 - t0);
-    t_s.iter().map(|t| *t > split).collect()
+    let split = jointctl_ident::identify::prepare::split_time(t_s, train_fraction);
+    t_s.iter().map(|t| *t >= split).collect()
 }
 
 /// Squared errors against the measurement on the samples `mask` selects (NaNs left out).
@@ -405,7 +405,7 @@ mod tests {
     fn the_held_out_part_is_identifys_last_thirty_per_cent_of_the_time_range() {
         let t: Vec<f64> = (0..=10).map(f64::from).collect();
         let mask = held_out_mask(&t, 0.7);
-        assert_eq!(mask.iter().filter(|m| **m).count(), 3);
-        assert!(!mask[7] && mask[8]);
+        assert_eq!(mask.iter().filter(|m| **m).count(), 4);
+        assert!(!mask[6] && mask[7]);
     }
 }

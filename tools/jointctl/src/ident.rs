@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use clap::Args;
 use jointctl_experiments::plot::{COLORS, Series, lines};
 use jointctl_ident::fit::{FitOptions, Order, fit};
-use jointctl_experiments::model_loop::{Extension, Found};
+use jointctl_experiments::model_loop::{Extension, Found, Gain};
 use jointctl_ident::identify::{BaselineModel, IdentifyOptions, Report, identify};
 
 #[derive(Args)]
@@ -334,11 +334,10 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     }
     if a.json {
         let mut json = serde_json::to_value(&report).unwrap_or_default();
-        let gain = |before: f64, after: f64| serde_json::json!({"rmse_before": before, "rmse_after": after});
-        let mut gains = serde_json::json!({"static": gain(report.rmse_before, report.rmse_after)});
+        let mut gains = serde_json::json!({"static": Gain { rmse_before: report.rmse_before, rmse_after: report.rmse_after }});
         if let Some((ext, _)) = &extension {
-            gains["simulation"] = gain(ext.simulation.rmse_before, ext.simulation.rmse_after);
-            gains["observer"] = gain(ext.observer.rmse_before, ext.observer.rmse_after);
+            gains["simulation"] = serde_json::json!(ext.simulation);
+            gains["observer"] = serde_json::json!(ext.observer);
             json["extension"] = serde_json::json!({
                 "observer": ext.observer_params.get("model_extension"),
                 "plant": ext.plant_effects,

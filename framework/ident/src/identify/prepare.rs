@@ -186,6 +186,20 @@ fn fundamental_hz(t: &[f64], d: &[f64]) -> f64 {
     if num > 0.0 { den / num } else { (n / duration).max(0.01) }
 }
 
+/// Where the held-out part starts [s]: after `train_fraction` of the time range. A sample at or
+/// after it is held out. Whatever scores a model on "the held-out part" (the model loop's
+/// simulation and observer gains) takes it from here.
+///
+/// ```
+/// assert_eq!(jointctl_ident::identify::prepare::split_time(&[0.0, 5.0, 10.0], 0.7), 7.0);
+/// ```
+pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
+    match (t_s.first(), t_s.last()) {
+        (Some(a), Some(b)) => a + train_fraction * (b - a),
+        _ => 0.0,
+    }
+}
+
 pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
@@ -216,7 +230,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / ENCODER_LSB_RAD, reversals: turns });
     }
     let spacing = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-    let t_split = t[0] + train_fraction * (t[t.len() - 1] - t[0]);
+    let t_split = split_time(&t, train_fraction);
     let split = t.partition_point(|x| *x < t_split);
     // A stateful effect's history: two cycles before the part (a Dahl state forgets within a
     // stroke far longer than its deflection scale, which the search keeps below a third of the
