@@ -76,6 +76,7 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     let first_drive = jointctl_hal_index(&cfg, &first_drive)?;
     let sim = SharedSim::new(sim_hal);
     let mut arm = Arm::build(&cfg, loader, Box::new(sim.clone()))?;
+    arm.run_in_simulated_time();
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
     let dof = arm_dof(&arm, &opts.joint);
     let two = directional;

@@ -210,6 +210,7 @@ pub fn replay_observers(path: &Path, loaded: &LoadedConfig, loader: &PluginLoade
     let all: Vec<RawSample> = std::iter::once(activation).chain(raw.iter().cloned()).collect();
     let hal = ReplayHal { frames: frames(&all, &devices, &mut report.notes).into_iter() };
     let mut arm = Arm::build(loaded, loader, Box::new(hal))?;
+    arm.run_in_simulated_time();
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
     let recorded = recorded_joints(&mut recording, &arm, &mut report.notes);
     let mut feed = CommandFeed::new(commands, &arm);
@@ -283,6 +284,7 @@ pub fn replay_on_sim(path: &Path, loaded: &LoadedConfig, loader: &PluginLoader) 
     let start: Vec<Option<f64>> = devices.drives.iter().map(|name| activation.drives.iter().find(|(n, ..)| n == name).and_then(|(_, r, _)| r.position_rad.usable(f64::INFINITY))).collect();
     sim.start_at(&start);
     let mut arm = Arm::build(loaded, loader, Box::new(sim))?;
+    arm.run_in_simulated_time();
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
     let recorded = recorded_joints(&mut recording, &arm, &mut report.notes);
     for name in &arm.dof_names {

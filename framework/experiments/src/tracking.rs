@@ -190,6 +190,7 @@ fn run_one(
 ) -> Result<Vec<Row>, ExperimentError> {
     let sim = SharedSim::new(SimHal::new(&cfg.config).map_err(|e| ExperimentError(e.to_string()))?);
     let mut arm = Arm::build(cfg, loader, Box::new(sim.clone()))?;
+    arm.run_in_simulated_time();
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;
     let dofs: Vec<usize> = drives.iter().map(|(name, ..)| arm_dof(&arm, name)).collect();
     let dt = 1.0 / arm.rate_hz;
