@@ -60,6 +60,11 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if !(sim.can_latency_s >= 0.0 && sim.can_latency_s <= 0.1) {
         err("hal.sim.can_latency_s".into(), format!("must be 0-0.1 s, got {}", sim.can_latency_s));
     }
+    if let Some(l) = sim.can_feedback_latency_s
+        && !(0.0..=0.1).contains(&l)
+    {
+        err("hal.sim.can_feedback_latency_s".into(), format!("must be 0-0.1 s, got {l}"));
+    }
     if !(sim.substep_s >= 1e-5 && sim.substep_s <= 0.005) {
         err("hal.sim.substep_s".into(), format!("must be 1e-5 to 5e-3 s, got {}", sim.substep_s));
     }

@@ -138,6 +138,8 @@ pub struct SimHal {
     loss_mode: CanLossMode,
     spi_latency_s: f64,
     can_latency_s: f64,
+    /// Age of the drives' readings [s].
+    can_feedback_latency_s: f64,
     substep_s: f64,
     rng: SplitMix64,
     time_s: f64,
@@ -315,6 +317,7 @@ impl SimHal {
             loss_mode: sim.can_loss_mode,
             spi_latency_s: sim.spi_latency_s,
             can_latency_s: sim.can_latency_s,
+            can_feedback_latency_s: sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s),
             substep_s: sim.substep_s,
             rng: SplitMix64(sim.seed ^ 0x9e37_79b9_7f4a_7c15),
             time_s: 0.0,
@@ -452,7 +455,7 @@ impl Hal for SimHal {
         }
         for (i, d) in frame.drives.iter_mut().enumerate() {
             // The same TPDO1 frames and decoder as the robot's CAN bus, with latency and losses.
-            let position = self.drive_history[i].at(now - self.can_latency_s);
+            let position = self.drive_history[i].at(now - self.can_feedback_latency_s);
             let counts = (position * self.counts_per_rad[i]).round() as i32;
             let lost = self.loss_rate > 0.0 && self.rng.uniform() < self.loss_rate;
             let frame_out = match (lost, self.loss_mode) {
@@ -461,7 +464,7 @@ impl Hal for SimHal {
                 (true, CanLossMode::Missing) => None,
             };
             let sample = match frame_out.as_ref().and_then(canopen::decode_tpdo1) {
-                Some(t) => Sample::Value { value: t.position_counts as f64 / self.counts_per_rad[i], age_s: self.can_latency_s },
+                Some(t) => Sample::Value { value: t.position_counts as f64 / self.counts_per_rad[i], age_s: self.can_feedback_latency_s },
                 None => Sample::Missing,
             };
             let reading = self.drive_conditioners[i].update(sample, now);

@@ -248,6 +248,17 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         },
         _ => None,
     };
+    // A closed-loop recording (set-points and readings of a running arm): the causes in the loop.
+    let loop_report = match (&a.config, &a.joint) {
+        (Some(config), Some(joint)) if jointctl_record::reader::is_mcap(&a.data) => match loop_causes(&a.data, config, joint) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                eprintln!("note: no causes in the loop: {e}");
+                None
+            }
+        },
+        _ => None,
+    };
     let mut md = format!(
         "# What the model misses: {}\n\n{} samples, {} dropped as dropouts. Baseline fitted on the first 70 % of the time range, scored on the last 30 %.\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n\n",
         a.data.display(),
@@ -275,6 +286,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     }
     if let Some((ext, _)) = &extension {
         md += &gains_table(ext);
+    }
+    if let Some(l) = &loop_report {
+        md += &loop_table(l);
     }
     if let (Some(dir), Some((ext, loaded))) = (&a.out, &extension) {
         let provenance = format!("by `jointctl identify --data {}`", a.data.display());
@@ -346,6 +360,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             });
         }
         json["gains"] = gains;
+        if let Some(l) = &loop_report {
+            json["loop"] = serde_json::json!({"values": l.values, "notes": l.notes, "hal_sim": l.hal_sim()});
+        }
         println!("{json}");
     } else {
         print!("{md}");
@@ -359,6 +376,25 @@ fn extend(config: &Path, joint: &str, report: &Report, data: &jointctl_ident::cs
     let found: Vec<Found> = report.causes.iter().map(|c| Found { effect: c.effect.clone(), plant: c.fragments.plant.clone(), observer: c.fragments.observer.clone() }).collect();
     let ext = jointctl_experiments::model_loop::extend(&loaded, joint, &found, data, IdentifyOptions::default().train_fraction).map_err(|e| format!("{}: {e}", config.display()))?;
     Ok((ext, loaded))
+}
+
+/// The causes in the loop of `joint` in the closed-loop recording `data`.
+fn loop_causes(data: &Path, config: &Path, joint: &str) -> Result<jointctl_experiments::loop_causes::LoopReport, String> {
+    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
+    let rec = jointctl_experiments::loop_causes::read(data, &loaded, joint).map_err(|e| e.to_string())?;
+    Ok(jointctl_experiments::loop_causes::identify_loop(&rec, &loaded))
+}
+
+/// The loop's values as a Markdown table.
+fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> String {
+    let mut md = String::from("\n## In the loop (closed-loop recording)\n\nFitted on the first 70 %, scored on the rest; a cause when the identified value explains the held-out part better than the configured one (block t-test).\n\n| value | key | identified | configured | held-out RMSE configured | identified | t (critical) | cause |\n|---|---|---|---|---|---|---|---|\n");
+    for v in &l.values {
+        let _ = writeln!(md, "| {} | `{}` | {:.4} | {:.4} | {:.4e} | {:.4e} | {:.1} ({:.1}) | {} |", v.name, v.key, v.value, v.configured, v.rmse_configured, v.rmse_identified, v.t, v.critical, if v.cause { "yes" } else { "no" });
+    }
+    for n in &l.notes {
+        let _ = writeln!(md, "- {n}");
+    }
+    md
 }
 
 /// The gains as a Markdown table, with what was left out and why.

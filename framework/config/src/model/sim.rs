@@ -26,9 +26,14 @@ pub struct SimConfig {
     /// SPI latency [s]: readings are this old (section 2.3: about 15 ms). Default 0.
     #[serde(default, deserialize_with = "finite")]
     pub spi_latency_s: f64,
-    /// CAN latency [s] (section 2.3: about 30 ms). Default 0.
+    /// CAN latency [s] (section 2.3: about 30 ms): set-points reach the drives this late, and
+    /// the drives' readings are this old unless `can_feedback_latency_s` says otherwise. Default 0.
     #[serde(default, deserialize_with = "finite")]
     pub can_latency_s: f64,
+    /// Age of the drives' readings [s] when it differs from the set-points' latency (`jointctl
+    /// identify` measures the two apart on a closed-loop recording). Default: `can_latency_s`.
+    #[serde(default)]
+    pub can_feedback_latency_s: Option<f64>,
     /// Integration step of the simulated physics [s]. Assumption: 0.5 ms.
     #[serde(default = "default_substep", deserialize_with = "finite")]
     pub substep_s: f64,
@@ -365,6 +370,7 @@ impl Default for SimConfig {
             can_loss_mode: CanLossMode::Missing,
             spi_latency_s: 0.0,
             can_latency_s: 0.0,
+            can_feedback_latency_s: None,
             substep_s: default_substep(),
             elmo: ElmoConfig::default(),
             drive_gains: Default::default(),

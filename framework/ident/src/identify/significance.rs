@@ -31,7 +31,8 @@ pub struct BlockTest {
     pub blocks: usize,
     /// Which test.
     pub kind: TestKind,
-    /// Mean gain in squared error [Nm^2] (positive: the cause helps).
+    /// Mean gain in squared error [Nm^2] (positive: the cause helps); for
+    /// [`TestKind::LogRatioBlocks`] the mean log RMSE ratio.
     pub mean_nm2: f64,
     /// The t statistic.
     pub t: f64,
@@ -46,12 +47,15 @@ pub enum TestKind {
     Blocks,
     /// Chi-square test of coefficients added on the held-out part.
     AddedCoefficients,
+    /// Block t-test of log RMSE ratios.
+    LogRatioBlocks,
 }
 
 impl std::fmt::Display for BlockTest {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.kind {
             TestKind::Blocks => write!(f, "held-out block t = {:.1} (critical {:.2}, {} blocks, one-sided {} %)", self.t, self.critical, self.blocks, LEVEL * 100.0),
+            TestKind::LogRatioBlocks => write!(f, "held-out block t = {:.1} of log RMSE ratios (critical {:.2}, {} blocks, one-sided {} %)", self.t, self.critical, self.blocks, LEVEL * 100.0),
             TestKind::AddedCoefficients => write!(
                 f,
                 "held-out chi-square = {:.0} (critical {:.0} for {} coefficients fitted on the held-out part, level {} %)",
@@ -110,13 +114,55 @@ pub fn block_test(diff: &[f64]) -> BlockTest {
             diff[lo..hi].iter().sum::<f64>() / (hi - lo).max(1) as f64
         })
         .collect();
+    t_of_block_means(&means, TestKind::Blocks)
+}
+
+/// Tests an error that scales with the motion (a latency, a profile limit: large where the
+/// signal moves fast, nothing where it holds): per block, the log of the RMSE ratio (without over
+/// with the cause), so that a few fast blocks do not drown the test in their spread. `before_sq`
+/// and `after_sq` are the per-sample squared errors; blocks where either is all zero or unknown
+/// are left out (they say nothing).
+///
+/// ```
+/// use jointctl_ident::identify::significance::log_ratio_block_test;
+/// // Half the error everywhere, the motion's size changing tenfold between blocks.
+/// let before: Vec<f64> = (0..400).map(|i| (1.0 + 9.0 * ((i / 20) % 2) as f64) * (1.0 + (i % 7) as f64)).collect();
+/// let after: Vec<f64> = before.iter().map(|b| b * 0.25).collect();
+/// assert!(log_ratio_block_test(&before, &after).significant());
+/// assert!(!log_ratio_block_test(&before, &before).significant());
+/// ```
+pub fn log_ratio_block_test(before_sq: &[f64], after_sq: &[f64]) -> BlockTest {
+    let n = before_sq.len().min(after_sq.len());
+    let blocks = blocks_for(n);
+    let ratios: Vec<f64> = (0..blocks)
+        .filter_map(|b| {
+            let (lo, hi) = (b * n / blocks, (b + 1) * n / blocks);
+            let mean = |x: &[f64]| {
+                let v: Vec<f64> = x[lo..hi].iter().copied().filter(|e| e.is_finite()).collect();
+                (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+            };
+            match (mean(before_sq), mean(after_sq)) {
+                (Some(b), Some(a)) if b > 0.0 && a > 0.0 => Some(0.5 * (b / a).ln()),
+                _ => None,
+            }
+        })
+        .collect();
+    if ratios.len() < 2 {
+        return BlockTest { blocks: ratios.len(), kind: TestKind::LogRatioBlocks, mean_nm2: 0.0, t: 0.0, critical: f64::INFINITY };
+    }
+    t_of_block_means(&ratios, TestKind::LogRatioBlocks)
+}
+
+/// The one-sided t-test of block means, their lag-1 correlation accounted for.
+fn t_of_block_means(means: &[f64], kind: TestKind) -> BlockTest {
+    let blocks = means.len();
     let m = means.iter().sum::<f64>() / blocks as f64;
     let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (blocks - 1) as f64;
     let rho = if var > 0.0 { means.windows(2).map(|w| (w[0] - m) * (w[1] - m)).sum::<f64>() / ((blocks - 1) as f64 * var) } else { 0.0 };
     let inflation = if rho > 0.0 { (1.0 + rho) / (1.0 - rho).max(0.05) } else { 1.0 };
     let se = (var * inflation / blocks as f64).sqrt();
     let t = if se > 0.0 { m / se } else if m > 0.0 { f64::INFINITY } else { 0.0 };
-    BlockTest { blocks, kind: TestKind::Blocks, mean_nm2: m, t, critical: student_t((blocks - 1) as f64) }
+    BlockTest { blocks, kind, mean_nm2: m, t, critical: student_t((blocks - 1) as f64) }
 }
 
 #[cfg(test)]

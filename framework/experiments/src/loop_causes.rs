@@ -1,0 +1,472 @@
+//! Causes in the loop, not in the joint: from a closed-loop recording (a torque-tracking run:
+//! reference, set-points, readings), how late the readings are, how late the set-points arrive
+//! and how the drive follows them (its profile limits), the factors section 6.2 blames for the
+//! 0.2 Hz limit. Each is a value of the simulation's `hal.sim` section; a value that makes the
+//! recording's held-out part significantly better explained than the configured one is a cause.
+//!
+//! - **Feedback latency** of a device group (the joint's drives over CAN, its encoders over SPI):
+//!   the F/T sensor is taken as the fresh signal; the group's readings, shifted earlier by `L`,
+//!   explain the F/T torque's *rate* best at the true `L`. Rates, not levels: the torque's level
+//!   carries the joint's hysteresis band, which shifts a level fit's best `L` by several ms; at
+//!   the rates of a tracking run the band is a small constant.
+//! - **Command latency and the drive's response**: the joint's drives replayed from the recorded
+//!   set-points (each arriving `L_cmd` after its cycle), the same ELMO model as the simulation
+//!   ([`jointctl_sim::elmo::ElmoDrive`]: trapezoidal profile, PID, inertia) against the recorded
+//!   load (the F/T torque through the joint's transmission), compared with the drives' readings
+//!   shifted by their feedback latency. `L_cmd`, then the profile's acceleration and velocity
+//!   limits, are searched; a limit the recording never reaches is said to be so, not guessed.
+//!
+//! Both are fitted on the first 70 % of the time range and scored on the rest (as `identify`).
+
+use std::path::Path;
+
+use jointctl_config::{ElmoConfig, LoadedConfig};
+use jointctl_ident::identify::prepare::split_time;
+use jointctl_ident::identify::significance::log_ratio_block_test;
+use jointctl_sim::elmo::ElmoDrive;
+use serde::Serialize;
+
+use crate::ExperimentError;
+
+/// Latencies searched [s]: 0 to 100 ms, the range the configuration accepts (section 2.3's set-up
+/// had 15 and 30 ms).
+pub const MAX_LATENCY_S: f64 = 0.1;
+
+/// The drive replay's integration step [s] (the simulation's default `substep_s`).
+const REPLAY_STEP_S: f64 = 0.0005;
+
+/// A profile limit counts as reached when it explains the training part's drive motion this much
+/// better (relative RMSE) than no limit at all. Assumption: below it the limit is indistinct from
+/// the PID's own response.
+const LIMIT_EVIDENCE: f64 = 0.05;
+
+/// One drive's recorded signals.
+#[derive(Clone, Debug, Default)]
+pub struct DriveTrace {
+    /// The drive's name.
+    pub name: String,
+    /// The set-point sent in each cycle [rad] (NaN: holding, nothing sent).
+    pub setpoint_rad: Vec<f64>,
+    /// The drive's position reading [rad] (NaN: unknown).
+    pub position_rad: Vec<f64>,
+    /// The load on the drive per cycle [Nm]: the joint's F/T torques through its transmission
+    /// (`M^T tau`, as the simulation loads its drives).
+    pub load_nm: Vec<f64>,
+    /// Its ELMO settings in the configuration.
+    pub elmo: ElmoConfig,
+}
+
+/// One DOF's closed-loop recording.
+#[derive(Clone, Debug, Default)]
+pub struct LoopRecording {
+    /// The DOF.
+    pub dof: String,
+    /// Cycle time [s] from the recorded stamps.
+    pub t_s: Vec<f64>,
+    /// The DOF's F/T torque [Nm] (NaN: unknown).
+    pub sensor_torque_nm: Vec<f64>,
+    /// The joint's drives that move its DOFs.
+    pub drives: Vec<DriveTrace>,
+    /// The joint's encoders: name and readings [rad] (NaN: unknown).
+    pub encoders: Vec<(String, Vec<f64>)>,
+}
+
+/// A value of the loop: identified, configured, and how much better it explains the held-out part.
+#[derive(Clone, Debug, Serialize)]
+pub struct LoopValue {
+    /// `feedback_latency_can`, `feedback_latency_spi`, `command_latency`, `drive_max_acceleration`,
+    /// `drive_max_velocity`.
+    pub name: String,
+    /// Its key in the configuration (`hal.sim.can_latency_s`, ...).
+    pub key: String,
+    /// The identified value (SI: s, rad/s^2, rad/s).
+    pub value: f64,
+    /// The configured value.
+    pub configured: f64,
+    /// Held-out RMSE with the configured value (torque rate [Nm/s] for feedback latencies, drive
+    /// position [rad] for the drive's response).
+    pub rmse_configured: f64,
+    /// Held-out RMSE with the identified value.
+    pub rmse_identified: f64,
+    /// The block t statistic of the gain (log RMSE ratios per block), and its critical value.
+    pub t: f64,
+    /// See `t`.
+    pub critical: f64,
+    /// The identified value explains the held-out part significantly better: a cause.
+    pub cause: bool,
+}
+
+/// What the loop gets wrong, for one DOF.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct LoopReport {
+    /// The DOF.
+    pub dof: String,
+    /// Every value identified.
+    pub values: Vec<LoopValue>,
+    /// What could not be identified, and why.
+    pub notes: Vec<String>,
+}
+
+impl LoopReport {
+    /// The causes: values the configuration has wrong.
+    pub fn causes(&self) -> impl Iterator<Item = &LoopValue> {
+        self.values.iter().filter(|v| v.cause)
+    }
+
+    /// The simulation's extension: `hal.sim` keys with the identified values of the causes.
+    pub fn hal_sim(&self) -> serde_json::Map<String, serde_json::Value> {
+        let mut out = serde_json::Map::new();
+        for v in self.causes() {
+            let path: Vec<&str> = v.key.trim_start_matches("hal.sim.").split('.').collect();
+            match path.as_slice() {
+                [k] => {
+                    out.insert(k.to_string(), v.value.into());
+                }
+                [a, k] => {
+                    let inner = out.entry(a.to_string()).or_insert_with(|| serde_json::json!({}));
+                    inner[k] = v.value.into();
+                }
+                _ => {}
+            }
+        }
+        out
+    }
+}
+
+fn err(m: impl Into<String>) -> ExperimentError {
+    ExperimentError(m.into())
+}
+
+/// `dof`'s closed-loop signals in the recording `path`, wired by `loaded` (the joint's drives,
+/// transmission and encoders).
+pub fn read(path: &Path, loaded: &LoadedConfig, dof: &str) -> Result<LoopRecording, ExperimentError> {
+    let cfg = &loaded.config;
+    let joint = cfg.joints.iter().find(|j| j.dof_names().contains(&dof)).ok_or_else(|| err(format!("no joint `{dof}` in {}", loaded.source.file.display())))?;
+    let sim = joint.sim.as_ref().ok_or_else(|| err(format!("joint `{}` has no `sim` section: its drives' transmission is unknown", joint.name)))?;
+    let dofs: Vec<String> = joint.dof_names().iter().map(|s| s.to_string()).collect();
+    let series = jointctl_record::reader::all_joint_series(path).map_err(|e| err(e.to_string()))?.0;
+    let of = |name: &str| series.get(name).ok_or_else(|| err(format!("{}: no joint `{name}` recorded", path.display())));
+    let main = of(dof)?;
+    let raw = jointctl_record::reader::raw_samples(path).map_err(|e| err(e.to_string()))?;
+    let by_cycle: std::collections::HashMap<u64, usize> = raw.iter().enumerate().map(|(i, r)| (r.cycle, i)).collect();
+    let rows: Vec<(usize, usize)> = main.cycle.iter().enumerate().filter_map(|(i, c)| by_cycle.get(c).map(|&r| (i, r))).collect();
+    if rows.len() < 100 {
+        return Err(err(format!("{}: {} cycles with both joint state and raw readings; a closed-loop recording needs at least 100", path.display(), rows.len())));
+    }
+    let mut rec = LoopRecording { dof: dof.into(), ..Default::default() };
+    rec.t_s = rows.iter().map(|&(i, _)| main.t_s[i]).collect();
+    rec.sensor_torque_nm = rows.iter().map(|&(i, _)| main.sensor_torque_nm[i]).collect();
+    // Every DOF's F/T torque loads the drives (M^T tau); a DOF without one is taken as unloaded.
+    let torques: Vec<Vec<f64>> = dofs.iter().map(|d| series.get(d).map_or(vec![0.0; rows.len()], |s| rows.iter().map(|&(i, _)| s.sensor_torque_nm.get(i).copied().unwrap_or(f64::NAN)).collect())).collect();
+    for (k, name) in sim.drives.iter().enumerate() {
+        let mut elmo = cfg.hal.sim.elmo;
+        if let Some(g) = cfg.hal.sim.drive_gains.get(name) {
+            (elmo.kp, elmo.ki, elmo.kd) = (g.kp, g.ki, g.kd);
+        }
+        let mut d = DriveTrace { name: name.clone(), elmo, ..Default::default() };
+        for (n, &(_, r)) in rows.iter().enumerate() {
+            let reading = raw[r].drives.iter().find(|(x, ..)| x == name);
+            d.position_rad.push(reading.and_then(|(_, r, _)| r.position_rad.usable(f64::INFINITY)).unwrap_or(f64::NAN));
+            d.setpoint_rad.push(reading.map_or(f64::NAN, |(_, _, s)| *s));
+            d.load_nm.push(sim.matrix.iter().zip(&torques).map(|(row, tau)| row.get(k).copied().unwrap_or(0.0) * tau[n]).sum());
+        }
+        rec.drives.push(d);
+    }
+    for name in joint.encoders.values() {
+        let values = rows.iter().map(|&(_, r)| raw[r].encoders.iter().find(|(x, _)| x == name).and_then(|(_, v)| v.usable(f64::INFINITY)).unwrap_or(f64::NAN)).collect();
+        rec.encoders.push((name.clone(), values));
+    }
+    Ok(rec)
+}
+
+/// `x` at time `q` by linear interpolation of the samples (`t` rising); NaN outside or next to
+/// an unknown sample.
+fn at(t: &[f64], x: &[f64], q: f64) -> f64 {
+    if t.is_empty() || q < t[0] || q > t[t.len() - 1] {
+        return f64::NAN;
+    }
+    let i = t.partition_point(|s| *s <= q).clamp(1, t.len() - 1);
+    let (t0, t1) = (t[i - 1], t[i]);
+    let w = if t1 > t0 { (q - t0) / (t1 - t0) } else { 0.0 };
+    x[i - 1] + w * (x[i] - x[i - 1])
+}
+
+/// The central-difference rate of `x` [unit/s]; NaN at the ends and next to unknown samples.
+fn rate(t: &[f64], x: &[f64]) -> Vec<f64> {
+    (0..x.len()).map(|i| if i == 0 || i + 1 == x.len() { f64::NAN } else { (x[i + 1] - x[i - 1]) / (t[i + 1] - t[i - 1]) }).collect()
+}
+
+/// Per-sample squared residuals of `y ~ c0 + sum c_j x_j` fitted by least squares on the samples
+/// `fit` selects (NaN where a value is unknown).
+fn regression_residuals(y: &[f64], xs: &[Vec<f64>], fit: impl Fn(usize) -> bool) -> Vec<f64> {
+    let usable = |i: usize| y[i].is_finite() && xs.iter().all(|x| x[i].is_finite());
+    let rows: Vec<usize> = (0..y.len()).filter(|&i| fit(i) && usable(i)).collect();
+    let cols = xs.len() + 1;
+    if rows.len() <= cols {
+        return vec![f64::NAN; y.len()];
+    }
+    let a = nalgebra::DMatrix::from_fn(rows.len(), cols, |r, c| if c == 0 { 1.0 } else { xs[c - 1][rows[r]] });
+    let b = nalgebra::DVector::from_iterator(rows.len(), rows.iter().map(|&i| y[i]));
+    let Ok(coef) = a.svd(true, true).solve(&b, 1e-12) else { return vec![f64::NAN; y.len()] };
+    (0..y.len()).map(|i| if usable(i) { (y[i] - coef[0] - xs.iter().enumerate().map(|(j, x)| coef[j + 1] * x[i]).sum::<f64>()).powi(2) } else { f64::NAN }).collect()
+}
+
+fn rms_where(sq: &[f64], keep: impl Fn(usize) -> bool) -> f64 {
+    let v: Vec<f64> = sq.iter().enumerate().filter(|(i, e)| keep(*i) && e.is_finite()).map(|(_, e)| *e).collect();
+    if v.is_empty() { f64::NAN } else { (v.iter().sum::<f64>() / v.len() as f64).sqrt() }
+}
+
+/// Whether a signal moves: its spread is more than `counts` of a 14-bit encoder (section 2.2).
+fn moves(x: &[f64]) -> bool {
+    let (lo, hi) = x.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    hi - lo > 8.0 * std::f64::consts::TAU / 16384.0
+}
+
+/// The feedback latency of a group of readings: the `L` at which the readings' rates, taken `L`
+/// later, explain the F/T torque's rate best on the training part (0.5 ms resolution). Returns
+/// the per-sample squared residuals at a latency, for scoring.
+fn feedback_latency(rec: &LoopRecording, group: &[&[f64]], train: impl Fn(usize) -> bool + Copy) -> (f64, impl Fn(f64) -> Vec<f64>) {
+    let t = rec.t_s.clone();
+    let torque_rate = rate(&t, &rec.sensor_torque_nm);
+    let group: Vec<Vec<f64>> = group.iter().map(|x| x.to_vec()).collect();
+    let residuals = move |latency: f64| {
+        // The reading at t + L is the device's state at t.
+        let xs: Vec<Vec<f64>> = group.iter().map(|x| rate(&t, &t.iter().map(|&q| at(&t, x, q + latency)).collect::<Vec<_>>())).collect();
+        regression_residuals(&torque_rate, &xs, |i| i < t.len())
+    };
+    let score = |l: f64| rms_where(&residuals(l), train);
+    let best = search(0.0, MAX_LATENCY_S, 0.0005, score);
+    (best, residuals)
+}
+
+/// The minimum of `f` over `[lo, hi]`: a grid of 41 points, then around the best at `step`.
+fn search(lo: f64, hi: f64, step: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let coarse = (hi - lo) / 40.0;
+    let mut best = (lo, f64::INFINITY);
+    for k in 0..=40 {
+        let x = lo + coarse * k as f64;
+        let v = f(x);
+        if v < best.1 {
+            best = (x, v);
+        }
+    }
+    let (a, b) = ((best.0 - coarse).max(lo), (best.0 + coarse).min(hi));
+    let n = ((b - a) / step).round() as usize;
+    for k in 0..=n {
+        let x = a + step * k as f64;
+        let v = f(x);
+        if v < best.1 {
+            best = (x, v);
+        }
+    }
+    best.0
+}
+
+/// The minimum of `f` near `start` by the Nelder-Mead simplex (`steps`: the first simplex's
+/// edges), after at most `iterations`.
+fn nelder_mead<const N: usize>(f: impl Fn([f64; N]) -> f64, start: [f64; N], steps: [f64; N], iterations: usize) -> [f64; N] {
+    let mut simplex: Vec<([f64; N], f64)> = (0..=N)
+        .map(|k| {
+            let mut x = start;
+            if k > 0 {
+                x[k - 1] += steps[k - 1];
+            }
+            (x, f(x))
+        })
+        .collect();
+    let along = |a: &[f64; N], b: &[f64; N], t: f64| -> [f64; N] { std::array::from_fn(|i| a[i] + t * (b[i] - a[i])) };
+    for _ in 0..iterations {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let centroid: [f64; N] = std::array::from_fn(|i| simplex[..N].iter().map(|p| p.0[i]).sum::<f64>() / N as f64);
+        let worst = simplex[N];
+        let reflected = along(&centroid, &worst.0, -1.0);
+        let fr = f(reflected);
+        if fr < simplex[0].1 {
+            let expanded = along(&centroid, &worst.0, -2.0);
+            let fe = f(expanded);
+            simplex[N] = if fe < fr { (expanded, fe) } else { (reflected, fr) };
+        } else if fr < simplex[N - 1].1 {
+            simplex[N] = (reflected, fr);
+        } else {
+            let contracted = along(&centroid, &worst.0, 0.5);
+            let fc = f(contracted);
+            if fc < worst.1 {
+                simplex[N] = (contracted, fc);
+            } else {
+                let best = simplex[0].0;
+                for p in simplex.iter_mut().skip(1) {
+                    p.0 = along(&best, &p.0, 0.5);
+                    p.1 = f(p.0);
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex[0].0
+}
+
+/// A drive replayed from the recorded set-points, each arriving `command_latency_s` after its
+/// cycle, against the recorded load: its position at each cycle's time [rad].
+pub fn replay_drive(t_s: &[f64], d: &DriveTrace, elmo: ElmoConfig, command_latency_s: f64, start_rad: f64) -> Vec<f64> {
+    let mut drive = ElmoDrive::new(elmo, start_rad);
+    let load0 = d.load_nm.iter().copied().find(|l| l.is_finite()).unwrap_or(0.0);
+    // Settle the PID under the first load (its integral) before the recording starts.
+    for _ in 0..(1.0 / REPLAY_STEP_S) as usize {
+        drive.step(load0, REPLAY_STEP_S);
+    }
+    let mut out = Vec::with_capacity(t_s.len());
+    let (mut now, mut next) = (t_s[0], 0usize);
+    let mut last_load = load0;
+    for &t in t_s {
+        while now < t - 1e-12 {
+            while next < t_s.len() && t_s[next] + command_latency_s <= now + 1e-12 {
+                drive.set_target(d.setpoint_rad[next]);
+                next += 1;
+            }
+            let load = at(t_s, &d.load_nm, now);
+            if load.is_finite() {
+                last_load = load;
+            }
+            let h = REPLAY_STEP_S.min(t - now);
+            drive.step(last_load, h);
+            now += h;
+        }
+        out.push(drive.position);
+    }
+    out
+}
+
+/// What the loop gets wrong on one DOF's closed-loop recording, against `loaded`'s simulation.
+pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
+    let sim = &loaded.config.hal.sim;
+    let mut report = LoopReport { dof: rec.dof.clone(), ..Default::default() };
+    let split = split_time(&rec.t_s, 0.7);
+    let t = &rec.t_s;
+    let train = |i: usize| t[i] < split;
+    let held = |i: usize| t[i] >= split;
+    if rec.sensor_torque_nm.iter().filter(|x| x.is_finite()).count() < 100 {
+        report.notes.push(format!("`{}` has no F/T torque in the recording: latencies are measured against it", rec.dof));
+        return report;
+    }
+    let value = |name: &str, key: &str, identified: f64, configured: f64, sq: &dyn Fn(f64) -> Vec<f64>| {
+        let (before, after) = (sq(configured), sq(identified));
+        let keep: Vec<usize> = (0..t.len()).filter(|&i| held(i) && before[i].is_finite() && after[i].is_finite()).collect();
+        let test = log_ratio_block_test(&keep.iter().map(|&i| before[i]).collect::<Vec<_>>(), &keep.iter().map(|&i| after[i]).collect::<Vec<_>>());
+        LoopValue {
+            name: name.into(),
+            key: key.into(),
+            value: identified,
+            configured,
+            rmse_configured: rms_where(&before, held),
+            rmse_identified: rms_where(&after, held),
+            t: test.t,
+            critical: test.critical,
+            cause: test.significant() && (identified - configured).abs() > 1e-9,
+        }
+    };
+    // The drives' readings (CAN).
+    let moving: Vec<&DriveTrace> = rec.drives.iter().filter(|d| moves(&d.position_rad)).collect();
+    let mut can_feedback = sim.can_latency_s;
+    if moving.is_empty() {
+        report.notes.push("the joint's drives did not move: no CAN latency or drive response to identify".into());
+    } else {
+        let group: Vec<&[f64]> = moving.iter().map(|d| d.position_rad.as_slice()).collect();
+        let (l, residuals) = feedback_latency(rec, &group, train);
+        can_feedback = l;
+        report.values.push(value("feedback_latency_can", "hal.sim.can_feedback_latency_s", l, sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s), &residuals));
+    }
+    // The encoders (SPI): only those that move tell their age.
+    let encoders: Vec<&[f64]> = rec.encoders.iter().filter(|(_, x)| moves(x)).map(|(_, x)| x.as_slice()).collect();
+    if encoders.is_empty() {
+        report.notes.push("the joint's encoders did not move (a clamped output): no SPI latency to identify".into());
+    } else {
+        let (l, residuals) = feedback_latency(rec, &encoders, train);
+        report.values.push(value("feedback_latency_spi", "hal.sim.spi_latency_s", l, sim.spi_latency_s, &residuals));
+    }
+    // The drives' response to the set-points.
+    let commanded: Vec<&DriveTrace> = moving.into_iter().filter(|d| d.setpoint_rad.iter().filter(|s| s.is_finite()).count() > 50).collect();
+    if commanded.is_empty() {
+        report.notes.push("no drive of the joint followed set-points: no command latency to identify".into());
+        return report;
+    }
+    // Each drive's state: its reading taken `can_feedback` later.
+    let truth: Vec<Vec<f64>> = commanded.iter().map(|d| t.iter().map(|&q| at(t, &d.position_rad, q + can_feedback)).collect()).collect();
+    let squared = |latency: f64, elmo_of: &dyn Fn(ElmoConfig) -> ElmoConfig| -> Vec<f64> {
+        let mut sq = vec![0.0; t.len()];
+        for (d, truth) in commanded.iter().zip(&truth) {
+            let start = truth.iter().copied().find(|x| x.is_finite()).unwrap_or(0.0);
+            let model = replay_drive(t, d, elmo_of(d.elmo), latency, start);
+            for i in 0..t.len() {
+                sq[i] += (model[i] - truth[i]).powi(2);
+            }
+        }
+        sq
+    };
+    // Latency and profile limits trade off (a slower profile looks like a later set-point) along
+    // a narrow valley: a grid over latency and acceleration limit finds the valley, a simplex
+    // search over all three follows it.
+    let limit = |a: f64, v: f64| move |e: ElmoConfig| ElmoConfig { max_acceleration_rad_s2: a, max_velocity_rad_s: v, ..e };
+    let score = |l: f64, a: f64, v: f64| rms_where(&squared(l.clamp(0.0, MAX_LATENCY_S), &limit(a, v)), train);
+    let (a0, v0) = (sim.elmo.max_acceleration_rad_s2, sim.elmo.max_velocity_rad_s);
+    let mut start = (f64::INFINITY, [sim.can_latency_s, a0.log10(), v0.log10()]);
+    for k in 0..=40 {
+        for j in 0..=12 {
+            let (l, la) = (MAX_LATENCY_S * k as f64 / 40.0, -0.5 + 4.0 * j as f64 / 12.0);
+            let s = score(l, 10f64.powf(la), v0);
+            if s < start.0 {
+                start = (s, [l, la, v0.log10()]);
+            }
+        }
+    }
+    let best = nelder_mead(|x| score(x[0], 10f64.powf(x[1]), 10f64.powf(x[2])), start.1, [0.0025, 0.15, 0.3], 200);
+    let (mut latency, a, v) = (best[0].clamp(0.0, MAX_LATENCY_S), 10f64.powf(best[1]), 10f64.powf(best[2]));
+    // A limit the recording never reached is not identified: without it the fit is as good.
+    let reached = |with: f64, without: f64| with < (1.0 - LIMIT_EVIDENCE) * without;
+    let a_reached = reached(score(latency, a, v), score(latency, 1e9, v));
+    let v_reached = reached(score(latency, a, v), score(latency, a, 1e9));
+    if !a_reached || !v_reached {
+        let (a1, v1) = (if a_reached { a } else { a0 }, if v_reached { v } else { v0 });
+        latency = search(0.0, MAX_LATENCY_S, 0.0005, |l| score(l, a1, v1));
+    }
+    let (a_used, v_used) = (if a_reached { a } else { a0 }, if v_reached { v } else { v0 });
+    report.values.push(value("command_latency", "hal.sim.can_latency_s", latency, sim.can_latency_s, &|l| squared(l, &limit(a_used, v_used))));
+    if a_reached {
+        report.values.push(value("drive_max_acceleration", "hal.sim.elmo.max_acceleration_rad_s2", a, a0, &|x| squared(latency, &limit(x, v_used))));
+    } else {
+        report.notes.push(format!("the drives' acceleration limit was not reached in this recording (no limit explains it as well): the configured {a0} rad/s^2 stays"));
+    }
+    if v_reached {
+        report.values.push(value("drive_max_velocity", "hal.sim.elmo.max_velocity_rad_s", v, v0, &|x| squared(latency, &limit(a_used, x))));
+    } else {
+        report.notes.push(format!("the drives' velocity limit was not reached in this recording (no limit explains it as well): the configured {v0} rad/s stays"));
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolation_and_rate_say_unknown_where_they_do_not_know() {
+        let t = [0.0, 1.0, 2.0];
+        assert_eq!(at(&t, &[0.0, 2.0, 4.0], 1.5), 3.0);
+        assert!(at(&t, &[0.0, 2.0, 4.0], 2.5).is_nan());
+        assert!(at(&t, &[0.0, f64::NAN, 4.0], 0.5).is_nan());
+        let r = rate(&t, &[0.0, 2.0, 4.0]);
+        assert!(r[0].is_nan() && r[1] == 2.0 && r[2].is_nan());
+    }
+
+    #[test]
+    fn the_simplex_follows_a_narrow_valley() {
+        // Rosenbrock's valley: the minimum at (1, 1).
+        let x = nelder_mead(|x: [f64; 2]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2), [-1.0, 1.0], [0.1, 0.1], 2000);
+        assert!((x[0] - 1.0).abs() < 1e-3 && (x[1] - 1.0).abs() < 1e-3, "{x:?}");
+    }
+
+    #[test]
+    fn the_search_finds_a_minimum_between_grid_points() {
+        let x = search(0.0, 0.2, 0.0005, |l| (l - 0.0317).abs());
+        assert!((x - 0.0317).abs() <= 0.00025, "{x}");
+    }
+}
