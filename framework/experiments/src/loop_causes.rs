@@ -69,6 +69,9 @@ pub struct LoopRecording {
     pub drives: Vec<DriveTrace>,
     /// The joint's encoders: name and readings [rad] (NaN: unknown).
     pub encoders: Vec<(String, Vec<f64>)>,
+    /// DOFs of the joint the drives move whose torque was not measured (no F/T sensor): the
+    /// drives' load is then unknown.
+    pub unmeasured_dofs: Vec<String>,
 }
 
 /// A value of the loop: identified, configured, and how much better it explains the held-out part.
@@ -105,6 +108,9 @@ pub struct LoopReport {
     pub values: Vec<LoopValue>,
     /// What could not be identified, and why.
     pub notes: Vec<String>,
+    /// The configured age of the drives' readings [s] (`can_feedback_latency_s`, else
+    /// `can_latency_s`): kept when only the command latency changes.
+    pub configured_can_feedback_s: f64,
 }
 
 impl LoopReport {
@@ -128,6 +134,11 @@ impl LoopReport {
                 }
                 _ => {}
             }
+        }
+        // The readings' age defaults to the command latency: a new command latency alone must
+        // not age them too.
+        if out.contains_key("can_latency_s") && !out.contains_key("can_feedback_latency_s") {
+            out.insert("can_feedback_latency_s".into(), self.configured_can_feedback_s.into());
         }
         out
     }
@@ -156,8 +167,14 @@ pub fn read(path: &Path, loaded: &LoadedConfig, dof: &str) -> Result<LoopRecordi
     let mut rec = LoopRecording { dof: dof.into(), ..Default::default() };
     rec.t_s = rows.iter().map(|&(i, _)| main.t_s[i]).collect();
     rec.sensor_torque_nm = rows.iter().map(|&(i, _)| main.sensor_torque_nm[i]).collect();
-    // Every DOF's F/T torque loads the drives (M^T tau); a DOF without one is taken as unloaded.
-    let torques: Vec<Vec<f64>> = dofs.iter().map(|d| series.get(d).map_or(vec![0.0; rows.len()], |s| rows.iter().map(|&(i, _)| s.sensor_torque_nm.get(i).copied().unwrap_or(f64::NAN)).collect())).collect();
+    // Every DOF's F/T torque loads the drives (M^T tau); a DOF without one is said to be unknown.
+    let mut torques: Vec<Vec<f64>> = dofs.iter().map(|d| series.get(d).map_or(vec![f64::NAN; rows.len()], |s| rows.iter().map(|&(i, _)| s.sensor_torque_nm.get(i).copied().unwrap_or(f64::NAN)).collect())).collect();
+    for (d, tau) in dofs.iter().zip(&mut torques) {
+        if tau.iter().all(|x| x.is_nan()) {
+            rec.unmeasured_dofs.push(d.clone());
+            tau.iter_mut().for_each(|x| *x = 0.0);
+        }
+    }
     for (k, name) in sim.drives.iter().enumerate() {
         let mut elmo = cfg.hal.sim.elmo;
         if let Some(g) = cfg.hal.sim.drive_gains.get(name) {
@@ -339,7 +356,7 @@ pub fn replay_drive(t_s: &[f64], d: &DriveTrace, elmo: ElmoConfig, command_laten
 /// What the loop gets wrong on one DOF's closed-loop recording, against `loaded`'s simulation.
 pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     let sim = &loaded.config.hal.sim;
-    let mut report = LoopReport { dof: rec.dof.clone(), ..Default::default() };
+    let mut report = LoopReport { dof: rec.dof.clone(), configured_can_feedback_s: sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s), ..Default::default() };
     let split = split_time(&rec.t_s, 0.7);
     let t = &rec.t_s;
     let train = |i: usize| t[i] < split;
@@ -383,7 +400,14 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         let (l, residuals) = feedback_latency(rec, &encoders, train);
         report.values.push(value("feedback_latency_spi", "hal.sim.spi_latency_s", l, sim.spi_latency_s, &residuals));
     }
-    // The drives' response to the set-points.
+    // The drives' response to the set-points: only with their whole load measured.
+    if !rec.unmeasured_dofs.is_empty() {
+        report.notes.push(format!(
+            "the joint's drives also move {} whose torque is not measured (no F/T sensor): their load is unknown, so no command latency or profile limits are identified",
+            rec.unmeasured_dofs.join(", ")
+        ));
+        return report;
+    }
     let commanded: Vec<&DriveTrace> = moving.into_iter().filter(|d| d.setpoint_rad.iter().filter(|s| s.is_finite()).count() > 50).collect();
     if commanded.is_empty() {
         report.notes.push("no drive of the joint followed set-points: no command latency to identify".into());

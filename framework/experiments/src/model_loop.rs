@@ -320,8 +320,11 @@ pub struct Written {
     pub observer: PathBuf,
     /// The joint's `sim.effects`.
     pub plant: PathBuf,
-    /// The config with both in place.
+    /// The config with both in place (and the loop's `hal.sim` values).
     pub extended: PathBuf,
+    /// The loop's `hal.sim` values (`loop.yaml`), when a closed-loop recording named causes in
+    /// the loop.
+    pub loop_sim: Option<PathBuf>,
 }
 
 /// Paths a config writes relative to its own folder, made absolute, so that the extended config
@@ -351,16 +354,22 @@ fn absolute_paths(doc: &mut serde_yaml::Value, config: &Path) {
 }
 
 /// Writes `dir/observer.yaml`, `dir/plant.yaml` and `dir/extended.yaml` (the config with the
-/// joint's params `{include: observer.yaml}` and its `sim.effects` those of `plant.yaml`), and
-/// checks that the last loads.
+/// joint's params `{include: observer.yaml}`, its `sim.effects` those of `plant.yaml` and the
+/// `hal.sim` keys of `loop_sim`, the causes in the loop, also written to `dir/loop.yaml` when
+/// there are any), and checks that the last loads.
 ///
 /// # Errors
 /// A file cannot be read or written, or the extended config does not load (said with its error).
-pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &str) -> Result<Written, ExperimentError> {
+pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &str, loop_sim: &Map<String, Value>) -> Result<Written, ExperimentError> {
     std::fs::create_dir_all(dir).map_err(|e| err(format!("cannot create {}: {e}", dir.display())))?;
     let config = &loaded.source.file;
     let yaml = |v: &Value| serde_yaml::to_string(v).map_err(|e| err(e.to_string()));
-    let written = Written { observer: dir.join("observer.yaml"), plant: dir.join("plant.yaml"), extended: dir.join("extended.yaml") };
+    let written = Written {
+        observer: dir.join("observer.yaml"),
+        plant: dir.join("plant.yaml"),
+        extended: dir.join("extended.yaml"),
+        loop_sim: (!loop_sim.is_empty()).then(|| dir.join("loop.yaml")),
+    };
     let put = |path: &Path, text: String| std::fs::write(path, text).map_err(|e| err(format!("cannot write {}: {e}", path.display())));
     put(
         &written.observer,
@@ -379,6 +388,13 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
         Some(sim) => sim["effects"] = effects,
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     }
+    if let Some(path) = &written.loop_sim {
+        let fragment: serde_yaml::Value = serde_yaml::to_value(loop_sim).map_err(|e| err(e.to_string()))?;
+        put(path, format!("# `hal.sim` values of {} identified in the loop {provenance}.\n{}", config.display(), serde_yaml::to_string(&fragment).map_err(|e| err(e.to_string()))?))?;
+        let hal = doc.as_mapping_mut().ok_or_else(|| err(format!("{}: not a mapping", config.display())))?.entry("hal".into()).or_insert_with(|| serde_yaml::Value::Mapping(Default::default()));
+        let sim = hal.as_mapping_mut().ok_or_else(|| err(format!("{}: hal is not a mapping", config.display())))?.entry("sim".into()).or_insert_with(|| serde_yaml::Value::Mapping(Default::default()));
+        merge_yaml(sim, &fragment);
+    }
     put(
         &written.extended,
         format!("# {} with `{}`'s observer (observer.yaml) and simulation (plant.yaml) extended {provenance}.\n# Written, not edited: the original's comments are in the original.\n{}", config.display(), ext.dof, serde_yaml::to_string(&doc).map_err(|e| err(e.to_string()))?),
@@ -387,9 +403,34 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     Ok(written)
 }
 
+/// `from`'s keys into `into`, mappings merged key by key (`elmo: {max_acceleration_rad_s2}`
+/// keeps the drive's other settings).
+fn merge_yaml(into: &mut serde_yaml::Value, from: &serde_yaml::Value) {
+    match (into.as_mapping_mut(), from.as_mapping()) {
+        (Some(a), Some(b)) => {
+            for (k, v) in b {
+                match a.get_mut(k) {
+                    Some(existing) if existing.is_mapping() && v.is_mapping() => merge_yaml(existing, v),
+                    _ => {
+                        a.insert(k.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        _ => *into = from.clone(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_loops_values_merge_into_hal_sim_and_keep_the_rest() {
+        let mut sim: serde_yaml::Value = serde_yaml::from_str("{seed: 1, can_latency_s: 0.03, elmo: {kp: 10.0, max_acceleration_rad_s2: 30.0}}").unwrap();
+        merge_yaml(&mut sim, &serde_yaml::from_str("{can_latency_s: 0.05, elmo: {max_acceleration_rad_s2: 8.0}}").unwrap());
+        assert_eq!(sim, serde_yaml::from_str::<serde_yaml::Value>("{seed: 1, can_latency_s: 0.05, elmo: {kp: 10.0, max_acceleration_rad_s2: 8.0}}").unwrap());
+    }
 
     #[test]
     fn linear_plant_terms_add_and_the_others_replace() {

@@ -292,9 +292,13 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     }
     if let (Some(dir), Some((ext, loaded))) = (&a.out, &extension) {
         let provenance = format!("by `jointctl identify --data {}`", a.data.display());
-        match jointctl_experiments::model_loop::write(ext, loaded, dir, &provenance) {
+        let loop_sim = loop_report.as_ref().map(|l| l.hal_sim()).unwrap_or_default();
+        match jointctl_experiments::model_loop::write(ext, loaded, dir, &provenance, &loop_sim) {
             Ok(w) => {
                 let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
+                if let Some(l) = &w.loop_sim {
+                    let _ = writeln!(md, "The loop's `hal.sim` values: {} (also in the extended config).", l.display());
+                }
             }
             Err(e) => return crate::fail(e),
         }
@@ -387,7 +391,7 @@ fn loop_causes(data: &Path, config: &Path, joint: &str) -> Result<jointctl_exper
 
 /// The loop's values as a Markdown table.
 fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> String {
-    let mut md = String::from("\n## In the loop (closed-loop recording)\n\nFitted on the first 70 %, scored on the rest; a cause when the identified value explains the held-out part better than the configured one (block t-test).\n\n| value | key | identified | configured | held-out RMSE configured | identified | t (critical) | cause |\n|---|---|---|---|---|---|---|---|\n");
+    let mut md = String::from("\n## In the loop (closed-loop recording)\n\nFitted on the first 70 %, scored on the rest; a cause when the identified value explains the held-out part better than the configured one (block t-test of log RMSE ratios).\n\n| value | key | identified | configured | held-out RMSE configured | identified | t (critical) | cause |\n|---|---|---|---|---|---|---|---|\n");
     for v in &l.values {
         let _ = writeln!(md, "| {} | `{}` | {:.4} | {:.4} | {:.4e} | {:.4e} | {:.1} ({:.1}) | {} |", v.name, v.key, v.value, v.configured, v.rmse_configured, v.rmse_identified, v.t, v.critical, if v.cause { "yes" } else { "no" });
     }
