@@ -13,8 +13,10 @@
 //!   set-points (each arriving `L_cmd` after its cycle), the same ELMO model as the simulation
 //!   ([`jointctl_sim::elmo::ElmoDrive`]: trapezoidal profile, PID, inertia) against the recorded
 //!   load (the F/T torque through the joint's transmission), compared with the drives' readings
-//!   shifted by their feedback latency. `L_cmd`, then the profile's acceleration and velocity
-//!   limits, are searched; a limit the recording never reaches is said to be so, not guessed.
+//!   shifted by their feedback latency. `L_cmd` and the profile's acceleration and velocity
+//!   limits are searched together (they trade off); a limit the recording never reaches is said
+//!   to be so, not guessed. The response is tested as a whole (a limit shows only at the steps
+//!   that reach it); a part of it is named when its configured value makes the fit clearly worse.
 //!
 //! Both are fitted on the first 70 % of the time range and scored on the rest (as `identify`).
 
@@ -87,11 +89,13 @@ pub struct LoopValue {
     /// The configured value.
     pub configured: f64,
     /// Held-out RMSE with the configured value (torque rate [Nm/s] for feedback latencies, drive
-    /// position [rad] for the drive's response).
+    /// position [rad] for the drive's response: this value configured, the others identified).
     pub rmse_configured: f64,
     /// Held-out RMSE with the identified value.
     pub rmse_identified: f64,
-    /// The block t statistic of the gain (log RMSE ratios per block), and its critical value.
+    /// The block t statistic of the gain (log RMSE ratios per block), and its critical value; for
+    /// the drive's response (command latency, profile limits) that of the whole response,
+    /// configured against identified.
     pub t: f64,
     /// See `t`.
     pub critical: f64,
@@ -365,10 +369,14 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         report.notes.push(format!("`{}` has no F/T torque in the recording: latencies are measured against it", rec.dof));
         return report;
     }
+    // The held-out part's squared errors without and with: the block test of their ratio.
+    let compare = |before: &[f64], after: &[f64]| {
+        let keep: Vec<usize> = (0..t.len()).filter(|&i| held(i) && before[i].is_finite() && after[i].is_finite()).collect();
+        log_ratio_block_test(&keep.iter().map(|&i| before[i]).collect::<Vec<_>>(), &keep.iter().map(|&i| after[i]).collect::<Vec<_>>())
+    };
     let value = |name: &str, key: &str, identified: f64, configured: f64, sq: &dyn Fn(f64) -> Vec<f64>| {
         let (before, after) = (sq(configured), sq(identified));
-        let keep: Vec<usize> = (0..t.len()).filter(|&i| held(i) && before[i].is_finite() && after[i].is_finite()).collect();
-        let test = log_ratio_block_test(&keep.iter().map(|&i| before[i]).collect::<Vec<_>>(), &keep.iter().map(|&i| after[i]).collect::<Vec<_>>());
+        let test = compare(&before, &after);
         LoopValue {
             name: name.into(),
             key: key.into(),
@@ -453,14 +461,37 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         latency = search(0.0, MAX_LATENCY_S, 0.0005, |l| score(l, a1, v1));
     }
     let (a_used, v_used) = (if a_reached { a } else { a0 }, if v_reached { v } else { v0 });
-    report.values.push(value("command_latency", "hal.sim.can_latency_s", latency, sim.can_latency_s, &|l| squared(l, &limit(a_used, v_used))));
+    // The drive's response is one model: its evidence is tested as a whole (configured against
+    // identified, on the held-out part), because a profile limit shows only at the few steps
+    // that reach it, and a test of it alone would be drowned by the blocks between them. A
+    // part of it is then named when putting its configured value back makes the training fit
+    // clearly worse.
+    let identified = squared(latency, &limit(a_used, v_used));
+    let as_configured = squared(sim.can_latency_s, &limit(a0, v0));
+    let whole = compare(&as_configured, &identified);
+    let trained = rms_where(&identified, train);
+    let mut part = |name: &str, key: &str, ident: f64, configured: f64, without: Vec<f64>| {
+        let needed = rms_where(&without, train) > (1.0 + LIMIT_EVIDENCE) * trained;
+        report.values.push(LoopValue {
+            name: name.into(),
+            key: key.into(),
+            value: ident,
+            configured,
+            rmse_configured: rms_where(&without, held),
+            rmse_identified: rms_where(&identified, held),
+            t: whole.t,
+            critical: whole.critical,
+            cause: whole.significant() && needed && (ident - configured).abs() > 1e-9,
+        });
+    };
+    part("command_latency", "hal.sim.can_latency_s", latency, sim.can_latency_s, squared(sim.can_latency_s, &limit(a_used, v_used)));
     if a_reached {
-        report.values.push(value("drive_max_acceleration", "hal.sim.elmo.max_acceleration_rad_s2", a, a0, &|x| squared(latency, &limit(x, v_used))));
+        part("drive_max_acceleration", "hal.sim.elmo.max_acceleration_rad_s2", a, a0, squared(latency, &limit(a0, v_used)));
     } else {
         report.notes.push(format!("the drives' acceleration limit was not reached in this recording (no limit explains it as well): the configured {a0} rad/s^2 stays"));
     }
     if v_reached {
-        report.values.push(value("drive_max_velocity", "hal.sim.elmo.max_velocity_rad_s", v, v0, &|x| squared(latency, &limit(a_used, x))));
+        part("drive_max_velocity", "hal.sim.elmo.max_velocity_rad_s", v, v0, squared(latency, &limit(a_used, v0)));
     } else {
         report.notes.push(format!("the drives' velocity limit was not reached in this recording (no limit explains it as well): the configured {v0} rad/s stays"));
     }

@@ -1,0 +1,108 @@
+//! Causes in the loop (issue: the model loop, item 4): the running arm records a torque-tracking
+//! session of the elbow q4 (output clamped, chapter 5's set-up): sines and steps from `jointctl
+//! cmd`, recorded by `jointctl record`. The plant's loop differs from the config's, unknown to it:
+//! set-points reach the drive 50 ms late (the config says 30), its readings are 20 ms old, and
+//! its profile accelerates at 8 rad/s^2 (the config says 30). `jointctl identify --config C
+//! --out DIR` must name the command latency and the acceleration limit with their values and
+//! write them into `DIR/extended.yaml`'s `hal.sim`; the closed-loop `sim replay` of the
+//! recording with the extended config must then be at least twice as close to the recorded F/T
+//! torque as with C. The same session on a plant whose loop is the config's gets no cause.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use jointctl_tests::{Edit, arm_name, jointctl, scratch, sherpa_with};
+
+/// The elbow clamped, the rest of the reference arm as it is.
+fn clamped(test: &str, arm: &str, loop_edits: &[Edit]) -> PathBuf {
+    let mut edits = vec![Edit::Set("joints[q4].sim.environment", serde_yaml::from_str("{kind: fixed, position_rad: 0.0}").unwrap())];
+    edits.extend(loop_edits.iter().map(|e| match e {
+        Edit::Set(p, v) => Edit::Set(p, v.clone()),
+        Edit::Remove(p) => Edit::Remove(p),
+    }));
+    sherpa_with(test, arm, &edits)
+}
+
+/// Runs the arm of `config` in real time and records 24 s of q4 following sines and steps.
+fn record_session(test: &str, config: &Path, arm: &str) -> PathBuf {
+    let mut run = Command::new(jointctl()).arg("run").arg(config).args(["--duration", "60"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
+    let out = scratch(&format!("{test}-recording")).join("session.mcap");
+    let mut record = Command::new(jointctl()).args(["record", "--arm", arm, "--duration", "24", "--out"]).arg(&out).stdout(Stdio::null()).spawn().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let cmd = |args: &[&str], then_s: f64| {
+        let c = Command::new(jointctl()).args(["cmd", "torque", "q4", "--arm", arm]).args(args).output().unwrap();
+        assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+        std::thread::sleep(std::time::Duration::from_secs_f64(then_s));
+    };
+    // Assumed excitation: slow and fast sines and +-8 Nm steps (the steps bring out the profile),
+    // three times, so that the held-out last 30 % has all of them.
+    for _ in 0..3 {
+        cmd(&["--sine", "4", "--freq", "0.5"], 3.0);
+        cmd(&["--step", "8"], 1.5);
+        cmd(&["--step", "-8"], 1.5);
+        cmd(&["--sine", "6", "--freq", "1"], 2.0);
+    }
+    assert!(record.wait().unwrap().success(), "record failed");
+    let _ = run.kill();
+    let _ = run.wait();
+    out
+}
+
+fn identify(recording: &Path, config: &Path, out: &Path) -> serde_json::Value {
+    let r = Command::new(jointctl()).args(["identify", "--joint", "q4", "--json", "--data"]).arg(recording).arg("--config").arg(config).arg("--out").arg(out).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    serde_json::from_slice(&r.stdout).expect("one JSON object")
+}
+
+/// The closed-loop replay's F/T torque RMSE of q4 [Nm].
+fn replay_ft_rmse(recording: &Path, config: &Path) -> f64 {
+    let r = Command::new(jointctl()).args(["sim", "replay", "--json"]).arg(recording).arg("--config").arg(config).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    v["channels"].as_array().unwrap().iter().find(|c| c["joint"] == "q4" && c["channel"] == "ft_torque").expect("q4 ft_torque channel")["rmse"].as_f64().unwrap()
+}
+
+#[test]
+fn a_loop_that_is_not_the_configs_is_named_and_the_replay_gets_better() {
+    let (hidden, clean) = (arm_name("loop-hidden"), arm_name("loop-clean"));
+    let config = clamped("loop-config", &arm_name("loop-config"), &[]);
+    let plant = clamped("loop-hidden", &hidden, &[
+        Edit::Set("hal.sim.can_latency_s", 0.05.into()),
+        Edit::Set("hal.sim.can_feedback_latency_s", 0.02.into()),
+        Edit::Set("hal.sim.elmo", serde_yaml::from_str("{max_acceleration_rad_s2: 8.0}").unwrap()),
+    ]);
+    let same = clamped("loop-clean", &clean, &[]);
+    // Both sessions at once: they are real time.
+    let (a, b) = (plant.clone(), same.clone());
+    let hidden_session = std::thread::spawn(move || record_session("loop-hidden", &a, &hidden));
+    let clean_session = record_session("loop-clean", &b, &clean);
+    let hidden_session = hidden_session.join().unwrap();
+
+    let out = scratch("loop-hidden-out");
+    let v = identify(&hidden_session, &config, &out);
+    let values = v["loop"]["values"].as_array().expect("loop values");
+    let named = |name: &str| values.iter().find(|x| x["name"] == name && x["cause"] == true).unwrap_or_else(|| panic!("`{name}` not named: {:#}", v["loop"]));
+    let latency = named("command_latency")["value"].as_f64().unwrap();
+    assert!((latency - 0.05).abs() <= 0.01, "command latency {latency} s (hidden: 0.05)");
+    let accel = named("drive_max_acceleration")["value"].as_f64().unwrap();
+    assert!((accel - 8.0).abs() / 8.0 <= 0.3, "acceleration limit {accel} rad/s^2 (hidden: 8)");
+    // The extension is in the simulation part: loop.yaml and the extended config's hal.sim.
+    let extended = out.join("extended.yaml");
+    let text = std::fs::read_to_string(&extended).unwrap();
+    let doc: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    assert_eq!(doc["hal"]["sim"]["can_latency_s"].as_f64(), Some(latency), "{text}");
+    assert!(out.join("loop.yaml").exists());
+    let check = Command::new(jointctl()).arg("check").arg(&extended).output().unwrap();
+    assert!(check.status.success(), "{}", String::from_utf8_lossy(&check.stderr));
+    // The gain where it matters: the closed loop replayed.
+    let (before, after) = (replay_ft_rmse(&hidden_session, &config), replay_ft_rmse(&hidden_session, &extended));
+    println!("sim replay of the hidden-loop session, q4 F/T torque RMSE: {before:.4} Nm (config) -> {after:.4} Nm (extended)");
+    assert!(after <= 0.5 * before, "replay F/T RMSE {before} -> {after} Nm");
+
+    // The clean control: the plant's loop is the config's.
+    let v = identify(&clean_session, &config, &scratch("loop-clean-out"));
+    let causes: Vec<&serde_json::Value> = v["loop"]["values"].as_array().unwrap().iter().filter(|x| x["cause"] == true).collect();
+    assert!(causes.is_empty(), "a clean loop got causes: {causes:#?}");
+}
