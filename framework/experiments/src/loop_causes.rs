@@ -328,7 +328,20 @@ fn nelder_mead<const N: usize>(f: impl Fn([f64; N]) -> f64, start: [f64; N], ste
 
 /// A drive replayed from the recorded set-points, each arriving `command_latency_s` after its
 /// cycle, against the recorded load: its position at each cycle's time [rad].
+///
+/// ```
+/// use jointctl_experiments::loop_causes::{DriveTrace, replay_drive};
+/// // A set-point of 0.1 rad sent at t = 0, arriving 30 ms later; no load.
+/// let t: Vec<f64> = (0..40).map(|k| k as f64 * 0.025).collect();
+/// let d = DriveTrace { setpoint_rad: vec![0.1; 40], load_nm: vec![0.0; 40], ..Default::default() };
+/// let p = replay_drive(&t, &d, d.elmo, 0.03, 0.0);
+/// assert_eq!(p[1], 0.0, "not arrived yet at 25 ms");
+/// assert!((p[39] - 0.1).abs() < 1e-3, "there after a second: {}", p[39]);
+/// ```
 pub fn replay_drive(t_s: &[f64], d: &DriveTrace, elmo: ElmoConfig, command_latency_s: f64, start_rad: f64) -> Vec<f64> {
+    if t_s.is_empty() {
+        return Vec::new();
+    }
     let mut drive = ElmoDrive::new(elmo, start_rad);
     let load0 = d.load_nm.iter().copied().find(|l| l.is_finite()).unwrap_or(0.0);
     // Settle the PID under the first load (its integral) before the recording starts.
