@@ -218,7 +218,12 @@ fn rate(t: &[f64], x: &[f64]) -> Vec<f64> {
 }
 
 /// Per-sample squared residuals of `y ~ c0 + sum c_j x_j` fitted by least squares on the samples
-/// `fit` selects (NaN where a value is unknown).
+/// `fit` selects (NaN where a value is unknown, everywhere when the fit is not determined).
+///
+/// By SVD with the minimum-norm solution, not identify's QR (`least_squares`, which refuses
+/// dependent columns): a joint's readings are often dependent by construction (the shoulder's
+/// deflection encoder reads a combination of its pulley encoders), and only the fit's residual
+/// is wanted here, not its coefficients.
 fn regression_residuals(y: &[f64], xs: &[Vec<f64>], fit: impl Fn(usize) -> bool) -> Vec<f64> {
     let usable = |i: usize| y[i].is_finite() && xs.iter().all(|x| x[i].is_finite());
     let rows: Vec<usize> = (0..y.len()).filter(|&i| fit(i) && usable(i)).collect();
@@ -244,20 +249,21 @@ fn moves(x: &[f64]) -> bool {
 }
 
 /// The feedback latency of a group of readings: the `L` at which the readings' rates, taken `L`
-/// later, explain the F/T torque's rate best on the training part (0.5 ms resolution). Returns
-/// the per-sample squared residuals at a latency, for scoring.
-fn feedback_latency(rec: &LoopRecording, group: &[&[f64]], train: impl Fn(usize) -> bool + Copy) -> (f64, impl Fn(f64) -> Vec<f64>) {
+/// later, explain the F/T torque's rate best on the training part (before `split_s`; 0.5 ms
+/// resolution). Returns the per-sample squared residuals at a latency (the regression fitted on
+/// the training part), for scoring; `None` when no latency gives a fit.
+fn feedback_latency(rec: &LoopRecording, group: &[&[f64]], split_s: f64) -> Option<(f64, impl Fn(f64) -> Vec<f64>)> {
     let t = rec.t_s.clone();
     let torque_rate = rate(&t, &rec.sensor_torque_nm);
     let group: Vec<Vec<f64>> = group.iter().map(|x| x.to_vec()).collect();
     let residuals = move |latency: f64| {
         // The reading at t + L is the device's state at t.
         let xs: Vec<Vec<f64>> = group.iter().map(|x| rate(&t, &t.iter().map(|&q| at(&t, x, q + latency)).collect::<Vec<_>>())).collect();
-        regression_residuals(&torque_rate, &xs, |i| i < t.len())
+        regression_residuals(&torque_rate, &xs, |i| t[i] < split_s)
     };
-    let score = |l: f64| rms_where(&residuals(l), train);
+    let score = |l: f64| rms_where(&residuals(l), |i| rec.t_s[i] < split_s);
     let best = search(0.0, MAX_LATENCY_S, 0.0005, score);
-    (best, residuals)
+    score(best).is_finite().then_some((best, residuals))
 }
 
 /// The minimum of `f` over `[lo, hi]`: a grid of 41 points, then around the best at `step`.
@@ -409,17 +415,23 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         report.notes.push("the joint's drives did not move: no CAN latency or drive response to identify".into());
     } else {
         let group: Vec<&[f64]> = moving.iter().map(|d| d.position_rad.as_slice()).collect();
-        let (l, residuals) = feedback_latency(rec, &group, train);
-        can_feedback = l;
-        report.values.push(value("feedback_latency_can", "hal.sim.can_feedback_latency_s", l, sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s), &residuals));
+        match feedback_latency(rec, &group, split) {
+            Some((l, residuals)) => {
+                can_feedback = l;
+                report.values.push(value("feedback_latency_can", "hal.sim.can_feedback_latency_s", l, sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s), &residuals));
+            }
+            None => report.notes.push("the drives' readings explain none of the F/T torque's rate: no CAN latency identified".into()),
+        }
     }
     // The encoders (SPI): only those that move tell their age.
     let encoders: Vec<&[f64]> = rec.encoders.iter().filter(|(_, x)| moves(x)).map(|(_, x)| x.as_slice()).collect();
     if encoders.is_empty() {
         report.notes.push("the joint's encoders did not move (a clamped output): no SPI latency to identify".into());
     } else {
-        let (l, residuals) = feedback_latency(rec, &encoders, train);
-        report.values.push(value("feedback_latency_spi", "hal.sim.spi_latency_s", l, sim.spi_latency_s, &residuals));
+        match feedback_latency(rec, &encoders, split) {
+            Some((l, residuals)) => report.values.push(value("feedback_latency_spi", "hal.sim.spi_latency_s", l, sim.spi_latency_s, &residuals)),
+            None => report.notes.push("the encoders' readings explain none of the F/T torque's rate: no SPI latency identified".into()),
+        }
     }
     // The drives' response to the set-points: only with their whole load measured.
     if !rec.unmeasured_dofs.is_empty() {
