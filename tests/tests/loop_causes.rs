@@ -1,10 +1,11 @@
 //! Causes in the loop (issue: the model loop, item 4): the running arm records a torque-tracking
 //! session of the elbow q4 (output clamped, chapter 5's set-up): sines and steps from `jointctl
 //! cmd`, recorded by `jointctl record`. The plant's loop differs from the config's, unknown to it:
-//! set-points reach the drive 50 ms late (the config says 30), its readings are 20 ms old, and
-//! its profile accelerates at 8 rad/s^2 (the config says 30). `jointctl identify --config C
-//! --out DIR` must name the command latency and the acceleration limit with their values and
-//! write them into `DIR/extended.yaml`'s `hal.sim`; the closed-loop `sim replay` of the
+//! set-points reach the drive 50 ms late (the config says 30), its readings are 20 ms old, its
+//! profile accelerates at 8 rad/s^2 (the config says 30) and its position loop is four times
+//! softer (kp 1000 Nm/rad, the config says 4000). `jointctl identify --config C --out DIR` must
+//! name the command latency, the acceleration limit and the position loop's gain with their
+//! values and write them into `DIR/extended.yaml`'s `hal.sim`; the closed-loop `sim replay` of the
 //! recording with the extended config must then be at least twice as close to the recorded F/T
 //! torque as with C. The same session on a plant whose loop is the config's gets no cause.
 
@@ -72,6 +73,8 @@ fn a_loop_that_is_not_the_configs_is_named_and_the_replay_gets_better() {
         Edit::Set("hal.sim.can_latency_s", 0.05.into()),
         Edit::Set("hal.sim.can_feedback_latency_s", 0.02.into()),
         Edit::Set("hal.sim.elmo", serde_yaml::from_str("{max_acceleration_rad_s2: 8.0}").unwrap()),
+        // Assumption: ki and kd as configured (20000, 80), so that kp alone differs.
+        Edit::Set("hal.sim.drive_gains.elmo_q4", serde_yaml::from_str("{kp: 1000.0, ki: 20000.0, kd: 80.0}").unwrap()),
     ]);
     let same = clamped("loop-clean", &clean, &[]);
     // Both sessions at once: they are real time.
@@ -88,11 +91,17 @@ fn a_loop_that_is_not_the_configs_is_named_and_the_replay_gets_better() {
     assert!((latency - 0.05).abs() <= 0.01, "command latency {latency} s (hidden: 0.05)");
     let accel = named("drive_max_acceleration")["value"].as_f64().unwrap();
     assert!((accel - 8.0).abs() / 8.0 <= 0.3, "acceleration limit {accel} rad/s^2 (hidden: 8)");
+    let kp = named("drive_kp")["value"].as_f64().unwrap();
+    assert!((kp - 1000.0).abs() / 1000.0 <= 0.3, "position loop kp {kp} Nm/rad (hidden: 1000)");
+    println!("identified: command latency {latency} s, acceleration limit {accel} rad/s^2, kp {kp} Nm/rad");
     // The extension is in the simulation part: loop.yaml and the extended config's hal.sim.
     let extended = out.join("extended.yaml");
     let text = std::fs::read_to_string(&extended).unwrap();
     let doc: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
     assert_eq!(doc["hal"]["sim"]["can_latency_s"].as_f64(), Some(latency), "{text}");
+    let written = doc["hal"]["sim"]["drive_gains"]["elmo_q4"]["kp"].as_f64().unwrap_or(f64::NAN);
+    assert!((written - kp).abs() <= 1e-9 * kp, "extended kp {written}, identified {kp}: {text}");
+    assert_eq!(doc["hal"]["sim"]["drive_gains"]["elmo_q5"]["kp"].as_f64(), Some(70.0966), "q5's own gains stay: {text}");
     assert!(out.join("loop.yaml").exists());
     let check = Command::new(jointctl()).arg("check").arg(&extended).output().unwrap();
     assert!(check.status.success(), "{}", String::from_utf8_lossy(&check.stderr));

@@ -13,9 +13,10 @@
 //!   set-points (each arriving `L_cmd` after its cycle), the same ELMO model as the simulation
 //!   ([`jointctl_sim::elmo::ElmoDrive`]: trapezoidal profile, PID, inertia) against the recorded
 //!   load (the F/T torque through the joint's transmission), compared with the drives' readings
-//!   shifted by their feedback latency. `L_cmd` and the profile's acceleration and velocity
-//!   limits are searched together (they trade off); a limit the recording never reaches is said
-//!   to be so, not guessed. The response is tested as a whole (a limit shows only at the steps
+//!   shifted by their feedback latency. `L_cmd`, the profile's acceleration and velocity limits
+//!   and the position loop's stiffness (kp, which shows wherever the load changes) are searched
+//!   together (they trade off); a limit the recording never reaches is said to be so, not
+//!   guessed. The response is tested as a whole (a limit shows only at the steps
 //!   that reach it); a part of it is named when its configured value makes the fit clearly worse.
 //!
 //! Both are fitted on the first 70 % of the time range and scored on the rest (as `identify`).
@@ -41,6 +42,11 @@ const REPLAY_STEP_S: f64 = 0.0005;
 /// better (relative RMSE) than no limit at all. Assumption: below it the limit is indistinct from
 /// the PID's own response.
 const LIMIT_EVIDENCE: f64 = 0.05;
+
+/// The drives' position-loop stiffness is searched within this many decades of the configured
+/// kp (a factor of 1/30 to 30). Assumption: a drive tuned further off than that is a different
+/// drive, not a mis-tuned one.
+const KP_DECADES: f64 = 1.5;
 
 /// One drive's recorded signals.
 #[derive(Clone, Debug, Default)]
@@ -80,7 +86,7 @@ pub struct LoopRecording {
 #[derive(Clone, Debug, Serialize)]
 pub struct LoopValue {
     /// `feedback_latency_can`, `feedback_latency_spi`, `command_latency`, `drive_max_acceleration`,
-    /// `drive_max_velocity`.
+    /// `drive_max_velocity`, `drive_kp` (a drive's position-loop proportional gain [Nm/rad]).
     pub name: String,
     /// Its key in the configuration (`hal.sim.can_latency_s`, ...).
     pub key: String,
@@ -115,6 +121,10 @@ pub struct LoopReport {
     /// The configured age of the drives' readings [s] (`can_feedback_latency_s`, else
     /// `can_latency_s`): kept when only the command latency changes.
     pub configured_can_feedback_s: f64,
+    /// The configured position-loop gains `[kp, ki, kd]` of the joint's drives: a drive's
+    /// `hal.sim.drive_gains` entry is written whole.
+    #[serde(skip)]
+    pub drive_gains: std::collections::BTreeMap<String, [f64; 3]>,
 }
 
 impl LoopReport {
@@ -135,6 +145,11 @@ impl LoopReport {
                 [a, k] => {
                     let inner = out.entry(a.to_string()).or_insert_with(|| serde_json::json!({}));
                     inner[k] = v.value.into();
+                }
+                ["drive_gains", drive, "kp"] => {
+                    let [_, ki, kd] = self.drive_gains.get(*drive).copied().unwrap_or([v.value, 0.0, 0.0]);
+                    let gains = out.entry("drive_gains").or_insert_with(|| serde_json::json!({}));
+                    gains[*drive] = serde_json::json!({"kp": v.value, "ki": ki, "kd": kd});
                 }
                 _ => {}
             }
@@ -460,30 +475,34 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         sq
     };
     // Latency and profile limits trade off (a slower profile looks like a later set-point) along
-    // a narrow valley: a grid over latency and acceleration limit finds the valley, a simplex
-    // search over all three follows it.
-    let limit = |a: f64, v: f64| move |e: ElmoConfig| ElmoConfig { max_acceleration_rad_s2: a, max_velocity_rad_s: v, ..e };
-    let score = |l: f64, a: f64, v: f64| rms_where(&squared(l.clamp(0.0, MAX_LATENCY_S), &limit(a, v)), train);
+    // a narrow valley: a grid over latency and acceleration limit finds the valley, a search
+    // over the position loop's stiffness (a factor on the drives' configured kp) at its best
+    // point, and a simplex search over all four follows the valley.
+    let limit = |a: f64, v: f64, kp: f64| move |e: ElmoConfig| ElmoConfig { max_acceleration_rad_s2: a, max_velocity_rad_s: v, kp: e.kp * kp, ..e };
+    let score = |l: f64, a: f64, v: f64, kp: f64| rms_where(&squared(l.clamp(0.0, MAX_LATENCY_S), &limit(a, v, kp)), train);
     let (a0, v0) = (sim.elmo.max_acceleration_rad_s2, sim.elmo.max_velocity_rad_s);
-    let mut start = (f64::INFINITY, [sim.can_latency_s, a0.log10(), v0.log10()]);
+    let mut start = (f64::INFINITY, [sim.can_latency_s, a0.log10(), v0.log10(), 0.0]);
     for k in 0..=40 {
         for j in 0..=12 {
             let (l, la) = (MAX_LATENCY_S * k as f64 / 40.0, -0.5 + 4.0 * j as f64 / 12.0);
-            let s = score(l, 10f64.powf(la), v0);
+            let s = score(l, 10f64.powf(la), v0, 1.0);
             if s < start.0 {
-                start = (s, [l, la, v0.log10()]);
+                start = (s, [l, la, v0.log10(), 0.0]);
             }
         }
     }
-    let best = nelder_mead(|x| score(x[0], 10f64.powf(x[1]), 10f64.powf(x[2])), start.1, [0.0025, 0.15, 0.3], 200);
+    let [l, la, lv, _] = start.1;
+    start.1[3] = search(-KP_DECADES, KP_DECADES, 0.05, |lk| score(l, 10f64.powf(la), 10f64.powf(lv), 10f64.powf(lk)));
+    let best = nelder_mead(|x| score(x[0], 10f64.powf(x[1]), 10f64.powf(x[2]), 10f64.powf(x[3])), start.1, [0.0025, 0.15, 0.3, 0.15], 300);
     let (mut latency, a, v) = (best[0].clamp(0.0, MAX_LATENCY_S), 10f64.powf(best[1]), 10f64.powf(best[2]));
+    let kp = 10f64.powf(best[3].clamp(-KP_DECADES, KP_DECADES));
     // A limit the recording never reached is not identified: without it the fit is as good.
     let reached = |with: f64, without: f64| with < (1.0 - LIMIT_EVIDENCE) * without;
-    let a_reached = reached(score(latency, a, v), score(latency, 1e9, v));
-    let v_reached = reached(score(latency, a, v), score(latency, a, 1e9));
+    let a_reached = reached(score(latency, a, v, kp), score(latency, 1e9, v, kp));
+    let v_reached = reached(score(latency, a, v, kp), score(latency, a, 1e9, kp));
     if !a_reached || !v_reached {
         let (a1, v1) = (if a_reached { a } else { a0 }, if v_reached { v } else { v0 });
-        latency = search(0.0, MAX_LATENCY_S, 0.0005, |l| score(l, a1, v1));
+        latency = search(0.0, MAX_LATENCY_S, 0.0005, |l| score(l, a1, v1, kp));
     }
     let (a_used, v_used) = (if a_reached { a } else { a0 }, if v_reached { v } else { v0 });
     // The drive's response is one model: its evidence is tested as a whole (configured against
@@ -491,34 +510,42 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     // that reach it, and a test of it alone would be drowned by the blocks between them. A
     // part of it is then named when putting its configured value back makes the training fit
     // clearly worse.
-    let identified = squared(latency, &limit(a_used, v_used));
-    let as_configured = squared(sim.can_latency_s, &limit(a0, v0));
+    let identified = squared(latency, &limit(a_used, v_used, kp));
+    let as_configured = squared(sim.can_latency_s, &limit(a0, v0, 1.0));
     let whole = compare(&as_configured, &identified);
     let trained = rms_where(&identified, train);
-    let mut part = |name: &str, key: &str, ident: f64, configured: f64, without: Vec<f64>| {
-        let needed = rms_where(&without, train) > (1.0 + LIMIT_EVIDENCE) * trained;
+    let mut part = |name: &str, key: &str, ident: f64, configured: f64, without: &[f64]| {
+        let needed = rms_where(without, train) > (1.0 + LIMIT_EVIDENCE) * trained;
         report.values.push(LoopValue {
             name: name.into(),
             key: key.into(),
             value: ident,
             configured,
-            rmse_configured: rms_where(&without, held),
+            rmse_configured: rms_where(without, held),
             rmse_identified: rms_where(&identified, held),
             t: whole.t,
             critical: whole.critical,
-            cause: whole.significant() && needed && (ident - configured).abs() > 1e-9,
+            cause: whole.significant() && needed && (ident - configured).abs() > 1e-9 * configured.abs().max(1.0),
         });
     };
-    part("command_latency", "hal.sim.can_latency_s", latency, sim.can_latency_s, squared(sim.can_latency_s, &limit(a_used, v_used)));
+    part("command_latency", "hal.sim.can_latency_s", latency, sim.can_latency_s, &squared(sim.can_latency_s, &limit(a_used, v_used, kp)));
     if a_reached {
-        part("drive_max_acceleration", "hal.sim.elmo.max_acceleration_rad_s2", a, a0, squared(latency, &limit(a0, v_used)));
+        part("drive_max_acceleration", "hal.sim.elmo.max_acceleration_rad_s2", a, a0, &squared(latency, &limit(a0, v_used, kp)));
     } else {
         report.notes.push(format!("the drives' acceleration limit was not reached in this recording (no limit explains it as well): the configured {a0} rad/s^2 stays"));
     }
     if v_reached {
-        part("drive_max_velocity", "hal.sim.elmo.max_velocity_rad_s", v, v0, squared(latency, &limit(a_used, v0)));
+        part("drive_max_velocity", "hal.sim.elmo.max_velocity_rad_s", v, v0, &squared(latency, &limit(a_used, v0, kp)));
     } else {
         report.notes.push(format!("the drives' velocity limit was not reached in this recording (no limit explains it as well): the configured {v0} rad/s stays"));
+    }
+    // The position loop: one stiffness factor for the joint's drives, reported per drive (its
+    // own gains, `hal.sim.drive_gains`, so that the arm's other drives keep theirs).
+    let without_kp = squared(latency, &limit(a_used, v_used, 1.0));
+    for d in &commanded {
+        let key = format!("hal.sim.drive_gains.{}.kp", d.name);
+        part("drive_kp", &key, d.elmo.kp * kp, d.elmo.kp, &without_kp);
+        report.drive_gains.insert(d.name.clone(), [d.elmo.kp, d.elmo.ki, d.elmo.kd]);
     }
     report
 }

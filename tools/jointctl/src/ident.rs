@@ -44,7 +44,7 @@ pub struct FitArgs {
 #[derive(Args)]
 pub struct IdentifyArgs {
     /// Measured experiment: CSV, or a recording (`jointctl record`, .mcap, with --joint; with
-    /// --config it also gives the causes in the loop: latencies and the drives' profile limits).
+    /// --config it also gives the causes in the loop: latencies, the drives' profile limits and position-loop gain).
     #[arg(long)]
     data: PathBuf,
     /// The arm description whose joint model is the baseline (with --joint).
