@@ -137,10 +137,12 @@ pub fn sherpa_with(test: &str, arm: &str, edits: &[Edit]) -> PathBuf {
     }));
     let text = yaml_with(&std::fs::read_to_string(&src).expect("configs/sherpa_arm.yaml"), &all);
     let path = scratch(test).join("sherpa.yaml");
-    // Files the arm includes (the shoulder's table) are found next to it.
+    // Files the arm includes (the shoulder's table, the URDF) are found next to it.
     for line in text.lines() {
         // (A test's own include, an absolute path, stays where it is.)
-        if let Some(file) = line.trim().strip_prefix("include:").map(str::trim).filter(|f| !f.is_empty() && Path::new(f).is_relative()) {
+        let trimmed = line.trim();
+        let named = trimmed.strip_prefix("include:").or_else(|| trimmed.strip_prefix("urdf:"));
+        if let Some(file) = named.map(str::trim).filter(|f| !f.is_empty() && Path::new(f).is_relative()) {
             let from = src.parent().expect("configs/").join(file);
             std::fs::copy(&from, path.with_file_name(file)).unwrap_or_else(|e| panic!("copy {}: {e}", from.display()));
         }

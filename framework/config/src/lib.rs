@@ -34,6 +34,8 @@ pub struct LoadedConfig {
     pub source: ConfigSource,
     /// The files its joints' `params: {include: FILE}` named, resolved, in joint order.
     pub included: Vec<PathBuf>,
+    /// The arm's kinematic chain (`kinematics.urdf`), read and checked against the DOFs.
+    pub chain: Option<jointctl_kinematics::Chain>,
 }
 
 /// The file a config came from and the location of each field in it.
@@ -181,7 +183,22 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
     if !problems.is_empty() {
         return Err(ConfigErrors(problems.into_iter().map(|(p, m)| source.error(&p, m)).collect()));
     }
-    Ok(LoadedConfig { config, source, included })
+    let chain = match &config.kinematics {
+        Some(k) => Some(read_chain(&source, &config, k).map_err(|m| ConfigErrors(vec![source.error("kinematics.urdf", m)]))?),
+        None => None,
+    };
+    Ok(LoadedConfig { config, source, included, chain })
+}
+
+/// The URDF of `kinematics.urdf`, its movable joints each a DOF of the arm.
+fn read_chain(source: &ConfigSource, config: &ArmConfig, k: &KinematicsConfig) -> Result<jointctl_kinematics::Chain, String> {
+    let chain = jointctl_kinematics::Chain::from_urdf_file(source.resolve(&k.urdf)).map_err(|e| e.to_string())?;
+    let dofs: Vec<&str> = config.joints.iter().flat_map(|j| j.dof_names()).collect();
+    let unknown: Vec<&str> = chain.dof_names().iter().map(String::as_str).filter(|d| !dofs.contains(d)).collect();
+    if !unknown.is_empty() {
+        return Err(format!("the URDF's movable joints {} are not DOFs of the arm ({}): name them after the DOFs they are", unknown.join(", "), dofs.join(", ")));
+    }
+    Ok(chain)
 }
 
 /// `params: {include: FILE, ...}`: the YAML mapping in FILE (relative to the config) is merged

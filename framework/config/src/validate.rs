@@ -47,6 +47,12 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if !(c.rate_hz > 0.0 && c.rate_hz <= 10_000.0) {
         err("rate_hz".into(), format!("must be in (0, 10000] Hz, got {}", c.rate_hz));
     }
+    if let Some(k) = &c.kinematics
+        && !(k.gravity_m_s2 >= 0.0 && k.gravity_m_s2 <= 30.0)
+    {
+        // Assumption: 0-30 m/s^2 covers every body a rover arm works on (Earth 9.81, Mars 3.71).
+        err("kinematics.gravity_m_s2".into(), format!("must be 0-30 m/s^2, got {}", k.gravity_m_s2));
+    }
     let sim = &c.hal.sim;
     if sim.encoder_noise_rad < 0.0 {
         err("hal.sim.encoder_noise_rad".into(), format!("must be >= 0, got {}", sim.encoder_noise_rad));

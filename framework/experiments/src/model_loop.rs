@@ -341,6 +341,9 @@ fn absolute_paths(doc: &mut serde_yaml::Value, config: &Path) {
     if let Some(dirs) = doc.get_mut("plugin_dirs").and_then(|d| d.as_sequence_mut()) {
         dirs.iter_mut().for_each(fix);
     }
+    if let Some(urdf) = doc.get_mut("kinematics").and_then(|k| k.get_mut("urdf")) {
+        fix(urdf);
+    }
     if let Some(joints) = doc.get_mut("joints").and_then(|j| j.as_sequence_mut()) {
         for joint in joints {
             if let Some(path) = joint.get_mut("plugin").and_then(|p| p.get_mut("path")) {

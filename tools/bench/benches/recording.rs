@@ -106,6 +106,7 @@ fn main() {
     let text = std::fs::read_to_string(jointctl_bench::root().join("configs/sherpa_arm.yaml")).unwrap().replacen("rate_hz: 40 ", "rate_hz: 1000 ", 1);
     // Includes stay next to the original file.
     let text = text.replace("include: sherpa_", &format!("include: {}/configs/sherpa_", jointctl_bench::root().display()));
+    let text = text.replace("urdf: sherpa_", &format!("urdf: {}/configs/sherpa_", jointctl_bench::root().display()));
     std::fs::write(&config, text).unwrap();
     let t = Instant::now();
     let replay = Command::new(&exe).args(["sim", "replay", "--json", "--config"]).arg(&config).arg(&file).output().unwrap();

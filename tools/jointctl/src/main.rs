@@ -2,6 +2,7 @@
 
 mod cmd;
 mod experiment;
+mod gravity;
 mod ident;
 mod inspect;
 mod record;
@@ -65,6 +66,9 @@ enum Command {
     /// Feed a recording's raw readings (and its commands) through a config's joint plugins: the
     /// observed torque they give against the recorded one and the F/T sensor.
     Replay(replay::ReplayArgs),
+    /// Gravity torques of a pose from the arm's URDF (appendix C): what each joint must apply
+    /// to hold it.
+    Gravity(gravity::GravityArgs),
     /// Read a running arm's shared memory from this separate process.
     Inspect {
         #[command(subcommand)]
@@ -196,5 +200,6 @@ fn main() -> ExitCode {
         Command::Identify(args) => ident::run_identify(args),
         Command::Experiment { command } => experiment::experiment(command),
         Command::Sim { command } => experiment::sim(command),
+        Command::Gravity(args) => gravity::run(args),
     }
 }

@@ -28,6 +28,25 @@ pub struct ArmConfig {
     pub buses: BusesConfig,
     /// The joints, each served by one plugin instance.
     pub joints: Vec<JointConfig>,
+    /// The arm's kinematic and inertial description (URDF), for gravity torques.
+    #[serde(default)]
+    pub kinematics: Option<KinematicsConfig>,
+}
+
+/// The arm's kinematic and inertial description (appendix C).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct KinematicsConfig {
+    /// The URDF file, relative to this file. Its movable joints are named after the arm's DOFs
+    /// (`q1` .. `q7`); a DOF it does not name gets no gravity torque.
+    pub urdf: PathBuf,
+    /// Gravity [m/s^2] along -z of the URDF's root frame. Default 9.81, eq. C.3's.
+    #[serde(default = "default_gravity", deserialize_with = "finite")]
+    pub gravity_m_s2: f64,
+}
+
+fn default_gravity() -> f64 {
+    9.81
 }
 
 fn default_rate_hz() -> f64 {

@@ -1,0 +1,119 @@
+//! Gravity torques from the arm's URDF (appendix C): figure C.2 reproduced, Pinocchio (PyPI `pin`,
+//! an independent rigid-body library reading the same URDF) agreeing on random poses, and bad
+//! input refused with what and where.
+
+use std::io::Write as _;
+use std::process::{Command, Stdio};
+
+use jointctl_sim::rng::SplitMix64;
+use jointctl_tests::{Edit, arm_name, jointctl, root, scratch, sherpa_with};
+
+fn gravity_json(args: &[&str]) -> serde_json::Value {
+    let out = Command::new(jointctl()).arg("gravity").arg(root().join("configs/sherpa_arm.yaml")).args(args).arg("--json").output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+#[test]
+fn figure_c2_is_reproduced_within_one_percent() {
+    let v = gravity_json(&["--pose", "appendix-c"]);
+    let tau = &v["torques_nm"];
+    assert!((v["pose"]["q2"].as_f64().unwrap() - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
+    // Figure C.2, numbered from q0 there: its q1, q3, q4, q6 are q2, q4, q5, q7 here.
+    for (dof, solver) in [("q2", -28.4263), ("q4", -10.5619), ("q5", -7.06608), ("q7", -0.692195)] {
+        let ours = tau[dof].as_f64().unwrap();
+        assert!((ours - solver).abs() <= 0.01 * solver.abs(), "{dof}: {ours} Nm vs figure C.2's {solver} Nm");
+    }
+    // Eq. C.3's hand values, which the thesis prints cut to 3-4 digits.
+    for (dof, hand) in [("q2", 28.48), ("q4", 10.58), ("q5", 7.08), ("q7", 0.693)] {
+        let ours = -tau[dof].as_f64().unwrap();
+        assert!(ours >= hand && ours - hand < 0.01, "{dof}: {ours} Nm vs eq. C.3's {hand} Nm");
+    }
+    for dof in ["q1", "q3", "q6"] {
+        assert!(tau[dof].as_f64().unwrap().abs() < 1e-12, "{dof} carries nothing at figure C.1's pose: {}", tau[dof]);
+    }
+}
+
+const PINOCCHIO: &str = r#"
+import json, sys
+import numpy as np
+import pinocchio as pin
+model = pin.buildModelFromUrdf(sys.argv[1])
+data = model.createData()
+out = []
+for pose in json.load(sys.stdin):
+    q = np.zeros(model.nq)
+    for j in range(1, model.njoints):
+        q[model.joints[j].idx_q] = pose[model.names[j]]
+    g = pin.computeGeneralizedGravity(model, data, q)
+    out.append({model.names[j]: float(g[model.joints[j].idx_v]) for j in range(1, model.njoints)})
+json.dump(out, sys.stdout)
+"#;
+
+#[test]
+fn pinocchio_agrees_on_random_poses_within_a_micro_newton_metre() {
+    let mut rng = SplitMix64(17);
+    let dofs = ["q1", "q2", "q3", "q4", "q5", "q6", "q7"];
+    let mut poses = Vec::new();
+    let mut ours = Vec::new();
+    for _ in 0..20 {
+        let q: Vec<f64> = dofs.iter().map(|_| (rng.uniform() * 2.0 - 1.0) * std::f64::consts::PI).collect();
+        let arg = dofs.iter().zip(&q).map(|(d, v)| format!("{d}={v:.17e}")).collect::<Vec<_>>().join(",");
+        let v = gravity_json(&["--q", &arg]);
+        // The angles as the CLI read them (round-trip exact).
+        poses.push(v["pose"].clone());
+        ours.push(v["torques_nm"].clone());
+    }
+    let mut py = Command::new(jointctl_tests::interop_python())
+        .args(["-c", PINOCCHIO])
+        .arg(root().join("configs/sherpa_arm.urdf"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the interop venv's python (.ci/setup-python-venv)");
+    py.stdin.take().unwrap().write_all(serde_json::to_string(&poses).unwrap().as_bytes()).unwrap();
+    let out = py.wait_with_output().unwrap();
+    assert!(out.status.success(), "pinocchio: {}", String::from_utf8_lossy(&out.stderr));
+    let theirs: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(theirs.len(), poses.len());
+    let mut worst = 0.0f64;
+    for (k, (a, b)) in ours.iter().zip(&theirs).enumerate() {
+        for d in dofs {
+            let (x, y) = (a[d].as_f64().unwrap(), b[d].as_f64().unwrap());
+            worst = worst.max((x - y).abs());
+            assert!((x - y).abs() <= 1e-6, "pose {k} {}: {d} ours {x} Nm, Pinocchio {y} Nm", poses[k]);
+        }
+    }
+    println!("20 random poses, 7 joints: largest difference from Pinocchio {worst:.3e} Nm");
+}
+
+#[test]
+fn bad_gravity_input_says_what_and_where() {
+    let run = |args: &[&str], config: &std::path::Path| {
+        let out = Command::new(jointctl()).arg("gravity").arg(config).args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} must fail");
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let sherpa = root().join("configs/sherpa_arm.yaml");
+    assert!(run(&["--q", "q9=0.1"], &sherpa).contains("`q9` is not a joint of the URDF"));
+    assert!(run(&["--q", "q2=inf"], &sherpa).contains("q2: inf is not a finite angle"));
+    // No URDF: said so, not a zero torque.
+    let bare = sherpa_with("gravity-bare", &arm_name("gravity-bare"), &[Edit::Remove("kinematics")]);
+    assert!(run(&[], &bare).contains("no `kinematics: {urdf: FILE}`"));
+    // A URDF joint that is no DOF of the arm: `check` names the file, line and field.
+    let dir = scratch("gravity-urdf-files");
+    let urdf = std::fs::read_to_string(root().join("configs/sherpa_arm.urdf")).unwrap().replace("<joint name=\"q7\"", "<joint name=\"q8\"");
+    std::fs::write(dir.join("renamed.urdf"), urdf).unwrap();
+    let renamed = sherpa_with("gravity-urdf", &arm_name("gravity-urdf"), &[Edit::Set("kinematics.urdf", dir.join("renamed.urdf").display().to_string().into())]);
+    let out = Command::new(jointctl()).arg("check").arg(&renamed).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("kinematics.urdf") && err.contains("the URDF's movable joints q8 are not DOFs of the arm"), "{err}");
+    // A broken URDF: the file and the parser's reason.
+    std::fs::write(dir.join("broken.urdf"), "<robot name=\"x\"><link name=\"a\"/><joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"nowhere\"/></joint></robot>").unwrap();
+    let broken = sherpa_with("gravity-urdf", &arm_name("gravity-broken"), &[Edit::Set("kinematics.urdf", dir.join("broken.urdf").display().to_string().into())]);
+    let out = Command::new(jointctl()).arg("check").arg(&broken).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("joint `j`: its child link `nowhere` is not a <link> of the robot"), "{err}");
+}
