@@ -175,6 +175,7 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
         }
     });
     assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
+    assert!(lp.arm.gravity_torques[1].abs() > 1.0, "the URDF's gravity torques ran: {:?}", lp.arm.gravity_torques);
     assert_eq!(n, 0);
 }
 

@@ -101,6 +101,14 @@ fn bad_gravity_input_says_what_and_where() {
     // No URDF: said so, not a zero torque.
     let bare = sherpa_with("gravity-bare", &arm_name("gravity-bare"), &[Edit::Remove("kinematics")]);
     assert!(run(&[], &bare).contains("no `kinematics: {urdf: FILE}`"));
+    // Feed-forward without a URDF: refused where it is asked for.
+    let no_urdf = sherpa_with("gravity-ff", &arm_name("gravity-ff"), &[
+        Edit::Remove("kinematics"),
+        Edit::Set("joints[q4].controller", serde_yaml::from_str("{gravity_feedforward: true}").unwrap()),
+    ]);
+    let out = Command::new(jointctl()).arg("check").arg(&no_urdf).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("joints[2].controller.gravity_feedforward: needs the arm's URDF"), "{err}");
     // A URDF joint that is no DOF of the arm: `check` names the file, line and field.
     let dir = scratch("gravity-urdf-files");
     let urdf = std::fs::read_to_string(root().join("configs/sherpa_arm.urdf")).unwrap().replace("<joint name=\"q7\"", "<joint name=\"q8\"");
@@ -116,4 +124,76 @@ fn bad_gravity_input_says_what_and_where() {
     let out = Command::new(jointctl()).arg("check").arg(&broken).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("joint `j`: its child link `nowhere` is not a <link> of the robot"), "{err}");
+}
+
+/// A link hanging below the elbow q4 (centre of mass `l` below the joint, `m` kg): the URDF the
+/// host computes gravity from, and the simulated plant's own free link with gravity `m g l`.
+const HANGING_LINK_M_KG: f64 = 1.0;
+const HANGING_LINK_L_M: f64 = 0.5;
+
+fn hanging_link_urdf() -> String {
+    format!(
+        r#"<robot name="hanging">
+  <link name="base"/>
+  <link name="forearm"><inertial><origin xyz="0 0 -{HANGING_LINK_L_M}"/><mass value="{HANGING_LINK_M_KG}"/>
+    <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.001"/></inertial></link>
+  <joint name="q4" type="continuous"><parent link="base"/><child link="forearm"/><axis xyz="0 1 0"/></joint>
+</robot>"#
+    )
+}
+
+/// The elbow in impedance hold at 0.5 rad (K 20 Nm/rad, D 2 Nms/rad) for 20 s of simulated time,
+/// with or without gravity feed-forward: its final position error [rad], the gravity torque it
+/// published and the torque reference beyond gravity [Nm].
+fn impedance_hold(feedforward: bool) -> (f64, f64, f64) {
+    use jointctl_modes::Mode;
+    use jointctl_runtime::commands::ArmCommand;
+    let name = format!("gravity-hold-{feedforward}");
+    let dir = scratch(&format!("{name}-urdf"));
+    std::fs::write(dir.join("hanging.urdf"), hanging_link_urdf()).unwrap();
+    let mgl = HANGING_LINK_M_KG * 9.81 * HANGING_LINK_L_M;
+    let path = sherpa_with(&name, &arm_name(&name), &[
+        Edit::Set("kinematics.urdf", dir.join("hanging.urdf").display().to_string().into()),
+        Edit::Set("joints[q4].sim.environment", serde_yaml::from_str(&format!("{{kind: free, inertia_kgm2: 0.3, damping_nms_per_rad: 1.0, gravity_nm: {mgl}}}")).unwrap()),
+        Edit::Set("joints[q4].controller", serde_yaml::from_str(&format!("{{gravity_feedforward: {feedforward}}}")).unwrap()),
+    ]);
+    let loaded = jointctl_config::load(&path).unwrap();
+    let mut loader = jointctl_runtime::PluginLoader::new([]);
+    loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
+    loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
+    loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
+    loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
+    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
+    let mut arm = jointctl_runtime::Arm::build(&loaded, &loader, Box::new(sim)).unwrap();
+    arm.run_in_simulated_time();
+    arm.activate().unwrap();
+    let q4 = arm.dof_names.iter().position(|d| d == "q4").unwrap();
+    let (dt, mut t) = (1.0 / arm.rate_hz, 0.0);
+    arm.observe(t);
+    let target = 0.5;
+    arm.apply(ArmCommand::Mode { dof: q4, mode: Mode::Impedance { stiffness_nm_per_rad: 20.0, damping_nms_per_rad: 2.0, target_rad: target }, streamed: false });
+    for _ in 0..(20.0 / dt) as usize {
+        arm.control();
+        t += dt;
+        arm.observe(t);
+    }
+    let q = arm.states[q4].position().expect("q4 observed");
+    (q - target, arm.gravity_torques[q4], arm.torque_references[q4])
+}
+
+#[test]
+fn gravity_feedforward_holds_an_impedance_target_that_gravity_pulls_away() {
+    let (error_without, g_without, _) = impedance_hold(false);
+    let (error_with, g_with, reference_with) = impedance_hold(true);
+    println!("q4 impedance hold at 0.5 rad, K 20 Nm/rad, hanging 1 kg at 0.5 m: error {error_without:.5} rad without feed-forward, {error_with:.6} rad with");
+    // Without: K (q_d - q) = m g l sin q, about 0.097 rad short.
+    let mgl = HANGING_LINK_M_KG * 9.81 * HANGING_LINK_L_M;
+    assert!(error_without < -0.05, "gravity pulls the link down: {error_without}");
+    // The published gravity torque is the URDF's at the observed pose, with or without use.
+    assert!((g_without - mgl * (0.5 + error_without).sin()).abs() < 1e-6, "{g_without}");
+    assert!((g_with - mgl * (0.5 + error_with).sin()).abs() < 1e-6, "{g_with}");
+    // With: the reference is the torque beyond gravity (about 0 at the target), and the error at
+    // least ten times smaller.
+    assert!(error_with.abs() * 10.0 < error_without.abs(), "with {error_with} vs without {error_without}");
+    assert!(reference_with.abs() < 0.1, "the torque beyond gravity at the target: {reference_with}");
 }

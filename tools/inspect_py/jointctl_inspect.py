@@ -38,6 +38,7 @@ class JointSample(ctypes.Structure):
         ("pivot_mm", ctypes.c_double),
         ("reference_torque_nm", ctypes.c_double),
         ("sensor_torque_nm", ctypes.c_double),
+        ("gravity_nm", ctypes.c_double),
         ("valid_mask", ctypes.c_uint32),
         ("fault_code", ctypes.c_uint32),
         ("mode", ctypes.c_uint32),  # jointctl_ipc::JointMode (0 hold .. 5 impedance)
@@ -58,7 +59,7 @@ class ArmState(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "jointctl.ArmState.v3"
+        return "jointctl.ArmState.v4"
 
 
 def field(sample: JointSample, bit: int, value: float):

@@ -187,6 +187,26 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
         Some(k) => Some(read_chain(&source, &config, k).map_err(|m| ConfigErrors(vec![source.error("kinematics.urdf", m)]))?),
         None => None,
     };
+    // Gravity feed-forward needs the DOF in the URDF.
+    let mut gravity_errors = Vec::new();
+    for (j, joint) in config.joints.iter().enumerate() {
+        for ((field, c), dof) in joint.dof_controllers().into_iter().zip(joint.dof_names()) {
+            if !c.gravity_feedforward {
+                continue;
+            }
+            let at = format!("joints[{j}].{field}.gravity_feedforward");
+            match &chain {
+                None => gravity_errors.push(source.error(&at, "needs the arm's URDF: add `kinematics: {urdf: FILE}`")),
+                Some(ch) if !ch.dof_names().iter().any(|d| d == dof) => {
+                    gravity_errors.push(source.error(&at, format!("`{dof}` is not a joint of the URDF ({})", ch.dof_names().join(", "))))
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    if !gravity_errors.is_empty() {
+        return Err(ConfigErrors(gravity_errors));
+    }
     Ok(LoadedConfig { config, source, included, chain })
 }
 

@@ -10,7 +10,7 @@
 //!   commands it accepted ([`raw`]);
 //! - `<arm>/command`: requests (request-response).
 //!
-//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v3`), so that
+//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v4`), so that
 //! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
 //! name, size and alignment but not field order, hence the version in the name. Every process of
 //! one arm builds its iceoryx2 config with [`iceoryx2_config_in`] rather than looking for a config
@@ -202,6 +202,11 @@ pub struct JointSample {
     /// validation and recording, never used by the observer), NaN when it has none or the
     /// reading is not usable this cycle.
     pub sensor_torque_nm: f64,
+    /// The torque that holds the arm against gravity at the observed pose [Nm] (the arm's URDF,
+    /// `kinematics`; appendix C), NaN when the arm has none or a position of the chain is
+    /// unknown. Torque and impedance references are beyond it when the DOF's controller has
+    /// `gravity_feedforward`.
+    pub gravity_nm: f64,
     /// [`FieldMask`] bits of the observed fields.
     pub valid_mask: u32,
     /// 0, or the fault that holds this joint (1 = its plugin panicked; >= 16 plugin codes).
@@ -224,6 +229,7 @@ impl JointSample {
         pivot_mm: f64::NAN,
         reference_torque_nm: f64::NAN,
         sensor_torque_nm: f64::NAN,
+        gravity_nm: f64::NAN,
         valid_mask: 0,
         fault_code: 0,
         mode: JointMode::HOLD,
@@ -248,7 +254,7 @@ impl JointSample {
 /// Every joint of the arm, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.ArmState.v3")]
+#[type_name("jointctl.ArmState.v4")]
 pub struct ArmState {
     /// Cycle counter, from 0 at start.
     pub cycle: u64,

@@ -50,6 +50,12 @@ pub struct ControllerConfig {
     /// (section 4.3). `false`: the set-point goes to the drive as it is.
     #[serde(default = "default_true")]
     pub manual_position_feedback: bool,
+    /// Appendix C / future work: in torque and impedance modes, add the torque that holds the
+    /// arm against gravity (from the arm's URDF, `kinematics`, at the observed joint positions)
+    /// to the torque the joint regulates, so that a torque reference is the torque beyond
+    /// gravity. Default off (the thesis' clamped experiments have no gravity load).
+    #[serde(default)]
+    pub gravity_feedforward: bool,
 }
 
 fn default_true() -> bool {
@@ -99,6 +105,7 @@ impl Default for ControllerConfig {
             watchdog_s: default_watchdog(),
             startup: None,
             manual_position_feedback: true,
+            gravity_feedforward: false,
         }
     }
 }
@@ -307,7 +314,9 @@ pub struct Output {
     /// Whether the plugin's position feedback PI should act (off in torque and impedance modes,
     /// where it would fight the torque loop, section 4.3).
     pub position_feedback: bool,
-    /// The torque reference used this cycle [Nm], NaN outside torque/impedance modes.
+    /// The torque reference used this cycle [Nm], NaN outside torque/impedance modes: the
+    /// torque beyond gravity when `gravity_feedforward` is on (the joint regulates this plus
+    /// [`Observed::gravity_nm`]).
     pub torque_reference_nm: f64,
     /// The set-point was clamped this cycle (limits or rate).
     pub clamped: bool,
@@ -335,6 +344,10 @@ pub struct Observed {
     pub torque_nm: Option<f64>,
     /// Joint stiffness [Nm/rad], if observed.
     pub stiffness_nm_per_rad: Option<f64>,
+    /// The torque that holds the arm against gravity at the observed pose [Nm], if known (an
+    /// arm with a URDF and every position of the chain observed). Used only with
+    /// `gravity_feedforward`; unknown then, the DOF holds.
+    pub gravity_nm: Option<f64>,
 }
 
 /// The controller of one DOF.
@@ -408,6 +421,7 @@ impl JointController {
             },
             Mode::Impedance { stiffness_nm_per_rad, damping_nms_per_rad, target_rad } => {
                 let Some(dq) = observed.velocity_rad_s else { return self.missing() };
+                // Section 1.2's law.
                 let tau = stiffness_nm_per_rad * (target_rad - q) - damping_nms_per_rad * dq;
                 match self.torque_law(tau, observed, q, dt_s) {
                     Some((sp, t)) => (sp, 0.0, false, t),
@@ -447,19 +461,23 @@ impl JointController {
 
     /// Figure 4.6: torque error → deflection error (÷ stiffness) → PI (gains scheduled over the
     /// stiffness, section 6.2) → + feed-forward deflection + current joint position.
+    ///
+    /// With `gravity_feedforward`, the joint regulates `reference + gravity` (the reference is
+    /// the torque beyond gravity); the torque limit bounds what the joint applies in all.
     fn torque_law(&mut self, reference_nm: f64, observed: &Observed, q: f64, dt_s: f64) -> Option<(f64, f64)> {
         let tau = observed.torque_nm?;
         let k = observed.stiffness_nm_per_rad.filter(|k| *k > 0.0)?;
-        let mut reference = reference_nm;
-        if reference.abs() > self.limits.torque_nm {
-            reference = self.limits.torque_nm.copysign(reference);
+        let gravity = if self.config.gravity_feedforward { observed.gravity_nm.filter(|g| g.is_finite())? } else { 0.0 };
+        let mut regulated = reference_nm + gravity;
+        if regulated.abs() > self.limits.torque_nm {
+            regulated = self.limits.torque_nm.copysign(regulated);
             self.events.torque_clamps += 1;
         }
         self.pi.set_gains(self.config.gains_at(k));
-        let deflection_error = (reference - tau) / k;
+        let deflection_error = (regulated - tau) / k;
         let correction = self.pi.update(deflection_error, dt_s);
-        let feed_forward = reference / k;
-        Some((q + feed_forward + correction, reference))
+        let feed_forward = regulated / k;
+        Some((q + feed_forward + correction, regulated - gravity))
     }
 }
 
@@ -479,7 +497,7 @@ mod tests {
 
     impl Plant {
         fn observe(&self, k_model: f64) -> Observed {
-            Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(self.k_true * self.motor), stiffness_nm_per_rad: Some(k_model) }
+            Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(self.k_true * self.motor), stiffness_nm_per_rad: Some(k_model), gravity_nm: None }
         }
         fn step(&mut self, out: &Output, dt: f64) {
             if !out.hold {
@@ -550,14 +568,14 @@ mod tests {
     fn limits_clamp_and_count() {
         let mut c = controller(10.0);
         c.set_mode(Mode::Position { target_rad: 3.0 }, 0.0, false);
-        let obs = Observed { position_rad: Some(0.99), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: None };
+        let obs = Observed { position_rad: Some(0.99), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: None, gravity_nm: None };
         let out = c.update(&obs, 0.0, 0.01);
         assert_eq!(out.setpoint_rad, 1.0);
         assert!(out.clamped);
         assert_eq!(c.events.setpoint_clamps, 1);
         // A torque reference beyond the limit is clamped to it and counted.
         c.set_mode(step_reference(50.0), 0.0, false);
-        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0) };
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: None };
         let out = c.update(&obs, 0.0, 0.01);
         assert_eq!(out.torque_reference_nm, 10.0);
         assert_eq!(c.events.torque_clamps, 1);
@@ -567,7 +585,7 @@ mod tests {
     fn torque_mode_without_an_observed_torque_holds() {
         let mut c = controller(10.0);
         c.set_mode(step_reference(5.0), 0.0, false);
-        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: Some(100.0) };
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: Some(100.0), gravity_nm: None };
         assert!(c.update(&obs, 0.0, 0.01).hold);
         assert_eq!(c.events.missing_inputs, 1);
     }
@@ -576,7 +594,7 @@ mod tests {
     /// thesis has on by default in manual manipulation (section 4.3).
     #[test]
     fn manual_mode_uses_the_feedback_pi_unless_the_yaml_turns_it_off() {
-        let observed = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: None, stiffness_nm_per_rad: None };
+        let observed = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: None, stiffness_nm_per_rad: None, gravity_nm: None };
         let mut c = JointController::new(ControllerConfig::default(), DofLimits::NONE);
         c.set_mode(Mode::Manual { target_rad: 0.01 }, 0.0, false);
         assert!(c.update(&observed, 0.0, 0.025).position_feedback);
@@ -590,7 +608,7 @@ mod tests {
     fn the_rate_limit_ramps_a_position_step() {
         let mut c = JointController::new(ControllerConfig { max_setpoint_rate_rad_s: 1.0, ..Default::default() }, DofLimits::NONE);
         c.set_mode(Mode::Position { target_rad: 1.0 }, 0.0, false);
-        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: None };
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: None, torque_nm: None, stiffness_nm_per_rad: None, gravity_nm: None };
         let a = c.update(&obs, 0.0, 0.1);
         let b = c.update(&obs, 0.1, 0.1);
         assert!((a.setpoint_rad - 0.1).abs() < 1e-12 && (b.setpoint_rad - 0.2).abs() < 1e-12);
@@ -601,7 +619,7 @@ mod tests {
     fn a_stream_that_stops_falls_back_to_hold() {
         let mut c = controller(10.0);
         c.set_mode(step_reference(1.0), 0.0, true);
-        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0) };
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: None };
         assert!(!c.update(&obs, 0.4, 0.01).hold);
         c.set_mode(step_reference(1.0), 0.4, true); // renewed
         assert!(!c.update(&obs, 0.8, 0.01).hold);
@@ -627,11 +645,59 @@ mod tests {
         // Output clamped at q = 0.1, target 0: the torque reference is -K * 0.1.
         let mut c = controller(100.0);
         c.set_mode(Mode::Impedance { stiffness_nm_per_rad: 50.0, damping_nms_per_rad: 2.0, target_rad: 0.0 }, 0.0, false);
-        let obs = Observed { position_rad: Some(0.1), velocity_rad_s: Some(0.5), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0) };
+        let obs = Observed { position_rad: Some(0.1), velocity_rad_s: Some(0.5), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: None };
         let out = c.update(&obs, 0.0, 0.01);
         assert!((out.torque_reference_nm - (-5.0 - 1.0)).abs() < 1e-12);
         // Unknown velocity: no damping term can be formed, so hold.
         let obs = Observed { velocity_rad_s: None, ..obs };
         assert!(c.update(&obs, 0.01, 0.01).hold);
+    }
+
+    fn with_gravity(on: bool) -> JointController {
+        let cfg = ControllerConfig { max_setpoint_rate_rad_s: 100.0, gravity_feedforward: on, ..ControllerConfig::default() };
+        JointController::new(cfg, DofLimits { position_rad: [-1.0, 1.0], torque_nm: 30.0, velocity_rad_s: f64::INFINITY })
+    }
+
+    #[test]
+    fn gravity_feedforward_regulates_the_reference_beyond_gravity() {
+        // Impedance at its target, at rest: the law asks for 0 Nm; the joint must still hold
+        // the 12 Nm gravity asks of it. The deflection set-point carries it (12 / 100 rad) and
+        // the published reference stays the torque beyond gravity.
+        let obs = Observed { position_rad: Some(0.2), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: Some(12.0) };
+        let mode = Mode::Impedance { stiffness_nm_per_rad: 50.0, damping_nms_per_rad: 2.0, target_rad: 0.2 };
+        let mut on = with_gravity(true);
+        on.set_mode(mode, 0.0, false);
+        let out = on.update(&obs, 0.0, 0.01);
+        assert_eq!(out.torque_reference_nm, 0.0);
+        let pi_step = out.setpoint_rad - 0.2 - 12.0 / 100.0;
+        assert!(pi_step > 0.0 && pi_step < 0.12 * 0.05, "the feed-forward deflection 0.12 rad plus a small PI step: {pi_step}");
+        // Off: gravity is not the controller's business; the same state sets no deflection.
+        let mut off = with_gravity(false);
+        off.set_mode(mode, 0.0, false);
+        assert!((off.update(&obs, 0.0, 0.01).setpoint_rad - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_unknown_gravity_torque_holds_a_compensated_joint_and_counts() {
+        // A missing position elsewhere in the chain makes the gravity torque unknown: never 0.
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: None };
+        let mut c = with_gravity(true);
+        c.set_mode(step_reference(5.0), 0.0, false);
+        assert!(c.update(&obs, 0.0, 0.01).hold);
+        assert_eq!(c.events.missing_inputs, 1);
+        let nan = Observed { gravity_nm: Some(f64::NAN), ..obs };
+        assert!(c.update(&nan, 0.01, 0.01).hold);
+        assert_eq!(c.events.missing_inputs, 2);
+    }
+
+    #[test]
+    fn the_torque_limit_bounds_reference_and_gravity_together() {
+        // Limit 30 Nm: 20 beyond 25 of gravity is clamped to 30 in all, 5 beyond gravity.
+        let obs = Observed { position_rad: Some(0.0), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: Some(25.0) };
+        let mut c = with_gravity(true);
+        c.set_mode(step_reference(20.0), 0.0, false);
+        let out = c.update(&obs, 0.0, 0.01);
+        assert!((out.torque_reference_nm - 5.0).abs() < 1e-12, "{}", out.torque_reference_nm);
+        assert_eq!(c.events.torque_clamps, 1);
     }
 }

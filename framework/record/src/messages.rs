@@ -114,6 +114,7 @@ pub fn write_joint_state(out: &mut String, s: &ArmState) {
             .num("pivot_mm", known(x, FieldMask::PIVOT, x.pivot_mm))
             .num("reference_torque_nm", x.reference_torque_nm)
             .num("sensor_torque_nm", x.sensor_torque_nm)
+            .num("gravity_nm", x.gravity_nm)
             .str("mode", x.mode.name())
             .bool("enabled", x.enabled != 0)
             .int("fault_code", u64::from(x.fault_code));
@@ -303,7 +304,7 @@ pub fn schema(topic: &str) -> Option<Value> {
     let joint = json!({"type": "object", "properties": {
         "name": {"type": "string"},
         "position_rad": number(), "velocity_rad_s": number(), "deflection_rad": number(), "torque_nm": number(),
-        "stiffness_nm_per_rad": number(), "pivot_mm": number(), "reference_torque_nm": number(), "sensor_torque_nm": number(),
+        "stiffness_nm_per_rad": number(), "pivot_mm": number(), "reference_torque_nm": number(), "sensor_torque_nm": number(), "gravity_nm": number(),
         "mode": {"type": "string"}, "enabled": {"type": "boolean"}, "fault_code": count,
     }});
     let body = match topic {

@@ -177,6 +177,9 @@ pub struct Arm {
     pub controllers: Vec<JointController>,
     /// The torque reference each DOF used this cycle [Nm] (NaN outside torque/impedance modes).
     pub torque_references: Vec<f64>,
+    /// The torque that holds the arm against gravity at this cycle's observed pose, per DOF
+    /// [Nm] (NaN: no URDF, a DOF the URDF does not name, or a position of the chain unknown).
+    pub gravity_torques: Vec<f64>,
     /// Requested stiffness per DOF [Nm/rad], NaN when none.
     pub stiffness_requests: Vec<f64>,
     /// Disabled DOFs hold and ignore modes until enabled.
@@ -197,6 +200,45 @@ pub struct Arm {
     device_buses: (Vec<u32>, Vec<u32>),
     /// The arm description's file, absolute when it could be resolved.
     config_path: Option<std::path::PathBuf>,
+    /// The gravity model of the arm's URDF, with its working memory.
+    gravity: Option<ArmGravity>,
+}
+
+/// The arm's gravity model and the buffers that keep its cycle allocation-free.
+struct ArmGravity {
+    model: jointctl_kinematics::Gravity,
+    /// The arm DOF of each of the chain's joints.
+    dof_of: Vec<usize>,
+    q_rad: Vec<f64>,
+    tau_nm: Vec<f64>,
+}
+
+impl ArmGravity {
+    fn new(loaded: &LoadedConfig, dof_names: &[String]) -> Option<ArmGravity> {
+        let (chain, k) = (loaded.chain.clone()?, loaded.config.kinematics.as_ref()?);
+        // Config loading checked that every joint of the chain is a DOF.
+        let dof_of: Vec<usize> = chain.dof_names().iter().map(|d| dof_names.iter().position(|n| n == d)).collect::<Option<_>>()?;
+        let n = dof_of.len();
+        let model = jointctl_kinematics::Gravity::with_gravity(chain, nalgebra::Vector3::new(0.0, 0.0, -k.gravity_m_s2));
+        Some(ArmGravity { model, dof_of, q_rad: vec![0.0; n], tau_nm: vec![0.0; n] })
+    }
+
+    /// This cycle's holding torques into `out` (per arm DOF); all unknown when one position of
+    /// the chain is: a missing reading is never taken as a pose.
+    fn update(&mut self, states: &[JointState], out: &mut [f64]) {
+        out.fill(f64::NAN);
+        for (q, &d) in self.q_rad.iter_mut().zip(&self.dof_of) {
+            match states[d].position() {
+                Some(p) if p.is_finite() => *q = p,
+                _ => return,
+            }
+        }
+        if self.model.torques(&self.q_rad, &mut self.tau_nm).is_ok() {
+            for (t, &d) in self.tau_nm.iter().zip(&self.dof_of) {
+                out[d] = *t;
+            }
+        }
+    }
 }
 
 fn roles(text: &str) -> Vec<(&str, bool)> {
@@ -369,6 +411,7 @@ impl Arm {
             return Err(ConfigErrors(errors));
         }
         let n = dof_names.len();
+        let dof_names_for_gravity = dof_names.clone();
         Ok(Arm {
             name: cfg.arm.clone(),
             rate_hz: cfg.rate_hz,
@@ -381,6 +424,7 @@ impl Arm {
             commands: vec![JointCommand::HOLD; n],
             controllers,
             torque_references: vec![f64::NAN; n],
+            gravity_torques: vec![f64::NAN; n],
             stiffness_requests: vec![f64::NAN; n],
             enabled: vec![true; n],
             stop_requested: false,
@@ -396,6 +440,7 @@ impl Arm {
                 cfg.buses.can.iter().enumerate().flat_map(|(b, bus)| bus.drives.iter().map(move |_| b as u32)).collect(),
             ),
             config_path: std::fs::canonicalize(&src.file).ok(),
+            gravity: ArmGravity::new(loaded, &dof_names_for_gravity),
         })
     }
 
@@ -515,6 +560,9 @@ impl Arm {
     /// Second half of a cycle: run every DOF's controller, control every joint whose state is
     /// usable, hold the others, and write the set-points.
     pub fn control(&mut self) {
+        if let Some(g) = &mut self.gravity {
+            g.update(&self.states, &mut self.gravity_torques);
+        }
         for d in 0..self.states.len() {
             let s = &self.states[d];
             let observed = Observed {
@@ -522,6 +570,7 @@ impl Arm {
                 velocity_rad_s: s.velocity(),
                 torque_nm: s.torque(),
                 stiffness_nm_per_rad: s.stiffness(),
+                gravity_nm: Some(self.gravity_torques[d]).filter(|g| g.is_finite()),
             };
             let out = self.controllers[d].update(&observed, self.now_s, self.dt_s);
             self.torque_references[d] = out.torque_reference_nm;

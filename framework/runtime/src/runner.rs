@@ -424,6 +424,7 @@ impl ArmPublisher {
                     name: s.joints[i].name,
                     reference_torque_nm: arm.torque_references[i],
                     sensor_torque_nm: arm.sensor_torque(i).unwrap_or(f64::NAN),
+                    gravity_nm: arm.gravity_torques[i],
                     mode: published_mode(arm.controllers[i].mode()),
                     enabled: arm.enabled[i] as u32,
                     position_rad: st.position_rad,
