@@ -661,16 +661,21 @@ mod tests {
     #[test]
     fn gravity_feedforward_regulates_the_reference_beyond_gravity() {
         // Impedance at its target, at rest: the law asks for 0 Nm; the joint must still hold
-        // the 12 Nm gravity asks of it. The deflection set-point carries it (12 / 100 rad) and
-        // the published reference stays the torque beyond gravity.
+        // the 12 Nm gravity asks of it. It regulates exactly as a torque mode asked for 12 Nm
+        // without gravity would (same deflection set-point), and the published reference stays
+        // the torque beyond gravity.
         let obs = Observed { position_rad: Some(0.2), velocity_rad_s: Some(0.0), torque_nm: Some(0.0), stiffness_nm_per_rad: Some(100.0), gravity_nm: Some(12.0) };
         let mode = Mode::Impedance { stiffness_nm_per_rad: 50.0, damping_nms_per_rad: 2.0, target_rad: 0.2 };
         let mut on = with_gravity(true);
         on.set_mode(mode, 0.0, false);
         let out = on.update(&obs, 0.0, 0.01);
         assert_eq!(out.torque_reference_nm, 0.0);
-        let pi_step = out.setpoint_rad - 0.2 - 12.0 / 100.0;
-        assert!(pi_step > 0.0 && pi_step < 0.12 * 0.05, "the feed-forward deflection 0.12 rad plus a small PI step: {pi_step}");
+        let mut plain = with_gravity(false);
+        plain.set_mode(step_reference(12.0), 0.0, false);
+        let same = plain.update(&Observed { gravity_nm: None, ..obs }, 0.0, 0.01);
+        assert_eq!(same.torque_reference_nm, 12.0);
+        assert!((out.setpoint_rad - same.setpoint_rad).abs() < 1e-15, "{} vs {}", out.setpoint_rad, same.setpoint_rad);
+        assert!(out.setpoint_rad > 0.2 + 12.0 / 100.0, "at least the feed-forward deflection: {}", out.setpoint_rad);
         // Off: gravity is not the controller's business; the same state sets no deflection.
         let mut off = with_gravity(false);
         off.set_mode(mode, 0.0, false);
