@@ -111,22 +111,16 @@ impl Gravity {
             }
         }
         for (i, b) in bodies.iter().enumerate() {
-            if let Some(JointDof { k, axis }) = b.joint.as_ref().and_then(|j| j.dof.map(|k| JointDof { k, axis: j.axis })) {
-                let frame = self.world[i];
-                let p = frame.translation.vector;
-                let a = frame.rotation * axis.into_inner();
-                let lever = self.subtree_moment[i] - self.subtree_mass[i] * p;
-                // (+ 0.0: a torque of -0.0 prints as 0.)
-                out[k] = -a.dot(&lever.cross(&self.gravity_m_s2)) + 0.0;
-            }
+            let Some((k, axis)) = b.joint.as_ref().and_then(|j| Some((j.dof?, j.axis))) else { continue };
+            let frame = self.world[i];
+            let p = frame.translation.vector;
+            let a = frame.rotation * axis.into_inner();
+            let lever = self.subtree_moment[i] - self.subtree_mass[i] * p;
+            // (+ 0.0: a torque of -0.0 prints as 0.)
+            out[k] = -a.dot(&lever.cross(&self.gravity_m_s2)) + 0.0;
         }
         Ok(())
     }
-}
-
-struct JointDof {
-    k: usize,
-    axis: nalgebra::Unit<Vector3<f64>>,
 }
 
 #[cfg(test)]
