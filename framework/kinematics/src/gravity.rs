@@ -46,7 +46,21 @@ pub struct Gravity {
 impl Gravity {
     /// Gravity along -z of the root frame at [`STANDARD_GRAVITY_M_S2`].
     pub fn new(chain: Chain) -> Gravity {
-        Gravity::with_gravity(chain, Vector3::new(0.0, 0.0, -STANDARD_GRAVITY_M_S2))
+        Gravity::downward(chain, STANDARD_GRAVITY_M_S2)
+    }
+
+    /// Gravity of `g_m_s2` along -z of the root frame (the arm description's `gravity_m_s2`).
+    ///
+    /// ```
+    /// # use jointctl_kinematics::{Chain, Gravity};
+    /// # let chain = Chain::from_urdf_file(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.urdf")).unwrap();
+    /// let mut mars = Gravity::downward(chain, 3.71);
+    /// let mut tau = [0.0; 7];
+    /// mars.torques(&[0.0, 0.7854, 0.0, 0.0, 0.0, 0.0, 0.0], &mut tau).unwrap();
+    /// assert!((tau[1] + 28.482 * 3.71 / 9.81).abs() < 1e-2);
+    /// ```
+    pub fn downward(chain: Chain, g_m_s2: f64) -> Gravity {
+        Gravity::with_gravity(chain, Vector3::new(0.0, 0.0, -g_m_s2))
     }
 
     /// Gravity as a vector in the root frame [m/s^2] (a rover on a slope: tilted).

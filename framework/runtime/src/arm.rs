@@ -219,7 +219,7 @@ impl ArmGravity {
         // Config loading checked that every joint of the chain is a DOF.
         let dof_of: Vec<usize> = chain.dof_names().iter().map(|d| dof_names.iter().position(|n| n == d)).collect::<Option<_>>()?;
         let n = dof_of.len();
-        let model = jointctl_kinematics::Gravity::with_gravity(chain, nalgebra::Vector3::new(0.0, 0.0, -k.gravity_m_s2));
+        let model = jointctl_kinematics::Gravity::downward(chain, k.gravity_m_s2);
         Some(ArmGravity { model, dof_of, q_rad: vec![0.0; n], tau_nm: vec![0.0; n] })
     }
 
@@ -411,7 +411,7 @@ impl Arm {
             return Err(ConfigErrors(errors));
         }
         let n = dof_names.len();
-        let dof_names_for_gravity = dof_names.clone();
+        let gravity = ArmGravity::new(loaded, &dof_names);
         Ok(Arm {
             name: cfg.arm.clone(),
             rate_hz: cfg.rate_hz,
@@ -440,7 +440,7 @@ impl Arm {
                 cfg.buses.can.iter().enumerate().flat_map(|(b, bus)| bus.drives.iter().map(move |_| b as u32)).collect(),
             ),
             config_path: std::fs::canonicalize(&src.file).ok(),
-            gravity: ArmGravity::new(loaded, &dof_names_for_gravity),
+            gravity,
         })
     }
 

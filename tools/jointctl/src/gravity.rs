@@ -76,7 +76,7 @@ pub fn run(a: GravityArgs) -> ExitCode {
         },
         (None, None) => vec![0.0; dofs.len()],
     };
-    let mut gravity = Gravity::with_gravity(chain, nalgebra::Vector3::new(0.0, 0.0, -k.gravity_m_s2));
+    let mut gravity = Gravity::downward(chain, k.gravity_m_s2);
     let mut tau = vec![0.0; dofs.len()];
     if let Err(e) = gravity.torques(&q, &mut tau) {
         return fail_err(e);
