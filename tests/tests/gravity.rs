@@ -88,6 +88,83 @@ fn pinocchio_agrees_on_random_poses_within_a_micro_newton_metre() {
     println!("20 random poses, 7 joints: largest difference from Pinocchio {worst:.3e} Nm");
 }
 
+const PINOCCHIO_DYNAMICS: &str = r#"
+import json, sys
+import numpy as np
+import pinocchio as pin
+model = pin.buildModelFromUrdf(sys.argv[1])
+cases = json.load(sys.stdin)
+model.armature = np.array(cases["armature"])
+data = model.createData()
+out = []
+for c in cases["cases"]:
+    q, v, a, tau = (np.array(c[k]) for k in ("q", "v", "a", "tau"))
+    out.append({
+        "rnea": pin.rnea(model, data, q, v, a).tolist(),
+        "crba": pin.crba(model, data, q).tolist(),
+        "aba": pin.aba(model, data, q, v, tau).tolist(),
+    })
+json.dump(out, sys.stdout)
+"#;
+
+/// The free arm's equation of motion (`jointctl_kinematics::Dynamics`) against Pinocchio's
+/// `rnea`, `crba` and `aba` on the same URDF with the same armature, at random states.
+#[test]
+fn pinocchio_agrees_on_the_arms_dynamics() {
+    use jointctl_kinematics::{Chain, Dynamics};
+    let chain = Chain::from_urdf_file(root().join("configs/sherpa_arm.urdf")).unwrap();
+    // Pinocchio numbers a chain's joints from the root as we do; checked, not assumed.
+    let armature = [0.2, 0.05, 0.01, 0.03, 0.02, 0.005, 0.004];
+    let mut dynamics = Dynamics::downward(chain, 9.81).with_armature(&armature).unwrap();
+    let mut rng = SplitMix64(23);
+    let mut draw = |scale: f64| -> Vec<f64> { (0..7).map(|_| (rng.uniform() * 2.0 - 1.0) * scale).collect() };
+    let mut cases = Vec::new();
+    let mut ours = Vec::new();
+    for _ in 0..20 {
+        let (q, v, a, tau) = (draw(std::f64::consts::PI), draw(2.0), draw(5.0), draw(10.0));
+        let (mut rnea, mut crba, mut aba) = (vec![0.0; 7], vec![0.0; 49], vec![0.0; 7]);
+        dynamics.inverse(&q, &v, &a, &mut rnea).unwrap();
+        dynamics.mass_matrix(&q, &mut crba).unwrap();
+        dynamics.forward(&q, &v, &tau, &[false; 7], &mut aba).unwrap();
+        ours.push((rnea, crba, aba));
+        cases.push(serde_json::json!({"q": q, "v": v, "a": a, "tau": tau}));
+    }
+    let mut py = Command::new(jointctl_tests::interop_python())
+        .args(["-c", PINOCCHIO_DYNAMICS])
+        .arg(root().join("configs/sherpa_arm.urdf"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the interop venv's python (.ci/setup-python-venv)");
+    let input = serde_json::json!({"armature": armature, "cases": cases});
+    py.stdin.take().unwrap().write_all(input.to_string().as_bytes()).unwrap();
+    let out = py.wait_with_output().unwrap();
+    assert!(out.status.success(), "pinocchio: {}", String::from_utf8_lossy(&out.stderr));
+    let theirs: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    let (mut worst_tau, mut worst_m, mut worst_qdd) = (0.0f64, 0.0f64, 0.0f64);
+    for (k, ((rnea, crba, aba), p)) in ours.iter().zip(&theirs).enumerate() {
+        let row = |key: &str| -> Vec<f64> { p[key].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+        // crba fills the upper triangle only.
+        let m: Vec<Vec<f64>> = p["crba"].as_array().unwrap().iter().map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()).collect();
+        for i in 0..7 {
+            for j in i..7 {
+                worst_m = worst_m.max((crba[i * 7 + j] - m[i][j]).abs());
+                assert!((crba[i * 7 + j] - m[i][j]).abs() < 1e-9, "case {k}: M[{i}][{j}] ours {} Pinocchio {}", crba[i * 7 + j], m[i][j]);
+            }
+        }
+        for (i, (x, y)) in rnea.iter().zip(row("rnea")).enumerate() {
+            worst_tau = worst_tau.max((x - y).abs());
+            assert!((x - y).abs() < 1e-6, "case {k}: rnea q{} ours {x} Pinocchio {y}", i + 1);
+        }
+        for (i, (x, y)) in aba.iter().zip(row("aba")).enumerate() {
+            worst_qdd = worst_qdd.max((x - y).abs() / y.abs().max(1.0));
+            assert!((x - y).abs() < 1e-6 * y.abs().max(1.0), "case {k}: aba q{} ours {x} Pinocchio {y}", i + 1);
+        }
+    }
+    println!("20 random states: largest difference from Pinocchio: torque {worst_tau:.2e} Nm, mass matrix {worst_m:.2e} kg m^2, acceleration {worst_qdd:.2e} (relative)");
+}
+
 #[test]
 fn bad_gravity_input_says_what_and_where() {
     let run = |args: &[&str], config: &std::path::Path| {

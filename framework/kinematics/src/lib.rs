@@ -10,6 +10,8 @@
 //! - [`Gravity`]: the generalised gravity torque of every movable joint at a pose, the torque the
 //!   joint must apply to hold the pose (the convention of Pinocchio's `computeGeneralizedGravity`
 //!   and of figure C.2's solver). Allocation-free after construction, for the control cycle.
+//! - [`Dynamics`]: the arm's equation of motion (inverse dynamics, mass matrix, forward
+//!   dynamics with joints locked), allocation-free, for the simulated free arm.
 //! - [`appendix_c`]: figure C.1's pose and masses and figure C.2's printed values.
 //!
 //! ```
@@ -32,7 +34,9 @@
 
 pub mod appendix_c;
 mod chain;
+mod dynamics;
 mod gravity;
 
 pub use chain::{Body, Chain, ChainError, JointFrame};
+pub use dynamics::{Dynamics, DynamicsError};
 pub use gravity::{Gravity, PoseError, STANDARD_GRAVITY_M_S2};
