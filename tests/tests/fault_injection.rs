@@ -143,7 +143,7 @@ fn diagnostics_carry_whole_device_names() {
 /// The rig at 100 Hz on a shared simulator, so that a test can inject faults into it.
 fn rig_on_shared_sim(name: &str) -> (jointctl_runtime::Arm, jointctl_sim::SharedSim) {
     let loaded = jointctl_config::parse_str(&rig_yaml(name, 100.0, ""), "rig.yaml").unwrap();
-    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
+    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::load(&loaded).unwrap());
     let mut arm = jointctl_runtime::Arm::build(&loaded, &PluginLoader::new([]), Box::new(sim.clone())).unwrap();
     arm.activate().unwrap();
     (arm, sim)

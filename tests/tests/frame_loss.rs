@@ -42,7 +42,7 @@ fn run(loss_rate: f64, mode: &str) -> Run {
         Edit::Set("joints[q4].params.stiffness_nm_per_rad", 113.78.into()),
     ]);
     let loaded = jointctl_config::load(&path).unwrap();
-    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
+    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::load(&loaded).unwrap());
     let mut arm = jointctl_runtime::Arm::build(&loaded, &jointctl_runtime::PluginLoader::new([]), Box::new(sim.clone())).unwrap();
     arm.activate().unwrap();
     arm.set_mode(3, Mode::Position { target_rad: 0.5 });

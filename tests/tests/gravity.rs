@@ -240,7 +240,7 @@ fn impedance_hold(feedforward: bool) -> (f64, f64, f64) {
     loader.register_static(jointctl_plugin_elastic::plugin_descriptor()).unwrap();
     loader.register_static(jointctl_plugin_vsa_shoulder::plugin_descriptor()).unwrap();
     loader.register_static(jointctl_plugin_vsa_wrist::plugin_descriptor()).unwrap();
-    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
+    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::load(&loaded).unwrap());
     let mut arm = jointctl_runtime::Arm::build(&loaded, &loader, Box::new(sim)).unwrap();
     arm.run_in_simulated_time();
     arm.activate().unwrap();

@@ -277,7 +277,7 @@ fn q5_observes_its_torque_from_the_drives_following_error_and_says_when_it_canno
         jointctl_tests::Edit::Set("joints[q5].sim.environment", serde_yaml::from_str("{kind: spring, stiffness_nm_per_rad: 70.0, rest_rad: 0.03, inertia_kgm2: 0.02, damping_nms_per_rad: 0.5}").unwrap()),
     ]);
     let loaded = jointctl_config::load(&path).unwrap();
-    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::new(&loaded.config).unwrap());
+    let sim = jointctl_sim::SharedSim::new(jointctl_sim::SimHal::load(&loaded).unwrap());
     let mut arm = jointctl_runtime::Arm::build(&loaded, &jointctl_runtime::PluginLoader::new([]), Box::new(sim.clone())).unwrap();
     arm.activate().unwrap();
     let q5 = arm.dof_names.iter().position(|n| n == "q5").unwrap();

@@ -22,7 +22,7 @@ use jointctl_runtime::{Arm, PluginLoader};
 /// ```
 pub fn build_hal(loaded: &LoadedConfig) -> Result<Box<dyn Hal>, ConfigErrors> {
     match loaded.config.hal.backend {
-        HalBackend::Sim => jointctl_sim::SimHal::new(&loaded.config)
+        HalBackend::Sim => jointctl_sim::SimHal::load(loaded)
             .map(|h| Box::new(h) as Box<dyn Hal>)
             .map_err(|e| setup_error(loaded, e)),
         HalBackend::Socketcan => {

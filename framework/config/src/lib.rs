@@ -188,7 +188,7 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
         None => None,
     };
     // Gravity feed-forward needs the DOF in the URDF.
-    let mut gravity_errors = Vec::new();
+    let mut kinematics_errors = Vec::new();
     for (j, joint) in config.joints.iter().enumerate() {
         for ((field, c), dof) in joint.dof_controllers().into_iter().zip(joint.dof_names()) {
             if !c.gravity_feedforward {
@@ -196,16 +196,40 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
             }
             let at = format!("joints[{j}].{field}.gravity_feedforward");
             match &chain {
-                None => gravity_errors.push(source.error(&at, "needs the arm's URDF: add `kinematics: {urdf: FILE}`")),
+                None => kinematics_errors.push(source.error(&at, "needs the arm's URDF: add `kinematics: {urdf: FILE}`")),
                 Some(ch) if !ch.dof_names().iter().any(|d| d == dof) => {
-                    gravity_errors.push(source.error(&at, format!("`{dof}` is not a joint of the URDF ({})", ch.dof_names().join(", "))))
+                    kinematics_errors.push(source.error(&at, format!("`{dof}` is not a joint of the URDF ({})", ch.dof_names().join(", "))))
                 }
                 Some(_) => {}
             }
         }
     }
-    if !gravity_errors.is_empty() {
-        return Err(ConfigErrors(gravity_errors));
+    // The free arm needs its DOFs in the URDF, and physical numbers.
+    for (j, joint) in config.joints.iter().enumerate() {
+        let Some(sim) = &joint.sim else { continue };
+        let per_dof: Vec<(String, &EnvironmentConfig)> = match (&sim.environment, sim.environments.as_slice()) {
+            (Some(e), _) => joint.dof_names().iter().map(|_| ("sim.environment".to_string(), e)).collect(),
+            (None, list) => list.iter().enumerate().map(|(i, e)| (format!("sim.environments[{i}]"), e)).collect(),
+        };
+        for ((field, env), dof) in per_dof.into_iter().zip(joint.dof_names()) {
+            let EnvironmentConfig::FreeArm { damping_nms_per_rad, armature_kgm2 } = env else { continue };
+            let at = format!("joints[{j}].{field}");
+            for (name, v) in [("damping_nms_per_rad", damping_nms_per_rad), ("armature_kgm2", armature_kgm2)] {
+                if !(v.is_finite() && *v >= 0.0) {
+                    kinematics_errors.push(source.error(&format!("{at}.{name}"), format!("must be a finite number >= 0, got {v}")));
+                }
+            }
+            match &chain {
+                None => kinematics_errors.push(source.error(&at, "a free arm needs the arm's URDF: add `kinematics: {urdf: FILE}`")),
+                Some(ch) if !ch.dof_names().iter().any(|d| d == dof) => {
+                    kinematics_errors.push(source.error(&at, format!("`{dof}` is not a joint of the URDF ({}), so it cannot be a joint of the free arm", ch.dof_names().join(", "))))
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    if !kinematics_errors.is_empty() {
+        return Err(ConfigErrors(kinematics_errors));
     }
     Ok(LoadedConfig { config, source, included, chain })
 }

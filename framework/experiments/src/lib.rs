@@ -16,6 +16,7 @@
 #![forbid(unsafe_code)]
 
 pub mod characterise;
+pub mod gravity_hold;
 pub mod loop_causes;
 pub mod model_loop;
 pub mod plot;

@@ -172,7 +172,7 @@ pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &Value, t_s: 
     if let Some(sim) = cfg.joints[j].sim.as_mut() {
         sim.effects = effects;
     }
-    let hal = jointctl_sim::SimHal::new(&cfg).map_err(|e| err(e.to_string()))?;
+    let hal = jointctl_sim::SimHal::with_chain(&cfg, loaded.chain.as_ref()).map_err(|e| err(e.to_string()))?;
     let unit = hal.units().iter().find(|u| u.dof_names.iter().any(|n| n == dof)).ok_or_else(|| err(format!("`{dof}` is not simulated")))?;
     let mut unit = unit.clone();
     // A NaN deflection (unknown) is replayed as the last known one: the element did not stop

@@ -66,7 +66,7 @@ pub fn record(loaded: &LoadedConfig, loader: &PluginLoader, opts: &RecordOptions
     } else {
         set_environment(&mut cfg, j, i, flow, EnvironmentConfig::Fixed { position_rad: 0.0 });
     }
-    let mut sim_hal = SimHal::new(&cfg.config).map_err(|e| ExperimentError(e.to_string()))?;
+    let mut sim_hal = SimHal::load(&cfg).map_err(|e| ExperimentError(e.to_string()))?;
     if let (Some(p), Some(pivot)) = (opts.pivot_mm, cfg.config.joints[j].sim.as_ref().and_then(|s| s.pivot.clone())) {
         let d = jointctl_hal_index(&cfg, &pivot.drive)?;
         sim_hal.set_drive_target(d, (p - pivot.offset_mm) / pivot.mm_per_rad);

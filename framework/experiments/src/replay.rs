@@ -278,7 +278,7 @@ pub fn replay_on_sim(path: &Path, loaded: &LoadedConfig, loader: &PluginLoader) 
             return Err(ExperimentError(format!("{}: recorded at {rate:.1} Hz, the config runs at {} Hz: set rate_hz to the recording's", path.display(), loaded.config.rate_hz)));
         }
     }
-    let mut sim = SimHal::new(&loaded.config).map_err(|e| ExperimentError(e.to_string()))?;
+    let mut sim = SimHal::load(loaded).map_err(|e| ExperimentError(e.to_string()))?;
     // From the recorded initial state: each drive where it was when the joints were activated
     // (the observers' zeros; a recording that starts later continues from there).
     let start: Vec<Option<f64>> = devices.drives.iter().map(|name| activation.drives.iter().find(|(n, ..)| n == name).and_then(|(_, r, _)| r.position_rad.usable(f64::INFINITY))).collect();

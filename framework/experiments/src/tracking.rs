@@ -188,7 +188,7 @@ fn run_one(
     hold: &[String],
     periods: f64,
 ) -> Result<Vec<Row>, ExperimentError> {
-    let sim = SharedSim::new(SimHal::new(&cfg.config).map_err(|e| ExperimentError(e.to_string()))?);
+    let sim = SharedSim::new(SimHal::load(cfg).map_err(|e| ExperimentError(e.to_string()))?);
     let mut arm = Arm::build(cfg, loader, Box::new(sim.clone()))?;
     arm.run_in_simulated_time();
     arm.activate().map_err(|e| ExperimentError(e.to_string()))?;

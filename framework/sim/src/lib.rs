@@ -11,16 +11,19 @@
 #![forbid(unsafe_code)]
 
 pub mod elmo;
+pub mod free_arm;
 pub mod rng;
 pub mod unit;
 
 use jointctl_api::{DriveAction, DriveReading, Reading};
-use jointctl_config::{ArmConfig, CanLossMode, EncoderSimConfig};
+use jointctl_config::{ArmConfig, CanLossMode, EncoderSimConfig, LoadedConfig};
+use jointctl_kinematics::Chain;
 use jointctl_hal::codec::{as5048, canopen};
 use jointctl_hal::condition::{Conditioner, Plausibility, Sample};
 use jointctl_hal::{ActuatorFrame, DeviceHealth, DeviceIndex, Hal, HalIoError, HalSetupError, SensorFrame};
 
 use crate::elmo::ElmoDrive;
+use crate::free_arm::FreeArm;
 use crate::rng::SplitMix64;
 use crate::unit::{Element, SignalKind, Unit};
 
@@ -149,6 +152,8 @@ pub struct SimHal {
     encoder_faults: Vec<Option<EncoderFault>>,
     /// Set-points on the CAN bus, per drive (they arrive `can_latency_s` after the write).
     in_flight: Vec<InFlight>,
+    /// The units' `free_arm` DOFs, moved together.
+    free_arm: Option<FreeArm>,
 }
 
 /// A fault injected into one simulated encoder, as the robot's SPI bus can produce them: the
@@ -170,8 +175,19 @@ fn setup(field: impl Into<String>, message: impl Into<String>) -> HalSetupError 
 }
 
 impl SimHal {
-    /// The simulated arm of a configuration.
+    /// The simulated arm of a loaded configuration (with its URDF, for a free arm).
+    pub fn load(loaded: &LoadedConfig) -> Result<Self, HalSetupError> {
+        SimHal::with_chain(&loaded.config, loaded.chain.as_ref())
+    }
+
+    /// The simulated arm of a configuration without its URDF (no `free_arm` environment).
     pub fn new(config: &ArmConfig) -> Result<Self, HalSetupError> {
+        SimHal::with_chain(config, None)
+    }
+
+    /// The simulated arm of a configuration and its kinematic chain (`kinematics.urdf`), which
+    /// a `free_arm` environment needs.
+    pub fn with_chain(config: &ArmConfig, chain: Option<&Chain>) -> Result<Self, HalSetupError> {
         let devices = DeviceIndex::of(config);
         let sim = &config.hal.sim;
         let drive_cfgs: Vec<_> = config.buses.can.iter().flat_map(|b| b.drives.iter()).collect();
@@ -188,8 +204,10 @@ impl SimHal {
         let drives: Vec<ElmoDrive> = elmo.iter().map(|e| ElmoDrive::new(*e, 0.0)).collect();
 
         let mut units = Vec::new();
+        let mut unit_joint = Vec::new();
         for (j, joint) in config.joints.iter().enumerate() {
             let Some(s) = &joint.sim else { continue };
+            unit_joint.push(j);
             let at = |f: &str| format!("joints[{j}].sim.{f}");
             let dof_names: Vec<String> = joint.dof_names().iter().map(|n| n.to_string()).collect();
             let drive_ids = s
@@ -295,6 +313,8 @@ impl SimHal {
                 .ok_or_else(|| setup(format!("{field}.dof"), format!("no simulated joint has a DOF `{}` (give that joint a `sim:` section)", sim_cfg.dof)))?;
             torque_sensors.push((at, f.range_nm, Conditioner::new(Plausibility::torque_sensor())));
         }
+        let g_m_s2 = config.kinematics.as_ref().map_or(jointctl_kinematics::STANDARD_GRAVITY_M_S2, |k| k.gravity_m_s2);
+        let mut free_arm = FreeArm::new(chain, g_m_s2, &units, |u| format!("joints[{}].sim.environment", unit_joint[u])).map_err(|(f, m)| setup(f, m))?;
         let n_drives = drives.len();
         let sensor_history = vec![DelayLine::new(); units.len() * unit::MAX_UNIT_DOF];
         let mut hal = SimHal {
@@ -324,10 +344,12 @@ impl SimHal {
             positions: vec![0.0; n_drives],
             velocities: vec![0.0; n_drives],
             loads: vec![0.0; n_drives],
+            free_arm: None,
         };
         for u in &mut hal.units {
             u.start(&hal.positions);
         }
+        hal.free_arm = free_arm.take();
         hal.record();
         Ok(hal)
     }
@@ -375,6 +397,11 @@ impl SimHal {
         &self.units
     }
 
+    /// The free arm, when some DOF's environment is `free_arm`.
+    pub fn free_arm(&self) -> Option<&FreeArm> {
+        self.free_arm.as_ref()
+    }
+
     /// The simulated drives, in device order.
     pub fn drives(&self) -> &[ElmoDrive] {
         &self.drives
@@ -418,6 +445,9 @@ impl SimHal {
             self.loads.iter_mut().for_each(|l| *l = 0.0);
             for u in &mut self.units {
                 u.step(&self.positions, &self.velocities, &mut self.loads, h, &mut self.rng);
+            }
+            if let Some(arm) = &mut self.free_arm {
+                arm.step(&mut self.units, h);
             }
             for (d, load) in self.drives.iter_mut().zip(&self.loads) {
                 d.step(*load, h);

@@ -325,6 +325,8 @@ impl Unit {
                     self.output_velocity[i] += a * dt;
                     self.output[i] += self.output_velocity[i] * dt;
                 }
+                // The free arm moves it, all joints together (`SimHal::advance`).
+                EnvironmentConfig::FreeArm { .. } => {}
                 EnvironmentConfig::Spring { stiffness_nm_per_rad, rest_rad, inertia_kgm2, damping_nms_per_rad } => {
                     let a = (self.torque[i] - stiffness_nm_per_rad * (self.output[i] - rest_rad) - damping_nms_per_rad * self.output_velocity[i]) / inertia_kgm2;
                     self.output_velocity[i] += a * dt;
@@ -429,6 +431,22 @@ impl Unit {
             out.push(self.sensor_torque[dof]);
         }
         out
+    }
+
+    /// DOF `i`'s output position [rad] and velocity [rad/s].
+    pub fn output_state(&self, i: usize) -> (f64, f64) {
+        (self.output[i], self.output_velocity[i])
+    }
+
+    /// Moves DOF `i`'s output (the free arm integrates the outputs it owns).
+    pub(crate) fn set_output_state(&mut self, i: usize, position_rad: f64, velocity_rad_s: f64) {
+        self.output[i] = position_rad;
+        self.output_velocity[i] = velocity_rad_s;
+    }
+
+    /// DOF `i`'s environment.
+    pub fn environment(&self, i: usize) -> &EnvironmentConfig {
+        &self.environments[i]
     }
 
     /// A named signal of DOF `i`.

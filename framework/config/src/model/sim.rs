@@ -249,6 +249,19 @@ pub enum EnvironmentConfig {
         #[serde(default)]
         gravity_nm: f64,
     },
+    /// A joint of the free arm: the arm of `kinematics.urdf`, its links loading each other under
+    /// gravity and through their motion (coupled rigid-body dynamics, not one link per joint).
+    /// The arm's joints that are not `free_arm` stay where their own environment puts them
+    /// (clamped: `fixed`).
+    FreeArm {
+        /// Viscous damping at the joint's output [Nms/rad] (bearings, seals).
+        #[serde(default)]
+        damping_nms_per_rad: f64,
+        /// Inertia added at the joint's output beyond its links' [kg m^2] (the gear's output
+        /// side, Pinocchio's armature).
+        #[serde(default)]
+        armature_kgm2: f64,
+    },
     /// A spring contact (the environment as a spring) on a link.
     Spring {
         /// Contact stiffness [Nm/rad].
