@@ -144,10 +144,26 @@ fn deadline_overruns_are_detected_and_counted() {
 
 #[test]
 fn a_sherpa_arm_cycle_allocates_nothing() {
+    sherpa_cycle_allocates_nothing(false);
+}
+
+/// The same with the simulated arm off its clamps: the free arm's rigid-body dynamics run
+/// inside the HAL's write, in the cycle.
+#[test]
+fn a_free_sherpa_arm_cycle_allocates_nothing() {
+    sherpa_cycle_allocates_nothing(true);
+}
+
+fn sherpa_cycle_allocates_nothing(free_arm: bool) {
     // All seven joints, VSA characteristic interpolation included, statically linked so that
     // the plugins' allocations would be counted.
-    let path = jointctl_tests::sherpa_with("sherpa-alloc", &arm_name("sherpa-alloc"), &[]);
-    let loaded = jointctl_config::load(&path).unwrap();
+    let name = format!("sherpa-alloc-{free_arm}");
+    let path = jointctl_tests::sherpa_with(&name, &arm_name(&name), &[]);
+    let mut loaded = jointctl_config::load(&path).unwrap();
+    if free_arm {
+        let chain = loaded.chain.clone().unwrap();
+        jointctl_sim::free_arm::release(&mut loaded.config, &chain);
+    }
     let mut loader = PluginLoader::new([]);
     for d in [
         jointctl_plugin_rigid::plugin_descriptor(),
@@ -177,6 +193,12 @@ fn a_sherpa_arm_cycle_allocates_nothing() {
     assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
     assert!(lp.arm.gravity_torques[1].abs() > 1.0, "the URDF's gravity torques ran: {:?}", lp.arm.gravity_torques);
     assert_eq!(n, 0);
+    drop(lp);
+    if free_arm {
+        // The free arm moved: q2 is loaded by the links beyond it, not clamped at its target.
+        let q2 = arm.states[1].torque().unwrap();
+        assert!(q2.abs() > 1.0, "q2 carries the arm: {q2} Nm");
+    }
 }
 
 fn position(target_rad: f64) -> Mode {

@@ -109,6 +109,9 @@ pub struct Row {
     pub observed_nm: f64,
     /// What the joint's torque sensor read (the simulated truth, noise included) [Nm] (mean).
     pub sensed_nm: f64,
+    /// Steady-state cycles in which the DOF's position was unknown (left out of the means, never
+    /// taken as a value).
+    pub unknown_cycles: usize,
 }
 
 /// One DOF's position error over a hold.
@@ -183,10 +186,10 @@ fn hold(cfg: &LoadedConfig, loader: &PluginLoader, plan: &Plan, pose: &Pose, fee
     let steps = (plan.hold_s / dt).round() as usize;
     let from = plan.hold_s - plan.average_s;
     let mut traces: Vec<Trace> = impedance.iter().map(|(_, g)| Trace { pose: pose.name.clone(), feedforward, dof: g.dof.clone(), points: Vec::with_capacity(steps) }).collect();
-    // Per impedance DOF: sums of error, error^2, gravity, reference, observed torque and sensor
-    // over the steady state.
-    let mut sums = vec![[0.0f64; 6]; impedance.len()];
-    let mut count = 0usize;
+    // Per impedance DOF: (sum, count) of the known error, error^2, gravity, reference, observed
+    // torque and sensor over the steady state, and the cycles with the position unknown.
+    let mut sums = vec![[(0.0f64, 0usize); 6]; impedance.len()];
+    let mut unknown = vec![0usize; impedance.len()];
     for _ in 0..steps {
         arm.control();
         t += dt;
@@ -194,39 +197,41 @@ fn hold(cfg: &LoadedConfig, loader: &PluginLoader, plan: &Plan, pose: &Pose, fee
         for (k, (dof, g)) in impedance.iter().enumerate() {
             let error = arm.states[*dof].position().map_or(f64::NAN, |q| q - target_of(&g.dof));
             traces[k].points.push((t - start, error));
-            if t - start >= from {
-                let sensed = sim.with(|s| s.joint_torque(&g.dof).map_or(f64::NAN, |x| x.1));
-                let s = &mut sums[k];
-                for (acc, v) in s.iter_mut().zip([error, error * error, arm.gravity_torques[*dof], arm.torque_references[*dof], arm.states[*dof].torque().unwrap_or(f64::NAN), sensed]) {
-                    *acc += v;
+            if t - start < from {
+                continue;
+            }
+            unknown[k] += usize::from(!error.is_finite());
+            let sensed = sim.with(|s| s.joint_torque(&g.dof).map_or(f64::NAN, |x| x.1));
+            let observed = arm.states[*dof].torque().unwrap_or(f64::NAN);
+            for (acc, v) in sums[k].iter_mut().zip([error, error * error, arm.gravity_torques[*dof], arm.torque_references[*dof], observed, sensed]) {
+                if v.is_finite() {
+                    *acc = (acc.0 + v, acc.1 + 1);
                 }
             }
-        }
-        if t - start >= from {
-            count += 1;
         }
     }
     if let Some(n) = sim.with(|s| s.free_arm().map(|a| a.failures())).filter(|n| *n > 0) {
         return Err(ExperimentError(format!("pose {}: the free arm had no answer in {n} physics steps (a state went non-finite)", pose.name)));
     }
-    let n = count.max(1) as f64;
+    let mean = |(sum, n): (f64, usize)| if n > 0 { sum / n as f64 } else { f64::NAN };
     let rows = impedance
         .iter()
-        .zip(&sums)
-        .map(|((_, g), s)| {
-            let mean = s[0] / n;
+        .zip(sums.into_iter().zip(unknown))
+        .map(|((_, g), (s, unknown_cycles))| {
+            let error = mean(s[0]);
             Row {
                 pose: pose.name.clone(),
                 feedforward,
                 dof: g.dof.clone(),
                 stiffness_nm_per_rad: g.stiffness_nm_per_rad,
                 target_rad: target_of(&g.dof),
-                error_rad: mean,
-                ripple_rad: (s[1] / n - mean * mean).max(0.0).sqrt(),
-                gravity_nm: s[2] / n,
-                reference_nm: s[3] / n,
-                observed_nm: s[4] / n,
-                sensed_nm: s[5] / n,
+                error_rad: error,
+                ripple_rad: (mean(s[1]) - error * error).max(0.0).sqrt(),
+                gravity_nm: mean(s[2]),
+                reference_nm: mean(s[3]),
+                observed_nm: mean(s[4]),
+                sensed_nm: mean(s[5]),
+                unknown_cycles,
             }
         })
         .collect();

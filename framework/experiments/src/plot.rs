@@ -61,6 +61,10 @@ pub fn lines(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[S
         return Err(PlotError::Empty { path: path.to_path_buf() });
     }
     let pad = ((y1 - y0) * 0.1).max(1e-6);
+    // Headroom for the legend (upper left, about 7 % of the height per entry), so that it never
+    // covers data.
+    let legend = (0.07 * series.len() as f64 + 0.05).min(0.6);
+    let top = y1 + pad + (y1 - y0 + 2.0 * pad) * legend / (1.0 - legend);
     let root = SVGBackend::new(path, (900, 420)).into_drawing_area();
     let e = |source: DrawingAreaErrorKind<std::io::Error>| PlotError::Draw { path: path.to_path_buf(), source };
     root.fill(&WHITE).map_err(e)?;
@@ -69,7 +73,7 @@ pub fn lines(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[S
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(56)
-        .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+        .build_cartesian_2d(x0..x1, (y0 - pad)..top)
         .map_err(e)?;
     chart.configure_mesh().x_desc(x_label).y_desc(y_label).draw().map_err(e)?;
     for s in series {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Subcommand;
-use jointctl_experiments::plot::{COLORS, Series, lines};
+use jointctl_experiments::plot::{COLORS, RGBColor, Series, lines};
 use jointctl_experiments::record::{RecordOptions, record, write_csv};
 use jointctl_experiments::tracking::{Plan, Row, Scenario, bandwidth_hz, run};
 
@@ -53,6 +53,22 @@ pub enum ExperimentCommand {
         /// Also write the table here (Markdown).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// Appendix C's future work: the arm off its clamps (every joint of its URDF a joint of the
+    /// simulated free arm), the torque-controlled pitch DOFs holding three poses in impedance,
+    /// with and without gravity feed-forward: steady-state error, torques, a plot per pose.
+    GravityHold {
+        /// The arm description (simulated backend, with `kinematics: {urdf: ...}`).
+        config: PathBuf,
+        /// `modern` (1 kHz, 1 ms) or `thesis` (40 Hz, 15/30 ms latency).
+        #[arg(long, default_value = "modern")]
+        scenario: String,
+        /// Print one JSON object `{"rows": [...]}` instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Where to write the table and plots (default reports/gravity-hold-SCENARIO).
+        #[arg(long)]
+        report: Option<PathBuf>,
     },
 }
 
@@ -240,6 +256,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        ExperimentCommand::GravityHold { config, scenario, json, report } => gravity_hold(&config, &scenario, json, report),
         ExperimentCommand::TorqueTracking { config, joint, scenario, stiffness, json, report, quick } => {
             let Some(scn) = Scenario::parse(&scenario) else {
                 return crate::fail(format!("--scenario must be `thesis` or `modern`, got `{scenario}`"));
@@ -398,4 +415,76 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
             ExitCode::SUCCESS
         }
     }
+}
+
+fn gravity_hold(config: &Path, scenario: &str, json: bool, report: Option<PathBuf>) -> ExitCode {
+    use jointctl_experiments::gravity_hold;
+    let Some(scn) = Scenario::parse(scenario) else {
+        return crate::fail(format!("--scenario must be `thesis` or `modern`, got `{scenario}`"));
+    };
+    let loaded = match jointctl_config::load(config) {
+        Ok(l) => l,
+        Err(e) => return crate::fail_err(e),
+    };
+    let loader = match crate::experiment_loader(&loaded) {
+        Ok(l) => l,
+        Err(e) => return crate::fail_err(e),
+    };
+    let mut plan = gravity_hold::Plan::sherpa();
+    plan.scenario = scn;
+    let (rows, traces) = match gravity_hold::run(&loaded, &loader, &plan) {
+        Ok(r) => r,
+        Err(e) => return crate::fail_err(e),
+    };
+    let dir = report.unwrap_or_else(|| PathBuf::from(format!("reports/gravity-hold-{}", scn.name())));
+    let mut md = format!(
+        "# Impedance hold on the free arm, {} scenario\n\nConfig: `{}`, every joint of its URDF released (`jointctl_sim::free_arm::release`). From upright to each pose in position mode ({} s), then {} in impedance for {} s; steady state = mean over the last {} s. The other DOFs hold their targets in position mode. Error = observed position - target; gravity = the host's holding torque from the URDF; reference = the torque beyond gravity; observed = the joint's observer; sensor = the simulated torque sensor.\n\n| pose | DOF | K [Nm/rad] | target [rad] | feed-forward | error [rad] | ripple [rad] | gravity [Nm] | reference [Nm] | observed [Nm] | sensor [Nm] | position unknown [cycles] | error ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        scn.name(),
+        config.display(),
+        plan.approach_s,
+        plan.impedance.iter().map(|g| g.dof.as_str()).collect::<Vec<_>>().join(", "),
+        plan.hold_s,
+        plan.average_s
+    );
+    for r in &rows {
+        let ratio = if r.feedforward {
+            rows.iter().find(|o| !o.feedforward && o.pose == r.pose && o.dof == r.dof).map_or("-".into(), |o| format!("{:.1}x", o.error_rad.abs() / r.error_rad.abs()))
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {:+.3} | {} | {:+.5} | {:.5} | {:+.3} | {:+.3} | {:+.3} | {:+.3} | {} | {} |",
+            r.pose, r.dof, r.stiffness_nm_per_rad, r.target_rad, if r.feedforward { "on" } else { "off" }, r.error_rad, r.ripple_rad, r.gravity_nm, r.reference_nm, r.observed_nm, r.sensed_nm, r.unknown_cycles, ratio
+        );
+    }
+    let written = std::fs::create_dir_all(&dir).map_err(|e| e.to_string()).and_then(|_| std::fs::write(dir.join("table.md"), &md).map_err(|e| e.to_string()));
+    if let Err(e) = written {
+        return crate::fail(format!("cannot write the report in {}: {e}", dir.display()));
+    }
+    // One plot per pose: each held DOF's error without (dashed colours would hide nothing, so
+    // separate colours) and with feed-forward.
+    let palette = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189), RGBColor(140, 86, 75)];
+    for pose in &plan.poses {
+        let names: Vec<String> = traces.iter().filter(|t| t.pose == pose.name).map(|t| format!("{} {}", t.dof, if t.feedforward { "with feed-forward" } else { "without" })).collect();
+        let series: Vec<Series> = traces
+            .iter()
+            .filter(|t| t.pose == pose.name)
+            .zip(&names)
+            .enumerate()
+            .map(|(k, (t, name))| Series { name, points: t.points.clone(), color: palette[k % palette.len()] })
+            .collect();
+        let targets = pose.targets.iter().map(|(d, q)| format!("{d} {q:.2}")).collect::<Vec<_>>().join(", ");
+        let title = format!("free arm, pose {} ({targets} rad), impedance hold, {}", pose.name, scn.name());
+        if let Err(e) = lines(&dir.join(format!("{}.svg", pose.name)), &title, "time in impedance [s]", "position error [rad]", &series) {
+            return crate::fail_err(e);
+        }
+    }
+    if json {
+        println!("{}", serde_json::json!({ "rows": rows }));
+    } else {
+        print!("{md}");
+        println!("\nReport and plots: {}", dir.display());
+    }
+    ExitCode::SUCCESS
 }

@@ -27,6 +27,11 @@ pub struct RunArgs {
     /// Do not publish to shared memory.
     #[arg(long)]
     no_ipc: bool,
+    /// Simulated backend: take the arm off its clamps, every joint of its URDF a joint of the
+    /// free arm (its links loading each other under gravity), whatever environment the YAML
+    /// gives them.
+    #[arg(long)]
+    free_arm: bool,
 }
 
 /// Says which signal ended set-up, after the joints were held.
@@ -43,10 +48,20 @@ pub fn run(a: RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(format!("cannot install the signal handlers: {e}")),
     };
-    let loaded = match jointctl_config::load(&a.config) {
+    let mut loaded = match jointctl_config::load(&a.config) {
         Ok(l) => l,
         Err(e) => return fail_err(e),
     };
+    if a.free_arm {
+        if loaded.config.hal.backend != jointctl_config::HalBackend::Sim {
+            return fail("--free-arm is for the simulated backend (`hal: {backend: sim}`)".to_string());
+        }
+        let Some(chain) = loaded.chain.clone() else {
+            return fail(format!("--free-arm needs the arm's URDF: {} has no `kinematics: {{urdf: FILE}}`", a.config.display()));
+        };
+        let released = jointctl_sim::free_arm::release(&mut loaded.config, &chain);
+        tracing::info!("free arm: {} released", released.join(", "));
+    }
     let ipc = &loaded.config.ipc;
     let scope = jointctl_ipc::IpcScope { domain: ipc.domain.clone(), root: ipc.root.clone(), group: ipc.group.clone() };
     if let Err(e) = jointctl_ipc::prepare_root(&scope) {
