@@ -1,12 +1,14 @@
 //! Inspectors: separate processes that read a running arm's shared memory. A slow or killed
 //! inspector never slows the loop: its buffer overflows (oldest dropped) instead.
 
+use std::fmt::Write as _;
+use std::io::Write as _;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::Subcommand;
 use iceoryx2::prelude::*;
-use jointctl_ipc::{ArmState, FieldMask, JointSample, ServiceNames, decode_name};
+use jointctl_ipc::{ArmState, Diagnostics, FieldMask, JointSample, ServiceNames, decode_name};
 
 #[derive(Subcommand)]
 pub enum InspectCommand {
@@ -42,18 +44,66 @@ pub enum InspectCommand {
         /// Give up when no sample arrives for this long [s].
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
+        /// Print at most this many samples per second (the newest; the rest are skipped).
+        #[arg(long, value_parser = positive_rate)]
+        rate: Option<f64>,
+        /// Only these joints (DOF names, comma-separated or repeated).
+        #[arg(long, value_delimiter = ',')]
+        joint: Vec<String>,
     },
+    /// Print a running arm's loop health: every diagnostics counter, the lateness histogram,
+    /// each device's losses by its full name, and each joint's faults and holds with the reason.
+    Diag {
+        /// The arm (its YAML `arm:` name).
+        #[arg(long, default_value = "sherpa")]
+        arm: String,
+        /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
+        #[arg(long)]
+        domain: Option<String>,
+        /// Shared-memory root of the arm (its YAML `ipc.root`).
+        #[arg(long, value_name = "DIR")]
+        ipc_root: Option<std::path::PathBuf>,
+        /// One JSON object (the recording's `diagnostics` channel).
+        #[arg(long)]
+        json: bool,
+        /// Give up when no sample arrives for this long [s].
+        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
+        timeout: f64,
+    },
+}
+
+/// A sample rate [Hz]: finite and > 0.
+fn positive_rate(text: &str) -> Result<f64, String> {
+    match crate::finite(text)? {
+        v if v > 0.0 => Ok(v),
+        v => Err(format!("must be > 0 Hz, got {v}")),
+    }
+}
+
+/// What a fault code means (`JointSample::fault_code`).
+fn fault_reason(code: u32) -> String {
+    match code {
+        0 => "none".into(),
+        1 => "its plugin panicked (never entered again)".into(),
+        c => format!("its plugin reported fault code {c}"),
+    }
 }
 
 fn json_f64(sample: &JointSample, bit: u32, value: f64) -> serde_json::Value {
     sample.get(bit, value).map_or(serde_json::Value::Null, serde_json::Value::from)
 }
 
-/// The JSON object of one sample, in the documented shape.
-pub fn sample_json(s: &ArmState) -> serde_json::Value {
+fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() { serde_json::Value::from(x) } else { serde_json::Value::Null }
+}
+
+/// The JSON object of one sample, in the documented shape: only the joints `keep` accepts;
+/// `wall_ns` is the cycle's stamp on the wall clock (UNIX time [ns]).
+pub fn sample_json(s: &ArmState, wall_ns: Option<u64>, keep: impl Fn(&str) -> bool) -> serde_json::Value {
     let joints: Vec<_> = s
         .joints()
         .iter()
+        .filter(|j| keep(decode_name(&j.name)))
         .map(|j| {
             serde_json::json!({
                 "name": decode_name(&j.name),
@@ -63,20 +113,35 @@ pub fn sample_json(s: &ArmState) -> serde_json::Value {
                 "torque": json_f64(j, FieldMask::TORQUE, j.torque_nm),
                 "stiffness": json_f64(j, FieldMask::STIFFNESS, j.stiffness_nm_per_rad),
                 "valid": j.fault_code == 0 && j.valid_mask & FieldMask::POSITION != 0,
+                "pivot": json_f64(j, FieldMask::PIVOT, j.pivot_mm),
+                "reference_torque": finite_or_null(j.reference_torque_nm),
+                "sensor_torque": finite_or_null(j.sensor_torque_nm),
+                "gravity": finite_or_null(j.gravity_nm),
+                "mode": j.mode.name(),
+                "enabled": j.enabled != 0,
+                "fault_code": j.fault_code,
             })
         })
         .collect();
-    serde_json::json!({"cycle": s.cycle, "stamp_ns": s.stamp_ns, "joints": joints})
+    serde_json::json!({"cycle": s.cycle, "stamp_ns": s.stamp_ns, "wall_ns": wall_ns, "joints": joints})
+}
+
+/// A CLOCK_MONOTONIC stamp [ns] (the runtime's, same machine) on the wall clock [UNIX ns]: the
+/// wall clock now minus how long ago the stamp was.
+fn wall_clock_ns(stamp_ns: u64) -> Option<u64> {
+    let mono_now = jointctl_runtime::timing::monotonic_ns();
+    let wall_now = u64::try_from(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).ok()?.as_nanos()).ok()?;
+    wall_now.checked_sub(mono_now.checked_sub(stamp_ns)?)
 }
 
 fn fmt(v: Option<f64>) -> String {
     v.map_or_else(|| "      -".to_string(), |x| format!("{x:7.3}"))
 }
 
-fn human(s: &ArmState) -> String {
+fn human(s: &ArmState, keep: impl Fn(&str) -> bool) -> String {
     let mut out = format!("cycle {:>8}{}\n", s.cycle, if s.final_sample != 0 { "  (final)" } else { "" });
     out.push_str("  joint   pos[rad] vel[rad/s] defl[rad] torque[Nm]  ref[Nm] K[Nm/rad] pivot[mm] mode       state\n");
-    for j in s.joints() {
+    for j in s.joints().iter().filter(|j| keep(decode_name(&j.name))) {
         out.push_str(&format!(
             "  {:<6} {} {}    {}  {}  {} {} {} {:<10} {}\n",
             decode_name(&j.name),
@@ -126,64 +191,49 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        InspectCommand::Echo { arm, domain, ipc_root, json, count, timeout } => {
-            let scope = jointctl_ipc::IpcScope { domain, root: ipc_root, group: None };
-            let node = match jointctl_ipc::create_node_in(&scope, &format!("jointctl-inspect-{}", std::process::id())) {
-                Ok(n) => n,
-                Err(e) => return crate::fail_err(e),
-            };
-            let names = ServiceNames::for_arm(&arm);
-            // The runtime may still be starting: wait for its service up to the timeout.
-            let opened = Instant::now();
-            let service = loop {
-                match jointctl_ipc::joint_state_service(&node, &names.joint_state) {
-                    Err(jointctl_ipc::IpcSetupError::OpenPublishSubscribe {
-                        source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist,
-                        ..
-                    }) if opened.elapsed() < Duration::from_secs_f64(timeout) => std::thread::sleep(Duration::from_millis(20)),
-                    other => break other,
-                }
-            };
-            let subscriber = match service
-                .map_err(|e| crate::chain(&e))
-                .and_then(|s| {
-                    s.subscriber_builder().create().map_err(|e| match e {
-                        iceoryx2::port::subscriber::SubscriberCreateError::ExceedsMaxSupportedSubscribers => format!(
-                            "every subscriber slot of `{}` is taken (the YAML's ipc.max_subscribers): close idle inspectors or raise the limit",
-                            names.joint_state
-                        ),
-                        e => format!("cannot subscribe to `{}`: {e}", names.joint_state),
-                    })
-                })
-            {
+        InspectCommand::Echo { arm, domain, ipc_root, json, count, timeout, rate, joint } => {
+            let hint = domain_hint(&domain);
+            let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service) {
                 Ok(s) => s,
                 Err(e) => return crate::fail(e),
             };
+            let names = ServiceNames::for_arm(&arm);
+            let keep = |name: &str| joint.is_empty() || joint.iter().any(|j| j == name);
+            let min_gap = rate.map(|hz| Duration::from_secs_f64(1.0 / hz));
             let mut received = 0u64;
             let mut last = Instant::now();
+            let mut last_printed: Option<Instant> = None;
             let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
             for signal in [2, 15] {
                 let _ = signal_hook_register(signal, &stop);
             }
+            let mut out = std::io::stdout().lock();
             while count.is_none_or(|c| received < c) && !stop.load(std::sync::atomic::Ordering::Relaxed) {
                 match subscriber.receive() {
                     Ok(Some(sample)) => {
                         last = Instant::now();
-                        received += 1;
                         let s: &ArmState = &sample;
-                        if json {
-                            println!("{}", sample_json(s));
-                        } else {
-                            print!("{}", human(s));
+                        let final_sample = s.final_sample != 0;
+                        // --rate: skip samples that come sooner than the rate allows (never the
+                        // final one).
+                        if !final_sample && min_gap.zip(last_printed).is_some_and(|(gap, at)| at.elapsed() < gap) {
+                            continue;
                         }
-                        if s.final_sample != 0 && count.is_none() {
+                        last_printed = Some(Instant::now());
+                        received += 1;
+                        let text = if json { format!("{}\n", sample_json(s, wall_clock_ns(s.stamp_ns), keep)) } else { human(s, keep) };
+                        // A closed pipe (`| head`) ends the inspector quietly.
+                        if out.write_all(text.as_bytes()).and_then(|_| out.flush()).is_err() {
+                            return ExitCode::SUCCESS;
+                        }
+                        if final_sample && count.is_none() {
                             break;
                         }
                     }
                     Ok(None) => {
                         if last.elapsed() > Duration::from_secs_f64(timeout) {
                             return crate::fail(format!(
-                                "no joint state from arm `{arm}` for {timeout} s (service `{}`): is `jointctl run` running with this arm and domain?",
+                                "no joint state from arm `{arm}` for {timeout} s (service `{}`): is `jointctl run` running with this arm and domain?{hint}",
                                 names.joint_state
                             ));
                         }
@@ -194,7 +244,130 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        InspectCommand::Diag { arm, domain, ipc_root, json, timeout } => {
+            let hint = domain_hint(&domain);
+            let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service) {
+                Ok(s) => s,
+                Err(e) => return crate::fail(e),
+            };
+            // The newest sample: wait for one, then drain what is buffered.
+            let started = Instant::now();
+            let mut newest: Option<Diagnostics> = None;
+            loop {
+                match subscriber.receive() {
+                    Ok(Some(sample)) => newest = Some(*sample),
+                    Ok(None) if newest.is_some() => break,
+                    Ok(None) if started.elapsed() > Duration::from_secs_f64(timeout) => {
+                        return crate::fail(format!(
+                            "no diagnostics from arm `{arm}` for {timeout} s (service `{arm}/diagnostics`): is `jointctl run` running with this arm and domain?{hint}"
+                        ));
+                    }
+                    Ok(None) => std::thread::sleep(Duration::from_millis(1)),
+                    Err(e) => return crate::fail(format!("receive failed: {e:?}")),
+                }
+            }
+            let d = newest.unwrap_or(Diagnostics::EMPTY);
+            let text = if json { format!("{}\n", jointctl_record::messages::diagnostics(&d)) } else { diag_human(&d) };
+            let _ = std::io::stdout().lock().write_all(text.as_bytes());
+            ExitCode::SUCCESS
+        }
     }
+}
+
+/// What to try when no runtime answers in the default domain.
+fn domain_hint(domain: &Option<String>) -> String {
+    match domain {
+        None => " (an arm whose YAML sets `ipc.domain` is found with `--domain D`)".into(),
+        Some(d) => format!(" (looked in domain `{d}`)"),
+    }
+}
+
+type Opener<T> = fn(&iceoryx2::node::Node<ipc::Service>, &str) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, jointctl_ipc::IpcSetupError>;
+
+/// A subscriber of the arm's samples of type `T`.
+type Subscription<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
+
+/// A subscriber to one of the arm's services, waiting up to `timeout` [s] for the runtime to
+/// create it (it may still be starting). The node must outlive the subscriber.
+fn subscribe<T: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static>(
+    arm: &str,
+    domain: Option<String>,
+    ipc_root: Option<std::path::PathBuf>,
+    timeout: f64,
+    service_name: impl Fn(&ServiceNames) -> String,
+    open: Opener<T>,
+) -> Result<(iceoryx2::node::Node<ipc::Service>, Subscription<T>), String> {
+    let hint = domain_hint(&domain);
+    let scope = jointctl_ipc::IpcScope { domain, root: ipc_root, group: None };
+    let node = jointctl_ipc::create_node_in(&scope, &format!("jointctl-inspect-{}", std::process::id())).map_err(|e| crate::chain(&e))?;
+    let name = service_name(&ServiceNames::for_arm(arm));
+    let opened = Instant::now();
+    let service = loop {
+        match open(&node, &name) {
+            Err(jointctl_ipc::IpcSetupError::OpenPublishSubscribe {
+                source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist,
+                ..
+            }) if opened.elapsed() < Duration::from_secs_f64(timeout) => std::thread::sleep(Duration::from_millis(20)),
+            Err(jointctl_ipc::IpcSetupError::OpenPublishSubscribe {
+                source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist,
+                ..
+            }) => return Err(format!("no service `{name}` after {timeout} s: is `jointctl run` running with arm `{arm}`?{hint}")),
+            other => break other,
+        }
+    };
+    let subscriber = service.map_err(|e| crate::chain(&e))?.subscriber_builder().create().map_err(|e| match e {
+        iceoryx2::port::subscriber::SubscriberCreateError::ExceedsMaxSupportedSubscribers => {
+            format!("every subscriber slot of `{name}` is taken (the YAML's ipc.max_subscribers): close idle inspectors or raise the limit")
+        }
+        e => format!("cannot subscribe to `{name}`: {e}"),
+    })?;
+    Ok((node, subscriber))
+}
+
+/// Diagnostics as a person reads them.
+fn diag_human(d: &Diagnostics) -> String {
+    let mut out = String::new();
+    let period_us = d.period_ns as f64 / 1e3;
+    let _ = writeln!(out, "cycle {}  period {period_us:.0} us ({:.1} Hz)", d.cycle, if d.period_ns > 0 { 1e9 / d.period_ns as f64 } else { f64::NAN });
+    let _ = writeln!(
+        out,
+        "overruns {}  missed deadlines {}  HAL errors {}  publish drops {}",
+        d.overruns, d.missed_deadlines, d.hal_errors, d.publish_drops
+    );
+    let _ = writeln!(out, "compute: last {:.1} us, max {:.1} us   lateness: max {:.1} us", d.last_compute_ns as f64 / 1e3, d.max_compute_ns as f64 / 1e3, d.max_jitter_ns as f64 / 1e3);
+    let _ = writeln!(out, "lateness histogram (cycles per bucket):");
+    let mut lower = 0;
+    for (upper, n) in jointctl_ipc::JITTER_BUCKET_UPPER_US.iter().zip(&d.jitter_histogram) {
+        let range = if *upper == u64::MAX { format!(">= {lower} us") } else { format!("{lower}-{upper} us") };
+        let _ = writeln!(out, "  {range:>14}  {n}");
+        lower = *upper;
+    }
+    let _ = writeln!(out, "joints:");
+    let _ = writeln!(out, "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>10}  fault", "joint", "held", "invalid", "faults", "pos clamp", "tq clamp", "rate lim", "watchdog", "missing", "max us");
+    for j in &d.joints[..(d.joint_count as usize).min(d.joints.len())] {
+        let _ = writeln!(
+            out,
+            "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>10.1}  {}",
+            decode_name(&j.name),
+            if j.held != 0 { "yes" } else { "no" },
+            j.invalid_cycles,
+            j.fault_count,
+            j.setpoint_clamps,
+            j.torque_clamps,
+            j.rate_limited,
+            j.watchdog_trips,
+            j.missing_inputs,
+            j.plugin_max_ns as f64 / 1e3,
+            fault_reason(j.fault_code)
+        );
+    }
+    let _ = writeln!(out, "devices:");
+    let _ = writeln!(out, "  {:<32} {:>8} {:>8} {:>11} {:>6}  flags", "device", "missing", "invalid", "implausible", "emcy");
+    for dev in &d.devices[..(d.device_count as usize).min(d.devices.len())] {
+        let flags: Vec<&str> = [(1, "silent"), (2, "fault"), (4, "bus-off"), (8, "error-passive")].iter().filter(|(bit, _)| dev.flags & bit != 0).map(|(_, n)| *n).collect();
+        let _ = writeln!(out, "  {:<32} {:>8} {:>8} {:>11} {:>6}  {}", decode_name(&dev.name), dev.missing, dev.invalid, dev.implausible, dev.emcy, if flags.is_empty() { "-".into() } else { flags.join(",") });
+    }
+    out
 }
 
 fn signal_hook_register(signal: i32, flag: &std::sync::Arc<std::sync::atomic::AtomicBool>) -> std::io::Result<()> {
