@@ -83,11 +83,14 @@ fn group_id(group: &str) -> Result<u32, AccessError> {
 ///
 /// ```
 /// let dir = std::env::temp_dir().join(format!("root-doc-{}", std::process::id()));
+/// // A process id comes back: a folder left by an earlier run is not this run's.
+/// let _ = std::fs::remove_dir_all(&dir);
 /// jointctl_ipc::access::secure_root(&dir, None).unwrap();
 /// use std::os::unix::fs::PermissionsExt;
 /// assert_eq!(std::fs::metadata(&dir).unwrap().permissions().mode() & 0o777, 0o700);
 /// std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o777)).unwrap();
 /// assert!(jointctl_ipc::access::secure_root(&dir, None).is_err());
+/// std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn secure_root(root: &Path, group: Option<&str>) -> Result<(), AccessError> {
     let io = |what, source| AccessError::Io { what, path: root.to_path_buf(), source };
