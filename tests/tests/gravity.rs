@@ -50,6 +50,23 @@ for pose in json.load(sys.stdin):
 json.dump(out, sys.stdout)
 "#;
 
+/// Runs a Pinocchio script (the interop venv's python) on the arm's URDF with `input` on its
+/// stdin: the JSON list it prints.
+fn pinocchio(script: &str, input: &serde_json::Value) -> Vec<serde_json::Value> {
+    let mut py = Command::new(jointctl_tests::interop_python())
+        .args(["-c", script])
+        .arg(root().join("configs/sherpa_arm.urdf"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the interop venv's python (.ci/setup-python-venv)");
+    py.stdin.take().unwrap().write_all(input.to_string().as_bytes()).unwrap();
+    let out = py.wait_with_output().unwrap();
+    assert!(out.status.success(), "pinocchio: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 #[test]
 fn pinocchio_agrees_on_random_poses_within_a_micro_newton_metre() {
     let mut rng = SplitMix64(17);
@@ -64,18 +81,7 @@ fn pinocchio_agrees_on_random_poses_within_a_micro_newton_metre() {
         poses.push(v["pose"].clone());
         ours.push(v["torques_nm"].clone());
     }
-    let mut py = Command::new(jointctl_tests::interop_python())
-        .args(["-c", PINOCCHIO])
-        .arg(root().join("configs/sherpa_arm.urdf"))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the interop venv's python (.ci/setup-python-venv)");
-    py.stdin.take().unwrap().write_all(serde_json::to_string(&poses).unwrap().as_bytes()).unwrap();
-    let out = py.wait_with_output().unwrap();
-    assert!(out.status.success(), "pinocchio: {}", String::from_utf8_lossy(&out.stderr));
-    let theirs: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    let theirs = pinocchio(PINOCCHIO, &serde_json::json!(poses));
     assert_eq!(theirs.len(), poses.len());
     let mut worst = 0.0f64;
     for (k, (a, b)) in ours.iter().zip(&theirs).enumerate() {
@@ -129,19 +135,7 @@ fn pinocchio_agrees_on_the_arms_dynamics() {
         ours.push((rnea, crba, aba));
         cases.push(serde_json::json!({"q": q, "v": v, "a": a, "tau": tau}));
     }
-    let mut py = Command::new(jointctl_tests::interop_python())
-        .args(["-c", PINOCCHIO_DYNAMICS])
-        .arg(root().join("configs/sherpa_arm.urdf"))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the interop venv's python (.ci/setup-python-venv)");
-    let input = serde_json::json!({"armature": armature, "cases": cases});
-    py.stdin.take().unwrap().write_all(input.to_string().as_bytes()).unwrap();
-    let out = py.wait_with_output().unwrap();
-    assert!(out.status.success(), "pinocchio: {}", String::from_utf8_lossy(&out.stderr));
-    let theirs: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    let theirs = pinocchio(PINOCCHIO_DYNAMICS, &serde_json::json!({"armature": armature, "cases": cases}));
     let (mut worst_tau, mut worst_m, mut worst_qdd) = (0.0f64, 0.0f64, 0.0f64);
     for (k, ((rnea, crba, aba), p)) in ours.iter().zip(&theirs).enumerate() {
         let row = |key: &str| -> Vec<f64> { p[key].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };

@@ -336,13 +336,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
             if let Err(e) = written {
                 return crate::fail(format!("cannot write the report in {}: {e}", dir.display()));
             }
-            if json {
-                println!("{}", serde_json::json!({ "rows": rows }));
-            } else {
-                print!("{md}");
-                println!("\nReport and plots: {}", dir.display());
-            }
-            ExitCode::SUCCESS
+            print_report(json, serde_json::json!(rows), &md, &dir)
         }
     }
 }
@@ -480,6 +474,11 @@ fn gravity_hold(config: &Path, scenario: &str, json: bool, report: Option<PathBu
             return crate::fail_err(e);
         }
     }
+    print_report(json, serde_json::json!(rows), &md, &dir)
+}
+
+/// `{"rows": [...]}` with `--json`, else the Markdown table and where the report is.
+fn print_report(json: bool, rows: serde_json::Value, md: &str, dir: &Path) -> ExitCode {
     if json {
         println!("{}", serde_json::json!({ "rows": rows }));
     } else {

@@ -26,15 +26,8 @@ pub enum InspectCommand {
     },
     /// Print the live joint states of a running arm.
     Echo {
-        /// The arm (its YAML `arm:` name).
-        #[arg(long, default_value = "sherpa")]
-        arm: String,
-        /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
-        #[arg(long)]
-        domain: Option<String>,
-        /// Shared-memory root of the arm (its YAML `ipc.root`).
-        #[arg(long, value_name = "DIR")]
-        ipc_root: Option<std::path::PathBuf>,
+        #[command(flatten)]
+        at: RunningArm,
         /// One JSON object per sample.
         #[arg(long)]
         json: bool,
@@ -54,15 +47,8 @@ pub enum InspectCommand {
     /// Print a running arm's loop health: every diagnostics counter, the lateness histogram,
     /// each device's losses by its full name, and each joint's faults and holds with the reason.
     Diag {
-        /// The arm (its YAML `arm:` name).
-        #[arg(long, default_value = "sherpa")]
-        arm: String,
-        /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
-        #[arg(long)]
-        domain: Option<String>,
-        /// Shared-memory root of the arm (its YAML `ipc.root`).
-        #[arg(long, value_name = "DIR")]
-        ipc_root: Option<std::path::PathBuf>,
+        #[command(flatten)]
+        at: RunningArm,
         /// One JSON object (the recording's `diagnostics` channel).
         #[arg(long)]
         json: bool,
@@ -70,6 +56,20 @@ pub enum InspectCommand {
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
     },
+}
+
+/// Where a running arm publishes.
+#[derive(clap::Args)]
+pub struct RunningArm {
+    /// The arm (its YAML `arm:` name).
+    #[arg(long, default_value = "sherpa")]
+    arm: String,
+    /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
+    #[arg(long)]
+    domain: Option<String>,
+    /// Shared-memory root of the arm (its YAML `ipc.root`).
+    #[arg(long, value_name = "DIR")]
+    ipc_root: Option<std::path::PathBuf>,
 }
 
 /// A sample rate [Hz]: finite and > 0.
@@ -191,7 +191,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        InspectCommand::Echo { arm, domain, ipc_root, json, count, timeout, rate, joint } => {
+        InspectCommand::Echo { at: RunningArm { arm, domain, ipc_root }, json, count, timeout, rate, joint } => {
             let hint = domain_hint(&domain);
             let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service) {
                 Ok(s) => s,
@@ -244,7 +244,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        InspectCommand::Diag { arm, domain, ipc_root, json, timeout } => {
+        InspectCommand::Diag { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
             let hint = domain_hint(&domain);
             let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service) {
                 Ok(s) => s,
