@@ -57,6 +57,8 @@ fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
             assert_eq!(p["valid"], true);
         }
         assert_eq!(pj[0]["torque"], serde_json::Value::Null, "a rigid joint's torque is unknown");
+        assert_eq!(pj[0]["mode"], "position", "`a` was commanded to a position before the Python client started");
+        assert!(s["wall_ns"].as_u64().is_some(), "a wall-clock stamp: {s}");
         assert!(pj[1]["torque"].is_f64());
     }
     // Live data: cycles increase, time stamps advance with them, and `a` moves towards 0.3 rad.

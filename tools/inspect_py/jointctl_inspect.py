@@ -4,8 +4,10 @@ It is an outside client of the shared-memory contract (framework/ipc): it uses o
 package `iceoryx2` 0.10 and ctypes mirrors of the `#[repr(C)]` payloads, and prints one JSON
 object per sample in the shape of `jointctl inspect echo --json`:
 
-    {"cycle": int, "stamp_ns": int, "joints": [{"name", "position", "velocity", "deflection",
-     "torque", "stiffness", "valid"}]}   (SI units; null for what is not observed)
+    {"cycle": int, "stamp_ns": int (monotonic), "wall_ns": int (the cycle on the UNIX clock),
+     "joints": [{"name", "position", "velocity", "deflection", "torque", "stiffness", "valid",
+     "pivot", "reference_torque", "sensor_torque", "gravity", "mode", "enabled", "fault_code"}]}
+    (SI units; null for what is not observed)
 
 Usage: python jointctl_inspect.py ARM [--count N] [--timeout S]
 """
@@ -22,7 +24,9 @@ import iceoryx2 as iox2
 # framework/ipc/src/lib.rs: MAX_JOINTS, NAME_LEN; framework/api/src/state.rs: FieldMask bits.
 MAX_JOINTS = 16
 NAME_LEN = 16
-POSITION, VELOCITY, DEFLECTION, TORQUE, STIFFNESS = 1 << 0, 1 << 1, 1 << 2, 1 << 3, 1 << 4
+POSITION, VELOCITY, DEFLECTION, TORQUE, STIFFNESS, PIVOT = 1 << 0, 1 << 1, 1 << 2, 1 << 3, 1 << 4, 1 << 5
+# framework/ipc/src/lib.rs: JointMode's codes and names.
+MODES = {0: "hold", 1: "position", 2: "manual", 3: "trajectory", 4: "torque", 5: "impedance"}
 
 
 class JointSample(ctypes.Structure):
@@ -69,6 +73,17 @@ def field(sample: JointSample, bit: int, value: float):
     return None
 
 
+def known(value: float):
+    """A finite value, else None (JSON null): NaN means not known."""
+    return value if math.isfinite(value) else None
+
+
+def wall_clock_ns(stamp_ns: int):
+    """The runtime's CLOCK_MONOTONIC stamp on the wall clock (same machine)."""
+    age = time.monotonic_ns() - stamp_ns
+    return time.time_ns() - age if age >= 0 else None
+
+
 def as_json(state: ArmState) -> dict:
     joints = []
     for j in state.joints[: min(state.joint_count, MAX_JOINTS)]:
@@ -82,9 +97,16 @@ def as_json(state: ArmState) -> dict:
                 "torque": field(j, TORQUE, j.torque_nm),
                 "stiffness": field(j, STIFFNESS, j.stiffness_nm_per_rad),
                 "valid": j.fault_code == 0 and bool(j.valid_mask & POSITION),
+                "pivot": field(j, PIVOT, j.pivot_mm),
+                "reference_torque": known(j.reference_torque_nm),
+                "sensor_torque": known(j.sensor_torque_nm),
+                "gravity": known(j.gravity_nm),
+                "mode": MODES.get(j.mode, "unknown"),
+                "enabled": j.enabled != 0,
+                "fault_code": j.fault_code,
             }
         )
-    return {"cycle": state.cycle, "stamp_ns": state.stamp_ns, "joints": joints}
+    return {"cycle": state.cycle, "stamp_ns": state.stamp_ns, "wall_ns": wall_clock_ns(state.stamp_ns), "joints": joints}
 
 
 def main() -> int:
