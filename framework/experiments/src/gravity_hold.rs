@@ -10,7 +10,7 @@ use jointctl_runtime::{Arm, PluginLoader};
 use jointctl_sim::{SharedSim, SimHal};
 
 use crate::tracking::Scenario;
-use crate::{ExperimentError, arm_dof};
+use crate::ExperimentError;
 
 /// One pose to hold: a name and the target of every DOF the pose names [rad] (the others: 0).
 #[derive(Clone, Debug)]
@@ -165,9 +165,11 @@ fn hold(cfg: &LoadedConfig, loader: &PluginLoader, plan: &Plan, pose: &Pose, fee
     let mut t = 0.0;
     arm.observe(t);
     let target_of = |dof: &str| pose.targets.iter().find(|(d, _)| d == dof).map_or(0.0, |(_, q)| *q);
-    let impedance: Vec<(usize, &Gains)> = plan.impedance.iter().map(|g| (arm_dof(&arm, &g.dof), g)).collect();
+    let names = arm.dof_names.clone();
+    let dof_of = |name: &str| names.iter().position(|d| d == name).ok_or_else(|| ExperimentError(format!("the plan names `{name}`, which is no DOF of the arm")));
+    let impedance = plan.impedance.iter().map(|g| Ok((dof_of(&g.dof)?, g))).collect::<Result<Vec<(usize, &Gains)>, ExperimentError>>()?;
     for (dof, k) in &plan.stiffness {
-        arm.apply(ArmCommand::Stiffness { dof: arm_dof(&arm, dof), stiffness_nm_per_rad: *k });
+        arm.apply(ArmCommand::Stiffness { dof: dof_of(dof)?, stiffness_nm_per_rad: *k });
     }
     // From upright to the pose in position mode, then the torque DOFs hold it in impedance.
     for dof in 0..arm.dof_names.len() {

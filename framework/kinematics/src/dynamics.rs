@@ -14,9 +14,17 @@ use crate::{Chain, PoseError};
 /// Why forward dynamics has no answer.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum DynamicsError {
-    /// The pose, a velocity, a torque or an armature is unusable.
+    /// The pose, a velocity or a torque is unusable.
     #[error(transparent)]
     Pose(#[from] PoseError),
+    /// An armature that is negative or not a number.
+    #[error("joint `{dof}`: armature {value} kg m^2 must be a finite number >= 0")]
+    Armature {
+        /// The joint.
+        dof: String,
+        /// The value given.
+        value: f64,
+    },
     /// A free joint that moves no inertia (a massless link and no armature): its acceleration
     /// is not defined.
     #[error("joint `{dof}` moves no inertia at this pose (mass matrix not positive definite): give its links mass or the joint an armature")]
@@ -108,13 +116,13 @@ impl Dynamics {
     /// let dynamics = Dynamics::downward(chain, 9.81).with_armature(&[0.1; 7]).unwrap();
     /// assert_eq!(dynamics.armature_kgm2(), [0.1; 7]);
     /// ```
-    pub fn with_armature(mut self, armature_kgm2: &[f64]) -> Result<Dynamics, PoseError> {
+    pub fn with_armature(mut self, armature_kgm2: &[f64]) -> Result<Dynamics, DynamicsError> {
         let n = self.armature_kgm2.len();
         if armature_kgm2.len() != n {
-            return Err(PoseError::Length { what: "armature", expected: n, got: armature_kgm2.len() });
+            return Err(PoseError::Length { what: "armature", expected: n, got: armature_kgm2.len() }.into());
         }
         if let Some(k) = armature_kgm2.iter().position(|a| !(a.is_finite() && *a >= 0.0)) {
-            return Err(PoseError::NotFinite { dof: self.chain.dof_names()[k].clone(), value: armature_kgm2[k] });
+            return Err(DynamicsError::Armature { dof: self.chain.dof_names()[k].clone(), value: armature_kgm2[k] });
         }
         self.armature_kgm2.copy_from_slice(armature_kgm2);
         Ok(self)
@@ -448,6 +456,7 @@ mod tests {
         let mut d = Dynamics::downward(chain, 9.81).with_armature(&[0.5]).unwrap();
         d.forward(&[0.0], &[0.0], &[1.0], &[false], &mut qdd).unwrap();
         assert!((qdd[0] - 2.0).abs() < 1e-12);
+        assert!(matches!(Dynamics::downward(d.chain().clone(), 9.81).with_armature(&[-0.1]), Err(DynamicsError::Armature { ref dof, .. }) if dof == "j"));
         assert!(matches!(d.forward(&[f64::NAN], &[0.0], &[1.0], &[false], &mut qdd), Err(DynamicsError::Pose(PoseError::NotFinite { ref dof, .. })) if dof == "j"));
     }
 }

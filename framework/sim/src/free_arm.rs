@@ -69,7 +69,7 @@ impl FreeArm {
         if let Err(e) = arm.dynamics.forward(&arm.q, &arm.qd, &arm.tau, &arm.locked, &mut arm.qdd) {
             let culprit = match &e {
                 DynamicsError::Singular { dof } => chain.dof_names().iter().position(|d| d == dof).map(|k| arm.at[k].0).unwrap_or(u),
-                DynamicsError::Pose(_) => u,
+                DynamicsError::Pose(_) | DynamicsError::Armature { .. } => u,
             };
             return Err((field_of(culprit), e.to_string()));
         }
