@@ -314,7 +314,7 @@ impl SimHal {
             torque_sensors.push((at, f.range_nm, Conditioner::new(Plausibility::torque_sensor())));
         }
         let g_m_s2 = config.kinematics.as_ref().map_or(jointctl_kinematics::STANDARD_GRAVITY_M_S2, |k| k.gravity_m_s2);
-        let mut free_arm = FreeArm::new(chain, g_m_s2, &units, |u| format!("joints[{}].sim.environment", unit_joint[u])).map_err(|(f, m)| setup(f, m))?;
+        let free_arm = FreeArm::new(chain, g_m_s2, &units, |u| format!("joints[{}].sim.environment", unit_joint[u])).map_err(|(f, m)| setup(f, m))?;
         let n_drives = drives.len();
         let sensor_history = vec![DelayLine::new(); units.len() * unit::MAX_UNIT_DOF];
         let mut hal = SimHal {
@@ -344,12 +344,11 @@ impl SimHal {
             positions: vec![0.0; n_drives],
             velocities: vec![0.0; n_drives],
             loads: vec![0.0; n_drives],
-            free_arm: None,
+            free_arm,
         };
         for u in &mut hal.units {
             u.start(&hal.positions);
         }
-        hal.free_arm = free_arm.take();
         hal.record();
         Ok(hal)
     }

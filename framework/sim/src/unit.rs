@@ -267,6 +267,8 @@ impl Unit {
     pub fn start(&mut self, drive_positions: &[f64]) {
         self.update_theta(drive_positions, &vec![0.0; drive_positions.len()]);
         for i in 0..self.dof() {
+            // At rest: a free link (or the free arm) starts still wherever it was.
+            self.output_velocity[i] = 0.0;
             self.output[i] = match self.environments[i] {
                 EnvironmentConfig::Fixed { position_rad } => position_rad,
                 EnvironmentConfig::Flow { .. } => self.flow(i, 0.0).unwrap_or(0.0),
