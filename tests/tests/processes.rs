@@ -169,6 +169,49 @@ fn inspect_diag_prints_the_arms_counters_and_devices() {
     assert!(!out.status.success() && err.contains("--domain D"), "{err}");
 }
 
+/// Finding: nothing showed what runs (`ros2 control list_controllers`). Pass: `inspect joints
+/// --json` names each joint's plugin, version and library, and its DOFs' mode, enabled, fault and
+/// validity, following a `disable` command.
+#[test]
+fn inspect_joints_lists_each_plugin_and_its_dofs_state() {
+    let (arm, yaml) = write_rig("joints", 100.0);
+    let mut run = spawn_run(&yaml, &["--duration", "30"]);
+    let joints = |extra: &[&str]| Command::new(jointctl()).args(["inspect", "joints", "--arm", &arm, "--timeout", "10"]).args(extra).output().unwrap();
+    let before = joints(&["--json"]);
+    let disabled = Command::new(jointctl()).args(["cmd", "--arm", &arm, "disable", "a"]).output().unwrap();
+    let mut after = serde_json::Value::Null;
+    let t = Instant::now();
+    while t.elapsed() < Duration::from_secs(5) {
+        let out = joints(&["--json"]);
+        after = serde_json::from_slice(&out.stdout).unwrap_or_default();
+        if after["joints"][0]["dofs"][0]["enabled"] == false {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let human = joints(&[]);
+    let _ = run.kill();
+    let _ = run.wait();
+    assert!(before.status.success(), "{}", String::from_utf8_lossy(&before.stderr));
+    assert!(disabled.status.success(), "{}", String::from_utf8_lossy(&disabled.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&before.stdout).unwrap();
+    assert_eq!(v["rate_hz"], 100.0, "{v}");
+    let a = &v["joints"][0];
+    assert_eq!((a["name"].as_str(), a["plugin"].as_str()), (Some("a"), Some("rigid")), "{v}");
+    assert_eq!(a["version"].as_str(), Some(env!("CARGO_PKG_VERSION")), "the plugins share the workspace's version: {v}");
+    let library = a["library"].as_str().unwrap_or_default();
+    assert!(library.ends_with("libjointctl_plugin_rigid.so"), "loaded from its library: {v}");
+    let dof = &a["dofs"][0];
+    assert_eq!((dof["name"].as_str(), dof["mode"].as_str()), (Some("a"), Some("hold")), "{v}");
+    assert_eq!((dof["enabled"].as_bool(), dof["valid"].as_bool(), dof["held"].as_bool()), (Some(true), Some(true), Some(false)), "{v}");
+    assert!(dof["observed"].as_array().unwrap().iter().any(|f| f == "position"), "{v}");
+    assert_eq!((dof["fault_code"].as_u64(), dof["fault"].as_str()), (Some(0), Some("none")), "{v}");
+    assert_eq!(after["joints"][0]["dofs"][0]["enabled"], false, "disabled: {after}");
+    assert_eq!(after["joints"][1]["dofs"][0]["enabled"], true, "only `a` was disabled: {after}");
+    let text = String::from_utf8_lossy(&human.stdout);
+    assert!(human.status.success() && text.contains("rigid") && text.contains("libjointctl_plugin_rigid.so"), "{text}");
+}
+
 /// Finding: SIGHUP (an SSH disconnect), SIGQUIT and SIGUSR1 ended the runtime without holding
 /// the joints, without a final sample, leaving stale shared memory. Pass, for every terminating
 /// signal: exit 0 within 5 s, "joints held" logged with the signal's name, a final sample

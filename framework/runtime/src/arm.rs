@@ -21,6 +21,10 @@ pub struct JointSlot {
     pub name: String,
     /// Plugin name.
     pub plugin: String,
+    /// The plugin crate's version.
+    pub plugin_version: String,
+    /// The library the plugin was loaded from; `None` when it is linked into the host.
+    pub plugin_library: Option<std::path::PathBuf>,
     joint: Box<dyn LoadedJoint>,
     dofs: core::ops::Range<usize>,
     encoder_map: [Option<usize>; MAX_ENCODERS],
@@ -360,6 +364,7 @@ impl Arm {
                 continue;
             };
             let ctx = JointContext::new(d.dof(), enc_roles.len() as u32, drv_roles.len() as u32, cfg.rate_hz);
+            let plugin_library = source.library.clone();
             let joint = match instantiate(jc, source, &ctx, &at, src) {
                 Ok(j) => j,
                 Err(e) => {
@@ -383,6 +388,8 @@ impl Arm {
             slots.push(JointSlot {
                 name: jc.name.clone(),
                 plugin: jc.plugin.name.clone(),
+                plugin_version: d.version().to_string(),
+                plugin_library,
                 joint: Box::new(joint),
                 dofs: first..dof_names.len(),
                 encoder_map,

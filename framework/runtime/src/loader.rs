@@ -12,10 +12,12 @@ use jointctl_api::abi::{ABI_MAGIC, ABI_MAJOR, ABI_MINOR, LAYOUT_HASH, PluginDesc
 use jointctl_api::{MAX_DOF, MAX_DRIVES, MAX_ENCODERS};
 
 /// Where a plugin's code comes from.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct PluginSource {
     /// The descriptor (from a loaded library or linked statically).
     pub descriptor: &'static PluginDescriptor,
+    /// The library it was loaded from; `None` when it is linked into the host.
+    pub library: Option<PathBuf>,
 }
 
 /// Why a plugin could not be loaded.
@@ -262,7 +264,7 @@ impl PluginLoader {
         if path.is_none()
             && let Some(d) = self.statics.get(name)
         {
-            return Ok(PluginSource { descriptor: d });
+            return Ok(PluginSource { descriptor: d, library: None });
         }
         let file = match path {
             Some(p) => p.to_path_buf(),
@@ -278,7 +280,7 @@ impl PluginLoader {
         let descriptor = unsafe { entry() };
         // SAFETY: the library stays loaded forever, so its descriptor is 'static.
         let d = unsafe { check_descriptor(descriptor, &file, name)? };
-        Ok(PluginSource { descriptor: d })
+        Ok(PluginSource { descriptor: d, library: Some(file) })
     }
 
     fn find(&self, name: &str) -> Result<PathBuf, LoadPluginError> {

@@ -16,7 +16,7 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use jointctl_config::TimingConfig;
 use jointctl_modes::Mode;
 use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDrive, RawFrame, RawReading};
-use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDiagnostics, JointMode, JointSample, ServiceNames, encode_name};
+use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointMode, JointSample, JointsDescriptor, ServiceNames, encode_name};
 
 use crate::commands::{ArmCommand, CommandValidator};
 
@@ -209,6 +209,26 @@ impl CommandDesk {
     }
 }
 
+/// The arm's plugin instances as `inspect joints` reads them.
+fn joints_descriptor(arm: &Arm) -> Box<JointsDescriptor> {
+    let mut d = Box::new(JointsDescriptor::EMPTY);
+    d.rate_hz = arm.rate_hz;
+    for (entry, slot) in d.joints.iter_mut().zip(&arm.slots) {
+        let dofs = slot.dofs();
+        *entry = JointDescriptor {
+            name: encode_name(&slot.name),
+            plugin: encode_name(&slot.plugin),
+            version: encode_name(&slot.plugin_version),
+            library: slot.plugin_library.as_deref().map_or([0; jointctl_ipc::raw::PATH_LEN], |p| encode_name(&p.to_string_lossy())),
+            first_dof: dofs.start as u32,
+            dof_count: dofs.len() as u32,
+            budget_ns: slot.budget_ns,
+        };
+        d.joint_count += 1;
+    }
+    d
+}
+
 /// What the publisher thread owns: the arm's node and ports.
 struct PublisherPorts {
     node: Node<ipc::Service>,
@@ -217,6 +237,8 @@ struct PublisherPorts {
     raw: Publisher<ipc::Service, RawFrame, ()>,
     /// Kept so that its one sample stays in the service's history for late subscribers.
     descriptor: Publisher<ipc::Service, RawDescriptor, ()>,
+    /// Kept likewise: the arm's plugin instances.
+    joints: Publisher<ipc::Service, JointsDescriptor, ()>,
     accepted: Publisher<ipc::Service, CommandRecord, ()>,
     server: iceoryx2::port::server::Server<ipc::Service, jointctl_ipc::CommandRequest, (), CommandResponse, ()>,
 }
@@ -224,7 +246,13 @@ struct PublisherPorts {
 impl PublisherPorts {
     /// Creates the arm's node and services; a taken publisher or server slot means another
     /// runtime runs this arm.
-    fn open(scope: &jointctl_ipc::IpcScope, arm_name: &str, limits: jointctl_ipc::PortLimits, description: &RawDescriptor) -> Result<Self, RunError> {
+    fn open(
+        scope: &jointctl_ipc::IpcScope,
+        arm_name: &str,
+        limits: jointctl_ipc::PortLimits,
+        description: &RawDescriptor,
+        instances: &JointsDescriptor,
+    ) -> Result<Self, RunError> {
         let node = jointctl_ipc::create_node_in(scope, &format!("jointctl-run-{arm_name}"))?;
         let names = ServiceNames::for_arm(arm_name);
         // The command server and the raw services first, the joint state and diagnostics last:
@@ -246,6 +274,14 @@ impl PublisherPorts {
         if !sent {
             tracing::warn!(service = %names.raw_descriptor, "could not publish the raw-reading descriptor");
         }
+        let joints = jointctl_ipc::create_joints_service(&node, &names.joints, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.joints, e))?;
+        let sent = joints.loan_uninit().map(|s| s.write_payload(*instances).send().is_ok()).unwrap_or(false);
+        if !sent {
+            tracing::warn!(service = %names.joints, "could not publish the plugin instances");
+        }
         let accepted = jointctl_ipc::create_commands_service(&node, &names.commands, limits)?
             .publisher_builder()
             .create()
@@ -258,7 +294,7 @@ impl PublisherPorts {
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
-        Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, accepted, server })
+        Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server })
     }
 
     /// Publishes the loop's records and answers commands until `stop`; returns the samples
@@ -295,14 +331,15 @@ impl PublisherPorts {
             }
             // A subscriber that arrived since gets the descriptor from the history now.
             let _ = self.descriptor.update_connections();
+            let _ = self.joints.update_connections();
             if stopping {
                 break;
             }
             std::thread::park_timeout(std::time::Duration::from_millis(5));
         }
-        let PublisherPorts { node, state, diagnostics, raw, descriptor, accepted, server } = self;
+        let PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server } = self;
         // Ports before the node: shared memory released in order.
-        drop((server, state, diagnostics, raw, descriptor, accepted, node));
+        drop((server, state, diagnostics, raw, descriptor, joints, accepted, node));
         failures
     }
 }
@@ -359,11 +396,12 @@ impl ArmPublisher {
         let (encoders, drives) = arm.raw_devices();
         let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
         fill_raw(&mut description.activation, arm);
+        let instances = joints_descriptor(arm);
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
             .spawn(move || {
-                let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description) {
+                let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description, &instances) {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(()));
                         ports

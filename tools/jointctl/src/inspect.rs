@@ -56,6 +56,18 @@ pub enum InspectCommand {
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
     },
+    /// List what runs: each joint's plugin (name, version, library), its DOFs with their mode,
+    /// whether they are enabled, faulted, held, and which fields are observed.
+    Joints {
+        #[command(flatten)]
+        at: RunningArm,
+        /// One JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Give up when no sample arrives for this long [s].
+        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
+        timeout: f64,
+    },
 }
 
 /// Where a running arm publishes.
@@ -245,33 +257,145 @@ pub fn run(command: InspectCommand) -> ExitCode {
             ExitCode::SUCCESS
         }
         InspectCommand::Diag { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
-            let hint = domain_hint(&domain);
-            let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service) {
-                Ok(s) => s,
+            let d = match newest(&arm, domain, ipc_root, timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service) {
+                Ok(d) => d,
                 Err(e) => return crate::fail(e),
             };
-            // The newest sample: wait for one, then drain what is buffered.
-            let started = Instant::now();
-            let mut newest: Option<Diagnostics> = None;
-            loop {
-                match subscriber.receive() {
-                    Ok(Some(sample)) => newest = Some(*sample),
-                    Ok(None) if newest.is_some() => break,
-                    Ok(None) if started.elapsed() > Duration::from_secs_f64(timeout) => {
-                        return crate::fail(format!(
-                            "no diagnostics from arm `{arm}` for {timeout} s (service `{arm}/diagnostics`): is `jointctl run` running with this arm and domain?{hint}"
-                        ));
-                    }
-                    Ok(None) => std::thread::sleep(Duration::from_millis(1)),
-                    Err(e) => return crate::fail(format!("receive failed: {e:?}")),
-                }
-            }
-            let d = newest.unwrap_or(Diagnostics::EMPTY);
             let text = if json { format!("{}\n", jointctl_record::messages::diagnostics(&d)) } else { diag_human(&d) };
             let _ = std::io::stdout().lock().write_all(text.as_bytes());
             ExitCode::SUCCESS
         }
+        InspectCommand::Joints { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
+            let read = || -> Result<(jointctl_ipc::JointsDescriptor, ArmState, Diagnostics), String> {
+                let instances = newest(&arm, domain.clone(), ipc_root.clone(), timeout, |n| n.joints.clone(), jointctl_ipc::joints_service)?;
+                let state = newest(&arm, domain.clone(), ipc_root.clone(), timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service)?;
+                let diagnostics = newest(&arm, domain.clone(), ipc_root.clone(), timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service)?;
+                Ok((instances, state, diagnostics))
+            };
+            let (instances, state, diagnostics) = match read() {
+                Ok(r) => r,
+                Err(e) => return crate::fail(e),
+            };
+            let view = joints_json(&instances, &state, &diagnostics);
+            let text = if json { format!("{view}\n") } else { joints_human(&view) };
+            let _ = std::io::stdout().lock().write_all(text.as_bytes());
+            ExitCode::SUCCESS
+        }
     }
+}
+
+/// The newest sample of one of the arm's services: waits up to `timeout` [s] for the first, then
+/// drains what is buffered.
+fn newest<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
+    arm: &str,
+    domain: Option<String>,
+    ipc_root: Option<std::path::PathBuf>,
+    timeout: f64,
+    service_name: impl Fn(&ServiceNames) -> String,
+    open: Opener<T>,
+) -> Result<T, String> {
+    let hint = domain_hint(&domain);
+    let name = service_name(&ServiceNames::for_arm(arm));
+    let (_node, subscriber) = subscribe(arm, domain, ipc_root, timeout, |n| service_name(n), open)?;
+    let started = Instant::now();
+    let mut newest: Option<T> = None;
+    loop {
+        match subscriber.receive() {
+            Ok(Some(sample)) => newest = Some(*sample),
+            Ok(None) => match newest {
+                Some(n) => return Ok(n),
+                None if started.elapsed() > Duration::from_secs_f64(timeout) => {
+                    return Err(format!("nothing from arm `{arm}` for {timeout} s (service `{name}`): is `jointctl run` running with this arm and domain?{hint}"));
+                }
+                None => std::thread::sleep(Duration::from_millis(1)),
+            },
+            Err(e) => return Err(format!("receive from `{name}` failed: {e:?}")),
+        }
+    }
+}
+
+/// Names of the observed fields in a [`FieldMask`].
+fn field_names(mask: u32) -> Vec<&'static str> {
+    [
+        (FieldMask::POSITION, "position"),
+        (FieldMask::VELOCITY, "velocity"),
+        (FieldMask::DEFLECTION, "deflection"),
+        (FieldMask::TORQUE, "torque"),
+        (FieldMask::STIFFNESS, "stiffness"),
+        (FieldMask::PIVOT, "pivot"),
+    ]
+    .iter()
+    .filter(|(bit, _)| mask & bit != 0)
+    .map(|(_, n)| *n)
+    .collect()
+}
+
+/// `inspect joints --json`: each plugin instance and its DOFs' state at the newest cycle.
+fn joints_json(instances: &jointctl_ipc::JointsDescriptor, state: &ArmState, diagnostics: &Diagnostics) -> serde_json::Value {
+    let joints: Vec<_> = instances
+        .joints()
+        .iter()
+        .map(|j| {
+            let first = j.first_dof as usize;
+            let dofs: Vec<_> = (first..first + j.dof_count as usize)
+                .filter_map(|i| Some((state.joints().get(i)?, diagnostics.joints.get(i)?)))
+                .map(|(s, d)| {
+                    serde_json::json!({
+                        "name": decode_name(&s.name),
+                        "mode": s.mode.name(),
+                        "enabled": s.enabled != 0,
+                        "valid": s.fault_code == 0 && s.valid_mask & FieldMask::POSITION != 0,
+                        "observed": field_names(s.valid_mask),
+                        "held": d.held != 0,
+                        "fault_code": s.fault_code,
+                        "fault": fault_reason(s.fault_code),
+                    })
+                })
+                .collect();
+            let library = decode_name(&j.library);
+            serde_json::json!({
+                "name": decode_name(&j.name),
+                "plugin": decode_name(&j.plugin),
+                "version": decode_name(&j.version),
+                "library": if library.is_empty() { serde_json::Value::Null } else { library.into() },
+                "budget_us": j.budget_ns as f64 / 1e3,
+                "dofs": dofs,
+            })
+        })
+        .collect();
+    serde_json::json!({"cycle": state.cycle, "rate_hz": instances.rate_hz, "joints": joints})
+}
+
+/// `inspect joints` as a table, from its JSON.
+fn joints_human(view: &serde_json::Value) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "cycle {}  rate {} Hz", view["cycle"], view["rate_hz"]);
+    let _ = writeln!(out, "{:<14} {:<14} {:<8} {:<8} {:<10} {:<8} {:<6} {:<6} {:<52} source", "joint", "plugin", "version", "dof", "mode", "enabled", "valid", "held", "observed");
+    let empty = Vec::new();
+    for j in view["joints"].as_array().unwrap_or(&empty) {
+        let source = j["library"].as_str().unwrap_or("linked into the host");
+        for (k, d) in j["dofs"].as_array().unwrap_or(&empty).iter().enumerate() {
+            let text = |v: &serde_json::Value| v.as_str().unwrap_or("?").to_string();
+            let yes = |v: &serde_json::Value| if v.as_bool() == Some(true) { "yes" } else { "no" };
+            let observed: Vec<String> = d["observed"].as_array().unwrap_or(&empty).iter().map(text).collect();
+            let (name, plugin, version) = if k == 0 { (text(&j["name"]), text(&j["plugin"]), text(&j["version"])) } else { Default::default() };
+            let _ = writeln!(
+                out,
+                "{name:<14} {plugin:<14} {version:<8} {:<8} {:<10} {:<8} {:<6} {:<6} {:<52} {}",
+                text(&d["name"]),
+                text(&d["mode"]),
+                yes(&d["enabled"]),
+                yes(&d["valid"]),
+                yes(&d["held"]),
+                observed.join(","),
+                if k == 0 { source } else { "" },
+            );
+            if d["fault_code"].as_u64().unwrap_or(0) != 0 {
+                let _ = writeln!(out, "{:<14} fault: {}", "", text(&d["fault"]));
+            }
+        }
+    }
+    out
 }
 
 /// What to try when no runtime answers in the default domain.
