@@ -9,6 +9,7 @@
 
 #![deny(unsafe_code)]
 
+pub mod feed;
 pub mod messages;
 pub mod recorder;
 pub mod reader;

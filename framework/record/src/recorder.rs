@@ -7,10 +7,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use jointctl_ipc::raw::RawDescriptor;
-use jointctl_ipc::{IpcScope, IpcSetupError, ServiceNames};
+use jointctl_ipc::IpcScope;
 use serde_json::Value;
 
+use crate::feed::{ArmFeed, FeedError};
 use crate::messages;
 
 /// What to record.
@@ -75,32 +75,9 @@ impl RecordSummary {
 /// Why a recording failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
-    /// Shared memory could not be opened (no runtime runs the arm, or another domain).
-    #[error("arm `{arm}`")]
-    Ipc {
-        /// The arm.
-        arm: String,
-        /// The reason.
-        source: IpcSetupError,
-    },
-    /// A subscriber could not be created (every slot taken).
-    #[error("cannot subscribe to `{service}`: {reason}")]
-    Subscribe {
-        /// Service.
-        service: String,
-        /// iceoryx2's reason.
-        reason: String,
-    },
-    /// Nothing arrived.
-    #[error("no {what} from arm `{arm}` within {timeout_s} s: is `jointctl run` running with this arm and domain?")]
-    Silent {
-        /// The arm.
-        arm: String,
-        /// What was waited for.
-        what: &'static str,
-        /// How long.
-        timeout_s: f64,
-    },
+    /// The arm's samples could not be read.
+    #[error(transparent)]
+    Feed(#[from] FeedError),
     /// The file could not be written.
     #[error("cannot write {}", .file.display())]
     File {
@@ -116,14 +93,6 @@ pub enum RecordError {
         file: PathBuf,
         /// The reason.
         source: mcap::McapError,
-    },
-    /// Receiving from shared memory failed.
-    #[error("cannot receive from `{service}`: {reason}")]
-    Receive {
-        /// Service.
-        service: String,
-        /// iceoryx2's reason.
-        reason: String,
     },
 }
 
@@ -142,20 +111,6 @@ impl Gaps {
             self.lost += number - next;
         }
         self.next = Some(self.next.map_or(number + 1, |n| n.max(number + 1)));
-    }
-}
-
-fn open_waiting<T>(timeout: Duration, mut open: impl FnMut() -> Result<T, IpcSetupError>) -> Result<T, IpcSetupError> {
-    let start = Instant::now();
-    loop {
-        match open() {
-            Err(IpcSetupError::OpenPublishSubscribe { source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist, .. })
-                if start.elapsed() < timeout =>
-            {
-                std::thread::sleep(Duration::from_millis(20))
-            }
-            other => return other,
-        }
     }
 }
 
@@ -191,50 +146,9 @@ fn unix_ns() -> u64 {
 /// # Ok(()) }
 /// ```
 pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, RecordError> {
-    let ipc = |source| RecordError::Ipc { arm: opts.arm.clone(), source };
     let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
-    let node = jointctl_ipc::create_node_in(&opts.scope, &format!("jointctl-record-{}", std::process::id())).map_err(ipc)?;
-    let names = ServiceNames::for_arm(&opts.arm);
-    let subscribe_error = |service: &str| {
-        let service = service.to_string();
-        move |e: iceoryx2::port::subscriber::SubscriberCreateError| RecordError::Subscribe { service: service.clone(), reason: format!("{e:?}") }
-    };
-    let raw = open_waiting(timeout, || jointctl_ipc::raw_service(&node, &names.raw)).map_err(ipc)?.subscriber_builder().create().map_err(subscribe_error(&names.raw))?;
-    let state = open_waiting(timeout, || jointctl_ipc::joint_state_service(&node, &names.joint_state))
-        .map_err(ipc)?
-        .subscriber_builder()
-        .create()
-        .map_err(subscribe_error(&names.joint_state))?;
-    let diagnostics = open_waiting(timeout, || jointctl_ipc::diagnostics_service(&node, &names.diagnostics))
-        .map_err(ipc)?
-        .subscriber_builder()
-        .create()
-        .map_err(subscribe_error(&names.diagnostics))?;
-    let commands = open_waiting(timeout, || jointctl_ipc::commands_service(&node, &names.commands))
-        .map_err(ipc)?
-        .subscriber_builder()
-        .create()
-        .map_err(subscribe_error(&names.commands))?;
-    let descriptor_sub = open_waiting(timeout, || jointctl_ipc::raw_descriptor_service(&node, &names.raw_descriptor))
-        .map_err(ipc)?
-        .subscriber_builder()
-        .create()
-        .map_err(subscribe_error(&names.raw_descriptor))?;
-    let receive_error = |service: &str| {
-        let service = service.to_string();
-        move |e: iceoryx2::port::ReceiveError| RecordError::Receive { service: service.clone(), reason: format!("{e:?}") }
-    };
-    // The descriptor names the raw frames' devices: it comes from the service's history.
-    let started = Instant::now();
-    let descriptor: RawDescriptor = loop {
-        if let Some(s) = descriptor_sub.receive().map_err(receive_error(&names.raw_descriptor))? {
-            break *s.payload();
-        }
-        if started.elapsed() > timeout {
-            return Err(RecordError::Silent { arm: opts.arm.clone(), what: "raw-reading descriptor", timeout_s: opts.timeout_s });
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
+    let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-record-{}", std::process::id()))?;
+    let descriptor = *feed.descriptor();
 
     let file = std::fs::File::create(&opts.out).map_err(|source| RecordError::File { file: opts.out.clone(), source })?;
     let mcap_error = |source| RecordError::Mcap { file: opts.out.clone(), source };
@@ -282,44 +196,24 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     let (mut first_stamp, mut last_stamp) = (None::<u64>, 0u64);
     let mut arm_stopped = false;
     let mut last_sample = Instant::now();
-    // One text buffer, reused: at 1 kHz, three messages a cycle.
-    let mut text = String::with_capacity(16 * 1024);
-    let mut write = |writer: &mut mcap::Writer<BufWriter<std::fs::File>>, topic: &'static str, number: u64, stamp_ns: u64, body: &str| -> Result<(), RecordError> {
-        let count = counts.entry(topic).or_default();
-        let header = mcap::records::MessageHeader { channel_id: channel[topic], sequence: *count as u32, log_time: stamp_ns, publish_time: stamp_ns };
-        *count += 1;
-        gaps.entry(topic).or_default().see(number);
-        writer.write_to_known_channel(&header, body.as_bytes()).map_err(|source| RecordError::Mcap { file: opts.out.clone(), source })
-    };
     loop {
-        let mut got = false;
-        while let Some(s) = raw.receive().map_err(receive_error(&names.raw))? {
-            got = true;
-            messages::write_raw(&mut text, &s, &descriptor);
-            write(&mut writer, "raw", s.cycle, s.stamp_ns, &text)?;
-        }
-        while let Some(s) = state.receive().map_err(receive_error(&names.joint_state))? {
-            got = true;
-            first_stamp.get_or_insert(s.stamp_ns);
-            last_stamp = last_stamp.max(s.stamp_ns);
-            arm_stopped |= s.final_sample != 0;
-            messages::write_joint_state(&mut text, &s);
-            write(&mut writer, "joint_state", s.cycle, s.stamp_ns, &text)?;
-        }
-        while let Some(s) = diagnostics.receive().map_err(receive_error(&names.diagnostics))? {
-            got = true;
-            messages::write_diagnostics(&mut text, &s);
-            write(&mut writer, "diagnostics", s.cycle, s.stamp_ns, &text)?;
-        }
-        while let Some(s) = commands.receive().map_err(receive_error(&names.commands))? {
-            got = true;
-            write(&mut writer, "commands", s.sequence, s.stamp_ns, &messages::command(&s).to_string())?;
-        }
+        let got = feed.poll(|m| {
+            if m.topic == "joint_state" {
+                first_stamp.get_or_insert(m.stamp_ns);
+                last_stamp = last_stamp.max(m.stamp_ns);
+                arm_stopped |= m.final_sample;
+            }
+            let count = counts.entry(m.topic).or_default();
+            let header = mcap::records::MessageHeader { channel_id: channel[m.topic], sequence: *count as u32, log_time: m.stamp_ns, publish_time: m.stamp_ns };
+            *count += 1;
+            gaps.entry(m.topic).or_default().see(m.number);
+            writer.write_to_known_channel(&header, m.json.as_bytes()).map_err(|source| RecordError::Mcap { file: opts.out.clone(), source })
+        })?;
         let elapsed_s = first_stamp.map_or(0.0, |f| last_stamp.saturating_sub(f) as f64 * 1e-9);
         if stop.load(Ordering::Acquire) || arm_stopped || opts.duration_s.is_some_and(|d| elapsed_s >= d) {
             break;
         }
-        if got {
+        if got > 0 {
             last_sample = Instant::now();
         } else if last_sample.elapsed() > timeout {
             break;
@@ -332,7 +226,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     writer.finish().map_err(mcap_error)?;
     drop(writer);
     if first_stamp.is_none() {
-        return Err(RecordError::Silent { arm: opts.arm.clone(), what: "joint state", timeout_s: opts.timeout_s });
+        return Err(FeedError::Silent { arm: opts.arm.clone(), what: "joint state", timeout_s: opts.timeout_s }.into());
     }
     let bytes = std::fs::metadata(&opts.out).map_or(0, |m| m.len());
     Ok(RecordSummary {

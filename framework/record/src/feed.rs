@@ -1,0 +1,182 @@
+//! A running arm's published samples as JSON messages: what the recorder writes into a file and
+//! what the bridges send to Foxglove and over Zenoh, one reader for all of them.
+
+use std::time::{Duration, Instant};
+
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawFrame};
+use jointctl_ipc::{ArmState, Diagnostics, IpcScope, IpcSetupError, ServiceNames};
+
+use crate::messages;
+
+/// Why an arm's samples cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum FeedError {
+    /// Shared memory could not be opened (no runtime runs the arm, or another domain).
+    #[error("arm `{arm}`")]
+    Ipc {
+        /// The arm.
+        arm: String,
+        /// The reason.
+        source: IpcSetupError,
+    },
+    /// A subscriber could not be created (every slot taken).
+    #[error("cannot subscribe to `{service}`: {reason}")]
+    Subscribe {
+        /// Service.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+    /// Nothing arrived.
+    #[error("no {what} from arm `{arm}` within {timeout_s} s: is `jointctl run` running with this arm and domain?")]
+    Silent {
+        /// The arm.
+        arm: String,
+        /// What was waited for.
+        what: &'static str,
+        /// How long.
+        timeout_s: f64,
+    },
+    /// Receiving from shared memory failed.
+    #[error("cannot receive from `{service}`: {reason}")]
+    Receive {
+        /// Service.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+}
+
+/// One published sample as JSON (the recording's form, [`messages`]).
+#[derive(Clone, Copy, Debug)]
+pub struct FeedMessage<'a> {
+    /// The channel: one of [`messages::CHANNELS`]' topics.
+    pub topic: &'static str,
+    /// Its cycle (or, for `commands`, its sequence number): a gap is a lost sample.
+    pub number: u64,
+    /// CLOCK_MONOTONIC stamp of the cycle (or of the command's acceptance) [ns].
+    pub stamp_ns: u64,
+    /// The JSON text.
+    pub json: &'a str,
+    /// The runtime's final joint state (the arm stopped).
+    pub final_sample: bool,
+}
+
+/// Subscribers to every published service of one arm.
+pub struct ArmFeed {
+    names: ServiceNames,
+    raw: Subscriber<ipc::Service, RawFrame, ()>,
+    state: Subscriber<ipc::Service, ArmState, ()>,
+    diagnostics: Subscriber<ipc::Service, Diagnostics, ()>,
+    commands: Subscriber<ipc::Service, CommandRecord, ()>,
+    descriptor: RawDescriptor,
+    // One text buffer, reused: at 1 kHz, three messages a cycle.
+    text: String,
+    // Last: the ports above must be dropped before their node.
+    _node: Node<ipc::Service>,
+}
+
+fn open_waiting<T>(timeout: Duration, mut open: impl FnMut() -> Result<T, IpcSetupError>) -> Result<T, IpcSetupError> {
+    let start = Instant::now();
+    loop {
+        match open() {
+            Err(IpcSetupError::OpenPublishSubscribe { source: iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError::DoesNotExist, .. })
+                if start.elapsed() < timeout =>
+            {
+                std::thread::sleep(Duration::from_millis(20))
+            }
+            other => return other,
+        }
+    }
+}
+
+fn subscriber<T: std::fmt::Debug + ZeroCopySend + 'static>(
+    arm: &str,
+    service: &str,
+    timeout: Duration,
+    open: impl FnMut() -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcSetupError>,
+) -> Result<Subscriber<ipc::Service, T, ()>, FeedError> {
+    open_waiting(timeout, open)
+        .map_err(|source| FeedError::Ipc { arm: arm.to_string(), source })?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| FeedError::Subscribe { service: service.to_string(), reason: format!("{e:?}") })
+}
+
+impl ArmFeed {
+    /// Subscribes to the arm's services as `node_name`, waiting up to `timeout` for a runtime to
+    /// create them and publish its raw-reading descriptor.
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use jointctl_record::feed::ArmFeed;
+    /// let mut feed = ArmFeed::open("sherpa", &Default::default(), std::time::Duration::from_secs(5), "my-viewer")?;
+    /// feed.poll(|m| {
+    ///     println!("{} {}", m.topic, m.json);
+    ///     Ok::<_, jointctl_record::feed::FeedError>(())
+    /// })?;
+    /// # Ok(()) }
+    /// ```
+    pub fn open(arm: &str, scope: &IpcScope, timeout: Duration, node_name: &str) -> Result<ArmFeed, FeedError> {
+        let ipc = |source| FeedError::Ipc { arm: arm.to_string(), source };
+        let node = jointctl_ipc::create_node_in(scope, node_name).map_err(ipc)?;
+        let names = ServiceNames::for_arm(arm);
+        let raw = subscriber(arm, &names.raw, timeout, || jointctl_ipc::raw_service(&node, &names.raw))?;
+        let state = subscriber(arm, &names.joint_state, timeout, || jointctl_ipc::joint_state_service(&node, &names.joint_state))?;
+        let diagnostics = subscriber(arm, &names.diagnostics, timeout, || jointctl_ipc::diagnostics_service(&node, &names.diagnostics))?;
+        let commands = subscriber(arm, &names.commands, timeout, || jointctl_ipc::commands_service(&node, &names.commands))?;
+        let descriptor_sub = subscriber(arm, &names.raw_descriptor, timeout, || jointctl_ipc::raw_descriptor_service(&node, &names.raw_descriptor))?;
+        // The descriptor names the raw frames' devices: it comes from the service's history.
+        let started = Instant::now();
+        let descriptor: RawDescriptor = loop {
+            if let Some(s) = descriptor_sub.receive().map_err(|e| FeedError::Receive { service: names.raw_descriptor.clone(), reason: format!("{e:?}") })? {
+                break *s.payload();
+            }
+            if started.elapsed() > timeout {
+                return Err(FeedError::Silent { arm: arm.to_string(), what: "raw-reading descriptor", timeout_s: timeout.as_secs_f64() });
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        drop(descriptor_sub);
+        Ok(ArmFeed { names, raw, state, diagnostics, commands, descriptor, text: String::with_capacity(16 * 1024), _node: node })
+    }
+
+    /// The arm's raw-reading descriptor (devices, rate, activation readings, YAML path).
+    pub fn descriptor(&self) -> &RawDescriptor {
+        &self.descriptor
+    }
+
+    /// Hands every buffered sample to `each` (raw, joint state, diagnostics, then commands) and
+    /// returns how many there were; stops at the first error `each` returns.
+    pub fn poll<E: From<FeedError>>(&mut self, mut each: impl FnMut(FeedMessage<'_>) -> Result<(), E>) -> Result<usize, E> {
+        let receive_error = |service: &str| {
+            let service = service.to_string();
+            move |e: iceoryx2::port::ReceiveError| FeedError::Receive { service: service.clone(), reason: format!("{e:?}") }
+        };
+        let mut n = 0;
+        let text = &mut self.text;
+        while let Some(s) = self.raw.receive().map_err(receive_error(&self.names.raw))? {
+            messages::write_raw(text, &s, &self.descriptor);
+            each(FeedMessage { topic: "raw", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false })?;
+            n += 1;
+        }
+        while let Some(s) = self.state.receive().map_err(receive_error(&self.names.joint_state))? {
+            messages::write_joint_state(text, &s);
+            each(FeedMessage { topic: "joint_state", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: s.final_sample != 0 })?;
+            n += 1;
+        }
+        while let Some(s) = self.diagnostics.receive().map_err(receive_error(&self.names.diagnostics))? {
+            messages::write_diagnostics(text, &s);
+            each(FeedMessage { topic: "diagnostics", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false })?;
+            n += 1;
+        }
+        while let Some(s) = self.commands.receive().map_err(receive_error(&self.names.commands))? {
+            *text = messages::command(&s).to_string();
+            each(FeedMessage { topic: "commands", number: s.sequence, stamp_ns: s.stamp_ns, json: text, final_sample: false })?;
+            n += 1;
+        }
+        Ok(n)
+    }
+}
