@@ -115,6 +115,13 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         err("ipc.domain".into(), format!("`{d}` is not a valid domain: use 1-32 letters, digits, `_` or `-`"));
     }
 
+    if let Some(z) = &c.network.zenoh.commands {
+        let form = z.listen.split_once('/').filter(|(protocol, address)| !protocol.is_empty() && address.contains(':'));
+        if form.is_none() {
+            err("network.zenoh.commands.listen".into(), format!("`{}` is not a Zenoh endpoint: write <protocol>/<address>:<port>, e.g. tcp/0.0.0.0:7448", z.listen));
+        }
+    }
+
     let co = &c.hal.canopen;
     if !(1..=127).contains(&co.host_node_id) {
         err("hal.canopen.host_node_id".into(), format!("a CANopen node id is 1-127, got {}", co.host_node_id));

@@ -897,3 +897,83 @@ pub fn command_service(
         None => builder.open().map_err(|source| IpcSetupError::OpenRequestResponse { service: service(), source }),
     }
 }
+
+/// Why a command got no answer from the runtime.
+#[derive(Debug, thiserror::Error)]
+pub enum CommandError {
+    /// The node could not be created.
+    #[error(transparent)]
+    Setup(#[from] IpcSetupError),
+    /// No runtime serves the arm.
+    #[error("no runtime is running arm `{arm}` (no service `{service}`): start `jointctl run`")]
+    NoRuntime {
+        /// The arm.
+        arm: String,
+        /// The command service.
+        service: String,
+    },
+    /// Every client slot is taken.
+    #[error("every client slot of `{service}` is taken (the YAML's ipc.max_clients)")]
+    SlotsTaken {
+        /// The command service.
+        service: String,
+    },
+    /// iceoryx2 refused the client, the request or the response.
+    #[error("cannot talk to `{service}`: {reason}")]
+    Port {
+        /// The command service.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+    /// The runtime did not answer in time.
+    #[error("no answer from arm `{arm}` within {timeout_s} s (is its runtime running?)")]
+    NoAnswer {
+        /// The arm.
+        arm: String,
+        /// How long it waited [s].
+        timeout_s: f64,
+    },
+}
+
+/// A client of an arm's command service: `jointctl cmd` and the network bridges send through it.
+pub struct CommandClient {
+    arm: String,
+    service: String,
+    client: iceoryx2::port::client::Client<ipc::Service, CommandRequest, (), CommandResponse, ()>,
+    // Last: the port above must be dropped before its node.
+    _node: Node<ipc::Service>,
+}
+
+impl CommandClient {
+    /// Connects to the command service of `arm` as `node_name`.
+    ///
+    /// ```
+    /// let e = jointctl_ipc::CommandClient::open(&Default::default(), "nobody-runs-this-arm", "doc-client").err().unwrap();
+    /// assert!(matches!(e, jointctl_ipc::CommandError::NoRuntime { .. }), "{e}");
+    /// ```
+    pub fn open(scope: &IpcScope, arm: &str, node_name: &str) -> Result<CommandClient, CommandError> {
+        let node = create_node_in(scope, node_name)?;
+        let service = command_service_name(arm);
+        let factory = command_service(&node, &service, None).map_err(|_| CommandError::NoRuntime { arm: arm.to_string(), service: service.clone() })?;
+        let client = factory.client_builder().create().map_err(|e| match e {
+            iceoryx2::service::port_factory::client::ClientCreateError::ExceedsMaxSupportedClients => CommandError::SlotsTaken { service: service.clone() },
+            e => CommandError::Port { service: service.clone(), reason: format!("{e:?}") },
+        })?;
+        Ok(CommandClient { arm: arm.to_string(), service, client, _node: node })
+    }
+
+    /// Sends `request` and waits up to `timeout_s` for the runtime's answer.
+    pub fn send(&self, request: CommandRequest, timeout_s: f64) -> Result<CommandResponse, CommandError> {
+        let port = |e: &dyn std::fmt::Debug| CommandError::Port { service: self.service.clone(), reason: format!("{e:?}") };
+        let pending = self.client.send_copy(request).map_err(|e| port(&e))?;
+        let start = std::time::Instant::now();
+        loop {
+            match pending.receive().map_err(|e| port(&e))? {
+                Some(response) => return Ok(*response.payload()),
+                None if start.elapsed().as_secs_f64() < timeout_s => std::thread::sleep(std::time::Duration::from_millis(1)),
+                None => return Err(CommandError::NoAnswer { arm: self.arm.clone(), timeout_s }),
+            }
+        }
+    }
+}

@@ -180,3 +180,28 @@ impl ArmFeed {
         Ok(n)
     }
 }
+
+/// A CLOCK_MONOTONIC stamp [ns] of this machine (the runtime's cycle stamps) on the wall clock
+/// [UNIX ns]: the wall clock now minus how long ago the stamp was. `None` for a stamp in the
+/// future or before the epoch.
+///
+/// ```
+/// let now = jointctl_record::feed::wall_clock_ns(jointctl_record::feed::monotonic_ns()).unwrap();
+/// let unix = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos() as u64;
+/// assert!(unix.abs_diff(now) < 1_000_000_000);
+/// ```
+pub fn wall_clock_ns(stamp_ns: u64) -> Option<u64> {
+    let mono_now = monotonic_ns();
+    let wall_now = u64::try_from(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).ok()?.as_nanos()).ok()?;
+    wall_now.checked_sub(mono_now.checked_sub(stamp_ns)?)
+}
+
+/// CLOCK_MONOTONIC [ns], the clock of the cycle stamps (the runtime's `timing::monotonic_ns`;
+/// not shared from there, so that a reader does not link the runtime).
+#[allow(unsafe_code)]
+pub fn monotonic_ns() -> u64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes into a valid timespec.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}

@@ -4,6 +4,7 @@
 //! `null`, never a number.
 
 use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawFrame, RawReading};
+use jointctl_ipc::CommandRequest;
 use jointctl_ipc::{ArmState, Diagnostics, FieldMask, JITTER_BUCKET_UPPER_US, JointSample, decode_name};
 use serde_json::{Value, json};
 
@@ -120,6 +121,62 @@ pub fn write_joint_state(out: &mut String, s: &ArmState) {
             .int("fault_code", u64::from(x.fault_code));
     });
     j.raw("}");
+}
+
+/// Reads a joint-state sample back from its JSON ([`write_joint_state`]'s form; a network
+/// client gets it from a bridge): a `null` field is unobserved (its bit clear, its value NaN).
+///
+/// ```
+/// let mut s = jointctl_ipc::ArmState::EMPTY;
+/// s.cycle = 7;
+/// s.joint_count = 1;
+/// s.joints[0].name = jointctl_ipc::encode_name("q2");
+/// s.joints[0].torque_nm = 1.5;
+/// s.joints[0].valid_mask = jointctl_ipc::FieldMask::TORQUE;
+/// let back = jointctl_record::messages::parse_joint_state(&jointctl_record::messages::joint_state(&s)).unwrap();
+/// assert_eq!((back.cycle, back.joints()[0].torque_nm, back.joints()[0].valid_mask), (7, 1.5, jointctl_ipc::FieldMask::TORQUE));
+/// assert!(back.joints()[0].position_rad.is_nan());
+/// ```
+pub fn parse_joint_state(v: &Value) -> Result<ArmState, String> {
+    let count = |key: &str| v[key].as_u64().ok_or_else(|| format!("`{key}` is not a count"));
+    let mut s = ArmState::EMPTY;
+    s.cycle = count("cycle")?;
+    s.stamp_ns = count("stamp_ns")?;
+    s.final_sample = u32::from(v["final"].as_bool().unwrap_or(false));
+    let joints = v["joints"].as_array().ok_or("`joints` is not an array")?;
+    if joints.len() > s.joints.len() {
+        return Err(format!("`joints`: at most {}, got {}", s.joints.len(), joints.len()));
+    }
+    for (i, (out, j)) in s.joints.iter_mut().zip(joints).enumerate() {
+        let name = j["name"].as_str().ok_or_else(|| format!("`joints[{i}].name` is not a string"))?;
+        out.name = jointctl_ipc::encode_name(name);
+        let mut field = |key: &str, bit: u32| -> Result<f64, String> {
+            match &j[key] {
+                Value::Null => Ok(f64::NAN),
+                x => {
+                    let value = x.as_f64().ok_or_else(|| format!("`joints[{i}].{key}` is not a number"))?;
+                    out.valid_mask |= bit;
+                    Ok(value)
+                }
+            }
+        };
+        out.position_rad = field("position_rad", FieldMask::POSITION)?;
+        out.velocity_rad_s = field("velocity_rad_s", FieldMask::VELOCITY)?;
+        out.deflection_rad = field("deflection_rad", FieldMask::DEFLECTION)?;
+        out.torque_nm = field("torque_nm", FieldMask::TORQUE)?;
+        out.stiffness_nm_per_rad = field("stiffness_nm_per_rad", FieldMask::STIFFNESS)?;
+        out.pivot_mm = field("pivot_mm", FieldMask::PIVOT)?;
+        // Not observed fields: no bit.
+        out.reference_torque_nm = field("reference_torque_nm", 0)?;
+        out.sensor_torque_nm = field("sensor_torque_nm", 0)?;
+        out.gravity_nm = field("gravity_nm", 0)?;
+        let mode = j["mode"].as_str().unwrap_or("hold");
+        out.mode = jointctl_ipc::JointMode::from_name(mode).ok_or_else(|| format!("`joints[{i}].mode`: unknown mode `{mode}`"))?;
+        out.enabled = u32::from(j["enabled"].as_bool().unwrap_or(true));
+        out.fault_code = j["fault_code"].as_u64().and_then(|c| u32::try_from(c).ok()).unwrap_or(0);
+    }
+    s.joint_count = joints.len() as u32;
+    Ok(s)
 }
 
 /// A joint-state sample.
@@ -264,24 +321,109 @@ pub fn raw(f: &RawFrame, d: &RawDescriptor) -> Value {
 /// assert_eq!(v["values"].as_array().unwrap().len(), 4, "only the values given");
 /// ```
 pub fn command(r: &CommandRecord) -> Value {
-    let q = &r.request;
-    let values: Vec<Value> = {
-        // Trailing unset values (NaN) are not part of the command.
-        let used = q.values.iter().rposition(|v| !v.is_nan()).map_or(0, |i| i + 1);
-        q.values[..used].iter().map(|v| finite(*v)).collect()
-    };
+    let mut v = request(&r.request);
+    if let Value::Object(map) = &mut v {
+        map.insert("sequence".into(), r.sequence.into());
+        map.insert("stamp_ns".into(), r.stamp_ns.into());
+        map.insert("message".into(), r.response.text().into());
+    }
+    v
+}
+
+/// A command request as JSON: what a network client sends (`jointctl cmd --zenoh`) and what
+/// [`parse_request`] reads back.
+///
+/// ```
+/// use jointctl_ipc::{CommandKind, CommandRequest};
+/// let v = jointctl_record::messages::request(&CommandRequest::new(CommandKind::POSITION, "q4", &[0.5]));
+/// assert_eq!(v.to_string(), r#"{"kind":"position","joint":"q4","streamed":false,"waveform":"step","values":[0.5],"points":[]}"#);
+/// ```
+pub fn request(q: &CommandRequest) -> Value {
+    // Trailing unset values (NaN) are not part of the command.
+    let used = q.values.iter().rposition(|v| !v.is_nan()).map_or(0, |i| i + 1);
+    let values: Vec<Value> = q.values[..used].iter().map(|v| finite(*v)).collect();
     let points: Vec<Value> = q.points[..(q.point_count as usize).min(q.points.len())].iter().map(|p| json!([finite(p[0]), finite(p[1]), finite(p[2])])).collect();
     json!({
-        "sequence": r.sequence,
-        "stamp_ns": r.stamp_ns,
         "kind": q.kind.name(),
         "joint": decode_name(&q.joint),
         "streamed": q.streamed != 0,
         "waveform": q.waveform.name(),
         "values": values,
         "points": points,
-        "message": r.response.text(),
     })
+}
+
+/// Reads a command request from its JSON ([`request`]'s form), refusing what the runtime could
+/// not have been sent from its own command line: an unknown kind or waveform, a name longer
+/// than a joint name, too many values or points, a value that is not a number. `null` is an
+/// unset value (NaN). The runtime validates the rest (joint, limits) as for every command.
+///
+/// ```
+/// use jointctl_record::messages::{parse_request, request};
+/// let v = serde_json::json!({"kind": "torque", "joint": "q2", "waveform": "sine", "values": [5.0, 0.1]});
+/// let r = parse_request(&v).unwrap();
+/// assert_eq!((r.kind, r.waveform, r.values[1]), (jointctl_ipc::CommandKind::TORQUE, jointctl_ipc::TorqueWaveform::SINE, 0.1));
+/// assert_eq!(request(&r)["values"], serde_json::json!([5.0, 0.1]));
+/// assert!(parse_request(&serde_json::json!({"kind": "fly"})).unwrap_err().contains("`kind`"));
+/// ```
+pub fn parse_request(v: &Value) -> Result<CommandRequest, String> {
+    let object = v.as_object().ok_or("a command is a JSON object")?;
+    for key in object.keys() {
+        if !["kind", "joint", "streamed", "waveform", "values", "points"].contains(&key.as_str()) {
+            return Err(format!("unknown field `{key}` (expected kind, joint, streamed, waveform, values, points)"));
+        }
+    }
+    let text = |key: &str| -> Result<Option<&str>, String> {
+        match object.get(key) {
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::String(s)) => Ok(Some(s)),
+            Some(other) => Err(format!("`{key}` must be a string, got {other}")),
+        }
+    };
+    let kind_name = text("kind")?.ok_or("`kind` is missing")?;
+    let kind = jointctl_ipc::CommandKind::from_name(kind_name)
+        .ok_or_else(|| format!("`kind`: unknown command `{kind_name}` (one of {})", jointctl_ipc::CommandKind::ALL.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(", ")))?;
+    let joint = text("joint")?.unwrap_or("");
+    if joint.len() >= jointctl_ipc::NAME_LEN {
+        return Err(format!("`joint`: `{joint}` is longer than any joint name ({} bytes at most)", jointctl_ipc::NAME_LEN - 1));
+    }
+    let number = |x: &Value, at: &str| -> Result<f64, String> {
+        match x {
+            Value::Null => Ok(f64::NAN),
+            Value::Number(n) => n.as_f64().filter(|f| f.is_finite()).ok_or_else(|| format!("{at}: {n} is not a finite number")),
+            other => Err(format!("{at}: {other} is not a number")),
+        }
+    };
+    let values: Vec<f64> = match object.get("values") {
+        None | Some(Value::Null) => Vec::new(),
+        Some(Value::Array(a)) if a.len() <= 8 => a.iter().enumerate().map(|(i, x)| number(x, &format!("`values[{i}]`"))).collect::<Result<_, _>>()?,
+        Some(Value::Array(a)) => return Err(format!("`values`: at most 8, got {}", a.len())),
+        Some(other) => return Err(format!("`values` must be an array of numbers, got {other}")),
+    };
+    let mut r = CommandRequest::new(kind, joint, &values);
+    if let Some(w) = text("waveform")? {
+        r.waveform = jointctl_ipc::TorqueWaveform::from_name(w).ok_or_else(|| format!("`waveform`: unknown waveform `{w}` (step, sine or cosine)"))?;
+    }
+    r.streamed = match object.get("streamed") {
+        None | Some(Value::Null) | Some(Value::Bool(false)) => 0,
+        Some(Value::Bool(true)) => 1,
+        Some(other) => return Err(format!("`streamed` must be true or false, got {other}")),
+    };
+    match object.get("points") {
+        None | Some(Value::Null) => {}
+        Some(Value::Array(points)) if points.len() <= jointctl_ipc::MAX_COMMAND_POINTS => {
+            for (i, p) in points.iter().enumerate() {
+                let triple = p.as_array().filter(|t| (2..=3).contains(&t.len())).ok_or_else(|| format!("`points[{i}]` must be [t, q] or [t, q, v]"))?;
+                for (k, x) in triple.iter().enumerate() {
+                    r.points[i][k] = number(x, &format!("`points[{i}][{k}]`"))?;
+                }
+            }
+            r.point_count = points.len() as u32;
+        }
+        Some(Value::Array(points)) => return Err(format!("`points`: at most {}, got {}", jointctl_ipc::MAX_COMMAND_POINTS, points.len())),
+        Some(other) => return Err(format!("`points` must be an array, got {other}")),
+    }
+    Ok(r)
 }
 
 fn number() -> Value {

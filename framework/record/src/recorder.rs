@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use jointctl_ipc::IpcScope;
 use serde_json::Value;
 
-use crate::feed::{ArmFeed, FeedError};
+use crate::feed::{ArmFeed, FeedError, monotonic_ns};
 use crate::messages;
 
 /// What to record.
@@ -239,12 +239,3 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     })
 }
 
-/// CLOCK_MONOTONIC [ns], the clock of the cycle stamps (the runtime's `timing::monotonic_ns`;
-/// not shared from there, so that a recorder does not link the runtime).
-#[allow(unsafe_code)]
-fn monotonic_ns() -> u64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: clock_gettime writes into a valid timespec.
-    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
-    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
-}

@@ -3,7 +3,6 @@
 //! runtime serves the arm.
 
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
 
 use clap::{Args, Subcommand};
 
@@ -28,6 +27,12 @@ pub struct CmdArgs {
     /// watchdog time.
     #[arg(long, global = true)]
     stream: bool,
+    /// Command from another machine: the Zenoh endpoint of the arm's `jointctl bridge zenoh`
+    /// command session (`network.zenoh.commands.listen`), e.g. `tcp/192.168.1.10:7448`.
+    #[arg(long, global = true, value_name = "ENDPOINT")]
+    pub zenoh: Option<String>,
+    #[command(flatten)]
+    pub credentials: crate::remote::CredentialArgs,
     #[command(subcommand)]
     command: Command,
 }
@@ -176,54 +181,25 @@ pub fn run(args: CmdArgs) -> ExitCode {
         Err(e) => return crate::fail(e),
     };
     req.streamed = args.stream as u32;
-    let node = match jointctl_ipc::create_node_in(&scope(&args), &format!("jointctl-cmd-{}", std::process::id())) {
-        Ok(n) => n,
-        Err(e) => return crate::fail_err(e),
-    };
-    let name = jointctl_ipc::command_service_name(&args.arm);
-    let Ok(service) = jointctl_ipc::command_service(&node, &name, None) else {
-        return crate::fail(format!("no runtime is running arm `{}` (no service `{name}`): start `jointctl run`", args.arm));
-    };
+    if let Some(endpoint) = &args.zenoh {
+        return crate::remote::command(endpoint, &args.arm, &args.credentials, &req, args.timeout);
+    }
     let is_stop = matches!(args.command, Command::Stop);
-    let client = match service.client_builder().create() {
-        Ok(c) => c,
-        Err(iceoryx2::service::port_factory::client::ClientCreateError::ExceedsMaxSupportedClients) => {
-            let why = format!("every client slot of `{name}` is taken (the YAML's ipc.max_clients)");
-            if is_stop {
-                return stop_by_signal(&args, &why);
-            }
-            return crate::fail(format!("{why}: close idle clients or raise the limit"));
+    let answer = jointctl_ipc::CommandClient::open(&scope(&args), &args.arm, &format!("jointctl-cmd-{}", std::process::id()))
+        .and_then(|client| client.send(req, args.timeout));
+    match answer {
+        Ok(response) if response.accepted != 0 => {
+            println!("accepted: {}", response.text());
+            ExitCode::SUCCESS
         }
-        Err(e) => return crate::fail(format!("cannot connect to `{name}`: {e:?}")),
-    };
-    let pending = match client.send_copy(req) {
-        Ok(p) => p,
-        Err(e) => return crate::fail(format!("cannot send to `{name}`: {e:?}")),
-    };
-    let start = Instant::now();
-    loop {
-        match pending.receive() {
-            Ok(Some(response)) => {
-                let text = response.text().to_string();
-                return if response.accepted != 0 {
-                    println!("accepted: {text}");
-                    ExitCode::SUCCESS
-                } else {
-                    crate::fail(format!("refused: {text}"))
-                };
-            }
-            Ok(None) if start.elapsed() < Duration::from_secs_f64(args.timeout) => std::thread::sleep(Duration::from_millis(1)),
-            Ok(None) if is_stop => return stop_by_signal(&args, &format!("no answer within {} s", args.timeout)),
-            Ok(None) => {
-                return crate::fail(format!("no answer from arm `{}` within {} s (is its runtime running?)", args.arm, args.timeout));
-            }
-            Err(e) => return crate::fail(format!("receive failed: {e:?}")),
-        }
+        Ok(response) => crate::fail(format!("refused: {}", response.text())),
+        // A stop needs no free client slot and no answer: the runtime is signalled instead.
+        Err(e @ (jointctl_ipc::CommandError::SlotsTaken { .. } | jointctl_ipc::CommandError::NoAnswer { .. })) if is_stop => stop_by_signal(&args, &e.to_string()),
+        Err(e @ jointctl_ipc::CommandError::SlotsTaken { .. }) => crate::fail(format!("{e}: close idle clients or raise the limit")),
+        Err(e) => crate::fail_err(e),
     }
 }
 
-/// The stop that no client can lock out: SIGTERM to the process holding the arm's lock, which
-/// holds the joints and ends as for any terminating signal.
 fn stop_by_signal(args: &CmdArgs, why: &str) -> ExitCode {
     let dir = match jointctl_ipc::lock_dir_in(&scope(args)) {
         Ok(d) => d,

@@ -43,6 +43,12 @@ pub enum InspectCommand {
         /// Only these joints (DOF names, comma-separated or repeated).
         #[arg(long, value_delimiter = ',')]
         joint: Vec<String>,
+        /// Read from another machine: the Zenoh endpoint of its `jointctl bridge zenoh` (e.g.
+        /// `tcp/192.168.1.10:7447`) instead of this machine's shared memory.
+        #[arg(long, value_name = "ENDPOINT")]
+        zenoh: Option<String>,
+        #[command(flatten)]
+        credentials: crate::remote::CredentialArgs,
     },
     /// Print a running arm's loop health: every diagnostics counter, the lateness histogram,
     /// each device's losses by its full name, and each joint's faults and holds with the reason.
@@ -75,13 +81,20 @@ pub enum InspectCommand {
 pub struct RunningArm {
     /// The arm (its YAML `arm:` name).
     #[arg(long, default_value = "sherpa")]
-    arm: String,
+    pub arm: String,
     /// iceoryx2 domain of the arm (its YAML `ipc.domain`).
     #[arg(long)]
     domain: Option<String>,
     /// Shared-memory root of the arm (its YAML `ipc.root`).
     #[arg(long, value_name = "DIR")]
     ipc_root: Option<std::path::PathBuf>,
+}
+
+impl RunningArm {
+    /// Its shared memory.
+    pub fn scope(&self) -> jointctl_ipc::IpcScope {
+        jointctl_ipc::IpcScope { domain: self.domain.clone(), root: self.ipc_root.clone(), group: None }
+    }
 }
 
 /// A sample rate [Hz]: finite and > 0.
@@ -136,14 +149,6 @@ pub fn sample_json(s: &ArmState, wall_ns: Option<u64>, keep: impl Fn(&str) -> bo
         })
         .collect();
     serde_json::json!({"cycle": s.cycle, "stamp_ns": s.stamp_ns, "wall_ns": wall_ns, "joints": joints})
-}
-
-/// A CLOCK_MONOTONIC stamp [ns] (the runtime's, same machine) on the wall clock [UNIX ns]: the
-/// wall clock now minus how long ago the stamp was.
-fn wall_clock_ns(stamp_ns: u64) -> Option<u64> {
-    let mono_now = jointctl_runtime::timing::monotonic_ns();
-    let wall_now = u64::try_from(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).ok()?.as_nanos()).ok()?;
-    wall_now.checked_sub(mono_now.checked_sub(stamp_ns)?)
 }
 
 fn fmt(v: Option<f64>) -> String {
@@ -203,58 +208,30 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        InspectCommand::Echo { at: RunningArm { arm, domain, ipc_root }, json, count, timeout, rate, joint } => {
+        InspectCommand::Echo { at: RunningArm { arm, domain, ipc_root }, json, count, timeout, rate, joint, zenoh, credentials } => {
+            let opts = EchoOptions { json, count, rate, joint };
+            if let Some(endpoint) = zenoh {
+                return crate::remote::echo(&endpoint, &arm, &credentials, timeout, &opts);
+            }
             let hint = domain_hint(&domain);
             let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service) {
                 Ok(s) => s,
                 Err(e) => return crate::fail(e),
             };
             let names = ServiceNames::for_arm(&arm);
-            let keep = |name: &str| joint.is_empty() || joint.iter().any(|j| j == name);
-            let min_gap = rate.map(|hz| Duration::from_secs_f64(1.0 / hz));
-            let mut received = 0u64;
             let mut last = Instant::now();
-            let mut last_printed: Option<Instant> = None;
-            let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-            for signal in [2, 15] {
-                let _ = signal_hook_register(signal, &stop);
-            }
-            let mut out = std::io::stdout().lock();
-            while count.is_none_or(|c| received < c) && !stop.load(std::sync::atomic::Ordering::Relaxed) {
-                match subscriber.receive() {
-                    Ok(Some(sample)) => {
-                        last = Instant::now();
-                        let s: &ArmState = &sample;
-                        let final_sample = s.final_sample != 0;
-                        // --rate: skip samples that come sooner than the rate allows (never the
-                        // final one).
-                        if !final_sample && min_gap.zip(last_printed).is_some_and(|(gap, at)| at.elapsed() < gap) {
-                            continue;
-                        }
-                        last_printed = Some(Instant::now());
-                        received += 1;
-                        let text = if json { format!("{}\n", sample_json(s, wall_clock_ns(s.stamp_ns), keep)) } else { human(s, keep) };
-                        // A closed pipe (`| head`) ends the inspector quietly.
-                        if out.write_all(text.as_bytes()).and_then(|_| out.flush()).is_err() {
-                            return ExitCode::SUCCESS;
-                        }
-                        if final_sample && count.is_none() {
-                            break;
-                        }
-                    }
-                    Ok(None) => {
-                        if last.elapsed() > Duration::from_secs_f64(timeout) {
-                            return crate::fail(format!(
-                                "no joint state from arm `{arm}` for {timeout} s (service `{}`): is `jointctl run` running with this arm and domain?{hint}",
-                                names.joint_state
-                            ));
-                        }
-                        std::thread::sleep(Duration::from_micros(500));
-                    }
-                    Err(e) => return crate::fail(format!("receive failed: {e:?}")),
+            echo(&opts, || match subscriber.receive() {
+                Ok(Some(sample)) => {
+                    last = Instant::now();
+                    Ok(Some((*sample, jointctl_record::feed::wall_clock_ns(sample.stamp_ns))))
                 }
-            }
-            ExitCode::SUCCESS
+                Ok(None) if last.elapsed() > Duration::from_secs_f64(timeout) => Err(format!(
+                    "no joint state from arm `{arm}` for {timeout} s (service `{}`): is `jointctl run` running with this arm and domain?{hint}",
+                    names.joint_state
+                )),
+                Ok(None) => Ok(None),
+                Err(e) => Err(format!("receive failed: {e:?}")),
+            })
         }
         InspectCommand::Diag { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
             let d = match newest(&arm, domain, ipc_root, timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service) {
@@ -396,6 +373,57 @@ fn joints_human(view: &serde_json::Value) -> String {
         }
     }
     out
+}
+
+/// How `inspect echo` prints, wherever its samples come from.
+pub struct EchoOptions {
+    /// One JSON object per sample.
+    pub json: bool,
+    /// Stop after N samples.
+    pub count: Option<u64>,
+    /// At most this many samples per second.
+    pub rate: Option<f64>,
+    /// Only these joints (all when empty).
+    pub joint: Vec<String>,
+}
+
+/// Prints the samples `next` gives (`Ok(None)`: none yet) until the count, the arm's final
+/// sample, SIGINT/SIGTERM or a closed pipe; `next`'s error ends it with exit 1.
+pub fn echo(opts: &EchoOptions, mut next: impl FnMut() -> Result<Option<(ArmState, Option<u64>)>, String>) -> ExitCode {
+    let keep = |name: &str| opts.joint.is_empty() || opts.joint.iter().any(|j| j == name);
+    let min_gap = opts.rate.map(|hz| Duration::from_secs_f64(1.0 / hz));
+    let mut received = 0u64;
+    let mut last_printed: Option<Instant> = None;
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for signal in [2, 15] {
+        let _ = signal_hook_register(signal, &stop);
+    }
+    let mut out = std::io::stdout().lock();
+    while opts.count.is_none_or(|c| received < c) && !stop.load(std::sync::atomic::Ordering::Relaxed) {
+        match next() {
+            Ok(Some((s, wall_ns))) => {
+                let final_sample = s.final_sample != 0;
+                // --rate: skip samples that come sooner than the rate allows (never the final
+                // one).
+                if !final_sample && min_gap.zip(last_printed).is_some_and(|(gap, at)| at.elapsed() < gap) {
+                    continue;
+                }
+                last_printed = Some(Instant::now());
+                received += 1;
+                let text = if opts.json { format!("{}\n", sample_json(&s, wall_ns, keep)) } else { human(&s, keep) };
+                // A closed pipe (`| head`) ends the inspector quietly.
+                if out.write_all(text.as_bytes()).and_then(|_| out.flush()).is_err() {
+                    return ExitCode::SUCCESS;
+                }
+                if final_sample && opts.count.is_none() {
+                    break;
+                }
+            }
+            Ok(None) => std::thread::sleep(Duration::from_micros(500)),
+            Err(e) => return crate::fail(e),
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 /// What to try when no runtime answers in the default domain.

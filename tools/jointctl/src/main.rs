@@ -1,11 +1,13 @@
 //! `jointctl`: run, check and inspect compliant robot arms.
 
+mod bridge;
 mod cmd;
 mod experiment;
 mod gravity;
 mod ident;
 mod inspect;
 mod record;
+mod remote;
 mod replay;
 mod run;
 mod transmission;
@@ -73,6 +75,11 @@ enum Command {
     Inspect {
         #[command(subcommand)]
         command: inspect::InspectCommand,
+    },
+    /// Open a running arm to Foxglove and to other machines (Zenoh).
+    Bridge {
+        #[command(subcommand)]
+        command: bridge::BridgeCommand,
     },
 }
 
@@ -147,7 +154,7 @@ fn fail_err(e: impl std::error::Error + 'static) -> ExitCode {
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info,zenoh=warn".into()),
         )
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
@@ -193,6 +200,7 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Inspect { command } => inspect::run(command),
+        Command::Bridge { command } => bridge::run(command),
         Command::Record(args) => record::run(args),
         Command::Replay(args) => replay::run(args),
         Command::Cmd(args) => cmd::run(args),

@@ -23,6 +23,9 @@ pub struct ArmConfig {
     /// Shared-memory (iceoryx2) settings.
     #[serde(default)]
     pub ipc: IpcConfig,
+    /// Access from other machines (`jointctl bridge zenoh`).
+    #[serde(default)]
+    pub network: NetworkConfig,
     /// CAN and SPI buses with the devices on them.
     #[serde(default)]
     pub buses: BusesConfig,
@@ -117,4 +120,35 @@ impl Default for IpcConfig {
     fn default() -> Self {
         IpcConfig { domain: None, root: None, group: None, max_subscribers: 16, max_clients: 16 }
     }
+}
+
+/// Access from other machines.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct NetworkConfig {
+    /// The Zenoh bridge (`jointctl bridge zenoh`).
+    #[serde(default)]
+    pub zenoh: ZenohConfig,
+}
+
+/// The Zenoh bridge. Without `commands` it only publishes (state, diagnostics, raw readings,
+/// accepted commands) and refuses every command, saying why.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZenohConfig {
+    /// Serve commands from the network, to authenticated peers only.
+    pub commands: Option<ZenohCommandsConfig>,
+}
+
+/// Commands over Zenoh: a second Zenoh session of the bridge, which admits only peers that
+/// authenticate with Zenoh's user/password scheme (a challenge-response: the password never
+/// crosses the network).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZenohCommandsConfig {
+    /// The Zenoh endpoint it listens on, e.g. `tcp/0.0.0.0:7448`.
+    pub listen: String,
+    /// Zenoh's user/password dictionary, relative to this file: one `user:password` per line.
+    /// Refused when users other than its owner may read it.
+    pub users_file: PathBuf,
 }

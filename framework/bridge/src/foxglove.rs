@@ -1,0 +1,131 @@
+//! A live view in Foxglove: the arm's recorded topics on the Foxglove SDK's WebSocket server.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use foxglove::{Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
+use jointctl_ipc::IpcScope;
+use jointctl_record::feed::{ArmFeed, FeedError, wall_clock_ns};
+use jointctl_record::messages;
+
+/// What to serve.
+#[derive(Clone, Debug)]
+pub struct FoxgloveOptions {
+    /// The arm (its YAML `arm:` name).
+    pub arm: String,
+    /// Its shared memory.
+    pub scope: IpcScope,
+    /// Address to listen on (`127.0.0.1`: this machine only; `0.0.0.0`: every interface).
+    pub host: String,
+    /// TCP port; 0 picks a free one (the `ready` callback learns which).
+    pub port: u16,
+    /// How long to wait for the arm's services, and how long the arm may be silent [s].
+    pub timeout_s: f64,
+}
+
+/// Why the bridge stopped with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum FoxgloveBridgeError {
+    /// The arm could not be read.
+    #[error(transparent)]
+    Feed(#[from] FeedError),
+    /// A channel could not be created.
+    #[error("cannot create the Foxglove channel `{topic}`")]
+    Channel {
+        /// The topic.
+        topic: String,
+        /// The SDK's reason.
+        source: foxglove::FoxgloveError,
+    },
+    /// The WebSocket server could not start (port taken, address not local).
+    #[error("cannot start the Foxglove WebSocket server on {host}:{port}")]
+    Server {
+        /// Address.
+        host: String,
+        /// Port.
+        port: u16,
+        /// The SDK's reason.
+        source: foxglove::FoxgloveError,
+    },
+}
+
+/// What the bridge forwarded.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct BridgeSummary {
+    /// Messages per topic.
+    pub messages: BTreeMap<String, u64>,
+    /// The arm stopped (its final sample).
+    pub arm_stopped: bool,
+}
+
+/// The SDK's channels, one per recorded topic, with the recording's JSON schemas.
+fn channels(ctx: &Arc<Context>) -> Result<BTreeMap<&'static str, Arc<RawChannel>>, FoxgloveBridgeError> {
+    let mut out = BTreeMap::new();
+    for (topic, schema_name) in messages::CHANNELS {
+        let schema = messages::schema(topic).map(|s| s.to_string()).unwrap_or_default();
+        let channel = ctx
+            .channel_builder(topic)
+            .message_encoding("json")
+            .schema(Schema::new(schema_name, "jsonschema", schema.into_bytes()))
+            .build_raw()
+            .map_err(|source| FoxgloveBridgeError::Channel { topic: topic.to_string(), source })?;
+        out.insert(topic, channel);
+    }
+    Ok(out)
+}
+
+/// Serves the arm until `stop` is set or the arm stops or falls silent; `ready` learns the port
+/// once clients may connect. Message times are the cycles' stamps on the wall clock.
+///
+/// ```no_run
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use jointctl_bridge::foxglove::{FoxgloveOptions, serve};
+/// let opts = FoxgloveOptions { arm: "sherpa".into(), scope: Default::default(), host: "127.0.0.1".into(), port: 8765, timeout_s: 5.0 };
+/// let summary = serve(&opts, &std::sync::atomic::AtomicBool::new(false), |port| eprintln!("ws://127.0.0.1:{port}"))?;
+/// println!("{:?}", summary.messages);
+/// # Ok(()) }
+/// ```
+pub fn serve(opts: &FoxgloveOptions, stop: &AtomicBool, ready: impl FnOnce(u16)) -> Result<BridgeSummary, FoxgloveBridgeError> {
+    let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
+    let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-bridge-foxglove-{}", std::process::id()))?;
+    let ctx = Context::new();
+    let channels = channels(&ctx)?;
+    let server = WebSocketServer::new()
+        .name(format!("jointctl {}", opts.arm))
+        .bind(opts.host.clone(), opts.port)
+        .context(&ctx)
+        .start_blocking()
+        .map_err(|source| FoxgloveBridgeError::Server { host: opts.host.clone(), port: opts.port, source })?;
+    ready(server.port());
+    let mut summary = BridgeSummary::default();
+    let mut last_sample = Instant::now();
+    let result = loop {
+        let polled = feed.poll(|m| {
+            if let Some(channel) = channels.get(m.topic) {
+                // No client subscribed: nothing to encode for.
+                if channel.has_sinks() {
+                    channel.log_with_meta(m.json.as_bytes(), PartialMetadata { log_time: wall_clock_ns(m.stamp_ns) });
+                }
+                *summary.messages.entry(m.topic.to_string()).or_default() += 1;
+            }
+            summary.arm_stopped |= m.final_sample;
+            Ok::<_, FeedError>(())
+        });
+        match polled {
+            Err(e) => break Err(e.into()),
+            Ok(n) if n > 0 => last_sample = Instant::now(),
+            Ok(_) if last_sample.elapsed() > timeout => {
+                tracing::warn!(arm = %opts.arm, timeout_s = opts.timeout_s, "the arm fell silent; the Foxglove bridge stops");
+                break Ok(());
+            }
+            Ok(_) => std::thread::sleep(Duration::from_millis(2)),
+        }
+        if stop.load(Ordering::Acquire) || summary.arm_stopped {
+            break Ok(());
+        }
+    };
+    server.stop().wait_blocking();
+    result.map(|()| summary)
+}

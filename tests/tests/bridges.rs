@@ -1,0 +1,216 @@
+//! The arm beyond shared memory, each bridge in its own process as a user runs it: a Foxglove
+//! protocol client (Python `websockets`, written from the protocol's specification) receives
+//! joint states from `jointctl bridge foxglove`; `jointctl inspect echo --zenoh` and
+//! `jointctl cmd --zenoh` reach the arm through `jointctl bridge zenoh` over TCP on loopback
+//! (scouting off), and commands pass only when the YAML allows them and the peer authenticates.
+
+use std::io::{BufRead, BufReader};
+use std::os::unix::fs::PermissionsExt;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use jointctl_tests::{arm_name, interop_python, jointctl, rig_yaml, root, scratch};
+
+const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";
+
+/// A process killed when the test ends, however it ends.
+struct Running(Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// A TCP port nothing listens on now (the OS's pick).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+/// The rig at 100 Hz with `network` appended to its YAML; returns (arm, yaml).
+fn rig(test: &str, network: &str) -> (String, std::path::PathBuf) {
+    let arm = arm_name(test);
+    let yaml = scratch(test).join("rig.yaml");
+    std::fs::write(&yaml, format!("{}{network}", rig_yaml(&arm, 100.0, ELASTIC))).unwrap();
+    (arm, yaml)
+}
+
+fn run_arm(yaml: &std::path::Path) -> Running {
+    Running(Command::new(jointctl()).arg("run").arg(yaml).args(["--duration", "60"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap())
+}
+
+/// Starts `jointctl bridge ARGS` and waits for its log line containing `ready`; returns the
+/// process, that line and a channel with the log lines that follow.
+fn bridge(args: &[&str], ready: &str) -> (Running, String, mpsc::Receiver<String>) {
+    let mut child = Command::new(jointctl()).arg("bridge").args(args).env("RUST_LOG", "info").stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let running = Running(child);
+    let t = Instant::now();
+    let mut seen = Vec::new();
+    while t.elapsed() < Duration::from_secs(20) {
+        if let Ok(line) = rx.recv_timeout(Duration::from_millis(100)) {
+            if line.contains(ready) {
+                return (running, line, rx);
+            }
+            seen.push(line);
+        }
+    }
+    panic!("the bridge never logged `{ready}`: {}", seen.join("\n"));
+}
+
+fn cmd(args: &[&str], password: Option<&str>) -> Output {
+    let mut c = Command::new(jointctl());
+    c.arg("cmd").args(args).env_remove("JOINTCTL_ZENOH_PASSWORD");
+    if let Some(p) = password {
+        c.env("JOINTCTL_ZENOH_PASSWORD", p);
+    }
+    c.output().unwrap()
+}
+
+fn text(out: &Output) -> String {
+    format!("exit {:?}; stdout: {}; stderr: {}", out.status.code(), String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr))
+}
+
+/// Issue's done-when: `inspect echo --zenoh ... --json --count 20` receives 20 samples from
+/// `bridge zenoh --listen` in another process, in `inspect echo --json`'s form with a wall-clock
+/// stamp; commands sent to the open endpoint are refused with where to go, an unauthenticated
+/// or wrongly authenticated peer cannot reach the command endpoint, and an authenticated one
+/// commands the arm (checked on the arm's own state).
+#[test]
+fn zenoh_carries_the_state_and_only_authenticated_commands() {
+    let (open_port, command_port) = (free_port(), free_port());
+    let command_endpoint = format!("tcp/127.0.0.1:{command_port}");
+    let (arm, yaml) = rig("zenoh-auth", &format!("network:\n  zenoh:\n    commands: {{listen: \"{command_endpoint}\", users_file: users.txt}}\n"));
+    let users = yaml.with_file_name("users.txt");
+    std::fs::write(&users, "operator:correct-horse\n").unwrap();
+    std::fs::set_permissions(&users, std::fs::Permissions::from_mode(0o600)).unwrap();
+    let password_file = yaml.with_file_name("password");
+    std::fs::write(&password_file, "correct-horse\n").unwrap();
+    let _arm = run_arm(&yaml);
+    let open = format!("tcp/127.0.0.1:{open_port}");
+    let (_bridge, ready, log) = bridge(&["zenoh", "--arm", &arm, "--listen", &open, "--timeout", "10"], "publishing on");
+    assert!(ready.contains(&format!("served to authenticated peers on {command_endpoint}")), "{ready}");
+
+    let echo = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--zenoh", &open, "--json", "--count", "20", "--timeout", "10"]).output().unwrap();
+    assert!(echo.status.success(), "{}", text(&echo));
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&echo.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 20);
+    let cycles: Vec<u64> = lines.iter().map(|v| v["cycle"].as_u64().unwrap()).collect();
+    assert!(cycles.windows(2).all(|w| w[1] > w[0]), "cycles rise: {cycles:?}");
+    let unix_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos() as u64;
+    for v in &lines {
+        let names: Vec<&str> = v["joints"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
+        assert_eq!(names, ["a", "b"], "{v}");
+        assert!(v["joints"][0]["position"].is_f64() && v["joints"][0]["mode"] == "hold", "inspect echo's form: {v}");
+        let wall = v["wall_ns"].as_u64().unwrap();
+        assert!(unix_ns.abs_diff(wall) < 30_000_000_000, "the stamp is on the wall clock: {wall} vs now {unix_ns}");
+    }
+
+    // The open endpoint refuses and says where commands are served.
+    let out = cmd(&["--arm", &arm, "--zenoh", &open, "disable", "a"], None);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("refused") && err.contains(&command_endpoint), "{}", text(&out));
+    // No credentials, or a wrong password: the command endpoint admits no such peer.
+    let out = cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "disable", "a"], None);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("admits only authenticated peers"), "{}", text(&out));
+    let out = cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "--user", "operator", "disable", "a"], Some("wrong"));
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("credentials"), "{}", text(&out));
+    let joint_a_enabled = || {
+        let out = Command::new(jointctl()).args(["inspect", "joints", "--arm", &arm, "--json"]).output().unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["joints"][0]["dofs"][0]["enabled"].as_bool().unwrap()
+    };
+    assert!(joint_a_enabled(), "no refused command reached the arm");
+    // Authenticated (password from a file): the runtime gets it, and validates it as its own.
+    let pf = password_file.to_str().unwrap();
+    let out = cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "--user", "operator", "--password-file", pf, "disable", "a"], None);
+    assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).contains("accepted"), "{}", text(&out));
+    let t = Instant::now();
+    while joint_a_enabled() {
+        assert!(t.elapsed() < Duration::from_secs(5), "the arm never disabled `a`");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "--user", "operator", "--password-file", pf, "position", "nope", "0.1"], None);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("nope"), "the runtime's own refusal: {}", text(&out));
+    // RUST_LOG=info: the bridge logged each decision.
+    let logged: Vec<String> = log.try_iter().collect();
+    let all = logged.join("\n");
+    assert!(all.contains("refused a command from the network") && all.contains("accepted a command from the network") && all.contains("the runtime refused"), "{all}");
+}
+
+/// Without `network.zenoh.commands` in the arm's YAML, every command over Zenoh is refused with
+/// that reason; the state is still published.
+#[test]
+fn without_the_yamls_consent_zenoh_commands_are_refused() {
+    let (arm, yaml) = rig("zenoh-no-commands", "");
+    let _arm = run_arm(&yaml);
+    let open = format!("tcp/127.0.0.1:{}", free_port());
+    let (_bridge, ready, _log) = bridge(&["zenoh", "--arm", &arm, "--listen", &open, "--timeout", "10"], "publishing on");
+    assert!(ready.contains("commands refused"), "{ready}");
+    let out = cmd(&["--arm", &arm, "--zenoh", &open, "hold"], None);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("does not allow commands over the network") && err.contains("network.zenoh.commands"), "{}", text(&out));
+}
+
+/// A users file others may read is refused before anything listens; so is a bad endpoint in
+/// the YAML (by `check`, with its field).
+#[test]
+fn a_readable_users_file_or_a_bad_endpoint_is_refused() {
+    let (arm, yaml) = rig("zenoh-users-file", &format!("network:\n  zenoh:\n    commands: {{listen: \"tcp/127.0.0.1:{}\", users_file: users.txt}}\n", free_port()));
+    let users = yaml.with_file_name("users.txt");
+    std::fs::write(&users, "operator:pw\n").unwrap();
+    std::fs::set_permissions(&users, std::fs::Permissions::from_mode(0o644)).unwrap();
+    let _arm = run_arm(&yaml);
+    let out = Command::new(jointctl())
+        .args(["bridge", "zenoh", "--arm", &arm, "--listen", &format!("tcp/127.0.0.1:{}", free_port()), "--timeout", "10"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("users.txt") && err.contains("chmod 600"), "{}", text(&out));
+
+    let (_, bad) = rig("zenoh-bad-endpoint", "network:\n  zenoh:\n    commands: {listen: \"localhost\", users_file: users.txt}\n");
+    let out = Command::new(jointctl()).arg("check").arg(&bad).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("network.zenoh.commands.listen") && err.contains("not a Zenoh endpoint"), "{}", text(&out));
+}
+
+/// Issue's done-when: a client speaking the Foxglove WebSocket protocol (written from the
+/// `foxglove.websocket.v1` specification) receives joint states from `jointctl bridge foxglove`,
+/// on the recording's channel name with its JSON schema, stamped on the wall clock. The official
+/// SDK negotiates the protocol under its newer name, `foxglove.sdk.v1`, and refuses a client
+/// that offers only the old one (as `foxglove_bridge` 3.x does): pinned here, so that a change
+/// in the SDK shows.
+#[test]
+fn a_foxglove_protocol_client_receives_joint_states() {
+    let (arm, yaml) = rig("foxglove", "");
+    let _arm = run_arm(&yaml);
+    let (_bridge, ready, _log) = bridge(&["foxglove", "--arm", &arm, "--port", "0", "--timeout", "10"], "listening on ws://");
+    let url = ready.split_whitespace().find(|w| w.starts_with("ws://")).unwrap().to_string();
+    let client = root().join("tests/interop/foxglove_client.py");
+    let out = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "5", "foxglove.websocket.v1,foxglove.sdk.v1"]).output().unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let messages: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(messages.len(), 5);
+    let unix_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos() as u64;
+    for m in &messages {
+        assert_eq!(m["subprotocol"], "foxglove.sdk.v1", "{m}");
+        assert_eq!((m["encoding"].as_str(), m["schema_encoding"].as_str(), m["schema_name"].as_str()), (Some("json"), Some("jsonschema"), Some("jointctl.ArmState")), "{m}");
+        assert_eq!(m["schema"]["properties"]["joints"]["type"], "array", "{m}");
+        let names: Vec<&str> = m["message"]["joints"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
+        assert_eq!(names, ["a", "b"], "{m}");
+        assert!(m["message"]["joints"][0]["position_rad"].is_f64(), "the recording's form: {m}");
+        assert!(unix_ns.abs_diff(m["log_time_ns"].as_u64().unwrap()) < 30_000_000_000, "log time on the wall clock: {m}");
+    }
+    let old_only = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "1", "foxglove.websocket.v1"]).output().unwrap();
+    assert!(!old_only.status.success() && String::from_utf8_lossy(&old_only.stderr).contains("400"), "{}", text(&old_only));
+}
