@@ -212,6 +212,40 @@ fn inspect_joints_lists_each_plugin_and_its_dofs_state() {
     assert!(human.status.success() && text.contains("rigid") && text.contains("libjointctl_plugin_rigid.so"), "{text}");
 }
 
+/// Finding: a fault's reason reached the log only, and commands left no trace there. Pass:
+/// `inspect diag --json` carries the plugin's reason with the fault code; the runtime logs the
+/// fault and every accepted and refused command at `RUST_LOG=info`, from its publisher thread.
+#[test]
+fn fault_reasons_reach_diagnostics_and_commands_are_logged() {
+    let arm = arm_name("fault-log");
+    let yaml = scratch("fault-log").join("rig.yaml");
+    let faulty = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {panic_in_observe_at: 5}\n";
+    std::fs::write(&yaml, rig_yaml(&arm, 100.0, faulty)).unwrap();
+    let mut run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--duration", "30"]).env("RUST_LOG", "info").stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let mut fault_message = String::new();
+    let t = Instant::now();
+    while t.elapsed() < Duration::from_secs(10) {
+        let out = Command::new(jointctl()).args(["inspect", "diag", "--arm", &arm, "--json", "--timeout", "10"]).output().unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+        if v["joints"][1]["fault_code"] == 1 {
+            fault_message = v["joints"][1]["fault_message"].as_str().unwrap_or_default().to_string();
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let accepted = Command::new(jointctl()).args(["cmd", "--arm", &arm, "position", "a", "0.1"]).output().unwrap();
+    let refused = Command::new(jointctl()).args(["cmd", "--arm", &arm, "position", "b", "0.1"]).output().unwrap();
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(run.id() as i32, libc::SIGINT) };
+    let _ = wait_with_timeout(&mut run, Duration::from_secs(5));
+    let log = stderr_of(&mut run);
+    assert!(fault_message.contains("deliberate panic in observe at cycle 5"), "the plugin's reason: `{fault_message}`");
+    assert!(accepted.status.success() && !refused.status.success());
+    assert!(log.contains("joint faulted and is held") && log.contains("deliberate panic in observe"), "{log}");
+    assert!(log.lines().any(|l| l.contains("accepted:") && l.contains("command=\"position\"") && l.contains("joint=\"a\"")), "{log}");
+    assert!(log.contains("refused: joint `b` is faulted"), "{log}");
+}
+
 /// Finding: SIGHUP (an SSH disconnect), SIGQUIT and SIGUSR1 ended the runtime without holding
 /// the joints, without a final sample, leaving stale shared memory. Pass, for every terminating
 /// signal: exit 0 within 5 s, "joints held" logged with the signal's name, a final sample

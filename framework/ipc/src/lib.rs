@@ -312,7 +312,13 @@ pub struct JointDiagnostics {
     pub plugin_max_ns: u64,
     /// Cycles the joint's plugin was over its budget (faulting or not).
     pub over_budget_cycles: u64,
+    /// NUL-padded reason of the fault that holds the joint (its plugin's message, or the
+    /// runtime's), empty when none.
+    pub fault_message: [u8; FAULT_MESSAGE_LEN],
 }
+
+/// Longest fault reason in [`JointDiagnostics`] [bytes, NUL included].
+pub const FAULT_MESSAGE_LEN: usize = 128;
 
 impl JointDiagnostics {
     /// An unnamed entry.
@@ -332,6 +338,7 @@ impl JointDiagnostics {
         plugin_budget_ns: 0,
         plugin_max_ns: 0,
         over_budget_cycles: 0,
+        fault_message: [0; FAULT_MESSAGE_LEN],
     };
 }
 
@@ -366,7 +373,7 @@ impl DeviceDiagnostics {
 /// Loop health, once per cycle.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.Diagnostics.v3")]
+#[type_name("jointctl.Diagnostics.v4")]
 pub struct Diagnostics {
     /// Cycle counter.
     pub cycle: u64,

@@ -221,6 +221,7 @@ pub fn write_diagnostics(out: &mut String, d: &Diagnostics) {
     j.objects("joints", &d.joints[..(d.joint_count as usize).min(d.joints.len())], |j, x| {
         j.str("name", decode_name(&x.name))
             .int("fault_code", u64::from(x.fault_code))
+            .str("fault_message", decode_name(&x.fault_message))
             .bool("held", x.held != 0)
             .int("invalid_cycles", x.invalid_cycles)
             .int("fault_count", x.fault_count)

@@ -16,7 +16,7 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use jointctl_config::TimingConfig;
 use jointctl_modes::Mode;
 use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDrive, RawFrame, RawReading};
-use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointMode, JointSample, JointsDescriptor, ServiceNames, encode_name};
+use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointMode, JointSample, JointsDescriptor, ServiceNames, decode_name, encode_name};
 
 use crate::commands::{ArmCommand, CommandValidator};
 
@@ -209,6 +209,17 @@ impl CommandDesk {
     }
 }
 
+/// Logs each joint whose fault count grew since `seen` (the publisher thread's view of the
+/// diagnostics), with its fault code and reason.
+fn log_new_faults(d: &Diagnostics, seen: &mut [u64; jointctl_ipc::MAX_JOINTS]) {
+    for (j, seen) in d.joints[..(d.joint_count as usize).min(d.joints.len())].iter().zip(seen.iter_mut()) {
+        if j.fault_count > *seen {
+            *seen = j.fault_count;
+            tracing::error!(joint = decode_name(&j.name), fault = j.fault_code, "joint faulted and is held: {}", decode_name(&j.fault_message));
+        }
+    }
+}
+
 /// The arm's plugin instances as `inspect joints` reads them.
 fn joints_descriptor(arm: &Arm) -> Box<JointsDescriptor> {
     let mut d = Box::new(JointsDescriptor::EMPTY);
@@ -308,9 +319,11 @@ impl PublisherPorts {
     ) -> u64 {
         let mut failures = 0u64;
         let mut accepted_count = 0u64;
+        let mut faults_seen = [0u64; jointctl_ipc::MAX_JOINTS];
         loop {
             let stopping = stop.load(Ordering::Acquire);
             while let Ok(rec) = records.pop() {
+                log_new_faults(&rec.diagnostics, &mut faults_seen);
                 let ok_state = self.state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
                 let ok_diag = self.diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
                 let ok_raw = self.raw.loan_uninit().map(|s| s.write_payload(rec.raw).send().is_ok()).unwrap_or(false);
@@ -321,6 +334,12 @@ impl PublisherPorts {
             // recorders, numbered so that a lost one shows.
             while let Ok(Some(request)) = self.server.receive() {
                 let response = desk.answer(request.payload(), &mut commands);
+                let (kind, joint) = (request.payload().kind.name(), decode_name(&request.payload().joint));
+                if response.accepted == 1 {
+                    tracing::info!(command = kind, joint, "accepted: {}", response.text());
+                } else {
+                    tracing::info!(command = kind, joint, "refused: {}", response.text());
+                }
                 if response.accepted == 1 {
                     accepted_count += 1;
                     let record = CommandRecord { sequence: accepted_count, stamp_ns: crate::timing::monotonic_ns(), request: *request.payload(), response };
@@ -513,6 +532,14 @@ impl ArmPublisher {
                 j.plugin_budget_ns = slot.budget_ns;
                 j.plugin_max_ns = slot.max_used_ns;
                 j.over_budget_cycles = slot.over_budget_cycles;
+                // Written when it changes only: faults are rare and hold until restart.
+                if slot.fault == 0 {
+                    if j.fault_message[0] != 0 {
+                        j.fault_message = [0; jointctl_ipc::FAULT_MESSAGE_LEN];
+                    }
+                } else if j.fault_message[0] == 0 {
+                    j.fault_message = encode_name(if slot.last_message().is_empty() { "no reason given" } else { slot.last_message() });
+                }
             }
         }
         arm.device_health(&mut self.health);
@@ -619,11 +646,16 @@ impl<'a> ControlLoop<'a> {
         done
     }
 
-    /// Logs faults raised since the last call (outside the timed part of a cycle; rare).
+    /// Logs faults raised since the last call when no publisher thread does (`--no-ipc`): the
+    /// publisher thread logs them from the diagnostics, so that the control thread writes
+    /// nothing. Outside the timed part of a cycle; rare.
     pub fn report_faults(&mut self) {
+        let published = self.publisher.is_some();
         for slot in self.arm.slots.iter_mut().filter(|s| s.fault_unreported) {
             slot.fault_unreported = false;
-            tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.last_message());
+            if !published {
+                tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.last_message());
+            }
         }
     }
 

@@ -510,7 +510,7 @@ fn diag_human(d: &Diagnostics) -> String {
             j.watchdog_trips,
             j.missing_inputs,
             j.plugin_max_ns as f64 / 1e3,
-            fault_reason(j.fault_code)
+            if j.fault_code == 0 { fault_reason(0) } else { format!("{}: {}", fault_reason(j.fault_code), decode_name(&j.fault_message)) }
         );
     }
     let _ = writeln!(out, "devices:");
