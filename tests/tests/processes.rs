@@ -747,3 +747,29 @@ fn bad_durations_are_refused_where_they_are_typed() {
         assert!(err.contains("must be >= 0 s") || err.contains("must be a finite number"), "{args:?}: {err}");
     }
 }
+
+/// Finding: no shell completions. Pass: `jointctl completions bash` is a script that bash
+/// sources, and completing `jointctl insp` and `jointctl inspect j` gives `inspect` and `joints`.
+#[test]
+fn bash_completes_subcommands() {
+    let script = Command::new(jointctl()).args(["completions", "bash"]).output().unwrap();
+    assert!(script.status.success());
+    let file = scratch("completions").join("jointctl.bash");
+    std::fs::write(&file, &script.stdout).unwrap();
+    let complete = |words: &[&str]| {
+        let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
+        let line = words.join(" ");
+        let body = format!(
+            "source {}; COMP_WORDS=({}); COMP_CWORD={}; COMP_LINE='{line}'; COMP_POINT=${{#COMP_LINE}}; _jointctl jointctl \"${{COMP_WORDS[COMP_CWORD]}}\" \"${{COMP_WORDS[COMP_CWORD-1]}}\"; echo \"${{COMPREPLY[@]}}\"",
+            file.display(),
+            quoted.join(" "),
+            words.len() - 1
+        );
+        let out = Command::new("bash").args(["-c", &body]).output().unwrap();
+        String::from_utf8_lossy(&out.stdout).trim().to_string()
+    };
+    assert_eq!(complete(&["jointctl", "insp"]), "inspect");
+    assert_eq!(complete(&["jointctl", "inspect", "j"]), "joints");
+    let bridges = complete(&["jointctl", "bridge", ""]);
+    assert!(bridges.split_whitespace().any(|w| w == "zenoh"), "{bridges}");
+}

@@ -76,6 +76,12 @@ enum Command {
         #[command(subcommand)]
         command: inspect::InspectCommand,
     },
+    /// Print a shell completion script: `jointctl completions bash > ~/.local/share/bash-completion/completions/jointctl`
+    /// (zsh: into a folder of `$fpath` as `_jointctl`; fish: `~/.config/fish/completions/jointctl.fish`).
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
     /// Open a running arm to Foxglove and to other machines (Zenoh).
     Bridge {
         #[command(subcommand)]
@@ -201,6 +207,12 @@ fn main() -> ExitCode {
         }
         Command::Inspect { command } => inspect::run(command),
         Command::Bridge { command } => bridge::run(command),
+        Command::Completions { shell } => {
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut <Cli as clap::CommandFactory>::command(), "jointctl", &mut script);
+            print_out(&String::from_utf8_lossy(&script));
+            ExitCode::SUCCESS
+        }
         Command::Record(args) => record::run(args),
         Command::Replay(args) => replay::run(args),
         Command::Cmd(args) => cmd::run(args),
