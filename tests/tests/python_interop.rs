@@ -77,3 +77,47 @@ fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
     // The Rust inspector ran before the Python one: an earlier cycle of the same run.
     assert!(rust_sample["cycle"].as_u64() < py_samples[0]["cycle"].as_u64());
 }
+
+/// Finding: the Python client could not follow `ipc.domain` and had no diagnostics. Pass: an
+/// arm in its own domain is found with `--domain` (and not without it, with a hint), and
+/// `--diag` prints the diagnostics in `jointctl inspect diag --json`'s shape, key for key,
+/// including a faulted joint's reason.
+#[test]
+fn the_python_inspector_follows_the_domain_and_reads_diagnostics() {
+    let arm = arm_name("py-diag");
+    let domain = format!("pyd{}", std::process::id());
+    let yaml = scratch("py-diag").join("rig.yaml");
+    let faulty = "  - name: b\n    plugin: faulty\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {fault_at: 3}\n";
+    std::fs::write(&yaml, format!("{}ipc: {{domain: {domain}}}\n", rig_yaml(&arm, 100.0, faulty))).unwrap();
+    let mut run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--duration", "20"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let script = root().join("tools/inspect_py/jointctl_inspect.py");
+    // Up, and past the fault at cycle 3.
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--domain", &domain, "--json", "--count", "10", "--timeout", "10"]).output().unwrap();
+    let rust = Command::new(jointctl()).args(["inspect", "diag", "--arm", &arm, "--domain", &domain, "--json"]).output().unwrap();
+    let py = Command::new(python()).arg(&script).args([&arm, "--domain", &domain, "--diag"]).output().unwrap();
+    let py_state = Command::new(python()).arg(&script).args([&arm, "--domain", &domain, "--count", "1"]).output().unwrap();
+    let lost = Command::new(python()).arg(&script).args([&arm, "--count", "1", "--timeout", "1"]).output().unwrap();
+    let _ = run.kill();
+    let _ = run.wait();
+    assert!(up.status.success() && rust.status.success(), "{}", String::from_utf8_lossy(&rust.stderr));
+    assert!(py.status.success(), "python --diag: {}", String::from_utf8_lossy(&py.stderr));
+    assert!(py_state.status.success(), "python --domain: {}", String::from_utf8_lossy(&py_state.stderr));
+    let err = String::from_utf8_lossy(&lost.stderr);
+    assert!(!lost.status.success() && err.contains("--domain"), "without the domain: {err}");
+    let (p, r): (serde_json::Value, serde_json::Value) = (serde_json::from_slice(&py.stdout).unwrap(), serde_json::from_slice(&rust.stdout).unwrap());
+    let keys = |v: &serde_json::Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    assert_eq!(keys(&p), keys(&r));
+    assert_eq!(keys(&p["joints"][0]), keys(&r["joints"][0]));
+    assert_eq!(keys(&p["devices"][0]), keys(&r["devices"][0]));
+    let bounds = |v: &serde_json::Value| v["lateness_histogram"].as_array().unwrap().iter().map(|b| b["upper_us"].clone()).collect::<Vec<_>>();
+    assert_eq!(bounds(&p), bounds(&r), "the same buckets");
+    assert_eq!(p["lateness_histogram"].as_array().unwrap().len(), 16);
+    assert_eq!(p["lateness_histogram"][15]["upper_us"], serde_json::Value::Null);
+    assert_eq!(p["period_ns"], 10_000_000);
+    let names = |v: &serde_json::Value, list: &str| v[list].as_array().unwrap().iter().map(|x| x["name"].clone()).collect::<Vec<_>>();
+    assert_eq!(names(&p, "joints"), names(&r, "joints"));
+    assert_eq!(names(&p, "devices"), names(&r, "devices"));
+    assert_eq!((p["joints"][1]["fault_code"].as_u64(), p["joints"][1]["fault_count"].as_u64()), (Some(42), Some(1)), "{p}");
+    assert_eq!(p["joints"][1]["fault_message"], r["joints"][1]["fault_message"]);
+    assert!(p["joints"][1]["held"].as_bool().unwrap());
+}

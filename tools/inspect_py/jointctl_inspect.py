@@ -1,4 +1,5 @@
-"""A jointctl inspector in Python: reads a running arm's joint states from shared memory.
+"""A jointctl inspector in Python: reads a running arm's joint states and diagnostics from
+shared memory.
 
 It is an outside client of the shared-memory contract (framework/ipc): it uses only the PyPI
 package `iceoryx2` 0.10 and ctypes mirrors of the `#[repr(C)]` payloads, and prints one JSON
@@ -9,7 +10,11 @@ object per sample in the shape of `jointctl inspect echo --json`:
      "pivot", "reference_torque", "sensor_torque", "gravity", "mode", "enabled", "fault_code"}]}
     (SI units; null for what is not observed)
 
-Usage: python jointctl_inspect.py ARM [--count N] [--timeout S]
+With `--diag` it prints the newest diagnostics once, in the shape of `jointctl inspect diag
+--json` (the recording's `diagnostics` channel). `--domain D` and `--ipc-root DIR` find an arm
+whose YAML sets `ipc.domain` / `ipc.root`, as the Rust tools' options do.
+
+Usage: python jointctl_inspect.py ARM [--domain D] [--ipc-root DIR] [--count N] [--timeout S] [--diag]
 """
 
 import argparse
@@ -21,9 +26,14 @@ import time
 
 import iceoryx2 as iox2
 
-# framework/ipc/src/lib.rs: MAX_JOINTS, NAME_LEN; framework/api/src/state.rs: FieldMask bits.
+# framework/ipc/src/lib.rs: MAX_JOINTS, NAME_LEN, DEVICE_NAME_LEN, MAX_DEVICES,
+# FAULT_MESSAGE_LEN, JITTER_BUCKET_UPPER_US; framework/api/src/state.rs: FieldMask bits.
 MAX_JOINTS = 16
 NAME_LEN = 16
+DEVICE_NAME_LEN = 48
+MAX_DEVICES = 32
+FAULT_MESSAGE_LEN = 128
+JITTER_BUCKET_UPPER_US = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000, None]
 POSITION, VELOCITY, DEFLECTION, TORQUE, STIFFNESS, PIVOT = 1 << 0, 1 << 1, 1 << 2, 1 << 3, 1 << 4, 1 << 5
 # framework/ipc/src/lib.rs: JointMode's codes and names.
 MODES = {0: "hold", 1: "position", 2: "manual", 3: "trajectory", 4: "torque", 5: "impedance"}
@@ -66,6 +76,94 @@ class ArmState(ctypes.Structure):
         return "jointctl.ArmState.v4"
 
 
+class JointDiagnostics(ctypes.Structure):
+    """Mirror of `jointctl_ipc::JointDiagnostics`."""
+
+    _fields_ = [
+        ("name", ctypes.c_uint8 * NAME_LEN),
+        ("valid_mask", ctypes.c_uint32),
+        ("fault_code", ctypes.c_uint32),
+        ("held", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("invalid_cycles", ctypes.c_uint64),
+        ("fault_count", ctypes.c_uint64),
+        ("setpoint_clamps", ctypes.c_uint64),
+        ("torque_clamps", ctypes.c_uint64),
+        ("rate_limited", ctypes.c_uint64),
+        ("watchdog_trips", ctypes.c_uint64),
+        ("missing_inputs", ctypes.c_uint64),
+        ("plugin_budget_ns", ctypes.c_uint64),
+        ("plugin_max_ns", ctypes.c_uint64),
+        ("over_budget_cycles", ctypes.c_uint64),
+        ("fault_message", ctypes.c_uint8 * FAULT_MESSAGE_LEN),
+    ]
+
+
+class DeviceDiagnostics(ctypes.Structure):
+    """Mirror of `jointctl_ipc::DeviceDiagnostics`."""
+
+    _fields_ = [
+        ("name", ctypes.c_uint8 * DEVICE_NAME_LEN),
+        ("missing", ctypes.c_uint64),
+        ("invalid", ctypes.c_uint64),
+        ("implausible", ctypes.c_uint64),
+        ("emcy", ctypes.c_uint64),
+        ("flags", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+    ]
+
+
+class Diagnostics(ctypes.Structure):
+    """Mirror of `jointctl_ipc::Diagnostics`."""
+
+    _fields_ = [
+        ("cycle", ctypes.c_uint64),
+        ("stamp_ns", ctypes.c_uint64),
+        ("period_ns", ctypes.c_uint64),
+        ("overruns", ctypes.c_uint64),
+        ("missed_deadlines", ctypes.c_uint64),
+        ("hal_errors", ctypes.c_uint64),
+        ("publish_drops", ctypes.c_uint64),
+        ("last_compute_ns", ctypes.c_uint64),
+        ("max_compute_ns", ctypes.c_uint64),
+        ("max_jitter_ns", ctypes.c_uint64),
+        ("jitter_histogram", ctypes.c_uint64 * 16),
+        ("joint_count", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("joints", JointDiagnostics * MAX_JOINTS),
+        ("device_count", ctypes.c_uint32),
+        ("_reserved2", ctypes.c_uint32),
+        ("devices", DeviceDiagnostics * MAX_DEVICES),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "jointctl.Diagnostics.v4"
+
+
+def text(raw) -> str:
+    """A NUL-padded name field as text."""
+    return bytes(raw).split(b"\0", 1)[0].decode("utf-8", "replace")
+
+
+def diagnostics_json(d: Diagnostics) -> dict:
+    """The shape of `jointctl inspect diag --json`."""
+    counters = ["cycle", "stamp_ns", "period_ns", "overruns", "missed_deadlines", "hal_errors", "publish_drops", "last_compute_ns", "max_compute_ns"]
+    out = {k: getattr(d, k) for k in counters}
+    out["max_lateness_ns"] = d.max_jitter_ns
+    out["lateness_histogram"] = [{"upper_us": u, "cycles": n} for u, n in zip(JITTER_BUCKET_UPPER_US, d.jitter_histogram)]
+    joint_counters = ["invalid_cycles", "fault_count", "setpoint_clamps", "torque_clamps", "rate_limited", "watchdog_trips", "missing_inputs", "plugin_max_ns", "over_budget_cycles"]
+    out["joints"] = [
+        {"name": text(j.name), "fault_code": j.fault_code, "fault_message": text(j.fault_message), "held": j.held != 0, **{k: getattr(j, k) for k in joint_counters}}
+        for j in d.joints[: min(d.joint_count, MAX_JOINTS)]
+    ]
+    out["devices"] = [
+        {"name": text(x.name), "missing": x.missing, "invalid": x.invalid, "implausible": x.implausible, "emcy": x.emcy, "flags": x.flags}
+        for x in d.devices[: min(d.device_count, MAX_DEVICES)]
+    ]
+    return out
+
+
 def field(sample: JointSample, bit: int, value: float):
     """The value when its bit is set in the validity mask, else None (JSON null)."""
     if sample.valid_mask & bit and math.isfinite(value):
@@ -87,10 +185,9 @@ def wall_clock_ns(stamp_ns: int):
 def as_json(state: ArmState) -> dict:
     joints = []
     for j in state.joints[: min(state.joint_count, MAX_JOINTS)]:
-        name = bytes(j.name).split(b"\0", 1)[0].decode("utf-8", "replace")
         joints.append(
             {
-                "name": name,
+                "name": text(j.name),
                 "position": field(j, POSITION, j.position_rad),
                 "velocity": field(j, VELOCITY, j.velocity_rad_s),
                 "deflection": field(j, DEFLECTION, j.deflection_rad),
@@ -109,22 +206,53 @@ def as_json(state: ArmState) -> dict:
     return {"cycle": state.cycle, "stamp_ns": state.stamp_ns, "wall_ns": wall_clock_ns(state.stamp_ns), "joints": joints}
 
 
+def node_in(domain, ipc_root):
+    """A node in the arm's domain and root (its YAML's `ipc.domain`, `ipc.root`)."""
+    config = iox2.config.default()
+    g = config.global_cfg
+    if domain is not None:
+        g.prefix = iox2.FileName.new(domain)
+    if ipc_root is not None:
+        g.root_path = iox2.Path.new(ipc_root)
+    return iox2.NodeBuilder.new().config(config).create(iox2.ServiceType.Ipc)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("arm", help="the arm's name (`arm:` in its YAML)")
+    parser.add_argument("--domain", default=None, help="iceoryx2 domain of the arm (its YAML `ipc.domain`)")
+    parser.add_argument("--ipc-root", default=None, help="shared-memory root of the arm (its YAML `ipc.root`)")
     parser.add_argument("--count", type=int, default=None, help="stop after N samples")
     parser.add_argument("--timeout", type=float, default=5.0, help="give up after S seconds without a sample")
+    parser.add_argument("--diag", action="store_true", help="print the newest diagnostics once (`inspect diag --json`)")
     args = parser.parse_args()
 
     iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
-    node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
-    service_name = f"{args.arm}/joint_state"
+    node = node_in(args.domain, args.ipc_root)
+    hint = f" in domain `{args.domain}`" if args.domain else " (an arm whose YAML sets `ipc.domain` is found with --domain D)"
+    topic, payload = ("diagnostics", Diagnostics) if args.diag else ("joint_state", ArmState)
+    service_name = f"{args.arm}/{topic}"
     try:
-        service = node.service_builder(iox2.ServiceName.new(service_name)).publish_subscribe(ArmState).open()
+        service = node.service_builder(iox2.ServiceName.new(service_name)).publish_subscribe(payload).open()
     except Exception as e:  # the arm is not running, or its payload layout differs
-        print(f"error: cannot open `{service_name}`: {e!r} (is `jointctl run` running with arm `{args.arm}`?)", file=sys.stderr)
+        print(f"error: cannot open `{service_name}`: {e!r} (is `jointctl run` running with arm `{args.arm}`?){hint}", file=sys.stderr)
         return 1
     subscriber = service.subscriber_builder().create()
+    if args.diag:
+        started = time.monotonic()
+        newest = None
+        while True:
+            sample = subscriber.receive()
+            if sample is not None:
+                newest = diagnostics_json(sample.payload().contents)
+                continue
+            if newest is not None:
+                print(json.dumps(newest), flush=True)
+                return 0
+            if time.monotonic() - started > args.timeout:
+                print(f"error: no diagnostics from arm `{args.arm}` for {args.timeout} s{hint}", file=sys.stderr)
+                return 1
+            time.sleep(0.001)
     received = 0
     last = time.monotonic()
     while args.count is None or received < args.count:
