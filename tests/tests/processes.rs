@@ -773,3 +773,12 @@ fn bash_completes_subcommands() {
     let bridges = complete(&["jointctl", "bridge", ""]);
     assert!(bridges.split_whitespace().any(|w| w == "zenoh"), "{bridges}");
 }
+
+/// `inspect top` is a terminal view; piped, it says so and where the same data is, instead of
+/// writing escape codes into a file.
+#[test]
+fn inspect_top_without_a_terminal_points_to_the_json_views() {
+    let out = Command::new(jointctl()).args(["inspect", "top", "--arm", "nobody-runs-this"]).stdout(Stdio::piped()).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("needs a terminal") && err.contains("inspect joints --json"), "{err}");
+}

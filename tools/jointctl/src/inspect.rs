@@ -62,6 +62,19 @@ pub enum InspectCommand {
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
     },
+    /// A refreshing terminal view: the loop's measured rate, lateness percentiles and
+    /// counters, each joint (as `inspect joints`, with position and torque) and each device's
+    /// losses. q, Esc or Ctrl-C quits.
+    Top {
+        #[command(flatten)]
+        at: RunningArm,
+        /// Refresh interval [s].
+        #[arg(long, default_value_t = 0.5, value_parser = positive_seconds)]
+        interval: f64,
+        /// Show the arm as silent after this long without a sample [s].
+        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
+        timeout: f64,
+    },
     /// List what runs: each joint's plugin (name, version, library), its DOFs with their mode,
     /// whether they are enabled, faulted, held, and which fields are observed.
     Joints {
@@ -94,6 +107,14 @@ impl RunningArm {
     /// Its shared memory.
     pub fn scope(&self) -> jointctl_ipc::IpcScope {
         jointctl_ipc::IpcScope { domain: self.domain.clone(), root: self.ipc_root.clone(), group: None }
+    }
+}
+
+/// An interval [s]: finite and > 0.
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match crate::finite(text)? {
+        v if v > 0.0 => Ok(v),
+        v => Err(format!("must be > 0 s, got {v}")),
     }
 }
 
@@ -242,6 +263,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
             let _ = std::io::stdout().lock().write_all(text.as_bytes());
             ExitCode::SUCCESS
         }
+        InspectCommand::Top { at, interval, timeout } => crate::top::run(at, interval, timeout),
         InspectCommand::Joints { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
             let read = || -> Result<(jointctl_ipc::JointsDescriptor, ArmState, Diagnostics), String> {
                 let instances = newest(&arm, domain.clone(), ipc_root.clone(), timeout, |n| n.joints.clone(), jointctl_ipc::joints_service)?;
@@ -259,6 +281,26 @@ pub fn run(command: InspectCommand) -> ExitCode {
             ExitCode::SUCCESS
         }
     }
+}
+
+/// [`newest`] for a running arm's options.
+pub fn newest_of<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
+    at: &RunningArm,
+    timeout: f64,
+    service_name: impl Fn(&ServiceNames) -> String,
+    open: Opener<T>,
+) -> Result<T, String> {
+    newest(&at.arm, at.domain.clone(), at.ipc_root.clone(), timeout, service_name, open)
+}
+
+/// [`subscribe`] for a running arm's options.
+pub fn subscription_of<T: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static>(
+    at: &RunningArm,
+    timeout: f64,
+    service_name: impl Fn(&ServiceNames) -> String,
+    open: Opener<T>,
+) -> Result<(iceoryx2::node::Node<ipc::Service>, Subscription<T>), String> {
+    subscribe(&at.arm, at.domain.clone(), at.ipc_root.clone(), timeout, service_name, open)
 }
 
 /// The newest sample of one of the arm's services: waits up to `timeout` [s] for the first, then
@@ -308,7 +350,7 @@ fn field_names(mask: u32) -> Vec<&'static str> {
 }
 
 /// `inspect joints --json`: each plugin instance and its DOFs' state at the newest cycle.
-fn joints_json(instances: &jointctl_ipc::JointsDescriptor, state: &ArmState, diagnostics: &Diagnostics) -> serde_json::Value {
+pub fn joints_json(instances: &jointctl_ipc::JointsDescriptor, state: &ArmState, diagnostics: &Diagnostics) -> serde_json::Value {
     let joints: Vec<_> = instances
         .joints()
         .iter()
@@ -326,6 +368,7 @@ fn joints_json(instances: &jointctl_ipc::JointsDescriptor, state: &ArmState, dia
                         "held": d.held != 0,
                         "fault_code": s.fault_code,
                         "fault": fault_reason(s.fault_code),
+                        "fault_message": decode_name(&d.fault_message),
                     })
                 })
                 .collect();
@@ -368,7 +411,7 @@ fn joints_human(view: &serde_json::Value) -> String {
                 if k == 0 { source } else { "" },
             );
             if d["fault_code"].as_u64().unwrap_or(0) != 0 {
-                let _ = writeln!(out, "{:<14} fault: {}", "", text(&d["fault"]));
+                let _ = writeln!(out, "{:<14} fault: {}: {}", "", text(&d["fault"]), text(&d["fault_message"]));
             }
         }
     }
@@ -434,10 +477,10 @@ fn domain_hint(domain: &Option<String>) -> String {
     }
 }
 
-type Opener<T> = fn(&iceoryx2::node::Node<ipc::Service>, &str) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, jointctl_ipc::IpcSetupError>;
+pub type Opener<T> = fn(&iceoryx2::node::Node<ipc::Service>, &str) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, jointctl_ipc::IpcSetupError>;
 
 /// A subscriber of the arm's samples of type `T`.
-type Subscription<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
+pub type Subscription<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
 
 /// A subscriber to one of the arm's services, waiting up to `timeout` [s] for the runtime to
 /// create it (it may still be starting). The node must outlive the subscriber.

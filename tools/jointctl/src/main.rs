@@ -10,6 +10,7 @@ mod record;
 mod remote;
 mod replay;
 mod run;
+mod top;
 mod transmission;
 
 use std::path::PathBuf;
