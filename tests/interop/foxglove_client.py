@@ -1,7 +1,7 @@
 """A Foxglove WebSocket protocol client, written from the protocol's specification
 (foxglove/ws-protocol, `foxglove.websocket.v1`), independent of the bridge's code: connects,
 lists the advertised channels, subscribes to one topic and prints its first N messages as JSON
-lines ({"subprotocol", "topic", "log_time_ns", "encoding", "schema_name", "schema_encoding",
+lines ({"received_ns" (UNIX clock at receipt), "subprotocol", "topic", "log_time_ns", "encoding", "schema_name", "schema_encoding",
 "schema", "message"}).
 
 The official Foxglove SDK names the same protocol `foxglove.sdk.v1` (its messages are those of
@@ -14,6 +14,7 @@ import asyncio
 import json
 import struct
 import sys
+import time
 
 import websockets
 
@@ -31,7 +32,11 @@ async def main(url: str, topic: str, count: int, offered: list) -> None:
         subscribed = None
         received = 0
         while received < count:
-            frame = await asyncio.wait_for(ws.recv(), timeout=10)
+            try:
+                frame = await asyncio.wait_for(ws.recv(), timeout=10)
+            except websockets.exceptions.ConnectionClosed:
+                # The bridge stopped (the arm stopped): what was received is printed.
+                return
             if isinstance(frame, str):
                 op = json.loads(frame)
                 if op.get("op") == "advertise":
@@ -50,6 +55,7 @@ async def main(url: str, topic: str, count: int, offered: list) -> None:
                 raise SystemExit(f"message for subscription {subscription_id}, not 1")
             payload = frame[13:]
             print(json.dumps({
+                "received_ns": time.time_ns(),
                 "subprotocol": ws.subprotocol,
                 "topic": subscribed["topic"],
                 "log_time_ns": log_time,

@@ -1,0 +1,169 @@
+//! `cargo bench -p jointctl-bench --bench bridges`: the network bridges against the full SHERPA
+//! arm at 1 kHz. One run of the loop alone, then one with `jointctl bridge zenoh` and
+//! `jointctl bridge foxglove` attached (separate processes, as in use) and a client on each:
+//! the loop's lateness and overruns side by side, and each client's latency from the cycle's
+//! stamp to receipt (p50/p99).
+//!
+//! Latency: the cycle's CLOCK_MONOTONIC stamp, put on the wall clock by the bridge (`wall_ns`,
+//! Foxglove's log time), against the wall clock when the client has the message. Both clocks
+//! are this machine's. The Zenoh client is this process (zenoh's Rust API); the Foxglove client
+//! is the Python `websockets` client of the tests, so its figure includes Python's decoding.
+//!
+//! Environment: `BENCH_BRIDGE_S` (default 30) seconds per run; `BENCH_QUICK=1` for 5 s.
+//! Needs `cargo build --release --workspace` first and `bash .ci/setup-python-venv`.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use jointctl_runtime::{ArmPublisher, PluginLoader, RunOptions};
+
+struct LoopRun {
+    cycles: u64,
+    p50_us: f64,
+    p99_us: f64,
+    max_us: f64,
+    overruns: u64,
+    drops: u64,
+}
+
+fn run_loop(seconds: f64, arm_name: &str) -> LoopRun {
+    let loaded = jointctl_bench::sherpa(1000.0, arm_name);
+    let loader = PluginLoader::new([jointctl_bench::release_dir()]);
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| panic!("{e}\n(build first: cargo build --release --workspace)"));
+    arm.activate().unwrap();
+    let reference = jointctl_modes::Reference { waveform: jointctl_modes::Waveform::Sine, amplitude: 5.0, frequency_hz: 0.5, offset: 0.0, start_s: 0.0 };
+    arm.set_mode(1, jointctl_modes::Mode::Torque { reference });
+    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
+    let cycles = (seconds * 1000.0) as u64;
+    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize, stop: None };
+    let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
+    let st = &r.stats;
+    let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
+    LoopRun {
+        cycles: st.cycles,
+        p50_us: us(st.jitter_percentile_ns(50.0)),
+        p99_us: us(st.jitter_percentile_ns(99.0)),
+        max_us: st.max_jitter_ns as f64 / 1e3,
+        overruns: st.overruns,
+        drops: publisher.drops(),
+    }
+}
+
+fn unix_ns() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    sorted[((p / 100.0 * (sorted.len() - 1) as f64).round() as usize).min(sorted.len() - 1)]
+}
+
+/// Starts `jointctl bridge ARGS` and returns it with the log line containing `ready` (waits
+/// in a thread so that the loop can start meanwhile).
+fn bridge(exe: &std::path::Path, args: &[String], ready: &'static str) -> (Child, std::sync::mpsc::Receiver<String>) {
+    let mut child = Command::new(exe).arg("bridge").args(args).env("RUST_LOG", "info").stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.contains(ready) {
+                let _ = tx.send(line);
+            }
+        }
+    });
+    (child, rx)
+}
+
+fn main() {
+    let quick = std::env::var("BENCH_QUICK").is_ok();
+    let seconds: f64 = std::env::var("BENCH_BRIDGE_S").ok().and_then(|v| v.parse().ok()).unwrap_or(if quick { 5.0 } else { 30.0 });
+    let exe = jointctl_bench::release_dir().join("jointctl");
+    assert!(exe.exists(), "{} is missing: cargo build --release --workspace", exe.display());
+    let python = jointctl_bench::root().join(".venv-interop/bin/python");
+    assert!(python.exists(), "{} is missing: bash .ci/setup-python-venv", python.display());
+    println!("jointctl bridge benchmark ({} cores), full SHERPA arm at 1 kHz, {seconds} s per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
+    println!();
+
+    let alone = run_loop(seconds, "bench-br-alone");
+
+    let arm = "bench-br-with";
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let (mut zenoh_bridge, zenoh_ready) = bridge(&exe, &["zenoh".into(), "--arm".into(), arm.into(), "--listen".into(), endpoint.clone(), "--timeout".into(), "10".into()], "publishing on");
+    let (mut foxglove_bridge, foxglove_ready) = bridge(&exe, &["foxglove".into(), "--arm".into(), arm.into(), "--port".into(), "0".into(), "--timeout".into(), "10".into()], "listening on ws://");
+    let looping = std::thread::spawn(move || run_loop(seconds, arm));
+    // The bridges find the arm once its loop runs; then the clients attach.
+    zenoh_ready.recv_timeout(Duration::from_secs(20)).expect("the Zenoh bridge never started");
+    let ws = foxglove_ready.recv_timeout(Duration::from_secs(20)).expect("the Foxglove bridge never started");
+    let url = ws.split_whitespace().find(|w| w.starts_with("ws://")).unwrap().to_string();
+    let foxglove_client = Command::new(&python)
+        .arg(jointctl_bench::root().join("tests/interop/foxglove_client.py"))
+        .args([&url, "joint_state", &format!("{}", (seconds * 1000.0) as u64)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let session = jointctl_bridge::zenoh::connect(&endpoint, None, 5.0).unwrap();
+    let subscriber = zenoh::Wait::wait(session.declare_subscriber(jointctl_bridge::zenoh::key(arm, "joint_state"))).unwrap();
+    let zenoh_latencies = Arc::new(Mutex::new(Vec::new()));
+    let done = Arc::new(AtomicBool::new(false));
+    let receiving = {
+        let (latencies, done) = (Arc::clone(&zenoh_latencies), Arc::clone(&done));
+        std::thread::spawn(move || {
+            while !done.load(Ordering::Relaxed) {
+                if let Ok(Some(sample)) = subscriber.recv_timeout(Duration::from_millis(100)) {
+                    let now = unix_ns();
+                    let text = sample.payload().try_to_string().map(|s| s.into_owned()).unwrap_or_default();
+                    let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+                    if let Some(wall) = v["wall_ns"].as_u64() {
+                        latencies.lock().unwrap().push(now.saturating_sub(wall) as f64 / 1e3);
+                    }
+                }
+            }
+        })
+    };
+    let with = looping.join().unwrap();
+    done.store(true, Ordering::Relaxed);
+    let _ = receiving.join();
+    let fox = foxglove_client.wait_with_output().unwrap();
+    let _ = zenoh_bridge.wait();
+    let _ = foxglove_bridge.wait();
+    let mut fox_latencies: Vec<f64> = String::from_utf8_lossy(&fox.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter_map(|m| Some(m["received_ns"].as_u64()?.saturating_sub(m["log_time_ns"].as_u64()?) as f64 / 1e3))
+        .collect();
+    let mut zenoh_latencies = std::mem::take(&mut *zenoh_latencies.lock().unwrap());
+    zenoh_latencies.sort_by(f64::total_cmp);
+    fox_latencies.sort_by(f64::total_cmp);
+
+    println!("## The loop with and without the bridges (lateness = wake-up time - deadline)");
+    println!("| run | cycles | p50 lateness us | p99 lateness us | max lateness us | overruns | records dropped by the runtime |");
+    println!("|---|---|---|---|---|---|---|");
+    for (name, r) in [("no bridge", &alone), ("`bridge zenoh` + `bridge foxglove` attached, a client on each", &with)] {
+        println!("| {name} | {} | {:.1} | {:.1} | {:.1} | {} | {} |", r.cycles, r.p50_us, r.p99_us, r.max_us, r.overruns, r.drops);
+    }
+    println!("| with - without | | {:+.1} | {:+.1} | {:+.1} | {:+} | |", with.p50_us - alone.p50_us, with.p99_us - alone.p99_us, with.max_us - alone.max_us, with.overruns as i64 - alone.overruns as i64);
+    println!();
+    println!("## Joint state: cycle stamp to client receipt (same machine, loopback)");
+    println!("| path | samples received | of cycles | p50 ms | p99 ms | max ms |");
+    println!("|---|---|---|---|---|---|");
+    for (name, l) in [("Zenoh: bridge → Rust subscriber over TCP", &zenoh_latencies), ("Foxglove: bridge → Python `websockets` client", &fox_latencies)] {
+        println!(
+            "| {name} | {} | {:.0} % | {:.2} | {:.2} | {:.2} |",
+            l.len(),
+            100.0 * l.len() as f64 / with.cycles.max(1) as f64,
+            percentile(l, 50.0) / 1e3,
+            percentile(l, 99.0) / 1e3,
+            l.last().copied().unwrap_or(f64::NAN) / 1e3
+        );
+    }
+    if !fox.status.success() {
+        println!("\n(the Foxglove client: {})", String::from_utf8_lossy(&fox.stderr).lines().last().unwrap_or(""));
+    }
+}
