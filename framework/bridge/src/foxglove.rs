@@ -2,12 +2,14 @@
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
 use foxglove::{Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
 use jointctl_ipc::IpcScope;
 use jointctl_record::feed::{ArmFeed, FeedError, wall_clock_ns};
+
+pub use crate::BridgeSummary;
 use jointctl_record::messages;
 
 /// What to serve.
@@ -51,14 +53,6 @@ pub enum FoxgloveBridgeError {
     },
 }
 
-/// What the bridge forwarded.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct BridgeSummary {
-    /// Messages per topic.
-    pub messages: BTreeMap<String, u64>,
-    /// The arm stopped (its final sample).
-    pub arm_stopped: bool,
-}
 
 /// The SDK's channels, one per recorded topic, with the recording's JSON schemas.
 fn channels(ctx: &Arc<Context>) -> Result<BTreeMap<&'static str, Arc<RawChannel>>, FoxgloveBridgeError> {
@@ -99,33 +93,19 @@ pub fn serve(opts: &FoxgloveOptions, stop: &AtomicBool, ready: impl FnOnce(u16))
         .start_blocking()
         .map_err(|source| FoxgloveBridgeError::Server { host: opts.host.clone(), port: opts.port, source })?;
     ready(server.port());
-    let mut summary = BridgeSummary::default();
-    let mut last_sample = Instant::now();
-    let result = loop {
-        let polled = feed.poll(|m| {
-            if let Some(channel) = channels.get(m.topic) {
-                // No client subscribed: nothing to encode for.
-                if channel.has_sinks() {
-                    channel.log_with_meta(m.json.as_bytes(), PartialMetadata { log_time: wall_clock_ns(m.stamp_ns) });
-                }
-                *summary.messages.entry(m.topic.to_string()).or_default() += 1;
+    let result = crate::pump(
+        &mut feed,
+        stop,
+        timeout,
+        "Foxglove",
+        |m| {
+            // No client subscribed: nothing to encode for.
+            if let Some(channel) = channels.get(m.topic).filter(|c| c.has_sinks()) {
+                channel.log_with_meta(m.json.as_bytes(), PartialMetadata { log_time: wall_clock_ns(m.stamp_ns) });
             }
-            summary.arm_stopped |= m.final_sample;
-            Ok::<_, FeedError>(())
-        });
-        match polled {
-            Err(e) => break Err(e.into()),
-            Ok(n) if n > 0 => last_sample = Instant::now(),
-            Ok(_) if last_sample.elapsed() > timeout => {
-                tracing::warn!(arm = %opts.arm, timeout_s = opts.timeout_s, "the arm fell silent; the Foxglove bridge stops");
-                break Ok(());
-            }
-            Ok(_) => std::thread::sleep(Duration::from_millis(2)),
-        }
-        if stop.load(Ordering::Acquire) || summary.arm_stopped {
-            break Ok(());
-        }
-    };
+        },
+        || {},
+    );
     server.stop().wait_blocking();
-    result.map(|()| summary)
+    Ok(result?)
 }

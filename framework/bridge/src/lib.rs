@@ -19,3 +19,53 @@ pub mod zenoh;
 
 /// The recorded topics every bridge sends, in the recording's names.
 pub use jointctl_record::messages::CHANNELS;
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use jointctl_record::feed::{ArmFeed, FeedError, FeedMessage};
+
+/// What a bridge forwarded.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct BridgeSummary {
+    /// Messages read from the arm per topic (each sent to every client subscribed to it).
+    pub messages: BTreeMap<String, u64>,
+    /// The arm stopped (its final sample).
+    pub arm_stopped: bool,
+}
+
+/// Hands the arm's samples to `send` until `stop` is set, the arm's final sample, or `timeout`
+/// without a sample; `between` runs after every poll (a bridge's other duties, such as
+/// answering commands).
+fn pump(
+    feed: &mut ArmFeed,
+    stop: &AtomicBool,
+    timeout: Duration,
+    bridge: &str,
+    mut send: impl FnMut(&FeedMessage<'_>),
+    mut between: impl FnMut(),
+) -> Result<BridgeSummary, FeedError> {
+    let mut summary = BridgeSummary::default();
+    let mut last_sample = Instant::now();
+    loop {
+        let n = feed.poll(|m| {
+            send(&m);
+            *summary.messages.entry(m.topic.to_string()).or_default() += 1;
+            summary.arm_stopped |= m.final_sample;
+            Ok::<_, FeedError>(())
+        })?;
+        between();
+        if stop.load(Ordering::Acquire) || summary.arm_stopped {
+            return Ok(summary);
+        }
+        if n > 0 {
+            last_sample = Instant::now();
+        } else if last_sample.elapsed() > timeout {
+            tracing::warn!(timeout_s = timeout.as_secs_f64(), "the arm fell silent; the {bridge} bridge stops");
+            return Ok(summary);
+        } else {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}

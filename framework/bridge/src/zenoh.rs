@@ -19,15 +19,15 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
 use jointctl_ipc::{CommandClient, IpcScope};
 use jointctl_record::feed::{ArmFeed, FeedError, wall_clock_ns};
 use jointctl_record::messages;
 use zenoh::Wait;
 
-pub use crate::foxglove::BridgeSummary;
+pub use crate::BridgeSummary;
 
 /// The key expression of one of the arm's topics (`joint_state`, `raw`, ...).
 ///
@@ -246,51 +246,40 @@ pub fn serve(opts: &ZenohOptions, stop: &AtomicBool, ready: impl FnOnce(&Listeni
     }
     ready(&Listening { listen: opts.listen.clone(), commands: commands.as_ref().ok().map(|c| c.listen.clone()) });
 
-    let mut summary = BridgeSummary::default();
     let mut text = String::with_capacity(16 * 1024);
-    let mut last_sample = Instant::now();
-    let result = loop {
-        let polled = feed.poll(|m| {
+    let result = crate::pump(
+        &mut feed,
+        stop,
+        timeout,
+        "Zenoh",
+        |m| {
             if let Some(publisher) = publishers.get(m.topic) {
                 with_wall_clock(&mut text, m.json, m.stamp_ns);
                 if let Err(e) = publisher.put(text.as_bytes()).wait() {
                     tracing::warn!(topic = m.topic, error = %e, "a sample could not be published");
                 }
-                *summary.messages.entry(m.topic.to_string()).or_default() += 1;
             }
-            summary.arm_stopped |= m.final_sample;
-            Ok::<_, FeedError>(())
-        });
-        while let Ok(Some(query)) = refusals.try_recv() {
-            tracing::info!(arm = %opts.arm, reason = %refusal, "refused a command from the network");
-            let _ = query.reply(query.key_expr().clone(), answer(false, &format!("refused: {refusal}"))).wait();
-        }
-        if let Some((_, queryable, client)) = &serving {
-            while let Ok(Some(query)) = queryable.try_recv() {
-                let reply = forward(&opts.arm, query.payload(), client, opts.command_timeout_s);
-                let _ = query.reply(query.key_expr().clone(), reply).wait();
+        },
+        || {
+            while let Ok(Some(query)) = refusals.try_recv() {
+                tracing::info!(arm = %opts.arm, reason = %refusal, "refused a command from the network");
+                let _ = query.reply(query.key_expr().clone(), answer(false, &format!("refused: {refusal}"))).wait();
             }
-        }
-        match polled {
-            Err(e) => break Err(e.into()),
-            Ok(n) if n > 0 => last_sample = Instant::now(),
-            Ok(_) if last_sample.elapsed() > timeout => {
-                tracing::warn!(arm = %opts.arm, timeout_s = opts.timeout_s, "the arm fell silent; the Zenoh bridge stops");
-                break Ok(());
+            if let Some((_, queryable, client)) = &serving {
+                while let Ok(Some(query)) = queryable.try_recv() {
+                    let reply = forward(&opts.arm, query.payload(), client, opts.command_timeout_s);
+                    let _ = query.reply(query.key_expr().clone(), reply).wait();
+                }
             }
-            Ok(_) => std::thread::sleep(Duration::from_millis(2)),
-        }
-        if stop.load(Ordering::Acquire) || summary.arm_stopped {
-            break Ok(());
-        }
-    };
+        },
+    );
     if let Some((session, queryable, client)) = serving {
         drop((queryable, client));
         let _ = session.close().wait();
     }
     drop((refusals, publishers));
     let _ = open.close().wait();
-    result.map(|()| summary)
+    Ok(result?)
 }
 
 /// A command from an authenticated peer, to the runtime; the reply says what it answered.

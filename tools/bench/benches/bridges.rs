@@ -18,39 +18,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use jointctl_runtime::{ArmPublisher, PluginLoader, RunOptions};
 
-struct LoopRun {
-    cycles: u64,
-    p50_us: f64,
-    p99_us: f64,
-    max_us: f64,
-    overruns: u64,
-    drops: u64,
-}
-
-fn run_loop(seconds: f64, arm_name: &str) -> LoopRun {
-    let loaded = jointctl_bench::sherpa(1000.0, arm_name);
-    let loader = PluginLoader::new([jointctl_bench::release_dir()]);
-    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| panic!("{e}\n(build first: cargo build --release --workspace)"));
-    arm.activate().unwrap();
-    let reference = jointctl_modes::Reference { waveform: jointctl_modes::Waveform::Sine, amplitude: 5.0, frequency_hz: 0.5, offset: 0.0, start_s: 0.0 };
-    arm.set_mode(1, jointctl_modes::Mode::Torque { reference });
-    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
-    let cycles = (seconds * 1000.0) as u64;
-    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize, stop: None };
-    let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
-    let st = &r.stats;
-    let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
-    LoopRun {
-        cycles: st.cycles,
-        p50_us: us(st.jitter_percentile_ns(50.0)),
-        p99_us: us(st.jitter_percentile_ns(99.0)),
-        max_us: st.max_jitter_ns as f64 / 1e3,
-        overruns: st.overruns,
-        drops: publisher.drops(),
-    }
-}
 
 fn unix_ns() -> u64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
@@ -89,14 +57,14 @@ fn main() {
     println!("jointctl bridge benchmark ({} cores), full SHERPA arm at 1 kHz, {seconds} s per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
     println!();
 
-    let alone = run_loop(seconds, "bench-br-alone");
+    let alone = jointctl_bench::run_sherpa_loop(seconds, "bench-br-alone");
 
     let arm = "bench-br-with";
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let endpoint = format!("tcp/127.0.0.1:{port}");
     let (mut zenoh_bridge, zenoh_ready) = bridge(&exe, &["zenoh".into(), "--arm".into(), arm.into(), "--listen".into(), endpoint.clone(), "--timeout".into(), "10".into()], "publishing on");
     let (mut foxglove_bridge, foxglove_ready) = bridge(&exe, &["foxglove".into(), "--arm".into(), arm.into(), "--port".into(), "0".into(), "--timeout".into(), "10".into()], "listening on ws://");
-    let looping = std::thread::spawn(move || run_loop(seconds, arm));
+    let looping = std::thread::spawn(move || jointctl_bench::run_sherpa_loop(seconds, arm));
     // The bridges find the arm once its loop runs; then the clients attach.
     zenoh_ready.recv_timeout(Duration::from_secs(20)).expect("the Zenoh bridge never started");
     let ws = foxglove_ready.recv_timeout(Duration::from_secs(20)).expect("the Foxglove bridge never started");

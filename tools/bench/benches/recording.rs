@@ -10,7 +10,6 @@
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-use jointctl_runtime::{ArmPublisher, PluginLoader, RunOptions};
 
 /// CPU time [s] of the children waited for so far (user + system).
 fn children_cpu_s() -> f64 {
@@ -22,38 +21,6 @@ fn children_cpu_s() -> f64 {
     t(u.ru_utime) + t(u.ru_stime)
 }
 
-struct LoopRun {
-    cycles: u64,
-    p50_us: f64,
-    p99_us: f64,
-    max_us: f64,
-    overruns: u64,
-    drops: u64,
-}
-
-fn run_loop(seconds: f64, arm_name: &str) -> LoopRun {
-    let loaded = jointctl_bench::sherpa(1000.0, arm_name);
-    let loader = PluginLoader::new([jointctl_bench::release_dir()]);
-    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| panic!("{e}\n(build first: cargo build --release --workspace)"));
-    arm.activate().unwrap();
-    // q2 tracks a torque sine, the others hold: the recording's content is the usual one.
-    let reference = jointctl_modes::Reference { waveform: jointctl_modes::Waveform::Sine, amplitude: 5.0, frequency_hz: 0.5, offset: 0.0, start_s: 0.0 };
-    arm.set_mode(1, jointctl_modes::Mode::Torque { reference });
-    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
-    let cycles = (seconds * 1000.0) as u64;
-    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize, stop: None };
-    let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
-    let st = &r.stats;
-    let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
-    LoopRun {
-        cycles: st.cycles,
-        p50_us: us(st.jitter_percentile_ns(50.0)),
-        p99_us: us(st.jitter_percentile_ns(99.0)),
-        max_us: st.max_jitter_ns as f64 / 1e3,
-        overruns: st.overruns,
-        drops: publisher.drops(),
-    }
-}
 
 fn main() {
     let quick = std::env::var("BENCH_QUICK").is_ok();
@@ -63,7 +30,7 @@ fn main() {
     println!("jointctl recording benchmark ({} cores), full SHERPA arm at 1 kHz, {seconds} s per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
     println!();
 
-    let alone = run_loop(seconds, "bench-rec-alone");
+    let alone = jointctl_bench::run_sherpa_loop(seconds, "bench-rec-alone");
     let file = std::env::temp_dir().join(format!("jointctl-bench-{}.mcap", std::process::id()));
     let cpu_before = children_cpu_s();
     // The recorder stops on the arm's final sample, when the loop below ends.
@@ -74,7 +41,7 @@ fn main() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let with = run_loop(seconds, "bench-rec-with");
+    let with = jointctl_bench::run_sherpa_loop(seconds, "bench-rec-with");
     let out = recorder.wait_with_output().unwrap();
     let recorder_cpu_s = children_cpu_s() - cpu_before;
     assert!(out.status.success(), "record: {}", String::from_utf8_lossy(&out.stderr));
