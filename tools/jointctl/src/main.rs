@@ -159,11 +159,15 @@ fn fail_err(e: impl std::error::Error + 'static) -> ExitCode {
 }
 
 fn main() -> ExitCode {
+    // Log lines go through a bounded queue to a writer thread, which drops them when stderr
+    // blocks (a pipe nobody drains): the runtime's publisher thread, which logs commands and
+    // faults, must never wait on stderr, or commands would go unanswered.
+    let (log_writer, _log_guard) = tracing_appender::non_blocking::NonBlockingBuilder::default().lossy(true).finish(std::io::stderr());
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info,zenoh=warn".into()),
         )
-        .with_writer(std::io::stderr)
+        .with_writer(log_writer)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let cli = Cli::parse();
