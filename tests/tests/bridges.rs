@@ -202,10 +202,10 @@ fn a_foxglove_protocol_client_receives_joint_states() {
     let messages: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     assert_eq!(messages.len(), 5);
     let unix_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos() as u64;
+    assert_eq!(messages[0]["schema"]["properties"]["joints"]["type"], "array", "the channel's JSON schema: {}", messages[0]);
     for m in &messages {
         assert_eq!(m["subprotocol"], "foxglove.sdk.v1", "{m}");
         assert_eq!((m["encoding"].as_str(), m["schema_encoding"].as_str(), m["schema_name"].as_str()), (Some("json"), Some("jsonschema"), Some("jointctl.ArmState")), "{m}");
-        assert_eq!(m["schema"]["properties"]["joints"]["type"], "array", "{m}");
         let names: Vec<&str> = m["message"]["joints"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
         assert_eq!(names, ["a", "b"], "{m}");
         assert!(m["message"]["joints"][0]["position_rad"].is_f64(), "the recording's form: {m}");
