@@ -189,7 +189,10 @@ impl Chain {
         }
         // Breadth first from the root: parents before children, DOFs in the URDF's joint order
         // along the tree (as Pinocchio numbers them for a chain).
-        let link_of = |name: &str| robot.links.iter().find(|l| l.name == name).expect("checked above");
+        // Every joint's links were checked above; an error, not a panic, if that ever changes.
+        let link_of = |j: &urdf_rs::Joint| {
+            robot.links.iter().find(|l| l.name == j.child.link).ok_or_else(|| ChainError::UnknownLink { joint: j.name.clone(), role: "child", link: j.child.link.clone() })
+        };
         let mut chain = Chain { name: robot.name.clone(), bodies: Vec::new(), dofs: Vec::new() };
         let mut queue = std::collections::VecDeque::from([(roots[0], None::<usize>, None::<&urdf_rs::Joint>)]);
         while let Some((link, parent, joint)) = queue.pop_front() {
@@ -218,7 +221,7 @@ impl Chain {
                 joint: frame,
             });
             for j in robot.joints.iter().filter(|j| j.parent.link == link.name) {
-                queue.push_back((link_of(&j.child.link), Some(index), Some(j)));
+                queue.push_back((link_of(j)?, Some(index), Some(j)));
             }
         }
         if chain.bodies.len() != robot.links.len() {
