@@ -94,6 +94,10 @@ pub enum ZenohBridgeError {
         /// Zenoh's reason.
         reason: String,
     },
+    /// The runtime's command service could not be reached (commands are allowed, but no
+    /// runtime serves the arm, or its client slots are taken).
+    #[error("cannot forward commands to the runtime")]
+    Runtime(#[source] jointctl_ipc::CommandError),
     /// A publisher or queryable could not be declared.
     #[error("cannot declare `{key}` on Zenoh: {reason}")]
     Declare {
@@ -240,7 +244,7 @@ pub fn serve(opts: &ZenohOptions, stop: &AtomicBool, ready: impl FnOnce(&Listeni
         let session = listening_session(std::slice::from_ref(&c.listen), Some(&c.users_file))?;
         let queryable = session.declare_queryable(command_key.clone()).wait().map_err(declare_error(&command_key))?;
         let client = CommandClient::open(&opts.scope, &opts.arm, &format!("jointctl-bridge-zenoh-cmd-{}", std::process::id()))
-            .map_err(|e| ZenohBridgeError::Declare { key: command_key.clone(), reason: e.to_string() })?;
+            .map_err(ZenohBridgeError::Runtime)?;
         tracing::info!(arm = %opts.arm, endpoint = %c.listen, "serving commands to authenticated peers");
         serving = Some((session, queryable, client));
     }

@@ -240,6 +240,15 @@ fn joints_descriptor(arm: &Arm) -> Box<JointsDescriptor> {
     d
 }
 
+/// Publishes the one sample a service keeps for late subscribers (descriptors); a failure is
+/// logged, since readers then wait for it in vain.
+fn publish_kept<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend>(publisher: &Publisher<ipc::Service, T, ()>, value: &T, service: &str) {
+    let sent = publisher.loan_uninit().map(|s| s.write_payload(*value).send().is_ok()).unwrap_or(false);
+    if !sent {
+        tracing::warn!(service, "could not publish the service's kept sample");
+    }
+}
+
 /// What the publisher thread owns: the arm's node and ports.
 struct PublisherPorts {
     node: Node<ipc::Service>,
@@ -281,18 +290,12 @@ impl PublisherPorts {
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.raw_descriptor, e))?;
-        let sent = descriptor.loan_uninit().map(|s| s.write_payload(*description).send().is_ok()).unwrap_or(false);
-        if !sent {
-            tracing::warn!(service = %names.raw_descriptor, "could not publish the raw-reading descriptor");
-        }
+        publish_kept(&descriptor, description, &names.raw_descriptor);
         let joints = jointctl_ipc::create_joints_service(&node, &names.joints, limits)?
             .publisher_builder()
             .create()
             .map_err(|e| port_error(arm_name, &names.joints, e))?;
-        let sent = joints.loan_uninit().map(|s| s.write_payload(*instances).send().is_ok()).unwrap_or(false);
-        if !sent {
-            tracing::warn!(service = %names.joints, "could not publish the plugin instances");
-        }
+        publish_kept(&joints, instances, &names.joints);
         let accepted = jointctl_ipc::create_commands_service(&node, &names.commands, limits)?
             .publisher_builder()
             .create()

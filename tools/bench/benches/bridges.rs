@@ -110,14 +110,7 @@ fn main() {
     zenoh_latencies.sort_by(f64::total_cmp);
     fox_latencies.sort_by(f64::total_cmp);
 
-    println!("## The loop with and without the bridges (lateness = wake-up time - deadline)");
-    println!("| run | cycles | p50 lateness us | p99 lateness us | max lateness us | overruns | records dropped by the runtime |");
-    println!("|---|---|---|---|---|---|---|");
-    for (name, r) in [("no bridge", &alone), ("`bridge zenoh` + `bridge foxglove` attached, a client on each", &with)] {
-        println!("| {name} | {} | {:.1} | {:.1} | {:.1} | {} | {} |", r.cycles, r.p50_us, r.p99_us, r.max_us, r.overruns, r.drops);
-    }
-    println!("| with - without | | {:+.1} | {:+.1} | {:+.1} | {:+} | |", with.p50_us - alone.p50_us, with.p99_us - alone.p99_us, with.max_us - alone.max_us, with.overruns as i64 - alone.overruns as i64);
-    println!();
+    jointctl_bench::print_side_by_side("The loop with and without the bridges", [("no bridge", &alone), ("`bridge zenoh` + `bridge foxglove` attached, a client on each", &with)]);
     println!("## Joint state: cycle stamp to client receipt (same machine, loopback)");
     println!("| path | samples received | of cycles | p50 ms | p99 ms | max ms |");
     println!("|---|---|---|---|---|---|");

@@ -49,14 +49,7 @@ fn main() {
     let duration = summary["duration_s"].as_f64().unwrap_or(f64::NAN);
     let bytes = summary["bytes"].as_f64().unwrap_or(f64::NAN);
 
-    println!("## The loop with and without a recorder (lateness = wake-up time - deadline)");
-    println!("| run | cycles | p50 lateness us | p99 lateness us | max lateness us | overruns | records dropped by the runtime |");
-    println!("|---|---|---|---|---|---|---|");
-    for (name, r) in [("no recorder", &alone), ("`jointctl record` attached", &with)] {
-        println!("| {name} | {} | {:.1} | {:.1} | {:.1} | {} | {} |", r.cycles, r.p50_us, r.p99_us, r.max_us, r.overruns, r.drops);
-    }
-    println!("| with - without | | {:+.1} | {:+.1} | {:+.1} | {:+} | |", with.p50_us - alone.p50_us, with.p99_us - alone.p99_us, with.max_us - alone.max_us, with.overruns as i64 - alone.overruns as i64);
-    println!();
+    jointctl_bench::print_side_by_side("The loop with and without a recorder", [("no recorder", &alone), ("`jointctl record` attached", &with)]);
     println!("## The recorder");
     println!("| recorded s | messages (raw / joint_state / diagnostics / commands) | lost | CPU time s | CPU, % of one core | MB per minute | target |");
     println!("|---|---|---|---|---|---|---|");

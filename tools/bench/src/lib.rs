@@ -86,3 +86,17 @@ pub fn run_sherpa_loop(seconds: f64, arm_name: &str) -> LoopRun {
         drops: publisher.drops(),
     }
 }
+
+/// Prints the loop's figures of a run without and a run with something attached, and their
+/// difference, as a Markdown table under `title`.
+pub fn print_side_by_side(title: &str, runs: [(&str, &LoopRun); 2]) {
+    let [(_, alone), (_, with)] = runs;
+    println!("## {title} (lateness = wake-up time - deadline)");
+    println!("| run | cycles | p50 lateness us | p99 lateness us | max lateness us | overruns | records dropped by the runtime |");
+    println!("|---|---|---|---|---|---|---|");
+    for (name, r) in runs {
+        println!("| {name} | {} | {:.1} | {:.1} | {:.1} | {} | {} |", r.cycles, r.p50_us, r.p99_us, r.max_us, r.overruns, r.drops);
+    }
+    println!("| with - without | | {:+.1} | {:+.1} | {:+.1} | {:+} | |", with.p50_us - alone.p50_us, with.p99_us - alone.p99_us, with.max_us - alone.max_us, with.overruns as i64 - alone.overruns as i64);
+    println!();
+}

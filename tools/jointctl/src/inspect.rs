@@ -55,12 +55,8 @@ pub enum InspectCommand {
     Diag {
         #[command(flatten)]
         at: RunningArm,
-        /// One JSON object (the recording's `diagnostics` channel).
-        #[arg(long)]
-        json: bool,
-        /// Give up when no sample arrives for this long [s].
-        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
-        timeout: f64,
+        #[command(flatten)]
+        snapshot: Snapshot,
     },
     /// A refreshing terminal view: the loop's measured rate, lateness percentiles and
     /// counters, each joint (as `inspect joints`, with position and torque) and each device's
@@ -80,13 +76,20 @@ pub enum InspectCommand {
     Joints {
         #[command(flatten)]
         at: RunningArm,
-        /// One JSON object.
-        #[arg(long)]
-        json: bool,
-        /// Give up when no sample arrives for this long [s].
-        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
-        timeout: f64,
+        #[command(flatten)]
+        snapshot: Snapshot,
     },
+}
+
+/// How a one-shot view (`diag`, `joints`) prints and waits.
+#[derive(clap::Args)]
+pub struct Snapshot {
+    /// One JSON object.
+    #[arg(long)]
+    json: bool,
+    /// Give up when no sample arrives for this long [s].
+    #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
+    timeout: f64,
 }
 
 /// Where a running arm publishes.
@@ -254,7 +257,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
                 Err(e) => Err(format!("receive failed: {e:?}")),
             })
         }
-        InspectCommand::Diag { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
+        InspectCommand::Diag { at: RunningArm { arm, domain, ipc_root }, snapshot: Snapshot { json, timeout } } => {
             let d = match newest(&arm, domain, ipc_root, timeout, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service) {
                 Ok(d) => d,
                 Err(e) => return crate::fail(e),
@@ -264,7 +267,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
             ExitCode::SUCCESS
         }
         InspectCommand::Top { at, interval, timeout } => crate::top::run(at, interval, timeout),
-        InspectCommand::Joints { at: RunningArm { arm, domain, ipc_root }, json, timeout } => {
+        InspectCommand::Joints { at: RunningArm { arm, domain, ipc_root }, snapshot: Snapshot { json, timeout } } => {
             let read = || -> Result<(jointctl_ipc::JointsDescriptor, ArmState, Diagnostics), String> {
                 let instances = newest(&arm, domain.clone(), ipc_root.clone(), timeout, |n| n.joints.clone(), jointctl_ipc::joints_service)?;
                 let state = newest(&arm, domain.clone(), ipc_root.clone(), timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service)?;
