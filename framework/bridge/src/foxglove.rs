@@ -9,7 +9,7 @@ use foxglove::{Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
 use jointctl_ipc::IpcScope;
 use jointctl_record::feed::{ArmFeed, FeedError, wall_clock_ns};
 
-pub use crate::BridgeSummary;
+use crate::BridgeSummary;
 use jointctl_record::messages;
 
 /// What to serve.

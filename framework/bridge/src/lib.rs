@@ -17,9 +17,6 @@
 pub mod foxglove;
 pub mod zenoh;
 
-/// The recorded topics every bridge sends, in the recording's names.
-pub use jointctl_record::messages::CHANNELS;
-
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};

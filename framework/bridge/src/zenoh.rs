@@ -24,10 +24,11 @@ use std::time::Duration;
 
 use jointctl_ipc::{CommandClient, IpcScope};
 use jointctl_record::feed::{ArmFeed, FeedError, wall_clock_ns};
+
+use crate::BridgeSummary;
 use jointctl_record::messages;
 use zenoh::Wait;
 
-pub use crate::BridgeSummary;
 
 /// The key expression of one of the arm's topics (`joint_state`, `raw`, ...).
 ///
