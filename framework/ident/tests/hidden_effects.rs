@@ -25,3 +25,20 @@ fn hidden_effects_and_pairs_are_named_with_their_parameters_and_controls_yield_n
     assert!(score.control_hits <= 1, "{} of 20 clean controls produced a cause", score.control_hits);
     assert!(score.params_ok as f64 >= 0.9 * score.params_checked as f64, "{} of {} parameters within tolerance (need 90 %)", score.params_ok, score.params_checked);
 }
+
+/// The same scoring on 500 s records (100 000 samples), whose searches run decimated: every
+/// single effect once and four clean controls.
+#[test]
+fn long_records_are_identified_as_the_short_ones() {
+    let start = std::time::Instant::now();
+    let score = hidden_effects::run_long(|case| {
+        let data = Data::from_columns(case.t.clone(), case.deflection.clone(), case.torque.clone());
+        let report = identify(&data, &IdentifyOptions::default()).unwrap();
+        (report.causes.into_iter().map(|c| (c.effect, c.params)).collect(), report.rejected)
+    });
+    println!("long records: confusion matrix (hidden -> named), in {:.2} s:\n{}", start.elapsed().as_secs_f64(), score.report());
+    for m in &score.misses {
+        println!("  {m}");
+    }
+    assert_eq!(score.controls, 4);
+}

@@ -60,9 +60,13 @@ pub struct Case {
 /// One synthetic characterisation: a sine deflection, the thesis' baseline (linear spring +
 /// eq. 3.5 arctan friction) plus `effects`, 14-bit deflection, noisy torque sensor.
 pub fn generate(effects: &[&'static str], seed: u64, low_snr: bool) -> Case {
+    generate_samples(effects, seed, low_snr, 12_000)
+}
+
+/// [`generate`] with `n` samples at 200 Hz instead of 12 000 (60 s).
+pub fn generate_samples(effects: &[&'static str], seed: u64, low_snr: bool, n: usize) -> Case {
     let mut r = Rng::new(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     let rate = 200.0;
-    let n = 12_000;
     let amp = r.range(0.05, 0.15);
     let f = r.range(0.1, 0.4);
     let k = r.range(30.0, 200.0);
@@ -208,8 +212,22 @@ impl Score {
     }
 }
 
+/// Samples of a long record (500 s at 200 Hz): identify's searches decimate it (see
+/// `jointctl_ident::identify::prepare::SEARCH_SAMPLES`), unlike the suite's 60 s records.
+pub const LONG_SAMPLES: usize = 100_000;
+
+/// The long-record suite: every single effect once and four clean controls, each
+/// [`LONG_SAMPLES`] long, scored as [`run`] scores.
+pub fn run_long(identify: impl FnMut(&Case) -> Found) -> Score {
+    let mut cases: Vec<(String, Vec<&'static str>, bool)> = SINGLE.iter().map(|e| (format!("{e} (long)"), vec![*e], false)).collect();
+    for rep in 0..4 {
+        cases.push((format!("clean #{rep} (long)"), vec![], rep == 3));
+    }
+    score(&cases, LONG_SAMPLES, identify)
+}
+
 /// Runs the suite: `identify` turns one case into what it found.
-pub fn run(mut identify: impl FnMut(&Case) -> Found) -> Score {
+pub fn run(identify: impl FnMut(&Case) -> Found) -> Score {
     let mut cases: Vec<(String, Vec<&'static str>, bool)> = Vec::new();
     for effect in SINGLE {
         for rep in 0..4 {
@@ -226,9 +244,14 @@ pub fn run(mut identify: impl FnMut(&Case) -> Found) -> Score {
     for rep in 0..20 {
         cases.push((format!("clean #{rep}"), vec![], rep % 4 == 3));
     }
+    score(&cases, 12_000, identify)
+}
+
+/// Scores `identify` on the cases (label, effects, low SNR) of `n` samples each.
+fn score(cases: &[(String, Vec<&'static str>, bool)], n: usize, mut identify: impl FnMut(&Case) -> Found) -> Score {
     let mut score = Score::default();
     for (i, (label, effects, low_snr)) in cases.iter().enumerate() {
-        let case = generate(effects, i as u64 * 7919 + 13, *low_snr);
+        let case = generate_samples(effects, i as u64 * 7919 + 13, *low_snr, n);
         let (causes, rejected) = identify(&case);
         let found: Vec<&str> = causes.iter().map(|c| c.0.as_str()).collect();
         let truth = if effects.is_empty() { "none".to_string() } else { effects.join("+") };

@@ -215,8 +215,13 @@ impl Model<'_> {
         let mut cols: Vec<Vec<f64>> = Vec::new();
         match self.baseline {
             BaselineModel::Polynomial(order) => {
+                // Each power from the one before (a power by a run-time exponent is a call a sample).
                 for k in 1..=*order {
-                    cols.push(inputs.elastic_rad.iter().map(|x| x.powi(k as i32)).collect());
+                    let next = match cols.last() {
+                        Some(below) if k > 1 => below.iter().zip(&inputs.elastic_rad).map(|(b, x)| b * x).collect(),
+                        _ => inputs.elastic_rad.clone(),
+                    };
+                    cols.push(next);
                 }
             }
             BaselineModel::Given(f) => {

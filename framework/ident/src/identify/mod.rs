@@ -159,7 +159,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         if taken.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
-        let ctx = SearchContext { excitation: p.excitation, t_s: &part.t, velocity_rad_per_s: &part.v, residual_nm: &part.tau, baseline_fitted };
+        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, baseline_fitted);
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
         let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm, model_nm: &model_nm };

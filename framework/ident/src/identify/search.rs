@@ -143,6 +143,10 @@ pub(crate) fn integer_search(f: impl Fn(i64) -> f64, lo: i64, hi: i64) -> Option
     best.0.is_finite().then_some(best.1)
 }
 
+/// The BIC improvement [BIC units] that moves a parameter in [`polish`] (Kass and Raftery 1995:
+/// below 2, "not worth more than a bare mention").
+const POLISH_EVIDENCE: f64 = 2.0;
+
 /// Every parameter of every term refined once more with the others in place (a cause added
 /// later may take over part of what an earlier one explained: eq. 3.5's `k_b` and viscous
 /// friction, a delay and the friction it was fitted with).
@@ -188,8 +192,11 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) ->
                 }
                 _ => now,
             };
+            // Moved only on evidence: a value whose fit is better by less than POLISH_EVIDENCE
+            // (BIC units, the same parameter count) is noise's choice, and keeping the value
+            // keeps every column computed with it.
             let part = if p.refine == Refine::Samples { &scan } else { coarse };
-            if at(better, part) < at(now, part) {
+            if better != now && at(better, part) < at(now, part) * (-POLISH_EVIDENCE / part.len() as f64).exp() {
                 spec.terms[t].params[j] = better;
             }
         }

@@ -99,6 +99,59 @@ fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> (BlockTest, f64) {
     (block_test(&diff), gain)
 }
 
+/// The cores this process may use.
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// `f` of every item, in the items' order, spread over the cores: each worker takes the next
+/// item left, so put the costly ones first. A panic in `f` (a registered cause's bug) is
+/// passed on, not swallowed: a candidate silently lost would make a wrong report.
+pub(crate) fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = cores().min(items.len()).max(1);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let (f, next) = (&f, &next);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(move || {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(item) = items.get(i) else { return mine };
+                        mine.push((i, f(item)));
+                    }
+                })
+            })
+            .collect();
+        workers.into_iter().flat_map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))).collect()
+    });
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}
+
+/// What a polished proposal came to on the held-out part.
+enum Checked {
+    /// Its fit on the training part is physically impossible (why).
+    Impossible(String),
+    /// The model, its test against the model without it.
+    Tested(Spec, BlockTest),
+    /// No fit.
+    NoFit,
+}
+
+/// The physics check and the held-out test of `full` against the model whose held-out errors are
+/// `reduced`.
+fn check(model: &Model, full: &Spec, reduced: &HeldOut, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Checked {
+    if let Some(why) = impossible(model, full, p, name) {
+        return Checked::Impossible(why);
+    }
+    match compare_with(reduced, model, full, p) {
+        Some((test, _)) => Checked::Tested(full.clone(), test),
+        None => Checked::NoFit,
+    }
+}
+
 /// What a candidate's search came to.
 enum Candidate {
     /// No parameter value gives a fit.
@@ -129,10 +182,10 @@ pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residual:
         }
         None => p.coarse.tau.clone(),
     };
-    SearchContext { excitation: p.excitation, t_s: &p.coarse.t, velocity_rad_per_s: &p.coarse.v, residual_nm: residual, baseline_fitted: matches!(model.baseline, super::BaselineModel::Polynomial(_)) }
+    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, residual, matches!(model.baseline, super::BaselineModel::Polynomial(_)))
 }
 
-pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String) -> Selection {
+pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String + Sync) -> Selection {
     let coarse: &Part = &p.coarse;
     let mut spec = base;
     let mut chosen: Vec<Chosen> = Vec::new();
@@ -150,25 +203,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         // refits the whole model) first, so that no core waits on one long search at the end.
         let mut candidates: Vec<usize> = (0..model.causes.len()).filter(|c| spec.term(*c).is_none()).collect();
         candidates.sort_by_key(|c| !model.causes[*c].transforms());
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(candidates.len()).max(1);
-        let next = std::sync::atomic::AtomicUsize::new(0);
-        let (spec_ref, ctx_ref, warm_ref, next, candidates) = (&spec, &ctx, &warm, &next, &candidates);
-        let outcomes: Vec<(usize, Candidate)> = std::thread::scope(|scope| {
-            let workers: Vec<_> = (0..threads)
-                .map(|_| {
-                    scope.spawn(move || {
-                        let mut mine = Vec::new();
-                        while let Some(&c) = candidates.get(next.fetch_add(1, std::sync::atomic::Ordering::Relaxed)) {
-                            mine.push((c, propose(model, spec_ref, c, ctx_ref, p, warm_ref.get(&c).map(Vec::as_slice))));
-                        }
-                        mine
-                    })
-                })
-                .collect();
-            // A worker that panicked lost its candidates; the others still count.
-            workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
-        });
-        let mut outcomes = outcomes;
+        let mut outcomes: Vec<(usize, Candidate)> = parallel_map(&candidates, |&c| (c, propose(model, &spec, c, &ctx, p, warm.get(&c).map(Vec::as_slice))));
         outcomes.sort_by_key(|(c, _)| *c);
         for (c, outcome) in outcomes {
             match outcome {
@@ -190,45 +225,52 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         let top: Vec<(f64, Spec, usize)> = proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP).collect();
         let mut accepted = false;
         let Some(reduced) = held_out_errors(model, &spec, p) else { break };
-        for (b, s, c) in &top {
-            let s = polish(model, s, coarse, &p.train);
-            if let Some(why) = impossible(model, &s, p, &name) {
-                rejected.push(why);
-                continue;
-            }
-            match compare_with(&reduced, model, &s, p) {
-                Some((test, _)) if test.significant() => {
-                    chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", test) });
-                    current = score(&s, 0.0);
-                    spec = s;
-                    accepted = true;
-                    break;
+        // The proposals polished, checked and tested as many at once as there are cores, best
+        // first; the outcomes are read in order, so the choice is the one a test after the other
+        // would make.
+        'proposals: for chunk in top.chunks(cores()) {
+            let tested = parallel_map(chunk, |(_, s, _)| check(model, &polish(model, s, coarse, &p.train), &reduced, p, &name));
+            for ((b, _, c), outcome) in chunk.iter().zip(tested) {
+                match outcome {
+                    Checked::Impossible(why) => rejected.push(why),
+                    Checked::Tested(s, test) if test.significant() => {
+                        chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", test) });
+                        current = score(&s, 0.0);
+                        spec = s;
+                        accepted = true;
+                        break 'proposals;
+                    }
+                    Checked::Tested(_, test) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(*c), test)),
+                    Checked::NoFit => {}
                 }
-                Some((test, _)) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(*c), test)),
-                None => {}
             }
         }
         // Two effects can hide each other on the held-out part (a dead zone behind an offset):
-        // when no proposal passes alone, the best pair of proposals is tested together; each must
-        // still pass given the other at the end.
+        // when no proposal passes alone, the pairs of proposals are tested together (best first);
+        // each must still pass given the other at the end.
         if !accepted {
-            'pairs: for (i, (_, first, a)) in top.iter().enumerate() {
-                for (_, second, c) in &top[i + 1..] {
-                    let Some(term) = second.term(*c).cloned() else { continue };
-                    let both = polish(model, &first.with(term), coarse, &p.train);
-                    if let Some(why) = impossible(model, &both, p, &name) {
-                        rejected.push(why);
-                        continue;
-                    }
-                    if let Some((test, _)) = compare_with(&reduced, model, &both, p).filter(|(t, _)| t.significant()) {
-                        let b = score(&both, 0.0);
-                        for k in [*a, *c] {
-                            chosen.push(Chosen { cause: k, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(*a), name(*c), test) });
+            let pairs: Vec<(usize, usize)> = (0..top.len()).flat_map(|i| (i + 1..top.len()).map(move |j| (i, j))).collect();
+            'pairs: for chunk in pairs.chunks(cores()) {
+                let tested = parallel_map(chunk, |&(i, j)| {
+                    let (first, (_, second, c)) = (&top[i].1, &top[j]);
+                    let term = second.term(*c)?.clone();
+                    Some(check(model, &polish(model, &first.with(term), coarse, &p.train), &reduced, p, &name))
+                });
+                for (&(i, j), outcome) in chunk.iter().zip(tested) {
+                    match outcome {
+                        Some(Checked::Impossible(why)) => rejected.push(why),
+                        Some(Checked::Tested(both, test)) if test.significant() => {
+                            let (a, c) = (top[i].2, top[j].2);
+                            let b = score(&both, 0.0);
+                            for k in [a, c] {
+                                chosen.push(Chosen { cause: k, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(a), name(c), test) });
+                            }
+                            current = b;
+                            spec = both;
+                            accepted = true;
+                            break 'pairs;
                         }
-                        current = b;
-                        spec = both;
-                        accepted = true;
-                        break 'pairs;
+                        _ => {}
                     }
                 }
             }
@@ -239,17 +281,14 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     }
     // Every cause must still earn its place given the others.
     while let Some(full) = held_out_errors(model, &spec, p) {
-        let tests: Vec<(usize, f64)> = chosen
-            .iter()
-            .enumerate()
-            .map(|(i, ch)| {
-                let reduced = held_out_errors(model, &spec.without(ch.cause), p);
-                (i, reduced.map_or(f64::NEG_INFINITY, |r| {
-                    let (t, _) = verdict(&r, &full, p);
-                    t.t - t.critical
-                }))
+        // The models without one cause each, fitted side by side.
+        let margins = parallel_map(&chosen, |ch| {
+            held_out_errors(model, &spec.without(ch.cause), p).map_or(f64::NEG_INFINITY, |r| {
+                let (t, _) = verdict(&r, &full, p);
+                t.t - t.critical
             })
-            .collect();
+        });
+        let tests: Vec<(usize, f64)> = margins.into_iter().enumerate().collect();
         match tests.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)) {
             Some((i, margin)) if margin <= 0.0 => {
                 let gone = chosen.remove(i);

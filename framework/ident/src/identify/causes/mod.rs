@@ -73,6 +73,41 @@ pub struct SearchContext<'a> {
     /// The baseline's characteristic is fitted on the data (its stiffness is already free), not
     /// given by a configured joint.
     pub baseline_fitted: bool,
+    /// The residual's dominant frequency, once asked for (several vibration causes ask).
+    dominant: std::sync::OnceLock<Option<f64>>,
+}
+
+impl<'a> SearchContext<'a> {
+    /// The context of one search step.
+    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], baseline_fitted: bool) -> Self {
+        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, baseline_fitted, dominant: std::sync::OnceLock::new() }
+    }
+
+    /// The frequency of the residual's strongest component in the band a structural mode is
+    /// looked for in [Hz], `None` when there is no mode there (see the `spectrum` module);
+    /// computed once per context, whichever cause asks first.
+    ///
+    /// ```
+    /// use jointctl_ident::identify::{CandidateCause, Parameter, Refine, SearchContext, Samples};
+    ///
+    /// /// A ripple at the residual's own dominant frequency.
+    /// struct Ripple;
+    /// impl CandidateCause for Ripple {
+    ///     fn name(&self) -> &str { "ripple" }
+    ///     fn coefficient_names(&self) -> Vec<String> { vec!["sin_nm".into()] }
+    ///     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+    ///         let grid = c.dominant_frequency_hz().into_iter().collect();
+    ///         vec![Parameter { name: "frequency_hz".into(), grid, refine: Refine::Not }]
+    ///     }
+    ///     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+    ///         vec![s.t_s.iter().map(|t| (std::f64::consts::TAU * p[0] * t).sin()).collect()]
+    ///     }
+    /// }
+    /// # assert_eq!(Ripple.name(), "ripple");
+    /// ```
+    pub fn dominant_frequency_hz(&self) -> Option<f64> {
+        *self.dominant.get_or_init(|| crate::identify::spectrum::dominant_frequency(self.t_s, self.residual_nm, self.excitation.frequency_hz))
+    }
 }
 
 /// A non-linear parameter of a cause and the values to search.

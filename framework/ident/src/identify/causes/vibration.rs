@@ -15,7 +15,7 @@ impl CandidateCause for Vibration {
         vec!["sin_nm".into(), "cos_nm".into()]
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
-        let Some(f) = spectrum::dominant_frequency(c.t_s, c.residual_nm, c.excitation.frequency_hz) else {
+        let Some(f) = c.dominant_frequency_hz() else {
             // No mode in the band: nothing to search.
             return vec![Parameter { name: "frequency_hz".into(), grid: Vec::new(), refine: Refine::Not }];
         };
