@@ -29,7 +29,7 @@ mod select;
 pub mod significance;
 mod spectrum;
 
-pub use causes::{CandidateCause, Excitation, Fragments, Inputs, Parameter, Refine, Samples, SearchContext};
+pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Samples, SearchContext};
 pub use prepare::PrepareError;
 pub use select::BIC_THRESHOLD;
 
@@ -159,7 +159,8 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         if taken.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
-        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, baseline_fitted);
+        let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
+        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted);
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
         let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm, model_nm: &model_nm };
@@ -209,9 +210,9 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let mut base = Spec::default();
     if opts.baseline_friction {
         let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
-        let mut residual = Vec::new();
-        let ctx = select::context(&model, &base, &p, &mut residual);
-        let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.train, None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
+        let mut residuals = Default::default();
+        let ctx = select::context(&model, &base, &p, &mut residuals);
+        let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.stretch, None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         base.terms.push(Term { baseline: true, ..term });
     }
     let before = select::held_out_errors(&model, &base, &p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;

@@ -29,15 +29,11 @@ pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: u
     (0.5 * (a + b)).exp()
 }
 
-/// Full-rate samples a delay scan runs on: a contiguous stretch keeps the one-sample resolution
-/// at a fraction of the cost.
-const SCAN_SAMPLES: usize = 16_000;
-
 /// The term of `cause` with its best parameters, added to `spec`: `None` when no value gives a
 /// fit. With `warm` (the best of the previous step, before one more cause was added), each grid
 /// is narrowed to the five values nearest it: a cause added elsewhere moves a parameter a little,
 /// not across its grid.
-pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, train: &Part, warm: Option<&[f64]>) -> Option<Term> {
+pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, stretch: &Part, warm: Option<&[f64]>) -> Option<Term> {
     if !model.causes[cause].applicable(ctx) {
         return None;
     }
@@ -97,17 +93,18 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
                     if at(x) < scores[i] { x } else { p.grid[i] }
                 }
                 Refine::Samples => {
-                    // Every full-rate sample period between the grid's neighbours of the best.
-                    let scan = train.first(SCAN_SAMPLES);
+                    // Every full-rate sample period between the grid's neighbours of the best, on
+                    // the full-rate stretch (a contiguous one keeps the one-sample resolution at
+                    // a fraction of the cost).
                     let reach = p.grid.iter().enumerate().filter(|(k, _)| *k != i).map(|(_, g)| (g - p.grid[i]).abs()).fold(f64::INFINITY, f64::min);
-                    let span = ((reach / train.dt).ceil() as i64).clamp(1, 200);
-                    let centre = (p.grid[i] / train.dt).round() as i64;
+                    let span = ((reach / stretch.dt).ceil() as i64).clamp(1, 200);
+                    let centre = (p.grid[i] / stretch.dt).round() as i64;
                     let at_full = |k: i64| {
                         let mut q = best.clone();
-                        q[j] = k as f64 * train.dt;
-                        rss(&q, &scan)
+                        q[j] = k as f64 * stretch.dt;
+                        rss(&q, stretch)
                     };
-                    integer_search(at_full, centre - span, centre + span)? as f64 * train.dt
+                    integer_search(at_full, centre - span, centre + span)? as f64 * stretch.dt
                 }
                 Refine::Not => p.grid[i],
             };
@@ -150,9 +147,8 @@ const POLISH_EVIDENCE: f64 = 2.0;
 /// Every parameter of every term refined once more with the others in place (a cause added
 /// later may take over part of what an earlier one explained: eq. 3.5's `k_b` and viscous
 /// friction, a delay and the friction it was fitted with).
-pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) -> Spec {
+pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, stretch: &Part) -> Spec {
     let mut spec = spec.clone();
-    let scan = train.first(SCAN_SAMPLES);
     for t in 0..spec.terms.len() {
         let grids = spec.terms[t].grids.clone();
         for (j, p) in grids.iter().enumerate() {
@@ -186,16 +182,16 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, train: &Part) ->
                 }
                 Refine::Samples => {
                     // Three search steps either way, every full-rate sample.
-                    let centre = (now / train.dt).round() as i64;
-                    let span = ((3.0 * coarse.dt / train.dt).ceil() as i64).clamp(1, 60);
-                    integer_search(|k| at(k as f64 * train.dt, &scan), centre - span, centre + span).map_or(now, |k| k as f64 * train.dt)
+                    let centre = (now / stretch.dt).round() as i64;
+                    let span = ((3.0 * coarse.dt / stretch.dt).ceil() as i64).clamp(1, 60);
+                    integer_search(|k| at(k as f64 * stretch.dt, stretch), centre - span, centre + span).map_or(now, |k| k as f64 * stretch.dt)
                 }
                 _ => now,
             };
             // Moved only on evidence: a value whose fit is better by less than POLISH_EVIDENCE
             // (BIC units, the same parameter count) is noise's choice, and keeping the value
             // keeps every column computed with it.
-            let part = if p.refine == Refine::Samples { &scan } else { coarse };
+            let part = if p.refine == Refine::Samples { stretch } else { coarse };
             if better != now && at(better, part) < at(now, part) * (-POLISH_EVIDENCE / part.len() as f64).exp() {
                 spec.terms[t].params[j] = better;
             }

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use super::causes::SearchContext;
+use super::causes::{FullRate, SearchContext};
 use super::design::{Model, Part, Spec};
 use super::prepare::Prepared;
 use super::search::{polish, search};
@@ -164,7 +164,7 @@ enum Candidate {
 
 /// Searches candidate `c`'s parameters with `spec` in place and checks the fit's physics.
 fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepared, warm: Option<&[f64]>) -> Candidate {
-    let Some(term) = search(model, spec, c, ctx, &p.coarse, &p.train, warm) else { return Candidate::NoFit };
+    let Some(term) = search(model, spec, c, ctx, &p.coarse, &p.stretch, warm) else { return Candidate::NoFit };
     let s = spec.with(term);
     let Some(fit) = model.fit(&s, &p.coarse) else { return Candidate::NoFit };
     let last = s.terms.len() - 1;
@@ -174,15 +174,18 @@ fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepar
     }
 }
 
-pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residual: &'a mut Vec<f64>) -> SearchContext<'a> {
-    *residual = match model.fit(spec, &p.coarse) {
-        Some(fit) => {
-            let pred = model.predict(spec, &fit, &p.coarse);
-            p.coarse.tau.iter().zip(&pred.torque_nm).map(|(y, m)| y - m).collect()
-        }
-        None => p.coarse.tau.clone(),
+/// The search context of `spec`: its fit on the decimated part, and its residuals there and on
+/// the full-rate stretch (kept in `residuals`).
+pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residuals: &'a mut (Vec<f64>, Vec<f64>)) -> SearchContext<'a> {
+    let fit = model.fit(spec, &p.coarse);
+    let residual = |part: &Part| match &fit {
+        Some(fit) => part.tau.iter().zip(&model.predict(spec, fit, part).torque_nm).map(|(y, m)| y - m).collect(),
+        None => part.tau.clone(),
     };
-    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, residual, matches!(model.baseline, super::BaselineModel::Polynomial(_)))
+    *residuals = (residual(&p.coarse), residual(&p.stretch));
+    let (coarse, stretch) = (&residuals.0, &residuals.1);
+    let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: stretch };
+    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, coarse, full_rate, matches!(model.baseline, super::BaselineModel::Polynomial(_)))
 }
 
 pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String + Sync) -> Selection {
@@ -195,8 +198,8 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     // Each candidate's best parameters of the previous step: the next search starts there.
     let mut warm: std::collections::HashMap<usize, Vec<f64>> = std::collections::HashMap::new();
     for _ in 0..max_causes {
-        let mut residual = Vec::new();
-        let ctx = context(model, &spec, p, &mut residual);
+        let mut residuals = Default::default();
+        let ctx = context(model, &spec, p, &mut residuals);
         let mut proposals: Vec<(f64, Spec, usize)> = Vec::new();
         // Every candidate's search is independent of the others': spread over the cores, each
         // worker taking the next candidate left, the costly ones (input transforms: every value
@@ -229,7 +232,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         // first; the outcomes are read in order, so the choice is the one a test after the other
         // would make.
         'proposals: for chunk in top.chunks(cores()) {
-            let tested = parallel_map(chunk, |(_, s, _)| check(model, &polish(model, s, coarse, &p.train), &reduced, p, &name));
+            let tested = parallel_map(chunk, |(_, s, _)| check(model, &polish(model, s, coarse, &p.stretch), &reduced, p, &name));
             for ((b, _, c), outcome) in chunk.iter().zip(tested) {
                 match outcome {
                     Checked::Impossible(why) => rejected.push(why),
@@ -254,7 +257,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 let tested = parallel_map(chunk, |&(i, j)| {
                     let (first, (_, second, c)) = (&top[i].1, &top[j]);
                     let term = second.term(*c)?.clone();
-                    Some(check(model, &polish(model, &first.with(term), coarse, &p.train), &reduced, p, &name))
+                    Some(check(model, &polish(model, &first.with(term), coarse, &p.stretch), &reduced, p, &name))
                 });
                 for (&(i, j), outcome) in chunk.iter().zip(tested) {
                     match outcome {

@@ -60,7 +60,8 @@ pub struct Excitation {
 }
 
 /// What a candidate sees when it chooses its parameter grid: the experiment's scales and the
-/// current model's residual on the (decimated) training part.
+/// current model's residual on the (decimated) training part, and on a stretch of it at the full
+/// rate.
 pub struct SearchContext<'a> {
     /// The experiment's scales.
     pub excitation: Excitation,
@@ -70,6 +71,9 @@ pub struct SearchContext<'a> {
     pub velocity_rad_per_s: &'a [f64],
     /// The current model's residual, measured minus predicted torque [Nm].
     pub residual_nm: &'a [f64],
+    /// The same on a contiguous stretch of the training part at the full sample rate: what
+    /// lies above the decimated part's Nyquist frequency (a structural mode) shows only here.
+    pub full_rate: FullRate<'a>,
     /// The baseline's characteristic is fitted on the data (its stiffness is already free), not
     /// given by a configured joint.
     pub baseline_fitted: bool,
@@ -77,15 +81,28 @@ pub struct SearchContext<'a> {
     dominant: std::sync::OnceLock<Option<f64>>,
 }
 
+/// Series of a contiguous full-rate stretch of the training part (see
+/// [`SearchContext::full_rate`]).
+#[derive(Clone, Copy)]
+pub struct FullRate<'a> {
+    /// Time [s].
+    pub t_s: &'a [f64],
+    /// Deflection rate [rad/s].
+    pub velocity_rad_per_s: &'a [f64],
+    /// The current model's residual [Nm].
+    pub residual_nm: &'a [f64],
+}
+
 impl<'a> SearchContext<'a> {
-    /// The context of one search step.
-    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], baseline_fitted: bool) -> Self {
-        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, baseline_fitted, dominant: std::sync::OnceLock::new() }
+    /// The context of one search step: the decimated part's series and the full-rate stretch's.
+    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, baseline_fitted: bool) -> Self {
+        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, dominant: std::sync::OnceLock::new() }
     }
 
     /// The frequency of the residual's strongest component in the band a structural mode is
-    /// looked for in [Hz], `None` when there is no mode there (see the `spectrum` module);
-    /// computed once per context, whichever cause asks first.
+    /// looked for in [Hz], on the full-rate stretch (a mode may lie above the decimated part's
+    /// Nyquist frequency); `None` when there is no mode there (see the `spectrum` module).
+    /// Computed once per context, whichever cause asks first.
     ///
     /// ```
     /// use jointctl_ident::identify::{CandidateCause, Parameter, Refine, SearchContext, Samples};
@@ -106,7 +123,8 @@ impl<'a> SearchContext<'a> {
     /// # assert_eq!(Ripple.name(), "ripple");
     /// ```
     pub fn dominant_frequency_hz(&self) -> Option<f64> {
-        *self.dominant.get_or_init(|| crate::identify::spectrum::dominant_frequency(self.t_s, self.residual_nm, self.excitation.frequency_hz))
+        let f = self.full_rate;
+        *self.dominant.get_or_init(|| crate::identify::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz))
     }
 }
 

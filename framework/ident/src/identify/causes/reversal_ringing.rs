@@ -64,6 +64,6 @@ impl CandidateCause for ReversalRinging {
         [("frequency_hz".to_string(), p[0]), ("damping_ratio".to_string(), p[1]), ("ring_amplitude_nm".to_string(), rms)].into_iter().collect()
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
-        2.0 * spectrum::resolvable(c.t_s, c.excitation.frequency_hz).ln()
+        2.0 * spectrum::resolvable(c.full_rate.t_s, c.excitation.frequency_hz).ln()
     }
 }

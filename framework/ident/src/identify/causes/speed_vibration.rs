@@ -16,8 +16,10 @@ impl CandidateCause for SpeedVibration {
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         // The matched filter for an amplitude that follows the speed: the residual weighted by it.
-        let weighted: Vec<f64> = c.residual_nm.iter().zip(c.velocity_rad_per_s).map(|(r, v)| r * v.abs()).collect();
-        let Some(f) = spectrum::dominant_frequency(c.t_s, &weighted, c.excitation.frequency_hz) else {
+        // On the full-rate stretch: the mode may lie above the decimated part's Nyquist frequency.
+        let f = c.full_rate;
+        let weighted: Vec<f64> = f.residual_nm.iter().zip(f.velocity_rad_per_s).map(|(r, v)| r * v.abs()).collect();
+        let Some(f) = spectrum::dominant_frequency(f.t_s, &weighted, c.excitation.frequency_hz) else {
             // No mode in the band: nothing to search.
             return vec![Parameter { name: "frequency_hz".into(), grid: Vec::new(), refine: Refine::Not }];
         };
@@ -38,6 +40,6 @@ impl CandidateCause for SpeedVibration {
         super::vibration::harmonic_remark(p[0], e, duration_s)
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
-        2.0 * spectrum::resolvable(c.t_s, c.excitation.frequency_hz).ln()
+        2.0 * spectrum::resolvable(c.full_rate.t_s, c.excitation.frequency_hz).ln()
     }
 }

@@ -33,7 +33,7 @@ impl CandidateCause for Vibration {
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
         // The frequency is the best of M resolvable ones: 2 ln M on top of BIC's count.
-        2.0 * spectrum::resolvable(c.t_s, c.excitation.frequency_hz).ln()
+        2.0 * spectrum::resolvable(c.full_rate.t_s, c.excitation.frequency_hz).ln()
     }
 }
 
