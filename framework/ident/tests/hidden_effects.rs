@@ -62,3 +62,19 @@ fn a_mode_above_the_search_parts_nyquist_frequency_is_found_at_its_frequency() {
         assert!((f - truth).abs() <= 0.05 * truth, "{effect}: {f} Hz for {truth} Hz");
     }
 }
+
+/// A Dahl hysteresis on top of eq. 3.5's arctan friction (a confound: both shape the torque at
+/// each reversal) is named alone, with its limit, on a long record: the friction's `k_b` and the
+/// Dahl scale are refined together until neither moves, not one step each (which left a cubic
+/// stiffness to make up for the difference).
+#[test]
+fn hysteresis_beside_arctan_friction_is_named_alone_on_a_long_record() {
+    let case = hidden_effects::generate_samples(&["hysteresis"], 7932, false, hidden_effects::LONG_SAMPLES);
+    let data = Data::from_columns(case.t.clone(), case.deflection.clone(), case.torque.clone());
+    let report = identify(&data, &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert_eq!(named, ["hysteresis"], "{:?}", report.causes);
+    let truth = case.truths.iter().find(|(_, p, _)| *p == "limit_nm").map(|t| t.2).unwrap();
+    let limit = report.causes[0].params["limit_nm"];
+    assert!((limit - truth).abs() <= 0.1 * truth, "limit {limit} Nm for {truth} Nm");
+}

@@ -187,6 +187,8 @@ pub struct Score {
     pub named: usize,
     /// Clean controls that got a cause.
     pub control_hits: usize,
+    /// Cases with hidden effects that also got a cause not hidden in them.
+    pub extra: usize,
     /// Clean controls.
     pub controls: usize,
     /// Parameters compared with the truth.
@@ -205,8 +207,8 @@ impl Score {
             out += &format!("  {truth:>40} -> {found:<40} {count}\n");
         }
         out += &format!(
-            "named: {} of {}; false causes in {} clean controls: {}; parameters within tolerance: {} of {}\n",
-            self.named, self.with_effects, self.controls, self.control_hits, self.params_ok, self.params_checked
+            "named: {} of {}; false causes in {} clean controls: {}; parameters within tolerance: {} of {}; cases with a cause besides the hidden ones: {} of {}\n",
+            self.named, self.with_effects, self.controls, self.control_hits, self.params_ok, self.params_checked, self.extra, self.with_effects
         );
         out
     }
@@ -267,6 +269,11 @@ fn score(cases: &[(String, Vec<&'static str>, bool)], n: usize, mut identify: im
             continue;
         }
         score.with_effects += 1;
+        let extra: Vec<&&str> = found.iter().filter(|f| !case.effects.iter().any(|e| reported(e) == **f)).collect();
+        if !extra.is_empty() {
+            score.extra += 1;
+            score.misses.push(format!("{label}: also named {extra:?}"));
+        }
         if case.effects.iter().all(|e| found.contains(&reported(e))) {
             score.named += 1;
         } else {

@@ -144,11 +144,29 @@ pub(crate) fn integer_search(f: impl Fn(i64) -> f64, lo: i64, hi: i64) -> Option
 /// below 2, "not worth more than a bare mention").
 const POLISH_EVIDENCE: f64 = 2.0;
 
-/// Every parameter of every term refined once more with the others in place (a cause added
-/// later may take over part of what an earlier one explained: eq. 3.5's `k_b` and viscous
-/// friction, a delay and the friction it was fitted with).
+/// Rounds of [`polish`] at most; it stops at the first round that moves nothing (an assumption:
+/// on the benchmark's file eq. 3.5's `k_b` and the Dahl scale converged within three).
+const POLISH_ROUNDS: usize = 8;
+
+/// Every parameter of every term refined again with the others in place (a cause added later
+/// may take over part of what an earlier one explained: eq. 3.5's `k_b` and viscous friction, a
+/// delay and the friction it was fitted with), round after round until nothing moves:
+/// confounded parameters (eq. 3.5's `k_b` and the Dahl scale) reach their joint optimum only so,
+/// one at a time. One round left the benchmark's `k_b` at 53 s/rad for 80 and a spurious cubic
+/// stiffness to make up for it.
 pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, stretch: &Part) -> Spec {
     let mut spec = spec.clone();
+    for _ in 0..POLISH_ROUNDS {
+        if !polish_round(model, &mut spec, coarse, stretch) {
+            break;
+        }
+    }
+    spec
+}
+
+/// One round of [`polish`]: whether a parameter moved.
+fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part) -> bool {
+    let mut moved = false;
     for t in 0..spec.terms.len() {
         let grids = spec.terms[t].grids.clone();
         for (j, p) in grids.iter().enumerate() {
@@ -194,8 +212,9 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, stretch: &Part) 
             let part = if p.refine == Refine::Samples { stretch } else { coarse };
             if better != now && at(better, part) < at(now, part) * (-POLISH_EVIDENCE / part.len() as f64).exp() {
                 spec.terms[t].params[j] = better;
+                moved = true;
             }
         }
     }
-    spec
+    moved
 }
