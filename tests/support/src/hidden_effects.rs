@@ -60,10 +60,13 @@ pub struct Case {
 /// One synthetic characterisation: a sine deflection, the thesis' baseline (linear spring +
 /// eq. 3.5 arctan friction) plus `effects`, 14-bit deflection, noisy torque sensor.
 pub fn generate(effects: &[&'static str], seed: u64, low_snr: bool) -> Case {
-    generate_samples(effects, seed, low_snr, 12_000)
+    generate_samples(effects, seed, low_snr, SHORT_SAMPLES)
 }
 
-/// [`generate`] with `n` samples at 200 Hz instead of 12 000 (60 s).
+/// Samples of the suite's records (60 s at 200 Hz).
+pub const SHORT_SAMPLES: usize = 12_000;
+
+/// [`generate`] with `n` samples at 200 Hz instead of [`SHORT_SAMPLES`].
 pub fn generate_samples(effects: &[&'static str], seed: u64, low_snr: bool, n: usize) -> Case {
     let mut r = Rng::new(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     let rate = 200.0;
@@ -246,7 +249,7 @@ pub fn run(identify: impl FnMut(&Case) -> Found) -> Score {
     for rep in 0..20 {
         cases.push((format!("clean #{rep}"), vec![], rep % 4 == 3));
     }
-    score(&cases, 12_000, identify)
+    score(&cases, SHORT_SAMPLES, identify)
 }
 
 /// Scores `identify` on the cases (label, effects, low SNR) of `n` samples each.
