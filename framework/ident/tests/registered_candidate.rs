@@ -114,3 +114,39 @@ fn a_malformed_registered_cause_is_an_error_not_a_silent_no_op() {
     assert_eq!(err, IdentifyError::CauseNameTaken { name: "hysteresis".into() });
     assert_eq!(err.to_string(), "registered cause `hysteresis`: the name is already taken");
 }
+
+/// A cause with a bug: its columns panic for some parameter values.
+struct PanickingCause;
+
+impl CandidateCause for PanickingCause {
+    fn name(&self) -> &str {
+        "panicking_cause"
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["gain_nm".into()]
+    }
+    fn parameters(&self, _: &SearchContext) -> Vec<Parameter> {
+        vec![Parameter { name: "scale".into(), grid: vec![1.0, 2.0, 3.0], refine: Refine::Not }]
+    }
+    fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        assert!(p[0] < 2.0, "scale {} is not handled", p[0]);
+        vec![s.deflection_rad.to_vec()]
+    }
+}
+
+/// Finding: a registered cause that panicked inside the search was lost with every candidate its
+/// worker had taken, and the report said nothing. Now it is an error that names the panic and
+/// the registered causes.
+#[test]
+fn a_registered_cause_that_panics_is_an_error_naming_it() {
+    let data = experiment(0.0, 150.0, 0.0);
+    let err = identify(&data, &with(vec![Box::new(PanickingCause)])).unwrap_err();
+    match &err {
+        IdentifyError::CausePanicked { message, registered } => {
+            assert!(message.contains("is not handled"), "{message}");
+            assert_eq!(registered, &["panicking_cause"]);
+        }
+        other => panic!("expected CausePanicked, got {other:?}"),
+    }
+    assert!(err.to_string().contains("panicking_cause"), "{err}");
+}

@@ -128,6 +128,14 @@ pub enum IdentifyError {
         /// "baseline" or "extended".
         model: &'static str,
     },
+    /// A cause panicked while it was searched or fitted.
+    #[error("a cause panicked during the search ({message}); the built-in causes do not, so look at the registered ones: {registered:?}")]
+    CausePanicked {
+        /// The panic's message.
+        message: String,
+        /// The registered causes' names.
+        registered: Vec<String>,
+    },
     /// A registered cause reuses a built-in or an earlier registered cause's name.
     #[error("registered cause `{name}`: the name is already taken")]
     CauseNameTaken {
@@ -201,7 +209,20 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let p = prepare::prepare(data, opts.train_fraction)?;
     let builtin = causes::builtin();
-    check_registered(&builtin, &opts.extra_candidates, &p, matches!(opts.baseline, BaselineModel::Polynomial(_)))?;
+    // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
+    // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
+    let checked_and_extended = || {
+        check_registered(&builtin, &opts.extra_candidates, &p, matches!(opts.baseline, BaselineModel::Polynomial(_)))?;
+        extend(&p, &builtin, opts)
+    };
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(checked_and_extended)).unwrap_or_else(|panic| {
+        let message = panic.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| panic.downcast_ref::<String>().cloned()).unwrap_or_else(|| "no message".into());
+        Err(IdentifyError::CausePanicked { message, registered: opts.extra_candidates.iter().map(|c| c.name().to_string()).collect() })
+    })
+}
+
+/// The search, the selection and the report on prepared data.
+fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     let model = Model { baseline: &opts.baseline, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
@@ -211,14 +232,14 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     if opts.baseline_friction {
         let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         let mut residuals = Default::default();
-        let ctx = select::context(&model, &base, &p, &mut residuals);
+        let ctx = select::context(&model, &base, p, &mut residuals);
         let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.stretch, None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         base.terms.push(Term { baseline: true, ..term });
     }
-    let before = select::held_out_errors(&model, &base, &p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
-    let selection = select::select(&model, &p, base.clone(), opts.max_causes, name);
+    let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
+    let selection = select::select(&model, p, base.clone(), opts.max_causes, name);
     let spec = selection.spec;
-    let after = select::held_out_errors(&model, &spec, &p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
+    let after = select::held_out_errors(&model, &spec, p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);
 
@@ -228,7 +249,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
         let (cause, term) = (all[chosen.cause], &spec.terms[i]);
         let names: Vec<String> = term.grids.iter().map(|p| p.name.clone()).collect();
-        let gain = select::held_out_errors(&model, &spec.without(chosen.cause), &p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
+        let gain = select::held_out_errors(&model, &spec.without(chosen.cause), p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
         let mut evidence = chosen.evidence.clone();
         if let Some(remark) = cause.remark(&term.params, &p.excitation, duration) {
             evidence += &format!("; {remark}");
