@@ -34,7 +34,8 @@ impl std::error::Error for DataError {}
 /// One experiment, column by column (SI units; pivot in mm, angle in degrees).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Data {
-    /// Time [s], strictly increasing.
+    /// Time [s], strictly increasing (a repetition whose time restarted is laid after the one
+    /// before it, see [`RESTART_GAP_S`]).
     pub t: Vec<f64>,
     /// Deflection [rad].
     pub deflection: Vec<f64>,
@@ -115,16 +116,21 @@ impl Data {
     }
 }
 
+/// The gap [s] a repetition whose time restarts is laid after the previous one with (an
+/// assumption: far longer than any logger's step, so identification sees a new segment).
+pub const RESTART_GAP_S: f64 = 1.0;
+
 const KNOWN: [&str; 7] = ["t", "deflection", "torque", "pivot_mm", "angle_deg", "motor_position", "reference_torque"];
 
 /// The largest magnitude each column may hold; beyond it a value is a corrupt cell or a unit
 /// mix-up, and it would overflow the fits (a 1e308 torque made the SVD panic). Assumptions,
-/// each far beyond any joint of this class: 1e9 s of recording; two turns of deflection (the
+/// each far beyond any joint of this class: 1e10 s of time (loggers write Unix-epoch seconds,
+/// 1.7e9 in 2024; 1e10 is the year 2286); two turns of deflection (the
 /// thesis' largest is a few tenths of a radian, figures 3.15-3.26); 1e4 Nm (q2's limit in the
 /// reference config is 40 Nm); 1000 mm of pivot travel (the thesis' settings span 0-50 mm,
 /// sections 3.4-3.5); +-720 degrees of direction; 1e6 rad of motor position (multi-turn motor counts); 1e4 Nm
 /// of reference.
-const PLAUSIBLE_ABS: [f64; 7] = [1e9, 4.0 * core::f64::consts::PI, 1e4, 1000.0, 720.0, 1e6, 1e4];
+const PLAUSIBLE_ABS: [f64; 7] = [1e10, 4.0 * core::f64::consts::PI, 1e4, 1000.0, 720.0, 1e6, 1e4];
 
 /// Reads a CSV file.
 pub fn read(path: &Path) -> Result<Data, DataError> {
@@ -182,6 +188,8 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         }
     }
     let idx: Vec<Option<usize>> = KNOWN.iter().map(|k| col(k)).collect();
+    // Time added to the file's own since the last restart, and where that repetition began.
+    let (mut shift, mut segment_start) = (0.0, 0usize);
     // The file's line of a parser position: the parser's own line count skips blank lines, and
     // a record's byte position can point at the blank lines before it. Positions only grow:
     // newlines are counted from the previous one (counting from the start made a long file
@@ -226,12 +234,24 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
             }
             values[k] = v;
         }
-        if let Some(prev) = data.t.last()
-            && values[0] <= *prev
-        {
-            return Err(err(line, Some("t"), format!("time {} does not increase (previous {prev})", values[0])));
+        // Repetitions logged one file each and concatenated: the time restarts near where the
+        // repetition began. The new repetition is laid after the previous one with a gap of
+        // RESTART_GAP_S (so time increases and identification sees a new segment); any other
+        // step back, or a time that repeats, is an error.
+        let (raw, mut at) = (values[0], values[0] + shift);
+        if let Some(&prev) = data.t.last() {
+            let (start, prev_raw) = (data.t[segment_start] - shift, prev - shift);
+            let restarts = raw < prev_raw && raw <= start + 0.1 * (prev_raw - start);
+            if restarts {
+                shift = prev + RESTART_GAP_S - raw;
+                at = raw + shift;
+                segment_start = data.t.len();
+                data.notes.push(format!("time restarts at line {line} ({raw} after {prev_raw}): a new repetition, laid {RESTART_GAP_S} s after the previous one"));
+            } else if at <= prev {
+                return Err(err(line, Some("t"), format!("time {raw} does not increase (previous {prev_raw})")));
+            }
         }
-        data.t.push(values[0]);
+        data.t.push(at);
         data.deflection.push(values[1]);
         data.torque.push(values[2]);
         // An optional column the file does not have stays empty.
@@ -277,6 +297,21 @@ mod tests {
         assert!(e.to_string().ends_with("the file seems separated by `;`: separate columns by commas"), "{e}");
         let e = parse_text("t\tdeflection\ttorque\n0\t0\t1\n").unwrap_err();
         assert!(e.to_string().contains("separated by tabs"), "{e}");
+    }
+
+    /// Finding (issue 36): repetitions logged one file each and concatenated, whose time restarts
+    /// at zero, were refused as "time does not increase"; Unix-epoch time stamps as "implausible".
+    #[test]
+    fn a_restarting_time_is_a_new_repetition_and_epoch_seconds_are_time() {
+        let d = parse_text("t,deflection,torque\n0,0,1\n0.5,0,1\n1.0,0,1\n0.0,0,1\n0.5,0,1\n").unwrap();
+        assert_eq!(d.t, [0.0, 0.5, 1.0, 1.0 + RESTART_GAP_S, 1.5 + RESTART_GAP_S]);
+        assert!(d.notes[0].starts_with("time restarts at line 5"), "{:?}", d.notes);
+        // A step back that is not a restart (near the end of a repetition) stays an error, as does a repeat.
+        let e = parse_text("t,deflection,torque\n0,0,1\n0.5,0,1\n1.0,0,1\n0.9,0,1\n").unwrap_err();
+        assert_eq!(e.to_string(), "x.csv:5: column `t`: time 0.9 does not increase (previous 1)");
+        assert!(parse_text("t,deflection,torque\n0,0,1\n0,0,1\n").is_err());
+        let d = parse_text("t,deflection,torque\n1722285643.101,0,1\n1722285643.103,0,1\n").unwrap();
+        assert_eq!(d.len(), 2);
     }
 
     #[test]

@@ -13,7 +13,7 @@ fn a_cause_only_the_training_part_shows_is_not_confirmed() {
     let transient = common::sine_experiment(|t, _, _| if t < 40.0 { 0.3 * (std::f64::consts::TAU * 7.0 * t).sin() } else { 0.0 });
     let report = identify(&transient, &IdentifyOptions::default()).unwrap();
     assert!(report.causes.iter().all(|c| c.effect != "vibration"), "{:?}", report.causes);
-    assert!(report.rejected.iter().any(|r| r.starts_with("vibration (proposed by BIC, not significant on the held-out part")), "{:?}", report.rejected);
+    assert!(report.rejected.iter().any(|r| r.starts_with("vibration (proposed by BIC, no evidence on the held-out part")), "{:?}", report.rejected);
     assert!(report.rmse_after <= report.rmse_before + 1e-12, "{} vs {}", report.rmse_after, report.rmse_before);
 
     // The same mode ringing throughout is confirmed, with its frequency.

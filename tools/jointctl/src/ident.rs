@@ -260,30 +260,54 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         },
         _ => None,
     };
+    let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples, {} dropped as dropouts. Baseline fitted on the first 70 % of the time range, scored on the last 30 %.\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). Baseline fitted on the first 70 % of the time range, scored on the last 30 %.\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
+        report.segments,
         report.dropped_samples,
+        report.resolution_rad,
         report.rmse_before,
-        report.rmse_after
+        report.rmse_after,
+        u.noise_floor_nm
     );
     let _ = writeln!(
         md,
-        "A cause is reported when BIC on the training part proposes it and its held-out gain passes a {} at level {} ({} blocks).\n",
-        report.significance.test, report.significance.level, report.significance.blocks
+        "A cause is named when BIC on the training part proposes it, its held-out gain is relevant ({}) and there is evidence for it: a {} at level {} ({} blocks).\n",
+        report.significance.relevance, report.significance.test, report.significance.level, report.significance.blocks
     );
     if report.causes.is_empty() {
-        md.push_str("No cause found: the baseline explains the data.\n");
+        if u.times_noise > jointctl_ident::identify::FAR_ABOVE_NOISE {
+            md.push_str("No listed cause explains what the baseline leaves.\n");
+        } else {
+            md.push_str("No cause found: the baseline explains the data to the noise floor.\n");
+        }
     } else {
-        md.push_str("| cause | parameters | RMSE gain [Nm] | evidence |\n|---|---|---|---|\n");
+        md.push_str("| cause | parameters (± standard error) | RMSE gain [Nm] | evidence |\n|---|---|---|---|\n");
         for c in &report.causes {
-            let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k} = {v:.5}")).collect();
+            let params: Vec<String> = c
+                .params
+                .iter()
+                .map(|(k, v)| match c.uncertainty.get(k) {
+                    Some(e) => format!("{k} = {v:.5} ± {e:.2e}"),
+                    None => format!("{k} = {v:.5}"),
+                })
+                .collect();
             let _ = writeln!(md, "| {} | {} | {:.4} | {} |", c.effect, params.join(", "), c.rmse_gain, c.evidence);
         }
     }
+    let _ = writeln!(
+        md,
+        "\nLeft over: {}. Held-out RMSE by |deflection| (small, middle, large third): {:.4}, {:.4}, {:.4} Nm; by |rate|: {:.4}, {:.4}, {:.4} Nm; by quarter of the time: {:.4}, {:.4}, {:.4}, {:.4} Nm.",
+        u.summary, u.by_deflection_nm[0], u.by_deflection_nm[1], u.by_deflection_nm[2], u.by_rate_nm[0], u.by_rate_nm[1], u.by_rate_nm[2], u.by_time_nm[0], u.by_time_nm[1], u.by_time_nm[2], u.by_time_nm[3]
+    );
+    if !report.negligible.is_empty() {
+        let list: Vec<String> = report.negligible.iter().map(|c| format!("{} ({})", c.effect, c.evidence)).collect();
+        let _ = writeln!(md, "\nSignificant but negligible (not named): {}.", list.join(", "));
+    }
     if !report.rejected.is_empty() {
-        let _ = writeln!(md, "\nRejected (physically impossible, or not significant on the held-out part): {}.", report.rejected.join(", "));
+        let _ = writeln!(md, "\nRejected (physically impossible, or no evidence on the held-out part): {}.", report.rejected.join(", "));
     }
     if let Some((ext, _)) = &extension {
         md += &gains_table(ext);

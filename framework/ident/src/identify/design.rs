@@ -207,7 +207,7 @@ impl Spec {
 impl Model<'_> {
     fn design(&self, spec: &Spec, p: &Part) -> Design {
         let n = p.len();
-        let mut inputs = Inputs { deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad: p.d.clone(), sample_period_s: p.dt };
+        let mut inputs = Inputs { t_s: p.t.clone(), deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad: p.d.clone(), sample_period_s: p.dt };
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
         }
@@ -368,6 +368,27 @@ impl Model<'_> {
         let rss = (0..n).map(|i| (p.tau[i] - d.fixed[i] - dot_row(&d.cols, &coefs, i) - segment_fit[i]).powi(2)).sum();
         let parameters = coefs.len() + segment_coefs.iter().map(Vec::len).sum::<usize>() + d.nonlinear;
         Some(Fit { coefs, spans: d.spans, segment_coefs, rss, parameters })
+    }
+
+    /// Standard errors of the ordinary coefficients of `fit` (`spec` fitted on `p`), in the order
+    /// of `fit.coefs`: `sqrt(s^2 (X'X)^-1)` with the residual variance `s^2` inflated for the
+    /// residual's lag-1 autocorrelation `rho` by `(1 + rho) / (1 - rho)` (the AR(1) variance
+    /// factor of a mean; an assumption where the residual is structure, not noise: it then
+    /// widens the errors, as it should). `None` when the design is singular.
+    pub fn standard_errors(&self, spec: &Spec, fit: &Fit, p: &Part) -> Option<Vec<f64>> {
+        let d = self.design(spec, p);
+        let (n, k) = (p.len(), d.cols.len());
+        if k == 0 || n <= k {
+            return Some(vec![0.0; k]);
+        }
+        let residual: Vec<f64> = (0..n).map(|i| p.tau[i] - d.fixed[i] - dot_row(&d.cols, &fit.coefs, i)).collect();
+        let s2 = dot(&residual, &residual) / (n - k) as f64;
+        let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / dot(&residual, &residual).max(1e-300)).clamp(0.0, 0.99);
+        let inflation = (1.0 + rho) / (1.0 - rho);
+        let scale: Vec<f64> = d.cols.iter().map(|c| dot(c, c).sqrt().max(1e-300)).collect();
+        let gram = DMatrix::from_fn(k, k, |a, b| dot(&d.cols[a], &d.cols[b]) / (scale[a] * scale[b]));
+        let inverse = gram.try_inverse()?;
+        Some((0..k).map(|j| (s2 * inflation * inverse[(j, j)].max(0.0)).sqrt() / scale[j]).collect())
     }
 
     /// The model's torque on a part with coefficients from another; segment-wise coefficients

@@ -44,12 +44,51 @@ pub struct Cause {
     pub params: BTreeMap<String, f64>,
     /// How much the held-out torque RMSE drops because of this cause [Nm].
     pub rmse_gain: f64,
-    /// Why it was selected: the training BIC and the held-out test.
+    /// Standard errors of the estimated coefficients, under the coefficients' names (same units),
+    /// from the training fit with its residual's autocorrelation accounted for (see
+    /// `design::Model::standard_errors`); derived parameters carry their coefficient's relative
+    /// error.
+    pub uncertainty: BTreeMap<String, f64>,
+    /// Why it was selected: the training BIC and the held-out judgement.
     pub evidence: String,
     /// What it adds to the observer's and the simulation's configuration.
     #[serde(skip)]
     pub fragments: Fragments,
 }
+
+/// A cause with evidence whose gain is too small to matter: listed apart, not named.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct NegligibleCause {
+    /// One of the vocabulary's names.
+    pub effect: String,
+    /// The judgement (gain and the relevance threshold it missed).
+    pub evidence: String,
+}
+
+/// What the extended model leaves unexplained on the held-out part.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Unexplained {
+    /// The torque's noise floor, measured on the data [Nm] (see [`prepare::noise_floor`]).
+    pub noise_floor_nm: f64,
+    /// Held-out RMSE of the extended model over the floor [-].
+    pub times_noise: f64,
+    /// The RMS of what is left above the floor, `sqrt(max(MSE - floor^2, 0))` [Nm].
+    pub excess_nm: f64,
+    /// Share of the held-out mean squared error above the floor [-].
+    pub share: f64,
+    /// Held-out RMSE of the extended model by thirds of |deflection| (small, middle, large) [Nm].
+    pub by_deflection_nm: [f64; 3],
+    /// ... by thirds of |deflection rate| (slow, middle, fast) [Nm].
+    pub by_rate_nm: [f64; 3],
+    /// ... by quarters of the held-out time [Nm].
+    pub by_time_nm: [f64; 4],
+    /// One sentence: what is left, and where.
+    pub summary: String,
+}
+
+/// The held-out RMSE above which a report does not say the model explains the data: this many
+/// times the noise floor (issue 36's bound for "far above the noise").
+pub const FAR_ABOVE_NOISE: f64 = 10.0;
 
 /// How significance was decided, for the report.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -58,6 +97,8 @@ pub struct Significance {
     pub test: String,
     /// One-sided level.
     pub level: f64,
+    /// The relevance rule.
+    pub relevance: String,
     /// Blocks of the held-out part.
     pub blocks: usize,
 }
@@ -69,12 +110,20 @@ pub struct Report {
     pub samples: usize,
     /// Samples excluded as dropouts.
     pub dropped_samples: usize,
+    /// The deflection's resolution estimated from its own steps [rad].
+    pub resolution_rad: f64,
+    /// Segments of contiguous logging (split at gaps and where the time restarted).
+    pub segments: usize,
     /// Held-out torque RMSE of the baseline [Nm].
     pub rmse_before: f64,
     /// Held-out torque RMSE of the extended model [Nm].
     pub rmse_after: f64,
-    /// Causes, most important first; empty when the baseline explains the data.
+    /// Causes, most important first; empty when no listed cause is relevant with evidence.
     pub causes: Vec<Cause>,
+    /// Causes with evidence whose held-out gain is negligible (below the relevance threshold).
+    pub negligible: Vec<NegligibleCause>,
+    /// What is left unexplained, measured against the noise floor.
+    pub unexplained: Unexplained,
     /// How a cause's held-out gain was judged.
     pub significance: Significance,
     /// Held-out part: (t, deflection, velocity, measured, baseline, extended) for plots.
@@ -238,11 +287,14 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     }
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let selection = select::select(&model, p, base.clone(), opts.max_causes, name);
-    let spec = selection.spec;
+    // With no cause the extension is the baseline as it was fitted, not one whose parameters
+    // the search moved on the way: rmse_after then equals rmse_before.
+    let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
     let after = select::held_out_errors(&model, &spec, p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);
 
+    let standard_errors = model.standard_errors(&spec, fit, &p.train).unwrap_or_default();
     let duration = p.train.t[p.train.len() - 1] - p.train.t[0] + p.test.t[p.test.len() - 1] - p.test.t[0];
     let mut found = Vec::new();
     for chosen in &selection.chosen {
@@ -254,9 +306,12 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         if let Some(remark) = cause.remark(&term.params, &p.excitation, duration) {
             evidence += &format!("; {remark}");
         }
+        let params = cause.report(&term.params, &names, fit.of(i));
+        let uncertainty = uncertainty_of(cause, &term.params, &names, fit.of(i), &standard_errors, fit.spans[i].clone(), &params);
         found.push(Cause {
             effect: cause.name().into(),
-            params: cause.report(&term.params, &names, fit.of(i)),
+            params,
+            uncertainty,
             rmse_gain: gain,
             evidence,
             fragments: cause.fragments(&term.params, fit.of(i)),
@@ -267,6 +322,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         found.push(Cause {
             effect: "dropout".into(),
             params,
+            uncertainty: BTreeMap::new(),
             rmse_gain: 0.0,
             evidence: format!("{} readings jumped to exactly zero from farther than the 14-bit quantisation and the signal's rate explain (appendix A's lost frames); excluded before fitting", p.dropped),
             fragments: Fragments::default(),
@@ -277,22 +333,106 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let base_pred = model.predict(&base, &before.fit, &p.test).torque_nm;
     let ext_pred = model.predict(&spec, fit, &p.test).torque_nm;
     let t = &p.test;
-    let held_out = (0..t.len()).map(|i| [t.t[i], t.d[i], t.v[i], t.tau[i], base_pred[i], ext_pred[i]]).collect();
+    let held_out: Vec<[f64; 6]> = (0..t.len()).map(|i| [p.t0 + t.t[i], t.d[i], t.v[i], t.tau[i], base_pred[i], ext_pred[i]]).collect();
+    let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"));
+    let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
     let mut rejected = selection.rejected;
     rejected.sort();
     rejected.dedup();
     Ok(Report {
         samples: p.samples,
         dropped_samples: p.dropped,
+        resolution_rad: p.resolution_rad,
+        segments: p.segments,
         rmse_before: select::rmse(&before.errors),
         rmse_after,
         causes: found,
+        negligible,
+        unexplained,
         significance: Significance {
-            test: "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; for coefficients fitted on each ring, a chi-square test of the held-out error drop".into(),
+            test: format!(
+                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided, or a gain of at least {:.0} % of the excess over the noise floor that is positive in each of {} parts of the held-out record; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
+                100.0 * significance::LARGE_SHARE_OF_EXCESS,
+                significance::CONSISTENCY_PARTS
+            ),
             level: significance::LEVEL,
+            relevance: format!(
+                "a held-out MSE gain of at least {:.0} % of the noise floor's variance and {:.0} % of the excess of the model without the cause over that floor",
+                100.0 * significance::RELEVANT_SHARE_OF_NOISE,
+                100.0 * significance::RELEVANT_SHARE_OF_EXCESS
+            ),
             blocks: significance::blocks_for(t.len()),
         },
         held_out,
         rejected,
     })
+}
+
+/// The standard errors of a cause's reported parameters: a coefficient's own; a derived
+/// parameter (a Dahl `sigma = limit / lambda`, an amplitude from a sine and a cosine) the
+/// relative error of the term's largest coefficient; a non-linear parameter none (it is searched
+/// on a grid, not estimated with an error).
+fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: &[String], coefs: &[f64], errors: &[f64], span: std::ops::Range<usize>, reported: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+    let mut out = BTreeMap::new();
+    let se: Vec<f64> = span.clone().map(|j| errors.get(j).copied().unwrap_or(f64::NAN)).collect();
+    if se.is_empty() || se.len() != coefs.len() {
+        return out;
+    }
+    let coefficient_names = cause.coefficient_names();
+    let relative = coefs.iter().zip(&se).filter(|(c, _)| c.abs() > 0.0).map(|(c, e)| e / c.abs()).fold(0.0f64, f64::max);
+    for (name, value) in reported {
+        if let Some(k) = coefficient_names.iter().position(|n| n == name) {
+            out.insert(name.clone(), se[k]);
+        } else if !names.contains(name) || params.is_empty() {
+            out.insert(name.clone(), relative * value.abs());
+        }
+    }
+    out
+}
+
+/// What the extended model leaves on the held-out part (`rows` as in [`Report::held_out`],
+/// `errors` its squared errors) against the noise floor.
+fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_cause: bool) -> Unexplained {
+    let n = rows.len().min(errors.len());
+    let mse = errors[..n].iter().sum::<f64>() / n.max(1) as f64;
+    let rmse = mse.sqrt();
+    let floor2 = floor_nm * floor_nm;
+    let excess_nm = (mse - floor2).max(0.0).sqrt();
+    let share = if mse > 0.0 { (mse - floor2).max(0.0) / mse } else { 0.0 };
+    let times_noise = if floor_nm > 0.0 { rmse / floor_nm } else { f64::INFINITY };
+    // RMSE by thirds of a quantity's magnitude.
+    let by = |key: &dyn Fn(&[f64; 6]) -> f64| -> [f64; 3] {
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|a, b| key(&rows[*a]).total_cmp(&key(&rows[*b])));
+        let mut out = [0.0; 3];
+        for (k, o) in out.iter_mut().enumerate() {
+            let part = &order[k * n / 3..(k + 1) * n / 3];
+            *o = (part.iter().map(|i| errors[*i]).sum::<f64>() / part.len().max(1) as f64).sqrt();
+        }
+        out
+    };
+    let by_deflection_nm = by(&|r| r[1].abs());
+    let by_rate_nm = by(&|r| r[2].abs());
+    let mut by_time_nm = [0.0; 4];
+    for (k, o) in by_time_nm.iter_mut().enumerate() {
+        let part = &errors[k * n / 4..(k + 1) * n / 4];
+        *o = (part.iter().sum::<f64>() / part.len().max(1) as f64).sqrt();
+    }
+    let largest = |v: &[f64], names: &[&str]| -> String {
+        let i = (0..v.len()).max_by(|a, b| v[*a].total_cmp(&v[*b])).unwrap_or(0);
+        names[i].to_string()
+    };
+    let summary = if times_noise <= FAR_ABOVE_NOISE {
+        format!("held-out RMSE {rmse:.4} Nm, {times_noise:.1} times the noise floor ({floor_nm:.4} Nm)")
+    } else {
+        format!(
+            "unexplained: {excess_nm:.4} Nm above the noise floor ({floor_nm:.4} Nm), {times_noise:.0} times the noise, {:.0} % of the held-out error; {}; largest at {} deflection, at {} rate and in the {} quarter of the held-out time",
+            100.0 * share,
+            if no_cause { "no listed cause explains it" } else { "the named causes do not explain it" },
+            largest(&by_deflection_nm, &["small", "middle", "large"]),
+            largest(&by_rate_nm, &["slow", "middle", "fast"]),
+            largest(&by_time_nm, &["first", "second", "third", "last"])
+        )
+    };
+    Unexplained { noise_floor_nm: floor_nm, times_noise, excess_nm, share, by_deflection_nm, by_rate_nm, by_time_nm, summary }
 }

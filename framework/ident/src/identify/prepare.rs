@@ -7,8 +7,52 @@ use super::causes::{Excitation, reversals};
 use super::design::Part;
 use crate::csv::Data;
 
-/// One count of the SHERPA joints' 14-bit absolute encoders [rad] (thesis section 3.1).
+/// One count of the SHERPA joints' 14-bit absolute encoders [rad] (thesis section 3.1): the
+/// coarsest resolution assumed when the data's own steps cannot tell (see [`resolution_rad`]).
 pub const ENCODER_LSB_RAD: f64 = std::f64::consts::TAU / 16384.0;
+
+/// A gap in the time stamps longer than this many median steps splits the record into segments
+/// (an assumption: a logger's jitter stays within a few steps; real irregular logs have a 99th
+/// percentile of 5-8 median steps, and a segment boundary only restarts the rate estimate).
+pub const GAP_STEPS: f64 = 10.0;
+
+/// The deflection's resolution [rad], from the data's own steps: the smallest step that is
+/// common (the 2nd percentile of the non-zero changes between samples), at most one count of the
+/// 14-bit encoder. A 14-bit encoder gives its count, a 17-bit or a 2e-6 rad linear encoder
+/// theirs, bin-averaged or unquantised data a step far below any count.
+///
+/// ```
+/// use jointctl_ident::identify::prepare::resolution_rad;
+/// let d: Vec<f64> = (0..2000).map(|i| ((i as f64 * 0.01).sin() * 2000.0).round() * 2e-6).collect();
+/// assert!((resolution_rad(&d) - 2e-6).abs() < 1e-9);
+/// ```
+pub fn resolution_rad(deflection_rad: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = deflection_rad.windows(2).map(|w| (w[1] - w[0]).abs()).filter(|s| *s > 1e-15).collect();
+    if steps.is_empty() {
+        return ENCODER_LSB_RAD;
+    }
+    let at = steps.len() / 50;
+    let step = *steps.select_nth_unstable_by(at, f64::total_cmp).1;
+    step.min(ENCODER_LSB_RAD)
+}
+
+/// Where each segment of contiguous logging starts: at 0 and after every gap longer than
+/// [`GAP_STEPS`] median steps (a logger's pause, a repetition's restart). Rates are never
+/// differenced across a gap.
+///
+/// ```
+/// let t = [0.0, 0.001, 0.002, 0.5, 0.501, 0.502];
+/// assert_eq!(jointctl_ident::identify::prepare::segment_starts(&t), vec![0, 3]);
+/// ```
+pub fn segment_starts(t_s: &[f64]) -> Vec<usize> {
+    let mut steps: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return vec![0];
+    }
+    let mid = steps.len() / 2;
+    let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    std::iter::once(0).chain((1..t_s.len()).filter(|i| t_s[*i] - t_s[i - 1] > GAP_STEPS * median)).collect()
+}
 
 /// Quantisation levels a deflection must span for a curve's shape to be told from its
 /// quantisation (an assumption: 16 levels resolve a cubic's bend to a few percent).
@@ -31,12 +75,12 @@ pub enum PrepareError {
     },
     /// The deflection hardly moves: nothing can be told from its quantisation.
     #[error(
-        "too little excitation: the deflection spans {span_rad:.3e} rad ({lsb:.1} encoder counts) with {reversals} reversals; identification needs at least {MIN_SPAN_LSB} counts and {MIN_REVERSALS} reversals (a sine of a few times the play, over one and a half cycles)"
+        "too little excitation: the deflection spans {span_rad:.3e} rad ({lsb:.1} counts of the encoder's resolution, as its steps in the data show) with {reversals} reversals; identification needs at least {MIN_SPAN_LSB} counts and {MIN_REVERSALS} reversals (a sine of a few times the play, over one and a half cycles)"
     )]
     TooLittleExcitation {
         /// Range of the deflection [rad].
         span_rad: f64,
-        /// The range in 14-bit encoder counts.
+        /// The range in counts of the encoder's resolution, as estimated from the data.
         lsb: f64,
         /// Velocity reversals found.
         reversals: usize,
@@ -75,6 +119,16 @@ pub(crate) struct Prepared {
     pub excitation: Excitation,
     pub samples: usize,
     pub dropped: usize,
+    /// The deflection's resolution estimated from the data [rad].
+    pub resolution_rad: f64,
+    /// Segments of contiguous logging in the whole (kept) record.
+    pub segments: usize,
+    /// The first time stamp of the record [s]: times inside are counted from it (Unix-epoch time
+    /// stamps keep their precision so).
+    pub t0: f64,
+    /// The torque's noise floor [Nm] (see [`noise_floor`]), on what a line in the deflection,
+    /// its rate and an offset leave of the torque (the spring's own curvature out of it).
+    pub noise_floor_nm: f64,
 }
 
 /// Grid searches run on at most this many samples, decimated to no fewer than 100 a cycle of
@@ -98,19 +152,13 @@ pub const FIT_SAMPLES: usize = 50_000;
 /// power grows with them, and it is predicted, not fitted, so they cost less).
 pub const HELD_OUT_SAMPLES: usize = 200_000;
 
-/// Exact zeros that the signal cannot have reached: a run of zeros between two readings farther
-/// from zero than three encoder counts plus five typical steps per sample of the run. (A signal
-/// that really crosses zero passes it within a step or two; thesis appendix A's lost CAN frames
-/// jump there from anywhere.)
+/// Exact zeros that the signal cannot have reached: a run of zeros far from the line between the
+/// readings either side of it, farther than three resolution steps plus twice the signal's own
+/// local step per sample of the run. (A signal that really crosses zero lies on that line: a fast
+/// stroke crossing zero between a reading above and one below is no dropout, however large its
+/// steps; thesis appendix A's lost CAN frames jump to zero from anywhere and back.)
 fn dropouts(series: &[f64], lsb: f64) -> Vec<bool> {
     let n = series.len();
-    let mut steps: Vec<f64> = series.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-    let typical = if steps.is_empty() {
-        0.0
-    } else {
-        let mid = steps.len() / 2;
-        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
     let mut dropped = vec![false; n];
     let mut i = 1;
     while i + 1 < n {
@@ -122,9 +170,18 @@ fn dropouts(series: &[f64], lsb: f64) -> Vec<bool> {
         while j < n && series[j] == 0.0 {
             j += 1;
         }
-        let reach = 3.0 * lsb + 5.0 * typical * (j - i + 1) as f64;
-        if j < n && series[i - 1].abs() > reach && series[j].abs() > reach {
-            dropped[i..j].iter_mut().for_each(|d| *d = true);
+        if j < n {
+            let (before, after) = (series[i - 1], series[j]);
+            // The signal's local step: the change into the run's left neighbour and out of its
+            // right one.
+            let step_in = if i >= 2 { (series[i - 1] - series[i - 2]).abs() } else { 0.0 };
+            let step_out = if j + 1 < n { (series[j + 1] - series[j]).abs() } else { 0.0 };
+            let reach = 3.0 * lsb + 2.0 * step_in.max(step_out) * (j - i + 1) as f64;
+            let span = (j - i + 1) as f64;
+            let nearest = (1..=j - i).map(|k| (before + (after - before) * k as f64 / span).abs()).fold(f64::INFINITY, f64::min);
+            if nearest > reach && before.abs() > reach && after.abs() > reach {
+                dropped[i..j].iter_mut().for_each(|d| *d = true);
+            }
         }
         i = j;
     }
@@ -217,6 +274,56 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
     }
 }
 
+/// The deflection rate of [`velocity`], segment by segment: never differenced across a gap.
+fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], half: usize) -> Vec<f64> {
+    let mut v = Vec::with_capacity(d.len());
+    for (k, &a) in starts.iter().enumerate() {
+        let b = starts.get(k + 1).copied().unwrap_or(d.len());
+        if b - a >= 2 {
+            v.extend(velocity(&t[a..b], &d[a..b], half));
+        } else {
+            v.extend(std::iter::repeat_n(0.0, b - a));
+        }
+    }
+    v
+}
+
+/// The noise floor of a series in time order [same unit]: Gasser, Sroka and Jennen-Steinmetz's
+/// (1986) pseudo-residuals, `(y[i-1] + y[i+1]) / 2 - y[i]` scaled to unit variance for white
+/// noise (a factor 2/3 on their mean square), within each segment; the median of the squares
+/// over ln 2's quantile ratio (0.4549) makes it robust to the few steps where the signal itself
+/// jumps (a reversal, a gap left inside a segment). A smooth signal sampled finely adds almost
+/// nothing; what is left is the white part of the noise.
+///
+/// ```
+/// use jointctl_ident::identify::prepare::noise_floor;
+/// let t: Vec<f64> = (0..20_000).map(|i| i as f64 * 0.001).collect();
+/// let mut rng = 12345u64;
+/// let y: Vec<f64> = t.iter().map(|t| {
+///     // Two uniforms summed: a noise of standard deviation 0.1 * sqrt(2 / 12).
+///     let mut u = || { rng ^= rng << 13; rng ^= rng >> 7; rng ^= rng << 17; (rng % 1_000_000) as f64 / 1e6 };
+///     10.0 * (3.0 * t).sin() + 0.1 * (u() + u() - 1.0)
+/// }).collect();
+/// let floor = noise_floor(&y, &[0]);
+/// assert!((floor / (0.1 * (2.0f64 / 12.0).sqrt()) - 1.0).abs() < 0.1, "{floor}");
+/// ```
+pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
+    let mut squares = Vec::with_capacity(y.len());
+    for (k, &a) in starts.iter().enumerate() {
+        let b = starts.get(k + 1).copied().unwrap_or(y.len());
+        for i in a + 1..b.saturating_sub(1) {
+            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
+            squares.push(e * e / 1.5);
+        }
+    }
+    if squares.is_empty() {
+        return 0.0;
+    }
+    let mid = squares.len() / 2;
+    // The median of a chi-square with one degree of freedom is 0.4549 times its mean.
+    (*squares.select_nth_unstable_by(mid, f64::total_cmp).1 / 0.4549).sqrt()
+}
+
 pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
@@ -225,7 +332,8 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     if let Some((column, len)) = data.uneven_column() {
         return Err(PrepareError::UnevenColumn { column, len, samples: n_all });
     }
-    let mut lost = dropouts(&data.deflection, ENCODER_LSB_RAD);
+    let resolution = resolution_rad(&data.deflection);
+    let mut lost = dropouts(&data.deflection, resolution);
     lost.iter_mut().zip(dropouts(&data.torque, 0.0)).for_each(|(a, b)| *a |= b);
     let dropped = lost.iter().filter(|l| **l).count();
     // The columns without the dropouts: borrowed when there are none (a long record is not
@@ -233,20 +341,40 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     let kept = |column: &'a [f64]| -> Cow<'a, [f64]> {
         if dropped == 0 { Cow::Borrowed(column) } else { Cow::Owned(column.iter().zip(&lost).filter(|(_, l)| !**l).map(|(x, _)| *x).collect()) }
     };
-    let (d, t, tau, pivot) = (kept(&data.deflection), kept(&data.t), kept(&data.torque), kept(&data.pivot_mm));
+    let (d, tau, pivot) = (kept(&data.deflection), kept(&data.torque), kept(&data.pivot_mm));
+    // Time counted from the first sample: Unix-epoch stamps (1.7e9 s) would leave a sine of the
+    // time a few digits only.
+    let t0 = data.t[0];
+    let t: Vec<f64> = kept(&data.t).iter().map(|x| x - t0).collect();
+    let starts = segment_starts(&t);
+    let frequency_hz = fundamental_hz(&t, &d);
     let period_samples = {
-        let crossings = d.windows(2).filter(|w| w[0] < 0.0 && w[1] >= 0.0).count().max(1) as f64;
-        d.len() as f64 / crossings
+        let duration = t[t.len() - 1] - t[0];
+        (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
     };
-    let v = velocity(&t, &d, ((period_samples / 50.0).round() as usize).clamp(2, 25));
+    let v = velocity_by_segment(&t, &d, &starts, ((period_samples / 50.0).round() as usize).clamp(2, 25));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = reversals(&d).len();
     let torque_moves = tau.iter().any(|x| *x != tau[0]);
-    if span < MIN_SPAN_LSB * ENCODER_LSB_RAD || turns < MIN_REVERSALS || !torque_moves {
-        return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / ENCODER_LSB_RAD, reversals: turns });
+    if span < MIN_SPAN_LSB * resolution || turns < MIN_REVERSALS || !torque_moves {
+        return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / resolution, reversals: turns });
     }
-    let spacing = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
+    let noise_floor_nm = {
+        let ones = vec![1.0; d.len()];
+        let cols = [d.to_vec(), v.clone(), ones];
+        let residual: Vec<f64> = match super::design::least_squares(&cols, &tau) {
+            Some(c) => (0..tau.len()).map(|i| tau[i] - c[0] * d[i] - c[1] * v[i] - c[2]).collect(),
+            None => tau.to_vec(),
+        };
+        noise_floor(&residual, &starts)
+    };
+    let spacing = {
+        let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        let mid = steps.len() / 2;
+        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
     let t_split = split_time(&t, train_fraction);
     let split = t.partition_point(|x| *x < t_split);
     // A stateful effect's history: two cycles before the part (a Dahl state forgets within a
@@ -275,10 +403,9 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     // The held-out part: its first HELD_OUT_SAMPLES after the split.
     let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len().min(split + HELD_OUT_SAMPLES)));
     let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
-    let frequency_hz = fundamental_hz(&t, &d);
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
     let stretch = train.first(STRETCH_SAMPLES);
-    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped })
+    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm })
 }
 
 #[cfg(test)]
@@ -326,5 +453,15 @@ mod tests {
         let mut lost = vec![0.05; 100];
         lost[40] = 0.0;
         assert_eq!(dropouts(&lost, ENCODER_LSB_RAD).iter().filter(|d| **d).count(), 1);
+        // Finding (issue 31): a fast stroke of five counts a sample that reads exactly zero as
+        // it crosses (between +5 and -5 counts) was taken for a lost frame, the record's slow
+        // parts having made the typical step zero.
+        let mut record = vec![0.0; 200];
+        for (k, x) in record.iter_mut().enumerate().skip(100) {
+            *x = (150.0 - k as f64) * 5.0 * ENCODER_LSB_RAD;
+        }
+        record[..100].iter_mut().enumerate().for_each(|(k, x)| *x = 0.1 + k as f64 * 1e-9);
+        assert_eq!(record[150], 0.0);
+        assert!(!dropouts(&record, ENCODER_LSB_RAD).iter().any(|d| *d));
     }
 }

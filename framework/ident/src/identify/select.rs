@@ -11,14 +11,18 @@ use super::causes::{FullRate, SearchContext};
 use super::design::{Model, Part, Spec};
 use super::prepare::Prepared;
 use super::search::{polish, search};
-use super::significance::{BlockTest, added_coefficients_test, block_test};
+use super::significance::{Judgement, added_coefficients_test, block_test, judge};
 
 /// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
 /// 1995: "very strong" evidence).
 pub const BIC_THRESHOLD: f64 = 10.0;
 
-/// Candidates proposed by BIC that are tested on the held-out part per step, best first.
-const TESTED_PER_STEP: usize = 3;
+/// Candidates proposed by BIC that are tested on the held-out part per step, best first; as
+/// many again of the causes fitted anew on each segment (rings), which are tested after the
+/// others: their coefficients are fitted on the held-out part itself, so their gain there is
+/// weaker evidence than a predicted one, and a flexible ring absorbs part of any structured
+/// residual (a delay's, a vibration's, a cubic's) that the right cause predicts.
+const TESTED_PER_STEP: usize = 4;
 
 pub(crate) struct Chosen {
     pub cause: usize,
@@ -29,6 +33,8 @@ pub(crate) struct Selection {
     pub spec: Spec,
     pub chosen: Vec<Chosen>,
     pub rejected: Vec<String>,
+    /// Causes with evidence whose gain is below the relevance threshold: (cause, evidence).
+    pub negligible: Vec<(usize, String)>,
 }
 
 pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
@@ -84,19 +90,21 @@ pub(crate) fn rmse(errors: &[f64]) -> f64 {
 /// held-out errors are `r`? A full model with more coefficients fitted on the held-out part (a
 /// segment-wise cause) takes the chi-square test of added coefficients; otherwise the block
 /// t-test.
-fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<(BlockTest, f64)> {
+fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<Judgement> {
     Some(verdict(r, &*held_out_errors(model, full, p)?, p))
 }
 
-/// The test of a full model's held-out errors `f` against a reduced model's `r`, and the RMSE gain.
-fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> (BlockTest, f64) {
-    let gain = rmse(&r.errors) - rmse(&f.errors);
-    if f.fitted_here > r.fitted_here {
+/// The judgement of a full model's held-out errors `f` against a reduced model's `r` (see
+/// [`super::significance`]).
+pub(crate) fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> Judgement {
+    let test = if f.fitted_here > r.fitted_here {
         let noise = f.rss / p.test.len().saturating_sub(f.fitted_here).max(1) as f64;
-        return (added_coefficients_test(r.rss, f.rss, noise, f.fitted_here - r.fitted_here), gain);
-    }
-    let diff: Vec<f64> = r.errors.iter().zip(&f.errors).map(|(a, b)| a - b).collect();
-    (block_test(&diff), gain)
+        added_coefficients_test(r.rss, f.rss, noise, f.fitted_here - r.fitted_here)
+    } else {
+        let diff: Vec<f64> = r.errors.iter().zip(&f.errors).map(|(a, b)| a - b).collect();
+        block_test(&diff)
+    };
+    judge(&r.errors, &f.errors, test, p.noise_floor_nm * p.noise_floor_nm)
 }
 
 /// The cores this process may use.
@@ -134,8 +142,8 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + 
 enum Checked {
     /// Its fit on the training part is physically impossible (why).
     Impossible(String),
-    /// The model, its test against the model without it.
-    Tested(Spec, BlockTest),
+    /// The model, its judgement against the model without it.
+    Tested(Spec, Judgement),
     /// No fit.
     NoFit,
 }
@@ -147,7 +155,7 @@ fn check(model: &Model, full: &Spec, reduced: &HeldOut, p: &Prepared, name: &(dy
         return Checked::Impossible(why);
     }
     match compare_with(reduced, model, full, p) {
-        Some((test, _)) => Checked::Tested(full.clone(), test),
+        Some(judgement) => Checked::Tested(full.clone(), judgement),
         None => Checked::NoFit,
     }
 }
@@ -193,6 +201,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     let mut spec = base;
     let mut chosen: Vec<Chosen> = Vec::new();
     let mut rejected = Vec::new();
+    let mut negligible = Vec::new();
     let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
     let mut current = score(&spec, 0.0);
     // Each candidate's best parameters of the previous step: the next search starts there.
@@ -225,25 +234,34 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
             }
         }
         proposals.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let top: Vec<(f64, Spec, usize)> = proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).take(TESTED_PER_STEP).collect();
+        // Ordinary causes first, then those fitted anew on each segment (see TESTED_PER_STEP).
+        let segmentwise = |s: &Spec, c: usize| model.fit(s, coarse).is_some_and(|f| s.terms.iter().position(|t| t.cause == c).is_some_and(|i| !f.segment_coefs[i].is_empty()));
+        let worth: Vec<(f64, Spec, usize, bool)> = proposals.into_iter().filter(|(b, ..)| current - b > BIC_THRESHOLD).map(|(b, s, c)| {
+            let rings = segmentwise(&s, c);
+            (b, s, c, rings)
+        }).collect();
+        let top: Vec<(f64, Spec, usize)> = worth.iter().filter(|w| !w.3).take(TESTED_PER_STEP).chain(worth.iter().filter(|w| w.3).take(TESTED_PER_STEP)).map(|(b, s, c, _)| (*b, s.clone(), *c)).collect();
         let mut accepted = false;
         let Some(reduced) = held_out_errors(model, &spec, p) else { break };
-        // The proposals polished, checked and tested as many at once as there are cores, best
-        // first; the outcomes are read in order, so the choice is the one a test after the other
-        // would make.
+        // The proposals polished, checked and tested as many at once as there are cores, in
+        // order; the outcomes are read in order, so the choice is the one a test after the
+        // other would make.
         'proposals: for chunk in top.chunks(cores()) {
             let tested = parallel_map(chunk, |(_, s, _)| check(model, &polish(model, s, coarse, &p.stretch), &reduced, p, &name));
             for ((b, _, c), outcome) in chunk.iter().zip(tested) {
                 match outcome {
                     Checked::Impossible(why) => rejected.push(why),
-                    Checked::Tested(s, test) if test.significant() => {
-                        chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {}", test) });
+                    Checked::Tested(s, judgement) if judgement.named() => {
+                        chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
                         current = score(&s, 0.0);
                         spec = s;
                         accepted = true;
                         break 'proposals;
                     }
-                    Checked::Tested(_, test) => rejected.push(format!("{} (proposed by BIC, not significant on the held-out part: {})", name(*c), test)),
+                    Checked::Tested(_, judgement) if judgement.negligible() => {
+                        negligible.push((*c, format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}")));
+                    }
+                    Checked::Tested(_, judgement) => rejected.push(format!("{} (proposed by BIC, no evidence on the held-out part: {judgement})", name(*c))),
                     Checked::NoFit => {}
                 }
             }
@@ -262,7 +280,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 for (&(i, j), outcome) in chunk.iter().zip(tested) {
                     match outcome {
                         Some(Checked::Impossible(why)) => rejected.push(why),
-                        Some(Checked::Tested(both, test)) if test.significant() => {
+                        Some(Checked::Tested(both, test)) if test.named() => {
                             let (a, c) = (top[i].2, top[j].2);
                             let b = score(&both, 0.0);
                             for k in [a, c] {
@@ -286,20 +304,26 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     while let Some(full) = held_out_errors(model, &spec, p) {
         // The models without one cause each, fitted side by side.
         let margins = parallel_map(&chosen, |ch| {
-            held_out_errors(model, &spec.without(ch.cause), p).map_or(f64::NEG_INFINITY, |r| {
-                let (t, _) = verdict(&r, &full, p);
-                t.t - t.critical
-            })
+            held_out_errors(model, &spec.without(ch.cause), p).map(|r| verdict(&r, &full, p))
         });
-        let tests: Vec<(usize, f64)> = margins.into_iter().enumerate().collect();
-        match tests.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)) {
-            Some((i, margin)) if margin <= 0.0 => {
+        // The weakest that is not named any more goes first (its gain in units of its
+        // relevance threshold).
+        let weakest = margins.iter().enumerate().filter(|(_, j)| !j.is_some_and(|j| j.named())).min_by(|a, b| {
+            let score = |j: &Option<Judgement>| j.map_or(f64::NEG_INFINITY, |j| j.gain_nm2 / j.relevant_nm2.max(1e-300));
+            score(a.1).total_cmp(&score(b.1))
+        });
+        match weakest {
+            Some((i, judgement)) => {
                 let gone = chosen.remove(i);
-                rejected.push(format!("{} (not significant once the others were in the model)", name(gone.cause)));
+                match judgement {
+                    Some(j) if j.negligible() => negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
+                    Some(j) => rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
+                    None => rejected.push(format!("{} (no fit without it)", name(gone.cause))),
+                }
                 spec = spec.without(gone.cause);
             }
-            _ => break,
+            None => break,
         }
     }
-    Selection { spec, chosen, rejected }
+    Selection { spec, chosen, rejected, negligible }
 }

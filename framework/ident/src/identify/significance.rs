@@ -1,4 +1,19 @@
-//! Is a held-out gain real? A block t-test on the held-out squared-error differences.
+//! Is a held-out gain real, and does it matter? A cause is named when its held-out gain is
+//! **relevant** and there is **evidence** for it ([`judge`]):
+//! - relevant: the drop of the held-out mean squared error is at least [`RELEVANT_SHARE_OF_NOISE`]
+//!   of the noise floor's variance and at least [`RELEVANT_SHARE_OF_EXCESS`] of what the model
+//!   without the cause leaves above that floor. The floor is measured on the data (see
+//!   [`super::prepare::noise_floor`]). A significant gain below this is listed apart, as
+//!   negligible, not named.
+//! - evidence: the block t-test below (a Diebold-Mariano comparison of the two predictors,
+//!   batch means), or, where the model without the cause leaves at least the noise's variance
+//!   again above the floor (a structured residual), a gain that is large
+//!   ([`LARGE_SHARE_OF_EXCESS`] of the excess) and consistent: positive in every one of
+//!   [`CONSISTENCY_PARTS`] contiguous parts of the held-out part. On real records the residual is mostly structure that the listed causes explain
+//!   only in part; the blocks' gains then scatter and the t statistic stays small while the
+//!   cause halves the error. Consistency in time is the evidence that holds there.
+//!
+//! The block t-test:
 //!
 //! The residuals of a model are correlated in time (a shape error repeats every cycle), so
 //! samples are not independent and a per-sample test would find everything significant. The
@@ -38,6 +53,107 @@ pub struct BlockTest {
     pub t: f64,
     /// Student's t at [`LEVEL`] for `blocks - 1` degrees of freedom.
     pub critical: f64,
+}
+
+/// A held-out gain of mean squared error is relevant when it is at least this share of the noise
+/// floor's variance (an assumption: a term whose RMS is below a fifth of the sensor's noise
+/// changes an observer's torque by less than the noise it already carries; a true effect of the
+/// noise's size gains 100 %).
+pub const RELEVANT_SHARE_OF_NOISE: f64 = 0.05;
+
+/// ... and at least this share of the excess of the reduced model's held-out mean squared error
+/// over the noise floor (the design note's 5 %: a term that removes less of what is wrong is
+/// significant and negligible).
+pub const RELEVANT_SHARE_OF_EXCESS: f64 = 0.05;
+
+/// A gain accepted on consistency instead of the t-test must remove at least this share of the
+/// excess (an assumption: a cause that removes a fifth of what is wrong, in every part of the
+/// held-out record, is a finding, whatever the scatter of the rest).
+pub const LARGE_SHARE_OF_EXCESS: f64 = 0.2;
+
+/// Contiguous parts of the held-out part in each of which a consistent gain is positive (the
+/// chance that four independent parts agree in sign by luck is 1/16; with the relevance
+/// threshold on top, a chance gain of that size does not occur on clean data: see the suites).
+pub const CONSISTENCY_PARTS: usize = 4;
+
+/// What the held-out part says of one cause: the test, the gain, and the two thresholds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Judgement {
+    /// The significance test.
+    pub test: BlockTest,
+    /// Drop of the held-out mean squared error [Nm^2].
+    pub gain_nm2: f64,
+    /// The relevance threshold it is held to [Nm^2].
+    pub relevant_nm2: f64,
+    /// Positive in every consistency part and large.
+    pub consistent: bool,
+}
+
+impl Judgement {
+    /// Relevant.
+    pub fn relevant(&self) -> bool {
+        self.gain_nm2 >= self.relevant_nm2
+    }
+    /// There is evidence for the gain (significant, or large and consistent).
+    pub fn evidence(&self) -> bool {
+        self.test.significant() || self.consistent
+    }
+    /// Named: relevant, with evidence.
+    pub fn named(&self) -> bool {
+        self.relevant() && self.evidence()
+    }
+    /// Significant but below the relevance threshold.
+    pub fn negligible(&self) -> bool {
+        self.evidence() && !self.relevant()
+    }
+}
+
+impl std::fmt::Display for Judgement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}; held-out MSE gain {:.3e} Nm^2 (relevant from {:.3e})", self.test, self.gain_nm2, self.relevant_nm2)?;
+        if self.consistent {
+            write!(f, ", positive in all {CONSISTENCY_PARTS} parts of the held-out record")?;
+        }
+        Ok(())
+    }
+}
+
+/// Judges a full model's held-out squared errors `full` against a reduced model's `reduced`
+/// (per sample, the same samples) with `test` already computed on them, the noise floor's
+/// variance `noise_nm2`.
+///
+/// ```
+/// use jointctl_ident::identify::significance::{block_test, judge};
+/// // The reduced model leaves a structure of twice the noise's variance that the full one removes,
+/// // unevenly in time (a structured residual): consistent and large.
+/// let reduced: Vec<f64> = (0..4000).map(|i| 1.0 + 4.0 * ((i / 100) % 2) as f64).collect();
+/// let full = vec![1.0; 4000];
+/// let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
+/// let j = judge(&reduced, &full, block_test(&diff), 1.0);
+/// assert!(j.named() && j.consistent);
+/// // A gain of a hundredth of the noise: negligible, however certain.
+/// let tiny: Vec<f64> = full.iter().map(|x| x + 0.01).collect();
+/// let diff: Vec<f64> = tiny.iter().zip(&full).map(|(a, b)| a - b).collect();
+/// assert!(judge(&tiny, &full, block_test(&diff), 1.0).negligible());
+/// ```
+pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> Judgement {
+    let n = reduced.len().min(full.len()).max(1);
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
+    let (mse_reduced, mse_full) = (mean(&reduced[..n]), mean(&full[..n]));
+    let gain = mse_reduced - mse_full;
+    let excess = (mse_reduced - noise_nm2).max(0.0);
+    let relevant_nm2 = (RELEVANT_SHARE_OF_NOISE * noise_nm2).max(RELEVANT_SHARE_OF_EXCESS * excess);
+    let parts = CONSISTENCY_PARTS.min(n);
+    let every_part = (0..parts).all(|k| {
+        let (lo, hi) = (k * n / parts, (k + 1) * n / parts);
+        mean(&reduced[lo..hi]) > mean(&full[lo..hi])
+    });
+    // Consistency stands in for the t-test only where the residual is structure: the reduced
+    // model leaves at least the noise's variance again above the floor. Near the floor the
+    // t-test's white-noise premise holds, and it alone decides.
+    let structured = excess >= noise_nm2;
+    let consistent = structured && every_part && gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
+    Judgement { test, gain_nm2: gain, relevant_nm2, consistent }
 }
 
 /// The two tests.

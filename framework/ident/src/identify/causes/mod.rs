@@ -155,13 +155,15 @@ pub enum Refine {
 /// shifts the channel, a dead zone maps the deflection the spring sees) before columns are built.
 #[derive(Clone, Debug)]
 pub struct Inputs {
+    /// Time [s].
+    pub t_s: Vec<f64>,
     /// Deflection [rad] as the torque channel sees it.
     pub deflection_rad: Vec<f64>,
     /// Deflection rate [rad/s] as the torque channel sees it.
     pub velocity_rad_per_s: Vec<f64>,
     /// Deflection the elastic element transmits torque for [rad] (after play).
     pub elastic_rad: Vec<f64>,
-    /// Sample period of these inputs [s] (uniform).
+    /// Sample period of these inputs [s] (the median step; the time stamps may jitter and gap).
     pub sample_period_s: f64,
 }
 

@@ -3,8 +3,36 @@
 
 use super::{CandidateCause, Inputs, Parameter, Refine, Samples, SearchContext};
 
-/// The model of `phi(t - d)`, `d` a whole number of sample periods.
+/// The model of `phi(t - d)`: the inputs interpolated at the shifted time stamps (irregular
+/// logs too); `d` is refined in whole full-rate sample periods, or milliseconds when the samples
+/// are further apart.
 pub struct TimeDelay;
+
+/// `x` at the times `t - delay`, linearly interpolated between the samples around each; held at
+/// the first value before the record and never interpolated across a gap of more than
+/// `max_step` (the value after the gap is taken).
+fn delayed(t: &[f64], x: &[f64], delay: f64, max_step: f64) -> Vec<f64> {
+    let n = t.len();
+    let mut out = Vec::with_capacity(n);
+    // The sample at or before the shifted time moves forward monotonically with it.
+    let mut j = 0usize;
+    for &ti in t {
+        let at = ti - delay;
+        while j + 1 < n && t[j + 1] <= at {
+            j += 1;
+        }
+        let value = if at <= t[0] {
+            x[0]
+        } else if j + 1 >= n {
+            x[n - 1]
+        } else {
+            let step = t[j + 1] - t[j];
+            if step > max_step { x[j + 1] } else { x[j] + (x[j + 1] - x[j]) * (at - t[j]) / step }
+        };
+        out.push(value);
+    }
+    out
+}
 
 impl CandidateCause for TimeDelay {
     fn name(&self) -> &str {
@@ -19,23 +47,50 @@ impl CandidateCause for TimeDelay {
         let dt = c.excitation.sample_period_s;
         let max = ((0.1 / c.excitation.frequency_hz / dt).min(400.0)) as i64;
         let step = (max / 20).max(1);
-        let grid = (1..=max.max(1)).filter(|k| k % step == 0 || *k <= 3).flat_map(|k| [k as f64 * dt, -(k as f64) * dt]).collect();
+        let mut grid: Vec<f64> = (1..=max.max(1)).filter(|k| k % step == 0 || *k <= 3).flat_map(|k| [k as f64 * dt, -(k as f64) * dt]).collect();
+        // Samples far apart (a slow log, bins): fractions of a sample too, interpolated.
+        if dt > crate::identify::search::SUB_SAMPLE_DELAYS_ABOVE_S {
+            grid.extend([0.25 * dt, -0.25 * dt, 0.5 * dt, -0.5 * dt]);
+        }
         vec![Parameter { name: "delay_s".into(), grid, refine: Refine::Samples }]
     }
     fn transforms(&self) -> bool {
         true
     }
+    fn look_elsewhere(&self, c: &SearchContext) -> f64 {
+        // The delay is the best of M resolvable values (the grid's span in refinement steps):
+        // 2 ln M on top of BIC's count, as for a frequency scan. A small delay is, to first
+        // order, a damping (`phi(t - d) = phi - d dphi/dt`): without the charge it took the
+        // place of a viscous friction on a tie.
+        let span = 0.2 / c.excitation.frequency_hz.max(1e-3);
+        let unit = crate::identify::search::delay_unit(c.full_rate.t_s.windows(2).map(|w| w[1] - w[0]).fold(f64::INFINITY, f64::min).max(1e-6));
+        2.0 * (span / unit).max(1.0).ln()
+    }
     fn transform(&self, p: &[f64], inputs: &mut Inputs) {
-        let k = (p[0] / inputs.sample_period_s).round() as i64;
+        let max_step = 10.0 * inputs.sample_period_s;
         for x in [&mut inputs.deflection_rad, &mut inputs.velocity_rad_per_s, &mut inputs.elastic_rad] {
-            let n = x.len() as i64;
-            let src = x.clone();
-            for (i, v) in x.iter_mut().enumerate() {
-                *v = src[(i as i64 - k).clamp(0, n - 1) as usize];
-            }
+            *x = delayed(&inputs.t_s, x, p[0], max_step);
         }
     }
     fn columns(&self, _: &[f64], _: &Samples) -> Vec<Vec<f64>> {
         Vec::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::delayed;
+
+    #[test]
+    fn a_delay_interpolates_on_irregular_time_stamps() {
+        // A ramp x = t on jittered stamps: delayed by 0.0123 s it reads t - 0.0123 exactly.
+        let t: Vec<f64> = (0..500).map(|i| i as f64 * 0.002 + if i % 3 == 0 { 0.0007 } else { 0.0 }).collect();
+        let got = delayed(&t, &t, 0.0123, 0.02);
+        for i in 20..500 {
+            assert!((got[i] - (t[i] - 0.0123)).abs() < 1e-12, "{i}");
+        }
+        // Negative: early.
+        let got = delayed(&t, &t, -0.005, 0.02);
+        assert!((got[100] - (t[100] + 0.005)).abs() < 1e-12);
     }
 }

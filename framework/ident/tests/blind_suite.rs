@@ -1,0 +1,138 @@
+//! `identify` on records it was not developed on: the blind generator (`tests/blind-gen`,
+//! written without reading this crate) makes characterisation records from the thesis' set-up
+//! and published friction and hysteresis models that the cause library does not fit exactly
+//! (LuGre, Bouc-Wen, Stribeck, ramped backlash, filtered delays), some with real loggers' traits
+//! (irregular steps and gaps, epoch time, repetitions whose time restarts, 17-bit and 2e-6 rad
+//! encoders, 20 Hz bins, friction records whose deflection column is a position).
+//!
+//! Every record goes through the CSV reader, as a user's file would. The figures are printed
+//! per effect and per variant; the test holds the engine to what it reaches today on this
+//! generator, so that a change that worsens it fails here (issue 31 asks for 95 % named, at most
+//! 1 false cause in 20 clean records and 90 % of parameters within tolerance: docs/benchmarks.md
+//! says how far each source is).
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use jointctl_blind_gen::{Case, device_variants, suite};
+use jointctl_ident::identify::{IdentifyOptions, identify};
+
+/// What identify named in a case, with the parameters, or why it refused the file.
+type Outcome = Result<Vec<(String, BTreeMap<String, f64>)>, String>;
+
+fn run(case: &Case) -> Outcome {
+    let dir = std::env::temp_dir().join(format!("jointctl-blind-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let path = dir.join(format!("{}.csv", case.name));
+    jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
+    let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
+    let _ = std::fs::remove_file(&path);
+    let report = identify(&data?, &IdentifyOptions::default()).map_err(|e| e.to_string())?;
+    Ok(report.causes.into_iter().filter(|c| c.effect != "dropout").map(|c| (c.effect, c.params)).collect())
+}
+
+fn hidden(case: &Case) -> BTreeSet<String> {
+    case.answer.effect.split('+').filter(|e| *e != "none" && !e.is_empty()).map(str::to_string).collect()
+}
+
+/// The generator's parameter and identify's, and the relative tolerance (25 %, issue 31).
+const CHECKS: [(&str, &str, &str); 6] = [
+    ("viscous_friction", "b", "damping_nms_per_rad"),
+    ("hysteresis", "force", "limit_nm"),
+    ("dead_zone", "width", "half_width_rad"),
+    ("stiffness_nonlinearity", "k3", "k3_nm_per_rad3"),
+    ("sensor_offset", "offset", "offset_nm"),
+    ("time_delay", "delay", "delay_s"),
+];
+
+#[derive(Default)]
+struct Tally {
+    cases: usize,
+    named: usize,
+    extra: usize,
+    refused: usize,
+    params: usize,
+    params_ok: usize,
+}
+
+fn score(cases: &[Case], what: &str) -> (Tally, Tally, BTreeMap<String, Tally>) {
+    let (mut with, mut clean) = (Tally::default(), Tally::default());
+    let mut by: BTreeMap<String, Tally> = BTreeMap::new();
+    println!("\n{what}");
+    for case in cases {
+        let want = hidden(case);
+        let outcome = run(case);
+        let got: BTreeSet<String> = outcome.as_ref().map(|c| c.iter().map(|x| x.0.clone()).collect()).unwrap_or_default();
+        let all = want.iter().all(|w| got.contains(w));
+        let extra = got.iter().any(|g| !want.contains(g));
+        let count = |tally: &mut Tally| {
+            tally.cases += 1;
+            tally.refused += outcome.is_err() as usize;
+            tally.named += (outcome.is_ok() && all && !want.is_empty()) as usize;
+            tally.extra += extra as usize;
+        };
+        count(if want.is_empty() { &mut clean } else { &mut with });
+        count(by.entry(format!("effect {}", case.answer.effect)).or_default());
+        count(by.entry(format!("variant {}", case.answer.variant)).or_default());
+        if let Ok(causes) = &outcome {
+            for (effect, truth_key, key) in CHECKS {
+                let (Some(truth), Some((_, params))) = (case.answer.params.get(truth_key), causes.iter().find(|c| c.0 == effect)) else { continue };
+                if !want.contains(effect) {
+                    continue;
+                }
+                let ok = params.get(key).is_some_and(|v| (v - truth).abs() <= 0.25 * truth.abs());
+                with.params += 1;
+                with.params_ok += ok as usize;
+            }
+        }
+        let verdict = match (&outcome, want.is_empty()) {
+            (Err(e), _) => format!("refused: {e}"),
+            (Ok(_), false) if !all => "MISSED".into(),
+            (Ok(_), _) if extra => "EXTRA".into(),
+            _ => "pass".into(),
+        };
+        println!("  {:40} {:36} {:40} {verdict}", case.name, case.answer.effect, got.iter().cloned().collect::<Vec<_>>().join("+"));
+    }
+    println!(
+        "{what}: hidden effects named in {} of {} records, extra causes in {} of them; {} of {} clean records got a cause; {} refused; parameters within 25 %: {} of {}",
+        with.named, with.cases, with.extra, clean.extra, clean.cases, with.refused + clean.refused, with.params_ok, with.params
+    );
+    for (k, t) in &by {
+        println!("  {k:40} {} of {} named, {} with an extra cause, {} refused", t.named, t.cases, t.extra, t.refused);
+    }
+    (with, clean, by)
+}
+
+#[test]
+fn the_blind_generators_suite_is_identified_at_least_as_well_as_today() {
+    let cases = suite(1);
+    let (with, clean, _) = score(&cases, "blind generator, suite(1)");
+    // What this engine reached when the test was written (see docs/benchmarks.md); a change
+    // that loses ground here fails. Issue 31's targets are higher.
+    // Two records of suite(1) have a single velocity reversal and are refused as too little
+    // excitation (identification needs three).
+    assert!(with.refused + clean.refused <= 2, "{} records refused", with.refused + clean.refused);
+    assert!(with.named * 100 >= 50 * with.cases, "named in {} of {}", with.named, with.cases);
+    assert!(clean.extra * 100 <= 15 * clean.cases, "{} of {} clean records got a cause", clean.extra, clean.cases);
+    assert!(with.params_ok * 100 >= 50 * with.params, "{} of {} parameters within 25 %", with.params_ok, with.params);
+}
+
+/// One device's data written four ways (full-rate irregular, 20 Hz bins, one repetition, three
+/// repetitions): the same causes should be named on each (issue 36).
+#[test]
+fn one_device_written_four_ways() {
+    let cases = device_variants(1);
+    let mut answers: BTreeMap<String, Vec<(String, BTreeSet<String>)>> = BTreeMap::new();
+    for case in &cases {
+        let got = run(case).map(|c| c.into_iter().map(|x| x.0).collect()).unwrap_or_else(|e| BTreeSet::from([format!("refused: {e}")]));
+        answers.entry(case.answer.device.clone().unwrap_or_default()).or_default().push((case.answer.variant.clone(), got));
+    }
+    let mut same = 0;
+    for (device, variants) in &answers {
+        let agree = variants.windows(2).all(|w| w[0].1 == w[1].1);
+        same += agree as usize;
+        println!("device {device}: {}", variants.iter().map(|(v, g)| format!("{v}: {}", g.iter().cloned().collect::<Vec<_>>().join("+"))).collect::<Vec<_>>().join("; "));
+    }
+    println!("devices whose variants all got the same causes: {same} of {}", answers.len());
+    let (_, _, _) = score(&cases, "blind generator, device_variants(1)");
+    assert!(same >= 1, "no device got the same causes on every variant");
+}
