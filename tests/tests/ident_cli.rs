@@ -24,7 +24,7 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("exactly one JSON object");
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(keys, ["samples", "dropped_samples", "rmse_before", "rmse_after", "causes", "significance", "extension", "gains"]);
+    assert_eq!(keys, ["samples", "dropped_samples", "resolution_rad", "segments", "rmse_before", "rmse_after", "causes", "negligible", "unexplained", "significance", "extension", "gains"]);
     // With --config: the static gain (identify's own model), and the simulation's and the
     // observer's on the held-out part.
     for side in ["static", "simulation", "observer"] {
@@ -35,8 +35,13 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
     assert_eq!(v["samples"], 4000);
     let first = &v["causes"][0];
     let ckeys: Vec<&str> = first.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(ckeys, ["effect", "params", "rmse_gain", "evidence"]);
+    assert_eq!(ckeys, ["effect", "params", "uncertainty", "rmse_gain", "evidence"]);
     assert_eq!(first["effect"], "hysteresis");
+    // Every coefficient with its standard error, well below the value on 4000 samples.
+    let (limit, se) = (first["params"]["limit_nm"].as_f64().unwrap(), first["uncertainty"]["limit_nm"].as_f64().unwrap());
+    assert!(se > 0.0 && se < 0.1 * limit, "limit {limit} +- {se}");
+    // Named causes bring the held-out error near the floor the report measures.
+    assert!(v["unexplained"]["times_noise"].as_f64().unwrap() < 10.0, "{}", v["unexplained"]);
     // Finding: the example also got a 0.003 Nm "vibration" and a 0.001 Nm "time_delay". The
     // example's plant is the thesis' 113.78 Nm/rad line with the hysteresis; the configured
     // observer is the line fitted to the reference arm's stiffening elbow (section 3.3.2's

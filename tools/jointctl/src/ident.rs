@@ -281,7 +281,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         if u.times_noise > jointctl_ident::identify::FAR_ABOVE_NOISE {
             md.push_str("No listed cause explains what the baseline leaves.\n");
         } else {
-            md.push_str("No cause found: the baseline explains the data to the noise floor.\n");
+            let _ = writeln!(md, "No cause found; the baseline's held-out error is {:.1} times the noise floor.", u.times_noise);
         }
     } else {
         md.push_str("| cause | parameters (± standard error) | RMSE gain [Nm] | evidence |\n|---|---|---|---|\n");
