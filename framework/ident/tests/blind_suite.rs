@@ -111,9 +111,10 @@ fn the_blind_generators_suite_is_identified_at_least_as_well_as_today() {
     // Two records of suite(1) have a single velocity reversal and are refused as too little
     // excitation (identification needs three).
     assert!(with.refused + clean.refused <= 2, "{} records refused", with.refused + clean.refused);
-    assert!(with.named * 100 >= 50 * with.cases, "named in {} of {}", with.named, with.cases);
-    assert!(clean.extra * 100 <= 15 * clean.cases, "{} of {} clean records got a cause", clean.extra, clean.cases);
-    assert!(with.params_ok * 100 >= 50 * with.params, "{} of {} parameters within 25 %", with.params_ok, with.params);
+    // 69 of 88 named, 1 of 21 clean records with a cause, 74 of 76 parameters within 25 %.
+    assert!(with.named * 100 >= 75 * with.cases, "named in {} of {}", with.named, with.cases);
+    assert!(clean.extra * 100 <= 10 * clean.cases, "{} of {} clean records got a cause", clean.extra, clean.cases);
+    assert!(with.params_ok * 100 >= 90 * with.params, "{} of {} parameters within 25 %", with.params_ok, with.params);
 }
 
 /// One device's data written four ways (full-rate irregular, 20 Hz bins, one repetition, three
@@ -134,5 +135,6 @@ fn one_device_written_four_ways() {
     }
     println!("devices whose variants all got the same causes: {same} of {}", answers.len());
     let (_, _, _) = score(&cases, "blind generator, device_variants(1)");
-    assert!(same >= 1, "no device got the same causes on every variant");
+    // 2 of 5 devices when this was written.
+    assert!(same >= 2, "{same} of {} devices got the same causes on every variant", answers.len());
 }

@@ -351,7 +351,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         unexplained,
         significance: Significance {
             test: format!(
-                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided, or a gain of at least {:.0} % of the excess over the noise floor that is positive in each of {} parts of the held-out record; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
+                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided, or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of {} parts of the held-out record and betters most of those with something to explain; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
                 100.0 * significance::LARGE_SHARE_OF_EXCESS,
                 significance::CONSISTENCY_PARTS
             ),
