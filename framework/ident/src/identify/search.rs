@@ -166,7 +166,7 @@ const POLISH_ROUNDS: usize = 8;
 pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, stretch: &Part) -> Spec {
     let mut spec = spec.clone();
     for round in 0..POLISH_ROUNDS {
-        if !polish_round(model, &mut spec, coarse, stretch, round == 0, false) {
+        if !polish_round(model, &mut spec, coarse, stretch, round == 0) {
             break;
         }
     }
@@ -179,9 +179,35 @@ pub(crate) fn polish(model: &Model, spec: &Spec, coarse: &Part, stretch: &Part) 
 /// in for the damping) is otherwise scored against a baseline fitted to absorb it, and its BIC
 /// gain falls below the threshold (9.5 BIC units for a viscous friction that, with `k_b` free,
 /// takes the held-out error from 2.4 times the noise to the noise).
-pub(crate) fn profile_baseline(model: &Model, spec: &Spec, coarse: &Part, stretch: &Part) -> Spec {
+/// Only the grid is looked over here (the rest of the model fitted once, each value a
+/// projection); the polish of a proposal that is tested refines further.
+pub(crate) fn profile_baseline(model: &Model, spec: &Spec, coarse: &Part) -> Spec {
     let mut spec = spec.clone();
-    polish_round(model, &mut spec, coarse, stretch, true, true);
+    for t in 0..spec.terms.len() {
+        let cause = spec.terms[t].cause;
+        if !spec.terms[t].baseline || model.causes[cause].transforms() {
+            continue;
+        }
+        let Some(projector) = model.projector(&spec.without(cause), coarse) else { continue };
+        for (j, p) in spec.terms[t].grids.clone().iter().enumerate() {
+            if p.refine != Refine::Between || j >= spec.terms[t].params.len() {
+                continue;
+            }
+            let at = |x: f64| {
+                let mut term = spec.terms[t].clone();
+                term.params[j] = x;
+                model.rss_with(&projector, &term, coarse)
+            };
+            let now = at(spec.terms[t].params[j]);
+            let best = p.grid.iter().map(|x| (at(*x), *x)).min_by(|a, b| a.0.total_cmp(&b.0));
+            // Moved on evidence only, as in the polish.
+            if let Some((rss, x)) = best
+                && rss < now * (-POLISH_EVIDENCE / coarse.len() as f64).exp()
+            {
+                spec.terms[t].params[j] = x;
+            }
+        }
+    }
     spec
 }
 
@@ -190,12 +216,9 @@ pub(crate) fn profile_baseline(model: &Model, spec: &Spec, coarse: &Part, stretc
 /// model may sit far from the joint optimum (eq. 3.5's `k_b` searched alone goes low, so that
 /// the arctan stands in for a viscous friction; with the viscous term in place its optimum is
 /// ten times higher, beyond the reach of a local refinement).
-fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, whole_grid: bool, baseline_only: bool) -> bool {
+fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, whole_grid: bool) -> bool {
     let mut moved = false;
     for t in 0..spec.terms.len() {
-        if baseline_only && !spec.terms[t].baseline {
-            continue;
-        }
         let grids = spec.terms[t].grids.clone();
         for (j, p) in grids.iter().enumerate() {
             if j >= spec.terms[t].params.len() {
