@@ -35,7 +35,7 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
     assert_eq!(v["samples"], 4000);
     let first = &v["causes"][0];
     let ckeys: Vec<&str> = first.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(ckeys, ["effect", "params", "uncertainty", "rmse_gain", "evidence"]);
+    assert_eq!(ckeys, ["effect", "params", "rmse_gain", "uncertainty", "evidence"]);
     assert_eq!(first["effect"], "hysteresis");
     // Every coefficient with its standard error, well below the value on 4000 samples.
     let (limit, se) = (first["params"]["limit_nm"].as_f64().unwrap(), first["uncertainty"]["limit_nm"].as_f64().unwrap());
@@ -291,11 +291,15 @@ fn q4_recording(effects: impl Fn(&mut jointctl_config::EffectsConfig), rate_hz: 
 /// `stiffness_nonlinearity` at 100 Hz and `time_delay` + `vibration` at 1 kHz, none with a
 /// measurable gain.
 ///
-/// Finding (issue 31, item 5, open): at 1 kHz the recording itself carries a skew of one sample
-/// between the channels and a scale of 0.07 % (the "0.1-0.2 % stiffer" reading of
-/// docs/model-loop.md): each is relevant alone (a held-out gain of 23 % of the noise floor's
-/// variance together) and they are significant together (t = 6.1), so identify names them as a
-/// pair. Until the recorder's skew is found, that pair, and only at those sizes, is allowed here.
+/// Finding (issue 31, item 5, cause found, not yet fixed): at 1 kHz the recording's torque lags
+/// its deflection by one simulation substep: the simulated element's torque is formed before a
+/// flow moves the output (framework/sim/src/unit.rs, `Unit::step`) and the encoders read after.
+/// identify names it as a pair, a 1 ms delay with a 0.07 % stiffness error (each relevant
+/// alone, t = 6.1 together). Moving the flow's output before the torque removes it, but the
+/// committed characteristics must then be made again, and the new q2 table (coefficients within
+/// 0.2 %) extrapolates worse at appendix C's pose (28 Nm): the gravity hold there falls from
+/// 13x to 4x closer (tests/tests/free_arm.rs). Until that is sorted out, that pair, only at 1 kHz
+/// and only at those sizes, is allowed here.
 #[test]
 fn a_clean_simulated_recording_gets_no_cause_at_100_hz_or_1_khz() {
     for rate in [100.0, 1000.0] {

@@ -417,9 +417,8 @@ fn device_variants_share_their_physics() {
     }
 }
 
-/// The full suite (slow in a debug build: `cargo test --release -- --ignored`).
+/// The full suite (the crate is optimised in debug builds too: see the workspace's profile).
 #[test]
-#[ignore]
 fn whole_suite_generates_within_budget() {
     let t0 = std::time::Instant::now();
     let cases = jointctl_blind_gen::suite(1);
@@ -453,7 +452,6 @@ fn whole_suite_generates_within_budget() {
 
 /// Many draws of every cause on every variant: no panics, effects always clearly present.
 #[test]
-#[ignore]
 fn many_seeds_never_fail() {
     let variants = [
         "plain",
