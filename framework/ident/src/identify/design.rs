@@ -97,6 +97,19 @@ impl Fit {
     }
 }
 
+/// A model's errors on the held-out part.
+pub(crate) struct HeldOut {
+    /// Squared error per sample, with the Cp charge of coefficients fitted on the held-out part
+    /// itself (segment-wise terms) [Nm^2].
+    pub errors: Vec<f64>,
+    /// Residual sum of squares without the charge [Nm^2].
+    pub rss: f64,
+    /// Coefficients fitted on the held-out part.
+    pub fitted_here: usize,
+    /// The model fitted on the training part.
+    pub fit: Fit,
+}
+
 /// A fitted model's orthonormal design basis and residual on one part (see [`Model::projector`]).
 pub(crate) struct Projector {
     q: DMatrix<f64>,
@@ -131,7 +144,7 @@ pub(crate) struct Model<'a> {
     pub causes: &'a [&'a dyn CandidateCause],
     /// Held-out errors of the models evaluated so far (selection, the final check and the report
     /// ask for the same models again).
-    pub held_out: std::sync::Mutex<std::collections::HashMap<SpecKey, std::sync::Arc<super::select::HeldOut>>>,
+    pub held_out: std::sync::Mutex<std::collections::HashMap<SpecKey, std::sync::Arc<HeldOut>>>,
     /// Columns of terms computed so far (see [`ColumnCache`]).
     pub columns: ColumnCache,
 }

@@ -23,6 +23,7 @@ use crate::csv::Data;
 
 pub mod causes;
 mod design;
+mod numeric;
 pub mod prepare;
 mod search;
 mod select;

@@ -1,46 +1,9 @@
 //! The search for a cause's non-linear parameters: its grid on the decimated training part,
 //! refined as the parameter asks, coordinate by coordinate.
 
-use super::causes::{Refine, SearchContext};
+use super::causes::{Refine, SearchContext, delay_unit};
 use super::design::{Model, Part, Spec, Term};
-
-/// Sample periods above which a delay is refined in fractions of a sample [s] (an assumption:
-/// 20 Hz bins carry a sensor filter's delay of 15 ms, a third of a sample, and must resolve it;
-/// at 200 Hz, sub-sample delays of 2 ms were named on clean records of the project's generator,
-/// where no delay is hidden, so at and below this period a delay is refined in whole samples).
-pub(crate) const SUB_SAMPLE_DELAYS_ABOVE_S: f64 = 0.01;
-
-/// The step a whole-sample parameter (a delay) is refined in [s]: the full-rate sample period,
-/// or, on records sampled slower than [`SUB_SAMPLE_DELAYS_ABOVE_S`], a tenth of it but at least
-/// a millisecond (the delay's transform interpolates between samples).
-pub(crate) fn delay_unit(full_rate_dt: f64) -> f64 {
-    if full_rate_dt <= SUB_SAMPLE_DELAYS_ABOVE_S { full_rate_dt } else { (0.1 * full_rate_dt).max(1e-3) }
-}
-
-/// Golden-section minimum of `f` over [lo, hi] on a log scale (both > 0).
-pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: usize) -> f64 {
-    let (mut a, mut b) = (lo.ln(), hi.ln());
-    let g = 0.618_033_988_749_895;
-    let mut c = b - g * (b - a);
-    let mut d = a + g * (b - a);
-    let (mut fc, mut fd) = (f(c.exp()), f(d.exp()));
-    for _ in 0..iterations {
-        if fc < fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - g * (b - a);
-            fc = f(c.exp());
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + g * (b - a);
-            fd = f(d.exp());
-        }
-    }
-    (0.5 * (a + b)).exp()
-}
+use super::numeric::refine_log;
 
 /// The term of `cause` with its best parameters, added to `spec`: `None` when no value gives a
 /// fit. With `warm` (the best of the previous step, before one more cause was added), each grid

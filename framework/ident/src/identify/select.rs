@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use super::causes::{FullRate, SearchContext};
-use super::design::{Model, Part, Spec};
+use super::design::{HeldOut, Model, Part, Spec};
 use super::prepare::Prepared;
 use super::search::{polish, profile_baseline, search};
 use super::significance::{Judgement, added_coefficients_test, block_test, judge};
@@ -39,19 +39,6 @@ pub(crate) struct Selection {
 
 pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
     n as f64 * (rss / n as f64).max(1e-300).ln() + parameters as f64 * (n as f64).ln()
-}
-
-/// A model's errors on the held-out part.
-pub(crate) struct HeldOut {
-    /// Squared error per sample, with the Cp charge of coefficients fitted on the held-out part
-    /// itself (segment-wise terms) [Nm^2].
-    pub errors: Vec<f64>,
-    /// Residual sum of squares without the charge [Nm^2].
-    pub rss: f64,
-    /// Coefficients fitted on the held-out part.
-    pub fitted_here: usize,
-    /// The model fitted on the training part.
-    pub fit: super::design::Fit,
 }
 
 /// Held-out errors of `spec` fitted on the training part (each model fitted once: selection,

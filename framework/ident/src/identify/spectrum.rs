@@ -1,6 +1,6 @@
 //! Frequency scans of a residual, for the vibration causes.
 
-use super::causes::log_grid;
+use super::numeric::{log_grid, refine_log};
 
 /// `(sum r sin(w t), sum r cos(w t))`. On uniformly spaced samples the phasor is rotated by a
 /// constant step (two multiplications a sample instead of a sine and a cosine), re-anchored
@@ -85,7 +85,7 @@ pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> Op
         (best, best * 0.015)
     };
     let (a, b) = ((best - half_width).max(lo * 0.5), best + half_width);
-    let f = super::search::refine_log(|f| -power(f), a, b, 30);
+    let f = refine_log(|f| -power(f), a, b, 30);
     // At a harmonic of the excitation a component may be a periodic model error (the 14-bit
     // quantisation of a periodic deflection makes them), not a mode of the structure. "At" is
     // within three standard deviations of the line's frequency estimate (the Cramer-Rao bound of

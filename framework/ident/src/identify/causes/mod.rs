@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 
 use serde_json::{Map, Value};
 
+pub use super::numeric::log_grid;
+
 mod coulomb_friction;
 mod reversals;
 mod dead_zone;
@@ -28,6 +30,7 @@ pub use speed_vibration::SpeedVibration;
 pub use stiffness_error::StiffnessError;
 pub use stiffness_nonlinearity::StiffnessNonlinearity;
 pub use time_delay::TimeDelay;
+pub(crate) use time_delay::delay_unit;
 pub use vibration::Vibration;
 pub use viscous_friction::ViscousFriction;
 
@@ -124,7 +127,7 @@ impl<'a> SearchContext<'a> {
     /// ```
     pub fn dominant_frequency_hz(&self) -> Option<f64> {
         let f = self.full_rate;
-        *self.dominant.get_or_init(|| crate::identify::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz))
+        *self.dominant.get_or_init(|| super::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz))
     }
 }
 
@@ -288,14 +291,6 @@ pub trait CandidateCause: Send + Sync {
         let _ = context;
         0.0
     }
-}
-
-/// A log-spaced grid of `n` values from `lo` to `hi` (both > 0).
-pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    if n < 2 {
-        return vec![lo];
-    }
-    (0..n).map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64)).collect()
 }
 
 /// A JSON object from pairs, for fragments.

@@ -1,0 +1,36 @@
+//! Numerical helpers of the search that know nothing of causes or models: a log-spaced grid and
+//! a golden-section minimum on a log scale. A leaf: every other module of `identify` may use it.
+
+/// A log-spaced grid of `n` values from `lo` to `hi` (both > 0).
+pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    if n < 2 {
+        return vec![lo];
+    }
+    (0..n).map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64)).collect()
+}
+
+/// Golden-section minimum of `f` over [lo, hi] on a log scale (both > 0).
+pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: usize) -> f64 {
+    let (mut a, mut b) = (lo.ln(), hi.ln());
+    let g = 0.618_033_988_749_895;
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (f(c.exp()), f(d.exp()));
+    for _ in 0..iterations {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c.exp());
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d.exp());
+        }
+    }
+    (0.5 * (a + b)).exp()
+}
+
