@@ -153,11 +153,12 @@ pub const FIT_SAMPLES: usize = 50_000;
 pub const HELD_OUT_SAMPLES: usize = 200_000;
 
 /// Exact zeros that the signal cannot have reached: a run of zeros far from the line between the
-/// readings either side of it, farther than three resolution steps plus twice the signal's own
-/// local step per sample of the run. (A signal that really crosses zero lies on that line: a fast
+/// readings either side of it, farther than three times a reading's uncertainty (`uncertainty`:
+/// the encoder's resolution, the torque sensor's noise) plus twice the signal's own local step
+/// per sample of the run. (A signal that really crosses zero lies on that line: a fast
 /// stroke crossing zero between a reading above and one below is no dropout, however large its
 /// steps; thesis appendix A's lost CAN frames jump to zero from anywhere and back.)
-fn dropouts(series: &[f64], lsb: f64) -> Vec<bool> {
+fn dropouts(series: &[f64], uncertainty: f64) -> Vec<bool> {
     let n = series.len();
     let mut dropped = vec![false; n];
     let mut i = 1;
@@ -176,7 +177,7 @@ fn dropouts(series: &[f64], lsb: f64) -> Vec<bool> {
             // right one.
             let step_in = if i >= 2 { (series[i - 1] - series[i - 2]).abs() } else { 0.0 };
             let step_out = if j + 1 < n { (series[j + 1] - series[j]).abs() } else { 0.0 };
-            let reach = 3.0 * lsb + 2.0 * step_in.max(step_out) * (j - i + 1) as f64;
+            let reach = 3.0 * uncertainty + 2.0 * step_in.max(step_out) * (j - i + 1) as f64;
             let span = (j - i + 1) as f64;
             let nearest = (1..=j - i).map(|k| (before + (after - before) * k as f64 / span).abs()).fold(f64::INFINITY, f64::min);
             if nearest > reach && before.abs() > reach && after.abs() > reach {
@@ -334,7 +335,11 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     }
     let resolution = resolution_rad(&data.deflection);
     let mut lost = dropouts(&data.deflection, resolution);
-    lost.iter_mut().zip(dropouts(&data.torque, 0.0)).for_each(|(a, b)| *a |= b);
+    // A torque reading is uncertain by its sensor's noise (a noisy torque near zero may read
+    // exactly zero between two readings either side of it: a quantised F/T sensor of 1/640 Nm
+    // with 0.03 Nm of noise did), measured on the raw series as the floor is.
+    let torque_noise = noise_floor(&data.torque, &segment_starts(&data.t));
+    lost.iter_mut().zip(dropouts(&data.torque, torque_noise)).for_each(|(a, b)| *a |= b);
     let dropped = lost.iter().filter(|l| **l).count();
     // The columns without the dropouts: borrowed when there are none (a long record is not
     // copied whole).
@@ -463,5 +468,10 @@ mod tests {
         record[..100].iter_mut().enumerate().for_each(|(k, x)| *x = 0.1 + k as f64 * 1e-9);
         assert_eq!(record[150], 0.0);
         assert!(!dropouts(&record, ENCODER_LSB_RAD).iter().any(|d| *d));
+        // Finding (issue 36): a torque quantised to 1/640 Nm with 0.03 Nm of noise read exactly
+        // zero between -0.014 and -0.027 Nm, and was taken for a lost frame (uncertainty 0).
+        let torque = [-0.0125, -0.014062, 0.0, -0.026563, -0.029688];
+        assert!(dropouts(&torque, 0.0)[2]);
+        assert!(!dropouts(&torque, 0.03)[2]);
     }
 }
