@@ -111,9 +111,10 @@ fn the_blind_generators_suite_is_identified_at_least_as_well_as_today() {
     // Two records of suite(1) have a single velocity reversal and are refused as too little
     // excitation (identification needs three).
     assert!(with.refused + clean.refused <= 2, "{} records refused", with.refused + clean.refused);
-    // 69 of 88 named, 1 of 21 clean records with a cause, 74 of 76 parameters within 25 %.
-    assert!(with.named * 100 >= 75 * with.cases, "named in {} of {}", with.named, with.cases);
-    assert!(clean.extra * 100 <= 10 * clean.cases, "{} of {} clean records got a cause", clean.extra, clean.cases);
+    // 74 of 88 named, 0 of 21 clean records with a cause, 79 of 81 parameters within 25 %
+    // (69, 1 and 74 of 76 before forecast encompassing and the local velocity window).
+    assert!(with.named * 100 >= 82 * with.cases, "named in {} of {}", with.named, with.cases);
+    assert!(clean.extra * 100 <= 5 * clean.cases, "{} of {} clean records got a cause", clean.extra, clean.cases);
     assert!(with.params_ok * 100 >= 90 * with.params, "{} of {} parameters within 25 %", with.params_ok, with.params);
 }
 

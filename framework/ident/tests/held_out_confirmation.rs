@@ -22,3 +22,49 @@ fn a_cause_only_the_training_part_shows_is_not_confirmed() {
     assert_eq!(report.causes.first().map(|c| c.effect.as_str()), Some("vibration"), "{:?}", report.causes);
     assert!((report.causes[0].params["frequency_hz"] - 7.0).abs() < 0.01, "{:?}", report.causes[0].params);
 }
+
+/// A slow characterisation (0.05 Hz, 0.1 rad) with a burst of fast motion (2 Hz, 0.03 rad, 3 s)
+/// every 20 s, on the thesis' baseline (120 Nm/rad, eq. 3.5 friction `0.3 atan(80 v)`), 14-bit
+/// deflection, 0.02 Nm noise, 200 Hz for 200 s, plus a viscous friction of `b` [Nm s/rad].
+fn bursts(b: f64) -> jointctl_ident::csv::Data {
+    use std::f64::consts::TAU;
+    let (rate, n, k) = (200.0, 40_000, 120.0);
+    let q = TAU / 16384.0;
+    let mut rng = jointctl_test_support::XorShift64::new(0x9e37_79b9_7f4a_7c15);
+    let mut data = jointctl_ident::csv::Data::default();
+    for i in 0..n {
+        let t = i as f64 / rate;
+        let burst = t % 20.0 > 17.0;
+        let (x, v) = (0.1 * (TAU * 0.05 * t).sin(), 0.1 * TAU * 0.05 * (TAU * 0.05 * t).cos());
+        let (bx, bv) = if burst { (0.03 * (TAU * 2.0 * t).sin(), 0.03 * TAU * 2.0 * (TAU * 2.0 * t).cos()) } else { (0.0, 0.0) };
+        let (x, v) = (x + bx, v + bv);
+        data.t.push(t);
+        data.deflection.push((x / q).round() * q);
+        data.torque.push(k * x + 0.3 * (80.0 * v).atan() + b * v + 0.02 * rng.normal());
+        for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
+            col.push(f64::NAN);
+        }
+    }
+    data
+}
+
+#[test]
+fn a_viscous_friction_that_acts_only_in_fast_bursts_is_confirmed() {
+    // Issue 31, finding 1: a viscous friction large at top speed and nothing while the joint
+    // moves slowly got no cause. Most held-out blocks carry none of it, and the block t-test of
+    // squared-error gains drowned the few that do in their spread.
+    // Two causes, each checked by leaving its fix out: the rate read low in the bursts (a window
+    // sized on the slow fundamental) made 0.25 Nm s/rad a 0.35; with the rate right, the block
+    // t-test of squared-error gains finds neither 0.25 nor 0.12 (t = 3.3 at 0.25), forecast
+    // encompassing finds both.
+    for truth in [0.25, 0.12] {
+        let report = identify(&bursts(truth), &IdentifyOptions::default()).unwrap();
+        let viscous = report.causes.iter().find(|c| c.effect == "viscous_friction");
+        assert!(viscous.is_some(), "{truth}: causes {:?}, rejected {:?}", report.causes, report.rejected);
+        let b = viscous.unwrap().params["damping_nms_per_rad"];
+        assert!((b - truth).abs() < 0.25 * truth, "b = {b} for {truth}: {}", viscous.unwrap().evidence);
+    }
+    // The same record without it: nothing to name.
+    let clean = identify(&bursts(0.0), &IdentifyOptions::default()).unwrap();
+    assert!(clean.causes.is_empty(), "{:?}", clean.causes);
+}

@@ -102,6 +102,8 @@ pub(crate) struct HeldOut {
     /// Squared error per sample, with the Cp charge of coefficients fitted on the held-out part
     /// itself (segment-wise terms) [Nm^2].
     pub errors: Vec<f64>,
+    /// Residual per sample, measured less predicted [Nm].
+    pub residual_nm: Vec<f64>,
     /// Residual sum of squares without the charge [Nm^2].
     pub rss: f64,
     /// Coefficients fitted on the held-out part.

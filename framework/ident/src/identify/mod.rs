@@ -352,9 +352,10 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         unexplained,
         significance: Significance {
             test: format!(
-                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided, or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of {} parts of the held-out record and betters most of those with something to explain; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
-                100.0 * significance::LARGE_SHARE_OF_EXCESS,
-                significance::CONSISTENCY_PARTS
+                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; or forecast encompassing (the held-out residual regressed on the cause's correction, batch-means variance, the blocks' effective number as degrees of freedom) with a slope of at least {:.2} in each of {} parts of the held-out record where the correction acts; or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of those parts and betters most of those with something to explain; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
+                significance::CONFIRMED_SLOPE,
+                significance::CONSISTENCY_PARTS,
+                100.0 * significance::LARGE_SHARE_OF_EXCESS
             ),
             level: significance::LEVEL,
             relevance: format!(

@@ -189,17 +189,39 @@ fn dropouts(series: &[f64], uncertainty: f64) -> Vec<bool> {
     dropped
 }
 
+/// The half-width of the velocity's window is this fraction of the local period of the motion:
+/// a least-squares slope over +-P/50 reads a sine's rate 0.16 % low (its gain is
+/// `3 (sin x - x cos x) / x^3`, `x = 2 pi / 50`).
+const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
+
+/// The velocity window's half-width per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`] of
+/// the local period, twice the stroke between the reversals around the sample (debounced at a
+/// tenth of the range), never more than of the fundamental's `period_samples`; between 2 and 25
+/// samples. A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
+/// in places than its fundamental says: a window sized on the fundamental reads those rates low,
+/// and every rate-driven torque (viscous friction most) comes out too large; a window sized on
+/// the fastest motion everywhere differences the slow parts' quantisation steps.
+fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64) -> Vec<usize> {
+    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(2, 25);
+    let mut out = vec![half(period_samples); n];
+    for w in reversals.windows(2) {
+        let h = half(2.0 * (w[1] - w[0]) as f64);
+        out[w[0]..w[1].min(n)].iter_mut().for_each(|x| *x = h);
+    }
+    out
+}
+
 /// Deflection rate: the slope of a local least-squares line (a Savitzky-Golay derivative) over
-/// about a fiftieth of the excitation period: no lag, and it averages out the quantisation.
-/// Running window sums make it one pass whatever the window; they are summed afresh around a new
-/// time origin every 1024 samples so that rounding cannot build up over a long record.
-fn velocity(t: &[f64], d: &[f64], half: usize) -> Vec<f64> {
+/// `+-half[i]` samples around sample `i` (see [`velocity_half_widths`]): no lag, and it averages out the quantisation. Running window sums
+/// make it one pass whatever the window; they are summed afresh around a new time origin every
+/// 1024 samples so that rounding cannot build up over a long record.
+fn velocity(t: &[f64], d: &[f64], half: &[usize]) -> Vec<f64> {
     let n = d.len();
     let mut out = Vec::with_capacity(n);
     let (mut st, mut sd, mut stt, mut std_) = (0.0, 0.0, 0.0, 0.0);
     let (mut a, mut b, mut t0) = (0usize, 0usize, t[0]);
-    for i in 0..n {
-        let (lo, hi) = (i.saturating_sub(half), (i + half).min(n - 1) + 1);
+    for (i, &h) in half.iter().enumerate().take(n) {
+        let (lo, hi) = (i.saturating_sub(h), (i + h).min(n - 1) + 1);
         if i % 1024 == 0 {
             // Afresh: the window [lo, hi) around the origin t[lo].
             t0 = t[lo];
@@ -210,15 +232,26 @@ fn velocity(t: &[f64], d: &[f64], half: usize) -> Vec<f64> {
             }
             (a, b) = (lo, hi);
         }
+        // The window moves on and, where its width changes, grows or shrinks at either end.
         while b < hi {
             let x = t[b] - t0;
             (st, sd, stt, std_) = (st + x, sd + d[b], stt + x * x, std_ + x * d[b]);
             b += 1;
         }
+        while b > hi {
+            b -= 1;
+            let x = t[b] - t0;
+            (st, sd, stt, std_) = (st - x, sd - d[b], stt - x * x, std_ - x * d[b]);
+        }
         while a < lo {
             let x = t[a] - t0;
             (st, sd, stt, std_) = (st - x, sd - d[a], stt - x * x, std_ - x * d[a]);
             a += 1;
+        }
+        while a > lo {
+            a -= 1;
+            let x = t[a] - t0;
+            (st, sd, stt, std_) = (st + x, sd + d[a], stt + x * x, std_ + x * d[a]);
         }
         let m = (hi - lo) as f64;
         let den = stt - st * st / m;
@@ -276,12 +309,12 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
 }
 
 /// The deflection rate of [`velocity`], segment by segment: never differenced across a gap.
-fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], half: usize) -> Vec<f64> {
+fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], half: &[usize]) -> Vec<f64> {
     let mut v = Vec::with_capacity(d.len());
     for (k, &a) in starts.iter().enumerate() {
         let b = starts.get(k + 1).copied().unwrap_or(d.len());
         if b - a >= 2 {
-            v.extend(velocity(&t[a..b], &d[a..b], half));
+            v.extend(velocity(&t[a..b], &d[a..b], &half[a..b]));
         } else {
             v.extend(std::iter::repeat_n(0.0, b - a));
         }
@@ -357,10 +390,11 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         let duration = t[t.len() - 1] - t[0];
         (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
     };
-    let v = velocity_by_segment(&t, &d, &starts, ((period_samples / 50.0).round() as usize).clamp(2, 25));
+    let turning = reversals(&d);
+    let v = velocity_by_segment(&t, &d, &starts, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
-    let turns = reversals(&d).len();
+    let turns = turning.len();
     let torque_moves = tau.iter().any(|x| *x != tau[0]);
     if span < MIN_SPAN_LSB * resolution || turns < MIN_REVERSALS || !torque_moves {
         return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / resolution, reversals: turns });
@@ -422,7 +456,7 @@ mod tests {
         // 2 million samples at 200 Hz: 10 000 s, where sums of t^2 would lose the window's spread.
         let t: Vec<f64> = (0..2_000_000).map(|i| 10.0 + i as f64 * 0.005).collect();
         let d: Vec<f64> = t.iter().map(|t| (1.3 * t).sin()).collect();
-        let v = velocity(&t, &d, 5);
+        let v = velocity(&t, &d, &vec![5; t.len()]);
         for i in [0usize, 3, 250, 1023, 1024, 1_999_990, 1_999_999] {
             let (a, b) = (i.saturating_sub(5), (i + 5).min(1_999_999));
             let n = (b - a + 1) as f64;
@@ -431,6 +465,32 @@ mod tests {
             let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
             assert!((v[i] - num / den).abs() < 1e-6, "{i}: {} vs {}", v[i], num / den);
         }
+    }
+
+    #[test]
+    fn a_window_that_changes_width_is_still_the_local_line_slope() {
+        // Widths that grow and shrink by several samples from one sample to the next.
+        let t: Vec<f64> = (0..3000).map(|i| i as f64 * 0.004 + 0.0005 * ((i * 7) % 3) as f64).collect();
+        let d: Vec<f64> = t.iter().map(|t| (2.1 * t).sin() + 0.3 * (9.0 * t).cos()).collect();
+        let half: Vec<usize> = (0..3000).map(|i| [2, 9, 25, 4, 13][(i / 37) % 5]).collect();
+        let v = velocity(&t, &d, &half);
+        for i in (0..3000usize).step_by(7) {
+            let (a, b) = (i.saturating_sub(half[i]), (i + half[i]).min(2999));
+            let n = (b - a + 1) as f64;
+            let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
+            let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();
+            let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
+            assert!((v[i] - num / den).abs() < 1e-6, "{i}: {} vs {}", v[i], num / den);
+        }
+    }
+
+    #[test]
+    fn the_window_follows_the_local_motion() {
+        // Strokes of 1000 samples (a period of 2000, capped by the fundamental's 1000: a
+        // window of +-20), then of 50 (+-2); after the last reversal the fundamental's.
+        let reversals = [0, 1000, 2000, 2050, 2100, 2150];
+        let half = velocity_half_widths(2300, &reversals, 1000.0);
+        assert_eq!((half[500], half[1500], half[2020], half[2120], half[2200]), (20, 20, 2, 2, 20));
     }
 
     #[test]

@@ -11,7 +11,7 @@ use super::causes::{FullRate, SearchContext};
 use super::design::{HeldOut, Model, Part, Spec};
 use super::prepare::Prepared;
 use super::search::{polish, profile_baseline, search};
-use super::significance::{Judgement, added_coefficients_test, block_test, judge};
+use super::significance::{Judgement, added_coefficients_test, judge, predicted_cause_test};
 
 /// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
 /// 1995: "very strong" evidence).
@@ -58,9 +58,10 @@ fn compute_held_out(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut>
     let fit = model.fit(spec, &p.train)?;
     let pred = model.predict(spec, &fit, &p.test);
     let sigma2 = fit.rss / (p.train.len().saturating_sub(fit.parameters)).max(1) as f64;
-    let raw: Vec<f64> = p.test.tau.iter().zip(&pred.torque_nm).map(|(y, m)| (y - m).powi(2)).collect();
+    let residual_nm: Vec<f64> = p.test.tau.iter().zip(&pred.torque_nm).map(|(y, m)| y - m).collect();
+    let raw: Vec<f64> = residual_nm.iter().map(|e| e * e).collect();
     let errors = raw.iter().zip(&pred.leverage).map(|(e, h)| e + 2.0 * sigma2 * h).collect();
-    Some(HeldOut { errors, rss: raw.iter().sum(), fitted_here: pred.leverage.iter().sum::<f64>().round() as usize, fit })
+    Some(HeldOut { errors, residual_nm, rss: raw.iter().sum(), fitted_here: pred.leverage.iter().sum::<f64>().round() as usize, fit })
 }
 
 /// Why a model's fit on the training part is physically impossible (a term's own rule), if it is.
@@ -75,8 +76,8 @@ pub(crate) fn rmse(errors: &[f64]) -> f64 {
 
 /// Does `full` predict the held-out part significantly better than the reduced model whose
 /// held-out errors are `r`? A full model with more coefficients fitted on the held-out part (a
-/// segment-wise cause) takes the chi-square test of added coefficients; otherwise the block
-/// t-test.
+/// segment-wise cause) takes the chi-square test of added coefficients; otherwise the test of a
+/// predicted cause (the block t-test, or forecast encompassing confirmed in every part).
 fn compare_with(r: &HeldOut, model: &Model, full: &Spec, p: &Prepared) -> Option<Judgement> {
     Some(verdict(r, &*held_out_errors(model, full, p)?, p))
 }
@@ -89,7 +90,7 @@ pub(crate) fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> Judgement {
         added_coefficients_test(r.rss, f.rss, noise, f.fitted_here - r.fitted_here)
     } else {
         let diff: Vec<f64> = r.errors.iter().zip(&f.errors).map(|(a, b)| a - b).collect();
-        block_test(&diff)
+        predicted_cause_test(&r.residual_nm, &f.residual_nm, &diff)
     };
     judge(&r.errors, &f.errors, test, p.noise_floor_nm * p.noise_floor_nm)
 }

@@ -6,7 +6,10 @@
 //!   [`super::prepare::noise_floor`]). A significant gain below this is listed apart, as
 //!   negligible, not named.
 //! - evidence: the block t-test below (a Diebold-Mariano comparison of the two predictors,
-//!   batch means), or, where the model without the cause leaves at least the noise's variance
+//!   batch means); or forecast encompassing (the held-out residual regressed on the cause's
+//!   correction, [`encompassing_test`]) significant with the correction confirmed in size in
+//!   every part where it acts ([`confirmed_in_every_part`]), for a cause that acts in a few
+//!   blocks only; or, where the model without the cause leaves at least the noise's variance
 //!   again above the floor (a structured residual), a gain that is large
 //!   ([`LARGE_SHARE_OF_EXCESS`] of the excess) and consistent over [`CONSISTENCY_PARTS`]
 //!   contiguous parts of the held-out part: none made worse by a relevant amount; of those with
@@ -177,6 +180,8 @@ pub enum TestKind {
     AddedCoefficients,
     /// Block t-test of log RMSE ratios.
     LogRatioBlocks,
+    /// Forecast encompassing: the held-out residual regressed on the cause's correction.
+    Encompassing,
 }
 
 impl std::fmt::Display for BlockTest {
@@ -184,6 +189,15 @@ impl std::fmt::Display for BlockTest {
         match self.kind {
             TestKind::Blocks => write!(f, "held-out block t = {:.1} (critical {:.2}, {} blocks, one-sided {} %)", self.t, self.critical, self.blocks, LEVEL * 100.0),
             TestKind::LogRatioBlocks => write!(f, "held-out block t = {:.1} of log RMSE ratios (critical {:.2}, {} blocks, one-sided {} %)", self.t, self.critical, self.blocks, LEVEL * 100.0),
+            TestKind::Encompassing => write!(
+                f,
+                "held-out encompassing t = {:.1} (slope {:.2}; critical {:.2}, {} blocks, one-sided {} %)",
+                self.t,
+                self.mean_nm2,
+                self.critical,
+                self.blocks,
+                LEVEL * 100.0
+            ),
             TestKind::AddedCoefficients => write!(
                 f,
                 "held-out chi-square = {:.0} (critical {:.0} for {} coefficients fitted on the held-out part, level {} %)",
@@ -219,9 +233,22 @@ impl BlockTest {
     }
 }
 
-/// Student's t quantile at 1 - [`LEVEL`] by the Cornish-Fisher expansion (within 1 % for 4 or
-/// more degrees of freedom).
+/// Student's t at 1 - [`LEVEL`] for 1 to 10 degrees of freedom (standard tables).
+const STUDENT_T_SMALL: [f64; 10] = [318.31, 22.327, 10.215, 7.173, 5.893, 5.208, 4.785, 4.501, 4.297, 4.144];
+
+/// Student's t quantile at 1 - [`LEVEL`]: from the table up to 10 degrees of freedom (linear in
+/// 1 / df between its entries, conservative below 1), by the Cornish-Fisher expansion above
+/// (within 1 % for 4 or more degrees of freedom).
 fn student_t(df: f64) -> f64 {
+    if df <= 1.0 {
+        return STUDENT_T_SMALL[0];
+    }
+    if df < 10.0 {
+        let lo = df.floor();
+        let (a, b) = (STUDENT_T_SMALL[lo as usize - 1], STUDENT_T_SMALL[lo as usize]);
+        let w = (1.0 / lo - 1.0 / df) / (1.0 / lo - 1.0 / (lo + 1.0));
+        return a + w * (b - a);
+    }
     let z = Z;
     let (z3, z5, z7) = (z.powi(3), z.powi(5), z.powi(7));
     z + (z3 + z) / (4.0 * df) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * df * df) + (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * df.powi(3))
@@ -279,6 +306,118 @@ pub fn log_ratio_block_test(before_sq: &[f64], after_sq: &[f64]) -> BlockTest {
         return BlockTest { blocks: ratios.len(), kind: TestKind::LogRatioBlocks, mean_nm2: 0.0, t: 0.0, critical: f64::INFINITY };
     }
     t_of_block_means(&ratios, TestKind::LogRatioBlocks)
+}
+
+/// Forecast encompassing (Harvey, Leybourne and Newbold 1998): does the cause's correction
+/// `reduced - full` (per held-out sample, the two models' residuals [Nm]) predict the reduced
+/// model's residual? The slope of that residual on the correction is 1 for a cause that is right
+/// and 0 for one that only fitted the training part's noise; the one-sided test is of slope > 0.
+///
+/// An effect that acts only where the joint moves fast is zero in most of the held-out part: a
+/// test of squared-error gains per block then sees a few large blocks among many empty ones and
+/// its spread hides the gain. Here each sample weighs by the correction it receives, so the empty
+/// blocks add nothing to either the slope or its variance. The variance is that of the
+/// regression's score summed per block (batch means, the residual's correlation within a block
+/// kept, the lag-1 correlation between blocks accounted for as in the block t-test); the degrees of
+/// freedom are the blocks' effective number, `(sum P_b)^2 / sum P_b^2` with `P_b` a block's sum of
+/// squared corrections (Satterthwaite), so that a correction confined to two blocks is judged with
+/// two blocks' certainty.
+///
+/// ```
+/// use jointctl_ident::identify::significance::encompassing_test;
+/// let mut s = 1u64;
+/// let mut noise = || { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5 };
+/// // A correction that acts in one block in five, and is right there.
+/// let effect: Vec<f64> = (0..5000).map(|i| if (i / 250) % 5 == 0 { (i as f64 * 0.05).sin() } else { 0.0 }).collect();
+/// let reduced: Vec<f64> = effect.iter().map(|e| e + 0.3 * noise()).collect();
+/// let full: Vec<f64> = reduced.iter().zip(&effect).map(|(r, e)| r - e).collect();
+/// assert!(encompassing_test(&reduced, &full).significant());
+/// // A correction that has nothing to do with the residual.
+/// let unrelated: Vec<f64> = reduced.iter().zip(&effect).map(|(r, e)| r - 0.05 * (e + noise())).collect();
+/// let reduced_noise: Vec<f64> = (0..5000).map(|_| noise()).collect();
+/// let full_noise: Vec<f64> = reduced_noise.iter().zip(&unrelated).zip(&reduced).map(|((r, u), x)| r - (x - u)).collect();
+/// assert!(!encompassing_test(&reduced_noise, &full_noise).significant());
+/// ```
+pub fn encompassing_test(reduced: &[f64], full: &[f64]) -> BlockTest {
+    let n = reduced.len().min(full.len());
+    let blocks = blocks_for(n);
+    let none = BlockTest { blocks, kind: TestKind::Encompassing, mean_nm2: 0.0, t: 0.0, critical: f64::INFINITY };
+    let correction: Vec<f64> = reduced[..n].iter().zip(&full[..n]).map(|(r, f)| r - f).collect();
+    let pp: f64 = correction.iter().map(|c| c * c).sum();
+    if !(pp > 0.0) || !pp.is_finite() {
+        return none;
+    }
+    let slope = reduced.iter().zip(&correction).map(|(r, c)| r * c).sum::<f64>() / pp;
+    let (mut scores, mut weights) = (Vec::with_capacity(blocks), Vec::with_capacity(blocks));
+    for b in 0..blocks {
+        let (lo, hi) = (b * n / blocks, (b + 1) * n / blocks);
+        scores.push((lo..hi).map(|i| (reduced[i] - slope * correction[i]) * correction[i]).sum::<f64>());
+        weights.push(correction[lo..hi].iter().map(|c| c * c).sum::<f64>());
+    }
+    let sum_sq: f64 = scores.iter().map(|s| s * s).sum();
+    let rho = if sum_sq > 0.0 { scores.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / sum_sq } else { 0.0 };
+    let inflation = if rho > 0.0 { (1.0 + rho) / (1.0 - rho).max(0.05) } else { 1.0 };
+    let effective = pp * pp / weights.iter().map(|w| w * w).sum::<f64>();
+    // The scores sum to zero (the slope's normal equation): one degree of freedom spent on it.
+    let variance = sum_sq * blocks as f64 / (blocks - 1) as f64 * inflation;
+    let se = variance.sqrt() / pp;
+    let t = if se > 0.0 { slope / se } else if slope > 0.0 { f64::INFINITY } else { 0.0 };
+    BlockTest { blocks, kind: TestKind::Encompassing, mean_nm2: slope, t, critical: student_t((effective - 1.0).max(1.0)) }
+}
+
+/// The slope of the held-out residual on a cause's correction that confirms the correction: at
+/// slope `g` the held-out gain is `2 g - 1` of the correction's own power, so from 0.75 on the
+/// cause gives back at least half of what it adds (an assumption: a correction that is mostly
+/// wrong in size fitted something else on the training part, a model error that only resembles
+/// it). Checked in every part where the correction acts ([`ACTING_SHARE`]).
+pub const CONFIRMED_SLOPE: f64 = 0.75;
+
+/// A part of the held-out record is judged by [`confirmed_in_every_part`] when it holds at
+/// least this share of the correction's power (less is too little to confirm: a part where
+/// the joint holds still carries no viscous torque).
+pub const ACTING_SHARE: f64 = 0.1;
+
+/// Is the correction `reduced - full` confirmed in each of the [`CONSISTENCY_PARTS`] parts of
+/// the held-out record where it acts: the reduced model's residual on it has a slope of at
+/// least [`CONFIRMED_SLOPE`] there? A cause fitted to a model error that it only resembles (a
+/// cubic beside a hysteresis loop of another shape) is right in some parts and too large in
+/// others; a true cause is right wherever it acts.
+///
+/// ```
+/// use jointctl_ident::identify::significance::confirmed_in_every_part;
+/// // Right in size in the first half, twice too large in the second.
+/// let correction: Vec<f64> = (0..4000).map(|i| (i as f64 * 0.01).sin()).collect();
+/// let reduced: Vec<f64> = correction.iter().enumerate().map(|(i, c)| if i < 2000 { *c } else { 0.5 * c }).collect();
+/// let full: Vec<f64> = reduced.iter().zip(&correction).map(|(r, c)| r - c).collect();
+/// assert!(!confirmed_in_every_part(&reduced, &full));
+/// // The correction is the whole residual: the full model leaves nothing.
+/// assert!(confirmed_in_every_part(&correction, &vec![0.0; 4000]));
+/// ```
+pub fn confirmed_in_every_part(reduced: &[f64], full: &[f64]) -> bool {
+    let n = reduced.len().min(full.len());
+    let power = |lo: usize, hi: usize| (lo..hi).map(|i| (reduced[i] - full[i]).powi(2)).sum::<f64>();
+    let total = power(0, n);
+    (0..CONSISTENCY_PARTS).all(|k| {
+        let (lo, hi) = (k * n / CONSISTENCY_PARTS, (k + 1) * n / CONSISTENCY_PARTS);
+        let here = power(lo, hi);
+        here < ACTING_SHARE * total || (lo..hi).map(|i| reduced[i] * (reduced[i] - full[i])).sum::<f64>() / here >= CONFIRMED_SLOPE
+    })
+}
+
+/// The test of a cause whose held-out prediction has no coefficient fitted on the held-out
+/// part, given both models' held-out residuals [Nm] and the per-sample gains of squared error
+/// `diff`: the block t-test of the gains ([`block_test`]); where it finds no evidence, forecast
+/// encompassing ([`encompassing_test`]) significant and [`confirmed_in_every_part`]. The block
+/// t-test loses its power when the cause acts in a few blocks only (viscous friction at the top
+/// speed of a sweep); encompassing keeps it there, and the confirmation keeps it from taking a
+/// correction that fits a model error in some parts and not in others.
+pub fn predicted_cause_test(reduced: &[f64], full: &[f64], diff: &[f64]) -> BlockTest {
+    let blocks = block_test(diff);
+    if blocks.significant() {
+        return blocks;
+    }
+    let encompassing = encompassing_test(reduced, full);
+    if encompassing.significant() && confirmed_in_every_part(reduced, full) { encompassing } else { blocks }
 }
 
 /// The one-sided t-test of block means, their lag-1 correlation accounted for.
