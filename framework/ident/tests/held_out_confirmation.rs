@@ -68,3 +68,40 @@ fn a_viscous_friction_that_acts_only_in_fast_bursts_is_confirmed() {
     let clean = identify(&bursts(0.0), &IdentifyOptions::default()).unwrap();
     assert!(clean.causes.is_empty(), "{:?}", clean.causes);
 }
+
+#[test]
+fn a_time_delay_seen_in_one_fast_stretch_of_the_held_out_part_is_confirmed() {
+    // Issue 31, finding 2: time delays not named. Where the held-out part moves fast in one
+    // stretch only, a delay's correction sits in one block of twenty, and blocks of equal
+    // length leave its test one block's worth of certainty (a critical t of 318). A slow 0.05 Hz,
+    // 0.1 rad sine with a 3 s, 2 Hz, 0.03 rad stretch 30 s before the end; the torque lags the
+    // encoder by `delay_s`; 120 Nm/rad, eq. 3.5 friction, 14-bit deflection, 0.02 Nm noise, 200 Hz.
+    use std::f64::consts::TAU;
+    let record = |delay_s: f64| {
+        let deflection = |t: f64| 0.1 * (TAU * 0.05 * t).sin() + if (170.0..173.0).contains(&t) { 0.03 * (TAU * 2.0 * (t - 170.0)).sin() } else { 0.0 };
+        let q = TAU / 16384.0;
+        let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d);
+        let mut data = jointctl_ident::csv::Data::default();
+        for i in 0..40_000 {
+            let t = i as f64 / 200.0;
+            let (x, lagged) = (deflection(t), deflection(t - delay_s));
+            let v = (deflection(t - delay_s + 1e-4) - deflection(t - delay_s - 1e-4)) / 2e-4;
+            data.t.push(t);
+            data.deflection.push((x / q).round() * q);
+            data.torque.push(120.0 * lagged + 0.3 * (80.0 * v).atan() + 0.02 * rng.normal());
+            for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
+                col.push(f64::NAN);
+            }
+        }
+        data
+    };
+    let report = identify(&record(0.02), &IdentifyOptions::default()).unwrap();
+    let delay = report.causes.iter().find(|c| c.effect == "time_delay");
+    assert!(delay.is_some(), "causes {:?}, rejected {:?}", report.causes, report.rejected);
+    let d = delay.unwrap().params["delay_s"];
+    // Delays are whole samples at 200 Hz (5 ms); the slow sine's rate, where friction is still
+    // near-linear in the rate, trades a sample of delay against the friction.
+    assert!((d - 0.02).abs() <= 0.005 + 1e-9, "delay {d} s");
+    let clean = identify(&record(0.0), &IdentifyOptions::default()).unwrap();
+    assert!(clean.causes.is_empty(), "{:?}", clean.causes);
+}

@@ -315,13 +315,16 @@ pub fn log_ratio_block_test(before_sq: &[f64], after_sq: &[f64]) -> BlockTest {
 ///
 /// An effect that acts only where the joint moves fast is zero in most of the held-out part: a
 /// test of squared-error gains per block then sees a few large blocks among many empty ones and
-/// its spread hides the gain. Here each sample weighs by the correction it receives, so the empty
-/// blocks add nothing to either the slope or its variance. The variance is that of the
-/// regression's score summed per block (batch means, the residual's correlation within a block
-/// kept, the lag-1 correlation between blocks accounted for as in the block t-test); the degrees of
-/// freedom are the blocks' effective number, `(sum P_b)^2 / sum P_b^2` with `P_b` a block's sum of
-/// squared corrections (Satterthwaite), so that a correction confined to two blocks is judged with
-/// two blocks' certainty.
+/// its spread hides the gain. Here each sample weighs by the correction it receives, and the
+/// blocks are contiguous stretches of equal correction power (as many as [`blocks_for`] gives):
+/// where the cause acts they are short, where it does not they are long, and each carries as
+/// much of the evidence. A record whose held-out part moves fast in one stretch only (a sweep's
+/// end, a burst) is thus still judged on [`BLOCKS`] blocks. The variance is that of the
+/// regression's score summed per block (batch means: the residual's correlation within a
+/// block kept, the lag-1 correlation between blocks accounted for as in the block t-test); the
+/// degrees of freedom are the blocks' effective number, `(sum P_b)^2 / sum P_b^2` with `P_b` a
+/// block's sum of squared corrections (Satterthwaite; less than the blocks only where a single
+/// sample holds more than a block's share).
 ///
 /// ```
 /// use jointctl_ident::identify::significance::encompassing_test;
@@ -349,10 +352,25 @@ pub fn encompassing_test(reduced: &[f64], full: &[f64]) -> BlockTest {
     }
     let slope = reduced.iter().zip(&correction).map(|(r, c)| r * c).sum::<f64>() / pp;
     let (mut scores, mut weights) = (Vec::with_capacity(blocks), Vec::with_capacity(blocks));
-    for b in 0..blocks {
-        let (lo, hi) = (b * n / blocks, (b + 1) * n / blocks);
+    // Contiguous blocks of equal correction power: each carries as much of the evidence.
+    let mut bounds = vec![0];
+    let mut acc = 0.0;
+    for (i, c) in correction.iter().enumerate() {
+        acc += c * c;
+        if bounds.len() < blocks && acc >= pp * bounds.len() as f64 / blocks as f64 {
+            bounds.push(i + 1);
+        }
+    }
+    bounds.push(n);
+    bounds.dedup();
+    for w in bounds.windows(2) {
+        let (lo, hi) = (w[0], w[1]);
         scores.push((lo..hi).map(|i| (reduced[i] - slope * correction[i]) * correction[i]).sum::<f64>());
         weights.push(correction[lo..hi].iter().map(|c| c * c).sum::<f64>());
+    }
+    let blocks = scores.len();
+    if blocks < 2 {
+        return none;
     }
     let sum_sq: f64 = scores.iter().map(|s| s * s).sum();
     let rho = if sum_sq > 0.0 { scores.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / sum_sq } else { 0.0 };
