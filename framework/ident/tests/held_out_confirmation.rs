@@ -105,3 +105,35 @@ fn a_time_delay_seen_in_one_fast_stretch_of_the_held_out_part_is_confirmed() {
     let clean = identify(&record(0.0), &IdentifyOptions::default()).unwrap();
     assert!(clean.causes.is_empty(), "{:?}", clean.causes);
 }
+
+#[test]
+fn a_held_out_part_beyond_the_trainings_reach_is_said_to_be() {
+    // An excitation that grows over the record (0.03 rad at 0.2 Hz, then 0.1 rad at 1 Hz for
+    // the last 30 %): the causes are judged where the model was not fitted, and the report says
+    // so. The same record at one amplitude does not get the sentence.
+    use std::f64::consts::TAU;
+    let record = |grows: bool| {
+        let q = TAU / 16384.0;
+        let mut rng = jointctl_test_support::XorShift64::new(0x5851_f42d_4c95_7f2d);
+        let mut data = jointctl_ident::csv::Data::default();
+        for i in 0..40_000 {
+            let t = i as f64 / 200.0;
+            let (a, f) = if grows && t >= 140.0 { (0.1, 1.0) } else { (0.03, 0.2) };
+            let (x, v) = (a * (TAU * f * t).sin(), a * TAU * f * (TAU * f * t).cos());
+            data.t.push(t);
+            data.deflection.push((x / q).round() * q);
+            data.torque.push(120.0 * x + 0.3 * (80.0 * v).atan() + 0.02 * rng.normal());
+            for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
+                col.push(f64::NAN);
+            }
+        }
+        data
+    };
+    let grown = identify(&record(true), &IdentifyOptions::default()).unwrap();
+    let [rate, range] = grown.unexplained.held_out_reach;
+    assert!(rate > 10.0 && range > 2.5, "{rate} {range}");
+    assert!(grown.unexplained.summary.contains("judged where the model was not fitted"), "{}", grown.unexplained.summary);
+    let steady = identify(&record(false), &IdentifyOptions::default()).unwrap();
+    assert!(steady.unexplained.held_out_reach.iter().all(|r| (r - 1.0).abs() < 0.2), "{:?}", steady.unexplained.held_out_reach);
+    assert!(!steady.unexplained.summary.contains("not fitted"), "{}", steady.unexplained.summary);
+}
