@@ -66,7 +66,7 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
 /// the data) names the hysteresis, at the plant's 1.2 Nm, and no other model error. (With the reference arm's
 /// config the observer's own stiffening line differs from that plant: see the test above.)
 #[test]
-fn the_example_with_the_thesis_structure_names_its_hysteresis_alone() {
+fn the_example_with_the_thesis_structure_names_its_hysteresis_and_no_other_model_error() {
     let out = Command::new(jointctl()).args(["identify", "--json", "--data"]).arg(root().join("tests/data/q4_worn_elbow.csv")).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
