@@ -303,9 +303,14 @@ pub fn suite_plan(seed: u64) -> Vec<Spec> {
 /// The deterministic test suite: 63 single-effect cases (9 per cause), 5 friction-only
 /// records, 20 clean records and all 21 pairs; about half on real-data-like variants.
 pub fn suite(seed: u64) -> Vec<Case> {
+    try_suite(seed).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`suite`], or which case could not be generated and why.
+pub fn try_suite(seed: u64) -> Result<Vec<Case>, String> {
     suite_plan(seed)
         .iter()
-        .map(|s| s.generate().unwrap_or_else(|e| panic!("{}: {e}", s.name)).0)
+        .map(|s| s.generate().map(|(c, _)| c).map_err(|e| format!("{}: {e}", s.name)))
         .collect()
 }
 
@@ -330,19 +335,29 @@ pub const DEVICE_VARIANTS: [(&str, &str); 4] = [
 /// logged differently (full-rate irregular, binned to 20 Hz, one run, three runs): a tool's
 /// answers for one device should agree across its variants.
 pub fn device_variants(seed: u64) -> Vec<Case> {
-    device_variants_with_truth(seed)
+    try_device_variants(seed).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`device_variants`], or which device could not be generated and why.
+pub fn try_device_variants(seed: u64) -> Result<Vec<Case>, String> {
+    Ok(try_device_variants_with_truth(seed)?
         .into_iter()
         .map(|(c, _)| c)
-        .collect()
+        .collect())
 }
 
 #[doc(hidden)]
 pub fn device_variants_with_truth(seed: u64) -> Vec<(Case, Truth)> {
+    try_device_variants_with_truth(seed).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[doc(hidden)]
+pub fn try_device_variants_with_truth(seed: u64) -> Result<Vec<(Case, Truth)>, String> {
     let mut out = Vec::new();
     for (dev, effect) in DEVICES {
         let dev_seed = derive_seed(seed, &format!("device/{dev}"));
         let mut rng = Rng::new(dev_seed);
-        let causes = synth::parse_effects(effect).expect("device effect");
+        let causes = synth::parse_effects(effect).map_err(|e| format!("{dev}: effect {effect}: {e}"))?;
         let req = Request {
             causes: causes.clone(),
             flags: Flags::default(),
@@ -351,10 +366,10 @@ pub fn device_variants_with_truth(seed: u64) -> Vec<(Case, Truth)> {
             ratio: None,
             for_device: true,
         };
-        let setup = synth::draw_setup_retrying(&mut rng, &req).expect("device setup");
+        let setup = synth::draw_setup_retrying(&mut rng, &req).map_err(|e| format!("{dev}: set-up: {e}"))?;
         for (tag, variant) in DEVICE_VARIANTS {
             let mut vr = Rng::new(derive_seed(dev_seed, tag));
-            let flags = Flags::parse(variant, &mut vr).expect("device variant");
+            let flags = Flags::parse(variant, &mut vr).map_err(|e| format!("{dev}: variant {variant}: {e}"))?;
             let meta = Meta {
                 name: format!("{dev}_{tag}"),
                 device: Some(dev.to_string()),
@@ -364,7 +379,7 @@ pub fn device_variants_with_truth(seed: u64) -> Vec<(Case, Truth)> {
             out.push(synth::record(&setup, &flags, &mut vr, meta));
         }
     }
-    out
+    Ok(out)
 }
 
 /// The answer as a JSON object (the keys of answers.json).

@@ -43,22 +43,27 @@ fn main() -> ExitCode {
             .iter()
             .map(|spec| {
                 let t0 = Instant::now();
-                let (c, _) = spec
-                    .generate()
-                    .unwrap_or_else(|e| panic!("{}: {e}", spec.name));
+                let (c, _) = spec.generate().map_err(|e| format!("{}: {e}", spec.name))?;
                 eprintln!(
                     "{:<40} {:>8} samples {:>7.3} s",
                     c.name,
                     c.t.len(),
                     t0.elapsed().as_secs_f64()
                 );
-                c
+                Ok(c)
             })
-            .collect()
+            .collect::<Result<Vec<_>, String>>()
     } else if set == "suite" {
-        jointctl_blind_gen::suite(seed)
+        jointctl_blind_gen::try_suite(seed)
     } else {
-        jointctl_blind_gen::device_variants(seed)
+        jointctl_blind_gen::try_device_variants(seed)
+    };
+    let cases = match cases {
+        Ok(cases) => cases,
+        Err(e) => {
+            eprintln!("blind-gen: seed {seed}: cannot generate {e}");
+            return ExitCode::FAILURE;
+        }
     };
     let gen_s = start.elapsed().as_secs_f64();
     if let Err(e) = jointctl_blind_gen::write_set(&cases, &out) {

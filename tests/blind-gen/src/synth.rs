@@ -434,7 +434,7 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
     for col in 0..m {
         let piv = (col..m)
             .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
-            .unwrap();
+            .unwrap_or(col);
         a.swap(col, piv);
         b.swap(col, piv);
         let d = a[col][col];

@@ -451,6 +451,15 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
 mod tests {
     use super::*;
 
+    /// The least-squares line's slope through samples `a..=b`, summed directly.
+    fn line_slope(t: &[f64], d: &[f64], a: usize, b: usize) -> f64 {
+        let n = (b - a + 1) as f64;
+        let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
+        let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();
+        let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
+        num / den
+    }
+
     #[test]
     fn the_running_sum_derivative_equals_the_local_line_slope_over_a_long_record() {
         // 2 million samples at 200 Hz: 10 000 s, where sums of t^2 would lose the window's spread.
@@ -458,12 +467,8 @@ mod tests {
         let d: Vec<f64> = t.iter().map(|t| (1.3 * t).sin()).collect();
         let v = velocity(&t, &d, &vec![5; t.len()]);
         for i in [0usize, 3, 250, 1023, 1024, 1_999_990, 1_999_999] {
-            let (a, b) = (i.saturating_sub(5), (i + 5).min(1_999_999));
-            let n = (b - a + 1) as f64;
-            let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
-            let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();
-            let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
-            assert!((v[i] - num / den).abs() < 1e-6, "{i}: {} vs {}", v[i], num / den);
+            let slope = line_slope(&t, &d, i.saturating_sub(5), (i + 5).min(1_999_999));
+            assert!((v[i] - slope).abs() < 1e-6, "{i}: {} vs {slope}", v[i]);
         }
     }
 
@@ -475,12 +480,8 @@ mod tests {
         let half: Vec<usize> = (0..3000).map(|i| [2, 9, 25, 4, 13][(i / 37) % 5]).collect();
         let v = velocity(&t, &d, &half);
         for i in (0..3000usize).step_by(7) {
-            let (a, b) = (i.saturating_sub(half[i]), (i + half[i]).min(2999));
-            let n = (b - a + 1) as f64;
-            let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
-            let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();
-            let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
-            assert!((v[i] - num / den).abs() < 1e-6, "{i}: {} vs {}", v[i], num / den);
+            let slope = line_slope(&t, &d, i.saturating_sub(half[i]), (i + half[i]).min(2999));
+            assert!((v[i] - slope).abs() < 1e-6, "{i}: {} vs {slope}", v[i]);
         }
     }
 

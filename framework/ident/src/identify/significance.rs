@@ -82,6 +82,13 @@ pub const LARGE_SHARE_OF_EXCESS: f64 = 0.2;
 /// records).
 pub const CONSISTENCY_PARTS: usize = 4;
 
+/// The [`CONSISTENCY_PARTS`] contiguous parts of `n` held-out samples, `(start, end)` (fewer
+/// when there are fewer samples).
+fn consistency_parts(n: usize) -> impl Iterator<Item = (usize, usize)> {
+    let parts = CONSISTENCY_PARTS.min(n);
+    (0..parts).map(move |k| (k * n / parts, (k + 1) * n / parts))
+}
+
 /// What the held-out part says of one cause: the test, the gain, and the two thresholds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Judgement {
@@ -149,11 +156,9 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
     let gain = mse_reduced - mse_full;
     let excess = (mse_reduced - noise_nm2).max(0.0);
     let relevant_nm2 = (RELEVANT_SHARE_OF_NOISE * noise_nm2).max(RELEVANT_SHARE_OF_EXCESS * excess);
-    let parts = CONSISTENCY_PARTS.min(n);
     // Per part: what the reduced model leaves above the floor, and the gain.
-    let per_part: Vec<(f64, f64)> = (0..parts)
-        .map(|k| {
-            let (lo, hi) = (k * n / parts, (k + 1) * n / parts);
+    let per_part: Vec<(f64, f64)> = consistency_parts(n)
+        .map(|(lo, hi)| {
             let r = mean(&reduced[lo..hi]);
             (r - noise_nm2, r - mean(&full[lo..hi]))
         })
@@ -415,8 +420,7 @@ pub fn confirmed_in_every_part(reduced: &[f64], full: &[f64]) -> bool {
     let n = reduced.len().min(full.len());
     let power = |lo: usize, hi: usize| (lo..hi).map(|i| (reduced[i] - full[i]).powi(2)).sum::<f64>();
     let total = power(0, n);
-    (0..CONSISTENCY_PARTS).all(|k| {
-        let (lo, hi) = (k * n / CONSISTENCY_PARTS, (k + 1) * n / CONSISTENCY_PARTS);
+    consistency_parts(n).all(|(lo, hi)| {
         let here = power(lo, hi);
         here < ACTING_SHARE * total || (lo..hi).map(|i| reduced[i] * (reduced[i] - full[i])).sum::<f64>() / here >= CONFIRMED_SLOPE
     })
