@@ -16,10 +16,15 @@ impl CandidateCause for CoulombFriction {
         vec!["friction_ka_nm".into()]
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
-        // k_b from "linear over the whole speed range" to "a step at a hundredth of the peak
-        // speed" (the peak speed from the data): beyond, the arctan is a sign function.
+        // k_b from "the smoothing speed 1/k_b at the peak speed" to "a step at a three-hundredth
+        // of it" (the peak speed from the data): beyond, the arctan is a sign function. Below, it
+        // would not bend inside the recorded speeds: a straight line in the rate, a viscous
+        // friction under another name (the baseline's arctan took a large viscous friction as
+        // its own, and the cause that names it had nothing left to explain). At the bound the
+        // arctan reaches half its limit at the peak speed.
+        // An assumption of this project (eq. 3.5 gives the form, not a range for k_b).
         let peak = c.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
-        vec![Parameter { name: "friction_kb_s_per_rad".into(), grid: log_grid(0.3 / peak, 300.0 / peak, 13), refine: Refine::Between }]
+        vec![Parameter { name: "friction_kb_s_per_rad".into(), grid: log_grid(1.0 / peak, 300.0 / peak, 11), refine: Refine::Between }]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
         vec![s.velocity_rad_per_s.iter().map(|v| (p[0] * v).atan()).collect()]
