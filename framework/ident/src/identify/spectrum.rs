@@ -37,9 +37,18 @@ pub(crate) fn projection(t: &[f64], r: &[f64], w: f64) -> (f64, f64) {
 /// The band a mode is looked for in [Hz]: above the excitation's eighth harmonic (or 0.5 Hz),
 /// below 90 % of Nyquist (at most 200 Hz).
 pub(crate) fn band(t: &[f64], excitation_hz: f64) -> (f64, f64) {
-    let n = t.len().max(2);
-    let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
-    ((8.0 * excitation_hz).max(0.5), (0.5 / dt).min(200.0) * 0.9)
+    ((8.0 * excitation_hz).max(0.5), (0.5 / sample_step(t)).min(200.0) * 0.9)
+}
+
+/// The median step between samples [s]: the sampling's own period where a part leaves stretches
+/// of the record out (the span over the count would read them as slower sampling).
+pub(crate) fn sample_step(t: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|s| *s > 0.0).collect();
+    if steps.is_empty() {
+        return 1.0;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// The number of resolvable frequencies in the band over the record: the look-elsewhere count.
@@ -51,8 +60,9 @@ pub(crate) fn resolvable(t: &[f64], excitation_hz: f64) -> f64 {
 
 /// The frequency of the strongest component of `r` in the band [Hz]: the peak of a periodogram
 /// (an FFT zero-padded to four times the record, bins a quarter of the resolution apart), refined
-/// by golden section on the exact projection within a bin either side. Samples with gaps (after
-/// dropouts) take a 240-point grid of projections instead. `None` when the strongest component
+/// by golden section on the exact projection within a bin either side. Samples off a uniform grid
+/// (jitter, gaps, dropouts, restarts) go to their nearest slot of the median step; a record whose
+/// span is far beyond its samples takes a 240-point grid of projections instead. `None` when the strongest component
 /// sits at the band's lower edge (the tail of slower model errors) or cannot be told from a
 /// harmonic of the excitation (a periodic model error): neither is a mode.
 pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> Option<f64> {
@@ -62,12 +72,20 @@ pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> Op
         s * s + c * c
     };
     let n = t.len();
-    let dt = (t[n - 1] - t[0]) / (n - 1).max(1) as f64;
-    let uniform = n > 2 && t.windows(2).all(|p| ((p[1] - p[0]) - dt).abs() <= 1e-6 * dt);
-    let (best, half_width) = if uniform {
-        let size = (4 * n).next_power_of_two();
-        let mut buffer: Vec<rustfft::num_complex::Complex<f64>> = r.iter().map(|x| rustfft::num_complex::Complex::new(*x, 0.0)).collect();
-        buffer.resize(size, rustfft::num_complex::Complex::new(0.0, 0.0));
+    let dt = sample_step(t);
+    // The periodogram on the grid of the median step, each sample in its nearest slot and zeros
+    // where there is none: uniform samples exactly; a log that jitters, gaps or restarts with a
+    // time jump (repetitions) to within half a step. Its peak is refined on the exact projection
+    // below. (A 240-point logarithmic grid of projections, 1.5 % apart, took a side lobe 0.13 Hz
+    // from a 39 Hz mode on a 65 s record of three repetitions: the record resolves 0.015 Hz.)
+    // A record whose span is far beyond its samples (a restart hours later) takes that grid.
+    let slots: Option<Vec<usize>> = (n > 2).then(|| t.iter().map(|x| ((x - t[0]) / dt).round()).collect::<Vec<f64>>()).and_then(|at| (at[n - 1] < 16.0 * n as f64).then(|| at.iter().map(|a| *a as usize).collect()));
+    let (best, half_width) = if let Some(slots) = slots {
+        let size = (4 * (slots[n - 1] + 1)).next_power_of_two();
+        let mut buffer = vec![rustfft::num_complex::Complex::new(0.0, 0.0); size];
+        for (slot, x) in slots.iter().zip(r) {
+            buffer[*slot].re += *x;
+        }
         rustfft::FftPlanner::new().plan_fft_forward(size).process(&mut buffer);
         let bin_hz = 1.0 / (size as f64 * dt);
         let (first, last) = ((lo / bin_hz).ceil() as usize, ((hi / bin_hz).floor() as usize).min(size / 2));
