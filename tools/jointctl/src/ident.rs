@@ -302,6 +302,10 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         "\nLeft over: {}. Held-out RMSE by |deflection| (small, middle, large third): {:.4}, {:.4}, {:.4} Nm; by |rate|: {:.4}, {:.4}, {:.4} Nm; by quarter of the time: {:.4}, {:.4}, {:.4}, {:.4} Nm.",
         u.summary, u.by_deflection_nm[0], u.by_deflection_nm[1], u.by_deflection_nm[2], u.by_rate_nm[0], u.by_rate_nm[1], u.by_rate_nm[2], u.by_time_nm[0], u.by_time_nm[1], u.by_time_nm[2], u.by_time_nm[3]
     );
+    if !report.confounded.is_empty() {
+        let list: Vec<String> = report.confounded.iter().map(|c| format!("{} or {}: {}", c.effect, c.alternative, c.evidence)).collect();
+        let _ = writeln!(md, "\nConfounded (the data cannot tell these apart): {}.", list.join("; "));
+    }
     if !report.negligible.is_empty() {
         let list: Vec<String> = report.negligible.iter().map(|c| format!("{} ({})", c.effect, c.evidence)).collect();
         let _ = writeln!(md, "\nSignificant but negligible (not named): {}.", list.join(", "));

@@ -66,6 +66,21 @@ pub struct NegligibleCause {
     pub evidence: String,
 }
 
+/// A named cause and a candidate that explains the training part about as well in its place:
+/// the data cannot tell them apart, and the name given is one of the two.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Confound {
+    /// The named cause.
+    pub effect: String,
+    /// The candidate that fits the training part about as well instead.
+    pub alternative: String,
+    /// Training BIC of the model with the named cause and with the alternative in its place
+    /// (decimated training part, in the step the cause was named).
+    pub bic: [f64; 2],
+    /// One sentence: what cannot be told apart, and why.
+    pub evidence: String,
+}
+
 /// What the extended model leaves unexplained on the held-out part.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Unexplained {
@@ -140,6 +155,8 @@ pub struct Report {
     pub causes: Vec<Cause>,
     /// Causes with evidence whose held-out gain is negligible (below the relevance threshold).
     pub negligible: Vec<NegligibleCause>,
+    /// Named causes that the data cannot tell from another candidate (see [`Confound`]).
+    pub confounded: Vec<Confound>,
     /// What is left unexplained, measured against the noise floor.
     pub unexplained: Unexplained,
     /// How a cause's held-out gain was judged.
@@ -361,6 +378,21 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
     let held_out_reach = [ratio(rate_test, rate_train), ratio(range_test, range_train)];
     let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach);
+    let confounded = selection
+        .confounded
+        .iter()
+        .map(|&(named, other, a, b)| Confound {
+            effect: name(named),
+            alternative: name(other),
+            bic: [a, b],
+            evidence: format!(
+                "{} in place of {} explains the training part about as well (BIC {b:.0} against {a:.0}: a difference below {:.0}, not very strong evidence for either); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart",
+                name(other),
+                name(named),
+                select::CONFOUND_BIC
+            ),
+        })
+        .collect();
     let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
     let mut rejected = selection.rejected;
     rejected.sort();
@@ -374,6 +406,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         rmse_after,
         causes: found,
         negligible,
+        confounded,
         unexplained,
         significance: Significance {
             test: format!(

@@ -1,0 +1,63 @@
+//! Confounds as a result: when another candidate explains the training part about as well as a
+//! named cause, the report names the pair.
+
+use jointctl_ident::identify::{IdentifyOptions, identify};
+
+/// A sine deflection of `amp` rad at 0.25 Hz (plus, when `second`, a fifth of it at 1.55 Hz) on
+/// the thesis' baseline (120 Nm/rad, eq. 3.5 friction `0.3 atan(80 v)`), 14-bit deflection,
+/// 0.02 Nm noise, 200 Hz for 80 s, plus `extra(deflection, velocity)` [Nm].
+fn record(amp: f64, second: bool, mut extra: impl FnMut(f64, f64) -> f64) -> jointctl_ident::csv::Data {
+    use std::f64::consts::TAU;
+    let q = TAU / 16384.0;
+    let mut rng = jointctl_test_support::XorShift64::new(0x0123_4567_89ab_cdef);
+    let mut data = jointctl_ident::csv::Data::default();
+    let s = if second { 0.2 } else { 0.0 };
+    for i in 0..16_000 {
+        let t = f64::from(i) / 200.0;
+        let x = amp * ((TAU * 0.25 * t).sin() + s * (TAU * 1.55 * t).sin());
+        let v = amp * (TAU * 0.25 * (TAU * 0.25 * t).cos() + s * TAU * 1.55 * (TAU * 1.55 * t).cos());
+        data.t.push(t);
+        data.deflection.push((x / q).round() * q);
+        data.torque.push(120.0 * x + 0.3 * (80.0 * v).atan() + extra(x, v) + 0.02 * rng.normal());
+        for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
+            col.push(f64::NAN);
+        }
+    }
+    data
+}
+
+/// A Dahl hysteresis of `limit` [Nm] and deflection scale `lambda` [rad] (the state follows
+/// the deflection's steps).
+fn dahl(limit: f64, lambda: f64) -> impl FnMut(f64, f64) -> f64 {
+    let (mut z, mut prev) = (0.0f64, 0.0f64);
+    move |x, _| {
+        let step = x - prev;
+        prev = x;
+        if step != 0.0 {
+            let s = step.signum();
+            z = s + (z - s) * (-step.abs() / lambda).exp();
+        }
+        limit * z
+    }
+}
+
+#[test]
+fn a_hysteresis_on_one_sine_is_reported_confounded_and_a_second_frequency_resolves_it() {
+    // Issue 32, finding 4: confounded causes stay confounded, and the report names one of them
+    // without saying that the data cannot tell them apart. On one sine a Dahl loop (0.1 Nm,
+    // lambda 0.05 rad on a 0.08 rad stroke) is fitted to 95 % as well by a 5 ms delay (and a
+    // cubic): whichever is named, the pair is reported.
+    let pair = |a: &str, b: &str| [a, b].contains(&"hysteresis") && [a, b].contains(&"time_delay");
+    let one = identify(&record(0.08, false, dahl(0.1, 0.05)), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = one.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert!(named.contains(&"hysteresis") || named.contains(&"time_delay"), "{named:?}");
+    let confound = one.confounded.iter().find(|c| pair(&c.effect, &c.alternative));
+    assert!(confound.is_some(), "named {named:?}, confounded {:?}", one.confounded);
+    assert!(confound.unwrap().evidence.contains("explains the training part about as well"), "{:?}", confound);
+    // A second frequency (a fifth of the amplitude at 1.55 Hz) tells them apart: the hysteresis
+    // is named and confounded with nothing.
+    let two = identify(&record(0.08, true, dahl(0.1, 0.05)), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = two.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert!(named.contains(&"hysteresis") && !named.contains(&"time_delay"), "{named:?}");
+    assert!(two.confounded.iter().all(|c| c.effect != "hysteresis" && c.alternative != "hysteresis"), "{:?}", two.confounded);
+}
