@@ -111,9 +111,11 @@ fn the_blind_generators_suite_is_identified_at_least_as_well_as_today() {
     // Two records of suite(1) have a single velocity reversal and are refused as too little
     // excitation (identification needs three).
     assert!(with.refused + clean.refused <= 2, "{} records refused", with.refused + clean.refused);
-    // 76 of 88 named, 0 of 21 clean records with a cause, 81 of 83 parameters within 25 %
-    // (69, 1 and 74 of 76 before forecast encompassing and the local velocity window).
-    assert!(with.named * 100 >= 85 * with.cases, "named in {} of {}", with.named, with.cases);
+    // 81 of 88 named, 0 of 21 clean records with a cause, 83 of 86 parameters within 25 %
+    // (76, 0 and 81 of 83 before the arctan had to bend inside the recorded speeds and modes
+    // were scanned on the median step's grid; 69, 1 and 74 of 76 before forecast encompassing
+    // and the local velocity window).
+    assert!(with.named * 100 >= 90 * with.cases, "named in {} of {}", with.named, with.cases);
     assert!(clean.extra * 100 <= 5 * clean.cases, "{} of {} clean records got a cause", clean.extra, clean.cases);
     assert!(with.params_ok * 100 >= 90 * with.params, "{} of {} parameters within 25 %", with.params_ok, with.params);
 }
