@@ -148,7 +148,7 @@ fn check_users_file(file: &Path) -> Result<(), ZenohBridgeError> {
     if mode & 0o077 != 0 {
         return Err(bad(format!("others may read or change it (mode {:o}): `chmod 600` it", mode & 0o777)));
     }
-    let text = std::fs::read_to_string(file).map_err(|e| bad(e.to_string()))?;
+    let text = jointctl_files::read_to_string(file, jointctl_files::FileKind::Credentials).map_err(|e| bad(e.to_string()))?;
     let mut users = 0;
     for (i, line) in text.lines().enumerate() {
         if line.trim().is_empty() {

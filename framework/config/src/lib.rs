@@ -74,12 +74,12 @@ impl ConfigSource {
 /// Reads, parses and validates an arm description.
 pub fn load(path: impl AsRef<Path>) -> Result<LoadedConfig, ConfigErrors> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+    let text = jointctl_files::read_to_string(path, jointctl_files::FileKind::Config).map_err(|e| ConfigError {
         file: path.to_path_buf(),
         line: 0,
         column: 0,
         field: String::new(),
-        message: format!("cannot read the file: {e}"),
+        message: e.to_string(),
     })?;
     parse_str(&text, path)
 }
@@ -236,7 +236,9 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
 
 /// The URDF of `kinematics.urdf`, its movable joints each a DOF of the arm.
 fn read_chain(source: &ConfigSource, config: &ArmConfig, k: &KinematicsConfig) -> Result<jointctl_kinematics::Chain, String> {
-    let chain = jointctl_kinematics::Chain::from_urdf_file(source.resolve(&k.urdf)).map_err(|e| e.to_string())?;
+    let path = source.resolve(&k.urdf);
+    let xml = jointctl_files::read_to_string(&path, jointctl_files::FileKind::Urdf).map_err(|e| e.to_string())?;
+    let chain = jointctl_kinematics::Chain::from_urdf_str(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
     let dofs: Vec<&str> = config.joints.iter().flat_map(|j| j.dof_names()).collect();
     let unknown: Vec<&str> = chain.dof_names().iter().map(String::as_str).filter(|d| !dofs.contains(d)).collect();
     if !unknown.is_empty() {
@@ -255,7 +257,7 @@ fn include_params(source: &ConfigSource, params: &mut Params) -> Result<Option<P
         return Err(("include".into(), "must be a file path".into()));
     };
     let path = source.resolve(Path::new(rel));
-    let text = std::fs::read_to_string(&path).map_err(|e| ("include".into(), format!("cannot read {}: {e}", path.display())))?;
+    let text = jointctl_files::read_to_string(&path, jointctl_files::FileKind::Include).map_err(|e| ("include".into(), e.to_string()))?;
     let included: Params = serde_yaml::from_str(&text).map_err(|e| ("include".into(), format!("{}: {e}", path.display())))?;
     let serde_json::Value::Object(map) = included.0 else {
         return Err(("include".into(), format!("{} must hold a YAML mapping", path.display())));

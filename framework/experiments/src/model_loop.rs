@@ -379,7 +379,7 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
         format!("# The complete params of `{}`'s joint in {}, with the observer's model extension {provenance}.\n# Use: params: {{include: observer.yaml}}\n{}", ext.dof, config.display(), yaml(&ext.observer_params)?),
     )?;
     put(&written.plant, format!("# `sim.effects` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&ext.plant_effects)?))?;
-    let text = std::fs::read_to_string(config).map_err(|e| err(format!("cannot read {}: {e}", config.display())))?;
+    let text = jointctl_files::read_to_string(config, jointctl_files::FileKind::Config).map_err(|e| err(e.to_string()))?;
     let mut doc: serde_yaml::Value = serde_yaml::from_str(&text).map_err(|e| err(format!("{}: {e}", config.display())))?;
     absolute_paths(&mut doc, config);
     let joint = doc.get_mut("joints").and_then(|j| j.get_mut(ext.joint_index)).ok_or_else(|| err(format!("{}: no joints[{}]", config.display(), ext.joint_index)))?;

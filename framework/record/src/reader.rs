@@ -49,6 +49,9 @@ impl JointSeries {
 /// Why a recording could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
+    /// The file is not one to read (a FIFO, a device, a directory, beyond the size limit).
+    #[error(transparent)]
+    UserFile(#[from] jointctl_files::FileError),
     /// The file could not be read.
     #[error("cannot read {}: {source}", .file.display())]
     File {
@@ -192,7 +195,7 @@ impl RawJson<'_> {
 /// Calls `each(topic, sequence, data)` for every message of one of `topics`, in file order
 /// (the file is read and decompressed once).
 fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
     let stream = mcap::MessageStream::new(&bytes).map_err(|source| ReadError::Mcap { file: path.into(), source })?;
     for message in stream {
         let m = message.map_err(|source| ReadError::Mcap { file: path.into(), source })?;
@@ -357,7 +360,7 @@ pub fn raw_samples(path: &Path) -> Result<Vec<RawSample>, ReadError> {
 /// The readings the recorded arm's joints were activated with (the `activation` metadata), if
 /// the recording has them.
 pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
     let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
     for index in summary.metadata_indexes.iter().filter(|i| i.name == "activation") {
@@ -491,7 +494,7 @@ fn motor_drive(path: &Path, joint: &str) -> Result<Option<String>, ReadError> {
 /// The arm description attached to the recording (the first attachment, the file `jointctl
 /// run` was given): its name and text.
 pub fn config_attachment(path: &Path) -> Result<Option<(String, String)>, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::File { file: path.into(), source })?;
+    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
     let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
     let Some(index) = summary.attachment_indexes.first() else { return Ok(None) };

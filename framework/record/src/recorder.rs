@@ -117,12 +117,12 @@ impl Gaps {
 /// The files to attach: the arm's YAML and the files its joints include (as the config crate
 /// resolves them); a description that no longer loads is attached alone.
 fn config_files(config: &Path) -> Vec<(String, Vec<u8>)> {
-    let Ok(text) = std::fs::read(config) else { return Vec::new() };
+    let Ok(text) = jointctl_files::read(config, jointctl_files::FileKind::Config) else { return Vec::new() };
     let name = |p: &Path| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned());
     let mut out = vec![(name(config), text)];
     let included = jointctl_config::load(config).map(|l| l.included).unwrap_or_default();
     for path in included {
-        if let Ok(bytes) = std::fs::read(&path) {
+        if let Ok(bytes) = jointctl_files::read(&path, jointctl_files::FileKind::Include) {
             out.push((name(&path), bytes));
         }
     }

@@ -320,7 +320,7 @@ const HOST_MACHINE: u16 = if cfg!(target_arch = "x86_64") {
 pub fn check_library_file(file: &Path) -> Result<(), LoadPluginError> {
     use object::read::elf::{ElfFile64, FileHeader, ProgramHeader, SectionHeader};
     let bad = |reason: String| LoadPluginError::Malformed { file: file.into(), reason };
-    let data = std::fs::read(file).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    let data = jointctl_files::read(file, jointctl_files::FileKind::Plugin).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     let elf = ElfFile64::<object::Endianness>::parse(&*data).map_err(|e| bad(format!("not a complete 64-bit ELF file ({e})")))?;
     let (header, endian) = (elf.elf_header(), elf.endian());
     if header.e_type(endian) != object::elf::ET_DYN {

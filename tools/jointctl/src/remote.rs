@@ -29,7 +29,7 @@ impl CredentialArgs {
     fn credentials(&self) -> Result<Option<Credentials>, String> {
         let Some(user) = &self.user else { return Ok(None) };
         let password = match &self.password_file {
-            Some(file) => std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?.lines().next().unwrap_or("").to_string(),
+            Some(file) => jointctl_files::read_to_string(file, jointctl_files::FileKind::Credentials).map_err(|e| e.to_string())?.lines().next().unwrap_or("").to_string(),
             None => std::env::var(PASSWORD_ENV).map_err(|_| format!("--user {user} needs a password: --password-file FILE or {PASSWORD_ENV}"))?,
         };
         if password.is_empty() {
