@@ -79,7 +79,7 @@ pub fn load(path: impl AsRef<Path>) -> Result<LoadedConfig, ConfigErrors> {
         line: 0,
         column: 0,
         field: String::new(),
-        message: e.to_string(),
+        message: e.reason(),
     })?;
     parse_str(&text, path)
 }

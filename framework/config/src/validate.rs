@@ -44,8 +44,11 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if !valid_name(&c.arm, 32) {
         err("arm".into(), format!("`{}` is not a valid arm name: use 1-32 letters, digits, `_` or `-`", c.arm));
     }
-    if !(c.rate_hz > 0.0 && c.rate_hz <= 10_000.0) {
-        err("rate_hz".into(), format!("must be in (0, 10000] Hz, got {}", c.rate_hz));
+    // At least 1 Hz (an assumption: a torque loop slower than that cannot hold a joint, and the
+    // runtime answers SIGINT and commands once a period: at 1e-6 Hz it never would, and at
+    // 1e-300 Hz the period is not a time at all).
+    if !(c.rate_hz >= 1.0 && c.rate_hz <= 10_000.0) {
+        err("rate_hz".into(), format!("must be in [1, 10000] Hz, got {}", short(c.rate_hz)));
     }
     if let Some(k) = &c.kinematics
         && !(k.gravity_m_s2 >= 0.0 && k.gravity_m_s2 <= 30.0)
@@ -353,4 +356,11 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         err("buses.can".into(), format!("{drives} drives exceed the maximum of {}", jointctl_api::MAX_ARM_DRIVES));
     }
     errs
+}
+
+/// A number as a person reads it in a message: plainly between a thousandth and a million,
+/// otherwise with four significant digits and an exponent (a 309-digit value cut at a line's
+/// end loses the reason).
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x}") } else { format!("{x:.3e}") }
 }

@@ -44,7 +44,11 @@ const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
     ("encoder that does not exist", "encoders: {output: e2}", "encoders: {output: e9}", 25, "joints[1].encoders.output", "no encoder named `e9`"),
     ("drive that does not exist", "drives: {motor: m2}", "drives: {motor: m7}", 26, "joints[1].drives.motor", "no drive named `m7`"),
     ("non-finite number", "torque_nm: 10", "torque_nm: .nan", 21, "joints[0].limits.torque_nm", "must be a finite number"),
-    ("rate out of range", "rate_hz: 40", "rate_hz: -5", 2, "rate_hz", "must be in (0, 10000] Hz"),
+    ("rate out of range", "rate_hz: 40", "rate_hz: -5", 2, "rate_hz", "must be in [1, 10000] Hz"),
+    // Issue 40, finding 6: a rate whose period is not a time (run panicked) or lasts days
+    // (run no longer answered SIGINT) passed.
+    ("rate too slow to be a loop", "rate_hz: 40", "rate_hz: 1.0e-300", 2, "rate_hz", "must be in [1, 10000] Hz, got 1.000e-300"),
+    ("rate of a loop that never turns", "rate_hz: 40", "rate_hz: 1e-6", 2, "rate_hz", "must be in [1, 10000] Hz, got 1.000e-6"),
     ("node id out of range", "{name: m2, node_id: 2}", "{name: m2, node_id: 200}", 10, "buses.can[0].drives[1].node_id", "node id is 1-127"),
     ("limits upside down", "position_rad: [-1.0, 1.0]", "position_rad: [1.0, -1.0]", 21, "joints[0].limits.position_rad", "lower limit 1 must be below upper limit -1"),
     ("invalid arm name", "arm: rig", "arm: my arm/1", 1, "arm", "not a valid arm name"),

@@ -112,6 +112,23 @@ pub enum FileError {
     },
 }
 
+impl FileError {
+    /// What is wrong, without the file's path (for errors that name the file themselves).
+    ///
+    /// ```
+    /// let e = jointctl_files::read(std::path::Path::new("/dev/zero"), jointctl_files::FileKind::Data).unwrap_err();
+    /// assert_eq!(e.reason(), "the data file is a character device, not a regular file");
+    /// ```
+    pub fn reason(&self) -> String {
+        match self {
+            FileError::Io { kind, source, .. } => format!("cannot read the {}: {source}", kind.name()),
+            FileError::NotRegular { kind, what, .. } => format!("the {} is a {what}, not a regular file", kind.name()),
+            FileError::TooLarge { kind, .. } => format!("the {} is larger than {} MiB, the limit for its kind", kind.name(), kind.limit_bytes() >> 20),
+            FileError::NotText { kind, .. } => format!("the {} is not UTF-8 text", kind.name()),
+        }
+    }
+}
+
 /// Checks that `path` is a regular file of at most its kind's size, without blocking and
 /// without reading it; returns its size [bytes]. For files another library opens (a plugin the
 /// dynamic loader maps).

@@ -132,19 +132,9 @@ const KNOWN: [&str; 7] = ["t", "deflection", "torque", "pivot_mm", "angle_deg", 
 /// of reference.
 const PLAUSIBLE_ABS: [f64; 7] = [1e10, 4.0 * core::f64::consts::PI, 1e4, 1000.0, 720.0, 1e6, 1e4];
 
-/// What is wrong with a file, without its path (the error names it already).
-fn file_reason(e: &jointctl_files::FileError) -> String {
-    match e {
-        jointctl_files::FileError::Io { source, .. } => format!("cannot read: {source}"),
-        jointctl_files::FileError::NotRegular { what, .. } => format!("a {what}, not a regular file"),
-        jointctl_files::FileError::TooLarge { kind, .. } => format!("larger than {} MiB, the limit for a data file", kind.limit_bytes() >> 20),
-        jointctl_files::FileError::NotText { .. } => "not UTF-8 text".into(),
-    }
-}
-
 /// Reads a CSV file.
 pub fn read(path: &Path) -> Result<Data, DataError> {
-    let text = jointctl_files::read_to_string(path, jointctl_files::FileKind::Data).map_err(|e| DataError { file: path.into(), line: 0, column: None, message: file_reason(&e) })?;
+    let text = jointctl_files::read_to_string(path, jointctl_files::FileKind::Data).map_err(|e| DataError { file: path.into(), line: 0, column: None, message: e.reason() })?;
     parse(&text, path)
 }
 

@@ -123,9 +123,11 @@ fn positive_seconds(text: &str) -> Result<f64, String> {
 
 /// A sample rate [Hz]: finite and > 0.
 fn positive_rate(text: &str) -> Result<f64, String> {
+    // At least one sample in MAX_SECONDS (1/1e-300 Hz panicked in `Duration`).
+    let slowest = 1.0 / crate::MAX_SECONDS;
     match crate::finite(text)? {
-        v if v > 0.0 => Ok(v),
-        v => Err(format!("must be > 0 Hz, got {v}")),
+        v if v >= slowest => Ok(v),
+        v => Err(format!("must be >= {slowest:e} Hz, got {}", crate::short(v))),
     }
 }
 

@@ -117,13 +117,24 @@ fn finite(text: &str) -> Result<f64, String> {
     }
 }
 
-/// A duration [s]: finite and >= 0 (a negative or NaN one would panic in `Duration` or end a
-/// run at once without saying so).
+/// The longest duration a command takes [s]: 1e9 s, 31 years (an assumption: longer is "for
+/// ever" to a person, and 1e300 s panicked in `Duration`).
+pub const MAX_SECONDS: f64 = 1e9;
+
+/// A duration [s]: finite, in [0, [`MAX_SECONDS`]] (a negative, NaN or huge one would panic in
+/// `Duration` or end a run at once without saying so).
 fn seconds(text: &str) -> Result<f64, String> {
     match finite(text)? {
-        v if v >= 0.0 => Ok(v),
-        v => Err(format!("must be >= 0 s, got {v}")),
+        v if (0.0..=MAX_SECONDS).contains(&v) => Ok(v),
+        v => Err(format!("must be in [0, {MAX_SECONDS:e}] s, got {}", short(v))),
     }
+}
+
+/// A number as a person reads it in a message: plainly between a thousandth and a million,
+/// otherwise with four significant digits and an exponent (a 309-digit value cut at a line's
+/// end loses the reason).
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x}") } else { format!("{x:.3e}") }
 }
 
 /// Writes `text` to stdout; a reader that has gone (`| head`) is not an error worth a panic,

@@ -9,8 +9,10 @@ pub struct ArmConfig {
     /// Arm name: letters, digits, `_` and `-` (at most 32). Shared-memory service names are
     /// derived from it (`<arm>/joint_state`, `<arm>/diagnostics`).
     pub arm: String,
-    /// Control loop rate [Hz]. Default 40 Hz, the thesis' loop rate (sections 2.3 and 4.1).
+    /// Control loop rate [Hz], 1 to 10 000. Default 40 Hz, the thesis' loop rate (sections 2.3
+    /// and 4.1).
     #[serde(default = "default_rate_hz", deserialize_with = "finite")]
+    #[schemars(range(min = 1.0, max = 10000.0))]
     pub rate_hz: f64,
     /// Which hardware backend the loop talks to.
     pub hal: HalConfig,
