@@ -157,7 +157,7 @@ fn commands_that_would_never_run_are_refused_and_negative_numbers_parse() {
         (&["stiffness", "q3", "50"][..], 1, "joint `q3` has no variable stiffness"),
         (&["torque", "q2", "--step", "1", "--delay", "NaN"][..], 2, "must be a finite number, got NaN"),
         (&["position", "q1", "nan"][..], 2, "must be a finite number"),
-        (&["torque", "q2", "--step", "1", "--delay=-1"][..], 2, "must be >= 0 s, got -1"),
+        (&["torque", "q2", "--step", "1", "--delay=-1"][..], 2, "must be in [0, 1e9] s, got -1"),
         (&["torque", "q2", "--step", "-5"][..], 0, "accepted: q2: torque"),
         (&["torque", "q2", "--sine", "-2", "--freq", "0.5", "--offset", "-1"][..], 0, "accepted"),
         (&["stiffness", "q6", "2.5"][..], 0, "accepted"),
