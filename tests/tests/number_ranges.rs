@@ -1,5 +1,6 @@
 //! Numbers from the command line and the config have ranges, and a value outside is refused
-//! with the range and the value printed short, never a panic (issue 40, findings 6 and 8).
+//! with the range and the value printed short, never a panic (issue 40, findings 6 and 8); output
+//! to a reader that has gone ends quietly (finding 19).
 
 use std::process::Command;
 
@@ -36,5 +37,25 @@ fn a_loop_rate_whose_period_is_not_a_time_is_refused_by_check() {
         let o = Command::new(jointctl()).arg("check").arg(&yaml).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains(&format!("rate_hz: must be in [1, 10000] Hz, got {shown}")), "{rate}: {err}");
+    }
+}
+
+#[test]
+fn a_reader_that_goes_away_ends_the_output_not_the_program_with_a_panic() {
+    // Issue 40, finding 19: `jointctl schema | head -1` panicked on the closed pipe, and
+    // `jointctl check X | head -1` about half the time (whether the pipe closed before the
+    // second line). Each is run ten times, the reader gone after its first line.
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let config = jointctl_tests::root().join("configs/sherpa_arm.yaml");
+    for args in [vec!["schema".to_string()], vec!["check".to_string(), config.display().to_string()]] {
+        for _ in 0..10 {
+            let mut child = Command::new(jointctl()).args(&args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+            let mut first = String::new();
+            BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+            let out = child.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!first.is_empty() && !err.contains("panicked") && out.status.code() != Some(101), "{args:?}: {err}");
+        }
     }
 }

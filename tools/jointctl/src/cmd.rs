@@ -189,7 +189,7 @@ pub fn run(args: CmdArgs) -> ExitCode {
         .and_then(|client| client.send(req, args.timeout));
     match answer {
         Ok(response) if response.accepted != 0 => {
-            println!("accepted: {}", response.text());
+            outln!("accepted: {}", response.text());
             ExitCode::SUCCESS
         }
         Ok(response) => crate::fail(format!("refused: {}", response.text())),
@@ -207,7 +207,7 @@ fn stop_by_signal(args: &CmdArgs, why: &str) -> ExitCode {
     };
     match jointctl_runtime::lock::signal_stop(&dir, &args.arm) {
         Ok(pid) => {
-            println!("accepted: stopping ({why}; sent SIGTERM to the runtime, process {pid})");
+            outln!("accepted: stopping ({why}; sent SIGTERM to the runtime, process {pid})");
             ExitCode::SUCCESS
         }
         Err(e) => crate::fail(format!("{why}, and the runtime could not be signalled: {e}")),

@@ -250,9 +250,9 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
                 return crate::fail(format!("cannot write {}: {e}", path.display()));
             }
             if json {
-                println!("{}", serde_json::json!({ "joint": joint, "stiffness_nm_per_rad": k, "variants": variants }));
+                outln!("{}", serde_json::json!({ "joint": joint, "stiffness_nm_per_rad": k, "variants": variants }));
             } else {
-                print!("{table}");
+                out!("{table}");
             }
             ExitCode::SUCCESS
         }
@@ -480,10 +480,10 @@ fn gravity_hold(config: &Path, scenario: &str, json: bool, report: Option<PathBu
 /// `{"rows": [...]}` with `--json`, else the Markdown table and where the report is.
 fn print_report(json: bool, rows: serde_json::Value, md: &str, dir: &Path) -> ExitCode {
     if json {
-        println!("{}", serde_json::json!({ "rows": rows }));
+        outln!("{}", serde_json::json!({ "rows": rows }));
     } else {
-        print!("{md}");
-        println!("\nReport and plots: {}", dir.display());
+        out!("{md}");
+        outln!("\nReport and plots: {}", dir.display());
     }
     ExitCode::SUCCESS
 }

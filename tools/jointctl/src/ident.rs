@@ -142,7 +142,7 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
             }
             eprintln!("characteristic written to {}", path.display());
         }
-        None => print!("{yaml}"),
+        None => out!("{yaml}"),
     }
     if let Some(dir) = &a.report {
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -396,9 +396,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         if let Some(l) = &loop_report {
             json["loop"] = serde_json::json!({"values": l.values, "notes": l.notes, "hal_sim": l.hal_sim()});
         }
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print!("{md}");
+        out!("{md}");
     }
     ExitCode::SUCCESS
 }

@@ -221,7 +221,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
                 let name = s.static_details.name().as_str().to_string();
                 if prefix.as_ref().is_none_or(|p| name.starts_with(p)) {
                     let pattern = format!("{:?}", s.static_details.messaging_pattern());
-                    println!("{name}  ({})", pattern.split('(').next().unwrap_or("?"));
+                    outln!("{name}  ({})", pattern.split('(').next().unwrap_or("?"));
                     found += 1;
                 }
                 CallbackProgression::Continue

@@ -1,5 +1,17 @@
 //! `jointctl`: run, check and inspect compliant robot arms.
 
+/// `print!` to stdout through [`print_out`]: a reader that has gone (`| head -1`) ends the
+/// output, not the program with a panic. Every command's standard output goes through these two.
+macro_rules! out {
+    ($($arg:tt)*) => { $crate::print_out(&format!($($arg)*)) };
+}
+
+/// `println!` through [`print_out`] (see [`out!`]).
+macro_rules! outln {
+    () => { $crate::print_out("\n") };
+    ($($arg:tt)*) => { $crate::print_out(&format!("{}\n", format_args!($($arg)*))) };
+}
+
 mod bridge;
 mod cmd;
 mod experiment;
@@ -197,20 +209,20 @@ fn main() -> ExitCode {
             };
             match jointctl_backends::build_arm_for_check(&loaded, &loader) {
                 Ok(arm) => {
-                    println!("{}: arm `{}` OK, {} Hz, {} joint(s):", config.display(), arm.name, arm.rate_hz, arm.dof_names.len());
+                    outln!("{}: arm `{}` OK, {} Hz, {} joint(s):", config.display(), arm.name, arm.rate_hz, arm.dof_names.len());
                     for slot in &arm.slots {
                         let dofs: Vec<_> = slot.dofs().map(|i| arm.dof_names[i].as_str()).collect();
-                        println!("  {:<10} plugin {:<14} DOF {}", slot.name, slot.plugin, dofs.join(", "));
+                        outln!("  {:<10} plugin {:<14} DOF {}", slot.name, slot.plugin, dofs.join(", "));
                     }
                     let budgets = jointctl_hal::budget::budgets(&loaded.config);
                     if !budgets.is_empty() {
-                        println!("CAN bus budget at {} Hz:", arm.rate_hz);
+                        outln!("CAN bus budget at {} Hz:", arm.rate_hz);
                         for b in budgets {
-                            println!("  {b}");
+                            outln!("  {b}");
                         }
                     }
                     for w in warnings {
-                        println!("{w}");
+                        outln!("{w}");
                     }
                     ExitCode::SUCCESS
                 }
@@ -218,7 +230,7 @@ fn main() -> ExitCode {
             }
         }
         Command::Schema => {
-            println!("{}", serde_json::to_string_pretty(&jointctl_config::json_schema()).unwrap_or_default());
+            outln!("{}", serde_json::to_string_pretty(&jointctl_config::json_schema()).unwrap_or_default());
             ExitCode::SUCCESS
         }
         Command::Inspect { command } => inspect::run(command),

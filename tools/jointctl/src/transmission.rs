@@ -113,8 +113,8 @@ fn check(config: &Path, step_rad: f64) -> Result<bool, String> {
     // One encoder count of each of the two encoders, plus a tenth of the expected change.
     let count = std::f64::consts::TAU / 16384.0;
     let mut ok = true;
-    println!("| actuator moved | q2 expected [rad] | q2 measured [rad] | q2 | q3 expected [rad] (no encoder: watch it) |");
-    println!("|---|---|---|---|---|");
+    outln!("| actuator moved | q2 expected [rad] | q2 measured [rad] | q2 | q3 expected [rad] (no encoder: watch it) |");
+    outln!("|---|---|---|---|---|");
     for m in &moves {
         let tolerance = 2.0 * count + 0.1 * m.expected_q2_rad.abs();
         let verdict = if (m.measured_q2_rad - m.expected_q2_rad).abs() <= tolerance {
@@ -126,12 +126,12 @@ fn check(config: &Path, step_rad: f64) -> Result<bool, String> {
             ok = false;
             "DIFFERENT"
         };
-        println!("| {} | {:+.4} | {:+.4} | {verdict} | {:+.4} |", m.actuator, m.expected_q2_rad, m.measured_q2_rad, m.expected_q3_rad);
+        outln!("| {} | {:+.4} | {:+.4} | {verdict} | {:+.4} |", m.actuator, m.expected_q2_rad, m.measured_q2_rad, m.expected_q3_rad);
     }
     if ok {
-        println!("q2's row of eq. 3.3 is the assumed one (q2 = (a2 + a3) / 2) on this arm.");
+        outln!("q2's row of eq. 3.3 is the assumed one (q2 = (a2 + a3) / 2) on this arm.");
     } else {
-        println!("q2 does not move as the assumed eq. 3.3 says: fix the differential (or the drives' wiring or direction) before trusting torque control.");
+        outln!("q2 does not move as the assumed eq. 3.3 says: fix the differential (or the drives' wiring or direction) before trusting torque control.");
     }
     Ok(ok)
 }
