@@ -158,6 +158,12 @@ fn commands_that_would_never_run_are_refused_and_negative_numbers_parse() {
         (&["torque", "q2", "--step", "1", "--delay", "NaN"][..], 2, "must be a finite number, got NaN"),
         (&["position", "q1", "nan"][..], 2, "must be a finite number"),
         (&["torque", "q2", "--step", "1", "--delay=-1"][..], 2, "must be in [0, 1e9] s, got -1"),
+        // Issue 40, finding 7: negative values reached the argument parser's "unexpected
+        // argument '-1'" instead of a reason.
+        (&["torque", "q2", "--step", "1", "--delay", "-1"][..], 2, "must be in [0, 1e9] s, got -1"),
+        (&["torque", "q2", "--sine", "5", "--freq", "-1"][..], 1, "frequency_hz must be >= 0, got -1"),
+        (&["impedance", "q4", "--k", "-1", "--d", "1"][..], 1, "K and D must be >= 0, got K = -1"),
+        (&["--timeout", "-1", "hold", "q2"][..], 2, "must be in [0, 1e9] s, got -1"),
         (&["torque", "q2", "--step", "-5"][..], 0, "accepted: q2: torque"),
         (&["torque", "q2", "--sine", "-2", "--freq", "0.5", "--offset", "-1"][..], 0, "accepted"),
         (&["stiffness", "q6", "2.5"][..], 0, "accepted"),

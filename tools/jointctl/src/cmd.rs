@@ -21,7 +21,7 @@ pub struct CmdArgs {
     #[arg(long, global = true, value_name = "DIR")]
     ipc_root: Option<std::path::PathBuf>,
     /// How long to wait for the runtime's answer [s].
-    #[arg(long, global = true, default_value_t = 2.0, value_parser = seconds)]
+    #[arg(long, global = true, default_value_t = 2.0, value_parser = seconds, allow_negative_numbers = true)]
     timeout: f64,
     /// A streamed command: the joint falls back to holding if it is not renewed within its
     /// watchdog time.
@@ -53,13 +53,13 @@ enum Command {
         #[arg(long, value_name = "NM", group = "waveform", requires = "freq", value_parser = finite, allow_negative_numbers = true)]
         cosine: Option<f64>,
         /// Frequency of the sine or cosine [Hz].
-        #[arg(long, value_name = "HZ", value_parser = finite)]
+        #[arg(long, value_name = "HZ", value_parser = finite, allow_negative_numbers = true)]
         freq: Option<f64>,
         /// Offset added to the reference [Nm].
         #[arg(long, value_name = "NM", default_value_t = 0.0, value_parser = finite, allow_negative_numbers = true)]
         offset: f64,
         /// Start the reference this long after the command arrives [s].
-        #[arg(long, value_name = "S", default_value_t = 0.0, value_parser = seconds)]
+        #[arg(long, value_name = "S", default_value_t = 0.0, value_parser = seconds, allow_negative_numbers = true)]
         delay: f64,
     },
     /// Position control with the feedback PI (section 4.3) to RAD.
@@ -92,7 +92,7 @@ enum Command {
         /// Joint name.
         joint: String,
         /// [Nm/rad]
-        #[arg(value_parser = finite)]
+        #[arg(value_parser = finite, allow_negative_numbers = true)]
         nm_per_rad: f64,
     },
     /// Impedance control: tau = K (target - q) - D dq/dt, through the torque mode.
@@ -100,10 +100,10 @@ enum Command {
         /// Joint name.
         joint: String,
         /// K [Nm/rad].
-        #[arg(long = "k", value_name = "NM_PER_RAD", value_parser = finite)]
+        #[arg(long = "k", value_name = "NM_PER_RAD", value_parser = finite, allow_negative_numbers = true)]
         k: f64,
         /// D [Nms/rad].
-        #[arg(long = "d", value_name = "NMS_PER_RAD", value_parser = finite)]
+        #[arg(long = "d", value_name = "NMS_PER_RAD", value_parser = finite, allow_negative_numbers = true)]
         d: f64,
         /// Target [rad]; default: where the joint is.
         #[arg(long, allow_negative_numbers = true, value_parser = finite)]
