@@ -303,6 +303,9 @@ impl CommandValidator {
         let fault = self.status.fault(dof);
         let streamed = req.streamed != 0;
         let cmd = match req.kind {
+            // A faulted joint is held until the runtime restarts: enabling it would be answered
+            // "enabled" and change nothing (disabling it is always safe).
+            CommandKind::ENABLE if fault != 0 => return Err(CommandError::Faulted { joint: name.clone(), code: fault }),
             CommandKind::ENABLE | CommandKind::DISABLE => {
                 let enabled = req.kind == CommandKind::ENABLE;
                 return Ok((ArmCommand::Enable { dof, enabled }, format!("{name} {}", if enabled { "enabled (holding)" } else { "disabled (holding)" })));
@@ -406,6 +409,21 @@ mod tests {
 
     fn refused(v: &mut CommandValidator, kind: CommandKind, joint: &str, values: &[f64]) -> CommandError {
         v.validate(&CommandRequest::new(kind, joint, values)).map(|(c, _)| c).unwrap_err()
+    }
+
+    /// Issue 40, finding 17: `cmd enable q1` on a faulted joint answered "accepted: q1 enabled";
+    /// the joint stayed faulted and the next command was refused.
+    #[test]
+    fn enabling_a_faulted_joint_is_refused_with_its_fault() {
+        let status = Arc::new(LoopStatus::new(3));
+        let rigid = DofSpec { name: "q1".into(), plugin: "rigid".into(), limits: None, torque: false, stiffness: false };
+        let mut v = CommandValidator::new(vec![rigid], status.clone());
+        status.set_dof(0, true, 1);
+        let e = refused(&mut v, CommandKind::ENABLE, "q1", &[]);
+        assert!(matches!(e, CommandError::Faulted { code: 1, .. }), "{e}");
+        assert!(e.to_string().contains("is faulted"), "{e}");
+        // Disabling it is still taken: it only makes it safer.
+        assert!(v.validate(&CommandRequest::new(CommandKind::DISABLE, "q1", &[])).is_ok());
     }
 
     /// Finding: torque on a rigid joint and stiffness on a non-VSA joint were accepted (exit 0,
