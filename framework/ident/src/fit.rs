@@ -18,7 +18,7 @@ use crate::csv::Data;
 /// let e = fit(&data, &FitOptions { order: Order::Fixed(9), ..FitOptions::default() }).unwrap_err();
 /// assert!(matches!(e, FitRunError::Order { got: 9, .. }));
 /// ```
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum FitRunError {
     /// The polynomial order is out of range.
     #[error("the polynomial order must be 1-{max}, got {got}")]
@@ -49,6 +49,24 @@ pub enum FitRunError {
         len: usize,
         /// Samples (the time column's length).
         samples: usize,
+    },
+    /// A group's deflection barely moves: no characteristic can be read from it.
+    #[error("{group}: the deflection takes {distinct} distinct value(s) (span {span_rad:e} rad): a characteristic needs a deflection that moves over at least {MIN_DISTINCT_DEFLECTIONS} values")]
+    NoExcitation {
+        /// The group.
+        group: String,
+        /// Distinct deflection values in it.
+        distinct: usize,
+        /// Their span [rad].
+        span_rad: f64,
+    },
+    /// The fit's numbers are not finite (a deflection of subnormal size).
+    #[error("{group}: the fitted curve is not finite ({what}): the deflection is too small for a stiffness to be computed")]
+    NotFinite {
+        /// The group.
+        group: String,
+        /// What came out.
+        what: String,
     },
     /// One group's (pivot setting, direction, branch) curve cannot be fitted.
     #[error("{group}: {source}")]
@@ -255,6 +273,23 @@ pub const SAMPLES_PER_PARAMETER: usize = 5;
 /// the order holds fewer than 4 samples.
 pub const MIN_SAMPLES: usize = 20;
 
+/// Distinct deflection values a group needs (an assumption: with one value a "stiffness" is the
+/// mean torque over that deflection, whatever the torque does; with two, a line through zero
+/// cannot be told from an offset; issue 40 found a constant deflection fitted at 0.021 Nm/rad with
+/// an RMSE of 6.8 Nm and passed on to a joint).
+pub const MIN_DISTINCT_DEFLECTIONS: usize = 3;
+
+fn moving_deflection(group: &str, x: &[f64]) -> Result<(), FitRunError> {
+    let mut sorted: Vec<f64> = x.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup();
+    if sorted.len() < MIN_DISTINCT_DEFLECTIONS {
+        let span_rad = sorted.last().zip(sorted.first()).map_or(0.0, |(a, b)| a - b);
+        return Err(FitRunError::NoExcitation { group: group.into(), distinct: sorted.len(), span_rad });
+    }
+    Ok(())
+}
+
 fn enough_samples(group: &str, samples: usize, parameters: usize) -> Result<(), FitRunError> {
     let needed = (SAMPLES_PER_PARAMETER * parameters).max(MIN_SAMPLES);
     if samples < needed {
@@ -308,7 +343,11 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
             k.1.map_or("-".into(), |v| format!("{}", v as f64 / 1000.0))
         );
         enough_samples(&label, x.len(), 1)?;
+        moving_deflection(&label, &x)?;
         let stiffness = through_zero(&x, &y, 1).map_err(|source| FitRunError::Group { group: label.clone(), source })?[0];
+        if !stiffness.is_finite() {
+            return Err(FitRunError::NotFinite { group: label, what: format!("stiffness {stiffness}") });
+        }
         let through = opts.through_zero;
         let (curve, order, rmse, worst, branch_rmse) = if opts.branches {
             let split = |pos: bool| -> (Vec<f64>, Vec<f64>) { x.iter().zip(&y).filter(|(a, _)| (**a >= 0.0) == pos).map(|(a, b)| (*a, *b)).unzip() };
@@ -396,6 +435,34 @@ mod too_few_samples {
         let e = fit(&data, &FitOptions { order: Order::Fixed(6), branches: true, ..FitOptions::default() }).unwrap_err();
         assert!(matches!(e, FitRunError::TooFewSamples { parameters: 6, needed: 30, .. }), "{e}");
         assert!(fit(&data, &FitOptions { order: Order::Fixed(3), ..FitOptions::default() }).is_ok());
+    }
+}
+
+#[cfg(test)]
+mod deflection_that_does_not_move {
+    use super::*;
+
+    fn data(deflection: impl Fn(usize) -> f64) -> Data {
+        let mut text = String::from("t,deflection,torque\n");
+        for i in 0..200 {
+            text += &format!("{},{:e},{}\n", i as f64 * 0.01, deflection(i), 0.1 * (i % 7) as f64);
+        }
+        crate::csv::parse(&text, "x.csv".as_ref()).unwrap()
+    }
+
+    /// Issue 40, findings 9 and 10: a constant, non-zero deflection was fitted at 5.94 Nm/rad
+    /// (RMSE 0.2 Nm, the torque's own spread) and a subnormal one gave an infinite stiffness;
+    /// both exited 0 with a file a joint would load.
+    #[test]
+    fn a_constant_or_subnormal_deflection_is_refused_with_why() {
+        let opts = FitOptions { smoothing_window: 1, order: Order::Fixed(1), branches: false, through_zero: true };
+        let e = fit(&data(|_| 0.05), &opts).unwrap_err();
+        assert!(matches!(e, FitRunError::NoExcitation { distinct: 1, .. }), "{e}");
+        assert!(e.to_string().contains("the deflection takes 1 distinct value(s)"), "{e}");
+        let e = fit(&data(|i| [1e-310, 2e-310, 3e-310][i % 3]), &opts).unwrap_err();
+        assert!(matches!(e, FitRunError::NotFinite { .. }), "{e}");
+        // Three values that move: a stiffness.
+        assert!(fit(&data(|i| [0.01, 0.02, 0.03][i % 3]), &opts).is_ok());
     }
 }
 
