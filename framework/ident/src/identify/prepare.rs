@@ -85,6 +85,13 @@ pub enum PrepareError {
         /// Velocity reversals found.
         reversals: usize,
     },
+    /// The torque never changes: there is nothing to explain (a sensor that was not connected or
+    /// not logged).
+    #[error("the torque is {value_nm} Nm in every sample: nothing to identify (was the torque sensor connected and logged?)")]
+    ConstantTorque {
+        /// The one value [Nm].
+        value_nm: f64,
+    },
     /// A column's length is neither the samples' nor (an optional column) zero.
     #[error("column `{column}` has {len} values for {samples} samples")]
     UnevenColumn {
@@ -395,9 +402,13 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = turning.len();
-    let torque_moves = tau.iter().any(|x| *x != tau[0]);
-    if span < MIN_SPAN_LSB * resolution || turns < MIN_REVERSALS || !torque_moves {
+    if span < MIN_SPAN_LSB * resolution || turns < MIN_REVERSALS {
         return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / resolution, reversals: turns });
+    }
+    // A constant torque under a deflection that moves was reported as too little excitation,
+    // with counts and reversals that met the bounds it quoted (issue 40, finding 10).
+    if tau.iter().all(|x| *x == tau[0]) {
+        return Err(PrepareError::ConstantTorque { value_nm: tau[0] });
     }
     // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
     let noise_floor_nm = {
@@ -450,6 +461,25 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 40, finding 10: a constant torque was refused as "too little excitation: 413.7
+    /// counts, 20 reversals; needs at least 16 and 3", a reason the data meets.
+    #[test]
+    fn a_constant_torque_is_refused_as_such() {
+        let mut data = Data::default();
+        for i in 0..2000 {
+            let t = f64::from(i) * 0.01;
+            data.t.push(t);
+            data.deflection.push(0.05 * (std::f64::consts::TAU * 0.5 * t).sin());
+            data.torque.push(1.5);
+            for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
+                col.push(f64::NAN);
+            }
+        }
+        let e = prepare(&data, 0.7).err().expect("refused");
+        assert!(matches!(e, PrepareError::ConstantTorque { value_nm } if value_nm == 1.5), "{e}");
+        assert!(e.to_string().starts_with("the torque is 1.5 Nm in every sample"), "{e}");
+    }
 
     /// The least-squares line's slope through samples `a..=b`, summed directly.
     fn line_slope(t: &[f64], d: &[f64], a: usize, b: usize) -> f64 {
