@@ -53,6 +53,18 @@ pub const MAX_QUOTED: usize = 64;
 /// Longest message [chars], whatever it quotes.
 const MAX_MESSAGE: usize = 2000;
 
+/// A number as a person reads it in a message: plainly between a thousandth and a million,
+/// otherwise with four significant digits and an exponent (a 309-digit value cut at a line's
+/// end loses the reason).
+///
+/// ```
+/// assert_eq!(jointctl_config::short_number(-1.0), "-1");
+/// assert_eq!(jointctl_config::short_number(1e-300), "1.000e-300");
+/// ```
+pub fn short_number(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x}") } else { format!("{x:.3e}") }
+}
+
 /// A message with every `` `quoted` `` value longer than [`MAX_QUOTED`] characters shortened
 /// to its start and its size, and the whole cut at 2000 characters: a 50 MB name in a file
 /// must not come back as a 50 MB error.

@@ -20,7 +20,7 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-pub use error::{ConfigError, ConfigErrors, bounded_message};
+pub use error::{ConfigError, ConfigErrors, bounded_message, short_number};
 pub use model::*;
 pub use spans::{Location, SpanIndex};
 pub use validate::{MAX_ARM_DOF, MAX_JOINT_NAME};

@@ -48,7 +48,7 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     // runtime answers SIGINT and commands once a period: at 1e-6 Hz it never would, and at
     // 1e-300 Hz the period is not a time at all).
     if !(c.rate_hz >= 1.0 && c.rate_hz <= 10_000.0) {
-        err("rate_hz".into(), format!("must be in [1, 10000] Hz, got {}", short(c.rate_hz)));
+        err("rate_hz".into(), format!("must be in [1, 10000] Hz, got {}", crate::short_number(c.rate_hz)));
     }
     if let Some(k) = &c.kinematics
         && !(k.gravity_m_s2 >= 0.0 && k.gravity_m_s2 <= 30.0)
@@ -356,11 +356,4 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         err("buses.can".into(), format!("{drives} drives exceed the maximum of {}", jointctl_api::MAX_ARM_DRIVES));
     }
     errs
-}
-
-/// A number as a person reads it in a message: plainly between a thousandth and a million,
-/// otherwise with four significant digits and an exponent (a 309-digit value cut at a line's
-/// end loses the reason).
-fn short(x: f64) -> String {
-    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x}") } else { format!("{x:.3e}") }
 }

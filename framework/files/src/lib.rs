@@ -71,11 +71,10 @@ impl FileKind {
     }
 }
 
-/// Why a user-named file was not read.
-#[derive(Debug, thiserror::Error)]
+/// Why a user-named file was not read. Displayed as the file, then [`FileError::reason`].
+#[derive(Debug)]
 pub enum FileError {
     /// The file could not be opened or read.
-    #[error("{}: cannot read the {}: {source}", file.display(), kind.name())]
     Io {
         /// The file.
         file: PathBuf,
@@ -85,7 +84,6 @@ pub enum FileError {
         source: std::io::Error,
     },
     /// Not a regular file (a FIFO, a device, a socket, a directory).
-    #[error("{}: the {} is a {what}, not a regular file", file.display(), kind.name())]
     NotRegular {
         /// The file.
         file: PathBuf,
@@ -95,7 +93,6 @@ pub enum FileError {
         what: &'static str,
     },
     /// Larger than its kind's limit.
-    #[error("{}: the {} is larger than {} MiB, the limit for its kind", file.display(), kind.name(), kind.limit_bytes() >> 20)]
     TooLarge {
         /// The file.
         file: PathBuf,
@@ -103,7 +100,6 @@ pub enum FileError {
         kind: FileKind,
     },
     /// Not UTF-8 text where text was expected.
-    #[error("{}: the {} is not UTF-8 text", file.display(), kind.name())]
     NotText {
         /// The file.
         file: PathBuf,
@@ -112,7 +108,34 @@ pub enum FileError {
     },
 }
 
+impl std::fmt::Display for FileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.file().display(), self.reason())
+    }
+}
+
+impl std::error::Error for FileError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            FileError::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
 impl FileError {
+    /// The file.
+    ///
+    /// ```
+    /// let e = jointctl_files::read(std::path::Path::new("/dev/zero"), jointctl_files::FileKind::Data).unwrap_err();
+    /// assert_eq!(e.file(), std::path::Path::new("/dev/zero"));
+    /// ```
+    pub fn file(&self) -> &Path {
+        match self {
+            FileError::Io { file, .. } | FileError::NotRegular { file, .. } | FileError::TooLarge { file, .. } | FileError::NotText { file, .. } => file,
+        }
+    }
+
     /// What is wrong, without the file's path (for errors that name the file themselves).
     ///
     /// ```
@@ -129,28 +152,12 @@ impl FileError {
     }
 }
 
-/// Checks that `path` is a regular file of at most its kind's size, without blocking and
-/// without reading it; returns its size [bytes]. For files another library opens (a plugin the
-/// dynamic loader maps).
-///
-/// ```
-/// use jointctl_files::{FileError, FileKind, check};
-/// let dir = std::env::temp_dir().join(format!("jointctl-files-doc-{}", std::process::id()));
-/// std::fs::create_dir_all(&dir).unwrap();
-/// std::fs::write(dir.join("arm.yaml"), "arm: a\n").unwrap();
-/// assert_eq!(check(&dir.join("arm.yaml"), FileKind::Config).unwrap(), 7);
-/// assert!(matches!(check(&dir, FileKind::Config), Err(FileError::NotRegular { what: "directory", .. })));
-/// assert!(matches!(check(std::path::Path::new("/dev/zero"), FileKind::Data), Err(FileError::NotRegular { .. })));
-/// ```
-pub fn check(path: &Path, kind: FileKind) -> Result<u64, FileError> {
-    open(path, kind).map(|(_, size)| size)
-}
-
 /// The bytes of the regular file `path`, at most its kind's limit.
 ///
 /// ```
 /// use jointctl_files::{FileKind, read};
 /// assert!(read(std::path::Path::new("/dev/urandom"), FileKind::Include).unwrap_err().to_string().contains("not a regular file"));
+/// assert!(matches!(read(&std::env::temp_dir(), FileKind::Config), Err(jointctl_files::FileError::NotRegular { what: "directory", .. })));
 /// ```
 pub fn read(path: &Path, kind: FileKind) -> Result<Vec<u8>, FileError> {
     let (file, size) = open(path, kind)?;

@@ -10,20 +10,17 @@ fn record(amp: f64, second: bool, mut extra: impl FnMut(f64, f64) -> f64) -> joi
     use std::f64::consts::TAU;
     let q = TAU / 16384.0;
     let mut rng = jointctl_test_support::XorShift64::new(0x0123_4567_89ab_cdef);
-    let mut data = jointctl_ident::csv::Data::default();
+    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
     let s = if second { 0.2 } else { 0.0 };
     for i in 0..16_000 {
         let t = f64::from(i) / 200.0;
         let x = amp * ((TAU * 0.25 * t).sin() + s * (TAU * 1.55 * t).sin());
         let v = amp * (TAU * 0.25 * (TAU * 0.25 * t).cos() + s * TAU * 1.55 * (TAU * 1.55 * t).cos());
-        data.t.push(t);
-        data.deflection.push((x / q).round() * q);
-        data.torque.push(120.0 * x + 0.3 * (80.0 * v).atan() + extra(x, v) + 0.02 * rng.normal());
-        for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
-            col.push(f64::NAN);
-        }
+        t_s.push(t);
+        deflection.push((x / q).round() * q);
+        torque.push(120.0 * x + 0.3 * (80.0 * v).atan() + extra(x, v) + 0.02 * rng.normal());
     }
-    data
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
 }
 
 /// A Dahl hysteresis of `limit` [Nm] and deflection scale `lambda` [rad] (the state follows

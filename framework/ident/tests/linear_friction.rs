@@ -14,19 +14,16 @@ fn record(b: f64, k3: f64) -> jointctl_ident::csv::Data {
     let (rate, n, k) = (500.0, 30_000, 60.0);
     let q = TAU / 16384.0;
     let mut rng = jointctl_test_support::XorShift64::new(0x5851_f42d_4c95_7f2d);
-    let mut data = jointctl_ident::csv::Data::default();
+    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..n {
         let t = i as f64 / rate;
         let x = 0.08 * (TAU * 0.3 * t).sin() + 0.04 * (TAU * 0.1 * t).sin();
         let v = 0.08 * TAU * 0.3 * (TAU * 0.3 * t).cos() + 0.04 * TAU * 0.1 * (TAU * 0.1 * t).cos();
-        data.t.push(t);
-        data.deflection.push((x / q).round() * q);
-        data.torque.push(k * x + k3 * x.powi(3) + 0.01 * (40.0 * v).atan() + b * v + 0.01 * rng.normal());
-        for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
-            col.push(f64::NAN);
-        }
+        t_s.push(t);
+        deflection.push((x / q).round() * q);
+        torque.push(k * x + k3 * x.powi(3) + 0.01 * (40.0 * v).atan() + b * v + 0.01 * rng.normal());
     }
-    data
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
 }
 
 #[test]

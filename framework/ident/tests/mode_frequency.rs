@@ -12,7 +12,7 @@ fn repetitions(mode_hz: f64) -> jointctl_ident::csv::Data {
     let (rate, per_rep, k) = (250.0, 5500, 120.0);
     let q = TAU / 16384.0;
     let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d);
-    let mut data = jointctl_ident::csv::Data::default();
+    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
     for rep in 0..3 {
         let start = rep as f64 * (per_rep as f64 / rate + 4.6 + 0.5 / rate);
         for i in 0..per_rep {
@@ -20,15 +20,12 @@ fn repetitions(mode_hz: f64) -> jointctl_ident::csv::Data {
             let t = start + local;
             let x = 0.05 * (TAU * 0.2 * local).sin();
             let v = 0.05 * TAU * 0.2 * (TAU * 0.2 * local).cos();
-            data.t.push(t);
-            data.deflection.push((x / q).round() * q);
-            data.torque.push(k * x + 0.3 * (80.0 * v).atan() + 0.4 * (TAU * mode_hz * t).sin() + 0.17 * rng.normal());
-            for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
-                col.push(f64::NAN);
-            }
+            t_s.push(t);
+            deflection.push((x / q).round() * q);
+            torque.push(k * x + 0.3 * (80.0 * v).atan() + 0.4 * (TAU * mode_hz * t).sin() + 0.17 * rng.normal());
         }
     }
-    data
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
 }
 
 #[test]

@@ -127,7 +127,7 @@ fn positive_rate(text: &str) -> Result<f64, String> {
     let slowest = 1.0 / crate::MAX_SECONDS;
     match crate::finite(text)? {
         v if v >= slowest => Ok(v),
-        v => Err(format!("must be >= {slowest:e} Hz, got {}", crate::short(v))),
+        v => Err(format!("must be >= {slowest:e} Hz, got {}", jointctl_config::short_number(v))),
     }
 }
 

@@ -138,15 +138,8 @@ pub const MAX_SECONDS: f64 = 1e9;
 fn seconds(text: &str) -> Result<f64, String> {
     match finite(text)? {
         v if (0.0..=MAX_SECONDS).contains(&v) => Ok(v),
-        v => Err(format!("must be in [0, {MAX_SECONDS:e}] s, got {}", short(v))),
+        v => Err(format!("must be in [0, {MAX_SECONDS:e}] s, got {}", jointctl_config::short_number(v))),
     }
-}
-
-/// A number as a person reads it in a message: plainly between a thousandth and a million,
-/// otherwise with four significant digits and an exponent (a 309-digit value cut at a line's
-/// end loses the reason).
-fn short(x: f64) -> String {
-    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x}") } else { format!("{x:.3e}") }
 }
 
 /// Writes `text` to stdout; a reader that has gone (`| head`) is not an error worth a panic,

@@ -34,3 +34,14 @@ pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: u
     (0.5 * (a + b)).exp()
 }
 
+/// The median step between time stamps [s], steps of zero left out: the sampling's own period
+/// where a log jitters, gaps, or a part leaves stretches of the record out (the span over the
+/// count would read those as slower sampling). 1 s when there is no step.
+pub(crate) fn median_step(t: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|s| *s > 0.0).collect();
+    if steps.is_empty() {
+        return 1.0;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}

@@ -420,11 +420,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         };
         noise_floor(&residual, &starts)
     };
-    let spacing = {
-        let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-        let mid = steps.len() / 2;
-        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
+    let spacing = super::numeric::median_step(&t);
     let t_split = split_time(&t, train_fraction);
     let split = t.partition_point(|x| *x < t_split);
     // A stateful effect's history: two cycles before the part (a Dahl state forgets within a
@@ -466,16 +462,9 @@ mod tests {
     /// counts, 20 reversals; needs at least 16 and 3", a reason the data meets.
     #[test]
     fn a_constant_torque_is_refused_as_such() {
-        let mut data = Data::default();
-        for i in 0..2000 {
-            let t = f64::from(i) * 0.01;
-            data.t.push(t);
-            data.deflection.push(0.05 * (std::f64::consts::TAU * 0.5 * t).sin());
-            data.torque.push(1.5);
-            for col in [&mut data.pivot_mm, &mut data.angle_deg, &mut data.motor_position, &mut data.reference_torque] {
-                col.push(f64::NAN);
-            }
-        }
+        let t: Vec<f64> = (0..2000).map(|i| f64::from(i) * 0.01).collect();
+        let deflection = t.iter().map(|t| 0.05 * (std::f64::consts::TAU * 0.5 * t).sin()).collect();
+        let data = Data::from_columns(t, deflection, vec![1.5; 2000]);
         let e = prepare(&data, 0.7).err().expect("refused");
         assert!(matches!(e, PrepareError::ConstantTorque { value_nm } if value_nm == 1.5), "{e}");
         assert!(e.to_string().starts_with("the torque is 1.5 Nm in every sample"), "{e}");

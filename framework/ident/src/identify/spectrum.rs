@@ -1,6 +1,6 @@
 //! Frequency scans of a residual, for the vibration causes.
 
-use super::numeric::{log_grid, refine_log};
+use super::numeric::{log_grid, median_step, refine_log};
 
 /// `(sum r sin(w t), sum r cos(w t))`. On uniformly spaced samples the phasor is rotated by a
 /// constant step (two multiplications a sample instead of a sine and a cosine), re-anchored
@@ -37,18 +37,7 @@ pub(crate) fn projection(t: &[f64], r: &[f64], w: f64) -> (f64, f64) {
 /// The band a mode is looked for in [Hz]: above the excitation's eighth harmonic (or 0.5 Hz),
 /// below 90 % of Nyquist (at most 200 Hz).
 pub(crate) fn band(t: &[f64], excitation_hz: f64) -> (f64, f64) {
-    ((8.0 * excitation_hz).max(0.5), (0.5 / sample_step(t)).min(200.0) * 0.9)
-}
-
-/// The median step between samples [s]: the sampling's own period where a part leaves stretches
-/// of the record out (the span over the count would read them as slower sampling).
-pub(crate) fn sample_step(t: &[f64]) -> f64 {
-    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|s| *s > 0.0).collect();
-    if steps.is_empty() {
-        return 1.0;
-    }
-    let mid = steps.len() / 2;
-    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+    ((8.0 * excitation_hz).max(0.5), (0.5 / median_step(t)).min(200.0) * 0.9)
 }
 
 /// The number of resolvable frequencies in the band over the record: the look-elsewhere count.
@@ -72,7 +61,7 @@ pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> Op
         s * s + c * c
     };
     let n = t.len();
-    let dt = sample_step(t);
+    let dt = median_step(t);
     // The periodogram on the grid of the median step, each sample in its nearest slot and zeros
     // where there is none: uniform samples exactly; a log that jitters, gaps or restarts with a
     // time jump (repetitions) to within half a step. Its peak is refined on the exact projection
