@@ -203,13 +203,14 @@ fn dropouts(series: &[f64], uncertainty: f64) -> Vec<bool> {
 /// `3 (sin x - x cos x) / x^3`, `x = 2 pi / 50`).
 const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
 
-/// The velocity window's half-width per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`] of
-/// the local period, twice the stroke between the reversals around the sample (debounced at a
-/// tenth of the range), never more than of the fundamental's `period_samples`; between 2 and 25
-/// samples. A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
+/// The widest the velocity window may be per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`]
+/// of the local period, twice the stroke between the reversals around the sample (debounced at
+/// a tenth of the range), never more than of the fundamental's `period_samples`; between 2 and
+/// 25 samples. A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
 /// in places than its fundamental says: a window sized on the fundamental reads those rates low,
-/// and every rate-driven torque (viscous friction most) comes out too large; a window sized on
-/// the fastest motion everywhere differences the slow parts' quantisation steps.
+/// and every rate-driven torque (viscous friction most) comes out too large. Where the motion
+/// bends faster than its strokes tell (a corner between a hold and a ramp; every sample of a
+/// slow log), [`adaptive_velocity`] narrows the window further.
 fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64) -> Vec<usize> {
     let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(2, 25);
     let mut out = vec![half(period_samples); n];
@@ -221,10 +222,17 @@ fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64) -> V
 }
 
 /// Deflection rate: the slope of a local least-squares line (a Savitzky-Golay derivative) over
-/// `+-half[i]` samples around sample `i` (see [`velocity_half_widths`]): no lag, and it averages out the quantisation. Running window sums
+/// `+-half[i]` samples around sample `i`: no lag, and it averages out the quantisation. Running window sums
 /// make it one pass whatever the window; they are summed afresh around a new time origin every
 /// 1024 samples so that rounding cannot build up over a long record.
+#[cfg(test)]
 fn velocity(t: &[f64], d: &[f64], half: &[usize]) -> Vec<f64> {
+    slopes(t, d, half).into_iter().map(|(slope, _)| slope).collect()
+}
+
+/// [`velocity`]'s slopes with the spread of each window's time stamps about their mean,
+/// `sum (t - mean t)^2` [s^2]: a slope's standard error is the deflection's noise over its root.
+fn slopes(t: &[f64], d: &[f64], half: &[usize]) -> Vec<(f64, f64)> {
     let n = d.len();
     let mut out = Vec::with_capacity(n);
     let (mut st, mut sd, mut stt, mut std_) = (0.0, 0.0, 0.0, 0.0);
@@ -265,7 +273,52 @@ fn velocity(t: &[f64], d: &[f64], half: &[usize]) -> Vec<f64> {
         let m = (hi - lo) as f64;
         let den = stt - st * st / m;
         let num = std_ - st * sd / m;
-        out.push(if den > 1e-300 { num / den } else { 0.0 });
+        out.push(if den > 1e-300 { (num / den, den) } else { (0.0, 0.0) });
+    }
+    out
+}
+
+/// The half-widths the rate's window is chosen from [samples], narrowest first (an assumption:
+/// steps of about 1.4 in width, so the chosen window is at most 40 % narrower than the widest
+/// the data allow, up to the 25 samples of [`velocity_half_widths`]).
+const RATE_HALF_WIDTHS: [usize; 9] = [1, 2, 3, 4, 6, 8, 11, 16, 25];
+
+/// Standard errors a wider window's slope may lie from every narrower one's before the wider
+/// window is refused (an assumption: three, a 0.3 % chance each that noise alone refuses it).
+const RATE_WINDOW_SIGMAS: f64 = 3.0;
+
+/// Deflection rate with a window chosen at each sample by the intersection of confidence
+/// intervals (Goldenshluger and Nemirovski 1997; Katkovnik 1999): the slope of the widest window
+/// among [`RATE_HALF_WIDTHS`] narrower than `widest[i]` (see [`velocity_half_widths`]) and
+/// `widest[i]` itself whose interval `slope +- RATE_WINDOW_SIGMAS se` still meets the intervals
+/// of all narrower ones, `se = noise / sqrt(sum (t - mean t)^2)` with `noise_rad` the
+/// deflection's noise (its quantisation and its own noise). Where the motion is a line to within
+/// the noise it is the widest window (quantisation averaged out); where it bends more than the
+/// noise, narrower. The window sized on the motion's strokes alone read a 20 Hz log's rate over
+/// +-2 to +-7 samples (0.2-0.7 s): the corners between its holds and ramps were smeared, and a
+/// delay of 85 ms with them (the blind devices' delay binned to 20 Hz was not named).
+fn adaptive_velocity(t: &[f64], d: &[f64], noise_rad: f64, widest: &[usize]) -> Vec<f64> {
+    let n = d.len();
+    let (mut lo, mut hi) = (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]);
+    let mut out = vec![0.0; n];
+    let mut open = vec![true; n];
+    // The ladder's rungs narrower than the widest allowed, then the widest itself.
+    let rungs = RATE_HALF_WIDTHS.iter().map(|h| vec![*h; n]).chain(std::iter::once(widest.to_vec()));
+    for (rung, half) in rungs.enumerate() {
+        let last = rung == RATE_HALF_WIDTHS.len();
+        for (i, (slope, spread)) in slopes(t, d, &half).into_iter().enumerate() {
+            if !open[i] || (!last && half[i] >= widest[i]) {
+                continue;
+            }
+            let reach = if spread > 0.0 { RATE_WINDOW_SIGMAS * noise_rad / spread.sqrt() } else { f64::INFINITY };
+            lo[i] = lo[i].max(slope - reach);
+            hi[i] = hi[i].min(slope + reach);
+            if lo[i] > hi[i] {
+                open[i] = false;
+            } else {
+                out[i] = slope;
+            }
+        }
     }
     out
 }
@@ -317,13 +370,13 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
     }
 }
 
-/// The deflection rate of [`velocity`], segment by segment: never differenced across a gap.
-fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], half: &[usize]) -> Vec<f64> {
+/// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a gap.
+fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise_rad: f64, half: &[usize]) -> Vec<f64> {
     let mut v = Vec::with_capacity(d.len());
     for (k, &a) in starts.iter().enumerate() {
         let b = starts.get(k + 1).copied().unwrap_or(d.len());
         if b - a >= 2 {
-            v.extend(velocity(&t[a..b], &d[a..b], &half[a..b]));
+            v.extend(adaptive_velocity(&t[a..b], &d[a..b], noise_rad, &half[a..b]));
         } else {
             v.extend(std::iter::repeat_n(0.0, b - a));
         }
@@ -400,7 +453,9 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
     };
     let turning = reversals(&d);
-    let v = velocity_by_segment(&t, &d, &starts, &velocity_half_widths(d.len(), &turning, period_samples));
+    // The deflection's noise: its quantisation (uniform over a step) and its own white noise.
+    let deflection_noise = (resolution * resolution / 12.0 + noise_floor(&d, &starts).powi(2)).sqrt();
+    let v = velocity_by_segment(&t, &d, &starts, deflection_noise, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = turning.len();
