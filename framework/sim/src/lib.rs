@@ -116,6 +116,18 @@ impl DelayLine {
         }
         oldest
     }
+
+    /// [`Self::at`], but `None` when nothing was kept at or before `t` and nothing older was
+    /// dropped: a reading from before the simulation started, which no sensor gave.
+    fn reading_at(&self, t: f64) -> Option<f64> {
+        let n = if self.filled { Self::CAPACITY } else { self.next };
+        let newest_kept_before = (1..=n).map(|back| self.samples[(self.next + Self::CAPACITY - back) % Self::CAPACITY]).find(|(ts, _)| *ts <= t + 1e-12);
+        match newest_kept_before {
+            Some((_, v)) => Some(v),
+            None if self.filled => Some(self.at(t)),
+            None => None,
+        }
+    }
 }
 
 /// The simulated arm.
@@ -349,7 +361,7 @@ impl SimHal {
         for u in &mut hal.units {
             u.start(&hal.positions);
         }
-        hal.record();
+        hal.record_positions();
         Ok(hal)
     }
 
@@ -372,17 +384,24 @@ impl SimHal {
     }
 
     fn record(&mut self) {
+        self.record_positions();
+        for (lines, u) in self.sensor_history.chunks_mut(unit::MAX_UNIT_DOF).zip(&self.units) {
+            for (h, tau) in lines.iter_mut().zip(&u.sensor_torque[..u.dof_names.len()]) {
+                h.push(self.time_s, *tau);
+            }
+        }
+    }
+
+    /// The encoders' and drives' histories; the torque sensors' only once they have read (after
+    /// the first physics step: at the start their reading is no reading, see
+    /// [`Self::sensor_torque_aged`]).
+    fn record_positions(&mut self) {
         for i in 0..self.encoders.len() {
             let v = self.truth(&self.encoders[i]);
             self.encoder_history[i].push(self.time_s, v);
         }
         for (h, d) in self.drive_history.iter_mut().zip(&self.drives) {
             h.push(self.time_s, d.position);
-        }
-        for (lines, u) in self.sensor_history.chunks_mut(unit::MAX_UNIT_DOF).zip(&self.units) {
-            for (h, tau) in lines.iter_mut().zip(&u.sensor_torque[..u.dof_names.len()]) {
-                h.push(self.time_s, *tau);
-            }
         }
     }
 
@@ -413,13 +432,15 @@ impl SimHal {
 
     /// The torque sensor's reading of DOF `name` as it was `age_s` ago [Nm] (within one physics
     /// step; at most about 0.25 s back): a recording pairs it with encoder readings of that age,
-    /// so that the channels stay aligned when the SPI bus has latency.
+    /// so that the channels stay aligned when the SPI bus has latency. `None` for a reading from
+    /// before the simulation started (a recording's first samples read 0.0 there, exactly, and
+    /// identify took them for lost frames).
     pub fn sensor_torque_aged(&self, name: &str, age_s: f64) -> Option<f64> {
         let (unit, dof) = self.units.iter().enumerate().find_map(|(k, u)| u.dof_names.iter().position(|n| n == name).map(|i| (k, i)))?;
         if age_s <= 0.0 {
             return Some(self.units[unit].sensor_torque[dof]);
         }
-        Some(self.sensor_history[unit * unit::MAX_UNIT_DOF + dof].at(self.time_s - age_s))
+        self.sensor_history[unit * unit::MAX_UNIT_DOF + dof].reading_at(self.time_s - age_s)
     }
 
     /// The configured SPI latency [s]: the age of every encoder reading.
@@ -593,7 +614,7 @@ impl SimHal {
         for u in &mut self.units {
             u.start(&self.positions);
         }
-        self.record();
+        self.record_positions();
     }
 
     /// Lets the drives move for `seconds` of simulated time without reading (settling).

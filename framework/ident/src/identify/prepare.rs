@@ -198,6 +198,13 @@ fn dropouts(series: &[f64], uncertainty: f64) -> Vec<bool> {
     dropped
 }
 
+/// [`dropouts`] in each segment of contiguous logging apart (`starts` from [`segment_starts`]):
+/// a record that starts from rest after a gap (a repetition, an experiment's next sine) reads
+/// exactly zero there, and the reading before the gap is no neighbour of it.
+fn dropouts_by_segment(series: &[f64], starts: &[usize], uncertainty: f64) -> Vec<bool> {
+    starts.iter().enumerate().flat_map(|(k, &a)| dropouts(&series[a..starts.get(k + 1).copied().unwrap_or(series.len())], uncertainty)).collect()
+}
+
 /// The half-width of the velocity's window is this fraction of the local period of the motion:
 /// a least-squares slope over +-P/50 reads a sine's rate 0.16 % low (its gain is
 /// `3 (sin x - x cos x) / x^3`, `x = 2 pi / 50`).
@@ -420,6 +427,25 @@ pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
     (*squares.select_nth_unstable_by(mid, f64::total_cmp).1 / 0.4549).sqrt()
 }
 
+/// The root mean square of Gasser, Sroka and Jennen-Steinmetz's pseudo-residuals (see
+/// [`noise_floor`]) within each segment: the mean, not the median. A deflection that is the
+/// difference of two quantised encoders (an output encoder less a finer motor encoder through a
+/// gear ratio) moves in steps of many sizes whose smallest is far below its scatter; the median
+/// of its pseudo-residuals is zero where it holds a count, and its 2nd-percentile step (the
+/// resolution) 1.5e-5 rad on the elbow, where the scatter is ten times that.
+fn scatter_rms(y: &[f64], starts: &[usize]) -> f64 {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for (k, &a) in starts.iter().enumerate() {
+        let b = starts.get(k + 1).copied().unwrap_or(y.len());
+        for i in a + 1..b.saturating_sub(1) {
+            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
+            sum += e * e / 1.5;
+            count += 1;
+        }
+    }
+    if count == 0 { 0.0 } else { (sum / count as f64).sqrt() }
+}
+
 pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
@@ -429,12 +455,16 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         return Err(PrepareError::UnevenColumn { column, len, samples: n_all });
     }
     let resolution = resolution_rad(&data.deflection);
-    let mut lost = dropouts(&data.deflection, resolution);
+    // Each segment of contiguous logging apart: a record that starts from rest (a repetition,
+    // an experiment's next sine) reads exactly zero after a gap, and the reading before the gap
+    // is no neighbour of it.
+    let raw_starts = segment_starts(&data.t);
+    let mut lost = dropouts_by_segment(&data.deflection, &raw_starts, resolution);
     // A torque reading is uncertain by its sensor's noise (a noisy torque near zero may read
     // exactly zero between two readings either side of it: a quantised F/T sensor of 1/640 Nm
     // with 0.03 Nm of noise did), measured on the raw series as the floor is.
-    let torque_noise = noise_floor(&data.torque, &segment_starts(&data.t));
-    lost.iter_mut().zip(dropouts(&data.torque, torque_noise)).for_each(|(a, b)| *a |= b);
+    let torque_noise = noise_floor(&data.torque, &raw_starts);
+    lost.iter_mut().zip(dropouts_by_segment(&data.torque, &raw_starts, torque_noise)).for_each(|(a, b)| *a |= b);
     let dropped = lost.iter().filter(|l| **l).count();
     // The columns without the dropouts: borrowed when there are none (a long record is not
     // copied whole).
@@ -453,8 +483,9 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
     };
     let turning = reversals(&d);
-    // The deflection's noise: its quantisation (uniform over a step) and its own white noise.
-    let deflection_noise = (resolution * resolution / 12.0 + noise_floor(&d, &starts).powi(2)).sqrt();
+    // The deflection's noise: its quantisation (uniform over a step) and what else scatters it
+    // about a line from sample to sample (see [`scatter_rms`]).
+    let deflection_noise = (resolution * resolution / 12.0 + scatter_rms(&d, &starts).powi(2)).sqrt();
     let v = velocity_by_segment(&t, &d, &starts, deflection_noise, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
@@ -525,6 +556,46 @@ mod tests {
         let e = prepare(&data, 0.7).err().expect("refused");
         assert!(matches!(e, PrepareError::ConstantTorque { value_nm } if value_nm == 1.5), "{e}");
         assert!(e.to_string().starts_with("the torque is 1.5 Nm in every sample"), "{e}");
+    }
+
+    #[test]
+    fn a_segment_that_starts_from_rest_after_a_gap_is_not_a_dropout() {
+        // Finding (issue 32, an experiment's sines recorded one after the other, each from
+        // rest): the torque read exactly zero in the first samples after the 1 s gap (the
+        // simulator's sensor before it had read; a real logger may start so too), the reading
+        // before the gap (-0.143 Nm) was taken as their neighbour, and they were dropped as
+        // lost frames. Across a gap there is no neighbour to judge a zero by.
+        let torque = [-0.113, -0.138, -0.143, 0.0, 0.0, 0.0, 0.0, -0.0896, -0.0946, -0.0996];
+        let starts = [0, 3];
+        let whole = dropouts(&torque, 0.01);
+        assert!(whole[3..7].iter().all(|d| *d), "the finding: {whole:?}");
+        assert!(!dropouts_by_segment(&torque, &starts, 0.01).iter().any(|d| *d));
+    }
+
+    #[test]
+    fn the_rate_of_a_deflection_between_two_encoders_is_read_over_a_wide_window() {
+        // Finding (the project's simulated elbow, after the rate's window began to narrow where
+        // the deflection bends): the deflection is a 14-bit output encoder less a finer motor
+        // encoder through the tendon ratio, so its steps come in many sizes and its smallest
+        // common step (1.5e-5 rad) is far below its scatter. Taken as its noise, every window
+        // wider than +-2 samples looked bent, and the rate read 35 % high at mid-stroke; the
+        // identified hysteresis came out at 357 Nm/rad instead of about 100.
+        use std::f64::consts::TAU;
+        let (q_out, q_motor) = (TAU / 16384.0, TAU / 1_048_576.0);
+        let t: Vec<f64> = (0..16_000).map(|i| f64::from(i) * 0.005).collect();
+        let deflection: Vec<f64> = t
+            .iter()
+            .map(|t| {
+                let motor = 1e-3 * (TAU * 0.25 * t + 0.3).sin();
+                let output = 2.0 * motor + 0.1 * (TAU * 0.25 * t).sin();
+                (output / q_out).round() * q_out - 2.0 * (motor / q_motor).round() * q_motor
+            })
+            .collect();
+        let torque = deflection.iter().map(|d| 100.0 * d).collect();
+        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
+        let truth = |t: f64| 0.1 * TAU * 0.25 * (TAU * 0.25 * t).cos();
+        let worst = p.train.t.iter().zip(&p.train.v).skip(100).map(|(t, v)| (v - truth(*t)).abs()).fold(0.0, f64::max);
+        assert!(worst < 0.05 * 0.1 * TAU * 0.25, "rate off by up to {worst} rad/s");
     }
 
     /// The least-squares line's slope through samples `a..=b`, summed directly.
