@@ -8,6 +8,7 @@ use clap::Subcommand;
 use jointctl_experiments::plot::{COLORS, RGBColor, Series, lines};
 use jointctl_experiments::record::{RecordOptions, record, write_csv};
 use jointctl_experiments::tracking::{Plan, Row, Scenario, bandwidth_hz, run};
+use jointctl_ident::identify::experiment::{Experiment, Segment};
 
 #[derive(Subcommand)]
 pub enum ExperimentCommand {
@@ -105,6 +106,11 @@ pub enum SimCommand {
         /// Sample rate [Hz].
         #[arg(long, default_value_t = 100.0)]
         rate: f64,
+        /// Run an experiment file instead of one sine (`experiment.yaml` as `jointctl identify`
+        /// proposes it for a confounded pair: sines run one after the other, each from rest,
+        /// written as one record with a 1 s gap in the time between them).
+        #[arg(long, conflicts_with_all = ["amplitude", "frequency", "duration"])]
+        experiment: Option<PathBuf>,
     },
     /// Characterise a joint into one CSV for `jointctl fit`: the shoulder (q2) at 0-45 mm in
     /// 5 mm steps (section 3.4.2; fit with `--branches --order 3`), the wrist at 0-50 mm along
@@ -341,10 +347,43 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
     }
 }
 
+/// An experiment file as `jointctl identify` writes it, each segment checked (a sine the
+/// simulator can run: finite, positive, at most a day long).
+fn read_experiment(file: &std::path::Path) -> Result<Experiment, String> {
+    let text = jointctl_files::read_to_string(file, jointctl_files::FileKind::Config).map_err(|e| e.to_string())?;
+    let experiment: Experiment = serde_yaml::from_str(&text).map_err(|e| match e.location() {
+        Some(at) => format!("{}:{}:{}: {e}", file.display(), at.line(), at.column()),
+        None => format!("{}: {e}", file.display()),
+    })?;
+    if experiment.segments.is_empty() {
+        return Err(format!("{}: segments: none to run", file.display()));
+    }
+    for (i, s) in experiment.segments.iter().enumerate() {
+        let bad = |field: &str, value: f64, rule: &str| Err(format!("{}: segments[{i}].{field}: {value} must be {rule}", file.display()));
+        if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
+            return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
+        }
+        if !(s.frequency_hz.is_finite() && s.frequency_hz > 0.0 && s.frequency_hz <= 100.0) {
+            return bad("frequency_hz", s.frequency_hz, "in (0, 100] Hz");
+        }
+        if !(s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= 86_400.0) {
+            return bad("duration_s", s.duration_s, "in (0, 86400] s");
+        }
+    }
+    Ok(experiment)
+}
+
 pub fn sim(cmd: SimCommand) -> ExitCode {
     match cmd {
         SimCommand::Replay(args) => crate::replay::run_sim(args),
-        SimCommand::Record { config, joint, out, amplitude, frequency, duration, pivot_mm, angle_deg, rate } => {
+        SimCommand::Record { config, joint, out, amplitude, frequency, duration, pivot_mm, angle_deg, rate, experiment } => {
+            let segments = match &experiment {
+                Some(file) => match read_experiment(file) {
+                    Ok(e) => e.segments,
+                    Err(e) => return crate::fail(e),
+                },
+                None => vec![Segment { amplitude_rad: amplitude, frequency_hz: frequency, duration_s: duration }],
+            };
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
                 Err(e) => return crate::fail_err(e),
@@ -354,10 +393,17 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                 Ok(l) => l,
                 Err(e) => return crate::fail_err(e),
             };
-            let samples = match record(&loaded, &loader, &opts) {
-                Ok(s) => s,
-                Err(e) => return crate::fail_err(e),
-            };
+            let mut samples: Vec<jointctl_experiments::record::Sample> = Vec::new();
+            for segment in &segments {
+                let opts = RecordOptions { amplitude_rad: segment.amplitude_rad, frequency_hz: segment.frequency_hz, duration_s: segment.duration_s, ..opts.clone() };
+                // Each segment from rest, after the last one's end and a gap of 1 s (identify
+                // starts a segment of contiguous logging there and never differences across it).
+                let offset = samples.last().map_or(0.0, |s| s.t + 1.0);
+                match record(&loaded, &loader, &opts) {
+                    Ok(more) => samples.extend(more.into_iter().map(|s| jointctl_experiments::record::Sample { t: s.t + offset, ..s })),
+                    Err(e) => return crate::fail_err(e),
+                }
+            }
             let file = match std::fs::File::create(&out) {
                 Ok(f) => f,
                 Err(e) => return crate::fail(format!("cannot create {}: {e}", out.display())),

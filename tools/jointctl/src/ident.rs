@@ -306,6 +306,22 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         let list: Vec<String> = report.confounded.iter().map(|c| format!("{} or {}: {}", c.effect, c.alternative, c.evidence)).collect();
         let _ = writeln!(md, "\nConfounded (the data cannot tell these apart): {}.", list.join("; "));
     }
+    if let Some(experiment) = &report.experiment {
+        let _ = writeln!(md, "\nAn experiment that tells them apart: {}.", experiment.purpose.join("; "));
+        if let Some(dir) = a.report.as_ref().or(a.out.as_ref()) {
+            let file = dir.join("experiment.yaml");
+            let written = std::fs::create_dir_all(dir).map_err(|e| e.to_string()).and_then(|_| serde_yaml::to_string(experiment).map_err(|e| e.to_string())).and_then(|yaml| {
+                let header = format!("# Proposed by `jointctl identify --data {}`: run with `jointctl sim record CONFIG --joint J --experiment {}`\n", a.data.display(), file.display());
+                std::fs::write(&file, header + &yaml).map_err(|e| e.to_string())
+            });
+            match written {
+                Ok(()) => {
+                    let _ = writeln!(md, "Written as {} (run it with `jointctl sim record CONFIG --joint J --experiment {}`, then identify the new record).", file.display(), file.display());
+                }
+                Err(e) => return crate::fail(format!("cannot write {}: {e}", file.display())),
+            }
+        }
+    }
     if !report.negligible.is_empty() {
         let list: Vec<String> = report.negligible.iter().map(|c| format!("{} ({})", c.effect, c.evidence)).collect();
         let _ = writeln!(md, "\nSignificant but negligible (not named): {}.", list.join(", "));

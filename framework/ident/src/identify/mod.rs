@@ -23,6 +23,7 @@ use crate::csv::Data;
 
 pub mod causes;
 mod design;
+pub mod experiment;
 mod numeric;
 pub mod prepare;
 mod search;
@@ -79,6 +80,34 @@ pub struct Confound {
     pub bic: [f64; 2],
     /// One sentence: what cannot be told apart, and why.
     pub evidence: String,
+}
+
+/// Why a named cause and an alternative are confounded, by the rule that found them (training
+/// BICs within 10, or the alternative's improvement at least 90 % of the named cause's; see
+/// `docs/identify/significance.md`, "Confounds"): training BICs of the model with the
+/// named cause `named_bic`, with the alternative in its place `other_bic`, and before either
+/// `before_bic`.
+///
+/// ```
+/// use jointctl_ident::identify::confound_evidence;
+/// assert!(confound_evidence("dead_zone", "stiffness_error", -100.0, -95.0, 0.0).contains("a difference of 5, below 10"));
+/// // The share rule: 143 apart, but the alternative improves the BIC by 99 % of the named cause's.
+/// let why = confound_evidence("dead_zone", "stiffness_error", -19903.0, -19760.0, 0.0);
+/// assert!(why.contains("99 % of") && !why.contains("below"), "{why}");
+/// ```
+pub fn confound_evidence(named: &str, other: &str, named_bic: f64, other_bic: f64, before_bic: f64) -> String {
+    let why = if (named_bic - other_bic).abs() < select::CONFOUND_BIC {
+        format!("BIC {other_bic:.0} against {named_bic:.0}: a difference of {:.0}, below {:.0}, not very strong evidence for either", (named_bic - other_bic).abs(), select::CONFOUND_BIC)
+    } else {
+        format!(
+            "it improves the training BIC by {:.0}, {:.0} % of the {:.0} the named cause does (at least {:.0} % counts as about as well)",
+            before_bic - other_bic,
+            100.0 * (before_bic - other_bic) / (before_bic - named_bic),
+            before_bic - named_bic,
+            100.0 * select::CONFOUND_SHARE
+        )
+    };
+    format!("{other} in place of {named} explains the training part about as well ({why}); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart")
 }
 
 /// What the extended model leaves unexplained on the held-out part.
@@ -157,6 +186,8 @@ pub struct Report {
     pub negligible: Vec<NegligibleCause>,
     /// Named causes that the data cannot tell from another candidate (see [`Confound`]).
     pub confounded: Vec<Confound>,
+    /// An experiment that would tell each confounded pair apart (none without pairs).
+    pub experiment: Option<experiment::Experiment>,
     /// What is left unexplained, measured against the noise floor.
     pub unexplained: Unexplained,
     /// How a cause's held-out gain was judged.
@@ -378,19 +409,14 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
     let held_out_reach = [ratio(rate_test, rate_train), ratio(range_test, range_train)];
     let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach);
-    let confounded = selection
+    let confounded: Vec<Confound> = selection
         .confounded
         .iter()
-        .map(|&(named, other, a, b)| Confound {
+        .map(|&(named, other, a, b, before)| Confound {
             effect: name(named),
             alternative: name(other),
             bic: [a, b],
-            evidence: format!(
-                "{} in place of {} explains the training part about as well (BIC {b:.0} against {a:.0}: a difference below {:.0}, not very strong evidence for either); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart",
-                name(other),
-                name(named),
-                select::CONFOUND_BIC
-            ),
+            evidence: confound_evidence(&name(named), &name(other), a, b, before),
         })
         .collect();
     let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
@@ -406,6 +432,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         rmse_after,
         causes: found,
         negligible,
+        experiment: experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz),
         confounded,
         unexplained,
         significance: Significance {

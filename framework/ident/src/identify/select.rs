@@ -36,8 +36,9 @@ pub(crate) struct Selection {
     /// Causes with evidence whose gain is below the relevance threshold: (cause, evidence).
     pub negligible: Vec<(usize, String)>,
     /// Named causes and a candidate left out that explains the training part about as well in
-    /// its place: (named, alternative, training BIC of the named, of the alternative).
-    pub confounded: Vec<(usize, usize, f64, f64)>,
+    /// its place: (named, alternative, training BIC of the named, of the alternative, of the
+    /// model before either).
+    pub confounded: Vec<(usize, usize, f64, f64, f64)>,
 }
 
 /// A candidate whose training BIC, in the step a cause was named, lies within this much of the
@@ -207,7 +208,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     let mut negligible = Vec::new();
     // Named causes and the candidates that explained the training part about as well, in the
     // step each was named: (named, alternative, BIC of each).
-    let mut about_as_well: Vec<(usize, usize, f64, f64)> = Vec::new();
+    let mut about_as_well: Vec<(usize, usize, f64, f64, f64)> = Vec::new();
     let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
     let mut current = score(&spec, 0.0);
     // Each candidate's best parameters of the previous step: the next search starts there.
@@ -261,7 +262,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                         // Candidates with a better training BIC were tested before and the
                         // held-out part told them apart; those after it were not tested.
                         let close = |bic: f64| (bic - b).abs() < CONFOUND_BIC || current - bic >= CONFOUND_SHARE * (current - b);
-                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0)).map(|w| (*c, w.2, *b, w.0)));
+                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0)).map(|w| (*c, w.2, *b, w.0, current)));
                         chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
                         current = score(&s, 0.0);
                         spec = s;
