@@ -135,7 +135,7 @@ struct CommandFeed {
 impl CommandFeed {
     fn new(commands: Vec<RecordedCommand>, arm: &Arm) -> Self {
         let status = Arc::new(LoopStatus::new(arm.dof_names.len()));
-        CommandFeed { commands, next: 0, validator: CommandValidator::new(arm.dof_specs(), Arc::clone(&status)), status }
+        CommandFeed { commands, next: 0, validator: CommandValidator::new(arm.dof_specs(), Arc::clone(&status)).with_loop_rate(1.0 / arm.dt_s), status }
     }
 
     fn apply_due(&mut self, arm: &mut Arm, frame: &RawSample, notes: &mut Vec<String>) {

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use jointctl_config::LimitsConfig;
+use jointctl_config::{LimitsConfig, short_number};
 
 use crate::status::LoopStatus;
 use jointctl_modes::{Mode, Reference, Trajectory, TrajectoryPoint, Waveform};
@@ -100,7 +100,7 @@ pub enum CommandError {
     #[error("the runtime is stopping and takes no more commands")]
     Stopping,
     /// A value is NaN or infinite.
-    #[error("{what} must be a finite number, got {value}")]
+    #[error("{what} must be a finite number, got {}", short_number(*value))]
     NotFinite {
         /// Which value.
         what: &'static str,
@@ -108,7 +108,7 @@ pub enum CommandError {
         value: f64,
     },
     /// A position beyond the DOF's limits.
-    #[error("position {position_rad} rad is outside {joint}'s limits [{}, {}] rad", limits_rad[0], limits_rad[1])]
+    #[error("position {} rad is outside {joint}'s limits [{}, {}] rad", short_number(*position_rad), short_number(limits_rad[0]), short_number(limits_rad[1]))]
     PositionOutOfLimits {
         /// The DOF.
         joint: String,
@@ -148,14 +148,25 @@ pub enum CommandError {
         /// The waveform.
         waveform: Waveform,
     },
-    /// A negative start delay.
-    #[error("the start delay must be >= 0 s, got {delay_s} s")]
+    /// A periodic reference faster than the loop can sample: above half its rate, the loop
+    /// reads it as another, slower sine (aliasing).
+    #[error("a {waveform:?} reference of {} Hz is above the loop's Nyquist frequency ({} Hz: half its rate)", short_number(*frequency_hz), short_number(*nyquist_hz))]
+    AboveNyquist {
+        /// The waveform.
+        waveform: Waveform,
+        /// The frequency asked for [Hz].
+        frequency_hz: f64,
+        /// Half the loop's rate [Hz].
+        nyquist_hz: f64,
+    },
+    /// A start delay below zero or beyond [`MAX_START_DELAY_S`].
+    #[error("the start delay must be in [0, {}] s, got {} s", short_number(MAX_START_DELAY_S), short_number(*delay_s))]
     NegativeDelay {
         /// The delay asked for [s].
         delay_s: f64,
     },
     /// The reference would exceed the DOF's torque limit.
-    #[error("the reference reaches {peak_nm} Nm, beyond {joint}'s torque limit {limit_nm} Nm")]
+    #[error("the reference reaches {} Nm, beyond {joint}'s torque limit {} Nm", short_number(*peak_nm), short_number(*limit_nm))]
     TorqueBeyondLimit {
         /// The DOF.
         joint: String,
@@ -165,7 +176,7 @@ pub enum CommandError {
         limit_nm: f64,
     },
     /// Negative impedance gains.
-    #[error("K and D must be >= 0, got K = {stiffness_nm_per_rad}, D = {damping_nms_per_rad}")]
+    #[error("K and D must be >= 0, got K = {}, D = {}", short_number(*stiffness_nm_per_rad), short_number(*damping_nms_per_rad))]
     NegativeImpedance {
         /// K [Nm/rad].
         stiffness_nm_per_rad: f64,
@@ -173,10 +184,10 @@ pub enum CommandError {
         damping_nms_per_rad: f64,
     },
     /// A stiffness that is not positive.
-    #[error("the stiffness must be > 0 Nm/rad, got {0}")]
+    #[error("the stiffness must be > 0 Nm/rad, got {}", short_number(*.0))]
     NonPositiveStiffness(f64),
     /// A stiffness beyond the DOF's range.
-    #[error("stiffness {stiffness_nm_per_rad} Nm/rad is outside {joint}'s range [{}, {}] Nm/rad", range[0], range[1])]
+    #[error("stiffness {} Nm/rad is outside {joint}'s range [{}, {}] Nm/rad", short_number(*stiffness_nm_per_rad), short_number(range[0]), short_number(range[1]))]
     StiffnessOutOfRange {
         /// The DOF.
         joint: String,
@@ -230,7 +241,13 @@ pub struct CommandValidator {
     dofs: Vec<DofSpec>,
     status: Arc<LoopStatus>,
     stop_accepted: bool,
+    /// Half the loop's rate [Hz] (infinite until [`CommandValidator::with_loop_rate`]).
+    nyquist_hz: f64,
 }
+
+/// The longest start delay a reference may ask for [s] (an assumption: a day; a delay is a wait
+/// before an experiment starts, and 1e300 s was accepted and never started).
+pub const MAX_START_DELAY_S: f64 = 86_400.0;
 
 fn finite(what: &'static str, value: f64) -> Result<f64, CommandError> {
     if value.is_finite() { Ok(value) } else { Err(CommandError::NotFinite { what, value }) }
@@ -239,7 +256,26 @@ fn finite(what: &'static str, value: f64) -> Result<f64, CommandError> {
 impl CommandValidator {
     /// A validator for these DOFs, reading the loop's status.
     pub fn new(dofs: Vec<DofSpec>, status: Arc<LoopStatus>) -> Self {
-        CommandValidator { dofs, status, stop_accepted: false }
+        CommandValidator { dofs, status, stop_accepted: false, nyquist_hz: f64::INFINITY }
+    }
+
+    /// The same validator for a loop running at `rate_hz`: periodic references above half of it
+    /// are refused (a 1 GHz sine was accepted on a 40 Hz loop).
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use jointctl_runtime::commands::{CommandValidator, DofSpec};
+    /// use jointctl_runtime::status::LoopStatus;
+    /// let v = CommandValidator::new(vec![DofSpec::any("q1", None)], Arc::new(LoopStatus::new(1))).with_loop_rate(40.0);
+    /// assert_eq!(v.nyquist_hz(), 20.0);
+    /// ```
+    pub fn with_loop_rate(self, rate_hz: f64) -> Self {
+        CommandValidator { nyquist_hz: 0.5 * rate_hz, ..self }
+    }
+
+    /// Half the loop's rate [Hz]: the fastest periodic reference taken.
+    pub fn nyquist_hz(&self) -> f64 {
+        self.nyquist_hz
     }
 
     /// Refuses every command from now on: a stop was queued for the loop. Called once the stop
@@ -353,7 +389,10 @@ impl CommandValidator {
                 if waveform != Waveform::Step && reference.frequency_hz <= 0.0 {
                     return Err(CommandError::NeedsFrequency { waveform });
                 }
-                if reference.start_s < 0.0 {
+                if waveform != Waveform::Step && reference.frequency_hz > self.nyquist_hz {
+                    return Err(CommandError::AboveNyquist { waveform, frequency_hz: reference.frequency_hz, nyquist_hz: self.nyquist_hz });
+                }
+                if !(0.0..=MAX_START_DELAY_S).contains(&reference.start_s) {
                     return Err(CommandError::NegativeDelay { delay_s: reference.start_s });
                 }
                 if let Some(limit) = spec.limits.and_then(|l| l.torque_nm)
@@ -424,6 +463,25 @@ mod tests {
         assert!(e.to_string().contains("is faulted"), "{e}");
         // Disabling it is still taken: it only makes it safer.
         assert!(v.validate(&CommandRequest::new(CommandKind::DISABLE, "q1", &[])).is_ok());
+    }
+
+    /// Issue 40, finding 7: on a 40 Hz loop a 1 GHz sine and a start delay of 1e300 s were
+    /// accepted, and a step of 1e308 Nm was refused with a 309-digit number that the reply's
+    /// 240 bytes cut before the reason.
+    #[test]
+    fn references_the_loop_cannot_follow_are_refused_with_short_numbers() {
+        let limits = LimitsConfig { position_rad: [-2.0, 2.0], velocity_rad_s: None, torque_nm: Some(30.0), stiffness_nm_per_rad: None };
+        let dof = DofSpec { name: "q2".into(), plugin: "vsa_shoulder".into(), limits: Some(limits), torque: true, stiffness: true };
+        let mut v = CommandValidator::new(vec![dof], Arc::new(LoopStatus::new(1))).with_loop_rate(40.0);
+        let torque = |v: &mut CommandValidator, w, values: &[f64]| v.validate(&CommandRequest::torque("q2", w, values)).map(|(c, _)| c);
+        let e = torque(&mut v, jointctl_ipc::TorqueWaveform::SINE, &[5.0, 1e9, 0.0, 0.0]).unwrap_err();
+        assert_eq!(e.to_string(), "a Sine reference of 1.000e9 Hz is above the loop's Nyquist frequency (20 Hz: half its rate)");
+        assert!(torque(&mut v, jointctl_ipc::TorqueWaveform::SINE, &[5.0, 20.0, 0.0, 0.0]).is_ok());
+        let e = torque(&mut v, jointctl_ipc::TorqueWaveform::SINE, &[5.0, 1.0, 0.0, 1e300]).unwrap_err();
+        assert_eq!(e.to_string(), "the start delay must be in [0, 86400] s, got 1.000e300 s");
+        let e = torque(&mut v, jointctl_ipc::TorqueWaveform::STEP, &[1e308, 0.0, 0.0, 0.0]).unwrap_err();
+        assert_eq!(e.to_string(), "the reference reaches 1.000e308 Nm, beyond q2's torque limit 30 Nm");
+        assert!(e.to_string().len() < 100);
     }
 
     /// Finding: torque on a rigid joint and stiffness on a non-VSA joint were accepted (exit 0,

@@ -410,7 +410,7 @@ impl ArmPublisher {
         let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
         let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
         let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
-        let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)), arm.dt_s);
+        let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)).with_loop_rate(1.0 / arm.dt_s), arm.dt_s);
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
         let arm_name = arm.name.clone();
