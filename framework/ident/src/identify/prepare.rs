@@ -427,23 +427,38 @@ pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
     (*squares.select_nth_unstable_by(mid, f64::total_cmp).1 / 0.4549).sqrt()
 }
 
-/// The root mean square of Gasser, Sroka and Jennen-Steinmetz's pseudo-residuals (see
-/// [`noise_floor`]) within each segment: the mean, not the median. A deflection that is the
-/// difference of two quantised encoders (an output encoder less a finer motor encoder through a
-/// gear ratio) moves in steps of many sizes whose smallest is far below its scatter; the median
-/// of its pseudo-residuals is zero where it holds a count, and its 2nd-percentile step (the
-/// resolution) 1.5e-5 rad on the elbow, where the scatter is ten times that.
+/// The share of Gasser, Sroka and Jennen-Steinmetz's pseudo-residuals (see [`noise_floor`])
+/// that [`scatter_rms`] keeps: the smallest 90 % (an assumption: a slow log's corners between
+/// holds and ramps, a few per cent of its samples, are bends, not scatter).
+const SCATTER_KEPT: f64 = 0.9;
+
+/// The mean of a normal variable's square over its central 90 %, as a share of its variance:
+/// `1 - 2 z phi(z) / 0.9` at `z = 1.645`.
+const SCATTER_TRIMMED_SHARE: f64 = 0.623;
+
+/// The deflection's scatter about a line from sample to sample: the root mean square of the
+/// smallest [`SCATTER_KEPT`] of the pseudo-residuals within each segment, scaled back to a
+/// normal variable's standard deviation. Not the median: a deflection that is the difference of
+/// two quantised encoders (an output encoder less a finer motor encoder through a gear ratio)
+/// moves in steps of many sizes; the median of its pseudo-residuals is zero where it holds a
+/// count, and its 2nd-percentile step (the resolution) 1.5e-5 rad on the elbow, where it
+/// scatters ten times that. Not the whole mean either: the corners of a 20 Hz log's holds and
+/// ramps are bends of the motion, and taken as scatter they widened every window again.
 fn scatter_rms(y: &[f64], starts: &[usize]) -> f64 {
-    let (mut sum, mut count) = (0.0, 0usize);
+    let mut squares = Vec::with_capacity(y.len());
     for (k, &a) in starts.iter().enumerate() {
         let b = starts.get(k + 1).copied().unwrap_or(y.len());
         for i in a + 1..b.saturating_sub(1) {
             let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
-            sum += e * e / 1.5;
-            count += 1;
+            squares.push(e * e / 1.5);
         }
     }
-    if count == 0 { 0.0 } else { (sum / count as f64).sqrt() }
+    if squares.is_empty() {
+        return 0.0;
+    }
+    let keep = ((squares.len() as f64 * SCATTER_KEPT).ceil() as usize).clamp(1, squares.len());
+    squares.select_nth_unstable_by(keep - 1, f64::total_cmp);
+    (squares[..keep].iter().sum::<f64>() / keep as f64 / SCATTER_TRIMMED_SHARE).sqrt()
 }
 
 pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
