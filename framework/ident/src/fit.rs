@@ -68,6 +68,30 @@ pub enum FitRunError {
         /// What came out.
         what: String,
     },
+    /// The torque takes fewer than [`MIN_DISTINCT_DEFLECTIONS`] values: no spring to fit (a
+    /// constant torque was fitted at order 6, coefficients of 1e9, exit 0).
+    #[error("{group}: the torque takes {distinct} distinct value(s): a characteristic needs a torque that moves with the deflection")]
+    ConstantTorque {
+        /// The group.
+        group: String,
+        /// Distinct torque values in it.
+        distinct: usize,
+    },
+    /// The fitted curve does not rise over the data's deflections, or its linear stiffness is
+    /// not positive: no spring.
+    #[error("{group}: the fitted curve does not rise over the data (torque {} Nm from {} to {} rad, linear stiffness {} Nm/rad): a spring's torque must rise with its deflection", short(*rise_nm), short(*lo_rad), short(*hi_rad), short(*stiffness_nm_per_rad))]
+    NotIncreasing {
+        /// The group.
+        group: String,
+        /// The data's smallest deflection [rad].
+        lo_rad: f64,
+        /// Its largest [rad].
+        hi_rad: f64,
+        /// The curve's torque change between them [Nm].
+        rise_nm: f64,
+        /// The through-zero linear stiffness [Nm/rad].
+        stiffness_nm_per_rad: f64,
+    },
     /// One group's (pivot setting, direction, branch) curve cannot be fitted.
     #[error("{group}: {source}")]
     Group {
@@ -290,6 +314,38 @@ fn moving_deflection(group: &str, x: &[f64]) -> Result<(), FitRunError> {
     Ok(())
 }
 
+/// `x` printed short (a 1e9 coefficient must not come back as ten digits and a fraction).
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) { format!("{x:.4}") } else { format!("{x:.3e}") }
+}
+
+/// Refuses a torque that does not move (fewer than [`MIN_DISTINCT_DEFLECTIONS`] values: nothing
+/// to fit a spring to), a linear stiffness that is not positive, and a curve whose torque does
+/// not rise from the data's smallest deflection to its largest. A curve that dips locally (a
+/// polynomial through a dead zone, section 3.3.2's way) is kept.
+fn rises(group: &str, curve: &CurveSpec, x: &[f64], y: &[f64]) -> Result<(), FitRunError> {
+    let mut values: Vec<f64> = y.to_vec();
+    values.sort_by(f64::total_cmp);
+    values.dedup();
+    if values.len() < MIN_DISTINCT_DEFLECTIONS {
+        return Err(FitRunError::ConstantTorque { group: group.into(), distinct: values.len() });
+    }
+    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    let torque = |at: f64| -> f64 {
+        let poly = |c: &[f64]| c.iter().rev().fold(0.0, |acc, ck| (acc + ck) * at);
+        match (&curve.coefficients, &curve.positive, &curve.negative) {
+            (Some(c), _, _) => poly(c),
+            (None, Some(p), Some(n)) => poly(if at >= 0.0 { p } else { n }),
+            _ => f64::NAN,
+        }
+    };
+    let rise = torque(hi) - torque(lo);
+    if !(curve.stiffness_nm_per_rad > 0.0 && rise > 0.0) {
+        return Err(FitRunError::NotIncreasing { group: group.into(), lo_rad: lo, hi_rad: hi, rise_nm: rise, stiffness_nm_per_rad: curve.stiffness_nm_per_rad });
+    }
+    Ok(())
+}
+
 fn enough_samples(group: &str, samples: usize, parameters: usize) -> Result<(), FitRunError> {
     let needed = (SAMPLES_PER_PARAMETER * parameters).max(MIN_SAMPLES);
     if samples < needed {
@@ -399,6 +455,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
             };
             (curve, order, rmse, worst, branch)
         };
+        rises(&label, &curve, &x, &y)?;
         groups.push(GroupFit {
             pivot_mm: curve.pivot_mm,
             angle_deg: curve.angle_deg,
@@ -413,6 +470,45 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
     }
     let spec = CharacteristicSpec { source: Source::Measured, curves: groups.iter().map(|g| g.curve.clone()).collect() };
     Ok(FitResult { groups, spec })
+}
+
+#[cfg(test)]
+mod rising {
+    use super::*;
+
+    /// Issue 40, finding 10: a constant torque under a moving deflection was fitted at order 6
+    /// (coefficients of -3.8e6 and 8.8e8, a stiffness of 1.8e-15 Nm/rad) and written, exit 0.
+    #[test]
+    fn a_curve_that_does_not_rise_is_refused() {
+        let mut text = String::from("t,deflection,torque\n");
+        for i in 0..2000 {
+            let t = i as f64 * 0.01;
+            text += &format!("{t},{},1.5\n", 0.05 * (std::f64::consts::TAU * 0.5 * t).sin());
+        }
+        let data = crate::csv::parse(&text, "constant.csv".as_ref()).unwrap();
+        let e = fit(&data, &FitOptions::default()).unwrap_err();
+        assert!(matches!(e, FitRunError::ConstantTorque { distinct: 1, .. }), "{e}");
+        // A torque that falls as the deflection grows: no spring either.
+        let mut text = String::from("t,deflection,torque\n");
+        for i in 0..2000 {
+            let t = i as f64 * 0.01;
+            let x = 0.05 * (std::f64::consts::TAU * 0.5 * t).sin();
+            text += &format!("{t},{x},{}\n", -80.0 * x + 0.01 * (i % 7) as f64);
+        }
+        let data = crate::csv::parse(&text, "falling.csv".as_ref()).unwrap();
+        let e = fit(&data, &FitOptions::default()).unwrap_err();
+        assert!(matches!(e, FitRunError::NotIncreasing { .. }), "{e}");
+        assert!(e.to_string().contains("a spring's torque must rise with its deflection"), "{e}");
+        // A spring that softens but still rises is fitted.
+        let mut text = String::from("t,deflection,torque\n");
+        for i in 0..2000 {
+            let t = i as f64 * 0.01;
+            let x = 0.1 * (std::f64::consts::TAU * 0.5 * t).sin();
+            text += &format!("{t},{x},{}\n", 100.0 * x - 3000.0 * x.powi(3));
+        }
+        let data = crate::csv::parse(&text, "soft.csv".as_ref()).unwrap();
+        assert!(fit(&data, &FitOptions::default()).is_ok());
+    }
 }
 
 #[cfg(test)]
