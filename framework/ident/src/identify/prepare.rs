@@ -391,6 +391,20 @@ fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise_rad: f64, h
     v
 }
 
+/// The squared pseudo-residuals `(y[i-1] + y[i+1]) / 2 - y[i]` within each segment, scaled to
+/// unit variance for white noise (a factor 2/3 on their mean square).
+fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
+    let mut squares = Vec::with_capacity(y.len());
+    for (k, &a) in starts.iter().enumerate() {
+        let b = starts.get(k + 1).copied().unwrap_or(y.len());
+        for i in a + 1..b.saturating_sub(1) {
+            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
+            squares.push(e * e / 1.5);
+        }
+    }
+    squares
+}
+
 /// The noise floor of a series in time order [same unit]: Gasser, Sroka and Jennen-Steinmetz's
 /// (1986) pseudo-residuals, `(y[i-1] + y[i+1]) / 2 - y[i]` scaled to unit variance for white
 /// noise (a factor 2/3 on their mean square), within each segment; the median of the squares
@@ -411,14 +425,7 @@ fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise_rad: f64, h
 /// assert!((floor / (0.1 * (2.0f64 / 12.0).sqrt()) - 1.0).abs() < 0.1, "{floor}");
 /// ```
 pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
-    let mut squares = Vec::with_capacity(y.len());
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(y.len());
-        for i in a + 1..b.saturating_sub(1) {
-            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
-            squares.push(e * e / 1.5);
-        }
-    }
+    let mut squares = pseudo_residual_squares(y, starts);
     if squares.is_empty() {
         return 0.0;
     }
@@ -445,14 +452,7 @@ const SCATTER_TRIMMED_SHARE: f64 = 0.623;
 /// scatters ten times that. Not the whole mean either: the corners of a 20 Hz log's holds and
 /// ramps are bends of the motion, and taken as scatter they widened every window again.
 fn scatter_rms(y: &[f64], starts: &[usize]) -> f64 {
-    let mut squares = Vec::with_capacity(y.len());
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(y.len());
-        for i in a + 1..b.saturating_sub(1) {
-            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
-            squares.push(e * e / 1.5);
-        }
-    }
+    let mut squares = pseudo_residual_squares(y, starts);
     if squares.is_empty() {
         return 0.0;
     }
