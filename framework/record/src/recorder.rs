@@ -114,6 +114,37 @@ impl Gaps {
     }
 }
 
+/// Where the recorder writes: the file, and what it counts on the way.
+struct Sink<W: std::io::Write + std::io::Seek> {
+    writer: mcap::Writer<W>,
+    channel: BTreeMap<&'static str, u16>,
+    out: PathBuf,
+    counts: BTreeMap<&'static str, u64>,
+    gaps: BTreeMap<&'static str, Gaps>,
+    /// The newest cycle (or command sequence) written per channel.
+    newest: BTreeMap<&'static str, u64>,
+    first_stamp: Option<u64>,
+    last_stamp: u64,
+    arm_stopped: bool,
+}
+
+impl<W: std::io::Write + std::io::Seek> Sink<W> {
+    fn write(&mut self, m: &crate::feed::FeedMessage<'_>) -> Result<(), RecordError> {
+        if m.topic == "joint_state" {
+            self.first_stamp.get_or_insert(m.stamp_ns);
+            self.last_stamp = self.last_stamp.max(m.stamp_ns);
+            self.arm_stopped |= m.final_sample;
+        }
+        let count = self.counts.entry(m.topic).or_default();
+        let header = mcap::records::MessageHeader { channel_id: self.channel[m.topic], sequence: *count as u32, log_time: m.stamp_ns, publish_time: m.stamp_ns };
+        *count += 1;
+        self.gaps.entry(m.topic).or_default().see(m.number);
+        let newest = self.newest.entry(m.topic).or_insert(m.number);
+        *newest = (*newest).max(m.number);
+        self.writer.write_to_known_channel(&header, m.json.as_bytes()).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })
+    }
+}
+
 /// The files to attach: the arm's YAML and the files its joints include (as the config crate
 /// resolves them); a description that no longer loads is attached alone.
 fn config_files(config: &Path) -> Vec<(String, Vec<u8>)> {
@@ -191,26 +222,22 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         }
     }
 
-    let mut counts: BTreeMap<&str, u64> = messages::CHANNELS.iter().map(|(t, _)| (*t, 0)).collect();
-    let mut gaps: BTreeMap<&str, Gaps> = messages::CHANNELS.iter().map(|(t, _)| (*t, Gaps::default())).collect();
-    let (mut first_stamp, mut last_stamp) = (None::<u64>, 0u64);
-    let mut arm_stopped = false;
+    let mut sink = Sink {
+        writer,
+        channel,
+        out: opts.out.clone(),
+        counts: messages::CHANNELS.iter().map(|(t, _)| (*t, 0)).collect(),
+        gaps: messages::CHANNELS.iter().map(|(t, _)| (*t, Gaps::default())).collect(),
+        newest: BTreeMap::new(),
+        first_stamp: None,
+        last_stamp: 0,
+        arm_stopped: false,
+    };
     let mut last_sample = Instant::now();
     loop {
-        let got = feed.poll(|m| {
-            if m.topic == "joint_state" {
-                first_stamp.get_or_insert(m.stamp_ns);
-                last_stamp = last_stamp.max(m.stamp_ns);
-                arm_stopped |= m.final_sample;
-            }
-            let count = counts.entry(m.topic).or_default();
-            let header = mcap::records::MessageHeader { channel_id: channel[m.topic], sequence: *count as u32, log_time: m.stamp_ns, publish_time: m.stamp_ns };
-            *count += 1;
-            gaps.entry(m.topic).or_default().see(m.number);
-            writer.write_to_known_channel(&header, m.json.as_bytes()).map_err(|source| RecordError::Mcap { file: opts.out.clone(), source })
-        })?;
-        let elapsed_s = first_stamp.map_or(0.0, |f| last_stamp.saturating_sub(f) as f64 * 1e-9);
-        if stop.load(Ordering::Acquire) || arm_stopped || opts.duration_s.is_some_and(|d| elapsed_s >= d) {
+        let got = feed.poll(|m| sink.write(&m))?;
+        let elapsed_s = sink.first_stamp.map_or(0.0, |f| sink.last_stamp.saturating_sub(f) as f64 * 1e-9);
+        if stop.load(Ordering::Acquire) || sink.arm_stopped || opts.duration_s.is_some_and(|d| elapsed_s >= d) {
             break;
         }
         if got > 0 {
@@ -223,6 +250,28 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
             std::thread::sleep(Duration::from_millis(2));
         }
     }
+    // The recording ends with its last joint state. The runtime publishes a cycle's state, then
+    // its diagnostics and raw readings: those of the last cycle may not have arrived when the
+    // state did (a file ended with a joint state whose raw readings were not in it, and the
+    // elbow's drive read as lost in its last cycle). Wait for them, a few cycles at most, and
+    // take nothing newer.
+    if let Some(end_cycle) = sink.newest.get("joint_state").copied() {
+        let period_s = if descriptor.rate_hz > 0.0 { 1.0 / descriptor.rate_hz } else { 0.1 };
+        let deadline = Instant::now() + Duration::from_secs_f64((5.0 * period_s).clamp(0.05, 1.0));
+        let last_stamp = sink.last_stamp;
+        while ["raw", "diagnostics"].iter().any(|t| sink.newest.get(t).is_none_or(|n| *n < end_cycle)) && Instant::now() < deadline {
+            feed.poll(|m| {
+                let in_recording = match m.topic {
+                    "commands" => m.stamp_ns <= last_stamp,
+                    _ => m.number <= end_cycle && m.topic != "joint_state",
+                };
+                if in_recording { sink.write(&m) } else { Ok(()) }
+            })?;
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    let Sink { writer, counts, gaps, first_stamp, last_stamp, arm_stopped, .. } = sink;
+    let mut writer = writer;
     writer.finish().map_err(mcap_error)?;
     drop(writer);
     if first_stamp.is_none() {
