@@ -526,12 +526,25 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     let spacing = super::numeric::median_step(&t);
     let t_split = split_time(&t, train_fraction);
     let split = t.partition_point(|x| *x < t_split);
-    // A stateful effect's history: two cycles before the part (a Dahl state forgets within a
-    // stroke far longer than its deflection scale, which the search keeps below a third of the
-    // amplitude), not the whole record before it.
-    let history = (2.0 * period_samples).max(100.0) as usize;
+    // A stateful effect's history: back over a travel of twice the amplitude, at least two
+    // cycles (a Dahl state forgets within a travel far longer than its deflection scale, which
+    // the search keeps below a third of the amplitude), not the whole record before it. Counted
+    // in travel, not time: a held-out part that starts in a hold took two cycles of the hold as
+    // its history, its Dahl state started at zero where the joint held its loop's limit, and
+    // the right hysteresis (blind suite, LuGre) made the held-out part worse than none.
+    let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
+    let cycles = (2.0 * period_samples).max(100.0) as usize;
+    let warm_start = |start: usize| {
+        let mut travel = 0.0;
+        let mut i = start;
+        while i > 0 && (start - i < cycles || travel < 2.0 * amplitude_rad) {
+            travel += (d[i] - d[i - 1]).abs();
+            i -= 1;
+        }
+        i
+    };
     let part = |r: std::ops::Range<usize>| Part {
-        warm: d[r.start.saturating_sub(history)..r.start].to_vec(),
+        warm: d[warm_start(r.start)..r.start].to_vec(),
         t: t[r.clone()].to_vec(),
         d: d[r.clone()].to_vec(),
         v: v[r.clone()].to_vec(),
@@ -551,7 +564,6 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     // beyond (their standard errors shrink as 1/sqrt(n)), and a long record stays fast.
     // The held-out part: its first HELD_OUT_SAMPLES after the split.
     let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len().min(split + HELD_OUT_SAMPLES)));
-    let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
     let stretch = train.first(STRETCH_SAMPLES);
     Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm })
