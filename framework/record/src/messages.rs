@@ -337,7 +337,8 @@ pub fn command(r: &CommandRecord) -> Value {
 /// ```
 /// use jointctl_ipc::{CommandKind, CommandRequest};
 /// let v = jointctl_record::messages::request(&CommandRequest::new(CommandKind::POSITION, "q4", &[0.5]));
-/// assert_eq!(v.to_string(), r#"{"kind":"position","joint":"q4","streamed":false,"waveform":"step","values":[0.5],"points":[]}"#);
+/// let expected: serde_json::Value = serde_json::from_str(r#"{"kind":"position","joint":"q4","streamed":false,"waveform":"step","values":[0.5],"points":[]}"#).unwrap();
+/// assert_eq!(v, expected);
 /// ```
 pub fn request(q: &CommandRequest) -> Value {
     // Trailing unset values (NaN) are not part of the command.

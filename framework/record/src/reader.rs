@@ -68,6 +68,16 @@ pub enum ReadError {
         /// The reason.
         source: mcap::McapError,
     },
+    /// A recording cut short before its first chunk was complete: no message is left to read.
+    #[error("{}: the recording was cut short after {bytes} bytes, before its first complete chunk: no message can be read ({source})", .file.display())]
+    CutBeforeData {
+        /// The file.
+        file: PathBuf,
+        /// Its length [bytes].
+        bytes: u64,
+        /// Where reading stopped.
+        source: mcap::McapError,
+    },
     /// A message that is not the documented JSON.
     #[error("{}: message {sequence} on `{topic}` is not the documented JSON: {reason}", .file.display())]
     Message {
@@ -196,14 +206,56 @@ impl RawJson<'_> {
 /// (the file is read and decompressed once).
 fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
     let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
-    let stream = mcap::MessageStream::new(&bytes).map_err(|source| ReadError::Mcap { file: path.into(), source })?;
+    let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
+    // A file without its end (the recorder killed, the machine off, the disk full) is read up to
+    // its last complete chunk.
+    let stream = mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into()).map_err(mcap_error)?;
+    let mut read = 0u64;
     for message in stream {
-        let m = message.map_err(|source| ReadError::Mcap { file: path.into(), source })?;
-        if topics.contains(&m.channel.topic.as_str()) {
-            each(&m.channel.topic, m.sequence, &m.data)?;
+        match message {
+            Ok(m) => {
+                read += 1;
+                if topics.contains(&m.channel.topic.as_str()) {
+                    each(&m.channel.topic, m.sequence, &m.data)?;
+                }
+            }
+            Err(source) if is_cut(&bytes) && read > 0 => {
+                warn_cut(path, read, &source);
+                break;
+            }
+            Err(source) if is_cut(&bytes) => return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source }),
+            Err(source) => return Err(mcap_error(source)),
         }
     }
     Ok(())
+}
+
+/// A file that does not end with MCAP's closing magic was cut short while it was written.
+fn is_cut(bytes: &[u8]) -> bool {
+    bytes.len() < 2 * mcap::MAGIC.len() || !bytes.ends_with(mcap::MAGIC)
+}
+
+/// Says once per file that a recording was cut short and what is read of it.
+fn warn_cut(path: &Path, messages: u64, source: &mcap::McapError) {
+    static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    let mut warned = WARNED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !warned.iter().any(|p| p == path) {
+        warned.push(path.to_path_buf());
+        tracing::warn!(
+            "{}: the recording was cut short (its writer was killed, the machine stopped or the disk filled: {source}); \
+             reading the {messages} messages of its complete chunks, the rest is lost",
+            path.display()
+        );
+    }
+}
+
+/// The top-level records of a file that was cut short, up to the cut (its summary, at the end, is
+/// not there to index them).
+fn records_before_cut(bytes: &[u8]) -> Vec<mcap::records::Record<'_>> {
+    match mcap::read::LinearReader::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into()) {
+        Ok(reader) => reader.map_while(Result::ok).collect(),
+        Err(_) => Vec::new(),
+    }
 }
 
 /// The joint states, DOF by DOF, as they are read.
@@ -362,9 +414,13 @@ pub fn raw_samples(path: &Path) -> Result<Vec<RawSample>, ReadError> {
 pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
     let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
-    let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
-    for index in summary.metadata_indexes.iter().filter(|i| i.name == "activation") {
-        let m = mcap::read::metadata(&bytes, index).map_err(mcap_error)?;
+    let metadata: Vec<mcap::records::Metadata> = if is_cut(&bytes) {
+        records_before_cut(&bytes).into_iter().filter_map(|r| if let mcap::records::Record::Metadata(m) = r { Some(m) } else { None }).collect()
+    } else {
+        let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
+        summary.metadata_indexes.iter().filter(|i| i.name == "activation").map(|index| mcap::read::metadata(&bytes, index).map_err(mcap_error)).collect::<Result<_, _>>()?
+    };
+    for m in metadata.iter().filter(|m| m.name == "activation") {
         let Some(text) = m.metadata.get("raw") else { continue };
         let bad = |reason: String| ReadError::Message { file: path.into(), topic: "activation".into(), sequence: 0, reason };
         let v: RawJson = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
@@ -496,6 +552,12 @@ fn motor_drive(path: &Path, joint: &str) -> Result<Option<String>, ReadError> {
 pub fn config_attachment(path: &Path) -> Result<Option<(String, String)>, ReadError> {
     let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
+    if is_cut(&bytes) {
+        return Ok(records_before_cut(&bytes).into_iter().find_map(|r| match r {
+            mcap::records::Record::Attachment { header, data, .. } => Some((header.name, String::from_utf8_lossy(&data).into_owned())),
+            _ => None,
+        }));
+    }
     let Some(summary) = mcap::Summary::read(&bytes).map_err(mcap_error)? else { return Ok(None) };
     let Some(index) = summary.attachment_indexes.first() else { return Ok(None) };
     let a = mcap::read::attachment(&bytes, index).map_err(mcap_error)?;
