@@ -341,3 +341,47 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
         assert!(!err.contains("not a readable MCAP") && !err.contains("panicked"), "cut at byte {at}: {err}");
     }
 }
+
+/// Issue 40, finding 11 (its second half): a recording that filled the disk exited 1 with a
+/// clear message, but `--json` printed no summary and the file was unreadable. Two ways a disk
+/// fills: `/dev/full` refuses the file's first bytes (ENOSPC), and a file-size limit
+/// (RLIMIT_FSIZE, SIGXFSZ ignored, EFBIG) stops it part way. Each exits 1 with the reason and
+/// prints its summary; the part-way file is read back up to its last complete chunk.
+#[test]
+fn a_recording_that_fills_the_disk_prints_its_summary_and_the_reason() {
+    use std::os::unix::process::CommandExt as _;
+    let arm = arm_name("record-full");
+    let config = sherpa_with("record-full", &arm, &[]);
+    let run = spawn_run(&config);
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
+    let full = Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "20", "--json", "--out", "/dev/full"]).output().unwrap();
+    let limited = scratch("record-full-out").join("limited.mcap");
+    let mut record = Command::new(jointctl());
+    record.args(["record", "--arm", &arm, "--duration", "20", "--json", "--out"]).arg(&limited);
+    // SAFETY: between fork and exec only async-signal-safe calls (signal, setrlimit).
+    unsafe {
+        record.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit { rlim_cur: 100_000, rlim_max: 100_000 };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let part_way = record.output().unwrap();
+    stop(run);
+    for (out, reason, taken) in [(&full, "No space left on device", false), (&part_way, "File too large", true)] {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(reason) && err.contains("the recording stopped after"), "{err}");
+        let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("one JSON summary ({e}): {}", String::from_utf8_lossy(&out.stdout)));
+        assert!(summary["error"].as_str().is_some_and(|e| e.contains(reason)), "{summary}");
+        let states = summary["messages"]["joint_state"].as_u64().unwrap();
+        assert_eq!(states > 0, taken, "{summary}");
+        assert!(summary["duration_s"].as_f64().is_some_and(|d| d < 20.0), "{summary}");
+    }
+    let q2 = jointctl_record::reader::joint_series(&limited, "q2").unwrap();
+    assert!(!q2.t_s.is_empty(), "the part-way file is read up to its last complete chunk");
+}

@@ -86,6 +86,14 @@ pub enum RecordError {
         /// The reason.
         source: std::io::Error,
     },
+    /// The recording stopped on a failure after it had begun: what the file holds up to it.
+    #[error("the recording stopped after {:.2} s: {source}", .summary.duration_s)]
+    Stopped {
+        /// What was recorded up to the failure.
+        summary: Box<RecordSummary>,
+        /// The failure.
+        source: Box<RecordError>,
+    },
     /// The MCAP writer failed.
     #[error("cannot write {} as MCAP", .file.display())]
     Mcap {
@@ -183,6 +191,19 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
 
     let file = std::fs::File::create(&opts.out).map_err(|source| RecordError::File { file: opts.out.clone(), source })?;
     let mcap_error = |source| RecordError::Mcap { file: opts.out.clone(), source };
+    // A file that cannot be written from its start (a full disk) is a recording stopped before
+    // its first sample: the summary says so too.
+    let before_start = |source: mcap::McapError| RecordError::Stopped {
+        summary: Box::new(RecordSummary {
+            file: opts.out.clone(),
+            duration_s: 0.0,
+            messages: messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect(),
+            lost_by_channel: messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect(),
+            bytes: std::fs::metadata(&opts.out).map_or(0, |m| m.len()),
+            arm_stopped: false,
+        }),
+        source: Box::new(mcap_error(source)),
+    };
     let mut writer = mcap::WriteOptions::new()
         .compression(Some(mcap::Compression::Zstd))
         // zstd's fastest level: the JSON of successive cycles differs little, so level 1 still
@@ -195,12 +216,12 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         .profile("")
         .library(format!("jointctl-record {}", env!("CARGO_PKG_VERSION")))
         .create(BufWriter::new(file))
-        .map_err(mcap_error)?;
+        .map_err(before_start)?;
     let mut channel = BTreeMap::new();
     for (topic, schema_name) in messages::CHANNELS {
         let schema = messages::schema(topic).map(|s| s.to_string()).unwrap_or_default();
-        let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes()).map_err(mcap_error)?;
-        let id = writer.add_channel(schema_id, topic, "json", &BTreeMap::new()).map_err(mcap_error)?;
+        let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes()).map_err(before_start)?;
+        let id = writer.add_channel(schema_id, topic, "json", &BTreeMap::new()).map_err(before_start)?;
         channel.insert(topic, id);
     }
     let start_unix_ns = unix_ns();
@@ -215,14 +236,14 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     if let Some(path) = descriptor.config_path() {
         metadata.insert("config".to_string(), path.display().to_string());
     }
-    writer.write_metadata(&mcap::records::Metadata { name: "jointctl".into(), metadata }).map_err(mcap_error)?;
+    writer.write_metadata(&mcap::records::Metadata { name: "jointctl".into(), metadata }).map_err(before_start)?;
     // The readings the joints were activated with: a replay activates its observers with them.
     let activation = messages::raw(&descriptor.activation, &descriptor).to_string();
-    writer.write_metadata(&mcap::records::Metadata { name: "activation".into(), metadata: BTreeMap::from([("raw".to_string(), activation)]) }).map_err(mcap_error)?;
+    writer.write_metadata(&mcap::records::Metadata { name: "activation".into(), metadata: BTreeMap::from([("raw".to_string(), activation)]) }).map_err(before_start)?;
     if let Some(path) = descriptor.config_path() {
         for (name, data) in config_files(&path) {
             let attachment = mcap::Attachment { log_time: start_monotonic_ns, create_time: start_unix_ns, name, media_type: "application/yaml".into(), data: data.into() };
-            writer.attach(&attachment).map_err(mcap_error)?;
+            writer.attach(&attachment).map_err(before_start)?;
         }
     }
 
@@ -237,6 +258,32 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         last_stamp: 0,
         arm_stopped: false,
     };
+    // A failure while recording (a full disk, a reader gone) still closes what was written and
+    // says how far it got.
+    let outcome = take_samples(&mut feed, &mut sink, opts, stop, timeout, descriptor.rate_hz);
+    let mut summary = RecordSummary {
+        file: opts.out.clone(),
+        duration_s: sink.first_stamp.map_or(0.0, |f| sink.last_stamp.saturating_sub(f) as f64 * 1e-9),
+        messages: sink.counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        lost_by_channel: sink.gaps.iter().map(|(k, g)| (k.to_string(), g.lost)).collect(),
+        bytes: 0,
+        arm_stopped: sink.arm_stopped,
+    };
+    let finished = sink.writer.finish().map_err(mcap_error);
+    drop(sink);
+    summary.bytes = std::fs::metadata(&opts.out).map_or(0, |m| m.len());
+    if let Err(source) = outcome.and(finished) {
+        return Err(RecordError::Stopped { summary: Box::new(summary), source: Box::new(source) });
+    }
+    if summary.messages.get("joint_state").is_none_or(|n| *n == 0) {
+        return Err(FeedError::Silent { arm: opts.arm.clone(), what: "joint state", timeout_s: opts.timeout_s }.into());
+    }
+    Ok(summary)
+}
+
+/// Takes the arm's samples into `sink` until the duration, a stop, the arm's final sample or
+/// silence, then the last cycle's samples that follow its joint state.
+fn take_samples<W: std::io::Write + std::io::Seek>(feed: &mut ArmFeed, sink: &mut Sink<W>, opts: &RecordOptions, stop: &AtomicBool, timeout: Duration, rate_hz: f64) -> Result<(), RecordError> {
     let mut last_sample = Instant::now();
     loop {
         let got = feed.poll(|m| sink.write(&m))?;
@@ -260,7 +307,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     // elbow's drive read as lost in its last cycle). Wait for them, a few cycles at most, and
     // take nothing newer.
     if let Some(end_cycle) = sink.newest.get("joint_state").copied() {
-        let period_s = if descriptor.rate_hz > 0.0 { 1.0 / descriptor.rate_hz } else { 0.1 };
+        let period_s = if rate_hz > 0.0 { 1.0 / rate_hz } else { 0.1 };
         let deadline = Instant::now() + Duration::from_secs_f64((5.0 * period_s).clamp(0.05, 1.0));
         let last_stamp = sink.last_stamp;
         while ["raw", "diagnostics"].iter().any(|t| sink.newest.get(t).is_none_or(|n| *n < end_cycle)) && Instant::now() < deadline {
@@ -274,21 +321,6 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
             std::thread::sleep(Duration::from_millis(1));
         }
     }
-    let Sink { writer, counts, gaps, first_stamp, last_stamp, arm_stopped, .. } = sink;
-    let mut writer = writer;
-    writer.finish().map_err(mcap_error)?;
-    drop(writer);
-    if first_stamp.is_none() {
-        return Err(FeedError::Silent { arm: opts.arm.clone(), what: "joint state", timeout_s: opts.timeout_s }.into());
-    }
-    let bytes = std::fs::metadata(&opts.out).map_or(0, |m| m.len());
-    Ok(RecordSummary {
-        file: opts.out.clone(),
-        duration_s: first_stamp.map_or(0.0, |f| last_stamp.saturating_sub(f) as f64 * 1e-9),
-        messages: counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        lost_by_channel: gaps.iter().map(|(k, g)| (k.to_string(), g.lost)).collect(),
-        bytes,
-        arm_stopped,
-    })
+    Ok(())
 }
 

@@ -49,17 +49,26 @@ pub fn run(a: RecordArgs) -> ExitCode {
         duration_s: a.duration,
         timeout_s: a.timeout,
     };
-    let summary = match jointctl_record::recorder::record(&opts, &stop) {
-        Ok(s) => s,
+    let (summary, failure) = match jointctl_record::recorder::record(&opts, &stop) {
+        Ok(s) => (s, None),
+        // Stopped part way (a full disk): the summary of what the file holds, then the reason.
+        Err(jointctl_record::recorder::RecordError::Stopped { summary, source }) => (*summary, Some(source)),
         Err(e) => return crate::fail_err(e),
     };
     if a.json {
-        crate::print_out(&format!("{}\n", summary.json()));
+        let mut json = summary.json();
+        if let Some(e) = &failure {
+            json["error"] = serde_json::Value::String(crate::chain(e.as_ref()));
+        }
+        crate::print_out(&format!("{json}\n"));
     } else {
         eprintln!("{}: {:.2} s of arm `{}`, {} bytes", summary.file.display(), summary.duration_s, opts.arm, summary.bytes);
         for (channel, n) in &summary.messages {
             eprintln!("  {channel:<12} {n:>8} messages, {} lost", summary.lost_by_channel.get(channel).copied().unwrap_or(0));
         }
+    }
+    if let Some(e) = failure {
+        return crate::fail_err(jointctl_record::recorder::RecordError::Stopped { summary: Box::new(summary), source: e });
     }
     if summary.lost() > 0 {
         eprintln!("warning: {} samples lost (the recorder fell behind, or the runtime dropped records: see diagnostics.publish_drops)", summary.lost());
