@@ -306,6 +306,15 @@ signal_tests! {
     sigusr1_holds_the_joints: SIGUSR1,
     sigusr2_holds_the_joints: SIGUSR2,
     sigalrm_holds_the_joints: SIGALRM,
+    // Issue 40, finding 18: sent with `kill`, SIGSEGV and SIGBUS were ignored (the run went on to
+    // its --duration) and the others ended the runtime without holding the joints.
+    sigsegv_sent_by_kill_holds_the_joints: SIGSEGV,
+    sigbus_sent_by_kill_holds_the_joints: SIGBUS,
+    sigill_sent_by_kill_holds_the_joints: SIGILL,
+    sigfpe_sent_by_kill_holds_the_joints: SIGFPE,
+    sigtrap_sent_by_kill_holds_the_joints: SIGTRAP,
+    sigsys_sent_by_kill_holds_the_joints: SIGSYS,
+    sigabrt_sent_by_kill_holds_the_joints: SIGABRT,
 }
 
 /// Finding: with `hal: socketcan`, a second runtime built and activated the HAL (an NMT
@@ -781,4 +790,35 @@ fn inspect_top_without_a_terminal_points_to_the_json_views() {
     let out = Command::new(jointctl()).args(["inspect", "top", "--arm", "nobody-runs-this"]).stdout(Stdio::piped()).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("needs a terminal") && err.contains("inspect joints --json"), "{err}");
+}
+
+/// The other half of finding 18's fix: a fault signal the process raises on itself (a bad
+/// address, `abort`, a raised SIGILL) still ends it by its default action once the runtime's
+/// handlers are installed; only a signal another process sends is a stop request. Pass: each
+/// child dies by its signal, none lives on.
+#[test]
+fn the_processs_own_faults_still_end_it_by_default() {
+    use std::os::unix::process::ExitStatusExt as _;
+    if let Ok(which) = std::env::var("JOINTCTL_TEST_OWN_FAULT") {
+        let _stop = jointctl_runtime::signals::StopRequest::install().unwrap();
+        match which.as_str() {
+            "abort" => std::process::abort(),
+            // SAFETY: none: this child exists to fault on an unmapped address.
+            "segv" => unsafe { std::ptr::without_provenance_mut::<u8>(8).write_volatile(1) },
+            // SAFETY: raising a signal on this process.
+            _ => unsafe {
+                libc::raise(libc::SIGILL);
+            },
+        }
+        std::thread::sleep(Duration::from_millis(500));
+        std::process::exit(0);
+    }
+    for (which, signal) in [("abort", libc::SIGABRT), ("segv", libc::SIGSEGV), ("ill", libc::SIGILL)] {
+        let out = Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", "the_processs_own_faults_still_end_it_by_default", "--nocapture", "--test-threads", "1"])
+            .env("JOINTCTL_TEST_OWN_FAULT", which)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.signal(), Some(signal), "{which}: {:?} {}", out.status, String::from_utf8_lossy(&out.stderr));
+    }
 }

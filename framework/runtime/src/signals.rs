@@ -9,8 +9,7 @@ use signal_hook::consts::signal;
 
 /// The asynchronous signals whose default action ends the process. SIGPIPE is left ignored
 /// (Rust's default): a closed log pipe is not a reason to stop an arm. SIGKILL and SIGSTOP
-/// cannot be caught; the synchronous ones (SIGSEGV, SIGBUS, SIGILL, SIGFPE) mean the process
-/// itself is broken and may not run a handler.
+/// cannot be caught; the fault signals are [`FAULT_SIGNALS`].
 pub const STOP_SIGNALS: [i32; 14] = [
     signal::SIGHUP,
     signal::SIGINT,
@@ -27,6 +26,23 @@ pub const STOP_SIGNALS: [i32; 14] = [
     libc::SIGPWR,
     libc::SIGSTKFLT,
 ];
+
+/// Signals that mean the process itself is broken when the kernel or the process raises them (a
+/// bad address, an illegal instruction, a division by zero, a breakpoint, a forbidden system
+/// call, `abort`): the process ends as by default, and the drives' own heartbeat supervision
+/// stops them (see docs/faults.md). Sent by another process with `kill`, they are a stop request
+/// like [`STOP_SIGNALS`]: `kill -SEGV` was ignored (Rust's stack-overflow handler takes SIGSEGV
+/// and SIGBUS, and a fault it does not recognise only resets them), and the others ended the
+/// runtime without holding the joints.
+pub const FAULT_SIGNALS: [i32; 7] = [signal::SIGSEGV, signal::SIGBUS, signal::SIGILL, signal::SIGFPE, signal::SIGTRAP, signal::SIGSYS, signal::SIGABRT];
+
+/// Whether a signal came from another process (`kill`, `sigqueue`): a non-positive `si_code`
+/// and a sender that is not this process (`abort` raises SIGABRT on itself).
+fn sent_by_another_process(info: &libc::siginfo_t) -> bool {
+    // SAFETY: `si_pid` reads the sender's pid field, present for every non-positive si_code
+    // (SI_USER, SI_QUEUE, SI_TKILL); it is read only when si_code says so.
+    info.si_code <= 0 && unsafe { info.si_pid() } != std::process::id() as i32
+}
 
 /// The stop request of a run: set by a signal (its number) or by the program (any non-zero).
 ///
@@ -48,6 +64,28 @@ impl StopRequest {
         let flag = Arc::new(AtomicUsize::new(0));
         for s in STOP_SIGNALS {
             signal_hook::flag::register_usize(s, Arc::clone(&flag), s as usize)?;
+        }
+        for s in FAULT_SIGNALS {
+            let flag = Arc::clone(&flag);
+            let action = move |info: &libc::siginfo_t| {
+                if sent_by_another_process(info) {
+                    let _ = flag.compare_exchange(0, s as usize, Ordering::Relaxed, Ordering::Relaxed);
+                } else if s != signal::SIGSEGV && s != signal::SIGBUS {
+                    // The process's own fault: its default action (SIGSEGV and SIGBUS reach it
+                    // through Rust's handler, which runs before this one and resets them).
+                    // SAFETY: sigaction and raise are async-signal-safe; the raised signal is
+                    // blocked until this handler returns, then ends the process by default.
+                    unsafe {
+                        let mut default: libc::sigaction = std::mem::zeroed();
+                        default.sa_sigaction = libc::SIG_DFL;
+                        libc::sigaction(s, &default, std::ptr::null_mut());
+                        libc::raise(s);
+                    }
+                }
+            };
+            // SAFETY: the action only reads its siginfo, swaps an atomic and calls sigaction and
+            // raise, which are async-signal-safe; it allocates and locks nothing.
+            unsafe { signal_hook_registry::register_unchecked(s, action) }?;
         }
         Ok(StopRequest(flag))
     }
