@@ -822,3 +822,17 @@ fn the_processs_own_faults_still_end_it_by_default() {
         assert_eq!(out.status.signal(), Some(signal), "{which}: {:?} {}", out.status, String::from_utf8_lossy(&out.stderr));
     }
 }
+
+/// Issue 40, finding 18 (its leftovers): `cmd --domain` with a typo left a management segment
+/// for that domain in /dev/shm, for good. Pass: a command to a domain nobody runs is refused as
+/// "no runtime" and leaves no file of that domain behind.
+#[test]
+fn a_command_to_a_domain_nobody_runs_leaves_nothing_in_dev_shm() {
+    let domain = format!("typo{}", std::process::id());
+    let out = Command::new(jointctl()).args(["cmd", "enable", "q1", "--arm", "sherpa", "--domain", &domain]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("no runtime is running arm `sherpa`"), "{err}");
+    let left: Vec<String> = std::fs::read_dir("/dev/shm").unwrap().filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with(&domain)).collect();
+    assert!(left.is_empty(), "left in /dev/shm: {left:?}");
+}

@@ -960,8 +960,15 @@ impl CommandClient {
     /// assert!(matches!(e, jointctl_ipc::CommandError::NoRuntime { .. }), "{e}");
     /// ```
     pub fn open(scope: &IpcScope, arm: &str, node_name: &str) -> Result<CommandClient, CommandError> {
-        let node = create_node_in(scope, node_name)?;
         let service = command_service_name(arm);
+        // Looked up before this client makes a node: a node makes its domain's management
+        // segment in /dev/shm for good, and `cmd --domain` with a typo left one behind.
+        let config = iceoryx2_config_in(scope)?;
+        let exists = <ipc::Service as iceoryx2::service::Service>::does_exist(&service_name(&service)?, &config, MessagingPattern::RequestResponse);
+        if matches!(exists, Ok(false)) {
+            return Err(CommandError::NoRuntime { arm: arm.to_string(), service });
+        }
+        let node = create_node_in(scope, node_name)?;
         let factory = command_service(&node, &service, None).map_err(|_| CommandError::NoRuntime { arm: arm.to_string(), service: service.clone() })?;
         let client = factory.client_builder().create().map_err(|e| match e {
             iceoryx2::service::port_factory::client::ClientCreateError::ExceedsMaxSupportedClients => CommandError::SlotsTaken { service: service.clone() },

@@ -17,8 +17,11 @@ use jointctl_record::recorder::{RecordOptions, record};
 /// old recorder always lost the last cycle's.
 #[test]
 fn the_last_joint_state_comes_with_its_raw_readings_and_diagnostics() {
-    let scope = IpcScope::domain(Some(&format!("jtail{}", std::process::id())));
-    let arm = "tail_arm";
+    // The default domain, an arm of this process's own: a domain of its own would leave its
+    // management segment in /dev/shm.
+    let scope = IpcScope::default();
+    let arm = format!("tail_arm_{}", std::process::id());
+    let arm = arm.as_str();
     let names = ServiceNames::for_arm(arm);
     let node = jointctl_ipc::create_node_in(&scope, "fake-arm").unwrap();
     let limits = PortLimits::default();
