@@ -285,3 +285,35 @@ fn a_truncated_or_corrupt_plugin_file_is_refused_before_it_is_mapped() {
         assert!(err.contains("truncated") || err.contains("not a complete 64-bit ELF file"), "{args:?}: {err}");
     }
 }
+
+/// Issue 40, finding 5: a plugin overwritten in place while `run` used it (`cp`, which truncates
+/// and rewrites the same file) killed the runtime with SIGSEGV: the loader had mapped that file,
+/// and its pages changed under the running code. The runtime now loads the bytes it checked from
+/// a private in-memory copy. Pass: the file is overwritten with zeros half a second into a 2 s run
+/// at 200 Hz, and the run ends at its duration with exit 0.
+#[test]
+fn a_plugin_file_overwritten_while_it_runs_does_not_touch_the_running_code() {
+    use std::io::Write as _;
+    let dir = scratch("overwritten");
+    let so = dir.join("plugins").join("my_joint.so");
+    std::fs::create_dir_all(so.parent().unwrap()).unwrap();
+    std::fs::copy(artifact("libjointctl_plugin_faulty.so"), &so).unwrap();
+    let extra = "  - name: b\n    plugin: {name: faulty, path: plugins/my_joint.so}\n    encoders: {output: e1}\n    drives: {motor: m1}\n";
+    let yaml = dir.join("arm.yaml");
+    std::fs::write(&yaml, rig_yaml(&arm_name("overwritten"), 200.0, extra)).unwrap();
+    let run = std::process::Command::new(jointctl_tests::jointctl())
+        .arg("run")
+        .arg(&yaml)
+        .args(["--duration", "2"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let len = std::fs::metadata(&so).unwrap().len() as usize;
+    let mut file = std::fs::OpenOptions::new().write(true).truncate(true).open(&so).unwrap();
+    file.write_all(&vec![0u8; len]).unwrap();
+    drop(file);
+    let out = run.wait_with_output().unwrap();
+    assert!(out.status.success(), "{:?}: {}", out.status, String::from_utf8_lossy(&out.stderr));
+}

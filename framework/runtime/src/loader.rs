@@ -315,13 +315,18 @@ const HOST_MACHINE: u16 = if cfg!(target_arch = "x86_64") {
 /// Checks, from the file's bytes and before the dynamic loader maps it, that a library is a
 /// complete 64-bit ELF shared object for this machine: every segment and section the loader
 /// could touch lies inside the file. A truncated library otherwise kills the host with SIGBUS.
-/// A file replaced between this check and the mapping is not caught (plugin folders are the
-/// operator's to protect).
+/// The runtime loads the bytes it checked (see [`private_copy`]), so a file replaced after the
+/// check is not what runs.
 pub fn check_library_file(file: &Path) -> Result<(), LoadPluginError> {
+    let data = jointctl_files::read(file, jointctl_files::FileKind::Plugin).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    check_library_bytes(file, &data)
+}
+
+/// [`check_library_file`] on bytes already read from `file`.
+fn check_library_bytes(file: &Path, data: &[u8]) -> Result<(), LoadPluginError> {
     use object::read::elf::{ElfFile64, FileHeader, ProgramHeader, SectionHeader};
     let bad = |reason: String| LoadPluginError::Malformed { file: file.into(), reason };
-    let data = jointctl_files::read(file, jointctl_files::FileKind::Plugin).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
-    let elf = ElfFile64::<object::Endianness>::parse(&*data).map_err(|e| bad(format!("not a complete 64-bit ELF file ({e})")))?;
+    let elf = ElfFile64::<object::Endianness>::parse(data).map_err(|e| bad(format!("not a complete 64-bit ELF file ({e})")))?;
     let (header, endian) = (elf.elf_header(), elf.endian());
     if header.e_type(endian) != object::elf::ET_DYN {
         return Err(bad("not a shared library (ELF type is not ET_DYN)".into()));
@@ -348,16 +353,42 @@ pub fn check_library_file(file: &Path) -> Result<(), LoadPluginError> {
     Ok(())
 }
 
+/// The checked bytes of a library in an anonymous in-memory file, the one the dynamic loader
+/// maps. Mapping the plugin's own file tied the running code to it: overwriting it in place
+/// while the runtime ran (`cp new.so plugin.so` truncates and rewrites the same file) changed the
+/// mapped pages under the running code, and the host died with SIGSEGV (issue 40, finding 5).
+/// A library that loads others relative to itself (`$ORIGIN`) would not find them from here;
+/// jointctl plugins link only the C library.
+fn private_copy(data: &[u8]) -> std::io::Result<std::fs::File> {
+    use std::io::Write as _;
+    use std::os::fd::FromRawFd as _;
+    // SAFETY: a valid NUL-terminated name; the new descriptor is owned by the File below.
+    let fd = unsafe { libc::memfd_create(c"jointctl-plugin".as_ptr(), libc::MFD_CLOEXEC) };
+    if fd < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: `fd` was just created and is owned by nothing else.
+    let mut file = unsafe { std::fs::File::from_raw_fd(fd) };
+    file.write_all(data)?;
+    Ok(file)
+}
+
 fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginError> {
     let canonical = file.canonicalize().map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     let mut loaded = LOADED.lock().unwrap_or_else(|p| p.into_inner());
     if let Some((_, lib)) = loaded.iter().find(|(p, _)| *p == canonical) {
         return Ok(lib);
     }
-    check_library_file(&canonical)?;
+    let data = jointctl_files::read(&canonical, jointctl_files::FileKind::Plugin).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    check_library_bytes(&canonical, &data)?;
+    let copy = private_copy(&data).map_err(|e| LoadPluginError::Open { file: file.into(), reason: format!("cannot make the private copy it is loaded from: {e}") })?;
     // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's.
-    let lib = unsafe { libloading::Library::new(&canonical) }
+    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }
         .map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
+    // Kept open, as the library stays loaded: a descriptor closed here is the next copy's, and
+    // the dynamic loader, which knows a loaded library by its path, handed the next plugin the
+    // first one's library.
+    std::mem::forget(copy);
     // Never unloaded: see the module docs.
     let lib: &'static libloading::Library = Box::leak(Box::new(lib));
     loaded.push((canonical, lib));
