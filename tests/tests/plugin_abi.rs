@@ -317,3 +317,49 @@ fn a_plugin_file_overwritten_while_it_runs_does_not_touch_the_running_code() {
     let out = run.wait_with_output().unwrap();
     assert!(out.status.success(), "{:?}: {}", out.status, String::from_utf8_lossy(&out.stderr));
 }
+
+/// `bytes` with every relocation of its `.rela.dyn` section pointing at an address far outside
+/// the library (its size and its ELF structure unchanged): the dynamic loader writes there.
+fn with_relocations_out_of_the_library(mut bytes: Vec<u8>) -> Vec<u8> {
+    let u16_at = |b: &[u8], i: usize| u16::from_le_bytes([b[i], b[i + 1]]) as usize;
+    let u32_at = |b: &[u8], i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap()) as usize;
+    let u64_at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
+    let (shoff, shentsize, shnum, shstrndx) = (u64_at(&bytes, 0x28), u16_at(&bytes, 0x3A), u16_at(&bytes, 0x3C), u16_at(&bytes, 0x3E));
+    let header = |i: usize| shoff + i * shentsize;
+    let names = u64_at(&bytes, header(shstrndx) + 24);
+    let rela = (0..shnum)
+        .find(|&i| {
+            let name = names + u32_at(&bytes, header(i));
+            bytes[name..].starts_with(b".rela.dyn\0")
+        })
+        .expect("a .rela.dyn section");
+    let (offset, size) = (u64_at(&bytes, header(rela) + 24), u64_at(&bytes, header(rela) + 32));
+    for entry in (offset..offset + size).step_by(24) {
+        bytes[entry..entry + 8].copy_from_slice(&0x7fff_ffff_0000u64.to_le_bytes());
+        bytes[entry + 8..entry + 16].copy_from_slice(&8u64.to_le_bytes()); // R_X86_64_RELATIVE
+        bytes[entry + 16..entry + 24].copy_from_slice(&0u64.to_le_bytes());
+    }
+    bytes
+}
+
+/// Issue 40, finding 4: a plugin file of the right size whose middle was corrupt passed the ELF
+/// structure check, and `check` and `run` died with SIGSEGV inside the dynamic loader (exit 139).
+/// Now each library is loaded first in a short-lived child of `jointctl`. Pass: both exit 1 and
+/// name the file and the probe's signal.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn a_plugin_that_kills_the_dynamic_loader_is_refused_by_check_and_run() {
+    let dir = scratch("corrupt-middle");
+    let so = dir.join("plugins").join("my_joint.so");
+    std::fs::create_dir_all(so.parent().unwrap()).unwrap();
+    std::fs::write(&so, with_relocations_out_of_the_library(std::fs::read(artifact("libjointctl_plugin_faulty.so")).unwrap())).unwrap();
+    let extra = "  - name: b\n    plugin: {name: faulty, path: plugins/my_joint.so}\n    encoders: {output: e1}\n    drives: {motor: m1}\n";
+    let yaml = dir.join("arm.yaml");
+    std::fs::write(&yaml, rig_yaml(&arm_name("corrupt-middle"), 100.0, extra)).unwrap();
+    for args in [vec!["check"], vec!["run", "--cycles", "3"]] {
+        let out = std::process::Command::new(jointctl_tests::jointctl()).args(&args[..1]).arg(&yaml).args(&args[1..]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {:?} {err}", out.status);
+        assert!(err.contains("my_joint.so") && err.contains("killed a probe process with SIGSEGV"), "{args:?}: {err}");
+    }
+}

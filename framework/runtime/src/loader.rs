@@ -373,6 +373,38 @@ fn private_copy(data: &[u8]) -> std::io::Result<std::fs::File> {
     Ok(file)
 }
 
+/// Loads a library's bytes somewhere the host survives, before the host loads them: the
+/// structure check cannot see everything the dynamic loader trusts (relocations that point out
+/// of the library crashed `check` and `run` inside it, exit 139, issue 40, finding 4). `Err`
+/// says why the library is refused.
+pub type Probe = fn(&[u8]) -> Result<(), String>;
+
+static PROBE: std::sync::OnceLock<Probe> = std::sync::OnceLock::new();
+
+/// Sets the probe every library passes before this process loads it (once; the `jointctl`
+/// binary loads each library first in a short-lived child of itself). Without one, a library is
+/// loaded after the structure check alone.
+///
+/// ```
+/// fn accept(_: &[u8]) -> Result<(), String> { Ok(()) }
+/// jointctl_runtime::loader::set_probe(accept);
+/// ```
+pub fn set_probe(probe: Probe) {
+    let _ = PROBE.set(probe);
+}
+
+/// What a probe process does with a library's bytes: loads them from a private copy, as the
+/// host would. It returns if the load returns; the caller's process dies where the host would.
+pub fn probe_load(data: &[u8]) -> Result<(), String> {
+    check_library_bytes(Path::new("<probe>"), data).map_err(|e| e.to_string())?;
+    let copy = private_copy(data).map_err(|e| e.to_string())?;
+    // SAFETY: the point of a probe: this short-lived process loads the library in the host's
+    // place, and dies instead of it if the library is broken.
+    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }.map_err(|e| e.to_string())?;
+    std::mem::forget(lib);
+    Ok(())
+}
+
 fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginError> {
     let canonical = file.canonicalize().map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     let mut loaded = LOADED.lock().unwrap_or_else(|p| p.into_inner());
@@ -381,6 +413,9 @@ fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginE
     }
     let data = jointctl_files::read(&canonical, jointctl_files::FileKind::Plugin).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     check_library_bytes(&canonical, &data)?;
+    if let Some(probe) = PROBE.get() {
+        probe(&data).map_err(|reason| LoadPluginError::Malformed { file: file.into(), reason })?;
+    }
     let copy = private_copy(&data).map_err(|e| LoadPluginError::Open { file: file.into(), reason: format!("cannot make the private copy it is loaded from: {e}") })?;
     // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's.
     let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }

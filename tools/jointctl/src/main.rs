@@ -49,6 +49,10 @@ enum Command {
     },
     /// Print the JSON Schema of arm descriptions (for editors).
     Schema,
+    /// Load a plugin library read from stdin, as the host would (the probe every library passes
+    /// first; exit 0 loaded, 1 refused, killed by a signal: the library is corrupt).
+    #[command(name = "__probe-plugin", hide = true)]
+    ProbePlugin,
     /// Check eq. 3.3's assumed shoulder differential on the arm before trusting torque control:
     /// each shoulder actuator moves alone by a small step, q2 is read from its own encoders
     /// (exit 0 as assumed, 1 not). Uses the config's backend: the real arm with `socketcan`.
@@ -142,6 +146,52 @@ fn seconds(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Loads a plugin library's bytes in a short-lived child of this program before this process
+/// loads them: a library that kills the dynamic loader kills the child, and is refused here.
+fn probe_in_child(data: &[u8]) -> Result<(), String> {
+    use std::io::Write as _;
+    use std::os::unix::process::ExitStatusExt as _;
+    const PROBE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+    let exe = match std::env::current_exe() {
+        Ok(exe) => exe,
+        Err(e) => {
+            tracing::warn!("plugin libraries are loaded without a probe: cannot find this program ({e})");
+            return Ok(());
+        }
+    };
+    let spawned = std::process::Command::new(exe).arg("__probe-plugin").stdin(std::process::Stdio::piped()).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn();
+    let mut child = match spawned {
+        Ok(c) => c,
+        Err(e) => {
+            tracing::warn!("plugin libraries are loaded without a probe: cannot start one ({e})");
+            return Ok(());
+        }
+    };
+    if let Some(mut stdin) = child.stdin.take() {
+        let _ = stdin.write_all(data);
+    }
+    let started = std::time::Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if started.elapsed() < PROBE_TIMEOUT => std::thread::sleep(std::time::Duration::from_millis(5)),
+            _ => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!("loading it did not finish in {} s in a probe process", PROBE_TIMEOUT.as_secs()));
+            }
+        }
+    };
+    match status.signal() {
+        Some(signal) => Err(format!(
+            "loading it killed a probe process with {} before this process loaded it (the dynamic loader trusts its relocations and dynamic section, and they are corrupt); rebuild it or copy it again",
+            jointctl_runtime::signals::signal_name(signal)
+        )),
+        // Loaded, or refused with a reason the host's own load gives again.
+        None => Ok(()),
+    }
+}
+
 /// Writes `text` to stdout; a reader that has gone (`| head`) is not an error worth a panic,
 /// which `print!` would raise.
 fn print_out(text: &str) {
@@ -187,7 +237,20 @@ fn main() -> ExitCode {
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::ProbePlugin) {
+        jointctl_runtime::loader::set_probe(probe_in_child);
+    }
     match cli.command {
+        Command::ProbePlugin => {
+            let mut data = Vec::new();
+            if let Err(e) = std::io::Read::read_to_end(&mut std::io::stdin(), &mut data) {
+                return fail(format!("cannot read the library from stdin: {e}"));
+            }
+            match jointctl_runtime::loader::probe_load(&data) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => fail(e),
+            }
+        }
         Command::Run(args) => run::run(args),
         Command::CheckTransmission { config, step_rad } => transmission::run(&config, step_rad),
         Command::Check { config } => {
