@@ -836,3 +836,30 @@ fn a_command_to_a_domain_nobody_runs_leaves_nothing_in_dev_shm() {
     let left: Vec<String> = std::fs::read_dir("/dev/shm").unwrap().filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with(&domain)).collect();
     assert!(left.is_empty(), "left in /dev/shm: {left:?}");
 }
+
+/// Issue 40, finding 16: the one-runtime lock held per domain and root, and a copy of a
+/// SocketCAN config in another domain went on to open `can0` beside the running arm: two hosts
+/// would drive the same bus. Pass: while another process holds a CAN interface's machine-wide
+/// lock, a runtime of another arm in another domain on that interface is refused, naming the
+/// interface and the holder, before it opens the bus (alone, it tries the bus).
+#[test]
+fn a_second_runtime_on_the_same_can_interface_is_refused_whatever_its_domain() {
+    let (_, yaml) = write_rig("bus-lock", 100.0);
+    let interface = format!("jcb{}", std::process::id() % 100_000);
+    let can_yaml = yaml.with_file_name("can.yaml");
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    let edited = jointctl_tests::yaml_with(&text, &[
+        jointctl_tests::Edit::Set("hal.backend", "socketcan".into()),
+        jointctl_tests::Edit::Set("buses.can[0].interface", interface.clone().into()),
+    ]);
+    std::fs::write(&can_yaml, format!("{edited}\nipc:\n  domain: other{}\n", std::process::id())).unwrap();
+    let held = jointctl_runtime::lock::BusLock::acquire(&jointctl_runtime::lock::machine_lock_dir(), &interface).unwrap();
+    let second = Command::new(jointctl()).arg("run").arg(&can_yaml).args(["--cycles", "3"]).output().unwrap();
+    drop(held);
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("CAN interface `{interface}` is driven by another runtime (process {})", std::process::id())), "{err}");
+    let alone = Command::new(jointctl()).arg("run").arg(&can_yaml).args(["--cycles", "3"]).output().unwrap();
+    let err = String::from_utf8_lossy(&alone.stderr);
+    assert!(err.contains(&interface) && !err.contains("driven by another runtime"), "{err}");
+}

@@ -19,6 +19,16 @@ pub enum LockError {
         /// The holder's process id, when it could be read.
         holder: Option<u32>,
     },
+    /// Another runtime drives the CAN interface (whatever its arm, domain or root).
+    #[error("CAN interface `{interface}` is driven by another runtime{}: two hosts on one bus would both command its drives; stop it first (lock {})", .holder.map(|p| format!(" (process {p})")).unwrap_or_default(), .path.display())]
+    BusInUse {
+        /// The interface.
+        interface: String,
+        /// The lock file.
+        path: PathBuf,
+        /// The holder's process id, when it could be read.
+        holder: Option<u32>,
+    },
     /// The lock file or its folder could not be created or locked.
     #[error("cannot take the lock {} of arm `{arm}`", .path.display())]
     Io {
@@ -73,6 +83,61 @@ impl ArmLock {
     /// The lock file.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+/// The folder of the machine's bus locks, the same for every domain and root: `/run/lock/jointctl`
+/// (the system's folder for device locks), or `jointctl-locks` in the temporary folder where
+/// there is none.
+pub fn machine_lock_dir() -> PathBuf {
+    let run_lock = Path::new("/run/lock");
+    if run_lock.is_dir() { run_lock.join("jointctl") } else { std::env::temp_dir().join("jointctl-locks") }
+}
+
+/// A CAN interface's lock, held by the runtime that drives it until dropped. The arm's lock is
+/// per domain and root: a copy of a SocketCAN config in another domain went on to open `can0`
+/// beside the running arm (issue 40, finding 16).
+///
+/// ```
+/// let dir = std::env::temp_dir().join(format!("bus-doc-{}", std::process::id()));
+/// let lock = jointctl_runtime::lock::BusLock::acquire(&dir, "vcan9").unwrap();
+/// assert!(jointctl_runtime::lock::BusLock::acquire(&dir, "vcan9").is_err());
+/// drop(lock);
+/// ```
+#[derive(Debug)]
+pub struct BusLock {
+    _file: std::fs::File,
+}
+
+impl BusLock {
+    /// Takes `<dir>/can-<interface>.lock` without waiting. `dir` is made sticky and open to every
+    /// user (as `/run/lock` is): another user's runtime must find, not be refused, the lock.
+    pub fn acquire(dir: &Path, interface: &str) -> Result<Self, LockError> {
+        use std::os::unix::fs::PermissionsExt;
+        let path = dir.join(format!("can-{interface}.lock"));
+        let io = |source| LockError::Io { arm: format!("CAN interface {interface}"), path: path.clone(), source };
+        if !dir.is_dir() {
+            std::fs::DirBuilder::new().recursive(true).mode(0o755).create(dir).map_err(io)?;
+            std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o1777)).map_err(io)?;
+        }
+        let mut file = match std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).mode(0o644).open(&path) {
+            Ok(f) => f,
+            // Another user's lock file: readable, and a read-only descriptor locks as well.
+            Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => std::fs::File::open(&path).map_err(io)?,
+            Err(e) => return Err(io(e)),
+        };
+        // SAFETY: flock on a file descriptor this function owns.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let e = std::io::Error::last_os_error();
+            if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
+                let mut text = String::new();
+                let holder = file.read_to_string(&mut text).ok().and_then(|_| text.trim().parse().ok());
+                return Err(LockError::BusInUse { interface: interface.into(), path, holder });
+            }
+            return Err(io(e));
+        }
+        let _ = file.set_len(0).and_then(|()| file.rewind()).and_then(|()| write!(file, "{}", std::process::id()));
+        Ok(BusLock { _file: file })
     }
 }
 

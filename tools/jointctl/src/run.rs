@@ -76,6 +76,17 @@ pub fn run(a: RunArgs) -> ExitCode {
         Ok(l) => l,
         Err(e) => return fail_err(e),
     };
+    // Every CAN interface the arm drives, whatever the domain or root: one host per bus.
+    let mut _bus_locks = Vec::new();
+    if loaded.config.hal.backend == jointctl_config::HalBackend::Socketcan {
+        let dir = jointctl_runtime::lock::machine_lock_dir();
+        for bus in &loaded.config.buses.can {
+            match jointctl_runtime::lock::BusLock::acquire(&dir, &bus.interface) {
+                Ok(l) => _bus_locks.push(l),
+                Err(e) => return fail_err(e),
+            }
+        }
+    }
     let mut loader = jointctl_runtime::loader_for(&loaded);
     if a.static_plugins && let Err(e) = static_loader(&mut loader) {
         return fail_err(e);
