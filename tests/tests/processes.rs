@@ -863,3 +863,27 @@ fn a_second_runtime_on_the_same_can_interface_is_refused_whatever_its_domain() {
     let err = String::from_utf8_lossy(&alone.stderr);
     assert!(err.contains(&interface) && !err.contains("driven by another runtime"), "{err}");
 }
+
+/// Issue 40, finding 15: `ipc.root` in a world-writable sticky folder (`root: /tmp`) was
+/// accepted; another user could make the arm's `services/`, `nodes/` and `jointctl/` folders
+/// there first, open to all, and later empty `services/`, cutting `inspect` and `cmd` off the
+/// running arm. Pass: a root of mode 1777 is refused before anything is created in it, naming
+/// the folder and its mode; the same folder at 0700 runs.
+#[test]
+fn an_ipc_root_writable_by_others_is_refused_even_when_sticky() {
+    use std::os::unix::fs::PermissionsExt as _;
+    let (_, yaml) = write_rig("sticky-root", 100.0);
+    let root = yaml.with_file_name("shared-root");
+    std::fs::create_dir_all(&root).unwrap();
+    std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(&yaml, format!("{text}\nipc:\n  domain: sticky{}\n  root: {}\n", std::process::id(), root.display())).unwrap();
+    let out = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "3", "--no-ipc"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("{} is writable by other users (mode 1777)", root.display())), "{err}");
+    assert_eq!(std::fs::read_dir(&root).unwrap().count(), 0, "nothing was created in it");
+    std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o700)).unwrap();
+    let out = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "3", "--no-ipc"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}

@@ -35,7 +35,7 @@ pub enum AccessError {
         advice: &'static str,
     },
     /// The root folder lets other users create or replace files in it.
-    #[error("{} is writable by other users (mode {mode:04o}): they could replace the arm's shared memory; chmod o-w it or name another ipc.root", .path.display())]
+    #[error("{} is writable by other users (mode {mode:04o}): they could replace the arm's shared memory or make its folders first; chmod o-w it or name a folder of your own (ipc.root)", .path.display())]
     OpenToOthers {
         /// The folder.
         path: PathBuf,
@@ -116,7 +116,10 @@ pub fn secure_root(root: &Path, group: Option<&str>) -> Result<(), AccessError> 
             advice: "run as that user, or name a root of your own (ipc.root)",
         });
     }
-    if meta.mode() & 0o002 != 0 && meta.mode() & 0o1000 == 0 {
+    // Sticky or not: in a sticky folder (`ipc.root: /tmp`) another user could not replace the
+    // arm's files, but could make its `services/`, `nodes/` and `jointctl/` folders first, open
+    // to all, and empty them later, cutting every client off a running arm (issue 40, finding 15).
+    if meta.mode() & 0o002 != 0 {
         return Err(AccessError::OpenToOthers { path: root.to_path_buf(), mode: meta.mode() & 0o7777 });
     }
     Ok(())
