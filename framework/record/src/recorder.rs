@@ -46,6 +46,13 @@ pub struct RecordSummary {
 }
 
 impl RecordSummary {
+    /// A recording of `file` that holds no sample (yet).
+    fn empty(file: PathBuf) -> Self {
+        let zero = || messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect();
+        let bytes = std::fs::metadata(&file).map_or(0, |m| m.len());
+        RecordSummary { file, duration_s: 0.0, messages: zero(), lost_by_channel: zero(), bytes, arm_stopped: false }
+    }
+
     /// Samples lost on every channel together.
     pub fn lost(&self) -> u64 {
         self.lost_by_channel.values().sum()
@@ -120,6 +127,11 @@ impl Gaps {
         }
         self.next = Some(self.next.map_or(number + 1, |n| n.max(number + 1)));
     }
+
+    /// The newest number seen.
+    fn newest(&self) -> Option<u64> {
+        self.next.map(|n| n - 1)
+    }
 }
 
 /// Where the recorder writes: the file, and what it counts on the way.
@@ -129,8 +141,6 @@ struct Sink<W: std::io::Write + std::io::Seek> {
     out: PathBuf,
     counts: BTreeMap<&'static str, u64>,
     gaps: BTreeMap<&'static str, Gaps>,
-    /// The newest cycle (or command sequence) written per channel.
-    newest: BTreeMap<&'static str, u64>,
     first_stamp: Option<u64>,
     last_stamp: u64,
     arm_stopped: bool,
@@ -147,9 +157,24 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
         let header = mcap::records::MessageHeader { channel_id: self.channel[m.topic], sequence: *count as u32, log_time: m.stamp_ns, publish_time: m.stamp_ns };
         *count += 1;
         self.gaps.entry(m.topic).or_default().see(m.number);
-        let newest = self.newest.entry(m.topic).or_insert(m.number);
-        *newest = (*newest).max(m.number);
         self.writer.write_to_known_channel(&header, m.json.as_bytes()).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })
+    }
+
+    /// The newest cycle (or command sequence) written on `topic`.
+    fn newest(&self, topic: &str) -> Option<u64> {
+        self.gaps.get(topic).and_then(Gaps::newest)
+    }
+
+    /// What the file holds so far (its size is read once it is closed).
+    fn summary(&self) -> RecordSummary {
+        RecordSummary {
+            file: self.out.clone(),
+            duration_s: self.first_stamp.map_or(0.0, |f| self.last_stamp.saturating_sub(f) as f64 * 1e-9),
+            messages: self.counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+            lost_by_channel: self.gaps.iter().map(|(k, g)| (k.to_string(), g.lost)).collect(),
+            bytes: 0,
+            arm_stopped: self.arm_stopped,
+        }
     }
 }
 
@@ -194,14 +219,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     // A file that cannot be written from its start (a full disk) is a recording stopped before
     // its first sample: the summary says so too.
     let before_start = |source: mcap::McapError| RecordError::Stopped {
-        summary: Box::new(RecordSummary {
-            file: opts.out.clone(),
-            duration_s: 0.0,
-            messages: messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect(),
-            lost_by_channel: messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect(),
-            bytes: std::fs::metadata(&opts.out).map_or(0, |m| m.len()),
-            arm_stopped: false,
-        }),
+        summary: Box::new(RecordSummary::empty(opts.out.clone())),
         source: Box::new(mcap_error(source)),
     };
     let mut writer = mcap::WriteOptions::new()
@@ -253,7 +271,6 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         out: opts.out.clone(),
         counts: messages::CHANNELS.iter().map(|(t, _)| (*t, 0)).collect(),
         gaps: messages::CHANNELS.iter().map(|(t, _)| (*t, Gaps::default())).collect(),
-        newest: BTreeMap::new(),
         first_stamp: None,
         last_stamp: 0,
         arm_stopped: false,
@@ -261,14 +278,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     // A failure while recording (a full disk, a reader gone) still closes what was written and
     // says how far it got.
     let outcome = take_samples(&mut feed, &mut sink, opts, stop, timeout, descriptor.rate_hz);
-    let mut summary = RecordSummary {
-        file: opts.out.clone(),
-        duration_s: sink.first_stamp.map_or(0.0, |f| sink.last_stamp.saturating_sub(f) as f64 * 1e-9),
-        messages: sink.counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        lost_by_channel: sink.gaps.iter().map(|(k, g)| (k.to_string(), g.lost)).collect(),
-        bytes: 0,
-        arm_stopped: sink.arm_stopped,
-    };
+    let mut summary = sink.summary();
     let finished = sink.writer.finish().map_err(mcap_error);
     drop(sink);
     summary.bytes = std::fs::metadata(&opts.out).map_or(0, |m| m.len());
@@ -306,11 +316,11 @@ fn take_samples<W: std::io::Write + std::io::Seek>(feed: &mut ArmFeed, sink: &mu
     // state did (a file ended with a joint state whose raw readings were not in it, and the
     // elbow's drive read as lost in its last cycle). Wait for them, a few cycles at most, and
     // take nothing newer.
-    if let Some(end_cycle) = sink.newest.get("joint_state").copied() {
+    if let Some(end_cycle) = sink.newest("joint_state") {
         let period_s = if rate_hz > 0.0 { 1.0 / rate_hz } else { 0.1 };
         let deadline = Instant::now() + Duration::from_secs_f64((5.0 * period_s).clamp(0.05, 1.0));
         let last_stamp = sink.last_stamp;
-        while ["raw", "diagnostics"].iter().any(|t| sink.newest.get(t).is_none_or(|n| *n < end_cycle)) && Instant::now() < deadline {
+        while ["raw", "diagnostics"].iter().any(|t| sink.newest(t).is_none_or(|n| n < end_cycle)) && Instant::now() < deadline {
             feed.poll(|m| {
                 let in_recording = match m.topic {
                     "commands" => m.stamp_ns <= last_stamp,

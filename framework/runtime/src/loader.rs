@@ -373,6 +373,18 @@ fn private_copy(data: &[u8]) -> std::io::Result<std::fs::File> {
     Ok(file)
 }
 
+/// Loads a library's bytes through a [`private_copy`], which stays open as the library stays
+/// loaded: a descriptor closed here is the next copy's, and the dynamic loader, which knows a
+/// loaded library by its path, handed the next plugin the first one's library.
+fn load_private_copy(data: &[u8]) -> Result<libloading::Library, String> {
+    let copy = private_copy(data).map_err(|e| format!("cannot make the private copy it is loaded from: {e}"))?;
+    // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's
+    // (and a probe process loads a library precisely to die in the host's place).
+    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }.map_err(|e| e.to_string())?;
+    std::mem::forget(copy);
+    Ok(lib)
+}
+
 /// Loads a library's bytes somewhere the host survives, before the host loads them: the
 /// structure check cannot see everything the dynamic loader trusts (relocations that point out
 /// of the library crashed `check` and `run` inside it, exit 139, issue 40, finding 4). `Err`
@@ -397,11 +409,7 @@ pub fn set_probe(probe: Probe) {
 /// host would. It returns if the load returns; the caller's process dies where the host would.
 pub fn probe_load(data: &[u8]) -> Result<(), String> {
     check_library_bytes(Path::new("<probe>"), data).map_err(|e| e.to_string())?;
-    let copy = private_copy(data).map_err(|e| e.to_string())?;
-    // SAFETY: the point of a probe: this short-lived process loads the library in the host's
-    // place, and dies instead of it if the library is broken.
-    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }.map_err(|e| e.to_string())?;
-    std::mem::forget(lib);
+    std::mem::forget(load_private_copy(data)?);
     Ok(())
 }
 
@@ -416,14 +424,7 @@ fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginE
     if let Some(probe) = PROBE.get() {
         probe(&data).map_err(|reason| LoadPluginError::Malformed { file: file.into(), reason })?;
     }
-    let copy = private_copy(&data).map_err(|e| LoadPluginError::Open { file: file.into(), reason: format!("cannot make the private copy it is loaded from: {e}") })?;
-    // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's.
-    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }
-        .map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
-    // Kept open, as the library stays loaded: a descriptor closed here is the next copy's, and
-    // the dynamic loader, which knows a loaded library by its path, handed the next plugin the
-    // first one's library.
-    std::mem::forget(copy);
+    let lib = load_private_copy(&data).map_err(|reason| LoadPluginError::Open { file: file.into(), reason })?;
     // Never unloaded: see the module docs.
     let lib: &'static libloading::Library = Box::leak(Box::new(lib));
     loaded.push((canonical, lib));

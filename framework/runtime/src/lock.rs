@@ -41,6 +41,30 @@ pub enum LockError {
     },
 }
 
+/// Whether [`take`] got a lock.
+enum Taken {
+    /// This process holds it now.
+    Yes,
+    /// Another process holds it (its id, when the file says).
+    By(Option<u32>),
+}
+
+/// Takes the exclusive lock of an open lock file without waiting and writes this process's id
+/// into it (for the message another runtime prints), or reads the holder's.
+fn take(file: &mut std::fs::File) -> std::io::Result<Taken> {
+    // SAFETY: flock on a file descriptor the caller owns.
+    if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+        let e = std::io::Error::last_os_error();
+        if e.raw_os_error() != Some(libc::EWOULDBLOCK) {
+            return Err(e);
+        }
+        let mut text = String::new();
+        return Ok(Taken::By(file.read_to_string(&mut text).ok().and_then(|_| text.trim().parse().ok())));
+    }
+    let _ = file.set_len(0).and_then(|()| file.rewind()).and_then(|()| write!(file, "{}", std::process::id()));
+    Ok(Taken::Yes)
+}
+
 /// The arm's single-runtime lock, held until dropped. The kernel releases it when the process
 /// ends in any way (SIGKILL included), so a crashed runtime never blocks a restart.
 ///
@@ -65,19 +89,10 @@ impl ArmLock {
         std::fs::DirBuilder::new().recursive(true).mode(0o750).create(dir).map_err(io)?;
         let mut file =
             std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).mode(0o600).open(&path).map_err(io)?;
-        // SAFETY: flock on a file descriptor this function owns.
-        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
-            let e = std::io::Error::last_os_error();
-            if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
-                let mut text = String::new();
-                let holder = file.read_to_string(&mut text).ok().and_then(|_| text.trim().parse().ok());
-                return Err(LockError::AlreadyRunning { arm: arm.into(), path, holder });
-            }
-            return Err(io(e));
+        match take(&mut file).map_err(io)? {
+            Taken::Yes => Ok(ArmLock { _file: file, path }),
+            Taken::By(holder) => Err(LockError::AlreadyRunning { arm: arm.into(), path, holder }),
         }
-        // The holder's pid, for the message a second runtime prints.
-        let _ = file.set_len(0).and_then(|()| file.rewind()).and_then(|()| write!(file, "{}", std::process::id()));
-        Ok(ArmLock { _file: file, path })
     }
 
     /// The lock file.
@@ -126,18 +141,10 @@ impl BusLock {
             Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => std::fs::File::open(&path).map_err(io)?,
             Err(e) => return Err(io(e)),
         };
-        // SAFETY: flock on a file descriptor this function owns.
-        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
-            let e = std::io::Error::last_os_error();
-            if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
-                let mut text = String::new();
-                let holder = file.read_to_string(&mut text).ok().and_then(|_| text.trim().parse().ok());
-                return Err(LockError::BusInUse { interface: interface.into(), path, holder });
-            }
-            return Err(io(e));
+        match take(&mut file).map_err(io)? {
+            Taken::Yes => Ok(BusLock { _file: file }),
+            Taken::By(holder) => Err(LockError::BusInUse { interface: interface.into(), path, holder }),
         }
-        let _ = file.set_len(0).and_then(|()| file.rewind()).and_then(|()| write!(file, "{}", std::process::id()));
-        Ok(BusLock { _file: file })
     }
 }
 
