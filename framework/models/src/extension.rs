@@ -50,6 +50,10 @@ pub struct ExtensionSpec {
     /// Play `w` [rad] (`dead_zone`).
     #[serde(default)]
     pub dead_zone_rad: f64,
+    /// The band on either side of `w` over which the play's contact stiffens [rad], at most `w`
+    /// (`dead_zone`; see [`crate::play`]).
+    #[serde(default)]
+    pub dead_zone_ramp_rad: f64,
     /// `b` [Nms/rad] (`viscous_friction`).
     #[serde(default)]
     pub viscous_nms_per_rad: f64,
@@ -103,6 +107,7 @@ impl Default for ExtensionSpec {
             torque_scale: 1.0,
             cubic_nm_per_rad3: 0.0,
             dead_zone_rad: 0.0,
+            dead_zone_ramp_rad: 0.0,
             viscous_nms_per_rad: 0.0,
             friction: None,
             hysteresis: None,
@@ -145,6 +150,8 @@ impl ModelExtension {
     /// ```
     /// use jointctl_models::extension::{ExtensionSpec, ModelExtension};
     /// assert!(ModelExtension::new(ExtensionSpec { dead_zone_rad: -0.1, ..Default::default() }).is_err());
+    /// // The contact band is at most the play's half width.
+    /// assert!(ModelExtension::new(ExtensionSpec { dead_zone_rad: 0.01, dead_zone_ramp_rad: 0.02, ..Default::default() }).is_err());
     /// ```
     pub fn new(spec: ExtensionSpec) -> Result<Self, ExtensionError> {
         let bad = |field: &str, message: String| Err(ExtensionError { field: field.into(), message });
@@ -162,6 +169,9 @@ impl ModelExtension {
         }
         if !(spec.dead_zone_rad >= 0.0 && spec.dead_zone_rad.is_finite()) {
             return bad("dead_zone_rad", format!("must be >= 0, got {}", spec.dead_zone_rad));
+        }
+        if !(spec.dead_zone_ramp_rad >= 0.0 && spec.dead_zone_ramp_rad <= spec.dead_zone_rad) {
+            return bad("dead_zone_ramp_rad", format!("must be between 0 and dead_zone_rad ({}), got {}", spec.dead_zone_rad, spec.dead_zone_ramp_rad));
         }
         if !(spec.rate_window_s > 0.0 && spec.rate_window_s.is_finite()) {
             return bad("rate_window_s", format!("must be > 0, got {}", spec.rate_window_s));
@@ -197,10 +207,10 @@ impl ModelExtension {
         self.len = 0;
     }
 
-    /// The play: `phi_e = sgn(phi) max(|phi| - w, 0)`, the deflection the element transmits
-    /// torque for; the characteristic is evaluated at it.
+    /// The play: `phi_e = sgn(phi) max(|phi| - w, 0)` (with its contact band, [`crate::play`]),
+    /// the deflection the element transmits torque for; the characteristic is evaluated at it.
     pub fn elastic_deflection(&self, phi: f64) -> f64 {
-        phi.signum() * (phi.abs() - self.spec.dead_zone_rad).max(0.0)
+        crate::play::elastic_deflection(phi, self.spec.dead_zone_rad, self.spec.dead_zone_ramp_rad)
     }
 
     /// Dahl's model, exact per step: `u <- sgn(dphi) + (u - sgn(dphi)) exp(-|dphi| / lambda)`;

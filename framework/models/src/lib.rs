@@ -10,6 +10,7 @@
 //!   planetary differential (eq. 3.4), belt, bevel differential (eq. 3.6/3.7), wrist deflection
 //!   (eq. 3.8), and the arctan friction of eq. 3.5;
 //! - [`fit`]: least-squares polynomial fits, as the thesis' Matlab step.
+//! - [`play`]: the dead zone of an element, ideal or with a contact that stiffens over a band.
 //!
 //! Everything evaluated in a control cycle is allocation-free.
 
@@ -20,4 +21,5 @@ pub mod characteristic;
 pub mod extension;
 pub mod fit;
 pub mod lever_arm;
+pub mod play;
 pub mod transmission;

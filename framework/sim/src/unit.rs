@@ -6,6 +6,7 @@
 use jointctl_config::{EffectsConfig, ElementSimConfig, EnvironmentConfig};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
 use jointctl_models::assumed::smooth_dead_zone;
+use jointctl_models::play::elastic_deflection;
 use jointctl_models::lever_arm::LeverArm;
 
 use crate::rng::SplitMix64;
@@ -138,6 +139,7 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
     let mut values = vec![
         ("viscous_nms_per_rad", fx.viscous_nms_per_rad, true),
         ("dead_zone_rad", fx.dead_zone_rad, true),
+        ("dead_zone_ramp_rad", fx.dead_zone_ramp_rad, true),
         ("cubic_nm_per_rad3", fx.cubic_nm_per_rad3, false),
         ("torque_offset_nm", fx.torque_offset_nm, false),
         ("torque_noise_nm", fx.torque_noise_nm, true),
@@ -160,6 +162,9 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
         if !v.is_finite() || (non_negative && v < 0.0) {
             return Err((name.into(), format!("must be a finite number{}, got {v}", if non_negative { " >= 0" } else { "" })));
         }
+    }
+    if fx.dead_zone_ramp_rad > fx.dead_zone_rad {
+        return Err(("dead_zone_ramp_rad".into(), format!("must be at most dead_zone_rad ({}), got {}", fx.dead_zone_rad, fx.dead_zone_ramp_rad)));
     }
     if fx.hysteresis.is_some_and(|h| h.limit_nm == 0.0) {
         return Err(("hysteresis.limit_nm".into(), "must be > 0 (the Dahl state is scaled by it)".into()));
@@ -300,7 +305,7 @@ impl Unit {
             let d = self.theta[i] - self.output[i];
             rate[i] = self.theta_velocity[i] - self.output_velocity[i];
             // Dead-zone (play): no torque until the play is taken up.
-            d_eff[i] = d.signum() * (d.abs() - fx.dead_zone_rad).max(0.0);
+            d_eff[i] = elastic_deflection(d, fx.dead_zone_rad, fx.dead_zone_ramp_rad);
         }
         self.element_step(&d_eff, &rate, dt, Some(rng));
         // Reaction on the drives: loads = M^T tau.
@@ -427,7 +432,7 @@ impl Unit {
             let dt = if k == 0 { 0.0 } else { t_s[k] - t_s[k - 1] };
             let (mut d_eff, mut w) = ([0.0; MAX_UNIT_DOF], [0.0; MAX_UNIT_DOF]);
             let d = deflection_rad[k];
-            d_eff[dof] = d.signum() * (d.abs() - self.effects.dead_zone_rad).max(0.0);
+            d_eff[dof] = elastic_deflection(d, self.effects.dead_zone_rad, self.effects.dead_zone_ramp_rad);
             w[dof] = rate;
             self.element_step(&d_eff, &w, dt, None);
             out.push(self.sensor_torque[dof]);

@@ -195,6 +195,9 @@ fn plant_effects_that_are_not_numbers_or_not_physical_are_refused_by_field() {
     assert_eq!(message, "must be a finite number >= 0, got -0.1");
     let zero_limit = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.0 }), ..EffectsConfig::default() };
     assert_eq!(check_effects(&zero_limit).unwrap_err().0, "hysteresis.limit_nm");
+    let wide_ramp = EffectsConfig { dead_zone_rad: 0.002, dead_zone_ramp_rad: 0.003, ..EffectsConfig::default() };
+    assert_eq!(check_effects(&wide_ramp).unwrap_err().0, "dead_zone_ramp_rad");
+    assert!(check_effects(&EffectsConfig { dead_zone_rad: 0.002, dead_zone_ramp_rad: 0.002, ..EffectsConfig::default() }).is_ok());
     assert!(check_effects(&EffectsConfig::default()).is_ok());
 }
 

@@ -307,6 +307,10 @@ pub struct EffectsConfig {
     /// Dead-zone (play) half-width around zero deflection [rad].
     #[serde(default)]
     pub dead_zone_rad: f64,
+    /// The band on either side of `dead_zone_rad` over which the contact stiffens [rad], at most
+    /// `dead_zone_rad` (0: the play is taken up at once; `jointctl_models::play`).
+    #[serde(default)]
+    pub dead_zone_ramp_rad: f64,
     /// Stiffness non-linearity: `+ k3 delta^3` [Nm/rad^3].
     #[serde(default)]
     pub cubic_nm_per_rad3: f64,
