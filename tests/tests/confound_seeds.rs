@@ -12,7 +12,8 @@
 //! prints a table per pair (the figures in `docs/model-loop.md`). Run it with
 //! `cargo build --release --workspace && cargo test --release -p jointctl-tests --test
 //! confound_seeds -- --ignored --nocapture`; `JOINTCTL_CONFOUND_SEEDS=1,2,...` picks the seeds
-//! (default 1-10).
+//! (default 1-10), `JOINTCTL_CONFOUND_SCALE` scales the effects (default 1), and
+//! `JOINTCTL_CONFOUND_KEEP=1` keeps each case's records and configs in the temporary folder.
 
 use std::path::Path;
 use std::process::Command;
@@ -133,7 +134,9 @@ fn case(label: &str, seed: u64, hidden: (&str, Draw), other: &str) -> Case {
         second,
         if resolved { "resolved" } else { "not resolved" }
     );
-    let _ = std::fs::remove_dir_all(&work);
+    if std::env::var_os("JOINTCTL_CONFOUND_KEEP").is_none() {
+        let _ = std::fs::remove_dir_all(&work);
+    }
     Case { confound_reported, resolved }
 }
 
