@@ -853,7 +853,7 @@ fn a_second_runtime_on_the_same_can_interface_is_refused_whatever_its_domain() {
         jointctl_tests::Edit::Set("buses.can[0].interface", interface.clone().into()),
     ]);
     std::fs::write(&can_yaml, format!("{edited}\nipc:\n  domain: other{}\n", std::process::id())).unwrap();
-    let held = jointctl_runtime::lock::BusLock::acquire(&jointctl_runtime::lock::machine_lock_dir(), &interface).unwrap();
+    let held = jointctl_runtime::lock::MachineLock::bus(&jointctl_runtime::lock::machine_lock_dir(), &interface).unwrap();
     let second = Command::new(jointctl()).arg("run").arg(&can_yaml).args(["--cycles", "3"]).output().unwrap();
     drop(held);
     let err = String::from_utf8_lossy(&second.stderr);
@@ -862,6 +862,28 @@ fn a_second_runtime_on_the_same_can_interface_is_refused_whatever_its_domain() {
     let alone = Command::new(jointctl()).arg("run").arg(&can_yaml).args(["--cycles", "3"]).output().unwrap();
     let err = String::from_utf8_lossy(&alone.stderr);
     assert!(err.contains(&interface) && !err.contains("driven by another runtime"), "{err}");
+}
+
+/// Issue 40, finding 16 (the arm half): the one-runtime lock held per domain and root, so the
+/// same arm ran in two domains at once, both driving its drives. Pass: while a runtime of the
+/// arm runs in its domain, a runtime of the same arm in another domain is refused, naming the
+/// arm and the holder; once the first has stopped, it runs.
+#[test]
+fn a_second_runtime_of_the_same_arm_is_refused_whatever_its_domain() {
+    let (arm, yaml) = write_rig("arm-machine-lock", 100.0);
+    let mut first = spawn_run(&yaml, &["--duration", "20"]);
+    std::thread::sleep(Duration::from_millis(700));
+    let other = yaml.with_file_name("other-domain.yaml");
+    let domain = format!("other{}", std::process::id());
+    std::fs::write(&other, format!("{}\nipc:\n  domain: {domain}\n", std::fs::read_to_string(&yaml).unwrap())).unwrap();
+    let second = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
+    let _ = first.kill();
+    let _ = first.wait();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("arm `{arm}` is already running on this machine (process {})", first.id())), "{err}");
+    let alone = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
+    assert!(alone.status.success(), "{}", String::from_utf8_lossy(&alone.stderr));
 }
 
 /// Issue 40, finding 15: `ipc.root` in a world-writable sticky folder (`root: /tmp`) was

@@ -246,11 +246,10 @@ fn position(target_rad: f64) -> Mode {
 /// (exit 1).
 #[test]
 fn check_transmission_tells_the_assumed_differential_from_the_printed_one() {
-    let ok = std::process::Command::new(jointctl_tests::jointctl())
-        .arg("check-transmission")
-        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml"))
-        .output()
-        .unwrap();
+    // The reference arm under a name of this test's own: the check takes the arm's machine-wide
+    // lock, and a `jointctl run` of `sherpa` elsewhere on the machine would refuse it.
+    let reference = jointctl_tests::sherpa_with("reference-eq-3-3", &jointctl_tests::arm_name("reference-eq-3-3"), &[]);
+    let ok = std::process::Command::new(jointctl_tests::jointctl()).arg("check-transmission").arg(&reference).output().unwrap();
     let table = String::from_utf8_lossy(&ok.stdout);
     assert_eq!(ok.status.code(), Some(0), "{table}{}", String::from_utf8_lossy(&ok.stderr));
     assert!(table.contains("| actuator_a | +0.0100 | +0.0100 | as assumed |"), "{table}");
@@ -261,6 +260,25 @@ fn check_transmission_tells_the_assumed_differential_from_the_printed_one() {
     assert_eq!(wrong.status.code(), Some(1), "{table}");
     assert!(table.contains("| actuator_b | +0.0100 | -0.0100 | OPPOSITE SIGN |"), "{table}");
     assert!(table.contains("| actuator_a | +0.0100 | +0.0100 | as assumed |"), "{table}");
+}
+
+/// Issue 40: `check-transmission` commands the shoulder's drives and took no lock, so it ran
+/// beside a runtime of the same arm, both commanding the drives. Pass: while the arm's
+/// machine-wide lock is held, the check is refused, naming the arm and the holder, before it
+/// opens the hardware; once released, it runs.
+#[test]
+fn check_transmission_is_refused_while_the_arm_runs() {
+    let arm = jointctl_tests::arm_name("transmission-lock");
+    let path = jointctl_tests::sherpa_with("transmission-lock", &arm, &[]);
+    let held = jointctl_runtime::lock::MachineLock::arm(&jointctl_runtime::lock::machine_lock_dir(), &arm).unwrap();
+    let refused = std::process::Command::new(jointctl_tests::jointctl()).arg("check-transmission").arg(&path).output().unwrap();
+    drop(held);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("arm `{arm}` is already running on this machine (process {})", std::process::id())), "{err}");
+    assert!(!err.contains("every drive holds"), "the drives were never commanded: {err}");
+    let alone = std::process::Command::new(jointctl_tests::jointctl()).arg("check-transmission").arg(&path).output().unwrap();
+    assert_eq!(alone.status.code(), Some(0), "{}", String::from_utf8_lossy(&alone.stderr));
 }
 
 /// Issue 10: q5 has no compliant element (section 3.3.2: its compliance is the ELMO's

@@ -19,6 +19,16 @@ pub enum LockError {
         /// The holder's process id, when it could be read.
         holder: Option<u32>,
     },
+    /// A runtime of the same arm name runs on this machine in another domain or root.
+    #[error("arm `{arm}` is already running on this machine{} in another domain or ipc.root: one runtime per arm name, whatever the domain (two would drive the same drives); stop it first (lock {})", .holder.map(|p| format!(" (process {p})")).unwrap_or_default(), .path.display())]
+    RunningElsewhere {
+        /// Arm name.
+        arm: String,
+        /// The lock file.
+        path: PathBuf,
+        /// The holder's process id, when it could be read.
+        holder: Option<u32>,
+    },
     /// Another runtime drives the CAN interface (whatever its arm, domain or root).
     #[error("CAN interface `{interface}` is driven by another runtime{}: two hosts on one bus would both command its drives; stop it first (lock {})", .holder.map(|p| format!(" (process {p})")).unwrap_or_default(), .path.display())]
     BusInUse {
@@ -101,7 +111,7 @@ impl ArmLock {
     }
 }
 
-/// The folder of the machine's bus locks, the same for every domain and root: `/run/lock/jointctl`
+/// The folder of the machine's arm and bus locks, the same for every domain and root: `/run/lock/jointctl`
 /// (the system's folder for device locks), or `jointctl-locks` in the temporary folder where
 /// there is none.
 pub fn machine_lock_dir() -> PathBuf {
@@ -109,41 +119,60 @@ pub fn machine_lock_dir() -> PathBuf {
     if run_lock.is_dir() { run_lock.join("jointctl") } else { std::env::temp_dir().join("jointctl-locks") }
 }
 
-/// A CAN interface's lock, held by the runtime that drives it until dropped. The arm's lock is
-/// per domain and root: a copy of a SocketCAN config in another domain went on to open `can0`
-/// beside the running arm (issue 40, finding 16).
+/// Opens (creating) `<dir>/<name>` for a machine-wide lock. `dir` is made sticky and open to
+/// every user (as `/run/lock` is): another user's runtime must find, not be refused, the lock.
+fn open_machine_lock(dir: &Path, name: &str, label: &str) -> Result<(std::fs::File, PathBuf), LockError> {
+    use std::os::unix::fs::PermissionsExt;
+    let path = dir.join(name);
+    let io = |source| LockError::Io { arm: label.into(), path: path.clone(), source };
+    if !dir.is_dir() {
+        std::fs::DirBuilder::new().recursive(true).mode(0o755).create(dir).map_err(io)?;
+        std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o1777)).map_err(io)?;
+    }
+    let file = match std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).mode(0o644).open(&path) {
+        Ok(f) => f,
+        // Another user's lock file: readable, and a read-only descriptor locks as well.
+        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => std::fs::File::open(&path).map_err(io)?,
+        Err(e) => return Err(io(e)),
+    };
+    Ok((file, path))
+}
+
+/// A machine-wide lock, held until dropped: a CAN interface's ([`MachineLock::bus`]) or an arm
+/// name's ([`MachineLock::arm`]). The arm's [`ArmLock`] is per domain and root: a copy of a
+/// SocketCAN config in another domain went on to open `can0` beside the running arm, and the
+/// same arm ran twice in two domains (issue 40, finding 16).
 ///
 /// ```
 /// let dir = std::env::temp_dir().join(format!("bus-doc-{}", std::process::id()));
-/// let lock = jointctl_runtime::lock::BusLock::acquire(&dir, "vcan9").unwrap();
-/// assert!(jointctl_runtime::lock::BusLock::acquire(&dir, "vcan9").is_err());
-/// drop(lock);
+/// let lock = jointctl_runtime::lock::MachineLock::bus(&dir, "vcan9").unwrap();
+/// assert!(jointctl_runtime::lock::MachineLock::bus(&dir, "vcan9").is_err());
+/// let arm = jointctl_runtime::lock::MachineLock::arm(&dir, "doc-arm").unwrap();
+/// assert!(jointctl_runtime::lock::MachineLock::arm(&dir, "doc-arm").is_err());
+/// drop((lock, arm));
 /// ```
 #[derive(Debug)]
-pub struct BusLock {
+pub struct MachineLock {
     _file: std::fs::File,
 }
 
-impl BusLock {
-    /// Takes `<dir>/can-<interface>.lock` without waiting. `dir` is made sticky and open to every
-    /// user (as `/run/lock` is): another user's runtime must find, not be refused, the lock.
-    pub fn acquire(dir: &Path, interface: &str) -> Result<Self, LockError> {
-        use std::os::unix::fs::PermissionsExt;
-        let path = dir.join(format!("can-{interface}.lock"));
-        let io = |source| LockError::Io { arm: format!("CAN interface {interface}"), path: path.clone(), source };
-        if !dir.is_dir() {
-            std::fs::DirBuilder::new().recursive(true).mode(0o755).create(dir).map_err(io)?;
-            std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o1777)).map_err(io)?;
-        }
-        let mut file = match std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).mode(0o644).open(&path) {
-            Ok(f) => f,
-            // Another user's lock file: readable, and a read-only descriptor locks as well.
-            Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => std::fs::File::open(&path).map_err(io)?,
-            Err(e) => return Err(io(e)),
-        };
-        match take(&mut file).map_err(io)? {
-            Taken::Yes => Ok(BusLock { _file: file }),
+impl MachineLock {
+    /// Takes `<dir>/can-<interface>.lock` without waiting.
+    pub fn bus(dir: &Path, interface: &str) -> Result<Self, LockError> {
+        let label = format!("CAN interface {interface}");
+        let (mut file, path) = open_machine_lock(dir, &format!("can-{interface}.lock"), &label)?;
+        match take(&mut file).map_err(|source| LockError::Io { arm: label, path: path.clone(), source })? {
+            Taken::Yes => Ok(MachineLock { _file: file }),
             Taken::By(holder) => Err(LockError::BusInUse { interface: interface.into(), path, holder }),
+        }
+    }
+
+    /// Takes `<dir>/arm-<arm>.lock` without waiting (arm names are letters, digits, `_` and `-`).
+    pub fn arm(dir: &Path, arm: &str) -> Result<Self, LockError> {
+        let (mut file, path) = open_machine_lock(dir, &format!("arm-{arm}.lock"), arm)?;
+        match take(&mut file).map_err(|source| LockError::Io { arm: arm.into(), path: path.clone(), source })? {
+            Taken::Yes => Ok(MachineLock { _file: file }),
+            Taken::By(holder) => Err(LockError::RunningElsewhere { arm: arm.into(), path, holder }),
         }
     }
 }

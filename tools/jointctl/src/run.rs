@@ -43,6 +43,32 @@ fn stopped_during_setup(stop: &StopRequest, arm: Option<&mut jointctl_runtime::A
     fail(format!("stopped by {by} before the loop started; joints held"))
 }
 
+/// The locks held while a process drives an arm's hardware, released when dropped.
+pub struct HardwareLocks {
+    _arm: jointctl_runtime::lock::ArmLock,
+    _machine: Vec<jointctl_runtime::lock::MachineLock>,
+}
+
+/// Takes, before any bus is opened, the locks a process must hold to drive the arm of `loaded`:
+/// the arm's in its domain and root (where `cmd stop` finds the runtime), and machine-wide the
+/// arm name's and every CAN interface's, whatever the domain or root (one runtime per arm and
+/// one host per bus). `jointctl run` and `jointctl check-transmission` both command the drives.
+pub fn lock_hardware(loaded: &jointctl_config::LoadedConfig) -> Result<HardwareLocks, String> {
+    let ipc = &loaded.config.ipc;
+    let scope = jointctl_ipc::IpcScope { domain: ipc.domain.clone(), root: ipc.root.clone(), group: ipc.group.clone() };
+    jointctl_ipc::prepare_root(&scope).map_err(|e| crate::chain(&e))?;
+    let lock_dir = jointctl_ipc::lock_dir_in(&scope).map_err(|e| crate::chain(&e))?;
+    let arm = jointctl_runtime::lock::ArmLock::acquire(&lock_dir, &loaded.config.arm).map_err(|e| crate::chain(&e))?;
+    let machine_dir = jointctl_runtime::lock::machine_lock_dir();
+    let mut machine = vec![jointctl_runtime::lock::MachineLock::arm(&machine_dir, &loaded.config.arm).map_err(|e| crate::chain(&e))?];
+    if loaded.config.hal.backend == jointctl_config::HalBackend::Socketcan {
+        for bus in &loaded.config.buses.can {
+            machine.push(jointctl_runtime::lock::MachineLock::bus(&machine_dir, &bus.interface).map_err(|e| crate::chain(&e))?);
+        }
+    }
+    Ok(HardwareLocks { _arm: arm, _machine: machine })
+}
+
 pub fn run(a: RunArgs) -> ExitCode {
     let stop = match StopRequest::install() {
         Ok(s) => s,
@@ -64,29 +90,11 @@ pub fn run(a: RunArgs) -> ExitCode {
     }
     let ipc = &loaded.config.ipc;
     let scope = jointctl_ipc::IpcScope { domain: ipc.domain.clone(), root: ipc.root.clone(), group: ipc.group.clone() };
-    if let Err(e) = jointctl_ipc::prepare_root(&scope) {
-        return fail_err(e);
-    }
-    let lock_dir = match jointctl_ipc::lock_dir_in(&scope) {
-        Ok(d) => d,
-        Err(e) => return fail_err(e),
-    };
     // Before any bus is opened: a second runtime of this arm must not touch its drives.
-    let _lock = match jointctl_runtime::lock::ArmLock::acquire(&lock_dir, &loaded.config.arm) {
+    let _locks = match lock_hardware(&loaded) {
         Ok(l) => l,
-        Err(e) => return fail_err(e),
+        Err(e) => return fail(e),
     };
-    // Every CAN interface the arm drives, whatever the domain or root: one host per bus.
-    let mut _bus_locks = Vec::new();
-    if loaded.config.hal.backend == jointctl_config::HalBackend::Socketcan {
-        let dir = jointctl_runtime::lock::machine_lock_dir();
-        for bus in &loaded.config.buses.can {
-            match jointctl_runtime::lock::BusLock::acquire(&dir, &bus.interface) {
-                Ok(l) => _bus_locks.push(l),
-                Err(e) => return fail_err(e),
-            }
-        }
-    }
     let mut loader = jointctl_runtime::loader_for(&loaded);
     if a.static_plugins && let Err(e) = static_loader(&mut loader) {
         return fail_err(e);
