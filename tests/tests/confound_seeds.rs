@@ -22,8 +22,11 @@ use jointctl_sim::rng::SplitMix64;
 use jointctl_tests::{Edit, arm_name, jointctl, scratch, sherpa_with};
 use serde_yaml::Value;
 
-/// One side of a pair: the plant's `sim.effects` YAML drawn from `rng`, and the cause's name.
+/// Draws one side of a pair: the plant's `sim.effects` YAML.
 type Draw = fn(&mut SplitMix64) -> String;
+
+/// One side of a pair: the cause `identify` must name, and how the plant's effect is drawn.
+type Side = (&'static str, Draw);
 
 /// A draw between `lo` and `hi`, times the campaign's scale (`JOINTCTL_CONFOUND_SCALE`, 1 by
 /// default: smaller effects are nearer the noise, where a pair is more often confounded).
@@ -49,7 +52,7 @@ fn viscous(rng: &mut SplitMix64) -> String {
 }
 
 /// The pairs, each with a short label (arm names are at most 32 characters).
-const PAIRS: [(&str, (&str, Draw), (&str, Draw)); 3] = [
+const PAIRS: [(&str, Side, Side); 3] = [
     ("cubic-play", ("stiffness_nonlinearity", cubic), ("dead_zone", play)),
     ("atan-dahl", ("coulomb_friction", arctan), ("hysteresis", dahl)),
     ("dahl-visc", ("hysteresis", dahl), ("viscous_friction", viscous)),
@@ -87,7 +90,7 @@ struct Case {
     resolved: bool,
 }
 
-fn case(label: &str, seed: u64, hidden: (&str, Draw), other: &str) -> Case {
+fn case(label: &str, seed: u64, hidden: Side, other: &str) -> Case {
     let mut rng = SplitMix64(seed ^ 0xc0f0_0000 ^ label.len() as u64);
     let effect = (hidden.1)(&mut rng);
     let name = format!("cf-{label}-{seed}");
