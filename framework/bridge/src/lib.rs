@@ -32,11 +32,31 @@ pub struct BridgeSummary {
     pub arm_stopped: bool,
 }
 
+/// Where a bridge reads the arm's samples: the arm's feed, or a stand-in in tests.
+trait Samples {
+    /// Hands every sample waiting to `each`; returns how many there were.
+    fn poll_each(&mut self, each: &mut dyn FnMut(FeedMessage<'_>)) -> Result<usize, FeedError>;
+}
+
+impl Samples for ArmFeed {
+    fn poll_each(&mut self, each: &mut dyn FnMut(FeedMessage<'_>)) -> Result<usize, FeedError> {
+        self.poll(|m| {
+            each(m);
+            Ok::<_, FeedError>(())
+        })
+    }
+}
+
 /// Hands the arm's samples to `send` until `stop` is set, the arm's final sample, or `timeout`
 /// without a sample; `between` runs after every poll (a bridge's other duties, such as
 /// answering commands).
+///
+/// The arm's silence is judged by polls alone, before `between` runs: the time a bridge spends
+/// on its own duties is not the arm's. Judged after it, a burst of commands answered after a
+/// poll that found nothing (3000 from the network, each waiting for the runtime's answer) read as
+/// the arm falling silent, and the bridge stopped while the arm ran on (issue 40, finding 13).
 fn pump(
-    feed: &mut ArmFeed,
+    feed: &mut impl Samples,
     stop: &AtomicBool,
     timeout: Duration,
     bridge: &str,
@@ -46,23 +66,81 @@ fn pump(
     let mut summary = BridgeSummary::default();
     let mut last_sample = Instant::now();
     loop {
-        let n = feed.poll(|m| {
+        let n = feed.poll_each(&mut |m| {
             send(&m);
             *summary.messages.entry(m.topic.to_string()).or_default() += 1;
             summary.arm_stopped |= m.final_sample;
-            Ok::<_, FeedError>(())
         })?;
-        between();
+        let silent = if n > 0 {
+            last_sample = Instant::now();
+            false
+        } else {
+            last_sample.elapsed() > timeout
+        };
+        if !silent {
+            between();
+        }
         if stop.load(Ordering::Acquire) || summary.arm_stopped {
             return Ok(summary);
         }
-        if n > 0 {
-            last_sample = Instant::now();
-        } else if last_sample.elapsed() > timeout {
+        if silent {
             tracing::warn!(timeout_s = timeout.as_secs_f64(), "the arm fell silent; the {bridge} bridge stops");
             return Ok(summary);
-        } else {
+        }
+        if n == 0 {
             std::thread::sleep(Duration::from_millis(2));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stand-in for the arm: one joint state a poll, except the polls listed as empty.
+    struct Arm {
+        polls: usize,
+        empty: Vec<usize>,
+    }
+
+    impl Samples for Arm {
+        fn poll_each(&mut self, each: &mut dyn FnMut(FeedMessage<'_>)) -> Result<usize, FeedError> {
+            self.polls += 1;
+            if self.empty.contains(&self.polls) {
+                return Ok(0);
+            }
+            each(FeedMessage { topic: "joint_state", number: self.polls as u64, stamp_ns: 0, json: "{}", final_sample: false });
+            Ok(1)
+        }
+    }
+
+    #[test]
+    fn time_spent_answering_commands_is_not_the_arms_silence() {
+        // Issue 40, finding 13: the poll before a burst of commands found nothing, the burst took
+        // longer than the timeout, and the bridge stopped as if the arm had fallen silent.
+        let stop = AtomicBool::new(false);
+        let mut arm = Arm { polls: 0, empty: vec![1] };
+        let mut betweens = 0;
+        let summary = pump(&mut arm, &stop, Duration::from_millis(50), "test", |_| {}, || {
+            betweens += 1;
+            if betweens == 1 {
+                std::thread::sleep(Duration::from_millis(120));
+            }
+            if betweens == 5 {
+                stop.store(true, Ordering::Release);
+            }
+        })
+        .unwrap();
+        assert_eq!(betweens, 5, "the bridge stopped after {betweens} rounds");
+        assert_eq!(summary.messages.get("joint_state"), Some(&4));
+    }
+
+    #[test]
+    fn an_arm_that_stays_silent_stops_the_bridge() {
+        let stop = AtomicBool::new(false);
+        let mut arm = Arm { polls: 0, empty: (1..10_000).collect() };
+        let started = Instant::now();
+        let summary = pump(&mut arm, &stop, Duration::from_millis(50), "test", |_| {}, || {}).unwrap();
+        assert!(started.elapsed() >= Duration::from_millis(50) && summary.messages.is_empty(), "{summary:?}");
     }
 }
