@@ -148,6 +148,31 @@ fn zenoh_carries_the_state_and_only_authenticated_commands() {
     assert!(all.contains("refused a command from the network") && all.contains("accepted a command from the network") && all.contains("the runtime refused"), "{all}");
 }
 
+/// Issue 40, finding 13: every one of 3000 authenticated commands sent at once was forwarded to
+/// the runtime. Pass: with `max_commands_per_s: 0.1` (one token, refilled in 10 s), the first
+/// command is forwarded and accepted, the next ones are refused with the reason and the key to
+/// change, and the bridge stays up.
+#[test]
+fn commands_beyond_the_configured_rate_are_refused_with_the_reason() {
+    let command_endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let (arm, yaml) = rig("zenoh-rate", &format!("network:\n  zenoh:\n    commands: {{listen: \"{command_endpoint}\", users_file: users.txt, max_commands_per_s: 0.1}}\n"));
+    let users = yaml.with_file_name("users.txt");
+    std::fs::write(&users, "operator:correct-horse\n").unwrap();
+    std::fs::set_permissions(&users, std::fs::Permissions::from_mode(0o600)).unwrap();
+    let _arm = run_arm(&yaml);
+    let open = format!("tcp/127.0.0.1:{}", free_port());
+    let (mut bridge, _ready, _log) = bridge(&["zenoh", "--arm", &arm, "--listen", &open, "--timeout", "10"], "publishing on");
+    let send = || cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "--user", "operator", "hold"], Some("correct-horse"));
+    let first = send();
+    assert!(first.status.success() && String::from_utf8_lossy(&first.stdout).contains("accepted"), "{}", text(&first));
+    for _ in 0..3 {
+        let out = send();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("more than 0.1 commands a second") && err.contains("network.zenoh.commands.max_commands_per_s"), "{}", text(&out));
+    }
+    assert!(bridge.0.try_wait().unwrap().is_none(), "the bridge stays up");
+}
+
 /// Without `network.zenoh.commands` in the arm's YAML, every command over Zenoh is refused with
 /// that reason; the state is still published.
 #[test]
@@ -182,6 +207,10 @@ fn a_readable_users_file_or_a_bad_endpoint_is_refused() {
     let out = Command::new(jointctl()).arg("check").arg(&bad).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("network.zenoh.commands.listen") && err.contains("not a Zenoh endpoint"), "{}", text(&out));
+    let (_, fast) = rig("zenoh-bad-rate", "network:\n  zenoh:\n    commands: {listen: \"tcp/127.0.0.1:7448\", users_file: users.txt, max_commands_per_s: 0}\n");
+    let out = Command::new(jointctl()).arg("check").arg(&fast).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("network.zenoh.commands.max_commands_per_s: must be in [0.1, 1000] commands a second, got 0"), "{}", text(&out));
 }
 
 /// Issue's done-when: a client speaking the Foxglove WebSocket protocol (written from the

@@ -123,6 +123,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         if form.is_none() {
             err("network.zenoh.commands.listen".into(), format!("`{}` is not a Zenoh endpoint: write <protocol>/<address>:<port>, e.g. tcp/0.0.0.0:7448", z.listen));
         }
+        if !(z.max_commands_per_s >= 0.1 && z.max_commands_per_s <= 1000.0) {
+            err("network.zenoh.commands.max_commands_per_s".into(), format!("must be in [0.1, 1000] commands a second, got {}", crate::short_number(z.max_commands_per_s)));
+        }
     }
 
     let co = &c.hal.canopen;

@@ -153,4 +153,16 @@ pub struct ZenohCommandsConfig {
     /// Zenoh's user/password dictionary, relative to this file: one `user:password` per line.
     /// Refused when users other than its owner may read it.
     pub users_file: PathBuf,
+    /// Commands a second the bridge forwards to the runtime, 0.1 to 1000; those beyond are
+    /// refused with the reason, not forwarded (a token bucket holding at most a second's worth,
+    /// at least one). Default 20: an assumption, half the thesis' 40 Hz loop rate (sections 2.3
+    /// and 4.1), above what a person or a base station's set-point stream sends and below a
+    /// flood that would keep the bridge answering instead of publishing.
+    #[serde(default = "default_max_commands_per_s", deserialize_with = "finite")]
+    #[schemars(range(min = 0.1, max = 1000.0))]
+    pub max_commands_per_s: f64,
+}
+
+fn default_max_commands_per_s() -> f64 {
+    20.0
 }
