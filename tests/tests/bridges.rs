@@ -70,7 +70,7 @@ fn bridge(args: &[&str], ready: &str) -> (Running, String, mpsc::Receiver<String
 
 fn cmd(args: &[&str], password: Option<&str>) -> Output {
     let mut c = Command::new(jointctl());
-    c.arg("cmd").args(args).env_remove("JOINTCTL_ZENOH_PASSWORD");
+    c.arg("cmd").args(args).env_remove("JOINTCTL_ZENOH_PASSWORD").env_remove("RUST_LOG");
     if let Some(p) = password {
         c.env("JOINTCTL_ZENOH_PASSWORD", p);
     }
@@ -124,7 +124,14 @@ fn zenoh_carries_the_state_and_only_authenticated_commands() {
     let out = cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "disable", "a"], None);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("admits only authenticated peers"), "{}", text(&out));
     let out = cmd(&["--arm", &arm, "--zenoh", &command_endpoint, "--user", "operator", "disable", "a"], Some("wrong"));
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("credentials"), "{}", text(&out));
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("wrong user or password"), "{}", text(&out));
+    // The right credentials sent to the open endpoint (issue 40, finding 14): it takes none, and
+    // says so, not "wrong user or password".
+    let out = cmd(&["--arm", &arm, "--zenoh", &open, "--user", "operator", "disable", "a"], Some("correct-horse"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("takes no credentials") && err.contains("network.zenoh.commands.listen") && !err.contains("wrong user"), "{}", text(&out));
+    // And Zenoh's own log lines stay out of a user's way unless RUST_LOG asks for them.
+    assert!(!err.contains("zenoh::") && err.lines().count() == 1, "{err}");
     let joint_a_enabled = || {
         let out = Command::new(jointctl()).args(["inspect", "joints", "--arm", &arm, "--json"]).output().unwrap();
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();

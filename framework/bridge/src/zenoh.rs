@@ -414,7 +414,29 @@ pub enum ZenohClientError {
 /// whether the bridge refused this peer.
 pub fn connect(endpoint: &str, credentials: Option<&Credentials>, timeout_s: f64) -> Result<zenoh::Session, ZenohClientError> {
     let connect_error = |reason: String| ZenohClientError::Connect { endpoint: endpoint.to_string(), reason };
-    let mut config = base_config("client").map_err(connect_error)?;
+    let config = client_config(endpoint, credentials, timeout_s).map_err(connect_error)?;
+    zenoh::open(config).wait().map_err(|e| {
+        let mut reason = diagnose(endpoint, credentials.is_some(), &e.to_string());
+        // Credentials refused where the same peer without them is admitted: the endpoint takes
+        // none (the bridge's open endpoint), and the credentials were never judged. Said as
+        // "wrong user or password" before, with the right ones (issue 40, finding 14).
+        if credentials.is_some() && reason.starts_with(REFUSED_CREDENTIALS) {
+            let open = client_config(endpoint, None, timeout_s.min(2.0)).ok().and_then(|c| zenoh::open(c).wait().ok());
+            if let Some(session) = open {
+                let _ = session.close().wait();
+                reason = "that endpoint takes no credentials: it is the bridge's open endpoint, which only publishes; commands go to the bridge's command endpoint (the arm's `network.zenoh.commands.listen`)".into();
+            }
+        }
+        connect_error(reason)
+    })
+}
+
+/// The start of [`diagnose`]'s reason when credentials were given and refused.
+const REFUSED_CREDENTIALS: &str = "the bridge refused this peer's credentials";
+
+/// A client's Zenoh configuration for `endpoint`, authenticating when `credentials` are given.
+fn client_config(endpoint: &str, credentials: Option<&Credentials>, timeout_s: f64) -> Result<zenoh::Config, String> {
+    let mut config = base_config("client")?;
     let endpoints = serde_json::to_string(&[endpoint]).unwrap_or_default();
     let timeout_ms = ((timeout_s * 1e3) as i64).max(1).to_string();
     let mut settings = vec![("connect/endpoints", endpoints), ("connect/timeout_ms", timeout_ms)];
@@ -423,9 +445,9 @@ pub fn connect(endpoint: &str, credentials: Option<&Credentials>, timeout_s: f64
         settings.push(("transport/auth/usrpwd/password", serde_json::to_string(&c.password).unwrap_or_default()));
     }
     for (key, value) in settings {
-        config.insert_json5(key, &value).map_err(|e| connect_error(format!("{key}: {e}")))?;
+        config.insert_json5(key, &value).map_err(|e| format!("{key}: {e}"))?;
     }
-    zenoh::open(config).wait().map_err(|e| connect_error(diagnose(endpoint, credentials.is_some(), &e.to_string())))
+    Ok(config)
 }
 
 /// Why a session could not open, as far as a TCP probe tells.
@@ -438,7 +460,7 @@ fn diagnose(endpoint: &str, authenticated: bool, zenoh_says: &str) -> String {
     match (reachable, authenticated) {
         (false, _) => format!("nothing listens there ({zenoh_says})"),
         (true, false) => "the bridge refused this peer: that endpoint admits only authenticated peers (give --user and a password)".into(),
-        (true, true) => "the bridge refused this peer's credentials (wrong user or password?)".into(),
+        (true, true) => format!("{REFUSED_CREDENTIALS} (wrong user or password?)"),
     }
 }
 
