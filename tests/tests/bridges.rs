@@ -155,6 +155,50 @@ fn zenoh_carries_the_state_and_only_authenticated_commands() {
     assert!(all.contains("refused a command from the network") && all.contains("accepted a command from the network") && all.contains("the runtime refused"), "{all}");
 }
 
+/// Issue 40, finding 12: on the open endpoint, a peer with no credentials published well-formed
+/// joint states on the arm's key, and 49 of 60 samples `inspect echo --zenoh` showed had its
+/// forged q1. Pass: while such a peer publishes a joint state with `a` at 1.2345 rad every
+/// 2 ms, none of 60 samples echoed carries it, and the bridge's own do arrive.
+#[test]
+fn a_peer_without_credentials_cannot_publish_into_the_arms_key_space() {
+    use zenoh::Wait;
+    let (arm, yaml) = rig("zenoh-forge", "");
+    let _arm = run_arm(&yaml);
+    let open = format!("tcp/127.0.0.1:{}", free_port());
+    let (_bridge, _ready, _log) = bridge(&["zenoh", "--arm", &arm, "--listen", &open, "--timeout", "10"], "publishing on");
+    let forger = jointctl_bridge::zenoh::connect(&open, None, 5.0).unwrap();
+    let key = format!("jointctl/{arm}/joint_state");
+    // The bridge's own form (`jointctl_record::messages::write_joint_state`, stamped on the wall
+    // clock), so that a client cannot tell it from the arm's.
+    let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos() as u64;
+    let forged = format!(
+        r#"{{"cycle": 1, "stamp_ns": 1, "final": false, "wall_ns": {wall_ns}, "joints": [{{"name": "a", "position_rad": 1.2345, "mode": "hold", "enabled": true, "fault_code": 0}}, {{"name": "b", "position_rad": 1.2345, "mode": "hold", "enabled": true, "fault_code": 0}}]}}"#
+    );
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let publishing = {
+        let (stop, key, forged) = (stop.clone(), key.clone(), forged.clone());
+        std::thread::spawn(move || {
+            let mut sent = 0u32;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                if forger.put(&key, forged.as_str()).wait().is_ok() {
+                    sent += 1;
+                }
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            sent
+        })
+    };
+    let echo = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--zenoh", &open, "--json", "--count", "60", "--timeout", "10"]).output().unwrap();
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let sent = publishing.join().unwrap();
+    assert!(sent >= 20, "the forger published {sent} samples");
+    assert!(echo.status.success(), "{}", text(&echo));
+    let out = String::from_utf8_lossy(&echo.stdout);
+    assert_eq!(out.lines().count(), 60, "{out}");
+    let forged_seen = out.lines().filter(|l| l.contains("1.2345")).count();
+    assert_eq!(forged_seen, 0, "{forged_seen} of 60 samples carried the forged position:\n{out}");
+}
+
 /// Issue 40, finding 13: every one of 3000 authenticated commands sent at once was forwarded to
 /// the runtime. Pass: with `max_commands_per_s: 0.1` (one token, refilled in 10 s), the first
 /// command is forwarded and accepted, the next ones are refused with the reason and the key to

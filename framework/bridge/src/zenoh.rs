@@ -127,6 +127,18 @@ fn base_config(mode: &str) -> Result<zenoh::Config, String> {
     Ok(config)
 }
 
+/// Zenoh's access control on the bridge's sessions: no peer may put or delete in the arm's key
+/// space (`jointctl/**`); only the bridge's own session publishes there. Without it, a peer
+/// with no credentials published well-formed joint states on the open endpoint, and 49 of 60
+/// samples `inspect echo --zenoh` showed carried its forged q1 (issue 40, finding 12).
+const READ_ONLY_FOR_PEERS: &str = r#"{
+    enabled: true,
+    default_permission: "allow",
+    rules: [{ id: "the arm's key space is the bridge's", permission: "deny", flows: ["ingress"], messages: ["put", "delete"], key_exprs: ["jointctl/**"] }],
+    subjects: [{ id: "every peer" }],
+    policies: [{ rules: ["the arm's key space is the bridge's"], subjects: ["every peer"] }],
+}"#;
+
 fn listening_session(endpoints: &[String], users_file: Option<&Path>) -> Result<zenoh::Session, ZenohBridgeError> {
     let session_error = |reason: String| ZenohBridgeError::Session { endpoints: endpoints.join(", "), reason };
     let mut config = base_config("peer").map_err(session_error)?;
@@ -136,6 +148,7 @@ fn listening_session(endpoints: &[String], users_file: Option<&Path>) -> Result<
         let path = serde_json::to_string(&file.to_string_lossy()).unwrap_or_default();
         config.insert_json5("transport/auth/usrpwd/dictionary_file", &path).map_err(|e| session_error(e.to_string()))?;
     }
+    config.insert_json5("access_control", READ_ONLY_FOR_PEERS).map_err(|e| session_error(format!("access_control: {e}")))?;
     zenoh::open(config).wait().map_err(|e| session_error(e.to_string()))
 }
 
