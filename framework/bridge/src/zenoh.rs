@@ -428,24 +428,8 @@ pub enum ZenohClientError {
 pub fn connect(endpoint: &str, credentials: Option<&Credentials>, timeout_s: f64) -> Result<zenoh::Session, ZenohClientError> {
     let connect_error = |reason: String| ZenohClientError::Connect { endpoint: endpoint.to_string(), reason };
     let config = client_config(endpoint, credentials, timeout_s).map_err(connect_error)?;
-    zenoh::open(config).wait().map_err(|e| {
-        let mut reason = diagnose(endpoint, credentials.is_some(), &e.to_string());
-        // Credentials refused where the same peer without them is admitted: the endpoint takes
-        // none (the bridge's open endpoint), and the credentials were never judged. Said as
-        // "wrong user or password" before, with the right ones (issue 40, finding 14).
-        if credentials.is_some() && reason.starts_with(REFUSED_CREDENTIALS) {
-            let open = client_config(endpoint, None, timeout_s.min(2.0)).ok().and_then(|c| zenoh::open(c).wait().ok());
-            if let Some(session) = open {
-                let _ = session.close().wait();
-                reason = "that endpoint takes no credentials: it is the bridge's open endpoint, which only publishes; commands go to the bridge's command endpoint (the arm's `network.zenoh.commands.listen`)".into();
-            }
-        }
-        connect_error(reason)
-    })
+    zenoh::open(config).wait().map_err(|e| connect_error(diagnose(endpoint, credentials.is_some(), timeout_s, &e.to_string())))
 }
-
-/// The start of [`diagnose`]'s reason when credentials were given and refused.
-const REFUSED_CREDENTIALS: &str = "the bridge refused this peer's credentials";
 
 /// A client's Zenoh configuration for `endpoint`, authenticating when `credentials` are given.
 fn client_config(endpoint: &str, credentials: Option<&Credentials>, timeout_s: f64) -> Result<zenoh::Config, String> {
@@ -463,8 +447,9 @@ fn client_config(endpoint: &str, credentials: Option<&Credentials>, timeout_s: f
     Ok(config)
 }
 
-/// Why a session could not open, as far as a TCP probe tells.
-fn diagnose(endpoint: &str, authenticated: bool, zenoh_says: &str) -> String {
+/// Why a session could not open, as far as a TCP probe tells, and, for refused credentials,
+/// whether the same peer without them is admitted.
+fn diagnose(endpoint: &str, authenticated: bool, timeout_s: f64, zenoh_says: &str) -> String {
     let Some(address) = endpoint.strip_prefix("tcp/") else { return zenoh_says.to_string() };
     let reachable = std::net::ToSocketAddrs::to_socket_addrs(address)
         .ok()
@@ -473,7 +458,19 @@ fn diagnose(endpoint: &str, authenticated: bool, zenoh_says: &str) -> String {
     match (reachable, authenticated) {
         (false, _) => format!("nothing listens there ({zenoh_says})"),
         (true, false) => "the bridge refused this peer: that endpoint admits only authenticated peers (give --user and a password)".into(),
-        (true, true) => format!("{REFUSED_CREDENTIALS} (wrong user or password?)"),
+        (true, true) => {
+            // Admitted without credentials: the endpoint takes none (the bridge's open one), and
+            // the credentials were never judged. Said as "wrong user or password" before, with
+            // the right ones (issue 40, finding 14).
+            let open = client_config(endpoint, None, timeout_s.min(2.0)).ok().and_then(|c| zenoh::open(c).wait().ok());
+            match open {
+                Some(session) => {
+                    let _ = session.close().wait();
+                    "that endpoint takes no credentials: it is the bridge's open endpoint, which only publishes; commands go to the bridge's command endpoint (the arm's `network.zenoh.commands.listen`)".into()
+                }
+                None => "the bridge refused this peer's credentials (wrong user or password?)".into(),
+            }
+        }
     }
 }
 

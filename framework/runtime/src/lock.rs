@@ -159,20 +159,20 @@ pub struct MachineLock {
 impl MachineLock {
     /// Takes `<dir>/can-<interface>.lock` without waiting.
     pub fn bus(dir: &Path, interface: &str) -> Result<Self, LockError> {
-        let label = format!("CAN interface {interface}");
-        let (mut file, path) = open_machine_lock(dir, &format!("can-{interface}.lock"), &label)?;
-        match take(&mut file).map_err(|source| LockError::Io { arm: label, path: path.clone(), source })? {
-            Taken::Yes => Ok(MachineLock { _file: file }),
-            Taken::By(holder) => Err(LockError::BusInUse { interface: interface.into(), path, holder }),
-        }
+        Self::take(dir, &format!("can-{interface}.lock"), &format!("CAN interface {interface}"), |path, holder| LockError::BusInUse { interface: interface.into(), path, holder })
     }
 
     /// Takes `<dir>/arm-<arm>.lock` without waiting (arm names are letters, digits, `_` and `-`).
     pub fn arm(dir: &Path, arm: &str) -> Result<Self, LockError> {
-        let (mut file, path) = open_machine_lock(dir, &format!("arm-{arm}.lock"), arm)?;
-        match take(&mut file).map_err(|source| LockError::Io { arm: arm.into(), path: path.clone(), source })? {
+        Self::take(dir, &format!("arm-{arm}.lock"), arm, |path, holder| LockError::RunningElsewhere { arm: arm.into(), path, holder })
+    }
+
+    /// Takes `<dir>/<name>`; `held` is the error when another process holds it.
+    fn take(dir: &Path, name: &str, label: &str, held: impl FnOnce(PathBuf, Option<u32>) -> LockError) -> Result<Self, LockError> {
+        let (mut file, path) = open_machine_lock(dir, name, label)?;
+        match take(&mut file).map_err(|source| LockError::Io { arm: label.into(), path: path.clone(), source })? {
             Taken::Yes => Ok(MachineLock { _file: file }),
-            Taken::By(holder) => Err(LockError::RunningElsewhere { arm: arm.into(), path, holder }),
+            Taken::By(holder) => Err(held(path, holder)),
         }
     }
 }

@@ -228,11 +228,11 @@ fn main() -> ExitCode {
     // Log lines go through a bounded queue to a writer thread, which drops them when stderr
     // blocks (a pipe nobody drains): the runtime's publisher thread, which logs commands and
     // faults, must never wait on stderr, or commands would go unanswered.
-    // Zenoh's own log lines are off unless RUST_LOG asks for them: each failure jointctl meets
-    // through Zenoh is reported as its own error, saying which endpoint and why, and Zenoh's lines
-    // before it (source paths, "Timeout!") only confused that (issue 40, finding 14).
     let (log_writer, _log_guard) = tracing_appender::non_blocking::NonBlockingBuilder::default().lossy(true).finish(std::io::stderr());
     tracing_subscriber::fmt()
+        // Zenoh's own lines are off unless RUST_LOG asks for them: jointctl reports each failure
+        // it meets through Zenoh as its own error, with the endpoint and why, and Zenoh's lines
+        // before it (source paths, "Timeout!") only confused that (issue 40, finding 14).
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info,zenoh=off".into()),
         )

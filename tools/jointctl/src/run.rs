@@ -43,6 +43,11 @@ fn stopped_during_setup(stop: &StopRequest, arm: Option<&mut jointctl_runtime::A
     fail(format!("stopped by {by} before the loop started; joints held"))
 }
 
+/// Where the arm's shared memory and its locks are: the YAML's `ipc`.
+fn ipc_scope(config: &jointctl_config::ArmConfig) -> jointctl_ipc::IpcScope {
+    jointctl_ipc::IpcScope { domain: config.ipc.domain.clone(), root: config.ipc.root.clone(), group: config.ipc.group.clone() }
+}
+
 /// The locks held while a process drives an arm's hardware, released when dropped.
 pub struct HardwareLocks {
     _arm: jointctl_runtime::lock::ArmLock,
@@ -54,8 +59,7 @@ pub struct HardwareLocks {
 /// arm name's and every CAN interface's, whatever the domain or root (one runtime per arm and
 /// one host per bus). `jointctl run` and `jointctl check-transmission` both command the drives.
 pub fn lock_hardware(loaded: &jointctl_config::LoadedConfig) -> Result<HardwareLocks, String> {
-    let ipc = &loaded.config.ipc;
-    let scope = jointctl_ipc::IpcScope { domain: ipc.domain.clone(), root: ipc.root.clone(), group: ipc.group.clone() };
+    let scope = ipc_scope(&loaded.config);
     jointctl_ipc::prepare_root(&scope).map_err(|e| crate::chain(&e))?;
     let lock_dir = jointctl_ipc::lock_dir_in(&scope).map_err(|e| crate::chain(&e))?;
     let arm = jointctl_runtime::lock::ArmLock::acquire(&lock_dir, &loaded.config.arm).map_err(|e| crate::chain(&e))?;
@@ -89,7 +93,7 @@ pub fn run(a: RunArgs) -> ExitCode {
         tracing::info!("free arm: {} released", released.join(", "));
     }
     let ipc = &loaded.config.ipc;
-    let scope = jointctl_ipc::IpcScope { domain: ipc.domain.clone(), root: ipc.root.clone(), group: ipc.group.clone() };
+    let scope = ipc_scope(&loaded.config);
     // Before any bus is opened: a second runtime of this arm must not touch its drives.
     let _locks = match lock_hardware(&loaded) {
         Ok(l) => l,

@@ -22,6 +22,11 @@ pub struct DeadZone;
 /// The ramp shares searched (a share of the half width): 0 is the ideal dead zone.
 const RAMP_SHARES: [f64; 6] = [0.0, 0.15, 0.3, 0.5, 0.75, 1.0];
 
+/// The contact band [rad] of parameters `[half_width_rad, ramp_share]`.
+fn ramp_rad(p: &[f64]) -> f64 {
+    p[0] * p.get(1).copied().unwrap_or(0.0)
+}
+
 impl CandidateCause for DeadZone {
     fn name(&self) -> &str {
         "dead_zone"
@@ -40,7 +45,7 @@ impl CandidateCause for DeadZone {
         true
     }
     fn transform(&self, p: &[f64], inputs: &mut Inputs) {
-        let ramp_rad = p[0] * p.get(1).copied().unwrap_or(0.0);
+        let ramp_rad = ramp_rad(p);
         for x in &mut inputs.elastic_rad {
             *x = elastic_deflection(*x, p[0], ramp_rad);
         }
@@ -49,8 +54,7 @@ impl CandidateCause for DeadZone {
         Vec::new()
     }
     fn fragments(&self, p: &[f64], _: &[f64]) -> Fragments {
-        let ramp_rad = p[0] * p.get(1).copied().unwrap_or(0.0);
-        let keys = || object([("dead_zone_rad", json!(p[0])), ("dead_zone_ramp_rad", json!(ramp_rad))]);
+        let keys = || object([("dead_zone_rad", json!(p[0])), ("dead_zone_ramp_rad", json!(ramp_rad(p)))]);
         Fragments { plant: keys(), observer: keys() }
     }
 }
