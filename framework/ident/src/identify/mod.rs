@@ -466,7 +466,9 @@ fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: &[String], 
         return out;
     }
     let coefficient_names = cause.coefficient_names();
-    let relative = coefs.iter().zip(&se).filter(|(c, _)| c.abs() > 0.0).map(|(c, e)| e / c.abs()).fold(0.0f64, f64::max);
+    // The largest coefficient's: the largest relative error of all would take a coefficient
+    // near zero (the cosine of a mode whose phase is near the sine's) as the amplitude's error.
+    let relative = coefs.iter().zip(&se).filter(|(c, _)| c.abs() > 0.0).max_by(|a, b| a.0.abs().total_cmp(&b.0.abs())).map_or(0.0, |(c, e)| e / c.abs());
     for (name, value) in reported {
         if let Some(k) = coefficient_names.iter().position(|n| n == name) {
             out.insert(name.clone(), se[k]);
