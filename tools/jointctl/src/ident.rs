@@ -272,6 +272,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.rmse_after,
         u.noise_floor_nm
     );
+    if let Some(n) = &report.no_spring {
+        let _ = writeln!(md, "Read as a friction record: {}.\n", n.note);
+    }
     let _ = writeln!(
         md,
         "A cause is named when BIC on the training part proposes it, its held-out gain is relevant ({}) and there is evidence for it: a {} at level {} ({} blocks).\n",
