@@ -60,3 +60,20 @@ fn a_friction_records_pre_sliding_is_reported_with_the_friction_not_as_hysteresi
     }
     assert!(wrong.is_empty(), "{wrong:#?}");
 }
+
+#[test]
+fn a_friction_records_stribeck_dip_is_reported_with_the_friction_not_as_ringing() {
+    // Found on l3-case008 (the same arm joint at 20 Hz) and on this file's record: with the
+    // pre-sliding in, the Stribeck dip left after each reversal was taken by a
+    // `reversal_ringing` (a 0.63 Hz "ring" at the damping grid's edge on l3-case008). Still
+    // open: the record with b = 0.4 Nm s/rad gets a `time_delay` beside its viscous friction
+    // (the bristles' damping lags the friction), so it is not checked here.
+    let b = 1.2;
+    let report = identify(&lugre_record(b, 0x51ed_270b_a1c3_9f47 ^ 1), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    let stribeck = report.no_spring.as_ref().map(|n| n.stribeck.clone()).unwrap_or_default();
+    assert_eq!(named, ["viscous_friction"], "{:?}", report.no_spring);
+    // The dip's size: fs - fc = 0.15 Nm above the Coulomb level, its speed 0.03 rad/s.
+    let (size, speed) = (stribeck.get("stribeck_nm").copied().unwrap_or(0.0), stribeck.get("stribeck_speed_rad_per_s").copied().unwrap_or(0.0));
+    assert!(size > 0.05 && size < 0.3 && speed > 0.01 && speed < 0.1, "{stribeck:?}");
+}

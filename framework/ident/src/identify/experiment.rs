@@ -33,7 +33,7 @@ pub enum Dependence {
 /// ```
 pub fn dependence(effect: &str) -> Option<Dependence> {
     Some(match effect {
-        "viscous_friction" | "coulomb_friction" | "time_delay" => Dependence::Rate,
+        "viscous_friction" | "coulomb_friction" | "stribeck_friction" | "time_delay" => Dependence::Rate,
         "dead_zone" | "stiffness_nonlinearity" | "stiffness_error" | "sensor_offset" => Dependence::Deflection,
         "hysteresis" => Dependence::Stroke,
         "vibration" | "speed_vibration" | "reversal_ringing" => Dependence::Time,

@@ -160,23 +160,6 @@ pub const FAR_ABOVE_NOISE: f64 = 10.0;
 /// and below (the highest l3-case036, whose offset follows the position a little).
 pub const NO_SPRING_SHARE: f64 = 0.2;
 
-/// The squared correlation of deflection and torque on a part: the share of the torque's
-/// variance a straight line in the deflection explains.
-fn spring_share(part: &design::Part) -> f64 {
-    let n = part.len().min(part.tau.len()) as f64;
-    if n < 2.0 {
-        return 1.0;
-    }
-    let (mx, my) = (part.d.iter().sum::<f64>() / n, part.tau.iter().sum::<f64>() / n);
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (x, y) in part.d.iter().zip(&part.tau) {
-        sxy += (x - mx) * (y - my);
-        sxx += (x - mx) * (x - mx);
-        syy += (y - my) * (y - my);
-    }
-    if sxx > 0.0 && syy > 0.0 { sxy * sxy / (sxx * syy) } else { 1.0 }
-}
-
 /// A record without a spring: what the baseline's friction took on for it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NoSpring {
@@ -186,6 +169,9 @@ pub struct NoSpring {
     /// The friction's Dahl pre-sliding, as the hysteresis cause reports it (in the extended
     /// model, not among the causes); empty when none was found.
     pub presliding: BTreeMap<String, f64>,
+    /// The friction's Stribeck dip (the `stribeck_friction` candidate, tried on friction records
+    /// only), in the extended model; empty when none was found.
+    pub stribeck: BTreeMap<String, f64>,
     /// One sentence for the report.
     pub note: String,
 }
@@ -323,7 +309,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
         let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
-        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted);
+        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, baseline_fitted && p.spring_share < NO_SPRING_SHARE);
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
         let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm, model_nm: &model_nm };
@@ -462,19 +448,24 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     // A record without a spring (the first column a joint position): a Dahl loop is the
     // friction's pre-sliding (Dahl's model is a friction model), not an elastic element's
     // hysteresis: it stays in the extended model and is reported with the friction.
-    let spring_share = spring_share(&p.train);
+    let spring_share = p.spring_share;
     let no_spring = (opts.baseline_friction && matches!(opts.baseline, BaselineModel::Polynomial(_)) && spring_share < NO_SPRING_SHARE).then(|| {
         let presliding = found.iter().position(|c| c.effect == "hysteresis").map(|i| found.remove(i));
+        let stribeck = found.iter().position(|c| c.effect == "stribeck_friction").map(|i| found.remove(i));
         let note = format!(
-            "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}",
+            "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}",
             100.0 * spring_share,
             100.0 * NO_SPRING_SHARE,
             match &presliding {
                 Some(c) => format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", c.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ")),
                 None => "no Dahl pre-sliding found".into(),
+            },
+            match &stribeck {
+                Some(c) => format!("; its Stribeck dip: {}", c.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ")),
+                None => String::new(),
             }
         );
-        NoSpring { deflection_share: spring_share, presliding: presliding.map(|c| c.params).unwrap_or_default(), note }
+        NoSpring { deflection_share: spring_share, presliding: presliding.map(|c| c.params).unwrap_or_default(), stribeck: stribeck.map(|c| c.params).unwrap_or_default(), note }
     });
     let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
     let mut rejected = selection.rejected;

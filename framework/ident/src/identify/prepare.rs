@@ -136,6 +136,9 @@ pub(crate) struct Prepared {
     /// The torque's noise floor [Nm] (see [`noise_floor`]), on what a line in the deflection,
     /// its rate and an offset leave of the torque (the spring's own curvature out of it).
     pub noise_floor_nm: f64,
+    /// The share of the training part's torque variance a line in the deflection explains
+    /// (see [`spring_share`]).
+    pub spring_share: f64,
 }
 
 /// Grid searches run on at most this many samples, decimated to no fewer than 100 a cycle of
@@ -566,8 +569,27 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len().min(split + HELD_OUT_SAMPLES)));
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
     let stretch = train.first(STRETCH_SAMPLES);
-    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm })
+    let spring_share = spring_share(&train);
+    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share })
 }
+
+/// The squared correlation of deflection and torque on a part: the share of the torque's
+/// variance a straight line in the deflection explains.
+pub(crate) fn spring_share(part: &Part) -> f64 {
+    let n = part.len().min(part.tau.len()) as f64;
+    if n < 2.0 {
+        return 1.0;
+    }
+    let (mx, my) = (part.d.iter().sum::<f64>() / n, part.tau.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in part.d.iter().zip(&part.tau) {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx) * (x - mx);
+        syy += (y - my) * (y - my);
+    }
+    if sxx > 0.0 && syy > 0.0 { sxy * sxy / (sxx * syy) } else { 1.0 }
+}
+
 
 #[cfg(test)]
 mod tests {

@@ -14,6 +14,7 @@ mod hysteresis;
 mod reversal_ringing;
 mod sensor_offset;
 mod speed_vibration;
+mod stribeck_friction;
 mod stiffness_error;
 mod stiffness_nonlinearity;
 mod time_delay;
@@ -27,6 +28,7 @@ pub use hysteresis::{Hysteresis, dahl_unit};
 pub use reversal_ringing::ReversalRinging;
 pub use sensor_offset::SensorOffset;
 pub use speed_vibration::SpeedVibration;
+pub use stribeck_friction::StribeckFriction;
 pub use stiffness_error::StiffnessError;
 pub use stiffness_nonlinearity::StiffnessNonlinearity;
 pub use time_delay::TimeDelay;
@@ -39,6 +41,7 @@ pub fn builtin() -> Vec<Box<dyn CandidateCause>> {
     vec![
         Box::new(ViscousFriction),
         Box::new(CoulombFriction),
+        Box::new(StribeckFriction),
         Box::new(SensorOffset),
         Box::new(StiffnessError),
         Box::new(StiffnessNonlinearity),
@@ -80,6 +83,9 @@ pub struct SearchContext<'a> {
     /// The baseline's characteristic is fitted on the data (its stiffness is already free), not
     /// given by a configured joint.
     pub baseline_fitted: bool,
+    /// The record has no spring: its deflection column is a joint position and its torque
+    /// friction (see [`crate::identify::NO_SPRING_SHARE`]).
+    pub no_spring: bool,
     /// The residual's dominant frequency, once asked for (several vibration causes ask).
     dominant: std::sync::OnceLock<Option<f64>>,
 }
@@ -98,8 +104,8 @@ pub struct FullRate<'a> {
 
 impl<'a> SearchContext<'a> {
     /// The context of one search step: the decimated part's series and the full-rate stretch's.
-    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, baseline_fitted: bool) -> Self {
-        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, dominant: std::sync::OnceLock::new() }
+    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, baseline_fitted: bool, no_spring: bool) -> Self {
+        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new() }
     }
 
     /// The frequency of the residual's strongest component in the band a structural mode is

@@ -1,0 +1,36 @@
+//! The Stribeck dip of a joint's friction: `+ s tanh(v / (v_s / 10)) exp(-(v / v_s)^2)`, the
+//! friction above its Coulomb level at low speed that falls to it by the Stribeck speed `v_s`
+//! (Armstrong-Helouvry et al. 1994). Tried on friction records only (no spring: the deflection
+//! column a joint position), where it is reported with the friction, not as a cause of its own:
+//! beside a spring the thesis' eq. 3.5 arctan stands for the whole friction.
+
+use super::{CandidateCause, Parameter, Refine, Samples, SearchContext, log_grid};
+
+/// `+ s tanh(10 v / v_s) exp(-(v / v_s)^2)` [Nm], `s >= 0`.
+pub struct StribeckFriction;
+
+impl CandidateCause for StribeckFriction {
+    fn name(&self) -> &str {
+        "stribeck_friction"
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["stribeck_nm".into()]
+    }
+    fn applicable(&self, c: &SearchContext) -> bool {
+        c.no_spring
+    }
+    fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+        // From a three-hundredth of the peak speed to a third of it (an assumption: beyond, the
+        // dip spans the recorded speeds and is a slope of the friction, viscous friction's).
+        let peak = c.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
+        vec![Parameter { name: "stribeck_speed_rad_per_s".into(), grid: log_grid(peak / 300.0, peak / 3.0, 11), refine: Refine::Between }]
+    }
+    fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        // The sign through a tanh a tenth of the Stribeck speed wide: a rate that flickers about
+        // zero in a hold does not switch the full dip.
+        vec![s.velocity_rad_per_s.iter().map(|v| (10.0 * v / p[0]).tanh() * (-(v / p[0]).powi(2)).exp()).collect()]
+    }
+    fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
+        (c[0] < 0.0).then(|| "a friction below its Coulomb level at low speed".into())
+    }
+}
