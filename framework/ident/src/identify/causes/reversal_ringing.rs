@@ -17,6 +17,16 @@ use crate::identify::spectrum;
 /// is not measured here.
 pub struct ReversalRinging;
 
+/// The largest damping ratio searched ...
+const MOST_DAMPED: f64 = 0.3;
+
+/// ... and the largest a ring is named with: its envelope falls to 28 % within a period, and
+/// it is gone after two (an assumption: a joint's structural modes ring at a few hundredths). A
+/// fit more damped than that is a transient after each reversal that a heavily damped ring only
+/// approximates (a torque sensor's filter on the friction's step, a friction's shape error), not
+/// a mode; searched up to [`MOST_DAMPED`] so that such a fit shows as one.
+const RING_DAMPING: f64 = 0.2;
+
 impl CandidateCause for ReversalRinging {
     fn name(&self) -> &str {
         "reversal_ringing"
@@ -32,7 +42,7 @@ impl CandidateCause for ReversalRinging {
         vec![
             // The periodogram's peak of rings of random phase sits at the damped frequency.
             Parameter { name: "frequency_hz".into(), grid: vec![f], refine: Refine::Not },
-            Parameter { name: "damping_ratio".into(), grid: log_grid(0.003, 0.3, 13), refine: Refine::Between },
+            Parameter { name: "damping_ratio".into(), grid: log_grid(0.003, MOST_DAMPED, 13), refine: Refine::Between },
         ]
     }
     fn segments(&self, _: &[f64], s: &Samples) -> Option<Vec<usize>> {
@@ -56,6 +66,9 @@ impl CandidateCause for ReversalRinging {
             }
         }
         vec![sin, cos]
+    }
+    fn impossible(&self, p: &[f64], _: &[f64]) -> Option<String> {
+        p.get(1).filter(|z| **z > RING_DAMPING).map(|z| format!("damping ratio {z:.2} above a ring's {RING_DAMPING}: a transient after reversals, not a mode"))
     }
     fn report(&self, p: &[f64], _: &[String], c: &[f64]) -> std::collections::BTreeMap<String, f64> {
         // `c` holds every ring's pair: the typical (RMS) ring amplitude.
