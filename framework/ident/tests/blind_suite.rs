@@ -142,3 +142,13 @@ fn one_device_written_four_ways() {
     // window narrows where the deflection bends (14 of 16).
     assert!(same >= 3, "{same} of {} devices got the same causes on every variant", answers.len());
 }
+
+/// Other seeds of the blind suite, for a change's check on records it was not looked at on:
+/// `JOINTCTL_BLIND_SEED=2 cargo test --release -p jointctl-ident --test blind_suite -- --ignored
+/// --nocapture`. Prints the tallies; asserts nothing (no target was set on other seeds).
+#[test]
+#[ignore]
+fn other_seeds_of_the_blind_suite() {
+    let seed = std::env::var("JOINTCTL_BLIND_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(2);
+    let _ = score(&suite(seed), &format!("blind generator, suite({seed})"));
+}
