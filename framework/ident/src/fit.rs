@@ -92,6 +92,14 @@ pub enum FitRunError {
         /// The through-zero linear stiffness [Nm/rad].
         stiffness_nm_per_rad: f64,
     },
+    /// The fitted curve turns back inside the data's deflections: the runtime would refuse it.
+    #[error("{group}: {message}")]
+    Falls {
+        /// The group.
+        group: String,
+        /// Where and how (the check every loaded characteristic passes).
+        message: String,
+    },
     /// One group's (pivot setting, direction, branch) curve cannot be fitted.
     #[error("{group}: {source}")]
     Group {
@@ -343,7 +351,13 @@ fn rises(group: &str, curve: &CurveSpec, x: &[f64], y: &[f64]) -> Result<(), Fit
     if !(curve.stiffness_nm_per_rad > 0.0 && rise > 0.0) {
         return Err(FitRunError::NotIncreasing { group: group.into(), lo_rad: lo, hi_rad: hi, rise_nm: rise, stiffness_nm_per_rad: curve.stiffness_nm_per_rad });
     }
-    Ok(())
+    // The check the runtime makes when it loads the file: nothing is written that it refuses.
+    jointctl_models::characteristic::check_curve(curve).map_err(|e| FitRunError::Falls { group: group.into(), message: e.message })
+}
+
+/// The lowest and highest deflection of a group [rad]: the range its curve holds for.
+fn span(x: &[f64]) -> [f64; 2] {
+    x.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(*v), hi.max(*v)])
 }
 
 fn enough_samples(group: &str, samples: usize, parameters: usize) -> Result<(), FitRunError> {
@@ -433,6 +447,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
                 negative: Some(cn),
                 offset_nm: offset,
                 stiffness_nm_per_rad: stiffness,
+                range_rad: Some(span(&x)),
             };
             (curve, order, rmse, wp.max(wn), (rp, rn))
         } else {
@@ -452,6 +467,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
                 negative: None,
                 offset_nm: offset,
                 stiffness_nm_per_rad: stiffness,
+                range_rad: Some(span(&x)),
             };
             (curve, order, rmse, worst, branch)
         };
@@ -499,6 +515,17 @@ mod rising {
         let e = fit(&data, &FitOptions::default()).unwrap_err();
         assert!(matches!(e, FitRunError::NotIncreasing { .. }), "{e}");
         assert!(e.to_string().contains("a spring's torque must rise with its deflection"), "{e}");
+        // Rising from one end to the other but falling in between (around +-0.05 rad): fit
+        // compared the ends only and wrote a curve that the runtime now refuses.
+        let mut text = String::from("t,deflection,torque\n");
+        for i in 0..2000 {
+            let t = i as f64 * 0.01;
+            let x = 0.1 * (std::f64::consts::TAU * 0.5 * t).sin();
+            text += &format!("{t},{x},{}\n", 100.0 * x - 25_000.0 * x.powi(3) + 2.0e6 * x.powi(5));
+        }
+        let data = crate::csv::parse(&text, "dipping.csv".as_ref()).unwrap();
+        let e = fit(&data, &FitOptions { order: Order::Fixed(5), ..FitOptions::default() }).unwrap_err();
+        assert!(matches!(e, FitRunError::Falls { .. }) && e.to_string().contains("does not rise with deflection"), "{e}");
         // A spring that softens but still rises is fitted.
         let mut text = String::from("t,deflection,torque\n");
         for i in 0..2000 {

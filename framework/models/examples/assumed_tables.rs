@@ -31,6 +31,9 @@ fn print(spec: &CharacteristicSpec, indent: &str) {
             fields.push(format!("negative: {}", list(v)));
         }
         fields.push(format!("stiffness_nm_per_rad: {:e}", c.stiffness_nm_per_rad));
+        if let Some([lo, hi]) = c.range_rad {
+            fields.push(format!("range_rad: [{lo:.6e}, {hi:.6e}]"));
+        }
         println!("{indent}    - {{{}}}", fields.join(", "));
     }
 }

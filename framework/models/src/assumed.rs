@@ -81,10 +81,19 @@ pub fn shoulder_spec() -> CharacteristicSpec {
                 negative: Some(round6(through_zero(&xn, &yn, 3).unwrap_or_default())),
                 offset_nm: None,
                 stiffness_nm_per_rad: round6(vec![first_order(&x_all, &y_all)])[0],
+                range_rad: Some(rounded_span(&x_all)),
             }
         })
         .collect();
     CharacteristicSpec { source: Source::Assumed, curves }
+}
+
+/// The lowest and highest of the samples a curve was fitted to [rad], rounded as the
+/// coefficients are.
+fn rounded_span(x: &[f64]) -> [f64; 2] {
+    let [lo, hi] = x.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(*v), hi.max(*v)]);
+    let r = round6(vec![lo, hi]);
+    [r[0], r[1]]
 }
 
 /// Assumed anisotropy of the wrist: the stiffness along direction `theta` is `K (1 + 0.1 cos 2 theta)`.
@@ -112,6 +121,7 @@ pub fn wrist_spec() -> CharacteristicSpec {
                 negative: None,
                 offset_nm: None,
                 stiffness_nm_per_rad: round6(vec![first_order(&x, &y)])[0],
+                range_rad: Some(rounded_span(&x)),
             });
         }
     }

@@ -58,7 +58,25 @@ pub struct CurveSpec {
     pub offset_nm: Option<f64>,
     /// First-order fit [Nm/rad].
     pub stiffness_nm_per_rad: f64,
+    /// Deflections the curve holds for, `[lowest, highest]` [rad] (`fit` writes the data's
+    /// range): the curve must rise over it. Without it, [`DEFAULT_RANGE_RAD`] either side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range_rad: Option<[f64; 2]>,
 }
+
+/// The deflection either side of zero over which a curve without `range_rad` must rise [rad]:
+/// the largest the project's characterisation drives an element to (`sim characterise`'s
+/// `max_deflection_rad`), an assumption for a file that does not say.
+pub const DEFAULT_RANGE_RAD: f64 = 0.35;
+
+/// Points at which a curve's rise is checked over its range (an assumption: a polynomial of at
+/// most [`MAX_ORDER`] turns at most `MAX_ORDER - 1` times, far fewer than this).
+const RISE_POINTS: usize = 256;
+
+/// The fall below the torque already reached that a curve may show over its range, as a share
+/// of the range's torque span (an assumption: a polynomial fitted through a dead zone wiggles by
+/// a fraction of a percent there; a curve that turns back falls by far more).
+const RISE_TOLERANCE: f64 = 0.01;
 
 /// A characteristic as written in YAML.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -162,8 +180,45 @@ impl Curve {
             }
             _ => return Err(err(format!("curves[{i}]"), "give either `coefficients`, or both `positive` and `negative`")),
         };
-        Ok(Curve { offset_nm, ..curve })
+        let curve = Curve { offset_nm, ..curve };
+        let [lo, hi] = s.range_rad.unwrap_or([-DEFAULT_RANGE_RAD, DEFAULT_RANGE_RAD]);
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(err(at("range_rad"), format!("must be two finite deflections, the lower first, got [{lo}, {hi}]")));
+        }
+        // Torque must rise with deflection over the range: a spring whose torque falls as it
+        // deflects further would make the observer read the load backwards there. A fitted
+        // polynomial wiggles where the element is flat (a dead zone): a fall below the torque
+        // reached before of more than RISE_TOLERANCE of the range's torque span counts.
+        let at_point = |k: usize| lo + (hi - lo) * k as f64 / (RISE_POINTS - 1) as f64;
+        let span = curve.torque(hi) - curve.torque(lo);
+        let mut highest = curve.torque(lo);
+        let falls = (1..RISE_POINTS).find(|k| {
+            let torque = curve.torque(at_point(*k));
+            highest = highest.max(torque);
+            !(span > 0.0) || highest - torque > RISE_TOLERANCE * span
+        });
+        if let Some(k) = falls {
+            return Err(err(
+                format!("curves[{i}]"),
+                format!("torque does not rise with deflection at {:.4} rad (range [{lo}, {hi}] rad{}): not a spring's characteristic", at_point(k), if s.range_rad.is_none() { ", the default; give `range_rad` with the deflections the curve was fitted over" } else { "" }),
+            ));
+        }
+        Ok(curve)
     }
+}
+
+/// The checks a loaded curve passes (finite coefficients, positive stiffness, a torque that rises
+/// over `range_rad`), for a writer that wants to refuse what the runtime would.
+///
+/// ```
+/// use jointctl_models::characteristic::{CurveSpec, check_curve};
+/// let line = CurveSpec { pivot_mm: None, angle_deg: None, coefficients: Some(vec![100.0]), positive: None, negative: None, offset_nm: None, stiffness_nm_per_rad: 100.0, range_rad: Some([-0.1, 0.1]) };
+/// assert!(check_curve(&line).is_ok());
+/// let turning = CurveSpec { coefficients: Some(vec![100.0, 0.0, -2.0e4]), ..line };
+/// assert!(check_curve(&turning).unwrap_err().message.contains("does not rise"));
+/// ```
+pub fn check_curve(curve: &CurveSpec) -> Result<(), SpecError> {
+    Curve::from_spec(curve, 0).map(|_| ())
 }
 
 /// The result of evaluating a characteristic.

@@ -52,8 +52,8 @@ fn two_settings() -> PivotCharacteristic {
     PivotCharacteristic::from_spec(&CharacteristicSpec {
         source: Source::Assumed,
         curves: vec![
-            CurveSpec { pivot_mm: Some(0.0), angle_deg: None, coefficients: None, positive: Some(vec![100.0]), negative: Some(vec![80.0]), offset_nm: None, stiffness_nm_per_rad: 90.0 },
-            CurveSpec { pivot_mm: Some(10.0), angle_deg: None, coefficients: Some(vec![20.0, 0.0, 100.0]), positive: None, negative: None, offset_nm: None, stiffness_nm_per_rad: 30.0 },
+            CurveSpec { pivot_mm: Some(0.0), angle_deg: None, coefficients: None, positive: Some(vec![100.0]), negative: Some(vec![80.0]), offset_nm: None, stiffness_nm_per_rad: 90.0, range_rad: None },
+            CurveSpec { pivot_mm: Some(10.0), angle_deg: None, coefficients: Some(vec![20.0, 0.0, 100.0]), positive: None, negative: None, offset_nm: None, stiffness_nm_per_rad: 30.0, range_rad: None },
         ],
     })
     .unwrap()
@@ -91,6 +91,28 @@ fn a_bad_spec_names_the_field() {
     let mut spec = wrist_spec();
     spec.curves.remove(5);
     assert!(WristCharacteristic::from_spec(&spec).unwrap_err().message.contains("same directions"));
+}
+
+#[test]
+fn a_characteristic_whose_torque_does_not_rise_over_its_range_is_refused() {
+    // Issue 40, finding 10 (the runtime's half): a curve with a positive first-order stiffness
+    // that turns down inside the spring's range loaded as any other, whoever wrote the file.
+    // The shoulder's assumed curves (cubics fitted up to their maximum torque) turn down beyond
+    // the deflections they were fitted over: refused over the default range, accepted over their own.
+    let mut spec = shoulder_spec();
+    spec.curves[0].range_rad = None;
+    let e = PivotCharacteristic::from_spec(&spec).unwrap_err();
+    assert_eq!(e.field, "curves[0]");
+    assert!(e.message.contains("does not rise") && e.message.contains("give `range_rad`"), "{}", e.message);
+    assert!(PivotCharacteristic::from_spec(&shoulder_spec()).is_ok());
+    // A falling curve (a negative cubic strong enough to turn within 0.1 rad) over a range that
+    // says so; and a range written the wrong way round.
+    let falling = CurveSpec { pivot_mm: Some(0.0), angle_deg: None, coefficients: Some(vec![100.0, 0.0, -20_000.0]), positive: None, negative: None, offset_nm: None, stiffness_nm_per_rad: 90.0, range_rad: Some([-0.1, 0.1]) };
+    let one = |c: CurveSpec| PivotCharacteristic::from_spec(&CharacteristicSpec { source: Source::Measured, curves: vec![c] });
+    let e = one(falling.clone()).unwrap_err();
+    assert!(e.message.contains("does not rise with deflection at -0.09") && !e.message.contains("default"), "{}", e.message);
+    assert!(one(CurveSpec { range_rad: Some([-0.03, 0.03]), ..falling.clone() }).is_ok());
+    assert_eq!(one(CurveSpec { range_rad: Some([0.03, -0.03]), ..falling }).unwrap_err().field, "curves[0].range_rad");
 }
 
 #[test]
