@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use jointctl_ipc::JointMode;
 use jointctl_modes::{Mode, Reference, Waveform};
 use jointctl_runtime::commands::ArmCommand;
-use jointctl_tests::{Edit, arm_name, jointctl, sherpa_with};
+use jointctl_tests::{Edit, arm_name, jointctl, sherpa_with, stop};
 
 fn sherpa_copy(test: &str) -> (String, std::path::PathBuf) {
     let arm = arm_name(test);
@@ -177,8 +177,7 @@ fn commands_that_would_never_run_are_refused_and_negative_numbers_parse() {
         assert_eq!(got, code, "{args:?}: {text}");
         assert!(text.contains(wants), "{args:?}: {text}");
     }
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
 }
 
 /// Finding: commands for a faulted joint were accepted. Pass: once joint `b` faults (fault code
@@ -198,8 +197,7 @@ fn a_faulted_joint_refuses_commands() {
     assert_eq!(code, 1, "{text}");
     assert!(text.contains("joint `b` is faulted (code 42: reported by its plugin)"), "{text}");
     assert_eq!(cmd(&arm, &["position", "a", "0.1"]).0, 0);
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
 }
 
 #[test]
@@ -212,8 +210,7 @@ fn a_streamed_command_that_stops_arriving_falls_back_to_hold() {
     watch.wait_for("torque mode", |s| s.joints[1].mode == JointMode::TORQUE);
     // Not renewed: after the watchdog time (0.5 s, assumption) q2 holds again.
     watch.wait_for("hold after the watchdog", |s| s.joints[1].mode == JointMode::HOLD);
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
 }
 
 #[test]

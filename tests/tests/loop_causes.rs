@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use jointctl_tests::{Edit, arm_name, jointctl, scratch, sherpa_with};
+use jointctl_tests::{Edit, arm_name, jointctl, scratch, sherpa_with, stop};
 
 /// The elbow clamped, the rest of the reference arm as it is.
 fn clamped(test: &str, arm: &str, loop_edits: &[Edit]) -> PathBuf {
@@ -46,8 +46,7 @@ fn record_session(test: &str, config: &Path, arm: &str) -> PathBuf {
         cmd(&["--sine", "6", "--freq", "1"], 2.0);
     }
     assert!(record.wait().unwrap().success(), "record failed");
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     out
 }
 

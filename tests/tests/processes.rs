@@ -5,7 +5,7 @@ use std::io::Read;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use jointctl_tests::{arm_name, jointctl, rig_yaml, scratch};
+use jointctl_tests::{arm_name, jointctl, rig_yaml, scratch, stop};
 
 const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";
 
@@ -53,8 +53,7 @@ fn an_inspector_process_prints_the_live_states_as_json() {
         .args(["inspect", "echo", "--arm", &arm, "--json", "--count", "5", "--timeout", "10"])
         .output()
         .unwrap();
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     assert!(out.status.success(), "inspect failed: {}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = text.lines().collect();
@@ -133,8 +132,7 @@ fn inspect_echo_filters_by_rate_and_joint_stamps_wall_clock_and_ends_quietly_on_
     drop(stdout);
     let status = wait_with_timeout(&mut echo, Duration::from_secs(10)).expect("the inspector ends when its reader is gone");
     let err = stderr_of(&mut echo);
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     assert!(status.success() && err.is_empty(), "exit {status:?}, stderr: {err}");
 }
 
@@ -147,8 +145,7 @@ fn inspect_diag_prints_the_arms_counters_and_devices() {
     let mut run = spawn_run(&yaml, &["--duration", "30"]);
     let out = Command::new(jointctl()).args(["inspect", "diag", "--arm", &arm, "--json", "--timeout", "10"]).output().unwrap();
     let human = Command::new(jointctl()).args(["inspect", "diag", "--arm", &arm, "--timeout", "10"]).output().unwrap();
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     // The newest sample when it asked (cycle 0 if the loop had just started).
@@ -190,8 +187,7 @@ fn inspect_joints_lists_each_plugin_and_its_dofs_state() {
         std::thread::sleep(Duration::from_millis(50));
     }
     let human = joints(&[]);
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     assert!(before.status.success(), "{}", String::from_utf8_lossy(&before.stderr));
     assert!(disabled.status.success(), "{}", String::from_utf8_lossy(&disabled.stderr));
     let v: serde_json::Value = serde_json::from_slice(&before.stdout).unwrap();
@@ -333,8 +329,7 @@ fn a_second_runtime_is_refused_before_it_opens_the_hardware() {
         jointctl_tests::Edit::Set("buses.can[0].interface", "jcnone0".into()),
     ])).unwrap();
     let second = Command::new(jointctl()).arg("run").arg(&can_yaml).args(["--cycles", "3"]).output().unwrap();
-    let _ = first.kill();
-    let _ = first.wait();
+    stop(&mut first);
     let err = String::from_utf8_lossy(&second.stderr);
     assert_eq!(second.status.code(), Some(1), "{err}");
     assert!(err.contains(&format!("arm `{arm}` is already running (process {})", first.id())), "{err}");
@@ -375,8 +370,7 @@ fn a_second_runtime_of_the_same_arm_is_refused() {
     let mut first = spawn_run(&yaml, &["--duration", "20"]);
     std::thread::sleep(Duration::from_millis(700));
     let second = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "3"]).output().unwrap();
-    let _ = first.kill();
-    let _ = first.wait();
+    stop(&mut first);
     assert_eq!(second.status.code(), Some(1));
     let err = String::from_utf8_lossy(&second.stderr);
     assert!(err.contains("is already running"), "{err}");
@@ -562,8 +556,7 @@ fn another_user_can_neither_tamper_with_nor_squat_the_shared_memory() {
     // The owner still commands the arm.
     let out = Command::new(jointctl()).args(["cmd", "--arm", &arm, "--domain", &domain, "--ipc-root", &root_arg, "hold"]).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     // A segment planted by another user for a domain is refused, with whose it is.
     let planted_domain = format!("sq{}", std::process::id());
     let hash_and_rest = segment.file_name().unwrap().to_str().unwrap().strip_prefix(&domain).unwrap().to_string();
@@ -646,10 +639,8 @@ fn a_stopped_or_killed_inspector_never_stalls_the_loop_or_keeps_its_slot() {
     let _ = inspector.wait();
     let mut second = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--timeout", "20"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let third = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "3", "--timeout", "5"]).output().unwrap();
-    let _ = second.kill();
-    let _ = second.wait();
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut second);
+    stop(&mut run);
     assert!(third.status.success(), "the killed inspector's slot was reclaimed: {}", String::from_utf8_lossy(&third.stderr));
     assert_eq!(String::from_utf8_lossy(&third.stdout).lines().count(), 3);
 }
@@ -704,8 +695,7 @@ fn a_command_flood_is_answered_and_does_not_slow_the_loop() {
     while let Some(s) = watch.receive().unwrap() {
         q = s.joints[0].position_rad;
     }
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     eprintln!(
         "flood: {sent} requests in {elapsed:.1} s, {answered} answered, {accepted} accepted, {full} refused (queue full); loop {} cycles, overruns {} -> {}, missed deadlines {} -> {}",
         after.cycle - before.cycle,
@@ -729,8 +719,7 @@ fn sigkill_then_restart() {
     let diag = diagnostics_of(&node, &arm);
     latest_diagnostics(&diag);
     drop(diag);
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     let again = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "20"]).output().unwrap();
     assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
     assert!(String::from_utf8_lossy(&again.stderr).contains("20 cycles"));
@@ -877,8 +866,7 @@ fn a_second_runtime_of_the_same_arm_is_refused_whatever_its_domain() {
     let domain = format!("other{}", std::process::id());
     std::fs::write(&other, format!("{}\nipc:\n  domain: {domain}\n", std::fs::read_to_string(&yaml).unwrap())).unwrap();
     let second = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
-    let _ = first.kill();
-    let _ = first.wait();
+    stop(&mut first);
     let err = String::from_utf8_lossy(&second.stderr);
     assert_eq!(second.status.code(), Some(1), "{err}");
     assert!(err.contains(&format!("arm `{arm}` is already running on this machine (process {})", first.id())), "{err}");

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
-use jointctl_tests::{arm_name, jointctl, rig_yaml, scratch};
+use jointctl_tests::{arm_name, jointctl, rig_yaml, scratch, stop};
 
 fn root() -> PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -34,8 +34,7 @@ fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
         .args([&arm, "--count", "20", "--timeout", "10"])
         .output()
         .unwrap();
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     assert!(cmd.status.success(), "cmd: {}", String::from_utf8_lossy(&cmd.stderr));
     assert!(py.status.success(), "python inspector: {}", String::from_utf8_lossy(&py.stderr));
     assert!(rust.status.success(), "rust inspector: {}", String::from_utf8_lossy(&rust.stderr));
@@ -97,8 +96,7 @@ fn the_python_inspector_follows_the_domain_and_reads_diagnostics() {
     let py = Command::new(python()).arg(&script).args([&arm, "--domain", &domain, "--diag"]).output().unwrap();
     let py_state = Command::new(python()).arg(&script).args([&arm, "--domain", &domain, "--count", "1"]).output().unwrap();
     let lost = Command::new(python()).arg(&script).args([&arm, "--count", "1", "--timeout", "1"]).output().unwrap();
-    let _ = run.kill();
-    let _ = run.wait();
+    stop(&mut run);
     assert!(up.status.success() && rust.status.success(), "{}", String::from_utf8_lossy(&rust.stderr));
     assert!(py.status.success(), "python --diag: {}", String::from_utf8_lossy(&py.stderr));
     assert!(py_state.status.success(), "python --domain: {}", String::from_utf8_lossy(&py_state.stderr));

@@ -3,22 +3,17 @@
 
 use std::process::{Child, Command, Stdio};
 
-use jointctl_tests::{arm_name, interop_python, jointctl, scratch, sherpa_with};
+use jointctl_tests::{arm_name, interop_python, jointctl, scratch, sherpa_with, stop};
 
 fn spawn_run(config: &std::path::Path) -> Child {
     Command::new(jointctl()).arg("run").arg(config).args(["--duration", "30"]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap()
-}
-
-fn stop(mut run: Child) {
-    let _ = run.kill();
-    let _ = run.wait();
 }
 
 /// The arm runs, q2 follows a torque sine, and `record --duration 3 --json` writes the file.
 fn record_sine(test: &str) -> (std::path::PathBuf, serde_json::Value, String) {
     let arm = arm_name(test);
     let config = sherpa_with(test, &arm, &[]);
-    let run = spawn_run(&config);
+    let mut run = spawn_run(&config);
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
     assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
     let out = scratch(&format!("{test}-out")).join("r.mcap");
@@ -29,7 +24,7 @@ fn record_sine(test: &str) -> (std::path::PathBuf, serde_json::Value, String) {
     let recorded = record.wait().unwrap();
     let mut stdout = String::new();
     std::io::Read::read_to_string(record.stdout.as_mut().unwrap(), &mut stdout).unwrap();
-    stop(run);
+    stop(&mut run);
     assert!(cmd.status.success(), "{}", String::from_utf8_lossy(&cmd.stderr));
     assert!(recorded.success(), "record failed");
     let summary: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON object");
@@ -116,7 +111,7 @@ fn sigint_finishes_a_valid_indexed_file() {
     let test = "record-sigint";
     let arm = arm_name(test);
     let config = sherpa_with(test, &arm, &[]);
-    let run = spawn_run(&config);
+    let mut run = spawn_run(&config);
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
     assert!(up.status.success());
     let out = scratch(&format!("{test}-out")).join("r.mcap");
@@ -125,7 +120,7 @@ fn sigint_finishes_a_valid_indexed_file() {
     // SAFETY: kill() with a child's pid and a valid signal number.
     unsafe { libc::kill(record.id() as i32, libc::SIGINT) };
     let done = record.wait_with_output().unwrap();
-    stop(run);
+    stop(&mut run);
     assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&done.stdout).unwrap();
     let n = summary["messages"]["joint_state"].as_u64().unwrap();
@@ -303,7 +298,7 @@ fn sim_replay_reports_what_the_simulation_gets_wrong_per_channel() {
 fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
     let arm = arm_name("record-killed");
     let config = sherpa_with("record-killed", &arm, &[]);
-    let run = spawn_run(&config);
+    let mut run = spawn_run(&config);
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
     assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
     let killed = scratch("record-killed-out").join("killed.mcap");
@@ -313,7 +308,7 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
     std::thread::sleep(std::time::Duration::from_secs(6));
     record.kill().unwrap();
     record.wait().unwrap();
-    stop(run);
+    stop(&mut run);
     let replay = Command::new(jointctl()).arg("replay").arg(&killed).arg("--config").arg(&config).arg("--json").output().unwrap();
     let err = String::from_utf8_lossy(&replay.stderr);
     assert!(replay.status.success(), "{err}");
@@ -352,7 +347,7 @@ fn a_recording_that_fills_the_disk_prints_its_summary_and_the_reason() {
     use std::os::unix::process::CommandExt as _;
     let arm = arm_name("record-full");
     let config = sherpa_with("record-full", &arm, &[]);
-    let run = spawn_run(&config);
+    let mut run = spawn_run(&config);
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
     assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
     let full = Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "20", "--json", "--out", "/dev/full"]).output().unwrap();
@@ -371,7 +366,7 @@ fn a_recording_that_fills_the_disk_prints_its_summary_and_the_reason() {
         });
     }
     let part_way = record.output().unwrap();
-    stop(run);
+    stop(&mut run);
     for (out, reason, taken) in [(&full, "No space left on device", false), (&part_way, "File too large", true)] {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{err}");
