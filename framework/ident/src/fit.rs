@@ -338,7 +338,7 @@ fn rises(group: &str, curve: &CurveSpec, x: &[f64], y: &[f64]) -> Result<(), Fit
     if values.len() < MIN_DISTINCT_DEFLECTIONS {
         return Err(FitRunError::ConstantTorque { group: group.into(), distinct: values.len() });
     }
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    let [lo, hi] = jointctl_models::characteristic::deflection_range(x);
     let torque = |at: f64| -> f64 {
         let poly = |c: &[f64]| c.iter().rev().fold(0.0, |acc, ck| (acc + ck) * at);
         match (&curve.coefficients, &curve.positive, &curve.negative) {
@@ -353,11 +353,6 @@ fn rises(group: &str, curve: &CurveSpec, x: &[f64], y: &[f64]) -> Result<(), Fit
     }
     // The check the runtime makes when it loads the file: nothing is written that it refuses.
     jointctl_models::characteristic::check_curve(curve).map_err(|e| FitRunError::Falls { group: group.into(), message: e.message })
-}
-
-/// The lowest and highest deflection of a group [rad]: the range its curve holds for.
-fn span(x: &[f64]) -> [f64; 2] {
-    x.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(*v), hi.max(*v)])
 }
 
 fn enough_samples(group: &str, samples: usize, parameters: usize) -> Result<(), FitRunError> {
@@ -447,7 +442,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
                 negative: Some(cn),
                 offset_nm: offset,
                 stiffness_nm_per_rad: stiffness,
-                range_rad: Some(span(&x)),
+                range_rad: Some(jointctl_models::characteristic::deflection_range(&x)),
             };
             (curve, order, rmse, wp.max(wn), (rp, rn))
         } else {
@@ -467,7 +462,7 @@ pub fn fit(data: &Data, opts: &FitOptions) -> Result<FitResult, FitRunError> {
                 negative: None,
                 offset_nm: offset,
                 stiffness_nm_per_rad: stiffness,
-                range_rad: Some(span(&x)),
+                range_rad: Some(jointctl_models::characteristic::deflection_range(&x)),
             };
             (curve, order, rmse, worst, branch)
         };

@@ -91,8 +91,7 @@ pub fn shoulder_spec() -> CharacteristicSpec {
 /// The lowest and highest of the samples a curve was fitted to [rad], rounded as the
 /// coefficients are.
 fn rounded_span(x: &[f64]) -> [f64; 2] {
-    let [lo, hi] = x.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(*v), hi.max(*v)]);
-    let r = round6(vec![lo, hi]);
+    let r = round6(crate::characteristic::deflection_range(x).to_vec());
     [r[0], r[1]]
 }
 

@@ -207,6 +207,16 @@ impl Curve {
     }
 }
 
+/// The lowest and highest of the deflections a curve is fitted to, `[lowest, highest]` [rad]:
+/// its `range_rad`.
+///
+/// ```
+/// assert_eq!(jointctl_models::characteristic::deflection_range(&[0.02, -0.05, 0.04]), [-0.05, 0.04]);
+/// ```
+pub fn deflection_range(deflections_rad: &[f64]) -> [f64; 2] {
+    deflections_rad.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(*v), hi.max(*v)])
+}
+
 /// The checks a loaded curve passes (finite coefficients, positive stiffness, a torque that rises
 /// over `range_rad`), for a writer that wants to refuse what the runtime would.
 ///

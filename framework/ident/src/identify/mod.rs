@@ -160,6 +160,15 @@ pub const FAR_ABOVE_NOISE: f64 = 10.0;
 /// and below (the highest l3-case036, whose offset follows the position a little).
 pub const NO_SPRING_SHARE: f64 = 0.2;
 
+/// Whether a record is read as a joint's friction (no spring): the baseline is fitted on the data
+/// (a configured joint has its spring) and a line in the deflection explains less than
+/// [`NO_SPRING_SHARE`] of the torque's variance. The one rule the search (which tries the
+/// friction's Stribeck dip only then) and the report (which moves the pre-sliding and the dip
+/// to [`NoSpring`]) both follow.
+pub(crate) fn reads_as_friction(p: &prepare::Prepared, baseline: &BaselineModel) -> bool {
+    matches!(baseline, BaselineModel::Polynomial(_)) && p.spring_share < NO_SPRING_SHARE
+}
+
 /// A record without a spring: what the baseline's friction took on for it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NoSpring {
@@ -300,7 +309,8 @@ pub enum IdentifyError {
 /// A registered cause must not reuse a name and must give one column per coefficient, one value
 /// per sample: checked once, up front, so that a mistake is an error rather than a cause that
 /// silently contributes nothing.
-fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn CandidateCause>], p: &prepare::Prepared, baseline_fitted: bool) -> Result<(), IdentifyError> {
+fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn CandidateCause>], p: &prepare::Prepared, baseline: &BaselineModel) -> Result<(), IdentifyError> {
+    let baseline_fitted = matches!(baseline, BaselineModel::Polynomial(_));
     let taken: Vec<&str> = builtin.iter().map(|c| c.name()).chain(["dropout"]).collect();
     let part = &p.coarse;
     for (i, c) in registered.iter().enumerate() {
@@ -309,7 +319,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
         let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
-        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, baseline_fitted && p.spring_share < NO_SPRING_SHARE);
+        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
         let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm, model_nm: &model_nm };
@@ -353,7 +363,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
     let checked_and_extended = || {
-        check_registered(&builtin, &opts.extra_candidates, &p, matches!(opts.baseline, BaselineModel::Polynomial(_)))?;
+        check_registered(&builtin, &opts.extra_candidates, &p, &opts.baseline)?;
         extend(&p, &builtin, opts)
     };
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(checked_and_extended)).unwrap_or_else(|panic| {
@@ -448,24 +458,18 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     // A record without a spring (the first column a joint position): a Dahl loop is the
     // friction's pre-sliding (Dahl's model is a friction model), not an elastic element's
     // hysteresis: it stays in the extended model and is reported with the friction.
-    let spring_share = p.spring_share;
-    let no_spring = (opts.baseline_friction && matches!(opts.baseline, BaselineModel::Polynomial(_)) && spring_share < NO_SPRING_SHARE).then(|| {
-        let presliding = found.iter().position(|c| c.effect == "hysteresis").map(|i| found.remove(i));
-        let stribeck = found.iter().position(|c| c.effect == "stribeck_friction").map(|i| found.remove(i));
+    let no_spring = reads_as_friction(p, &opts.baseline).then(|| {
+        let mut take = |effect: &str| found.iter().position(|c| c.effect == effect).map(|i| found.remove(i).params);
+        let (presliding, stribeck) = (take("hysteresis"), take("stribeck_friction"));
+        let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ");
         let note = format!(
             "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}",
-            100.0 * spring_share,
+            100.0 * p.spring_share,
             100.0 * NO_SPRING_SHARE,
-            match &presliding {
-                Some(c) => format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", c.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ")),
-                None => "no Dahl pre-sliding found".into(),
-            },
-            match &stribeck {
-                Some(c) => format!("; its Stribeck dip: {}", c.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ")),
-                None => String::new(),
-            }
+            presliding.as_ref().map_or("no Dahl pre-sliding found".into(), |c| format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", listed(c))),
+            stribeck.as_ref().map_or(String::new(), |c| format!("; its Stribeck dip: {}", listed(c))),
         );
-        NoSpring { deflection_share: spring_share, presliding: presliding.map(|c| c.params).unwrap_or_default(), stribeck: stribeck.map(|c| c.params).unwrap_or_default(), note }
+        NoSpring { deflection_share: p.spring_share, presliding: presliding.unwrap_or_default(), stribeck: stribeck.unwrap_or_default(), note }
     });
     let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
     let mut rejected = selection.rejected;

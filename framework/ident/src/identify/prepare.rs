@@ -590,7 +590,6 @@ pub(crate) fn spring_share(part: &Part) -> f64 {
     if sxx > 0.0 && syy > 0.0 { sxy * sxy / (sxx * syy) } else { 1.0 }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

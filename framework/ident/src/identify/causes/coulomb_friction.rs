@@ -23,7 +23,7 @@ impl CandidateCause for CoulombFriction {
         // its own, and the cause that names it had nothing left to explain). At the bound the
         // arctan reaches half its limit at the peak speed.
         // An assumption of this project (eq. 3.5 gives the form, not a range for k_b).
-        let peak = c.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
+        let peak = c.peak_speed_rad_per_s().max(1e-9);
         vec![Parameter { name: "friction_kb_s_per_rad".into(), grid: log_grid(1.0 / peak, 300.0 / peak, 11), refine: Refine::Between }]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {

@@ -108,6 +108,12 @@ impl<'a> SearchContext<'a> {
         SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new() }
     }
 
+    /// The largest |deflection rate| of the decimated training part [rad/s] (0 for a record that
+    /// does not move): the scale of a speed parameter's grid.
+    pub fn peak_speed_rad_per_s(&self) -> f64 {
+        self.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+    }
+
     /// The frequency of the residual's strongest component in the band a structural mode is
     /// looked for in [Hz], on the full-rate stretch (a mode may lie above the decimated part's
     /// Nyquist frequency); `None` when there is no mode there (see the `spectrum` module).

@@ -22,7 +22,7 @@ impl CandidateCause for StribeckFriction {
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         // From a three-hundredth of the peak speed to a third of it (an assumption: beyond, the
         // dip spans the recorded speeds and is a slope of the friction, viscous friction's).
-        let peak = c.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
+        let peak = c.peak_speed_rad_per_s().max(1e-9);
         vec![Parameter { name: "stribeck_speed_rad_per_s".into(), grid: log_grid(peak / 300.0, peak / 3.0, 11), refine: Refine::Between }]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {

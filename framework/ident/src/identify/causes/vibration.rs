@@ -34,7 +34,7 @@ impl CandidateCause for Vibration {
             // No mode in the band: nothing to search.
             return vec![Parameter { name: "frequency_hz".into(), grid: Vec::new(), refine: Refine::Not }];
         };
-        let peak = c.velocity_rad_per_s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let peak = c.peak_speed_rad_per_s();
         let (lo, hi, n) = ONSET_SHARES;
         let mut onsets = vec![0.0];
         if peak > 0.0 {
