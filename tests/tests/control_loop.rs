@@ -156,9 +156,15 @@ fn a_free_sherpa_arm_cycle_allocates_nothing() {
 
 fn sherpa_cycle_allocates_nothing(free_arm: bool) {
     // All seven joints, VSA characteristic interpolation included, statically linked so that
-    // the plugins' allocations would be counted.
+    // the plugins' allocations would be counted; the shoulder's model extension given per pivot
+    // setting (weighed at its pivot every cycle), the wrist's per DOF.
     let name = format!("sherpa-alloc-{free_arm}");
-    let path = jointctl_tests::sherpa_with(&name, &arm_name(&name), &[]);
+    let band = "{hysteresis: {sigma_nm_per_rad: 200.0, limit_nm: 0.4}, friction: {ka_nm: 0.1, kb_s_per_rad: 50.0}, viscous_nms_per_rad: 0.2}";
+    let edits = [
+        jointctl_tests::Edit::Set("joints[shoulder].params.model_extension", serde_yaml::from_str(&format!("{{by_pivot: [{{pivot_mm: 0.0, terms: {{}}}}, {{pivot_mm: 15.0, terms: {band}}}, {{pivot_mm: 45.0, terms: {{cubic_nm_per_rad3: 300.0}}}}]}}")).unwrap()),
+        jointctl_tests::Edit::Set("joints[wrist].params.model_extension", serde_yaml::from_str(&format!("[{band}, null]")).unwrap()),
+    ];
+    let path = jointctl_tests::sherpa_with(&name, &arm_name(&name), &edits);
     let mut loaded = jointctl_config::load(&path).unwrap();
     if free_arm {
         let chain = loaded.chain.clone().unwrap();

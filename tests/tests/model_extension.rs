@@ -71,6 +71,30 @@ fn the_shoulder_observed_with_its_plants_band_is_closer_to_the_ft_sensor() {
     assert!(with < 0.8 * without, "with the extension {with}, without {without}");
 }
 
+/// The shoulder's terms given per pivot setting (issue 32): the plant's band at the 15 and 30 mm
+/// settings and nothing at 0 and 45 mm. Tracked at 89 Nm/rad (about 21 mm, between 15 and 30) the
+/// observer uses the band and is as close to the F/T sensor as with the band given flat; the same
+/// settings read at the first one (the plugin not weighing them at its pivot) would gain nothing.
+#[test]
+fn the_shoulder_weighs_terms_given_per_pivot_setting_at_its_pivot() {
+    let band = "{hysteresis: {sigma_nm_per_rad: 200.0, limit_nm: 0.4}, friction: {ka_nm: 0.1, kb_s_per_rad: 50.0}, viscous_nms_per_rad: 0.2}";
+    let measure = |test: &str, extension: Option<String>| {
+        let mut edits = Vec::new();
+        if let Some(e) = extension {
+            edits.push(Edit::Set("joints[shoulder].params.model_extension", serde_yaml::from_str(&e).unwrap()));
+        }
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
+        let plan = Plan { stiffness_nm_per_rad: vec![89.0], references: vec![(Waveform::Sine, 0.2)], periods: 2.0, amplitudes_nm: vec![Some(7.5)], ..Plan::default() };
+        run(&loaded, &PluginLoader::new([]), "q2", Scenario::Modern, &plan, |_, _| {}).unwrap()[0].nrmse_observer_vs_sensor
+    };
+    let without = measure("ext-q2p-without", None);
+    let flat = measure("ext-q2p-flat", Some(band.to_string()));
+    let by_pivot = measure("ext-q2p-by-pivot", Some(format!("{{by_pivot: [{{pivot_mm: 0.0, terms: {{}}}}, {{pivot_mm: 15.0, terms: {band}}}, {{pivot_mm: 30.0, terms: {band}}}, {{pivot_mm: 45.0, terms: {{}}}}]}}")));
+    println!("q2 observer vs F/T NRMSE at 0.2 Hz, 89 Nm/rad: {without:.4} without, {flat:.4} with the band flat, {by_pivot:.4} with it by pivot");
+    assert!(by_pivot < 0.8 * without, "by pivot {by_pivot}, without {without}");
+    assert!((by_pivot - flat).abs() < 0.05 * flat, "by pivot {by_pivot}, flat {flat}");
+}
+
 /// The wrist (q6, q7): one extension per DOF; with its plant's hysteresis and friction on both,
 /// q7's observer is closer to the F/T sensor while tracking a sine; a list of the wrong length is
 /// an error at its field.

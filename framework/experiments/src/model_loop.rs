@@ -147,6 +147,7 @@ pub fn observer_torque(params: &Value, t_s: &[f64], deflection_rad: &[f64], pivo
         }
         out.push(match &mut extension {
             Some(e) => {
+                e.at_pivot(pivot);
                 let tau = curve(pivot, e.elastic_deflection(phi));
                 e.torque(t, phi, tau)
             }

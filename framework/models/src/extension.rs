@@ -8,6 +8,12 @@
 //! `u` the unit Dahl state (`du/dphi = (1 - u sgn(dphi)) / lambda`, `lambda = F_c / sigma`),
 //! `dphi/dt` the deflection rate, `s` the curve's scale and `c` the sensor's offset. Each term
 //! is one function named after its equation. Allocation-free after [`ModelExtension::new`].
+//!
+//! A joint with pivot settings (the shoulder q2) may give the terms per characterised setting
+//! (`by_pivot`): the lever arm's mismatch with its table, and with it what the table misses,
+//! changes with the setting, so terms identified at one setting are right there only (issue 32).
+//! Between two settings each term's parameters are weighted linearly, as the characteristic's
+//! curves are (sections 3.4.2, 4.2); outside them the nearest setting's terms hold.
 
 use serde::Deserialize;
 
@@ -31,6 +37,138 @@ pub struct DahlSpec {
     pub limit_nm: f64,
 }
 
+/// The terms of the sum in the module docs, without the rate estimate's settings: what changes
+/// from one pivot setting to the next.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Terms {
+    /// The characteristic's scale `s`.
+    #[serde(default = "one")]
+    pub torque_scale: f64,
+    /// `k3` [Nm/rad^3].
+    #[serde(default)]
+    pub cubic_nm_per_rad3: f64,
+    /// Play `w` [rad].
+    #[serde(default)]
+    pub dead_zone_rad: f64,
+    /// The play's contact band [rad], at most `w`.
+    #[serde(default)]
+    pub dead_zone_ramp_rad: f64,
+    /// `b` [Nms/rad].
+    #[serde(default)]
+    pub viscous_nms_per_rad: f64,
+    /// Eq. 3.5 friction.
+    #[serde(default)]
+    pub friction: Option<FrictionSpec>,
+    /// Dahl hysteresis.
+    #[serde(default)]
+    pub hysteresis: Option<DahlSpec>,
+    /// `c` [Nm].
+    #[serde(default)]
+    pub torque_offset_nm: f64,
+}
+
+impl Default for Terms {
+    fn default() -> Self {
+        Terms {
+            torque_scale: 1.0,
+            cubic_nm_per_rad3: 0.0,
+            dead_zone_rad: 0.0,
+            dead_zone_ramp_rad: 0.0,
+            viscous_nms_per_rad: 0.0,
+            friction: None,
+            hysteresis: None,
+            torque_offset_nm: 0.0,
+        }
+    }
+}
+
+impl Terms {
+    /// Each parameter weighted linearly between `self` (weight `1 - w`) and `other` (`w`). A
+    /// friction or hysteresis that one side lacks weighs in with its torque scale (`k_a`, `F_c`)
+    /// at zero and the other side's shape (`k_b`, `sigma`), so that it fades in over the span.
+    ///
+    /// ```
+    /// use jointctl_models::extension::{DahlSpec, Terms};
+    /// let a = Terms { cubic_nm_per_rad3: 100.0, ..Default::default() };
+    /// let b = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 }), ..Default::default() };
+    /// let mid = a.blend(&b, 0.5);
+    /// assert_eq!(mid.cubic_nm_per_rad3, 200.0);
+    /// assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.2 }));
+    /// ```
+    pub fn blend(&self, other: &Terms, w: f64) -> Terms {
+        let mix = |a: f64, b: f64| a + (b - a) * w;
+        let friction = match (self.friction, other.friction) {
+            (None, None) => None,
+            (a, b) => {
+                let (a, b) = (a.unwrap_or(FrictionSpec { ka_nm: 0.0, ..b.unwrap_or(FrictionSpec { ka_nm: 0.0, kb_s_per_rad: 1.0 }) }), b.unwrap_or(FrictionSpec { ka_nm: 0.0, ..a.unwrap_or(FrictionSpec { ka_nm: 0.0, kb_s_per_rad: 1.0 }) }));
+                Some(FrictionSpec { ka_nm: mix(a.ka_nm, b.ka_nm), kb_s_per_rad: mix(a.kb_s_per_rad, b.kb_s_per_rad) })
+            }
+        };
+        let hysteresis = match (self.hysteresis, other.hysteresis) {
+            (None, None) => None,
+            (a, b) => {
+                let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0 }) }));
+                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm) })
+            }
+        };
+        Terms {
+            torque_scale: mix(self.torque_scale, other.torque_scale),
+            cubic_nm_per_rad3: mix(self.cubic_nm_per_rad3, other.cubic_nm_per_rad3),
+            dead_zone_rad: mix(self.dead_zone_rad, other.dead_zone_rad),
+            dead_zone_ramp_rad: mix(self.dead_zone_ramp_rad, other.dead_zone_ramp_rad),
+            viscous_nms_per_rad: mix(self.viscous_nms_per_rad, other.viscous_nms_per_rad),
+            friction,
+            hysteresis,
+            torque_offset_nm: mix(self.torque_offset_nm, other.torque_offset_nm),
+        }
+    }
+
+    /// Each parameter in its range, the error naming the field under `prefix`.
+    fn check(&self, prefix: &str) -> Result<(), ExtensionError> {
+        let bad = |field: &str, message: String| Err(ExtensionError { field: format!("{prefix}{field}"), message });
+        let finite = [
+            ("torque_scale", self.torque_scale),
+            ("cubic_nm_per_rad3", self.cubic_nm_per_rad3),
+            ("viscous_nms_per_rad", self.viscous_nms_per_rad),
+            ("torque_offset_nm", self.torque_offset_nm),
+        ];
+        if let Some((f, v)) = finite.iter().find(|(_, v)| !v.is_finite()) {
+            return bad(f, format!("must be a finite number, got {v}"));
+        }
+        if !(self.torque_scale > 0.0) {
+            return bad("torque_scale", format!("must be > 0 (a curve turned over is not an error of fit), got {}", self.torque_scale));
+        }
+        if !(self.dead_zone_rad >= 0.0 && self.dead_zone_rad.is_finite()) {
+            return bad("dead_zone_rad", format!("must be >= 0, got {}", self.dead_zone_rad));
+        }
+        if !(self.dead_zone_ramp_rad >= 0.0 && self.dead_zone_ramp_rad <= self.dead_zone_rad) {
+            return bad("dead_zone_ramp_rad", format!("must be between 0 and dead_zone_rad ({}), got {}", self.dead_zone_rad, self.dead_zone_ramp_rad));
+        }
+        if let Some(f) = self.friction
+            && !(f.ka_nm.is_finite() && f.kb_s_per_rad > 0.0 && f.kb_s_per_rad.is_finite())
+        {
+            return bad("friction", format!("needs a finite ka_nm and kb_s_per_rad > 0, got {} and {}", f.ka_nm, f.kb_s_per_rad));
+        }
+        if let Some(h) = self.hysteresis
+            && !(h.sigma_nm_per_rad > 0.0 && h.limit_nm > 0.0 && h.sigma_nm_per_rad.is_finite() && h.limit_nm.is_finite())
+        {
+            return bad("hysteresis", format!("needs sigma_nm_per_rad > 0 and limit_nm > 0, got {} and {}", h.sigma_nm_per_rad, h.limit_nm));
+        }
+        Ok(())
+    }
+}
+
+/// The terms identified at one characterised pivot setting.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PivotTerms {
+    /// The setting [mm] (the characteristic's `pivot_mm`).
+    pub pivot_mm: f64,
+    /// The terms there.
+    pub terms: Terms,
+}
+
 /// A joint plugin's `model_extension` params: the observer keys of `identify`'s causes. Every
 /// term is off unless given.
 ///
@@ -38,7 +176,7 @@ pub struct DahlSpec {
 /// let s: jointctl_models::extension::ExtensionSpec = serde_json::from_str(r#"{"hysteresis": {"sigma_nm_per_rad": 300, "limit_nm": 1.2}}"#).unwrap();
 /// assert_eq!(s.torque_scale, 1.0);
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExtensionSpec {
     /// The characteristic's scale `s` (`stiffness_error`: 1 + the relative error).
@@ -81,6 +219,26 @@ pub struct ExtensionSpec {
     /// anyway.
     #[serde(default = "default_rate_window_max")]
     pub rate_window_max_s: f64,
+    /// The terms per pivot setting, pivots increasing (a joint with pivot settings; see the
+    /// module docs). When given, the flat terms above must be left out: these replace them.
+    #[serde(default)]
+    pub by_pivot: Vec<PivotTerms>,
+}
+
+impl ExtensionSpec {
+    /// The flat terms (those a joint without pivot settings uses).
+    pub fn terms(&self) -> Terms {
+        Terms {
+            torque_scale: self.torque_scale,
+            cubic_nm_per_rad3: self.cubic_nm_per_rad3,
+            dead_zone_rad: self.dead_zone_rad,
+            dead_zone_ramp_rad: self.dead_zone_ramp_rad,
+            viscous_nms_per_rad: self.viscous_nms_per_rad,
+            friction: self.friction,
+            hysteresis: self.hysteresis,
+            torque_offset_nm: self.torque_offset_nm,
+        }
+    }
 }
 
 /// Resolution steps the deflection must span in the rate's window (see
@@ -115,6 +273,7 @@ impl Default for ExtensionSpec {
             rate_window_s: default_rate_window(),
             rate_resolution_rad: default_resolution(),
             rate_window_max_s: default_rate_window_max(),
+            by_pivot: Vec::new(),
         }
     }
 }
@@ -129,6 +288,21 @@ pub struct ExtensionError {
     pub message: String,
 }
 
+/// The setting below `pivot_mm` (or the first) and the weight of the one above, clamped to
+/// the settings' range (at least two settings, pivots increasing), as
+/// [`crate::characteristic::pivot_bracket`] brackets the curves; no allocation.
+fn bracket(settings: &[PivotTerms], pivot_mm: f64) -> (usize, f64) {
+    let n = settings.len();
+    if pivot_mm.is_nan() || pivot_mm <= settings[0].pivot_mm {
+        return (0, 0.0);
+    }
+    if pivot_mm >= settings[n - 1].pivot_mm {
+        return (n - 2, 1.0);
+    }
+    let i = settings.partition_point(|s| s.pivot_mm <= pivot_mm) - 1;
+    (i, (pivot_mm - settings[i].pivot_mm) / (settings[i + 1].pivot_mm - settings[i].pivot_mm))
+}
+
 /// Samples the deflection-rate window holds (at most; fewer when the window is shorter).
 const RATE_CAPACITY: usize = 256;
 
@@ -136,6 +310,9 @@ const RATE_CAPACITY: usize = 256;
 #[derive(Clone, Debug)]
 pub struct ModelExtension {
     spec: ExtensionSpec,
+    /// The terms in force: the flat ones, or those at the last pivot given to
+    /// [`ModelExtension::at_pivot`].
+    live: Terms,
     /// Unit Dahl state `u` and the deflection it was last updated at.
     dahl: (f64, Option<f64>),
     /// Recent (time [s], deflection [rad]), oldest first, in a fixed ring.
@@ -155,24 +332,7 @@ impl ModelExtension {
     /// ```
     pub fn new(spec: ExtensionSpec) -> Result<Self, ExtensionError> {
         let bad = |field: &str, message: String| Err(ExtensionError { field: field.into(), message });
-        let finite = [
-            ("torque_scale", spec.torque_scale),
-            ("cubic_nm_per_rad3", spec.cubic_nm_per_rad3),
-            ("viscous_nms_per_rad", spec.viscous_nms_per_rad),
-            ("torque_offset_nm", spec.torque_offset_nm),
-        ];
-        if let Some((f, v)) = finite.iter().find(|(_, v)| !v.is_finite()) {
-            return bad(f, format!("must be a finite number, got {v}"));
-        }
-        if !(spec.torque_scale > 0.0) {
-            return bad("torque_scale", format!("must be > 0 (a curve turned over is not an error of fit), got {}", spec.torque_scale));
-        }
-        if !(spec.dead_zone_rad >= 0.0 && spec.dead_zone_rad.is_finite()) {
-            return bad("dead_zone_rad", format!("must be >= 0, got {}", spec.dead_zone_rad));
-        }
-        if !(spec.dead_zone_ramp_rad >= 0.0 && spec.dead_zone_ramp_rad <= spec.dead_zone_rad) {
-            return bad("dead_zone_ramp_rad", format!("must be between 0 and dead_zone_rad ({}), got {}", spec.dead_zone_rad, spec.dead_zone_ramp_rad));
-        }
+        spec.terms().check("")?;
         if !(spec.rate_window_s > 0.0 && spec.rate_window_s.is_finite()) {
             return bad("rate_window_s", format!("must be > 0, got {}", spec.rate_window_s));
         }
@@ -182,22 +342,55 @@ impl ModelExtension {
         if !(spec.rate_resolution_rad >= 0.0 && spec.rate_resolution_rad.is_finite()) {
             return bad("rate_resolution_rad", format!("must be >= 0, got {}", spec.rate_resolution_rad));
         }
-        if let Some(f) = spec.friction
-            && !(f.ka_nm.is_finite() && f.kb_s_per_rad > 0.0 && f.kb_s_per_rad.is_finite())
-        {
-            return bad("friction", format!("needs a finite ka_nm and kb_s_per_rad > 0, got {} and {}", f.ka_nm, f.kb_s_per_rad));
+        if !spec.by_pivot.is_empty() && spec.terms() != Terms::default() {
+            return bad("by_pivot", "give the terms either flat or by_pivot, not both: by_pivot replaces the flat terms".into());
         }
-        if let Some(h) = spec.hysteresis
-            && !(h.sigma_nm_per_rad > 0.0 && h.limit_nm > 0.0 && h.sigma_nm_per_rad.is_finite() && h.limit_nm.is_finite())
-        {
-            return bad("hysteresis", format!("needs sigma_nm_per_rad > 0 and limit_nm > 0, got {} and {}", h.sigma_nm_per_rad, h.limit_nm));
+        for (i, setting) in spec.by_pivot.iter().enumerate() {
+            if !setting.pivot_mm.is_finite() {
+                return bad(&format!("by_pivot[{i}].pivot_mm"), format!("must be a finite number, got {}", setting.pivot_mm));
+            }
+            if i > 0 && !(setting.pivot_mm > spec.by_pivot[i - 1].pivot_mm) {
+                return bad(&format!("by_pivot[{i}].pivot_mm"), format!("settings must be in increasing pivot order, got {} after {}", setting.pivot_mm, spec.by_pivot[i - 1].pivot_mm));
+            }
+            setting.terms.check(&format!("by_pivot[{i}].terms."))?;
         }
-        Ok(ModelExtension { spec, dahl: (0.0, None), ring: [(0.0, 0.0); RATE_CAPACITY], head: 0, len: 0 })
+        let live = spec.by_pivot.first().map_or(spec.terms(), |s| s.terms);
+        Ok(ModelExtension { spec, live, dahl: (0.0, None), ring: [(0.0, 0.0); RATE_CAPACITY], head: 0, len: 0 })
     }
 
     /// The parameters.
     pub fn spec(&self) -> &ExtensionSpec {
         &self.spec
+    }
+
+    /// The terms in force.
+    pub fn terms(&self) -> &Terms {
+        &self.live
+    }
+
+    /// Puts the terms at pivot setting `pivot_mm` in force (see the module docs); nothing
+    /// without `by_pivot`. Allocation-free: a call per control cycle.
+    ///
+    /// ```
+    /// use jointctl_models::extension::{ExtensionSpec, ModelExtension, PivotTerms, Terms};
+    /// let at = |pivot_mm: f64, cubic_nm_per_rad3: f64| PivotTerms { pivot_mm, terms: Terms { cubic_nm_per_rad3, ..Default::default() } };
+    /// let spec = ExtensionSpec { by_pivot: vec![at(10.0, 100.0), at(20.0, 300.0)], ..Default::default() };
+    /// let mut e = ModelExtension::new(spec).unwrap();
+    /// e.at_pivot(15.0);
+    /// assert_eq!(e.terms().cubic_nm_per_rad3, 200.0);
+    /// e.at_pivot(35.0);
+    /// assert_eq!(e.terms().cubic_nm_per_rad3, 300.0, "outside the settings, the nearest one's");
+    /// ```
+    pub fn at_pivot(&mut self, pivot_mm: f64) {
+        let settings = &self.spec.by_pivot;
+        match settings.len() {
+            0 => {}
+            1 => self.live = settings[0].terms,
+            _ => {
+                let (i, w) = bracket(settings, pivot_mm);
+                self.live = settings[i].terms.blend(&settings[i + 1].terms, w);
+            }
+        }
     }
 
     /// Forgets the state (the Dahl state, the rate's history): on activation, and when the
@@ -210,13 +403,13 @@ impl ModelExtension {
     /// The play: `phi_e = sgn(phi) max(|phi| - w, 0)` (with its contact band, [`crate::play`]),
     /// the deflection the element transmits torque for; the characteristic is evaluated at it.
     pub fn elastic_deflection(&self, phi: f64) -> f64 {
-        crate::play::elastic_deflection(phi, self.spec.dead_zone_rad, self.spec.dead_zone_ramp_rad)
+        crate::play::elastic_deflection(phi, self.live.dead_zone_rad, self.live.dead_zone_ramp_rad)
     }
 
     /// Dahl's model, exact per step: `u <- sgn(dphi) + (u - sgn(dphi)) exp(-|dphi| / lambda)`;
     /// returns `F_c u` [Nm] (0 without hysteresis).
     pub fn dahl_torque(&mut self, phi: f64) -> f64 {
-        let Some(h) = self.spec.hysteresis else { return 0.0 };
+        let Some(h) = self.live.hysteresis else { return 0.0 };
         let lambda = h.limit_nm / h.sigma_nm_per_rad;
         let (u, last) = self.dahl;
         let u = match last {
@@ -274,13 +467,13 @@ impl ModelExtension {
 
     /// Eq. 3.5 and viscous friction at rate `w`: `b w + k_a atan(k_b w)` [Nm].
     pub fn friction_torque(&self, w: f64) -> f64 {
-        let arctan = self.spec.friction.map_or(0.0, |f| f.ka_nm * (f.kb_s_per_rad * w).atan());
-        self.spec.viscous_nms_per_rad * w + arctan
+        let arctan = self.live.friction.map_or(0.0, |f| f.ka_nm * (f.kb_s_per_rad * w).atan());
+        self.live.viscous_nms_per_rad * w + arctan
     }
 
     /// The stiffness's non-linearity at the element's deflection: `k3 phi_e^3` [Nm].
     pub fn cubic_torque(&self, phi_e: f64) -> f64 {
-        self.spec.cubic_nm_per_rad3 * phi_e.powi(3)
+        self.live.cubic_nm_per_rad3 * phi_e.powi(3)
     }
 
     /// The observed torque at time `t_s` and deflection `phi`, given the characteristic's torque
@@ -296,7 +489,7 @@ impl ModelExtension {
     pub fn torque(&mut self, t_s: f64, phi: f64, curve_torque_nm: f64) -> f64 {
         let phi_e = self.elastic_deflection(phi);
         let w = self.deflection_rate(t_s, phi);
-        self.spec.torque_scale * curve_torque_nm + self.cubic_torque(phi_e) + self.friction_torque(w) + self.dahl_torque(phi) + self.spec.torque_offset_nm
+        self.live.torque_scale * curve_torque_nm + self.cubic_torque(phi_e) + self.friction_torque(w) + self.dahl_torque(phi) + self.live.torque_offset_nm
     }
 }
 
@@ -387,5 +580,64 @@ mod tests {
         let phi_e = phi - 0.01;
         let expected = 0.9 * 100.0 * phi_e + 200.0 * phi_e.powi(3) + 0.5 * 0.2 + 0.3 * (80.0f64 * 0.2).atan() - 0.2;
         assert!((tau - expected).abs() < 1e-9, "{tau} vs {expected}");
+    }
+
+    /// Terms per pivot setting: at a setting the extension is that setting's flat one, sample for
+    /// sample; between two it weighs each parameter linearly; bad settings are errors at their field.
+    #[test]
+    fn terms_by_pivot_are_each_settings_own_and_weighted_between() {
+        let a = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 }), friction: Some(FrictionSpec { ka_nm: 0.1, kb_s_per_rad: 50.0 }), ..Default::default() };
+        let b = Terms { torque_scale: 0.95, dead_zone_rad: 0.002, viscous_nms_per_rad: 0.3, torque_offset_nm: -0.1, ..Default::default() };
+        let flat = |t: Terms| ExtensionSpec {
+            torque_scale: t.torque_scale,
+            cubic_nm_per_rad3: t.cubic_nm_per_rad3,
+            dead_zone_rad: t.dead_zone_rad,
+            dead_zone_ramp_rad: t.dead_zone_ramp_rad,
+            viscous_nms_per_rad: t.viscous_nms_per_rad,
+            friction: t.friction,
+            hysteresis: t.hysteresis,
+            torque_offset_nm: t.torque_offset_nm,
+            ..Default::default()
+        };
+        let by_pivot = ExtensionSpec { by_pivot: vec![PivotTerms { pivot_mm: 10.0, terms: a }, PivotTerms { pivot_mm: 35.0, terms: b }], ..Default::default() };
+        let run = |spec: ExtensionSpec, pivot_mm: f64| {
+            let mut e = ModelExtension::new(spec).unwrap();
+            (0..500)
+                .map(|k| {
+                    let t = k as f64 * 1e-3;
+                    let phi = 0.05 * (6.0 * t).sin();
+                    e.at_pivot(pivot_mm);
+                    let curve = 90.0 * e.elastic_deflection(phi);
+                    e.torque(t, phi, curve)
+                })
+                .collect::<Vec<f64>>()
+        };
+        assert_eq!(run(by_pivot.clone(), 10.0), run(flat(a), 10.0));
+        assert_eq!(run(by_pivot.clone(), 35.0), run(flat(b), 35.0));
+        assert_eq!(run(by_pivot.clone(), 50.0), run(flat(b), 50.0), "beyond the last setting, its terms");
+        assert_eq!(run(by_pivot.clone(), 20.0), run(flat(a.blend(&b, 0.4)), 20.0));
+        let mid = a.blend(&b, 0.4);
+        assert!((mid.cubic_nm_per_rad3 - 180.0).abs() < 1e-9 && (mid.dead_zone_rad - 0.0008).abs() < 1e-12);
+        assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 * 0.6 }));
+
+        let err = |spec: ExtensionSpec| ModelExtension::new(spec).unwrap_err();
+        let both = ExtensionSpec { cubic_nm_per_rad3: 1.0, ..by_pivot.clone() };
+        assert_eq!(err(both).field, "by_pivot");
+        let mut backwards = by_pivot.clone();
+        backwards.by_pivot.reverse();
+        let e = err(backwards);
+        assert_eq!(e.field, "by_pivot[1].pivot_mm");
+        assert!(e.message.contains("increasing"), "{e}");
+        let mut bad = by_pivot;
+        bad.by_pivot[1].terms.hysteresis = Some(DahlSpec { sigma_nm_per_rad: -1.0, limit_nm: 0.2 });
+        assert_eq!(err(bad).field, "by_pivot[1].terms.hysteresis");
+    }
+
+    #[test]
+    fn terms_by_pivot_read_from_yaml_like_json() {
+        let s: ExtensionSpec = serde_json::from_str(r#"{"by_pivot": [{"pivot_mm": 10, "terms": {"cubic_nm_per_rad3": 318}}, {"pivot_mm": 20, "terms": {}}]}"#).unwrap();
+        assert_eq!(s.by_pivot.len(), 2);
+        assert_eq!(s.by_pivot[1].terms, Terms::default());
+        assert!(serde_json::from_str::<ExtensionSpec>(r#"{"by_pivot": [{"pivot_mm": 10, "terms": {"cubic": 1}}]}"#).is_err(), "an unknown term is refused");
     }
 }

@@ -157,7 +157,7 @@ impl JointPlugin for ElasticJoint {
             return Err(PluginError::at("compliance", "`drive_gain` takes a linear `stiffness_nm_per_rad` (the drive's gain at the joint), not a characteristic"));
         }
         let position = PositionLoop::from_params(p.position_pi)?;
-        let extension = match p.model_extension {
+        let extension = match p.model_extension.clone() {
             Some(spec) => Some(ModelExtension::new(spec).map_err(|e| PluginError::at(format!("model_extension.{}", e.field), e.message))?),
             None => None,
         };

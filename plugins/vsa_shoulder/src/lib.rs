@@ -122,7 +122,7 @@ impl JointPlugin for VsaShoulder {
             return Err(PluginError::at("torque_filter_s", "must be finite and >= 0"));
         }
         let position = PositionLoop::from_params(p.position_pi)?;
-        let extension = match p.model_extension {
+        let extension = match p.model_extension.clone() {
             Some(spec) => Some(ModelExtension::new(spec).map_err(|e| PluginError::at(format!("model_extension.{}", e.field), e.message))?),
             None => None,
         };
@@ -180,6 +180,8 @@ impl Observer for VsaShoulder {
                 // the play) and the extension's terms are added.
                 let torque = match &mut self.extension {
                     Some(x) => {
+                        // Terms identified per pivot setting are weighted at this one.
+                        x.at_pivot(p);
                         let at = self.characteristic.evaluate(p, x.elastic_deflection(d)).torque_nm;
                         x.torque(raw.stamp_s, d, at)
                     }

@@ -129,7 +129,7 @@ impl JointPlugin for VsaWrist {
         let mut extension: [Option<ModelExtension>; 2] = [None, None];
         for (i, spec) in p.model_extension.iter().enumerate() {
             if let Some(spec) = spec {
-                extension[i] = Some(ModelExtension::new(*spec).map_err(|e| PluginError::at(format!("model_extension[{i}].{}", e.field), e.message))?);
+                extension[i] = Some(ModelExtension::new(spec.clone()).map_err(|e| PluginError::at(format!("model_extension[{i}].{}", e.field), e.message))?);
             }
         }
         Ok(VsaWrist {
@@ -191,7 +191,10 @@ impl Observer for VsaWrist {
                 s[1].set_deflection(d7);
                 let torque = if self.extension.iter().any(Option::is_some) {
                     // The table at the elements' deflections (after each DOF's play), each
-                    // DOF's terms added.
+                    // DOF's terms (weighted at this pivot setting when given per setting) added.
+                    for x in self.extension.iter_mut().flatten() {
+                        x.at_pivot(p);
+                    }
                     let elastic = |x: &Option<ModelExtension>, d: f64| x.as_ref().map_or(d, |x| x.elastic_deflection(d));
                     let at = self.characteristic.evaluate(p, elastic(&self.extension[0], d6), elastic(&self.extension[1], d7));
                     let mut out = [at.torque_q6_nm, at.torque_q7_nm];
