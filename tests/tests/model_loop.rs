@@ -247,3 +247,32 @@ fn a_clean_plant_gets_no_cause() {
 }
 
 
+
+/// The shoulder characterised at its ten pivot settings (`jointctl sim characterise --joint q2`,
+/// section 3.4.2) on the reference arm, whose table was fitted through the middle of its plant's
+/// hysteresis band: `identify` takes the multi-setting record, identifies each setting apart and
+/// writes one extension with the terms `by_pivot` (issue 32). The band is named at most settings,
+/// the observer's held-out error (each setting's last 30 %) at least halves, and the extended
+/// config passes `check`.
+#[test]
+fn a_record_of_several_pivot_settings_is_identified_per_setting_and_extended_by_pivot() {
+    let work = scratch("ml-by-pivot");
+    let csv = work.join("q2.csv");
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    run_ok(Command::new(jointctl()).args(["sim", "characterise"]).arg(&config).args(["--joint", "q2", "--out"]).arg(&csv));
+    let out = work.join("extension");
+    let json: serde_json::Value = serde_json::from_str(&run_ok(
+        Command::new(jointctl()).args(["identify", "--data"]).arg(&csv).arg("--config").arg(&config).args(["--joint", "q2", "--json", "--out"]).arg(&out),
+    ))
+    .unwrap();
+    let settings = json["settings"].as_array().unwrap_or_else(|| panic!("no settings: {json}"));
+    assert_eq!(settings.len(), 10, "{json}");
+    let with_band = settings.iter().filter(|s| s["causes"].as_array().unwrap().iter().any(|c| c["effect"] == "hysteresis")).count();
+    assert!(with_band >= 8, "hysteresis named at {with_band} of 10 settings");
+    let observer = gain(&json, "observer");
+    println!("q2 by pivot: hysteresis at {with_band} of 10 settings; observer gain {observer:.2}; gains {}", json["gains"]);
+    assert!(observer >= 0.5, "observer gain {observer:.2}");
+    let by_pivot = json["extension"]["observer"]["by_pivot"].as_array().unwrap_or_else(|| panic!("{}", json["extension"]));
+    assert_eq!(by_pivot.len(), 10);
+    run_ok(Command::new(jointctl()).arg("check").arg(out.join("extended.yaml")));
+}

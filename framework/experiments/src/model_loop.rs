@@ -238,12 +238,25 @@ pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, tr
     if i != 0 {
         return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
     }
-    let (t, d, p) = (&data.t, &data.deflection, &data.pivot_mm);
-    let held_out = held_out_mask(t, train_fraction);
     let mut notes = Vec::new();
-
     // The observer: every cause's observer terms together.
-    let params_before = entry.params.0.clone();
+    let extension = observer_terms(found, &mut notes);
+    finish(loaded, dof, (j, entry), Value::Object(extension), found, data, &held_out_mask(&data.t, train_fraction), notes)
+}
+
+/// The causes `identify` named at one pivot setting of a record.
+#[derive(Clone, Debug)]
+pub struct SettingFound {
+    /// The setting [mm].
+    pub pivot_mm: f64,
+    /// Its samples in the record, in time order.
+    pub samples: Vec<usize>,
+    /// The causes named on them.
+    pub found: Vec<Found>,
+}
+
+/// Every cause's observer terms together (a note for each cause without one).
+fn observer_terms(found: &[Found], notes: &mut Vec<String>) -> Map<String, Value> {
     let mut extension = Map::new();
     for f in found {
         if f.observer.is_empty() {
@@ -251,12 +264,59 @@ pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, tr
         }
         extension.extend(f.observer.clone());
     }
+    extension
+}
+
+/// The extension of a DOF with pivot settings (the shoulder q2) from the causes `identify` named
+/// at each setting, in increasing pivot order: the observer's terms `by_pivot`, weighted at the
+/// joint's pivot online (issue 32), and its gain on what each setting's identification held out
+/// (its last `1 - train_fraction` of time). The simulated plant's effects are one set for every setting (`sim.effects` has no
+/// per-setting form): they are left as configured, and the simulation's gain is zero.
+///
+/// # Errors
+/// As [`extend`]; also settings not in increasing order.
+pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFound], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
+    let (j, i) = crate::locate(loaded, dof)?;
+    let entry = &loaded.config.joints[j];
+    if i != 0 {
+        return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
+    }
+    if settings.windows(2).any(|w| !(w[1].pivot_mm > w[0].pivot_mm)) {
+        return Err(err("the settings must be in increasing pivot order"));
+    }
+    let mut notes = Vec::new();
+    let mut by_pivot = Vec::new();
+    let mut held_out = vec![false; data.len()];
+    for SettingFound { pivot_mm, samples, found } in settings {
+        let t: Vec<f64> = samples.iter().map(|&i| data.t[i]).collect();
+        let split = jointctl_ident::identify::prepare::split_time(&t, train_fraction);
+        for (&i, &t) in samples.iter().zip(&t) {
+            held_out[i] = t >= split;
+        }
+        let mut setting_notes = Vec::new();
+        let terms = observer_terms(found, &mut setting_notes);
+        notes.extend(setting_notes.into_iter().map(|n| format!("at {pivot_mm:.1} mm: {n}")));
+        by_pivot.push(serde_json::json!({"pivot_mm": pivot_mm, "terms": terms}));
+    }
+    let any = settings.iter().any(|s| s.found.iter().any(|f| !f.observer.is_empty()));
+    let extension = if any { serde_json::json!({"by_pivot": by_pivot}) } else { Value::Object(Map::new()) };
+    notes.push("the simulated plant's effects are one set for every pivot setting: the per-setting causes go to the observer only, and the simulation is left as configured".into());
+    finish(loaded, dof, (j, entry), extension, &[], data, &held_out, notes)
+}
+
+/// The observer with `extension` (an empty object: none), the plant with each of `found`'s
+/// terms that make the replay better, and both gains on the `held_out` samples.
+#[allow(clippy::too_many_arguments)]
+fn finish(loaded: &LoadedConfig, dof: &str, (j, entry): (usize, &jointctl_config::JointConfig), extension: Value, found: &[Found], data: &Data, held_out: &[bool], mut notes: Vec<String>) -> Result<Extension, ExperimentError> {
+    let (t, d, p) = (&data.t, &data.deflection, &data.pivot_mm);
+    let params_before = entry.params.0.clone();
+    let empty = extension.as_object().is_some_and(Map::is_empty);
     let mut params_after = params_before.clone();
     if let Some(obj) = params_after.as_object_mut() {
-        if extension.is_empty() {
+        if empty {
             obj.remove("model_extension");
         } else {
-            obj.insert("model_extension".into(), Value::Object(extension));
+            obj.insert("model_extension".into(), extension);
         }
     }
     let obs_before = observer_torque(&params_before, t, d, p)?;
@@ -276,7 +336,7 @@ pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, tr
         }
         let candidate = merge_plant(&effects, &f.plant);
         let tried = replay(&candidate)?;
-        let (a, b) = (squared_errors(&data.torque, &current, &held_out, false), squared_errors(&data.torque, &tried, &held_out, false));
+        let (a, b) = (squared_errors(&data.torque, &current, held_out, false), squared_errors(&data.torque, &tried, held_out, false));
         let diff: Vec<f64> = a.iter().zip(&b).map(|(a, b)| a - b).collect();
         let test = block_test(&diff);
         if test.significant() {
@@ -290,8 +350,8 @@ pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, tr
         }
     }
     let gain = |before: &[f64], after: &[f64]| Gain {
-        rmse_before: rmse(&squared_errors(&data.torque, before, &held_out, true)),
-        rmse_after: rmse(&squared_errors(&data.torque, after, &held_out, true)),
+        rmse_before: rmse(&squared_errors(&data.torque, before, held_out, true)),
+        rmse_after: rmse(&squared_errors(&data.torque, after, held_out, true)),
     };
     Ok(Extension {
         dof: dof.into(),
@@ -302,8 +362,8 @@ pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, tr
         notes,
         simulation: gain(&sim_before, &current),
         observer: gain(&obs_before, &obs_after),
-        simulation_trace: trace(data, &held_out, &sim_before, &current),
-        observer_trace: trace(data, &held_out, &obs_before, &obs_after),
+        simulation_trace: trace(data, held_out, &sim_before, &current),
+        observer_trace: trace(data, held_out, &obs_before, &obs_after),
     })
 }
 

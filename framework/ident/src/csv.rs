@@ -105,6 +105,62 @@ impl Data {
             .map(|(name, c, _)| (name, c.len()))
     }
 
+    /// The pivot settings the samples were taken at, each `(setting [mm], its samples in order)`
+    /// in increasing pivot order: sorted pivot readings split where two neighbours are more than
+    /// [`SETTING_GAP_MM`] apart, a setting being the median of its readings. Empty without a pivot
+    /// column; samples without a pivot reading belong to none.
+    ///
+    /// ```
+    /// let mut d = jointctl_ident::csv::Data::from_columns(vec![0.0, 0.1, 0.2, 0.3], vec![0.0; 4], vec![0.0; 4]);
+    /// d.pivot_mm = vec![20.01, 10.0, 19.99, 10.02];
+    /// let s = d.pivot_settings();
+    /// assert_eq!(s.len(), 2);
+    /// assert_eq!(s[0].1, vec![1, 3]);
+    /// assert_eq!(s[1].1, vec![0, 2]);
+    /// ```
+    pub fn pivot_settings(&self) -> Vec<(f64, Vec<usize>)> {
+        let mut order: Vec<usize> = (0..self.pivot_mm.len()).filter(|&i| self.pivot_mm[i].is_finite()).collect();
+        order.sort_by(|&a, &b| self.pivot_mm[a].total_cmp(&self.pivot_mm[b]));
+        let mut out: Vec<(f64, Vec<usize>)> = Vec::new();
+        let mut group: Vec<usize> = Vec::new();
+        for (k, &i) in order.iter().enumerate() {
+            if k > 0 && self.pivot_mm[i] - self.pivot_mm[order[k - 1]] > SETTING_GAP_MM {
+                out.push((0.0, std::mem::take(&mut group)));
+            }
+            group.push(i);
+        }
+        if !group.is_empty() {
+            out.push((0.0, group));
+        }
+        for (setting, samples) in &mut out {
+            *setting = self.pivot_mm[samples[samples.len() / 2]];
+            samples.sort_unstable();
+        }
+        out
+    }
+
+    /// The samples `idx` (in the order given) of every column, the notes kept.
+    ///
+    /// ```
+    /// let d = jointctl_ident::csv::Data::from_columns(vec![0.0, 0.1, 0.2], vec![1.0, 2.0, 3.0], vec![4.0, 5.0, 6.0]);
+    /// let s = d.subset(&[0, 2]);
+    /// assert_eq!((s.t, s.deflection, s.torque), (vec![0.0, 0.2], vec![1.0, 3.0], vec![4.0, 6.0]));
+    /// assert!(s.pivot_mm.is_empty());
+    /// ```
+    pub fn subset(&self, idx: &[usize]) -> Data {
+        let pick = |c: &Vec<f64>| if c.is_empty() { Vec::new() } else { idx.iter().map(|&i| c[i]).collect() };
+        Data {
+            t: pick(&self.t),
+            deflection: pick(&self.deflection),
+            torque: pick(&self.torque),
+            pivot_mm: pick(&self.pivot_mm),
+            angle_deg: pick(&self.angle_deg),
+            motor_position: pick(&self.motor_position),
+            reference_torque: pick(&self.reference_torque),
+            notes: self.notes.clone(),
+        }
+    }
+
     /// Samples.
     pub fn len(&self) -> usize {
         self.t.len()
@@ -115,6 +171,11 @@ impl Data {
         self.t.is_empty()
     }
 }
+
+/// Pivot readings farther apart than this [mm] are different settings (an assumption: the
+/// thesis' settings are 5 mm apart, sections 3.4.2 and 3.5.2, and a held pivot reads within a few
+/// hundredths of a millimetre).
+pub const SETTING_GAP_MM: f64 = 1.0;
 
 /// The gap [s] a repetition whose time restarts is laid after the previous one with (an
 /// assumption: far longer than any logger's step, so identification sees a new segment).

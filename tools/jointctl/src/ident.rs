@@ -221,6 +221,12 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
+    // A record of several pivot settings against a joint with pivot settings: each setting apart.
+    if let (Some(config), Some(joint)) = (&a.config, &a.joint)
+        && data.pivot_settings().len() >= 2
+    {
+        return identify_by_pivot(&a, config, joint, &data);
+    }
     let spinner = (!a.json).then(|| {
         let s = indicatif::ProgressBar::new_spinner();
         s.set_message(format!("identifying {} samples", data.len()));
@@ -415,6 +421,115 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         if let Some(l) = &loop_report {
             json["loop"] = serde_json::json!({"values": l.values, "notes": l.notes, "hal_sim": l.hal_sim()});
         }
+        outln!("{json}");
+    } else {
+        out!("{md}");
+    }
+    ExitCode::SUCCESS
+}
+
+/// The samples a pivot setting needs to be identified apart (an assumption: identify's own
+/// minimum excitation is checked per setting; fewer than this is a stray reading, a pivot in
+/// transit between two settings).
+const MIN_SETTING_SAMPLES: usize = 200;
+
+/// `identify` on a record of several pivot settings (the shoulder q2, issue 32): each setting
+/// identified apart against the configured table at that setting, and one extension whose terms
+/// are given `by_pivot`, weighted at the joint's pivot online.
+fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointctl_ident::csv::Data) -> ExitCode {
+    let settings: Vec<(f64, Vec<usize>)> = data.pivot_settings().into_iter().filter(|(_, s)| s.len() >= MIN_SETTING_SAMPLES).collect();
+    let mut md = format!(
+        "# What the model misses, per pivot setting: {}
+
+{} samples at {} pivot settings, each identified apart (its first 70 % of time fitted, its last 30 % scored).
+
+| pivot [mm] | samples | baseline [Nm] | extended [Nm] | noise floor [Nm] | causes |
+|---|---|---|---|---|---|
+",
+        a.data.display(),
+        data.len(),
+        settings.len()
+    );
+    let mut reports = Vec::new();
+    let mut found = Vec::new();
+    for (pivot_mm, samples) in &settings {
+        let baseline = match config_baseline(config, joint) {
+            Ok(b) => b,
+            Err(e) => return crate::fail(e),
+        };
+        let report = match identify(&data.subset(samples), &IdentifyOptions { baseline, baseline_friction: false, ..IdentifyOptions::default() }) {
+            Ok(r) => r,
+            Err(e) => return crate::fail(format!("{} at pivot {pivot_mm:.2} mm: {e}", a.data.display())),
+        };
+        let causes: Vec<String> = report
+            .causes
+            .iter()
+            .map(|c| {
+                let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
+                format!("{} ({})", c.effect, params.join(", "))
+            })
+            .collect();
+        let _ = writeln!(
+            md,
+            "| {pivot_mm:.2} | {} | {:.4} | {:.4} | {:.4} | {} |",
+            samples.len(),
+            report.rmse_before,
+            report.rmse_after,
+            report.unexplained.noise_floor_nm,
+            if causes.is_empty() { "none".into() } else { causes.join("; ") }
+        );
+        found.push(jointctl_experiments::model_loop::SettingFound {
+            pivot_mm: *pivot_mm,
+            samples: samples.clone(),
+            found: report.causes.iter().map(|c| Found { effect: c.effect.clone(), plant: c.fragments.plant.clone(), observer: c.fragments.observer.clone() }).collect(),
+        });
+        reports.push((*pivot_mm, report));
+    }
+    let loaded = match jointctl_config::load(config) {
+        Ok(l) => l,
+        Err(e) => return crate::fail(e.to_string()),
+    };
+    let ext = match jointctl_experiments::model_loop::extend_by_pivot(&loaded, joint, &found, data, IdentifyOptions::default().train_fraction) {
+        Ok(e) => e,
+        Err(e) => return crate::fail(format!("{}: {e}", config.display())),
+    };
+    md += &gains_table(&ext);
+    if let Some(dir) = &a.out {
+        let provenance = format!("by `jointctl identify --data {}` (per pivot setting)", a.data.display());
+        match jointctl_experiments::model_loop::write(&ext, &loaded, dir, &provenance, &Default::default()) {
+            Ok(w) => {
+                let _ = writeln!(md, "\nWritten: {} (the joint's params, terms by pivot), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
+            }
+            Err(e) => return crate::fail(e),
+        }
+    }
+    if let Some(dir) = a.report.as_ref().or(a.out.as_ref()) {
+        match gain_plots(dir, &ext) {
+            Ok(files) => files.iter().for_each(|(title, file)| {
+                let _ = writeln!(md, "\n![{title}]({file})");
+            }),
+            Err(e) => return crate::fail(e),
+        }
+    }
+    if let Some(dir) = &a.report
+        && let Err(e) = std::fs::write(dir.join("report.md"), &md)
+    {
+        return crate::fail(format!("cannot write the report: {e}"));
+    }
+    if a.json {
+        let settings: Vec<serde_json::Value> = reports
+            .iter()
+            .map(|(pivot_mm, r)| {
+                let mut v = serde_json::to_value(r).unwrap_or_default();
+                v["pivot_mm"] = serde_json::json!(pivot_mm);
+                v
+            })
+            .collect();
+        let json = serde_json::json!({
+            "settings": settings,
+            "gains": {"simulation": ext.simulation, "observer": ext.observer},
+            "extension": {"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes},
+        });
         outln!("{json}");
     } else {
         out!("{md}");
