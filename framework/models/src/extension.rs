@@ -223,6 +223,15 @@ pub struct ExtensionSpec {
     /// module docs). When given, the flat terms above must be left out: these replace them.
     #[serde(default)]
     pub by_pivot: Vec<PivotTerms>,
+    /// The time constant of a first-order low-pass on the terms driven by the deflection's
+    /// history and rate (Dahl hysteresis, eq. 3.5 and viscous friction) [s]; 0: none. Those terms
+    /// are steep (a Dahl loop's slope is up to `2 sigma` after a reversal) or driven by a lagging
+    /// causal rate, and the torque loop divides its error by the characteristic's slope alone: fed
+    /// back unfiltered they raised the shoulder's loop gain at 44 mm (23 Nm/rad, an identified
+    /// sigma of 258 Nm/rad) until it rang at 21-31 Hz (issue 32). Assumption: 50 ms, a corner at
+    /// 3.2 Hz, above the thesis' references (up to 1 Hz, section 5) and far below that ring.
+    #[serde(default = "default_dynamic_terms_filter")]
+    pub dynamic_terms_filter_s: f64,
 }
 
 impl ExtensionSpec {
@@ -255,6 +264,9 @@ fn default_rate_window() -> f64 {
 fn default_resolution() -> f64 {
     std::f64::consts::TAU / 16384.0
 }
+fn default_dynamic_terms_filter() -> f64 {
+    0.05
+}
 fn default_rate_window_max() -> f64 {
     0.1
 }
@@ -274,6 +286,7 @@ impl Default for ExtensionSpec {
             rate_resolution_rad: default_resolution(),
             rate_window_max_s: default_rate_window_max(),
             by_pivot: Vec::new(),
+            dynamic_terms_filter_s: default_dynamic_terms_filter(),
         }
     }
 }
@@ -315,6 +328,8 @@ pub struct ModelExtension {
     live: Terms,
     /// Unit Dahl state `u` and the deflection it was last updated at.
     dahl: (f64, Option<f64>),
+    /// The low-passed history- and rate-driven terms [Nm] and the time of their last update [s].
+    filtered: Option<(f64, f64)>,
     /// Recent (time [s], deflection [rad]), oldest first, in a fixed ring.
     ring: [(f64, f64); RATE_CAPACITY],
     head: usize,
@@ -342,6 +357,9 @@ impl ModelExtension {
         if !(spec.rate_resolution_rad >= 0.0 && spec.rate_resolution_rad.is_finite()) {
             return bad("rate_resolution_rad", format!("must be >= 0, got {}", spec.rate_resolution_rad));
         }
+        if !(spec.dynamic_terms_filter_s >= 0.0 && spec.dynamic_terms_filter_s.is_finite()) {
+            return bad("dynamic_terms_filter_s", format!("must be >= 0, got {}", spec.dynamic_terms_filter_s));
+        }
         if !spec.by_pivot.is_empty() && spec.terms() != Terms::default() {
             return bad("by_pivot", "give the terms either flat or by_pivot, not both: by_pivot replaces the flat terms".into());
         }
@@ -355,7 +373,7 @@ impl ModelExtension {
             setting.terms.check(&format!("by_pivot[{i}].terms."))?;
         }
         let live = spec.by_pivot.first().map_or(spec.terms(), |s| s.terms);
-        Ok(ModelExtension { spec, live, dahl: (0.0, None), ring: [(0.0, 0.0); RATE_CAPACITY], head: 0, len: 0 })
+        Ok(ModelExtension { spec, live, filtered: None, dahl: (0.0, None), ring: [(0.0, 0.0); RATE_CAPACITY], head: 0, len: 0 })
     }
 
     /// The parameters.
@@ -397,6 +415,7 @@ impl ModelExtension {
     /// deflection is not known (a gap is not a motion).
     pub fn reset(&mut self) {
         self.dahl = (0.0, None);
+        self.filtered = None;
         self.len = 0;
     }
 
@@ -489,7 +508,18 @@ impl ModelExtension {
     pub fn torque(&mut self, t_s: f64, phi: f64, curve_torque_nm: f64) -> f64 {
         let phi_e = self.elastic_deflection(phi);
         let w = self.deflection_rate(t_s, phi);
-        self.live.torque_scale * curve_torque_nm + self.cubic_torque(phi_e) + self.friction_torque(w) + self.dahl_torque(phi) + self.live.torque_offset_nm
+        let mut dynamic = self.friction_torque(w) + self.dahl_torque(phi);
+        if self.spec.dynamic_terms_filter_s > 0.0 {
+            dynamic = match self.filtered {
+                Some((y, t0)) => {
+                    let dt = (t_s - t0).max(0.0);
+                    y + (dynamic - y) * dt / (self.spec.dynamic_terms_filter_s + dt)
+                }
+                None => dynamic,
+            };
+            self.filtered = Some((dynamic, t_s));
+        }
+        self.live.torque_scale * curve_torque_nm + self.cubic_torque(phi_e) + dynamic + self.live.torque_offset_nm
     }
 }
 
@@ -564,6 +594,7 @@ mod tests {
             viscous_nms_per_rad: 0.5,
             friction: Some(FrictionSpec { ka_nm: 0.3, kb_s_per_rad: 80.0 }),
             torque_offset_nm: -0.2,
+            dynamic_terms_filter_s: 0.0,
             ..Default::default()
         };
         let mut e = ModelExtension::new(spec).unwrap();
@@ -639,5 +670,35 @@ mod tests {
         assert_eq!(s.by_pivot.len(), 2);
         assert_eq!(s.by_pivot[1].terms, Terms::default());
         assert!(serde_json::from_str::<ExtensionSpec>(r#"{"by_pivot": [{"pivot_mm": 10, "terms": {"cubic": 1}}]}"#).is_err(), "an unknown term is refused");
+    }
+
+    /// The history- and rate-driven terms reach the torque through a first-order low-pass: a
+    /// Dahl loop reversed at once moves the torque by 63 % of its swing in one time constant, the
+    /// static terms at once; with no filter, the swing is there at once.
+    #[test]
+    fn the_dynamic_terms_are_low_passed_and_the_static_ones_are_not() {
+        let hysteresis = Some(DahlSpec { sigma_nm_per_rad: 1e6, limit_nm: 1.0 });
+        let run = |filter_s: f64| {
+            let mut e = ModelExtension::new(ExtensionSpec { hysteresis, torque_offset_nm: 0.5, dynamic_terms_filter_s: filter_s, ..Default::default() }).unwrap();
+            // Up (u = +1, settled), then one step down (u = -1 at once: sigma is huge).
+            let mut t = 0.0;
+            for k in 0..1000 {
+                t = k as f64 * 1e-3;
+                e.torque(t, 1e-3 * k as f64, 0.0);
+            }
+            let start = e.torque(t + 1e-3, 0.998, 0.0);
+            let mut at_tau = start;
+            for k in 2..=51 {
+                at_tau = e.torque(t + k as f64 * 1e-3, 0.998, 0.0);
+            }
+            (start, at_tau)
+        };
+        let (start, _) = run(0.0);
+        assert!((start - (0.5 - 1.0)).abs() < 1e-9, "unfiltered: the reversed loop at once, {start}");
+        let (start, after) = run(0.05);
+        assert!(start > 0.5 + 1.0 - 2.0 * 0.05, "filtered: a millisecond in, the torque has barely moved: {start}");
+        let moved = (0.5 + 1.0 - after) / 2.0;
+        assert!((moved - 0.63).abs() < 0.03, "one time constant later, {moved} of the swing");
+        assert!(ModelExtension::new(ExtensionSpec { dynamic_terms_filter_s: -1.0, ..Default::default() }).is_err());
     }
 }
