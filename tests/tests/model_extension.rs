@@ -95,6 +95,30 @@ fn the_shoulder_weighs_terms_given_per_pivot_setting_at_its_pivot() {
     assert!((by_pivot - flat).abs() < 0.05 * flat, "by pivot {by_pivot}, flat {flat}");
 }
 
+/// The shoulder at its softest setting (25 Nm/rad, about 44 mm) with a Dahl loop as steep as the
+/// one identified there (sigma 258 Nm/rad, ten times the element's slope) and eq. 3.5 friction: the
+/// torque loop must not ring (it follows its own observed torque as closely as without the
+/// extension, to within 0.05 of the reference's range; ringing, 0.39) and the observer is no farther from the F/T
+/// sensor than without it. Fed back unfiltered, the loop rang at 21-31 Hz (issue 32).
+#[test]
+fn the_softest_shoulder_setting_does_not_ring_with_a_steep_extension() {
+    let measure = |test: &str, extension: Option<&str>| {
+        let mut edits = Vec::new();
+        if let Some(e) = extension {
+            edits.push(Edit::Set("joints[shoulder].params.model_extension", serde_yaml::from_str(e).unwrap()));
+        }
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
+        let plan = Plan { stiffness_nm_per_rad: vec![25.0], references: vec![(Waveform::Sine, 0.1)], periods: 2.0, ..Plan::default() };
+        let row = run(&loaded, &PluginLoader::new([]), "q2", Scenario::Modern, &plan, |_, _| {}).unwrap().remove(0);
+        (row.nrmse_observed, row.nrmse_observer_vs_sensor)
+    };
+    let (own_without, vs_sensor_without) = measure("ext-q2-soft-without", None);
+    let (own_with, vs_sensor_with) = measure("ext-q2-soft-with", Some("{hysteresis: {sigma_nm_per_rad: 258.0, limit_nm: 0.31}, friction: {ka_nm: 0.22, kb_s_per_rad: 15.0}}"));
+    println!("q2 at 25 Nm/rad, 0.1 Hz: own tracking {own_without:.4} -> {own_with:.4}, observer vs F/T {vs_sensor_without:.4} -> {vs_sensor_with:.4}");
+    assert!(own_with < own_without + 0.05, "the loop rings: it follows its observed torque to {own_with}, without the extension {own_without}");
+    assert!(vs_sensor_with <= vs_sensor_without, "observer vs F/T {vs_sensor_with}, without the extension {vs_sensor_without}");
+}
+
 /// The wrist (q6, q7): one extension per DOF; with its plant's hysteresis and friction on both,
 /// q7's observer is closer to the F/T sensor while tracking a sine; a list of the wrong length is
 /// an error at its field.
