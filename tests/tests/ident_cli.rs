@@ -196,13 +196,21 @@ fn bad_identify_arguments_are_errors_not_silently_changed() {
     for (args, expected) in [
         (vec!["--baseline-order", "9"], "--baseline-order must be 1-6, got 9"),
         (vec!["--config", "configs/sherpa_arm.yaml", "--joint", "q9"], "no joint `q9`"),
-        (vec!["--config", "configs/sherpa_arm.yaml", "--joint", "q6"], "2-DOF characteristics (the wrist) are not supported as a baseline"),
     ] {
         let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&data).args(&args).output().unwrap();
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(expected), "expected `{expected}` in: {err}");
     }
+    // A wrist DOF against the wrist's table needs a record along that DOF: at 45 deg both deflect.
+    let dir = scratch("identify-wrist-45");
+    let along_45 = dir.join("q6-45.csv");
+    let rows: String = (0..400).map(|i| format!("{},{},{},20,45\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.05).sin(), 1.0 * (i as f64 * 0.05).sin())).collect();
+    std::fs::write(&along_45, format!("t,deflection,torque,pivot_mm,angle_deg\n{rows}")).unwrap();
+    let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&along_45).args(["--config", "configs/sherpa_arm.yaml", "--joint", "q6"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("sample 1: deflection direction 45 deg; `q6` is identified from a record along it (90 deg"), "{err}");
 }
 
 #[test]

@@ -116,23 +116,52 @@ fn err(m: impl Into<String>) -> ExperimentError {
 /// assert!((tau[1] - 2.5).abs() < 1e-12);
 /// ```
 pub fn observer_torque(params: &Value, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    observer_torque_of(params, 0, t_s, deflection_rad, pivot_mm)
+}
+
+/// Whether `params` hold a 2-DOF (wrist) characteristic, whose curves have directions.
+fn two_dof(params: &Value) -> bool {
+    params.get("characteristic").and_then(|c| c.get("curves")).and_then(Value::as_array).is_some_and(|c| c.iter().any(|c| c.get("angle_deg").is_some_and(|a| !a.is_null())))
+}
+
+/// [`observer_torque`] for DOF `dof` of the joint: for the wrist (section 3.5.2), that DOF's
+/// table torque with the other DOF undeflected, through `model_extension[dof]`, as the wrist
+/// plugin computes it online along a record that deflects that DOF alone.
+///
+/// ```
+/// let params = serde_json::json!({"stiffness_nm_per_rad": 100.0});
+/// let tau = jointctl_experiments::model_loop::observer_torque_of(&params, 0, &[0.0], &[0.01], &[f64::NAN]).unwrap();
+/// assert!((tau[0] - 1.0).abs() < 1e-12);
+/// ```
+pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
     let curve: Box<dyn Fn(f64, f64) -> f64> = if let Some(spec) = params.get("characteristic") {
         let spec: CharacteristicSpec = serde_json::from_value(spec.clone()).map_err(|e| err(format!("params.characteristic: {e}")))?;
         if spec.curves.iter().any(|c| c.angle_deg.is_some()) {
-            return Err(err("params.characteristic: a 2-DOF characteristic (the wrist) has no single-DOF observer model here"));
+            let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+            Box::new(move |pivot, x| {
+                let (d6, d7) = if dof == 0 { (x, 0.0) } else { (0.0, x) };
+                let e = table.evaluate(pivot, d6, d7);
+                if dof == 0 { e.torque_q6_nm } else { e.torque_q7_nm }
+            })
+        } else {
+            let table = PivotCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+            Box::new(move |pivot, x| table.evaluate(pivot, x).torque_nm)
         }
-        let table = PivotCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
-        Box::new(move |pivot, x| table.evaluate(pivot, x).torque_nm)
     } else if let Some(k) = params.get("stiffness_nm_per_rad").and_then(Value::as_f64) {
         Box::new(move |_, x| k * x)
     } else {
         return Err(err("params: neither `characteristic` nor `stiffness_nm_per_rad`: the joint has no elastic observer model"));
     };
-    let mut extension = match params.get("model_extension") {
+    // The wrist's extension is a list, one entry per DOF.
+    let (given, field) = match params.get("model_extension") {
+        Some(Value::Array(list)) => (list.get(dof).cloned(), format!("params.model_extension[{dof}]")),
+        other => (other.cloned(), "params.model_extension".to_string()),
+    };
+    let mut extension = match given {
         None | Some(Value::Null) => None,
         Some(v) => {
-            let spec: ExtensionSpec = serde_json::from_value(v.clone()).map_err(|e| err(format!("params.model_extension: {e}")))?;
-            Some(ModelExtension::new(spec).map_err(|e| err(format!("params.model_extension.{}: {}", e.field, e.message)))?)
+            let spec: ExtensionSpec = serde_json::from_value(v).map_err(|e| err(format!("{field}: {e}")))?;
+            Some(ModelExtension::new(spec).map_err(|e| err(format!("{field}.{}: {}", e.field, e.message)))?)
         }
     };
     let mut out = Vec::with_capacity(t_s.len());
@@ -235,13 +264,13 @@ fn merge_plant(effects: &Value, fragment: &Map<String, Value>) -> Value {
 pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
     let (j, i) = crate::locate(loaded, dof)?;
     let entry = &loaded.config.joints[j];
-    if i != 0 {
+    if i != 0 && !two_dof(&entry.params.0) {
         return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
     }
     let mut notes = Vec::new();
     // The observer: every cause's observer terms together.
     let extension = observer_terms(found, &mut notes);
-    finish(loaded, dof, (j, entry), Value::Object(extension), found, data, (&held_out_mask(&data.t, train_fraction), &[(0..data.len()).collect()]), notes)
+    finish(loaded, dof, (j, i, entry), Value::Object(extension), found, data, (&held_out_mask(&data.t, train_fraction), &[(0..data.len()).collect()]), notes)
 }
 
 /// The causes `identify` named at one pivot setting of a record.
@@ -307,7 +336,7 @@ pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFoun
         if plant.is_empty() { "none".to_string() } else { plant.iter().map(|f| format!("`{}`", f.effect)).collect::<Vec<_>>().join(", ") }
     ));
     let groups: Vec<Vec<usize>> = settings.iter().map(|s| s.samples.clone()).collect();
-    finish(loaded, dof, (j, entry), extension, &plant, data, (&held_out, &groups), notes)
+    finish(loaded, dof, (j, i, entry), extension, &plant, data, (&held_out, &groups), notes)
 }
 
 /// The causes named at half the settings or more, each with its plant terms averaged over the
@@ -352,20 +381,33 @@ fn mean_object(objects: &[&Map<String, Value>]) -> Map<String, Value> {
 /// indices: the pivot settings, or one group of every sample), and both gains on the `held_out`
 /// samples.
 #[allow(clippy::too_many_arguments)]
-fn finish(loaded: &LoadedConfig, dof: &str, (j, entry): (usize, &jointctl_config::JointConfig), extension: Value, found: &[Found], data: &Data, (held_out, groups): (&[bool], &[Vec<usize>]), mut notes: Vec<String>) -> Result<Extension, ExperimentError> {
+fn finish(loaded: &LoadedConfig, dof: &str, (j, i, entry): (usize, usize, &jointctl_config::JointConfig), extension: Value, found: &[Found], data: &Data, (held_out, groups): (&[bool], &[Vec<usize>]), mut notes: Vec<String>) -> Result<Extension, ExperimentError> {
     let (t, d, p) = (&data.t, &data.deflection, &data.pivot_mm);
     let params_before = entry.params.0.clone();
     let empty = extension.as_object().is_some_and(Map::is_empty);
     let mut params_after = params_before.clone();
+    let wrist = two_dof(&params_before);
     if let Some(obj) = params_after.as_object_mut() {
-        if empty {
+        if wrist {
+            // One entry per DOF ([q6, q7]): this DOF's, the other's as it was.
+            let mut list = match obj.get("model_extension") {
+                Some(Value::Array(l)) if l.len() == entry.dof_names().len() => l.clone(),
+                _ => vec![Value::Null; entry.dof_names().len()],
+            };
+            list[i] = if empty { Value::Null } else { extension };
+            if list.iter().all(Value::is_null) {
+                obj.remove("model_extension");
+            } else {
+                obj.insert("model_extension".into(), Value::Array(list));
+            }
+        } else if empty {
             obj.remove("model_extension");
         } else {
             obj.insert("model_extension".into(), extension);
         }
     }
-    let obs_before = observer_torque(&params_before, t, d, p)?;
-    let obs_after = observer_torque(&params_after, t, d, p)?;
+    let obs_before = observer_torque_of(&params_before, i, t, d, p)?;
+    let obs_after = observer_torque_of(&params_after, i, t, d, p)?;
 
     // The simulation: a cause's plant terms only when they make the training part's replay
     // significantly better.

@@ -180,6 +180,26 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
 }
 
 /// The baseline from a config's joint: its characteristic (elastic or shoulder table).
+/// A wrist DOF is identified from a record along it (section 3.5.2's 0 deg for q7, 90 deg for
+/// q6): along another direction both DOFs deflect, and one DOF's model cannot be the baseline.
+fn wrist_direction(config: &Path, joint: &str, data: &jointctl_ident::csv::Data) -> Result<(), String> {
+    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
+    let Some(entry) = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)) else { return Ok(()) };
+    let two_dof = entry.params.0.get("characteristic").and_then(|c| c.get("curves")).and_then(|c| c.as_array()).is_some_and(|c| c.iter().any(|c| c.get("angle_deg").is_some_and(|a| !a.is_null())));
+    if !two_dof {
+        return Ok(());
+    }
+    let along = if entry.dof_names().iter().position(|n| *n == joint) == Some(0) { 90.0 } else { 0.0 };
+    match data.angle_deg.iter().enumerate().find(|(_, a)| a.is_finite() && (*a - along).abs() > 0.5) {
+        Some((i, a)) => Err(format!(
+            "{}: sample {}: deflection direction {a} deg; `{joint}` is identified from a record along it ({along} deg, `jointctl sim record --joint {joint} --angle-deg {along}`): along another direction both wrist DOFs deflect",
+            config.display(),
+            i + 1
+        )),
+        None => Ok(()),
+    }
+}
+
 fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> {
     let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
     let entry = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)).ok_or_else(|| format!("no joint `{joint}` in {}", config.display()))?;
@@ -187,7 +207,15 @@ fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> 
     if let Some(spec) = p.get("characteristic") {
         let spec: jointctl_models::characteristic::CharacteristicSpec = serde_json::from_value(spec.clone()).map_err(|e| format!("{}: params.characteristic: {e}", entry.name))?;
         if spec.curves.iter().any(|c| c.angle_deg.is_some()) {
-            return Err(format!("joint `{joint}`: 2-DOF characteristics (the wrist) are not supported as a baseline yet; identify without --config"));
+            // The wrist (section 3.5.2): a DOF's table torque with the other DOF undeflected, as
+            // `sim record --joint q6|q7` deflects it (--angle-deg 90 or 0).
+            let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| format!("{}: {}", e.field, e.message))?;
+            let dof = entry.dof_names().iter().position(|n| *n == joint).unwrap_or(0);
+            return Ok(BaselineModel::Given(Box::new(move |d, pivot| {
+                let (d6, d7) = if dof == 0 { (d, 0.0) } else { (0.0, d) };
+                let e = table.evaluate(pivot, d6, d7);
+                if dof == 0 { e.torque_q6_nm } else { e.torque_q7_nm }
+            })));
         }
         let table = jointctl_models::characteristic::PivotCharacteristic::from_spec(&spec).map_err(|e| format!("{}: {}", e.field, e.message))?;
         return Ok(BaselineModel::Given(Box::new(move |d, pivot| table.evaluate(pivot, d).torque_nm)));
@@ -221,6 +249,11 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
+    if let (Some(config), Some(joint)) = (&a.config, &a.joint)
+        && let Err(e) = wrist_direction(config, joint, &data)
+    {
+        return crate::fail(e);
+    }
     // A record of several pivot settings against a joint with pivot settings: each setting apart.
     if let (Some(config), Some(joint)) = (&a.config, &a.joint)
         && data.pivot_settings().len() >= 2
