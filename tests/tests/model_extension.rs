@@ -49,6 +49,15 @@ fn bad_extension_parameters_are_errors_at_their_field() {
     let errs = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).map(|_| ()).unwrap_err();
     let e = errs.0.iter().find(|e| e.field.contains("model_extension")).unwrap_or_else(|| panic!("{errs}"));
     assert!(e.field.ends_with("model_extension.hysteresis") && e.message.contains("sigma_nm_per_rad > 0"), "{e}");
+    // Terms per pivot setting on a joint without pivot settings would be read at the first
+    // setting whatever the data said: refused.
+    let loaded = jointctl_config::load(sherpa_with("ext-bad-by-pivot", &arm_name("ext-bad-by-pivot"), &[Edit::Set(
+        "joints[q4].params.model_extension",
+        serde_yaml::from_str("{by_pivot: [{pivot_mm: 0.0, terms: {}}, {pivot_mm: 10.0, terms: {}}]}").unwrap(),
+    )]))
+    .unwrap();
+    let errs = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).map(|_| ()).unwrap_err();
+    assert!(errs.0.iter().any(|e| e.field.ends_with("model_extension.by_pivot") && e.message.contains("one setting")), "{errs}");
 }
 
 /// The shoulder (q2) on the reference arm, whose table was fitted through the middle of its

@@ -152,6 +152,12 @@ pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_ra
     } else {
         return Err(err("params: neither `characteristic` nor `stiffness_nm_per_rad`: the joint has no elastic observer model"));
     };
+    let needs_pivot = {
+        let mut pivots: Vec<f64> = params.get("characteristic").and_then(|c| c.get("curves")).and_then(Value::as_array).map(|c| c.iter().filter_map(|c| c.get("pivot_mm").and_then(Value::as_f64)).collect()).unwrap_or_default();
+        pivots.sort_by(f64::total_cmp);
+        pivots.dedup();
+        pivots.len() > 1
+    };
     // The wrist's extension is a list, one entry per DOF.
     let (given, field) = match params.get("model_extension") {
         Some(Value::Array(list)) => (list.get(dof).cloned(), format!("params.model_extension[{dof}]")),
@@ -166,8 +172,10 @@ pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_ra
     };
     let mut out = Vec::with_capacity(t_s.len());
     for (k, (&t, &phi)) in t_s.iter().zip(deflection_rad).enumerate() {
-        let pivot = pivot_mm.get(k).copied().filter(|p| p.is_finite()).unwrap_or(0.0);
-        if !phi.is_finite() {
+        // A model that changes with the pivot has no torque without a pivot reading (the plugins
+        // leave it unknown online); one that does not reads at its one setting.
+        let pivot = pivot_mm.get(k).copied().filter(|p| p.is_finite() || needs_pivot).unwrap_or(0.0);
+        if !phi.is_finite() || !pivot.is_finite() {
             if let Some(e) = &mut extension {
                 e.reset();
             }
@@ -308,11 +316,11 @@ fn observer_terms(found: &[Found], notes: &mut Vec<String>) -> Map<String, Value
 pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFound], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
     let (j, i) = crate::locate(loaded, dof)?;
     let entry = &loaded.config.joints[j];
-    if i != 0 {
+    if i != 0 && !two_dof(&entry.params.0) {
         return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
     }
-    if settings.windows(2).any(|w| !(w[1].pivot_mm > w[0].pivot_mm)) {
-        return Err(err("the settings must be in increasing pivot order"));
+    if let Some(w) = settings.windows(2).find(|w| !(w[1].pivot_mm > w[0].pivot_mm)) {
+        return Err(err(format!("the settings must be in increasing pivot order, got {} mm after {} mm", w[1].pivot_mm, w[0].pivot_mm)));
     }
     let mut notes = Vec::new();
     let mut by_pivot = Vec::new();
@@ -430,23 +438,20 @@ fn finish(loaded: &LoadedConfig, dof: &str, (j, i, entry): (usize, usize, &joint
         let tests: Vec<_> = groups
             .iter()
             .map(|g| {
-                let training: Vec<bool> = (0..data.len()).map(|i| !held_out[i]).collect();
-                let in_group: Vec<bool> = { let mut m = vec![false; data.len()]; g.iter().for_each(|&i| m[i] = training[i]); m };
+                let in_group: Vec<bool> = { let mut m = vec![false; data.len()]; g.iter().for_each(|&i| m[i] = !held_out[i]); m };
                 let (a, b) = (squared_errors(&data.torque, &current, &in_group, true), squared_errors(&data.torque, &tried, &in_group, true));
                 block_test(&a.iter().zip(&b).map(|(a, b)| a - b).collect::<Vec<f64>>())
             })
             .collect();
         let passed = tests.iter().filter(|t| t.significant()).count();
-        let ts: Vec<String> = tests.iter().map(|t| format!("{:.2}", t.t)).collect();
         if 2 * passed > tests.len() {
             plant_causes.push(f.effect.clone());
             (effects, current) = (candidate, tried);
         } else {
             notes.push(format!(
-                "`{}` left out of the simulation: its plant terms do not make the replay of the training part significantly better (block t = {} < {:.2}{}); the simulation already has it or it is the observer's alone",
+                "`{}` left out of the simulation: its plant terms do not make the replay of the training part significantly better ({}{}); the simulation already has it or it is the observer's alone",
                 f.effect,
-                ts.join(", "),
-                tests.first().map_or(f64::NAN, |t| t.critical),
+                tests.iter().map(|t| format!("block t = {:.2} < {:.2}", t.t, t.critical)).collect::<Vec<_>>().join(", "),
                 if tests.len() > 1 { " in more than half of the settings" } else { "" }
             ));
         }

@@ -106,35 +106,63 @@ impl Data {
     }
 
     /// The pivot settings the samples were taken at, each `(setting [mm], its samples in order)`
-    /// in increasing pivot order: sorted pivot readings split where two neighbours are more than
-    /// [`SETTING_GAP_MM`] apart, a setting being the median of its readings. Empty without a pivot
-    /// column; samples without a pivot reading belong to none.
+    /// in increasing pivot order. A hold is a run of samples in time whose pivot stays within
+    /// half of [`SETTING_GAP_MM`] of the run's first reading; a hold of fewer than `min_samples`
+    /// samples is the pivot in transit and belongs to no setting; holds whose medians are within
+    /// [`SETTING_GAP_MM`] are one setting (a repetition), its value the median of its readings.
+    /// Empty without a pivot column; samples without a pivot reading belong to none.
     ///
     /// ```
-    /// let mut d = jointctl_ident::csv::Data::from_columns(vec![0.0, 0.1, 0.2, 0.3], vec![0.0; 4], vec![0.0; 4]);
-    /// d.pivot_mm = vec![20.01, 10.0, 19.99, 10.02];
-    /// let s = d.pivot_settings();
+    /// let mut d = jointctl_ident::csv::Data::from_columns((0..9).map(|i| i as f64 * 0.1).collect(), vec![0.0; 9], vec![0.0; 9]);
+    /// // 10 mm held, a move through 15 mm, 20 mm held, then 10 mm again.
+    /// d.pivot_mm = vec![10.0, 10.01, 10.02, 15.0, 20.0, 19.99, 20.01, 10.0, 10.01];
+    /// let s = d.pivot_settings(2);
     /// assert_eq!(s.len(), 2);
-    /// assert_eq!(s[0].1, vec![1, 3]);
-    /// assert_eq!(s[1].1, vec![0, 2]);
+    /// assert_eq!(s[0].1, vec![0, 1, 2, 7, 8]);
+    /// assert_eq!(s[1].1, vec![4, 5, 6]);
     /// ```
-    pub fn pivot_settings(&self) -> Vec<(f64, Vec<usize>)> {
-        let mut order: Vec<usize> = (0..self.pivot_mm.len()).filter(|&i| self.pivot_mm[i].is_finite()).collect();
-        order.sort_by(|&a, &b| self.pivot_mm[a].total_cmp(&self.pivot_mm[b]));
-        let mut out: Vec<(f64, Vec<usize>)> = Vec::new();
-        let mut group: Vec<usize> = Vec::new();
-        for (k, &i) in order.iter().enumerate() {
-            if k > 0 && self.pivot_mm[i] - self.pivot_mm[order[k - 1]] > SETTING_GAP_MM {
-                out.push((0.0, std::mem::take(&mut group)));
+    pub fn pivot_settings(&self, min_samples: usize) -> Vec<(f64, Vec<usize>)> {
+        let p = &self.pivot_mm;
+        let mut holds: Vec<Vec<usize>> = Vec::new();
+        let mut run: Vec<usize> = Vec::new();
+        let mut close = |run: &mut Vec<usize>| {
+            if run.len() >= min_samples.max(1) {
+                holds.push(std::mem::take(run));
+            } else {
+                run.clear();
             }
-            group.push(i);
+        };
+        for i in 0..p.len() {
+            if !p[i].is_finite() {
+                close(&mut run);
+                continue;
+            }
+            if run.first().is_some_and(|&a| (p[i] - p[a]).abs() > SETTING_GAP_MM / 2.0) {
+                close(&mut run);
+            }
+            run.push(i);
         }
-        if !group.is_empty() {
-            out.push((0.0, group));
+        close(&mut run);
+        let median = |idx: &[usize]| {
+            let mut v: Vec<f64> = idx.iter().map(|&i| p[i]).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let mut holds: Vec<(f64, Vec<usize>)> = holds.into_iter().map(|h| (median(&h), h)).collect();
+        holds.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut out: Vec<(f64, Vec<usize>)> = Vec::new();
+        for (m, h) in holds {
+            match out.last_mut() {
+                Some((last, samples)) if m - *last <= SETTING_GAP_MM => {
+                    samples.extend(h);
+                    *last = m;
+                }
+                _ => out.push((m, h)),
+            }
         }
         for (setting, samples) in &mut out {
-            *setting = self.pivot_mm[samples[samples.len() / 2]];
             samples.sort_unstable();
+            *setting = median(samples);
         }
         out
     }

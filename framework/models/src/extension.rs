@@ -86,7 +86,8 @@ impl Default for Terms {
 impl Terms {
     /// Each parameter weighted linearly between `self` (weight `1 - w`) and `other` (`w`). A
     /// friction or hysteresis that one side lacks weighs in with its torque scale (`k_a`, `F_c`)
-    /// at zero and the other side's shape (`k_b`, `sigma`), so that it fades in over the span.
+    /// at zero and the other side's shape (`k_b`, `sigma`), so that it fades in over the span
+    /// (none where its weight is zero).
     ///
     /// ```
     /// use jointctl_models::extension::{DahlSpec, Terms};
@@ -102,14 +103,14 @@ impl Terms {
             (None, None) => None,
             (a, b) => {
                 let (a, b) = (a.unwrap_or(FrictionSpec { ka_nm: 0.0, ..b.unwrap_or(FrictionSpec { ka_nm: 0.0, kb_s_per_rad: 1.0 }) }), b.unwrap_or(FrictionSpec { ka_nm: 0.0, ..a.unwrap_or(FrictionSpec { ka_nm: 0.0, kb_s_per_rad: 1.0 }) }));
-                Some(FrictionSpec { ka_nm: mix(a.ka_nm, b.ka_nm), kb_s_per_rad: mix(a.kb_s_per_rad, b.kb_s_per_rad) })
+                Some(FrictionSpec { ka_nm: mix(a.ka_nm, b.ka_nm), kb_s_per_rad: mix(a.kb_s_per_rad, b.kb_s_per_rad) }).filter(|f| f.ka_nm != 0.0)
             }
         };
         let hysteresis = match (self.hysteresis, other.hysteresis) {
             (None, None) => None,
             (a, b) => {
                 let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0 }) }));
-                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm) })
+                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm) }).filter(|h| h.limit_nm > 0.0)
             }
         };
         Terms {
@@ -428,7 +429,11 @@ impl ModelExtension {
     /// Dahl's model, exact per step: `u <- sgn(dphi) + (u - sgn(dphi)) exp(-|dphi| / lambda)`;
     /// returns `F_c u` [Nm] (0 without hysteresis).
     pub fn dahl_torque(&mut self, phi: f64) -> f64 {
-        let Some(h) = self.live.hysteresis else { return 0.0 };
+        let Some(h) = self.live.hysteresis else {
+            // Kept up to date: terms weighed at a pivot can switch the loop on later.
+            self.dahl.1 = Some(phi);
+            return 0.0;
+        };
         let lambda = h.limit_nm / h.sigma_nm_per_rad;
         let (u, last) = self.dahl;
         let u = match last {

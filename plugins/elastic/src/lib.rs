@@ -157,6 +157,9 @@ impl JointPlugin for ElasticJoint {
             return Err(PluginError::at("compliance", "`drive_gain` takes a linear `stiffness_nm_per_rad` (the drive's gain at the joint), not a characteristic"));
         }
         let position = PositionLoop::from_params(p.position_pi)?;
+        if p.model_extension.as_ref().is_some_and(|e| !e.by_pivot.is_empty()) {
+            return Err(PluginError::at("model_extension.by_pivot", "an elastic joint has one setting: give its terms flat (by_pivot is for joints with pivot settings, the shoulder and the wrist)"));
+        }
         let extension = match p.model_extension.clone() {
             Some(spec) => Some(ModelExtension::new(spec).map_err(|e| PluginError::at(format!("model_extension.{}", e.field), e.message))?),
             None => None,

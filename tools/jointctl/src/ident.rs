@@ -182,22 +182,37 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
 /// The baseline from a config's joint: its characteristic (elastic or shoulder table).
 /// A wrist DOF is identified from a record along it (section 3.5.2's 0 deg for q7, 90 deg for
 /// q6): along another direction both DOFs deflect, and one DOF's model cannot be the baseline.
-fn wrist_direction(config: &Path, joint: &str, data: &jointctl_ident::csv::Data) -> Result<(), String> {
+fn wrist_direction(config: &Path, joint: &str, data: &jointctl_ident::csv::Data, data_file: &Path) -> Result<(), String> {
     let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
     let Some(entry) = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)) else { return Ok(()) };
-    let two_dof = entry.params.0.get("characteristic").and_then(|c| c.get("curves")).and_then(|c| c.as_array()).is_some_and(|c| c.iter().any(|c| c.get("angle_deg").is_some_and(|a| !a.is_null())));
-    if !two_dof {
+    if !curves(&entry.params.0).iter().any(|c| c.get("angle_deg").is_some_and(|a| !a.is_null())) {
         return Ok(());
     }
     let along = if entry.dof_names().iter().position(|n| *n == joint) == Some(0) { 90.0 } else { 0.0 };
     match data.angle_deg.iter().enumerate().find(|(_, a)| a.is_finite() && (*a - along).abs() > 0.5) {
         Some((i, a)) => Err(format!(
             "{}: sample {}: deflection direction {a} deg; `{joint}` is identified from a record along it ({along} deg, `jointctl sim record --joint {joint} --angle-deg {along}`): along another direction both wrist DOFs deflect",
-            config.display(),
+            data_file.display(),
             i + 1
         )),
         None => Ok(()),
     }
+}
+
+/// The curves of a joint's `params.characteristic` (none without one).
+fn curves(params: &serde_json::Value) -> Vec<serde_json::Value> {
+    params.get("characteristic").and_then(|c| c.get("curves")).and_then(|c| c.as_array()).cloned().unwrap_or_default()
+}
+
+/// Whether `joint`'s model changes with a pivot: its characteristic's curves are at more than one
+/// pivot setting (the shoulder, the wrist).
+fn joint_has_pivot_settings(config: &Path, joint: &str) -> Result<bool, String> {
+    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
+    let entry = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)).ok_or_else(|| format!("no joint `{joint}` in {}", config.display()))?;
+    let mut pivots: Vec<f64> = curves(&entry.params.0).iter().filter_map(|c| c.get("pivot_mm").and_then(|p| p.as_f64())).collect();
+    pivots.sort_by(f64::total_cmp);
+    pivots.dedup();
+    Ok(pivots.len() > 1)
 }
 
 fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> {
@@ -250,15 +265,25 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
     if let (Some(config), Some(joint)) = (&a.config, &a.joint)
-        && let Err(e) = wrist_direction(config, joint, &data)
+        && let Err(e) = wrist_direction(config, joint, &data, &a.data)
     {
         return crate::fail(e);
     }
     // A record of several pivot settings against a joint with pivot settings: each setting apart.
-    if let (Some(config), Some(joint)) = (&a.config, &a.joint)
-        && data.pivot_settings().len() >= 2
-    {
-        return identify_by_pivot(&a, config, joint, &data);
+    if let (Some(config), Some(joint)) = (&a.config, &a.joint) {
+        let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
+        if settings.len() >= 2 {
+            return match joint_has_pivot_settings(config, joint) {
+                Ok(true) => identify_by_pivot(&a, config, joint, &data, settings),
+                Ok(false) => crate::fail(format!(
+                    "{}: {} pivot settings, and `{joint}` in {} has none (its model does not change with a pivot): identify one setting's record",
+                    a.data.display(),
+                    settings.len(),
+                    config.display()
+                )),
+                Err(e) => crate::fail(e),
+            };
+        }
     }
     let spinner = (!a.json).then(|| {
         let s = indicatif::ProgressBar::new_spinner();
@@ -461,16 +486,15 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The samples a pivot setting needs to be identified apart (an assumption: identify's own
-/// minimum excitation is checked per setting; fewer than this is a stray reading, a pivot in
-/// transit between two settings).
+/// The samples a pivot setting's hold needs to count as a setting (an assumption: identify's own
+/// minimum excitation is checked per setting; a shorter hold is the pivot in transit between two
+/// settings, see [`jointctl_ident::csv::Data::pivot_settings`]).
 const MIN_SETTING_SAMPLES: usize = 200;
 
 /// `identify` on a record of several pivot settings (the shoulder q2, issue 32): each setting
 /// identified apart against the configured table at that setting, and one extension whose terms
 /// are given `by_pivot`, weighted at the joint's pivot online.
-fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointctl_ident::csv::Data) -> ExitCode {
-    let settings: Vec<(f64, Vec<usize>)> = data.pivot_settings().into_iter().filter(|(_, s)| s.len() >= MIN_SETTING_SAMPLES).collect();
+fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointctl_ident::csv::Data, settings: Vec<(f64, Vec<usize>)>) -> ExitCode {
     let mut md = format!(
         "# What the model misses, per pivot setting: {}
 
@@ -523,21 +547,28 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointc
         Err(e) => return crate::fail(e.to_string()),
     };
     let ext = match jointctl_experiments::model_loop::extend_by_pivot(&loaded, joint, &found, data, IdentifyOptions::default().train_fraction) {
-        Ok(e) => e,
-        Err(e) => return crate::fail(format!("{}: {e}", config.display())),
+        Ok(e) => Some(e),
+        Err(e) if a.out.is_some() => return crate::fail(format!("cannot write the extension: {}: {e}", config.display())),
+        // The causes stand without it (a config with no simulated joint): said, not fatal.
+        Err(e) => {
+            eprintln!("note: no simulation or observer gains: {}: {e}", config.display());
+            None
+        }
     };
-    md += &gains_table(&ext);
-    if let Some(dir) = &a.out {
+    if let Some(ext) = &ext {
+        md += &gains_table(ext);
+    }
+    if let (Some(dir), Some(ext)) = (&a.out, &ext) {
         let provenance = format!("by `jointctl identify --data {}` (per pivot setting)", a.data.display());
-        match jointctl_experiments::model_loop::write(&ext, &loaded, dir, &provenance, &Default::default()) {
+        match jointctl_experiments::model_loop::write(ext, &loaded, dir, &provenance, &Default::default()) {
             Ok(w) => {
                 let _ = writeln!(md, "\nWritten: {} (the joint's params, terms by pivot), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
             }
             Err(e) => return crate::fail(e),
         }
     }
-    if let Some(dir) = a.report.as_ref().or(a.out.as_ref()) {
-        match gain_plots(dir, &ext) {
+    if let (Some(dir), Some(ext)) = (a.report.as_ref().or(a.out.as_ref()), &ext) {
+        match gain_plots(dir, ext) {
             Ok(files) => files.iter().for_each(|(title, file)| {
                 let _ = writeln!(md, "\n![{title}]({file})");
             }),
@@ -545,7 +576,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointc
         }
     }
     if let Some(dir) = &a.report
-        && let Err(e) = std::fs::write(dir.join("report.md"), &md)
+        && let Err(e) = std::fs::create_dir_all(dir).and_then(|_| std::fs::write(dir.join("report.md"), &md))
     {
         return crate::fail(format!("cannot write the report: {e}"));
     }
@@ -558,11 +589,11 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointc
                 v
             })
             .collect();
-        let json = serde_json::json!({
-            "settings": settings,
-            "gains": {"simulation": ext.simulation, "observer": ext.observer},
-            "extension": {"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes},
-        });
+        let mut json = serde_json::json!({"settings": settings});
+        if let Some(ext) = &ext {
+            json["gains"] = serde_json::json!({"simulation": ext.simulation, "observer": ext.observer});
+            json["extension"] = serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes});
+        }
         outln!("{json}");
     } else {
         out!("{md}");
