@@ -339,25 +339,27 @@ fn the_shoulder_with_a_hidden_effect_is_identified_and_extended_per_pivot_settin
 }
 
 /// The wrist (section 3.5.2, issue 32): its plant is the observer's own table (`wrist_table`)
-/// plus a hidden Dahl hysteresis and the sensor's noise; each DOF recorded along itself (0 deg
-/// for q7, 90 deg for q6) is identified against the table's torque of that DOF, the hysteresis
-/// is named, the simulation and observer gains are at least 50 %, the extension is written for
-/// that DOF alone (`model_extension: [q6, q7]`), and the extended config passes `check`.
+/// plus the sensor's noise, and a hidden Dahl hysteresis in q7 alone (`effects_per_dof`). Each
+/// DOF recorded along itself (0 deg for q7, 90 deg for q6) is identified against the table's
+/// torque of that DOF: q7's hysteresis is named with simulation and observer gains of at least
+/// 50 %, its extension written for q7 alone (`model_extension: [q6, q7]`) and its plant terms into
+/// q7's own effects; q6 gets no hysteresis. The extended configs pass `check`.
 #[test]
-fn the_wrist_with_a_hidden_hysteresis_is_named_on_each_dof() {
+fn the_wrist_with_a_hidden_hysteresis_in_one_dof_is_named_on_that_dof() {
     let name = "ml-wrist";
     let arm = arm_name(name);
     let hidden = "hysteresis: {sigma_nm_per_rad: 60.0, limit_nm: 0.25}";
-    let edits = |effects: &str| {
+    let edits = |q7: &str| {
         vec![
-            Edit::Set("joints[wrist].sim.effects", serde_yaml::from_str(&format!("{{torque_noise_nm: 0.005, {effects}}}")).unwrap()),
+            Edit::Set("joints[wrist].sim.effects", serde_yaml::from_str("{}").unwrap()),
+            Edit::Set("joints[wrist].sim.effects_per_dof", serde_yaml::from_str(&format!("[{{torque_noise_nm: 0.005}}, {{torque_noise_nm: 0.005, {q7}}}]")).unwrap()),
             Edit::Set("joints[wrist].sim.element", serde_yaml::from_str("{kind: wrist_table}").unwrap()),
         ]
     };
     let config = sherpa_with(&format!("{name}-c"), &arm, &edits(""));
     let plant = sherpa_with(&format!("{name}-p"), &arm, &edits(hidden));
     let work = scratch(&format!("{name}-w"));
-    for (dof, angle, other) in [("q7", "0", 0), ("q6", "90", 1)] {
+    for (dof, angle, index) in [("q7", "0", 1), ("q6", "90", 0)] {
         let csv = work.join(format!("{dof}.csv"));
         let mut record = Command::new(jointctl());
         record.args(["sim", "record"]).arg(&plant).args(["--joint", dof, "--angle-deg", angle, "--out"]).arg(&csv);
@@ -369,12 +371,18 @@ fn the_wrist_with_a_hidden_hysteresis_is_named_on_each_dof() {
         ))
         .unwrap();
         let causes: Vec<&str> = json["causes"].as_array().unwrap().iter().map(|c| c["effect"].as_str().unwrap()).collect();
-        let (simulation, observer) = (gain(&json, "simulation"), gain(&json, "observer"));
-        println!("{name} {dof}: hidden {{{hidden}}}: named {causes:?}; gains simulation {simulation:.2}, observer {observer:.2}; extension {}", json["extension"]["observer"]);
-        assert!(causes.contains(&"hysteresis"), "{dof}: hysteresis not named: {causes:?}");
-        assert!(simulation >= 0.5 && observer >= 0.5, "{dof}: gains simulation {simulation:.2}, observer {observer:.2}");
-        let list = json["extension"]["observer"].as_array().unwrap_or_else(|| panic!("{dof}: the wrist's extension is a list per DOF: {}", json["extension"]));
-        assert!(list[other].is_null() && list[1 - other]["hysteresis"].is_object(), "{dof}: the extension is that DOF's alone: {list:?}");
+        println!("{name} {dof}: hidden in q7 {{{hidden}}}: named {causes:?}; gains {}; extension {}", json["gains"], json["extension"]);
         run_ok(Command::new(jointctl()).arg("check").arg(out.join("extended.yaml")));
+        if dof == "q6" {
+            assert!(!causes.contains(&"hysteresis"), "q6 has no hysteresis: {causes:?}");
+            continue;
+        }
+        assert!(causes.contains(&"hysteresis"), "q7: hysteresis not named: {causes:?}");
+        let (simulation, observer) = (gain(&json, "simulation"), gain(&json, "observer"));
+        assert!(simulation >= 0.5 && observer >= 0.5, "q7: gains simulation {simulation:.2}, observer {observer:.2}");
+        let list = json["extension"]["observer"].as_array().unwrap_or_else(|| panic!("the wrist's extension is a list per DOF: {}", json["extension"]));
+        assert!(list[1 - index].is_null() && list[index]["hysteresis"].is_object(), "the extension is q7's alone: {list:?}");
+        let extended = std::fs::read_to_string(out.join("extended.yaml")).unwrap();
+        assert!(extended.contains("effects_per_dof"), "q7's plant terms go to its own effects");
     }
 }

@@ -195,7 +195,7 @@ pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_ra
 }
 
 /// The simulated torque sensor's reading of `dof` replayed along the recorded motion, with the
-/// joint's `sim.effects` replaced by `effects` [Nm].
+/// joint's `sim.effects` (or the DOF's `sim.effects_per_dof` entry) replaced by `effects` [Nm].
 ///
 /// ```
 /// let loaded = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
@@ -208,7 +208,10 @@ pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &Value, t_s: 
     let effects: EffectsConfig = serde_json::from_value(effects.clone()).map_err(|e| err(format!("joints[{j}].sim.effects: {e}")))?;
     let mut cfg = loaded.config.clone();
     if let Some(sim) = cfg.joints[j].sim.as_mut() {
-        sim.effects = effects;
+        match sim.effects_per_dof.get_mut(i) {
+            Some(own) => *own = effects,
+            None => sim.effects = effects,
+        }
     }
     let hal = jointctl_sim::SimHal::with_chain(&cfg, loaded.chain.as_ref()).map_err(|e| err(e.to_string()))?;
     let unit = hal.units().iter().find(|u| u.dof_names.iter().any(|n| n == dof)).ok_or_else(|| err(format!("`{dof}` is not simulated")))?;
@@ -419,7 +422,8 @@ fn finish(loaded: &LoadedConfig, dof: &str, (j, i, entry): (usize, usize, &joint
 
     // The simulation: a cause's plant terms only when they make the training part's replay
     // significantly better.
-    let base_effects = entry.sim.as_ref().map(|s| serde_json::to_value(s.effects)).transpose().map_err(|e| err(e.to_string()))?.unwrap_or_default();
+    // The DOF's own set when the joint has one per DOF.
+    let base_effects = entry.sim.as_ref().map(|s| serde_json::to_value(s.effects_per_dof.get(i).copied().unwrap_or(s.effects))).transpose().map_err(|e| err(e.to_string()))?.unwrap_or_default();
     let replay = |effects: &Value| simulated_torque(loaded, dof, effects, t, d, p);
     let sim_before = replay(&base_effects)?;
     let (mut effects, mut current) = (base_effects.clone(), sim_before.clone());
@@ -555,7 +559,15 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     params.insert("include".into(), "observer.yaml".into());
     joint["params"] = serde_yaml::Value::Mapping(params);
     let effects: serde_yaml::Value = serde_yaml::to_value(&ext.plant_effects).map_err(|e| err(e.to_string()))?;
+    let entry = &loaded.config.joints[ext.joint_index];
+    let per_dof = entry.sim.as_ref().is_some_and(|s| !s.effects_per_dof.is_empty());
+    let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
     match joint.get_mut("sim") {
+        // A joint with a set of effects per DOF: this DOF's.
+        Some(sim) if per_dof => match sim.get_mut("effects_per_dof").and_then(|l| l.get_mut(i)) {
+            Some(slot) => *slot = effects,
+            None => return Err(err(format!("{}: joints[{}].sim.effects_per_dof has no entry {i}", config.display(), ext.joint_index))),
+        },
         Some(sim) => sim["effects"] = effects,
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     }

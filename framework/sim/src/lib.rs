@@ -255,7 +255,22 @@ impl SimHal {
                 None => None,
             };
             unit::check_effects(&s.effects).map_err(|(f, m)| setup(at(&format!("effects.{f}")), m))?;
-            units.push(Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects));
+            if !s.effects_per_dof.is_empty() {
+                if s.effects_per_dof.len() != n {
+                    return Err(setup(at("effects_per_dof"), format!("give one set per DOF ({n}), got {}", s.effects_per_dof.len())));
+                }
+                if serde_json::to_value(s.effects).ok() != serde_json::to_value(jointctl_config::EffectsConfig::default()).ok() {
+                    return Err(setup(at("effects"), "give `effects` (every DOF) or `effects_per_dof`, not both".to_string()));
+                }
+                for (i, fx) in s.effects_per_dof.iter().enumerate() {
+                    unit::check_effects(fx).map_err(|(f, m)| setup(at(&format!("effects_per_dof[{i}].{f}")), m))?;
+                }
+            }
+            let mut unit = Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects);
+            for (i, fx) in s.effects_per_dof.iter().enumerate() {
+                unit.set_effects(i, *fx);
+            }
+            units.push(unit);
         }
         let signal = |name: &str, field: String| -> Result<Term, HalSetupError> {
             let (dof, kind) = name.rsplit_once('.').ok_or_else(|| setup(field.clone(), format!("`{name}` is not DOF.SIGNAL")))?;

@@ -195,7 +195,8 @@ pub struct Unit {
     elements: Vec<Element>,
     pivot: Option<(usize, f64, f64)>,
     environments: Vec<EnvironmentConfig>,
-    effects: EffectsConfig,
+    /// Per DOF (the same set for every DOF unless [`Unit::set_effects`] says otherwise).
+    effects: [EffectsConfig; MAX_UNIT_DOF],
     /// Output positions [rad].
     pub output: [f64; MAX_UNIT_DOF],
     output_velocity: [f64; MAX_UNIT_DOF],
@@ -231,7 +232,7 @@ impl Unit {
             elements,
             pivot,
             environments,
-            effects,
+            effects: [effects; MAX_UNIT_DOF],
             output: [0.0; MAX_UNIT_DOF],
             output_velocity: [0.0; MAX_UNIT_DOF],
             theta: [0.0; MAX_UNIT_DOF],
@@ -298,10 +299,10 @@ impl Unit {
         self.time_s += dt;
         self.update_theta(positions, velocities);
         let n = self.dof();
-        let fx = self.effects;
         let mut d_eff = [0.0; MAX_UNIT_DOF];
         let mut rate = [0.0; MAX_UNIT_DOF];
         for i in 0..n {
+            let fx = self.effects[i];
             let d = self.theta[i] - self.output[i];
             rate[i] = self.theta_velocity[i] - self.output_velocity[i];
             // Dead-zone (play): no torque until the play is taken up.
@@ -348,7 +349,6 @@ impl Unit {
     /// `None`: the noise-free expectation).
     fn element_step(&mut self, d_eff: &[f64; MAX_UNIT_DOF], rate: &[f64; MAX_UNIT_DOF], dt: f64, mut rng: Option<&mut SplitMix64>) {
         let n = self.dof();
-        let fx = self.effects;
         let mut base = [0.0; MAX_UNIT_DOF];
         if self.elements.len() == 1 && n > 1 {
             // One element for every DOF (a 2-DOF wrist table couples them).
@@ -359,6 +359,7 @@ impl Unit {
             }
         }
         for i in 0..n {
+            let fx = self.effects[i];
             let st = &mut self.state[i];
             let mut t = base[i] + fx.cubic_nm_per_rad3 * d_eff[i].powi(3) + fx.viscous_nms_per_rad * rate[i];
             if let Some(f) = fx.arctan_friction {
@@ -432,12 +433,20 @@ impl Unit {
             let dt = if k == 0 { 0.0 } else { t_s[k] - t_s[k - 1] };
             let (mut d_eff, mut w) = ([0.0; MAX_UNIT_DOF], [0.0; MAX_UNIT_DOF]);
             let d = deflection_rad[k];
-            d_eff[dof] = elastic_deflection(d, self.effects.dead_zone_rad, self.effects.dead_zone_ramp_rad);
+            d_eff[dof] = elastic_deflection(d, self.effects[dof].dead_zone_rad, self.effects[dof].dead_zone_ramp_rad);
             w[dof] = rate;
             self.element_step(&d_eff, &w, dt, None);
             out.push(self.sensor_torque[dof]);
         }
         out
+    }
+
+    /// DOF `dof`'s plant effects in place of those [`Unit::new`] gave every DOF (the wrist's q6
+    /// and q7 each their own).
+    pub fn set_effects(&mut self, dof: usize, effects: EffectsConfig) {
+        if let Some(fx) = self.effects.get_mut(dof) {
+            *fx = effects;
+        }
     }
 
     /// DOF `i`'s output position [rad] and velocity [rad/s].

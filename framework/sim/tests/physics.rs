@@ -270,3 +270,29 @@ fn a_mode_with_a_reference_stiffness_rings_at_the_scaled_frequency() {
     assert!((plain - 10.0).abs() <= 1.0, "{plain} Hz");
     assert!((scaled - 20.0).abs() <= 1.0, "{scaled} Hz");
 }
+
+/// Plant effects per DOF (`sim.effects_per_dof`): a DOF's own set acts on that DOF alone; a list
+/// of the wrong length, or one beside `effects`, is an error at its field.
+#[test]
+fn effects_per_dof_act_on_their_own_dof() {
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let mut unit = Unit::new(vec!["a".into(), "b".into()], vec![0, 1], vec![vec![1.0, 0.0], vec![0.0, 1.0]], vec![Element::Linear(100.0), Element::Linear(100.0)], None, vec![fixed.clone(), fixed], EffectsConfig::default());
+    unit.set_effects(1, EffectsConfig { torque_offset_nm: 0.5, ..Default::default() });
+    unit.start(&[0.0, 0.0]);
+    let mut loads = [0.0; 2];
+    unit.step(&[0.01, 0.01], &[0.0, 0.0], &mut loads, 0.001, &mut SplitMix64(1));
+    let read = unit.replay(0, &[0.0], &[0.01], &[f64::NAN], 0.02)[0];
+    assert!((read - 1.0).abs() < 1e-12, "DOF a reads its element alone: {read}");
+    let read = unit.replay(1, &[0.0], &[0.01], &[f64::NAN], 0.02)[0];
+    assert!((read - 1.5).abs() < 1e-12, "DOF b reads its offset too: {read}");
+
+    let mut loaded = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
+    let wrist = loaded.config.joints.iter_mut().find(|j| j.name == "wrist").unwrap().sim.as_mut().unwrap();
+    wrist.effects_per_dof = vec![EffectsConfig::default()];
+    let err = jointctl_sim::SimHal::with_chain(&loaded.config, loaded.chain.as_ref()).map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("effects_per_dof") && err.contains("one set per DOF (2), got 1"), "{err}");
+    let wrist = loaded.config.joints.iter_mut().find(|j| j.name == "wrist").unwrap().sim.as_mut().unwrap();
+    wrist.effects_per_dof = vec![EffectsConfig::default(); 2];
+    let err = jointctl_sim::SimHal::with_chain(&loaded.config, loaded.chain.as_ref()).map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("effects") && err.contains("not both"), "{err}");
+}

@@ -145,9 +145,12 @@ pub struct JointSimConfig {
     /// ... or one per DOF.
     #[serde(default)]
     pub environments: Vec<EnvironmentConfig>,
-    /// Plant effects the observer does not model, each off unless given.
+    /// Plant effects the observer does not model, each off unless given...
     #[serde(default)]
     pub effects: EffectsConfig,
+    /// ... or one set per DOF (the wrist's q6 and q7 each their own), in place of `effects`.
+    #[serde(default)]
+    pub effects_per_dof: Vec<EffectsConfig>,
 }
 
 /// The elastic element, e.g. `{kind: linear, stiffness_nm_per_rad: 113.78}` or `{kind: rigid}`.
