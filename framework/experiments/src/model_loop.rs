@@ -119,9 +119,42 @@ pub fn observer_torque(params: &Value, t_s: &[f64], deflection_rad: &[f64], pivo
     observer_torque_of(params, 0, t_s, deflection_rad, pivot_mm)
 }
 
+/// `params.characteristic`, if the joint has one.
+fn characteristic(params: &Value) -> Result<Option<CharacteristicSpec>, ExperimentError> {
+    params.get("characteristic").map(|spec| serde_json::from_value(spec.clone()).map_err(|e| err(format!("params.characteristic: {e}")))).transpose()
+}
+
 /// Whether `params` hold a 2-DOF (wrist) characteristic, whose curves have directions.
 fn two_dof(params: &Value) -> bool {
-    params.get("characteristic").and_then(|c| c.get("curves")).and_then(Value::as_array).is_some_and(|c| c.iter().any(|c| c.get("angle_deg").is_some_and(|a| !a.is_null())))
+    characteristic(params).ok().flatten().is_some_and(|s| s.is_two_dof())
+}
+
+/// The torque [Nm] a joint's params give DOF `dof` at `(pivot [mm], deflection [rad])`: its
+/// characteristic at the pivot (the wrist's for that DOF with the other undeflected, section
+/// 3.5.2), or `stiffness_nm_per_rad` times the deflection; the configured model `identify --config`
+/// takes as its baseline and the observer starts from.
+///
+/// ```
+/// let params = serde_json::json!({"stiffness_nm_per_rad": 100.0});
+/// let curve = jointctl_experiments::model_loop::configured_torque(&params, 0).unwrap();
+/// assert!((curve(0.0, 0.01) - 1.0).abs() < 1e-12);
+/// ```
+pub fn configured_torque(params: &Value, dof: usize) -> Result<Box<dyn Fn(f64, f64) -> f64 + Send + Sync>, ExperimentError> {
+    let table_err = |e: jointctl_models::characteristic::SpecError| err(format!("params.characteristic.{}: {}", e.field, e.message));
+    match characteristic(params)? {
+        Some(spec) if spec.is_two_dof() => {
+            let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(table_err)?;
+            Ok(Box::new(move |pivot, x| table.torque_of_dof(pivot, dof, x)))
+        }
+        Some(spec) => {
+            let table = PivotCharacteristic::from_spec(&spec).map_err(table_err)?;
+            Ok(Box::new(move |pivot, x| table.evaluate(pivot, x).torque_nm))
+        }
+        None => match params.get("stiffness_nm_per_rad").and_then(Value::as_f64) {
+            Some(k) => Ok(Box::new(move |_, x| k * x)),
+            None => Err(err("params: neither `characteristic` nor `stiffness_nm_per_rad`: the joint has no elastic observer model")),
+        },
+    }
 }
 
 /// [`observer_torque`] for DOF `dof` of the joint: for the wrist (section 3.5.2), that DOF's
@@ -134,30 +167,8 @@ fn two_dof(params: &Value) -> bool {
 /// assert!((tau[0] - 1.0).abs() < 1e-12);
 /// ```
 pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
-    let curve: Box<dyn Fn(f64, f64) -> f64> = if let Some(spec) = params.get("characteristic") {
-        let spec: CharacteristicSpec = serde_json::from_value(spec.clone()).map_err(|e| err(format!("params.characteristic: {e}")))?;
-        if spec.curves.iter().any(|c| c.angle_deg.is_some()) {
-            let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
-            Box::new(move |pivot, x| {
-                let (d6, d7) = if dof == 0 { (x, 0.0) } else { (0.0, x) };
-                let e = table.evaluate(pivot, d6, d7);
-                if dof == 0 { e.torque_q6_nm } else { e.torque_q7_nm }
-            })
-        } else {
-            let table = PivotCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
-            Box::new(move |pivot, x| table.evaluate(pivot, x).torque_nm)
-        }
-    } else if let Some(k) = params.get("stiffness_nm_per_rad").and_then(Value::as_f64) {
-        Box::new(move |_, x| k * x)
-    } else {
-        return Err(err("params: neither `characteristic` nor `stiffness_nm_per_rad`: the joint has no elastic observer model"));
-    };
-    let needs_pivot = {
-        let mut pivots: Vec<f64> = params.get("characteristic").and_then(|c| c.get("curves")).and_then(Value::as_array).map(|c| c.iter().filter_map(|c| c.get("pivot_mm").and_then(Value::as_f64)).collect()).unwrap_or_default();
-        pivots.sort_by(f64::total_cmp);
-        pivots.dedup();
-        pivots.len() > 1
-    };
+    let curve = configured_torque(params, dof)?;
+    let needs_pivot = characteristic(params)?.is_some_and(|s| s.pivot_settings_mm().len() > 1);
     // The wrist's extension is a list, one entry per DOF.
     let (given, field) = match params.get("model_extension") {
         Some(Value::Array(list)) => (list.get(dof).cloned(), format!("params.model_extension[{dof}]")),
@@ -267,17 +278,24 @@ fn merge_plant(effects: &Value, fragment: &Map<String, Value>) -> Value {
     Value::Object(out)
 }
 
+/// `dof`'s joint entry (index, the DOF's index in it, the entry): a joint's observer extends its
+/// first DOF, or each DOF of the wrist.
+fn extended_joint<'a>(loaded: &'a LoadedConfig, dof: &str) -> Result<(usize, usize, &'a jointctl_config::JointConfig), ExperimentError> {
+    let (j, i) = crate::locate(loaded, dof)?;
+    let entry = &loaded.config.joints[j];
+    if i != 0 && !two_dof(&entry.params.0) {
+        return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
+    }
+    Ok((j, i, entry))
+}
+
 /// The extension of `dof` from the causes `identify` named on `data`, and its gains.
 ///
 /// # Errors
 /// The DOF is not in the config or not simulated, or its joint has no single-DOF elastic
 /// observer model (the 2-DOF wrist), or a cause's terms are out of range.
 pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
-    let (j, i) = crate::locate(loaded, dof)?;
-    let entry = &loaded.config.joints[j];
-    if i != 0 && !two_dof(&entry.params.0) {
-        return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
-    }
+    let (j, i, entry) = extended_joint(loaded, dof)?;
     let mut notes = Vec::new();
     // The observer: every cause's observer terms together.
     let extension = observer_terms(found, &mut notes);
@@ -317,11 +335,7 @@ fn observer_terms(found: &[Found], notes: &mut Vec<String>) -> Map<String, Value
 /// # Errors
 /// As [`extend`]; also settings not in increasing order.
 pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFound], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
-    let (j, i) = crate::locate(loaded, dof)?;
-    let entry = &loaded.config.joints[j];
-    if i != 0 && !two_dof(&entry.params.0) {
-        return Err(err(format!("`{dof}` is DOF {i} of joint `{}`: its observer's model extension is the joint's first DOF's", entry.name)));
-    }
+    let (j, i, entry) = extended_joint(loaded, dof)?;
     if let Some(w) = settings.windows(2).find(|w| !(w[1].pivot_mm > w[0].pivot_mm)) {
         return Err(err(format!("the settings must be in increasing pivot order, got {} mm after {} mm", w[1].pivot_mm, w[0].pivot_mm)));
     }

@@ -88,6 +88,29 @@ pub struct CharacteristicSpec {
     pub curves: Vec<CurveSpec>,
 }
 
+impl CharacteristicSpec {
+    /// Whether its curves have deflection directions: a 2-DOF table (the wrist, section 3.5.2).
+    pub fn is_two_dof(&self) -> bool {
+        self.curves.iter().any(|c| c.angle_deg.is_some())
+    }
+
+    /// The distinct pivot settings of its curves [mm], increasing (none for a curve without).
+    ///
+    /// ```
+    /// let spec: jointctl_models::characteristic::CharacteristicSpec = serde_json::from_str(
+    ///     r#"{"source": "assumed", "curves": [{"pivot_mm": 10, "coefficients": [50], "stiffness_nm_per_rad": 50},
+    ///        {"pivot_mm": 0, "coefficients": [90], "stiffness_nm_per_rad": 90}, {"pivot_mm": 10, "angle_deg": 45, "coefficients": [50], "stiffness_nm_per_rad": 50}]}"#).unwrap();
+    /// assert_eq!(spec.pivot_settings_mm(), vec![0.0, 10.0]);
+    /// assert!(spec.is_two_dof());
+    /// ```
+    pub fn pivot_settings_mm(&self) -> Vec<f64> {
+        let mut pivots: Vec<f64> = self.curves.iter().filter_map(|c| c.pivot_mm).collect();
+        pivots.sort_by(f64::total_cmp);
+        pivots.dedup();
+        pivots
+    }
+}
+
 /// A problem in a characteristic, with the field it concerns (relative to the characteristic).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SpecError {
@@ -509,6 +532,12 @@ impl WristCharacteristic {
     pub fn axis_stiffness_table(&self, q6: bool) -> Vec<f64> {
         let theta = if q6 { std::f64::consts::FRAC_PI_2 } else { 0.0 };
         (0..self.pivots_mm.len()).map(|i| self.stiffness_along(i, 0.0, theta)).collect()
+    }
+
+    /// DOF `dof`'s torque [Nm] (0: q6, 1: q7) at deflection `deflection_rad` with the other DOF
+    /// undeflected: the wrist characterised along one DOF (0 deg for q7, 90 deg for q6).
+    pub fn torque_of_dof(&self, pivot_mm: f64, dof: usize, deflection_rad: f64) -> f64 {
+        if dof == 0 { self.evaluate(pivot_mm, deflection_rad, 0.0).torque_q6_nm } else { self.evaluate(pivot_mm, 0.0, deflection_rad).torque_q7_nm }
     }
 
     /// Section 4.2 / figure 4.3: deflection (q6, q7) → polar, torque along the two nearest

@@ -179,66 +179,53 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The baseline from a config's joint: its characteristic (elastic or shoulder table).
-/// A wrist DOF is identified from a record along it (section 3.5.2's 0 deg for q7, 90 deg for
-/// q6): along another direction both DOFs deflect, and one DOF's model cannot be the baseline.
-fn wrist_direction(config: &Path, joint: &str, data: &jointctl_ident::csv::Data, data_file: &Path) -> Result<(), String> {
-    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
-    let Some(entry) = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)) else { return Ok(()) };
-    if !curves(&entry.params.0).iter().any(|c| c.get("angle_deg").is_some_and(|a| !a.is_null())) {
-        return Ok(());
-    }
-    let along = if entry.dof_names().iter().position(|n| *n == joint) == Some(0) { 90.0 } else { 0.0 };
-    match data.angle_deg.iter().enumerate().find(|(_, a)| a.is_finite() && (*a - along).abs() > 0.5) {
-        Some((i, a)) => Err(format!(
-            "{}: sample {}: deflection direction {a} deg; `{joint}` is identified from a record along it ({along} deg, `jointctl sim record --joint {joint} --angle-deg {along}`): along another direction both wrist DOFs deflect",
-            data_file.display(),
-            i + 1
-        )),
-        None => Ok(()),
-    }
+/// A config's joint as identify uses it: its params, which DOF of it, and its characteristic.
+struct ConfiguredJoint {
+    params: serde_json::Value,
+    dof: usize,
+    spec: Option<jointctl_models::characteristic::CharacteristicSpec>,
 }
 
-/// The curves of a joint's `params.characteristic` (none without one).
-fn curves(params: &serde_json::Value) -> Vec<serde_json::Value> {
-    params.get("characteristic").and_then(|c| c.get("curves")).and_then(|c| c.as_array()).cloned().unwrap_or_default()
-}
-
-/// Whether `joint`'s model changes with a pivot: its characteristic's curves are at more than one
-/// pivot setting (the shoulder, the wrist).
-fn joint_has_pivot_settings(config: &Path, joint: &str) -> Result<bool, String> {
+/// `joint` of `config`, loaded once.
+fn configured_joint(config: &Path, joint: &str) -> Result<ConfiguredJoint, String> {
     let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
     let entry = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)).ok_or_else(|| format!("no joint `{joint}` in {}", config.display()))?;
-    let mut pivots: Vec<f64> = curves(&entry.params.0).iter().filter_map(|c| c.get("pivot_mm").and_then(|p| p.as_f64())).collect();
-    pivots.sort_by(f64::total_cmp);
-    pivots.dedup();
-    Ok(pivots.len() > 1)
+    let params = entry.params.0.clone();
+    let spec = params.get("characteristic").map(|s| serde_json::from_value(s.clone()).map_err(|e| format!("{}: params.characteristic: {e}", entry.name))).transpose()?;
+    Ok(ConfiguredJoint { dof: entry.dof_names().iter().position(|n| *n == joint).unwrap_or(0), params, spec })
 }
 
-fn config_baseline(config: &Path, joint: &str) -> Result<BaselineModel, String> {
-    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
-    let entry = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)).ok_or_else(|| format!("no joint `{joint}` in {}", config.display()))?;
-    let p = &entry.params.0;
-    if let Some(spec) = p.get("characteristic") {
-        let spec: jointctl_models::characteristic::CharacteristicSpec = serde_json::from_value(spec.clone()).map_err(|e| format!("{}: params.characteristic: {e}", entry.name))?;
-        if spec.curves.iter().any(|c| c.angle_deg.is_some()) {
-            // The wrist (section 3.5.2): a DOF's table torque with the other DOF undeflected, as
-            // `sim record --joint q6|q7` deflects it (--angle-deg 90 or 0).
-            let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| format!("{}: {}", e.field, e.message))?;
-            let dof = entry.dof_names().iter().position(|n| *n == joint).unwrap_or(0);
-            return Ok(BaselineModel::Given(Box::new(move |d, pivot| {
-                let (d6, d7) = if dof == 0 { (d, 0.0) } else { (0.0, d) };
-                let e = table.evaluate(pivot, d6, d7);
-                if dof == 0 { e.torque_q6_nm } else { e.torque_q7_nm }
-            })));
+impl ConfiguredJoint {
+    /// The baseline: the joint's configured model (its characteristic, the wrist's for this
+    /// DOF, or its stiffness).
+    fn baseline(&self) -> Result<BaselineModel, String> {
+        let torque = jointctl_experiments::model_loop::configured_torque(&self.params, self.dof).map_err(|e| e.to_string())?;
+        // identify's baseline takes (deflection, pivot).
+        Ok(BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))))
+    }
+
+    /// Whether its model changes with a pivot (the shoulder, the wrist).
+    fn has_pivot_settings(&self) -> bool {
+        self.spec.as_ref().is_some_and(|s| s.pivot_settings_mm().len() > 1)
+    }
+
+    /// A wrist DOF is identified from a record along it (section 3.5.2's 0 deg for q7, 90 deg
+    /// for q6): along another direction both DOFs deflect, and one DOF's model cannot be the
+    /// baseline.
+    fn check_direction(&self, joint: &str, data: &jointctl_ident::csv::Data, data_file: &Path) -> Result<(), String> {
+        if !self.spec.as_ref().is_some_and(|s| s.is_two_dof()) {
+            return Ok(());
         }
-        let table = jointctl_models::characteristic::PivotCharacteristic::from_spec(&spec).map_err(|e| format!("{}: {}", e.field, e.message))?;
-        return Ok(BaselineModel::Given(Box::new(move |d, pivot| table.evaluate(pivot, d).torque_nm)));
+        let along = if self.dof == 0 { 90.0 } else { 0.0 };
+        match data.angle_deg.iter().enumerate().find(|(_, a)| a.is_finite() && (*a - along).abs() > 0.5) {
+            Some((i, a)) => Err(format!(
+                "{}: sample {}: deflection direction {a} deg; `{joint}` is identified from a record along it ({along} deg, `jointctl sim record --joint {joint} --angle-deg {along}`): along another direction both wrist DOFs deflect",
+                data_file.display(),
+                i + 1
+            )),
+            None => Ok(()),
+        }
     }
-    if let Some(k) = p.get("stiffness_nm_per_rad").and_then(|v| v.as_f64()) {
-        return Ok(BaselineModel::Given(Box::new(move |d, _| k * d)));
-    }
-    Err(format!("joint `{joint}` ({}) has no characteristic or stiffness in its params", entry.plugin.name))
 }
 
 pub fn run_identify(a: IdentifyArgs) -> ExitCode {
@@ -255,8 +242,15 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     // A configured joint's model has no eq. 3.5 friction (the joint plugins observe torque from
     // the characteristic alone): friction is then a cause to name, not part of the baseline.
     let baseline_friction = a.config.is_none();
-    let baseline = match (&a.config, &a.joint) {
-        (Some(c), Some(j)) => match config_baseline(c, j) {
+    let configured = match (&a.config, &a.joint) {
+        (Some(c), Some(j)) => match configured_joint(c, j) {
+            Ok(cj) => Some(cj),
+            Err(e) => return crate::fail(e),
+        },
+        _ => None,
+    };
+    let baseline = match &configured {
+        Some(cj) => match cj.baseline() {
             Ok(b) => b,
             Err(e) => return crate::fail(e),
         },
@@ -264,25 +258,22 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
-    if let (Some(config), Some(joint)) = (&a.config, &a.joint)
-        && let Err(e) = wrist_direction(config, joint, &data, &a.data)
-    {
-        return crate::fail(e);
-    }
-    // A record of several pivot settings against a joint with pivot settings: each setting apart.
-    if let (Some(config), Some(joint)) = (&a.config, &a.joint) {
+    if let (Some(cj), Some(config), Some(joint)) = (&configured, &a.config, &a.joint) {
+        if let Err(e) = cj.check_direction(joint, &data, &a.data) {
+            return crate::fail(e);
+        }
+        // A record of several pivot settings against a joint with pivot settings: each setting apart.
         let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
         if settings.len() >= 2 {
-            return match joint_has_pivot_settings(config, joint) {
-                Ok(true) => identify_by_pivot(&a, config, joint, &data, settings),
-                Ok(false) => crate::fail(format!(
+            if !cj.has_pivot_settings() {
+                return crate::fail(format!(
                     "{}: {} pivot settings, and `{joint}` in {} has none (its model does not change with a pivot): identify one setting's record",
                     a.data.display(),
                     settings.len(),
                     config.display()
-                )),
-                Err(e) => crate::fail(e),
-            };
+                ));
+            }
+            return identify_by_pivot(&a, config, joint, cj, &data, settings);
         }
     }
     let spinner = (!a.json).then(|| {
@@ -402,27 +393,11 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     if let Some(l) = &loop_report {
         md += &loop_table(l);
     }
-    if let (Some(dir), Some((ext, loaded))) = (&a.out, &extension) {
+    if let Some((ext, loaded)) = &extension {
         let provenance = format!("by `jointctl identify --data {}`", a.data.display());
         let loop_sim = loop_report.as_ref().map(|l| l.hal_sim()).unwrap_or_default();
-        match jointctl_experiments::model_loop::write(ext, loaded, dir, &provenance, &loop_sim) {
-            Ok(w) => {
-                let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
-                if let Some(l) = &w.loop_sim {
-                    let _ = writeln!(md, "The loop's `hal.sim` values: {} (also in the extended config).", l.display());
-                }
-            }
-            Err(e) => return crate::fail(e),
-        }
-    }
-    if let Some((ext, _)) = &extension
-        && let Some(dir) = a.report.as_ref().or(a.out.as_ref())
-    {
-        match gain_plots(dir, ext) {
-            Ok(files) => files.iter().for_each(|(title, file)| {
-                let _ = writeln!(md, "\n![{title}]({file})");
-            }),
-            Err(e) => return crate::fail(e),
+        if let Err(e) = write_extension(&a, ext, loaded, &provenance, &loop_sim, &mut md) {
+            return crate::fail(e);
         }
     }
     if let Some(dir) = &a.report {
@@ -468,12 +443,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         if let Some((ext, _)) = &extension {
             gains["simulation"] = serde_json::json!(ext.simulation);
             gains["observer"] = serde_json::json!(ext.observer);
-            json["extension"] = serde_json::json!({
-                "observer": ext.observer_params.get("model_extension"),
-                "plant": ext.plant_effects,
-                "plant_causes": ext.plant_causes,
-                "notes": ext.notes,
-            });
+            json["extension"] = extension_json(ext);
         }
         json["gains"] = gains;
         if let Some(l) = &loop_report {
@@ -494,7 +464,7 @@ const MIN_SETTING_SAMPLES: usize = 200;
 /// `identify` on a record of several pivot settings (the shoulder q2, issue 32): each setting
 /// identified apart against the configured table at that setting, and one extension whose terms
 /// are given `by_pivot`, weighted at the joint's pivot online.
-fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointctl_ident::csv::Data, settings: Vec<(f64, Vec<usize>)>) -> ExitCode {
+fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &ConfiguredJoint, data: &jointctl_ident::csv::Data, settings: Vec<(f64, Vec<usize>)>) -> ExitCode {
     let mut md = format!(
         "# What the model misses, per pivot setting: {}
 
@@ -510,7 +480,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointc
     let mut reports = Vec::new();
     let mut found = Vec::new();
     for (pivot_mm, samples) in &settings {
-        let baseline = match config_baseline(config, joint) {
+        let baseline = match configured.baseline() {
             Ok(b) => b,
             Err(e) => return crate::fail(e),
         };
@@ -558,21 +528,10 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointc
     if let Some(ext) = &ext {
         md += &gains_table(ext);
     }
-    if let (Some(dir), Some(ext)) = (&a.out, &ext) {
+    if let Some(ext) = &ext {
         let provenance = format!("by `jointctl identify --data {}` (per pivot setting)", a.data.display());
-        match jointctl_experiments::model_loop::write(ext, &loaded, dir, &provenance, &Default::default()) {
-            Ok(w) => {
-                let _ = writeln!(md, "\nWritten: {} (the joint's params, terms by pivot), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
-            }
-            Err(e) => return crate::fail(e),
-        }
-    }
-    if let (Some(dir), Some(ext)) = (a.report.as_ref().or(a.out.as_ref()), &ext) {
-        match gain_plots(dir, ext) {
-            Ok(files) => files.iter().for_each(|(title, file)| {
-                let _ = writeln!(md, "\n![{title}]({file})");
-            }),
-            Err(e) => return crate::fail(e),
+        if let Err(e) = write_extension(a, ext, &loaded, &provenance, &Default::default(), &mut md) {
+            return crate::fail(e);
         }
     }
     if let Some(dir) = &a.report
@@ -592,7 +551,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, data: &jointc
         let mut json = serde_json::json!({"settings": settings});
         if let Some(ext) = &ext {
             json["gains"] = serde_json::json!({"simulation": ext.simulation, "observer": ext.observer});
-            json["extension"] = serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes});
+            json["extension"] = extension_json(ext);
         }
         outln!("{json}");
     } else {
@@ -629,6 +588,28 @@ fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> String {
 }
 
 /// The gains as a Markdown table, with what was left out and why.
+/// The extension in `--json`: the observer's terms, the plant's effects and the notes.
+fn extension_json(ext: &Extension) -> serde_json::Value {
+    serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes})
+}
+
+/// The extension's files (`--out`) and gain plots (`--report`, else `--out`), each said in `md`.
+fn write_extension(a: &IdentifyArgs, ext: &Extension, loaded: &jointctl_config::LoadedConfig, provenance: &str, loop_sim: &serde_json::Map<String, serde_json::Value>, md: &mut String) -> Result<(), String> {
+    if let Some(dir) = &a.out {
+        let w = jointctl_experiments::model_loop::write(ext, loaded, dir, provenance, loop_sim).map_err(|e| e.to_string())?;
+        let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
+        if let Some(l) = &w.loop_sim {
+            let _ = writeln!(md, "The loop's `hal.sim` values: {} (also in the extended config).", l.display());
+        }
+    }
+    if let Some(dir) = a.report.as_ref().or(a.out.as_ref()) {
+        for (title, file) in gain_plots(dir, ext)? {
+            let _ = writeln!(md, "\n![{title}]({file})");
+        }
+    }
+    Ok(())
+}
+
 fn gains_table(ext: &Extension) -> String {
     let mut md = String::from("\n## Gains on the held-out part\n\n| | before [Nm] | after [Nm] | gain |\n|---|---|---|---|\n");
     for (name, g) in [("simulation (replayed along the recorded motion, vs F/T)", ext.simulation), ("observer (recorded deflections, vs F/T)", ext.observer)] {
