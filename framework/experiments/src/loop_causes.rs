@@ -48,13 +48,11 @@ const LIMIT_EVIDENCE: f64 = 0.05;
 /// drive, not a mis-tuned one.
 const KP_DECADES: f64 = 1.5;
 
-/// One drive's recorded signals (or a combination of a joint's drives, see [`common_mode`]).
+/// One drive's recorded signals.
 #[derive(Clone, Debug, Default)]
 pub struct DriveTrace {
     /// The drive's name.
     pub name: String,
-    /// The drives a combination stands for (empty: the drive itself).
-    pub members: Vec<String>,
     /// The set-point sent in each cycle [rad] (NaN: holding, nothing sent).
     pub setpoint_rad: Vec<f64>,
     /// The drive's position reading [rad] (NaN: unknown).
@@ -82,9 +80,6 @@ pub struct LoopRecording {
     /// DOFs of the joint the drives move whose torque was not measured (no F/T sensor): the
     /// drives' load is then unknown.
     pub unmeasured_dofs: Vec<String>,
-    /// Those DOFs' rows of the joint's transmission (`theta = M drive`): how their unknown
-    /// torques load each drive (`M^T tau`).
-    pub unmeasured_rows: Vec<Vec<f64>>,
 }
 
 /// A value of the loop: identified, configured, and how much better it explains the held-out part.
@@ -193,10 +188,9 @@ pub fn read(path: &Path, loaded: &LoadedConfig, dof: &str) -> Result<LoopRecordi
     rec.sensor_torque_nm = rows.iter().map(|&(i, _)| main.sensor_torque_nm[i]).collect();
     // Every DOF's F/T torque loads the drives (M^T tau); a DOF without one is said to be unknown.
     let mut torques: Vec<Vec<f64>> = dofs.iter().map(|d| series.get(d).map_or(vec![f64::NAN; rows.len()], |s| rows.iter().map(|&(i, _)| s.sensor_torque_nm.get(i).copied().unwrap_or(f64::NAN)).collect())).collect();
-    for (k, (d, tau)) in dofs.iter().zip(&mut torques).enumerate() {
+    for (d, tau) in dofs.iter().zip(&mut torques) {
         if tau.iter().all(|x| x.is_nan()) {
             rec.unmeasured_dofs.push(d.clone());
-            rec.unmeasured_rows.push(sim.matrix.get(k).cloned().unwrap_or_default());
             tau.iter_mut().for_each(|x| *x = 0.0);
         }
     }
@@ -397,55 +391,6 @@ pub fn replay_drive(t_s: &[f64], d: &DriveTrace, elmo: ElmoConfig, command_laten
     out
 }
 
-/// The share of the combination's set-point range the other combination's may move (an
-/// assumption: the drives' profiles and PIDs are one model only while the drives follow the same
-/// path; a held DOF's drives differ by a constant).
-const OTHER_MODE_SHARE: f64 = 0.05;
-
-/// Two drives that move a measured DOF and an unmeasured one (the shoulder's q2 and q3, eq. 3.3)
-/// load each drive with `M^T tau`: the unmeasured torque's share is unknown in each drive, but it
-/// cancels in the combination `w` of the drives orthogonal to its row of `M` (for eq. 3.3, the
-/// drives' mean). That combination's set-points, readings and load are one drive's when both
-/// drives are configured alike and follow the same path (the unmeasured DOF held): the drive
-/// model is not linear (its profile limits), so a combination of different paths is not one
-/// drive's response. `Err` says which condition fails.
-pub fn common_mode(rec: &LoopRecording) -> Result<DriveTrace, String> {
-    let ([a, b], [row]) = (rec.drives.as_slice(), rec.unmeasured_rows.as_slice()) else {
-        return Err(format!("{} drives and {} unmeasured DOFs: a combination is built for two drives and one", rec.drives.len(), rec.unmeasured_rows.len()));
-    };
-    let (r0, r1) = (row.first().copied().unwrap_or(0.0), row.get(1).copied().unwrap_or(0.0));
-    // w orthogonal to the row, scaled to sum to one (a mean of positions is a position).
-    let sum = r1 - r0;
-    if sum.abs() < 1e-12 {
-        return Err("the unmeasured torque loads the drives' every position-like combination".into());
-    }
-    let w = [r1 / sum, -r0 / sum];
-    let (ea, eb) = (a.elmo, b.elmo);
-    if (ea.kp, ea.ki, ea.kd, ea.max_acceleration_rad_s2, ea.max_velocity_rad_s) != (eb.kp, eb.ki, eb.kd, eb.max_acceleration_rad_s2, eb.max_velocity_rad_s) {
-        return Err(format!("`{}` and `{}` are configured differently", a.name, b.name));
-    }
-    let mix = |x: &[f64], y: &[f64]| -> Vec<f64> { x.iter().zip(y).map(|(x, y)| w[0] * x + w[1] * y).collect() };
-    let span = |v: &[f64]| v.iter().filter(|x| x.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
-    let common = mix(&a.setpoint_rad, &b.setpoint_rad);
-    let other: Vec<f64> = a.setpoint_rad.iter().zip(&b.setpoint_rad).map(|(x, y)| r0 * x + r1 * y).collect();
-    let ((cl, ch), (ol, oh)) = (span(&common), span(&other));
-    let norm = (r0 * r0 + r1 * r1).sqrt() / (w[0] * w[0] + w[1] * w[1]).sqrt();
-    if !(ch > cl) {
-        return Err("the drives' combination was not commanded to move".into());
-    }
-    if (oh - ol) / norm > OTHER_MODE_SHARE * (ch - cl) {
-        return Err(format!("the unmeasured DOF moved too ({:.3} against {:.3} rad of the combination): the drives followed different paths", (oh - ol) / norm, ch - cl));
-    }
-    Ok(DriveTrace {
-        name: format!("{:.3} {} {:+.3} {}", w[0], a.name, w[1], b.name),
-        members: vec![a.name.clone(), b.name.clone()],
-        setpoint_rad: common,
-        position_rad: mix(&a.position_rad, &b.position_rad),
-        load_nm: mix(&a.load_nm, &b.load_nm),
-        elmo: ea,
-    })
-}
-
 /// What the loop gets wrong on one DOF's closed-loop recording, against `loaded`'s simulation.
 pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     let sim = &loaded.config.hal.sim;
@@ -503,31 +448,14 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
             None => report.notes.push("the encoders' readings explain none of the F/T torque's rate: no SPI latency identified".into()),
         }
     }
-    // The drives' response to the set-points: with their whole load measured, or on the
-    // combination of the drives that no unmeasured torque loads.
-    let combined;
-    let moving = if rec.unmeasured_dofs.is_empty() {
-        moving
-    } else {
-        match common_mode(rec) {
-            Ok(trace) => {
-                report.notes.push(format!(
-                    "the joint's drives also move {} whose torque is not measured (no F/T sensor): the drives' response is identified on {}, the combination of the drives that torque does not load; the other combination's load stays unknown",
-                    rec.unmeasured_dofs.join(", "),
-                    trace.name
-                ));
-                combined = trace;
-                vec![&combined]
-            }
-            Err(why) => {
-                report.notes.push(format!(
-                    "the joint's drives also move {} whose torque is not measured (no F/T sensor): their load is unknown, so no command latency or profile limits are identified ({why})",
-                    rec.unmeasured_dofs.join(", ")
-                ));
-                return report;
-            }
-        }
-    };
+    // The drives' response to the set-points: only with their whole load measured.
+    if !rec.unmeasured_dofs.is_empty() {
+        report.notes.push(format!(
+            "the joint's drives also move {} whose torque is not measured (no F/T sensor): their load is unknown, so no command latency or profile limits are identified",
+            rec.unmeasured_dofs.join(", ")
+        ));
+        return report;
+    }
     let commanded: Vec<&DriveTrace> = moving.into_iter().filter(|d| d.setpoint_rad.iter().filter(|s| s.is_finite()).count() > 50).collect();
     if commanded.is_empty() {
         report.notes.push("no drive of the joint followed set-points: no command latency to identify".into());
@@ -615,12 +543,9 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     // own gains, `hal.sim.drive_gains`, so that the arm's other drives keep theirs).
     let without_kp = squared(latency, &limit(a_used, v_used, 1.0));
     for d in &commanded {
-        let names = if d.members.is_empty() { std::slice::from_ref(&d.name) } else { d.members.as_slice() };
-        for name in names {
-            let key = format!("hal.sim.drive_gains.{name}.kp");
-            part("drive_kp", &key, d.elmo.kp * kp, d.elmo.kp, &without_kp);
-            report.drive_gains.insert(name.clone(), [d.elmo.kp, d.elmo.ki, d.elmo.kd]);
-        }
+        let key = format!("hal.sim.drive_gains.{}.kp", d.name);
+        part("drive_kp", &key, d.elmo.kp * kp, d.elmo.kp, &without_kp);
+        report.drive_gains.insert(d.name.clone(), [d.elmo.kp, d.elmo.ki, d.elmo.kd]);
     }
     report
 }
@@ -637,28 +562,6 @@ mod tests {
         assert!(at(&t, &[0.0, f64::NAN, 4.0], 0.5).is_nan());
         let r = rate(&t, &[0.0, 2.0, 4.0]);
         assert!(r[0].is_nan() && r[1] == 2.0 && r[2].is_nan());
-    }
-
-    /// The shoulder's drives (eq. 3.3, `theta = M drive`, q3 unmeasured): their mean carries
-    /// q2's torque alone; refused when q3 moved (the drives followed different paths) or the
-    /// drives are configured differently.
-    #[test]
-    fn the_common_mode_cancels_the_unmeasured_torque() {
-        let elmo = ElmoConfig::default();
-        let drive = |name: &str, sp: Vec<f64>, load: Vec<f64>| DriveTrace { name: name.into(), setpoint_rad: sp.clone(), position_rad: sp, load_nm: load, elmo, ..Default::default() };
-        // tau2 = 2, tau3 = 1: loads 0.5 (2 + 1) and 0.5 (2 - 1); the mean is 0.5 tau2 = 1.
-        let sp: Vec<f64> = (0..10).map(|i| 0.01 * i as f64).collect();
-        let mut rec = LoopRecording { drives: vec![drive("a", sp.clone(), vec![1.5; 10]), drive("b", sp.iter().map(|x| x + 0.2).collect(), vec![0.5; 10])], unmeasured_dofs: vec!["q3".into()], unmeasured_rows: vec![vec![0.5, -0.5]], ..Default::default() };
-        let c = common_mode(&rec).unwrap();
-        assert_eq!(c.members, vec!["a".to_string(), "b".to_string()]);
-        assert!(c.load_nm.iter().all(|l| (l - 1.0).abs() < 1e-12), "{:?}", c.load_nm);
-        assert!((c.setpoint_rad[3] - 0.13).abs() < 1e-12);
-        // q3 commanded to move as far as q2: different paths.
-        rec.drives[1].setpoint_rad = sp.iter().map(|x| 3.0 * x).collect();
-        assert!(common_mode(&rec).unwrap_err().contains("moved too"));
-        rec.drives[1].setpoint_rad = sp.clone();
-        rec.drives[1].elmo.kp *= 2.0;
-        assert!(common_mode(&rec).unwrap_err().contains("configured differently"));
     }
 
     #[test]
