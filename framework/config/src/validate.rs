@@ -132,6 +132,13 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
     if !(1..=127).contains(&co.host_node_id) {
         err("hal.canopen.host_node_id".into(), format!("a CANopen node id is 1-127, got {}", co.host_node_id));
     }
+    for (field, value) in [("heartbeat_timeout_s", co.heartbeat_timeout_s), ("heartbeat_grace_s", co.heartbeat_grace_s)] {
+        if let Some(v) = value
+            && !(0.001..=60.0).contains(&v)
+        {
+            err(format!("hal.canopen.{field}"), format!("must be in [0.001, 60] s, got {}", crate::short_number(v)));
+        }
+    }
     if co.host_heartbeat_ms == 0 || co.comm_loss_timeout_ms <= co.host_heartbeat_ms {
         err(
             "hal.canopen.comm_loss_timeout_ms".into(),

@@ -64,6 +64,10 @@ const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
     ("implausible velocity limit", "torque_nm: 10", "torque_nm: 10, velocity_rad_s: 1e6", 21, "joints[0].limits.velocity_rad_s", "at most 50 rad/s"),
     // Finding: device names were cut to 15 bytes in diagnostics; now whole, up to 47.
     ("device name too long", "{name: e2, chip_select: 1}", "{name: enc_a_very_long_device_name_of_more_than_47_bytes, chip_select: 1}", 15, "buses.spi[0].encoders[1].name", "not a valid device name: use 1-47"),
+    // Issue 37: the heartbeat's times have a range (a grace of days would never call a
+    // drive silent).
+    ("heartbeat grace out of range", "  backend: sim", "  backend: sim\n  canopen: {heartbeat_grace_s: 1e9}", 5, "hal.canopen.heartbeat_grace_s", "must be in [0.001, 60] s, got 1.000e9"),
+    ("negative heartbeat timeout", "  backend: sim", "  backend: sim\n  canopen: {heartbeat_timeout_s: -1}", 5, "hal.canopen.heartbeat_timeout_s", "must be in [0.001, 60] s, got -1"),
     ("joint time budget beyond the period", "    plugin: elastic\n", "    plugin: elastic\n    budget_us: 30000\n", 25, "joints[1].budget_us", "at most the period (25000 us)"),
 ];
 

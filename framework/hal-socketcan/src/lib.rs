@@ -55,7 +55,8 @@ pub struct DriveHealth {
     pub emcy_count: u64,
     /// The last emergency code.
     pub last_emcy_code: u16,
-    /// No heartbeat within the timeout.
+    /// No heartbeat within the timeout, or none at all within the grace time after start-up
+    /// (`hal.canopen.heartbeat_grace_s`).
     pub silent: bool,
     /// Cycles without a TPDO, frames rejected, values rejected.
     pub losses: jointctl_hal::condition::LossCounters,
@@ -70,6 +71,8 @@ struct Drive {
     statusword: Option<u16>,
     last_heartbeat_s: Option<f64>,
     heartbeat_timeout_s: f64,
+    /// Silent when no heartbeat has come this long after the HAL started [s].
+    heartbeat_grace_s: f64,
     target_counts: Option<i32>,
     toggle: bool,
     reset_requested: bool,
@@ -230,6 +233,10 @@ impl HardwareHal {
                     statusword: None,
                     last_heartbeat_s: None,
                     heartbeat_timeout_s: co_cfg.heartbeat_timeout_s.unwrap_or(3.0 * d.heartbeat_ms as f64 / 1000.0),
+                    heartbeat_grace_s: co_cfg
+                        .heartbeat_grace_s
+                        .or(co_cfg.heartbeat_timeout_s)
+                        .unwrap_or(3.0 * d.heartbeat_ms as f64 / 1000.0),
                     target_counts: None,
                     toggle: false,
                     reset_requested: false,
@@ -345,7 +352,7 @@ impl Hal for HardwareHal {
                 }
             }
             for (i, d) in bus.drives.iter_mut().enumerate() {
-                d.health.silent = d.last_heartbeat_s.is_some_and(|t| now - t > d.heartbeat_timeout_s);
+                d.health.silent = d.is_silent(now);
                 let sample = match d.fresh {
                     // A silent node's stale frames are not trusted either.
                     _ if d.health.silent => Sample::Invalid,
@@ -471,6 +478,15 @@ impl Hal for HardwareHal {
 }
 
 impl Drive {
+    /// No heartbeat within its timeout of the last one, or, when none has come yet, within the
+    /// grace time of the HAL's start (`now_s` counts from it).
+    fn is_silent(&self, now_s: f64) -> bool {
+        match self.last_heartbeat_s {
+            Some(t) => now_s - t > self.heartbeat_timeout_s,
+            None => now_s > self.heartbeat_grace_s,
+        }
+    }
+
     fn conditioner_last_good(&self) -> Option<f64> {
         self.conditioner.last_good()
     }

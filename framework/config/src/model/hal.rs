@@ -41,7 +41,16 @@ pub struct CanopenConfig {
     /// A drive whose heartbeat is older than this is silent: its readings are invalid [s].
     /// Assumption: 3 heartbeat periods.
     #[serde(deserialize_with = "finite_opt")]
+    #[schemars(range(min = 0.001, max = 60.0))]
     pub heartbeat_timeout_s: Option<f64>,
+    /// A drive that has sent no heartbeat at all this long after the HAL started the bus is
+    /// silent too [s] (before, silence was measured from the last heartbeat seen, so a drive
+    /// that never sent one was never silent). Default: the drive's heartbeat timeout, since a
+    /// drive produces heartbeats from the moment 0x1017 is written at start-up (CiA 301), before
+    /// the loop's first cycle; a longer grace suits a drive that is slow to start producing.
+    #[serde(deserialize_with = "finite_opt")]
+    #[schemars(range(min = 0.001, max = 60.0))]
+    pub heartbeat_grace_s: Option<f64>,
     /// SYNC counter overflow (0x1019); 0 sends SYNC without a counter. Assumption: 240.
     pub sync_counter_overflow: u8,
     /// The host's own CANopen node id: it produces a heartbeat under this id, which every drive
@@ -65,6 +74,7 @@ impl Default for CanopenConfig {
             mode: DriveMode::default(),
             sdo_timeout_s: 0.2,
             heartbeat_timeout_s: None,
+            heartbeat_grace_s: None,
             sync_counter_overflow: 240,
             host_node_id: 127,
             host_heartbeat_ms: 50,
