@@ -160,10 +160,18 @@ fn sherpa_cycle_allocates_nothing(free_arm: bool) {
     // setting (weighed at its pivot every cycle), the wrist's per DOF.
     let name = format!("sherpa-alloc-{free_arm}");
     let band = "{hysteresis: {sigma_nm_per_rad: 200.0, limit_nm: 0.4}, friction: {ka_nm: 0.1, kb_s_per_rad: 50.0}, viscous_nms_per_rad: 0.2}";
-    let edits = [
+    // Every drive's set-points checked against a window and a rate (wide: checked, never
+    // refused).
+    let windows: Vec<(String, String)> =
+        (0..9).map(|d| (format!("buses.can[0].drives[{d}].setpoint_window_rad"), format!("buses.can[0].drives[{d}].max_setpoint_rate_rad_s"))).collect();
+    let mut edits = vec![
         jointctl_tests::Edit::Set("joints[shoulder].params.model_extension", serde_yaml::from_str(&format!("{{by_pivot: [{{pivot_mm: 0.0, terms: {{}}}}, {{pivot_mm: 15.0, terms: {band}}}, {{pivot_mm: 45.0, terms: {{cubic_nm_per_rad3: 300.0}}}}]}}")).unwrap()),
         jointctl_tests::Edit::Set("joints[wrist].params.model_extension", serde_yaml::from_str(&format!("[{band}, null]")).unwrap()),
     ];
+    for (window, rate) in &windows {
+        edits.push(jointctl_tests::Edit::Set(window, serde_yaml::from_str("[-100.0, 100.0]").unwrap()));
+        edits.push(jointctl_tests::Edit::Set(rate, 1000.0.into()));
+    }
     let path = jointctl_tests::sherpa_with(&name, &arm_name(&name), &edits);
     let mut loaded = jointctl_config::load(&path).unwrap();
     if free_arm {
@@ -199,6 +207,7 @@ fn sherpa_cycle_allocates_nothing(free_arm: bool) {
     assert!(lp.arm.states[1].torque().is_some() && lp.arm.states[5].torque().is_some(), "the VSA observers ran");
     assert!(lp.arm.gravity_torques[1].abs() > 1.0, "the URDF's gravity torques ran: {:?}", lp.arm.gravity_torques);
     assert_eq!(n, 0);
+    assert!(lp.arm.slots.iter().all(|s| s.fault == 0 && s.setpoint_rejections == 0), "the set-point check ran and refused nothing");
     drop(lp);
     if free_arm {
         // The free arm moved: q2 is loaded by the links beyond it, not clamped at its target.

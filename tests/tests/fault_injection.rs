@@ -27,6 +27,59 @@ fn arm_with_faulty(rate_hz: f64, params: &str) -> jointctl_runtime::Arm {
     arm
 }
 
+/// The rig of `rig_yaml` with joint `b` on the `faulty` test plugin and these edits to the YAML.
+fn arm_with_faulty_and(rate_hz: f64, params: &str, edits: &[jointctl_tests::Edit]) -> jointctl_runtime::Arm {
+    let extra = format!("  - name: b\n    plugin: faulty\n    encoders: {{output: e1}}\n    drives: {{motor: m1}}\n    params: {params}\n");
+    let yaml = jointctl_tests::yaml_with(&rig_yaml("fault-injection", rate_hz, &extra), edits);
+    let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    arm.activate().unwrap();
+    arm
+}
+
+/// Issue 37, finding 1: a plugin's motor set-points went to the drives as computed (the DOF's
+/// limits bound the joint-level command only), so a plugin bug drove a motor wherever it said.
+/// Pass: a plugin that writes 2 rad to a drive whose window is [-1.5, 1.5], or a step of 0.5 rad
+/// in a cycle to a drive allowed 5 rad/s (0.05 rad a cycle at 100 Hz), is held in that same
+/// cycle (its set-point is a hold, the drive never moves there), faulted with SETPOINT_REJECTED,
+/// named in the fault's reason with the drive and the value, and counted once; the other joint
+/// goes on. With the check off (`safety.check_setpoints: false`) the set-point reaches the drive.
+#[test]
+fn a_set_point_outside_its_drives_window_or_rate_is_held_and_named_in_the_same_cycle() {
+    use jointctl_tests::Edit;
+    let window = Edit::Set("buses.can[0].drives[m1].setpoint_window_rad", serde_yaml::from_str("[-1.5, 1.5]").unwrap());
+    let rate = Edit::Set("buses.can[0].drives[m1].max_setpoint_rate_rad_s", 5.0.into());
+    for (edits, wild, reason) in [
+        (vec![window], 2.0, "plugin `faulty` wrote 2 rad to drive `m1`, outside its setpoint_window_rad [-1.5, 1.5]"),
+        (vec![rate], 0.8, "plugin `faulty` moved drive `m1` from 0.3 to 0.8 rad in one cycle, more than 0.05 rad"),
+    ] {
+        let mut arm = arm_with_faulty_and(100.0, &format!("{{wild_setpoint_at: 150, wild_setpoint_rad: {wild}}}"), &edits);
+        arm.set_mode(0, position(0.3));
+        arm.set_mode(1, position(0.3));
+        step_100hz(&mut arm, 0..150);
+        assert_eq!(arm.slots[1].fault, 0, "{reason}: no fault before the wild set-point");
+        step_100hz(&mut arm, 150..151);
+        let b = &arm.slots[1];
+        assert_eq!(b.fault, JointFault::SETPOINT_REJECTED.code(), "{reason}");
+        assert_eq!(arm.last_setpoints()[1], MotorSetpoint::HOLD, "held in the same cycle");
+        assert!(b.fault_reason().contains(reason), "{}", b.fault_reason());
+        step_100hz(&mut arm, 151..200);
+        let b = &arm.slots[1];
+        assert_eq!((b.setpoint_rejections, b.fault_count), (1, 1));
+        assert!((arm.last_readings().drives[1].position_rad.value - 0.3).abs() < 0.01, "the drive stayed: {:?}", arm.last_readings().drives[1]);
+        assert!((arm.states[0].position().unwrap() - 0.3).abs() < 5e-3, "the other joint went on: {:?}", arm.states[0]);
+    }
+    // The check off: the same plugin moves the drive to 2 rad.
+    let off = [
+        Edit::Set("buses.can[0].drives[m1].setpoint_window_rad", serde_yaml::from_str("[-1.5, 1.5]").unwrap()),
+        Edit::Set("safety", serde_yaml::from_str("{check_setpoints: false}").unwrap()),
+    ];
+    let mut arm = arm_with_faulty_and(100.0, "{wild_setpoint_at: 150, wild_setpoint_rad: 2.0}", &off);
+    arm.set_mode(1, position(0.3));
+    step_100hz(&mut arm, 0..151);
+    assert_eq!((arm.slots[1].fault, arm.last_setpoints()[1]), (0, MotorSetpoint::move_to(2.0)));
+}
+
 /// Finding: a plugin that stalls froze every joint and was never faulted (30 ms stalls gave
 /// overruns forever; one that blocks 2 s every 80 cycles missed every deadline). Pass: at
 /// 100 Hz (budget 0.5 x 10 ms, stall limit 10 ms), a plugin that stalls 30 ms every 20 cycles,

@@ -95,6 +95,7 @@ class JointDiagnostics(ctypes.Structure):
         ("plugin_budget_ns", ctypes.c_uint64),
         ("plugin_max_ns", ctypes.c_uint64),
         ("over_budget_cycles", ctypes.c_uint64),
+        ("setpoint_rejections", ctypes.c_uint64),
         ("fault_message", ctypes.c_uint8 * FAULT_MESSAGE_LEN),
     ]
 
@@ -152,7 +153,7 @@ def diagnostics_json(d: Diagnostics) -> dict:
     out = {k: getattr(d, k) for k in counters}
     out["max_lateness_ns"] = d.max_jitter_ns
     out["lateness_histogram"] = [{"upper_us": u, "cycles": n} for u, n in zip(JITTER_BUCKET_UPPER_US, d.jitter_histogram)]
-    joint_counters = ["invalid_cycles", "fault_count", "setpoint_clamps", "torque_clamps", "rate_limited", "watchdog_trips", "missing_inputs", "plugin_max_ns", "over_budget_cycles"]
+    joint_counters = ["invalid_cycles", "fault_count", "setpoint_clamps", "torque_clamps", "rate_limited", "watchdog_trips", "missing_inputs", "plugin_max_ns", "over_budget_cycles", "setpoint_rejections"]
     out["joints"] = [
         {"name": text(j.name), "fault_code": j.fault_code, "fault_message": text(j.fault_message), "held": j.held != 0, **{k: getattr(j, k) for k in joint_counters}}
         for j in d.joints[: min(d.joint_count, MAX_JOINTS)]

@@ -45,6 +45,10 @@ impl JointFault {
     /// Raised by the host, never by a plugin: the plugin's calls in one cycle took longer than
     /// the joint's time budget, so it is not called again.
     pub const OVER_BUDGET: JointFault = JointFault(3);
+    /// Raised by the host, never by a plugin: a motor set-point the plugin wrote was not
+    /// finite, outside its drive's window or faster than its drive's set-point rate, so the
+    /// joint is held (the runtime's set-point check, `safety.check_setpoints`).
+    pub const SETPOINT_REJECTED: JointFault = JointFault(4);
 
     /// A plugin-defined fault code; codes below [`JointFault::FIRST_PLUGIN_CODE`] are moved above it.
     ///

@@ -22,6 +22,11 @@ pub fn finite_pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error
     Ok([check(a)?, check(b)?])
 }
 
+/// An optional pair of finite `f64`.
+pub fn finite_pair_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    Option::<[f64; 2]>::deserialize(d)?.map(|[a, b]| Ok([check(a)?, check(b)?])).transpose()
+}
+
 /// Three finite `f64` (a vector).
 pub fn finite_triple<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
     let [a, b, c] = <[f64; 3]>::deserialize(d)?;

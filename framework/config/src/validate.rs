@@ -169,6 +169,16 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             if !(d.max_velocity_rad_s > 0.0) {
                 err(format!("{path}.max_velocity_rad_s"), format!("must be > 0, got {}", d.max_velocity_rad_s));
             }
+            if let Some([lo, hi]) = d.setpoint_window_rad
+                && !(lo < hi)
+            {
+                err(format!("{path}.setpoint_window_rad"), format!("lower end {} must be below upper end {}", crate::short_number(lo), crate::short_number(hi)));
+            }
+            if let Some(r) = d.max_setpoint_rate_rad_s
+                && !(r > 0.0 && r <= 1000.0)
+            {
+                err(format!("{path}.max_setpoint_rate_rad_s"), format!("must be in (0, 1000] rad/s, got {}", crate::short_number(r)));
+            }
             if d.heartbeat_ms == 0 {
                 err(format!("{path}.heartbeat_ms"), "must be > 0 (the heartbeat tells a silent drive)".into());
             }

@@ -312,6 +312,9 @@ pub struct JointDiagnostics {
     pub plugin_max_ns: u64,
     /// Cycles the joint's plugin was over its budget (faulting or not).
     pub over_budget_cycles: u64,
+    /// Cycles whose motor set-points the runtime's check refused (not finite, outside the
+    /// drive's window, too fast); the first faults the joint.
+    pub setpoint_rejections: u64,
     /// NUL-padded reason of the fault that holds the joint (its plugin's message, or the
     /// runtime's), empty when none.
     pub fault_message: [u8; FAULT_MESSAGE_LEN],
@@ -338,6 +341,7 @@ impl JointDiagnostics {
         plugin_budget_ns: 0,
         plugin_max_ns: 0,
         over_budget_cycles: 0,
+        setpoint_rejections: 0,
         fault_message: [0; FAULT_MESSAGE_LEN],
     };
 }

@@ -231,7 +231,8 @@ pub fn write_diagnostics(out: &mut String, d: &Diagnostics) {
             .int("watchdog_trips", x.watchdog_trips)
             .int("missing_inputs", x.missing_inputs)
             .int("plugin_max_ns", x.plugin_max_ns)
-            .int("over_budget_cycles", x.over_budget_cycles);
+            .int("over_budget_cycles", x.over_budget_cycles)
+            .int("setpoint_rejections", x.setpoint_rejections);
     });
     j.objects("devices", &d.devices[..(d.device_count as usize).min(d.devices.len())], |j, x| {
         j.str("name", decode_name(&x.name))

@@ -60,6 +60,11 @@ pub struct JointSlot {
     forgive_after: u64,
     /// Cycles over budget so far (faulting or not).
     pub over_budget_cycles: u64,
+    /// Cycles whose motor set-points the runtime's check refused (see [`crate::guard`]).
+    pub setpoint_rejections: u64,
+    /// The runtime's own reason for the fault that holds the joint (a refused set-point), empty
+    /// when the plugin's message is the reason.
+    runtime_reason: crate::guard::Reason,
     /// Whether an over-budget plugin is faulted (real time) or only measured (simulated time:
     /// see [`Arm::run_in_simulated_time`]).
     budget_enforced: bool,
@@ -74,6 +79,15 @@ impl JointSlot {
     /// The plugin's last error or panic text.
     pub fn last_message(&self) -> &str {
         self.joint.last_message()
+    }
+
+    /// Why the joint is faulted: the runtime's reason when it raised the fault (a refused
+    /// set-point), else the plugin's last message.
+    pub fn fault_reason(&self) -> &str {
+        match self.runtime_reason.as_str() {
+            "" => self.joint.last_message(),
+            own => own,
+        }
     }
 
     fn gather(&mut self, sensor: &SensorFrame, stamp_s: f64, dt_s: f64) {
@@ -128,6 +142,15 @@ impl JointSlot {
             return false;
         }
         true
+    }
+
+    /// The first of this cycle's set-points the guard refuses: its drive and why.
+    fn first_refused(&self, guard: &crate::guard::SetpointGuard, sensor: &SensorFrame) -> Option<(usize, crate::guard::Violation)> {
+        self.setpoints[..self.drive_count].iter().zip(self.drive_map).find_map(|(sp, map)| {
+            let drive = map?;
+            let now = sensor.drives[drive].position_rad.usable(f64::INFINITY);
+            guard.check(drive, sp, now).err().map(|v| (drive, v))
+        })
     }
 
     fn raise(&mut self, fault: JointFault) {
@@ -206,6 +229,8 @@ pub struct Arm {
     config_path: Option<std::path::PathBuf>,
     /// The gravity model of the arm's URDF, with its working memory.
     gravity: Option<ArmGravity>,
+    /// The last check of every motor set-point before the HAL.
+    guard: crate::guard::SetpointGuard,
 }
 
 /// The arm's gravity model and the buffers that keep its cycle allocation-free.
@@ -411,6 +436,8 @@ impl Arm {
                 in_budget_cycles: 0,
                 forgive_after: cfg.rate_hz.ceil() as u64,
                 over_budget_cycles: 0,
+                setpoint_rejections: 0,
+                runtime_reason: Default::default(),
                 budget_enforced: true,
             });
         }
@@ -448,6 +475,7 @@ impl Arm {
             ),
             config_path: std::fs::canonicalize(&src.file).ok(),
             gravity,
+            guard: crate::guard::SetpointGuard::new(cfg),
         })
     }
 
@@ -605,7 +633,16 @@ impl Arm {
                 // Set-points computed too late are not written: the joint is held instead.
                 let in_time = slot.charge(start);
                 match result {
-                    Ok(()) if in_time => slot.held = false,
+                    Ok(()) if in_time => match slot.first_refused(&self.guard, &self.sensor) {
+                        None => slot.held = false,
+                        Some((drive, violation)) => {
+                            // A refused set-point holds the whole joint: its drives move together.
+                            slot.setpoints[..n].fill(MotorSetpoint::HOLD);
+                            slot.setpoint_rejections += 1;
+                            slot.runtime_reason.set_violation(&slot.plugin, self.guard.drive_name(drive), &violation);
+                            slot.raise(JointFault::SETPOINT_REJECTED);
+                        }
+                    },
                     Ok(()) => slot.setpoints[..n].fill(MotorSetpoint::HOLD),
                     Err(f) => {
                         slot.setpoints[..n].fill(MotorSetpoint::HOLD);
@@ -616,6 +653,7 @@ impl Arm {
             for (sp, map) in slot.setpoints[..slot.drive_count].iter().zip(slot.drive_map) {
                 if let Some(i) = map {
                     self.actuator.drives[i] = *sp;
+                    self.guard.written(i, sp);
                 }
             }
         }

@@ -535,13 +535,14 @@ impl ArmPublisher {
                 j.plugin_budget_ns = slot.budget_ns;
                 j.plugin_max_ns = slot.max_used_ns;
                 j.over_budget_cycles = slot.over_budget_cycles;
+                j.setpoint_rejections = slot.setpoint_rejections;
                 // Written when it changes only: faults are rare and hold until restart.
                 if slot.fault == 0 {
                     if j.fault_message[0] != 0 {
                         j.fault_message = [0; jointctl_ipc::FAULT_MESSAGE_LEN];
                     }
                 } else if j.fault_message[0] == 0 {
-                    j.fault_message = encode_name(if slot.last_message().is_empty() { "no reason given" } else { slot.last_message() });
+                    j.fault_message = encode_name(if slot.fault_reason().is_empty() { "no reason given" } else { slot.fault_reason() });
                 }
             }
         }
@@ -657,7 +658,7 @@ impl<'a> ControlLoop<'a> {
         for slot in self.arm.slots.iter_mut().filter(|s| s.fault_unreported) {
             slot.fault_unreported = false;
             if !published {
-                tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.last_message());
+                tracing::error!(joint = %slot.name, plugin = %slot.plugin, fault = slot.fault, "joint faulted and is held: {}", slot.fault_reason());
             }
         }
     }

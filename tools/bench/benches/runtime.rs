@@ -24,7 +24,13 @@ fn plugin_dir() -> PathBuf {
 }
 
 fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::LoadedConfig) {
-    let loaded = sherpa(rate_hz, arm);
+    build_with(statically, rate_hz, arm, |_| {})
+}
+
+/// [`build`] with the config edited before the arm is built.
+fn build_with(statically: bool, rate_hz: f64, arm: &str, edit: impl FnOnce(&mut jointctl_config::ArmConfig)) -> (Arm, jointctl_config::LoadedConfig) {
+    let mut loaded = sherpa(rate_hz, arm);
+    edit(&mut loaded.config);
     let mut loader = PluginLoader::new([plugin_dir()]);
     if statically {
         jointctl_bench::register_sherpa_plugins(&mut loader);
@@ -111,6 +117,36 @@ fn main() {
     println!("| loaded from .so | {lm:.0} | <= 5000 |");
     println!("| loaded / static (median of per-round ratios) | {:.3} | <= 1.05 |", median(&mut ratios));
     println!();
+
+    // 1b. The runtime's set-point check (issue 37): every drive given a window and a rate
+    // (wide, so nothing is refused), against the same arm with the check off; interleaved.
+    let checked = |on: bool| {
+        move |c: &mut jointctl_config::ArmConfig| {
+            c.safety.check_setpoints = on;
+            for d in c.buses.can.iter_mut().flat_map(|b| b.drives.iter_mut()) {
+                d.setpoint_window_rad = Some([-100.0, 100.0]);
+                d.max_setpoint_rate_rad_s = Some(1000.0);
+            }
+        }
+    };
+    let (mut on_arm, _) = build_with(true, 1000.0, "bench-guard-on", checked(true));
+    let (mut off_arm, _) = build_with(true, 1000.0, "bench-guard-off", checked(false));
+    let (mut on, mut off) = (Vec::new(), Vec::new());
+    compute_ns(&mut on_arm, batch);
+    compute_ns(&mut off_arm, batch);
+    for _ in 0..rounds {
+        on.push(compute_ns(&mut on_arm, batch));
+        off.push(compute_ns(&mut off_arm, batch));
+    }
+    let mut ratios: Vec<f64> = on.iter().zip(&off).map(|(a, b)| a / b).collect();
+    println!("## The set-point check (every drive's window and rate), statically linked, {rounds} x {batch} cycles");
+    println!("| check | median ns/cycle |");
+    println!("|---|---|");
+    println!("| on | {:.0} |", median(&mut on));
+    println!("| off | {:.0} |", median(&mut off));
+    println!("| on / off (median of per-round ratios) | {:.3} |", median(&mut ratios));
+    println!();
+    drop((on_arm, off_arm));
 
     // 2. Loop timing at 40 Hz and 1 kHz, publishing to shared memory, no subscriber.
     println!("## Loop timing (real run with publishing; lateness = wake-up time - deadline)");

@@ -136,6 +136,9 @@ fn fault_reason(code: u32) -> String {
     match code {
         0 => "none".into(),
         1 => "its plugin panicked (never entered again)".into(),
+        2 => "its plugin returned an unknown status".into(),
+        3 => "its plugin took longer than its time budget (never called again)".into(),
+        4 => "the runtime refused a motor set-point of its plugin".into(),
         c => format!("its plugin reported fault code {c}"),
     }
 }
@@ -543,11 +546,11 @@ fn diag_human(d: &Diagnostics) -> String {
         lower = *upper;
     }
     let _ = writeln!(out, "joints:");
-    let _ = writeln!(out, "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>10}  fault", "joint", "held", "invalid", "faults", "pos clamp", "tq clamp", "rate lim", "watchdog", "missing", "max us");
+    let _ = writeln!(out, "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>8} {:>10}  fault", "joint", "held", "invalid", "faults", "pos clamp", "tq clamp", "rate lim", "watchdog", "missing", "refused", "max us");
     for j in &d.joints[..(d.joint_count as usize).min(d.joints.len())] {
         let _ = writeln!(
             out,
-            "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>10.1}  {}",
+            "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>8} {:>10.1}  {}",
             decode_name(&j.name),
             if j.held != 0 { "yes" } else { "no" },
             j.invalid_cycles,
@@ -557,6 +560,7 @@ fn diag_human(d: &Diagnostics) -> String {
             j.rate_limited,
             j.watchdog_trips,
             j.missing_inputs,
+            j.setpoint_rejections,
             j.plugin_max_ns as f64 / 1e3,
             if j.fault_code == 0 { fault_reason(0) } else { format!("{}: {}", fault_reason(j.fault_code), decode_name(&j.fault_message)) }
         );

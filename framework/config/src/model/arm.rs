@@ -36,6 +36,26 @@ pub struct ArmConfig {
     /// The arm's kinematic and inertial description (URDF), for gravity torques.
     #[serde(default)]
     pub kinematics: Option<KinematicsConfig>,
+    /// The runtime's own checks between the plugins and the hardware.
+    #[serde(default)]
+    pub safety: SafetyConfig,
+}
+
+/// The runtime's own checks between the plugins and the hardware.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct SafetyConfig {
+    /// Check every motor set-point a plugin writes before the HAL sees it: finite, inside its
+    /// drive's `setpoint_window_rad`, no faster than its `max_setpoint_rate_rad_s`. A violation
+    /// holds the joint with a fault naming the plugin, the drive and the value. Default on; off
+    /// only to show what the drives' own limits do (a test of the drives, never an arm in use).
+    pub check_setpoints: bool,
+}
+
+impl Default for SafetyConfig {
+    fn default() -> Self {
+        SafetyConfig { check_setpoints: true }
+    }
 }
 
 /// The arm's kinematic and inertial description (appendix C).

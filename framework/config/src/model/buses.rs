@@ -120,6 +120,20 @@ pub struct DriveConfig {
     /// Fastest the reported position can change [rad/s] (plausibility). Assumption: 10 rad/s.
     #[serde(default = "default_drive_rate", deserialize_with = "finite")]
     pub max_velocity_rad_s: f64,
+    /// Motor positions a set-point may name [rad], as the drive reports them (`[low, high]`).
+    /// The runtime checks every set-point a plugin writes against it before the HAL sees it: one
+    /// outside holds the joint with a fault that names the plugin, the drive and the value (with
+    /// `safety.check_setpoints`). None: unchecked, since the motor's range follows from the
+    /// joint's transmission, which only the plugin knows.
+    #[serde(default, deserialize_with = "finite_pair_opt")]
+    pub setpoint_window_rad: Option<[f64; 2]>,
+    /// Fastest a set-point may move [rad/s]: from the last one written, or from the drive's
+    /// position after a hold. In cyclic synchronous position mode a step beyond what the drive
+    /// follows in a cycle is a following error; in profile position mode (the thesis') the drive
+    /// profiles a far target itself, so a far step may be legitimate there. None: unchecked.
+    #[serde(default, deserialize_with = "finite_opt")]
+    #[schemars(range(min = 0.0, max = 1000.0))]
+    pub max_setpoint_rate_rad_s: Option<f64>,
 }
 
 fn default_counts_per_rad() -> f64 {

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use schemars::JsonSchema;
 use serde::{Deserialize, Deserializer, Serialize, de};
 
-use crate::num::{finite, finite_opt, finite_pair, finite_triple};
+use crate::num::{finite, finite_opt, finite_pair, finite_pair_opt, finite_triple};
 pub use jointctl_control::PiGains;
 pub use jointctl_modes::{ControllerConfig, GainPoint};
 

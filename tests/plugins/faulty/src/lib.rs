@@ -28,6 +28,13 @@ struct Params {
     /// Stall by sleeping (blocking) instead of spinning.
     #[serde(default)]
     stall_sleeps: bool,
+    /// Write a move to `wild_setpoint_rad` on this cycle, whatever the command (a plugin bug
+    /// that drives a motor somewhere the joint's limits never allowed).
+    #[serde(default)]
+    wild_setpoint_at: Option<u64>,
+    /// Where the wild set-point goes [rad].
+    #[serde(default)]
+    wild_setpoint_rad: f64,
     /// Create this file in `deactivate`, so a test can see whether the host called it.
     #[serde(default)]
     deactivate_marker: Option<std::path::PathBuf>,
@@ -70,6 +77,10 @@ impl Controller for Faulty {
     fn control(&mut self, _: &[JointState], cmd: &[JointCommand], _: &RawJointView, out: &mut [MotorSetpoint]) -> Result<(), JointFault> {
         if self.p.panic_in_control_at == Some(self.cycle.saturating_sub(1)) {
             panic!("faulty joint: deliberate panic in control");
+        }
+        if self.p.wild_setpoint_at == Some(self.cycle.saturating_sub(1)) {
+            out[0] = MotorSetpoint::move_to(self.p.wild_setpoint_rad);
+            return Ok(());
         }
         out[0] = if cmd[0].mode == ControlMode::POSITION { MotorSetpoint::move_to(cmd[0].position_rad) } else { MotorSetpoint::HOLD };
         Ok(())
