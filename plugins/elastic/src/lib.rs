@@ -242,6 +242,13 @@ impl Observer for ElasticJoint {
         if let Some(v) = self.velocity.update(q, raw.dt_s) {
             s.set_velocity(v);
         }
+        // A gap in the deflection is no motion: the extension's state (the Dahl loop, the rate's
+        // history) starts afresh after it, as the offline scoring does (issue 37, finding 6).
+        if s.deflection().is_none()
+            && let Some(e) = &mut self.extension
+        {
+            e.reset();
+        }
         out[0] = s;
         Ok(())
     }

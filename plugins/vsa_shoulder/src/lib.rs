@@ -195,6 +195,13 @@ impl Observer for VsaShoulder {
                 q2.mark_clamped();
             }
         }
+        // A gap in the deflection or the pivot is no motion: the extension's state starts
+        // afresh after it, as the offline scoring does (issue 37, finding 6).
+        if q2.torque().is_none()
+            && let Some(x) = &mut self.extension
+        {
+            x.reset();
+        }
         let q3_pos = self.q3(raw);
         if let Some(q) = q3_pos {
             q3.set_position(q);

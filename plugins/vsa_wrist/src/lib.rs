@@ -217,6 +217,15 @@ impl Observer for VsaWrist {
                 st.set_velocity(v);
             }
         }
+        // A gap in the deflections or the pivot is no motion: each extension's state starts
+        // afresh after it, as the offline scoring does (issue 37, finding 6).
+        for (x, st) in self.extension.iter_mut().zip(&s) {
+            if let Some(x) = x
+                && st.torque().is_none()
+            {
+                x.reset();
+            }
+        }
         out[..2].copy_from_slice(&s);
         Ok(())
     }
