@@ -130,6 +130,9 @@ fn fit_output_feeds_the_runtime_through_include_without_editing() {
     let table = String::from_utf8_lossy(&out.stderr);
     assert!(table.contains("| - | - | 4000 | 3 |"), "{table}");
     assert!(dir.join("plots/fit.svg").exists());
+    // Issue 37, finding 8: the file carries its format.
+    let written: serde_yaml::Value = serde_yaml::from_str(&std::fs::read_to_string(&fitted).unwrap()).unwrap();
+    assert_eq!(written["version"].as_u64(), Some(jointctl_config::FORMAT_VERSION));
     // The arm description includes the fitted file instead of the linear stiffness.
     let path = jointctl_tests::sherpa_with("fit-included", &jointctl_tests::arm_name("fit-included"), &[jointctl_tests::Edit::Set(
         "joints[q4].params.include",

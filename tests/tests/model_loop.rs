@@ -239,6 +239,11 @@ fn a_clean_plant_gets_no_cause() {
         let causes = json["causes"].as_array().unwrap();
         let known = |c: &serde_json::Value| c["effect"] == "stiffness_error" && c["params"]["relative_error"].as_f64().unwrap().abs() < 0.005;
         assert!(causes.iter().all(known), "{name}: a clean plant got causes: {}", json["causes"]);
+        // Issue 37, finding 8: what identify writes carries its format.
+        for file in ["observer.yaml", "extended.yaml"] {
+            let written: serde_yaml::Value = serde_yaml::from_str(&std::fs::read_to_string(out.join(file)).unwrap()).unwrap();
+            assert_eq!(written["version"].as_u64(), Some(jointctl_config::FORMAT_VERSION), "{file}");
+        }
         if causes.is_empty() {
             let observer = std::fs::read_to_string(out.join("observer.yaml")).unwrap();
             assert!(!observer.contains("model_extension"), "{name}: nothing found, nothing to extend:\n{observer}");

@@ -135,6 +135,13 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
         .into());
     }
     let source = ConfigSource { file: file.as_ref().to_path_buf(), spans: SpanIndex::build(text) };
+    // The format is checked before the fields: a newer file's fields are not this jointctl's.
+    if let Ok(serde_yaml::Value::Mapping(doc)) = serde_yaml::from_str::<serde_yaml::Value>(text)
+        && let Some(v) = doc.get("version")
+        && let Err(message) = format_version(v)
+    {
+        return Err(ConfigErrors(vec![source.error("version", message)]));
+    }
     let de = serde_yaml::Deserializer::from_str(text);
     let config: ArmConfig = serde_path_to_error::deserialize(de).map_err(|e| {
         let field = e.path().to_string();
@@ -259,13 +266,46 @@ fn include_params(source: &ConfigSource, params: &mut Params) -> Result<Option<P
     let path = source.resolve(Path::new(rel));
     let text = jointctl_files::read_to_string(&path, jointctl_files::FileKind::Include).map_err(|e| ("include".into(), e.to_string()))?;
     let included: Params = serde_yaml::from_str(&text).map_err(|e| ("include".into(), format!("{}: {e}", path.display())))?;
-    let serde_json::Value::Object(map) = included.0 else {
+    let serde_json::Value::Object(mut map) = included.0 else {
         return Err(("include".into(), format!("{} must hold a YAML mapping", path.display())));
     };
+    // The included file's own format; not a parameter of the plugin.
+    if let Some(v) = map.remove("version") {
+        let v: serde_yaml::Value = serde_yaml::to_value(&v).unwrap_or_default();
+        format_version(&v).map_err(|m| ("include".into(), format!("{}: version: {m}", path.display())))?;
+    }
     for (k, v) in map {
         obj.entry(k).or_insert(v);
     }
     Ok(Some(path))
+}
+
+/// The format of the files an arm is configured from (the arm description, the files its
+/// joints' params include, what `fit` and `identify` write), in their `version:` field. A file
+/// without one is read as format 1, the first that had the field: every file written before
+/// it has today's meanings. Raise it when a field changes meaning, and migrate or refuse the
+/// older format in [`format_version`].
+pub const FORMAT_VERSION: u64 = 1;
+
+/// Checks a file's `version:` value: an integer from 1 to [`FORMAT_VERSION`].
+///
+/// ```
+/// use jointctl_config::format_version;
+/// assert!(format_version(&serde_yaml::Value::from(1)).is_ok());
+/// assert!(format_version(&serde_yaml::Value::from(7)).unwrap_err().contains("newer jointctl"));
+/// ```
+///
+/// # Errors
+/// The reason, to be shown at the file's `version` field.
+pub fn format_version(v: &serde_yaml::Value) -> Result<u64, String> {
+    match v.as_u64() {
+        Some(n) if (1..=FORMAT_VERSION).contains(&n) => Ok(n),
+        Some(n) if n > FORMAT_VERSION => Err(format!(
+            "format {n} is from a newer jointctl; this one reads formats 1 to {FORMAT_VERSION}: upgrade jointctl, or rewrite the file for format {FORMAT_VERSION}"
+        )),
+        Some(0) => Err(format!("there is no format 0; this jointctl reads formats 1 to {FORMAT_VERSION}")),
+        _ => Err(format!("must be the file format's number, an integer from 1 to {FORMAT_VERSION}, got {}", serde_yaml::to_string(v).unwrap_or_default().trim())),
+    }
 }
 
 /// The JSON Schema of the arm description, for editors.

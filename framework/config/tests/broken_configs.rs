@@ -68,6 +68,11 @@ const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
     // drive silent).
     ("heartbeat grace out of range", "  backend: sim", "  backend: sim\n  canopen: {heartbeat_grace_s: 1e9}", 5, "hal.canopen.heartbeat_grace_s", "must be in [0.001, 60] s, got 1.000e9"),
     ("negative heartbeat timeout", "  backend: sim", "  backend: sim\n  canopen: {heartbeat_timeout_s: -1}", 5, "hal.canopen.heartbeat_timeout_s", "must be in [0.001, 60] s, got -1"),
+    // Issue 37, finding 8: a file from another jointctl was read with today's meanings. The
+    // version is checked before the fields (a newer file's unknown field is not the reason).
+    ("a file from a newer jointctl", "rate_hz: 40", "version: 2\nrate_hz: 40\nspeed: 3", 2, "version", "format 2 is from a newer jointctl; this one reads formats 1 to 1"),
+    ("format 0", "rate_hz: 40", "version: 0\nrate_hz: 40", 2, "version", "there is no format 0"),
+    ("a version that is not a number", "rate_hz: 40", "version: one\nrate_hz: 40", 2, "version", "must be the file format's number"),
     ("joint time budget beyond the period", "    plugin: elastic\n", "    plugin: elastic\n    budget_us: 30000\n", 25, "joints[1].budget_us", "at most the period (25000 us)"),
 ];
 
@@ -97,6 +102,24 @@ fn each_broken_config_is_rejected_at_the_right_place() {
         }
     }
     assert!(failures.is_empty(), "misreported configs:\n{}", failures.join("\n"));
+}
+
+/// Issue 37, finding 8, for the files a joint includes: an included file from a newer jointctl
+/// is refused naming the file; one of this format loads, and its `version` is not a parameter
+/// of the plugin.
+#[test]
+fn an_included_file_carries_its_format() {
+    let dir = std::env::temp_dir().join(format!("jointctl-include-version-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = dir.join("rig.yaml");
+    std::fs::write(&config, GOOD.replacen("params: {stiffness_nm_per_rad: 113.78}", "params: {include: k.yaml}", 1)).unwrap();
+    std::fs::write(dir.join("k.yaml"), "version: 1\nstiffness_nm_per_rad: 113.78\n").unwrap();
+    let loaded = jointctl_config::load(&config).unwrap();
+    assert_eq!(loaded.config.joints[1].params.0, serde_json::json!({"stiffness_nm_per_rad": 113.78}));
+    std::fs::write(dir.join("k.yaml"), "version: 3\nstiffness_nm_per_rad: 113.78\n").unwrap();
+    let e = jointctl_config::load(&config).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("joints[1].params.include") && e.contains("k.yaml: version: format 3 is from a newer jointctl"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

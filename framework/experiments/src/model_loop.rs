@@ -562,12 +562,16 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     let put = |path: &Path, text: String| std::fs::write(path, text).map_err(|e| err(format!("cannot write {}: {e}", path.display())));
     put(
         &written.observer,
-        format!("# The complete params of `{}`'s joint in {}, with the observer's model extension {provenance}.\n# Use: params: {{include: observer.yaml}}\n{}", ext.dof, config.display(), yaml(&ext.observer_params)?),
+        format!("# The complete params of `{}`'s joint in {}, with the observer's model extension {provenance}.\n# Use: params: {{include: observer.yaml}}\n{}", ext.dof, config.display(), yaml(&versioned(&ext.observer_params))?),
     )?;
     put(&written.plant, format!("# `sim.effects` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&ext.plant_effects)?))?;
     let text = jointctl_files::read_to_string(config, jointctl_files::FileKind::Config).map_err(|e| err(e.to_string()))?;
     let mut doc: serde_yaml::Value = serde_yaml::from_str(&text).map_err(|e| err(format!("{}: {e}", config.display())))?;
     absolute_paths(&mut doc, config);
+    // Written in this jointctl's format, whatever the original's was.
+    if let Some(m) = doc.as_mapping_mut() {
+        m.insert("version".into(), jointctl_config::FORMAT_VERSION.into());
+    }
     let joint = doc.get_mut("joints").and_then(|j| j.get_mut(ext.joint_index)).ok_or_else(|| err(format!("{}: no joints[{}]", config.display(), ext.joint_index)))?;
     let mut params = serde_yaml::Mapping::new();
     params.insert("include".into(), "observer.yaml".into());
@@ -598,6 +602,19 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     )?;
     jointctl_config::load(&written.extended).map_err(|e| err(format!("the extended config does not load: {e}")))?;
     Ok(written)
+}
+
+/// `params` with this jointctl's file format first (`version:`), for a file a joint includes.
+fn versioned(params: &Value) -> Value {
+    match params {
+        Value::Object(m) => {
+            let mut out = Map::new();
+            out.insert("version".into(), jointctl_config::FORMAT_VERSION.into());
+            out.extend(m.iter().filter(|(k, _)| *k != "version").map(|(k, v)| (k.clone(), v.clone())));
+            Value::Object(out)
+        }
+        other => other.clone(),
+    }
 }
 
 /// `from`'s keys into `into`, mappings merged key by key (`elmo: {max_acceleration_rad_s2}`

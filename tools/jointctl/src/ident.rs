@@ -130,7 +130,7 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
             g.branch_rmse_nm.1
         );
     }
-    let yaml = match serde_yaml::to_string(&serde_json::json!({ "characteristic": result.spec })) {
+    let yaml = match serde_yaml::to_string(&serde_json::json!({ "version": jointctl_config::FORMAT_VERSION, "characteristic": result.spec })) {
         Ok(y) => format!("# Fitted by `jointctl fit {}` (smoothing {}, order {}, branches {}, through zero {}).\n{y}", a.data.display(), opts.smoothing_window, a.order, opts.branches, opts.through_zero),
         Err(e) => return crate::fail_err(e),
     };

@@ -6,6 +6,12 @@ use super::*;
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ArmConfig {
+    /// The file's format ([`crate::FORMAT_VERSION`], 1 today). A file from a newer jointctl is
+    /// refused with the reason instead of being read with this one's meanings; without it, the
+    /// file is read as format 1.
+    #[serde(default)]
+    #[schemars(range(min = 1, max = 1))]
+    pub version: Option<u64>,
     /// Arm name: letters, digits, `_` and `-` (at most 32). Shared-memory service names are
     /// derived from it (`<arm>/joint_state`, `<arm>/diagnostics`).
     pub arm: String,
