@@ -496,3 +496,16 @@ fn socketcan() -> jointctl_hal_conformance::Subject {
 }
 
 jointctl_hal_conformance::hal_conformance_tests!(socketcan, #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]);
+
+/// Issue 37, finding 7: `jointctl doctor`'s CAN check on a real (virtual) interface. Pass: vcan0,
+/// up, is ok (its bitrate is not compared: a virtual interface has none); a name no interface
+/// has fails.
+#[test]
+#[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
+fn doctor_finds_vcan0_up() {
+    require_vcan();
+    let up = jointctl_runtime::doctor::can_interface("vcan0", 1_000_000);
+    assert_eq!(up.status, jointctl_runtime::doctor::Status::Ok, "{up:?}");
+    assert!(up.found.starts_with("up ("), "{up:?}");
+    assert_eq!(jointctl_runtime::doctor::can_interface("vcan9", 1_000_000).status, jointctl_runtime::doctor::Status::Fail);
+}

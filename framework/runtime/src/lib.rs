@@ -7,6 +7,7 @@
 
 pub mod arm;
 pub mod commands;
+pub mod doctor;
 pub mod guard;
 pub mod joint;
 pub mod loader;

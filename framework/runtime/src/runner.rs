@@ -585,6 +585,11 @@ impl Drop for ArmPublisher {
 
 /// Applies the timing settings that need privileges; says what it could not do.
 fn apply_thread_settings(timing: &TimingConfig) {
+    if timing.lock_memory
+        && let Err(e) = crate::doctor::lock_all_memory()
+    {
+        tracing::warn!("could not lock the runtime's memory (timing.lock_memory): {e}; page faults can stall the loop. Raise the memlock limit of this user (limits.conf `memlock unlimited`, or LimitMEMLOCK=infinity); `jointctl doctor` checks it");
+    }
     if let Some(cpu) = timing.cpu {
         // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < 1024.
         let ok = unsafe {

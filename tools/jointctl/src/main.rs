@@ -14,6 +14,7 @@ macro_rules! outln {
 
 mod bridge;
 mod cmd;
+mod doctor;
 mod experiment;
 mod gravity;
 mod ident;
@@ -88,6 +89,10 @@ enum Command {
     /// Gravity torques of a pose from the arm's URDF (appendix C): what each joint must apply
     /// to hold it.
     Gravity(gravity::GravityArgs),
+    /// Is this machine fit to run the arm? Real-time kernel, memory lock, SCHED_FIFO at the
+    /// configured priority, the loop's CPU, the config's CAN interfaces up at their bitrate, and a
+    /// short 1 kHz loop's lateness, each with what to do (exit 1 when the arm cannot run here).
+    Doctor(doctor::DoctorArgs),
     /// Read a running arm's shared memory from this separate process.
     Inspect {
         #[command(subcommand)]
@@ -308,5 +313,6 @@ fn main() -> ExitCode {
         Command::Experiment { command } => experiment::experiment(command),
         Command::Sim { command } => experiment::sim(command),
         Command::Gravity(args) => gravity::run(args),
+        Command::Doctor(args) => doctor::doctor(&args),
     }
 }

@@ -95,6 +95,11 @@ pub struct TimingConfig {
     pub realtime_priority: Option<u8>,
     /// Pin the loop thread to this CPU.
     pub cpu: Option<usize>,
+    /// Lock the runtime's memory (`mlockall`) before the loop starts, so that no page fault
+    /// stalls a cycle; a refusal (the memlock limit) is a warning that says how to allow it.
+    /// Default off: the simulated arm on a laptop does not need it (`jointctl doctor` says
+    /// whether this machine permits it).
+    pub lock_memory: bool,
     /// Each joint's default time budget for its plugin's observe and control calls in one
     /// cycle, as a fraction of the period (a joint's own `budget_us` overrides it). A joint over
     /// budget is faulted and held and its plugin is not called again, so one stalling plugin
@@ -118,7 +123,7 @@ pub struct TimingConfig {
 
 impl Default for TimingConfig {
     fn default() -> Self {
-        TimingConfig { spin_us: 200, realtime_priority: None, cpu: None, joint_budget_fraction: 0.5, joint_stall_floor_us: 5000, joint_budget_strikes: 3 }
+        TimingConfig { spin_us: 200, realtime_priority: None, cpu: None, lock_memory: false, joint_budget_fraction: 0.5, joint_stall_floor_us: 5000, joint_budget_strikes: 3 }
     }
 }
 
