@@ -273,3 +273,63 @@ fn an_implausible_encoder_jump_never_reaches_the_state() {
     let e0 = arm.device_names().position(|n| n == "e0").unwrap();
     assert!(health[e0].implausible >= 10, "{:?}", health[e0]);
 }
+
+/// A simulated arm that records what the runtime asks its HAL to stop with, and can panic in a
+/// write (a bug of the runtime's own, unwinding through the loop).
+struct StopRecorder {
+    inner: jointctl_sim::SimHal,
+    stops: std::sync::Arc<std::sync::Mutex<Vec<Vec<jointctl_config::StopStep>>>>,
+    panic_at_write: Option<u64>,
+    writes: u64,
+}
+
+impl jointctl_hal::Hal for StopRecorder {
+    fn read(&mut self, frame: &mut jointctl_hal::SensorFrame) -> Result<(), jointctl_hal::HalIoError> {
+        self.inner.read(frame)
+    }
+    fn write(&mut self, frame: &jointctl_hal::ActuatorFrame, dt_s: f64) -> Result<(), jointctl_hal::HalIoError> {
+        self.writes += 1;
+        if self.panic_at_write == Some(self.writes) {
+            panic!("deliberate panic in the HAL's write {}", self.writes);
+        }
+        self.inner.write(frame, dt_s)
+    }
+    fn stop(&mut self, sequence: &[jointctl_config::StopStep], _: f64) -> Vec<jointctl_hal::StopStepReport> {
+        self.stops.lock().unwrap().push(sequence.to_vec());
+        Vec::new()
+    }
+}
+
+/// Issue 37, finding 4: stop and shutdown wrote a hold and returned; nothing took the drives
+/// through a stop sequence, and a panic of the runtime itself skipped even the hold. Pass: the
+/// configured `safety.stop_sequence` goes to the HAL exactly once on every path: the loop's end
+/// (cycles, duration), a stop request (a signal or `cmd stop` set it), and a panic unwinding
+/// through the loop; the default is `[quick_stop, pre_operational]`.
+#[test]
+fn the_stop_sequence_runs_once_on_every_path_that_ends_the_runtime() {
+    use jointctl_config::StopStep;
+    let run_with = |yaml_extra: &str, panic_at_write: Option<u64>, stop_first: bool| {
+        let yaml = rig_yaml("stop-sequence", 100.0, "").replace("timing: {spin_us: 100}", &format!("timing: {{spin_us: 100}}\n{yaml_extra}"));
+        let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
+        let stops = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let hal = StopRecorder { inner: jointctl_sim::SimHal::load(&loaded).unwrap(), stops: stops.clone(), panic_at_write, writes: 0 };
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut arm = jointctl_runtime::Arm::build(&loaded, &PluginLoader::new([]), Box::new(hal)).unwrap();
+            arm.activate().unwrap();
+            let stop = jointctl_runtime::signals::StopRequest::manual();
+            if stop_first {
+                stop.request();
+            }
+            let opts = RunOptions { cycles: Some(20), stop: Some(stop), ..Default::default() };
+            jointctl_runtime::run(&mut arm, &Default::default(), None, &opts).unwrap();
+        }));
+        let stops = stops.lock().unwrap().clone();
+        (outcome.is_ok(), stops)
+    };
+    let default = vec![StopStep::QuickStop, StopStep::PreOperational];
+    assert_eq!(run_with("", None, false), (true, vec![default.clone()]), "the loop's end");
+    assert_eq!(run_with("", None, true), (true, vec![default.clone()]), "a stop request");
+    assert_eq!(run_with("", Some(10), false), (false, vec![default]), "a panic of the runtime");
+    let configured = run_with("safety: {stop_sequence: [quick_stop, disable_operation, pre_operational]}", None, false);
+    assert_eq!(configured.1, vec![vec![StopStep::QuickStop, StopStep::DisableOperation, StopStep::PreOperational]]);
+}

@@ -128,6 +128,9 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         }
     }
 
+    if !(0.01..=10.0).contains(&c.safety.stop_step_timeout_s) {
+        err("safety.stop_step_timeout_s".into(), format!("must be in [0.01, 10] s, got {}", crate::short_number(c.safety.stop_step_timeout_s)));
+    }
     let co = &c.hal.canopen;
     if !(1..=127).contains(&co.host_node_id) {
         err("hal.canopen.host_node_id".into(), format!("a CANopen node id is 1-127, got {}", co.host_node_id));

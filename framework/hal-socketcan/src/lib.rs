@@ -18,6 +18,11 @@
 //! every drive's RPDO1 (controlword + target) and one SYNC with its counter. The CiA 402 enable
 //! sequence advances one step per cycle, and only once the drive's actual position is known (the
 //! first target is where the drive is). A faulted drive stays faulted until [`Hal::reset_faults`].
+//!
+//! Stop (blocking, after the loop): [`Hal::stop`] takes every drive through `safety.stop_sequence`
+//! (quick stop, disable operation or voltage, NMT pre-operational), each step's controlword sent
+//! with SYNC and the host's heartbeat until every drive reports the step's state or its timeout
+//! passes.
 
 pub mod netft;
 
@@ -25,13 +30,13 @@ use std::io::ErrorKind;
 use std::time::{Duration, Instant};
 
 use jointctl_api::{DriveAction, DriveReading, Reading};
-use jointctl_config::{ArmConfig, DriveMode};
+use jointctl_config::{ArmConfig, DriveMode, StopStep};
 use socketcan::{CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, SocketOptions, StandardId};
 
 use jointctl_hal::codec::as5048;
 use jointctl_hal::codec::canopen::{self as co, DriveState, Frame};
 use jointctl_hal::condition::{Conditioner, Plausibility, Sample};
-use jointctl_hal::{ActuatorFrame, Hal, HalIoError, HalSetupError, SensorFrame};
+use jointctl_hal::{ActuatorFrame, Hal, HalIoError, HalSetupError, SensorFrame, StopStepReport};
 
 /// Health of one CAN bus.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -70,6 +75,8 @@ struct Drive {
     fresh: Option<(i32, f64)>,
     statusword: Option<u16>,
     last_heartbeat_s: Option<f64>,
+    /// The NMT state in the drive's last heartbeat.
+    nmt_state: Option<u8>,
     heartbeat_timeout_s: f64,
     /// Silent when no heartbeat has come this long after the HAL started [s].
     heartbeat_grace_s: f64,
@@ -191,9 +198,10 @@ impl CanBus {
                 d.statusword = Some(t.statusword);
                 d.health.state = Some(co::state_of(t.statusword));
             }
-        } else if let Some((node, _state)) = co::decode_heartbeat(&f) {
+        } else if let Some((node, state)) = co::decode_heartbeat(&f) {
             if let Some(d) = self.drives.iter_mut().find(|d| d.node == node) {
                 d.last_heartbeat_s = Some(now_s);
+                d.nmt_state = Some(state);
             }
         } else if let Some(e) = co::decode_emcy(&f)
             && let Some(d) = self.drives.iter_mut().find(|d| d.node == e.node)
@@ -232,6 +240,7 @@ impl HardwareHal {
                     fresh: None,
                     statusword: None,
                     last_heartbeat_s: None,
+                    nmt_state: None,
                     heartbeat_timeout_s: co_cfg.heartbeat_timeout_s.unwrap_or(3.0 * d.heartbeat_ms as f64 / 1000.0),
                     heartbeat_grace_s: co_cfg
                         .heartbeat_grace_s
@@ -468,6 +477,34 @@ impl Hal for HardwareHal {
         }
     }
 
+    fn stop(&mut self, sequence: &[StopStep], step_timeout_s: f64) -> Vec<StopStepReport> {
+        let mut reports = Vec::with_capacity(sequence.len());
+        for &step in sequence {
+            let deadline = Instant::now() + Duration::from_secs_f64(step_timeout_s.max(0.0));
+            if step == StopStep::PreOperational {
+                for bus in &mut self.buses {
+                    bus.send(&co::nmt(co::NmtCommand::PreOperational, 0));
+                }
+            }
+            let pending = loop {
+                self.stop_exchange(step);
+                std::thread::sleep(Duration::from_millis(5));
+                let now = self.t0.elapsed().as_secs_f64();
+                for bus in &mut self.buses {
+                    while let Ok(f) = bus.socket.read_frame() {
+                        bus.handle(&f, now);
+                    }
+                }
+                let pending: Vec<String> = self.buses.iter().flat_map(|b| &b.drives).filter(|d| !d.reached(step)).map(|d| d.name.clone()).collect();
+                if pending.is_empty() || Instant::now() >= deadline {
+                    break pending;
+                }
+            };
+            reports.push(StopStepReport { step, pending });
+        }
+        reports
+    }
+
     fn reset_faults(&mut self) {
         for bus in &mut self.buses {
             for d in &mut bus.drives {
@@ -477,7 +514,48 @@ impl Hal for HardwareHal {
     }
 }
 
+impl HardwareHal {
+    /// One exchange of a stop step: its controlword to every drive (a drive step), a SYNC so
+    /// that the drives answer with their statusword, and the host's heartbeat, so that no drive
+    /// takes the sequence's pauses for a dead host.
+    fn stop_exchange(&mut self, step: StopStep) {
+        let controlword = match step {
+            StopStep::QuickStop => Some(co::controlword::QUICK_STOP),
+            StopStep::DisableOperation => Some(co::controlword::SWITCH_ON),
+            StopStep::DisableVoltage => Some(co::controlword::DISABLE_VOLTAGE),
+            StopStep::PreOperational => None,
+        };
+        for bus in &mut self.buses {
+            if let Some(cw) = controlword {
+                for i in 0..bus.drives.len() {
+                    let (node, target) = (bus.drives[i].node, bus.drives[i].target_counts.unwrap_or(0));
+                    bus.send(&co::rpdo1(node, cw, target));
+                }
+                let counter = (bus.sync_overflow > 1).then(|| {
+                    bus.sync_counter = if bus.sync_counter >= bus.sync_overflow { 1 } else { bus.sync_counter + 1 };
+                    bus.sync_counter
+                });
+                bus.send(&co::sync(counter));
+            }
+            bus.send(&co::heartbeat(self.host_node_id, co::nmt_state::OPERATIONAL));
+        }
+    }
+}
+
 impl Drive {
+    /// Whether the drive reports the state a stop step leads to.
+    fn reached(&self, step: StopStep) -> bool {
+        let state = self.health.state;
+        match step {
+            // A quick stop ends in "quick stop active", or in "switch on disabled" where the
+            // drive's quick-stop option code (0x605A) says so.
+            StopStep::QuickStop => matches!(state, Some(DriveState::QuickStopActive | DriveState::SwitchOnDisabled)),
+            StopStep::DisableOperation => matches!(state, Some(DriveState::SwitchedOn | DriveState::ReadyToSwitchOn | DriveState::SwitchOnDisabled)),
+            StopStep::DisableVoltage => state == Some(DriveState::SwitchOnDisabled),
+            StopStep::PreOperational => self.nmt_state == Some(co::nmt_state::PRE_OPERATIONAL),
+        }
+    }
+
     /// No heartbeat within its timeout of the last one, or, when none has come yet, within the
     /// grace time of the HAL's start (`now_s` counts from it).
     fn is_silent(&self, now_s: f64) -> bool {

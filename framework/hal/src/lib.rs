@@ -162,6 +162,24 @@ pub trait Hal: Send {
     /// sensors, in [`DeviceIndex`] order.
     /// Called every cycle: must not allocate. Default: nothing to report.
     fn device_health(&self, _out: &mut [DeviceHealth]) {}
+
+    /// Takes every drive through `sequence` (`safety.stop_sequence`) when the runtime stops,
+    /// after the last hold was written: blocking, outside the loop, each step waiting up to
+    /// `step_timeout_s` for every drive to report it. Returns what each step reached. Default:
+    /// nothing (a backend without drive states, such as the simulated one, where the last hold
+    /// is the stop).
+    fn stop(&mut self, _sequence: &[jointctl_config::StopStep], _step_timeout_s: f64) -> Vec<StopStepReport> {
+        Vec::new()
+    }
+}
+
+/// What one step of the stop sequence reached.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StopStepReport {
+    /// The step.
+    pub step: jointctl_config::StopStep,
+    /// The drives that did not report the step's state within the timeout (empty: all did).
+    pub pending: Vec<String>,
 }
 
 /// Health of one device, published in diagnostics.

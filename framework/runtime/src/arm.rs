@@ -231,6 +231,19 @@ pub struct Arm {
     gravity: Option<ArmGravity>,
     /// The last check of every motor set-point before the HAL.
     guard: crate::guard::SetpointGuard,
+    /// `safety.stop_sequence` and its step timeout [s].
+    stop_sequence: Vec<jointctl_config::StopStep>,
+    stop_step_timeout_s: f64,
+    /// [`Arm::shutdown`] ran: the drives are stopped and the plugins deactivated.
+    shut_down: bool,
+}
+
+/// An arm dropped without [`Arm::shutdown`] (a panic of the runtime unwinding through it, an
+/// early return) still holds its drives and runs the stop sequence.
+impl Drop for Arm {
+    fn drop(&mut self) {
+        self.shutdown();
+    }
 }
 
 /// The arm's gravity model and the buffers that keep its cycle allocation-free.
@@ -476,6 +489,9 @@ impl Arm {
             config_path: std::fs::canonicalize(&src.file).ok(),
             gravity,
             guard: crate::guard::SetpointGuard::new(cfg),
+            stop_sequence: cfg.safety.stop_sequence.clone(),
+            stop_step_timeout_s: cfg.safety.stop_step_timeout_s,
+            shut_down: false,
         })
     }
 
@@ -670,10 +686,22 @@ impl Arm {
 
     /// Holds every drive and tells every plugin the loop stopped.
     pub fn shutdown(&mut self) {
+        if self.shut_down {
+            return;
+        }
+        self.shut_down = true;
         for sp in &mut self.actuator.drives {
             *sp = MotorSetpoint::HOLD;
         }
         let _ = self.hal.write(&self.actuator, self.dt_s);
+        // The configured stop sequence, the same on every path that ends the runtime.
+        for report in self.hal.stop(&self.stop_sequence, self.stop_step_timeout_s) {
+            if report.pending.is_empty() {
+                tracing::info!(step = ?report.step, "stop sequence: every drive reached it");
+            } else {
+                tracing::error!(step = ?report.step, "stop sequence: {} did not report it within {} s", report.pending.join(", "), self.stop_step_timeout_s);
+            }
+        }
         for slot in &mut self.slots {
             slot.joint.deactivate();
         }

@@ -56,12 +56,40 @@ pub struct SafetyConfig {
     /// holds the joint with a fault naming the plugin, the drive and the value. Default on; off
     /// only to show what the drives' own limits do (a test of the drives, never an arm in use).
     pub check_setpoints: bool,
+    /// What every drive is told, in order, when the runtime stops, whatever stopped it (`cmd
+    /// stop`, SIGINT/SIGTERM, the end of `--duration`, an error after start, a panic of the
+    /// runtime), after the last hold is written. Default `[quick_stop, pre_operational]`: the
+    /// drives decelerate and hold where they are, powered (an arm without brakes does not fall),
+    /// and stop taking PDOs. `disable_operation` (the motor unpowered, brakes where fitted)
+    /// belongs only on an arm whose brakes hold it. The simulated backend has no drive states:
+    /// there the last hold is the stop.
+    pub stop_sequence: Vec<StopStep>,
+    /// How long each step waits for every drive to report its state [s]; a drive that does not
+    /// is named in the log. Assumption: 0.5 s, several heartbeats and SYNC periods.
+    #[serde(deserialize_with = "finite")]
+    #[schemars(range(min = 0.01, max = 10.0))]
+    pub stop_step_timeout_s: f64,
 }
 
 impl Default for SafetyConfig {
     fn default() -> Self {
-        SafetyConfig { check_setpoints: true }
+        SafetyConfig { check_setpoints: true, stop_sequence: vec![StopStep::QuickStop, StopStep::PreOperational], stop_step_timeout_s: 0.5 }
     }
+}
+
+/// One step of the stop sequence (CiA 402 controlwords, CiA 301 NMT).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum StopStep {
+    /// Quick stop (controlword 0x0002): decelerate on the quick-stop ramp (0x6085) and hold.
+    QuickStop,
+    /// Disable operation (0x0007): the motor unpowered in "switched on"; brakes engage where
+    /// fitted. Without brakes, a loaded joint falls.
+    DisableOperation,
+    /// Disable voltage (0x0000): "switch on disabled". Without brakes, a loaded joint falls.
+    DisableVoltage,
+    /// NMT pre-operational: the drive stops taking and sending PDOs.
+    PreOperational,
 }
 
 /// The arm's kinematic and inertial description (appendix C).

@@ -91,6 +91,8 @@ pub mod controlword {
     pub const ENABLE_OPERATION: u16 = 0x000F;
     /// Disable voltage: → switch on disabled.
     pub const DISABLE_VOLTAGE: u16 = 0x0000;
+    /// Quick stop (enable voltage set, quick stop bit clear): → quick stop active.
+    pub const QUICK_STOP: u16 = 0x0002;
     /// Fault reset (on the rising edge of bit 7).
     pub const FAULT_RESET: u16 = 0x0080;
     /// Profile position: new set-point (bit 4).
