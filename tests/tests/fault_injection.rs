@@ -43,7 +43,8 @@ fn arm_with_faulty_and(rate_hz: f64, params: &str, edits: &[jointctl_tests::Edit
 /// in a cycle to a drive allowed 5 rad/s (0.05 rad a cycle at 100 Hz), is held in that same
 /// cycle (its set-point is a hold, the drive never moves there), faulted with SETPOINT_REJECTED,
 /// named in the fault's reason with the drive and the value, and counted once; the other joint
-/// goes on. With the check off (`safety.check_setpoints: false`) the set-point reaches the drive.
+/// goes on. With the check off (`safety.check_setpoints: false`) the set-point reaches the drive,
+/// and the simulated drive, told the window as its software position limits, stops at 1.5 rad.
 #[test]
 fn a_set_point_outside_its_drives_window_or_rate_is_held_and_named_in_the_same_cycle() {
     use jointctl_tests::Edit;
@@ -69,7 +70,9 @@ fn a_set_point_outside_its_drives_window_or_rate_is_held_and_named_in_the_same_c
         assert!((arm.last_readings().drives[1].position_rad.value - 0.3).abs() < 0.01, "the drive stayed: {:?}", arm.last_readings().drives[1]);
         assert!((arm.states[0].position().unwrap() - 0.3).abs() < 5e-3, "the other joint went on: {:?}", arm.states[0]);
     }
-    // The check off: the same plugin moves the drive to 2 rad.
+    // The host's check off: the set-point of 2 rad reaches the drive, and the drive (told the
+    // same window as its software position limits, 0x607D) stops at 1.5 rad (issue 37, finding
+    // 2: with nothing below the host, it went to 2).
     let off = [
         Edit::Set("buses.can[0].drives[m1].setpoint_window_rad", serde_yaml::from_str("[-1.5, 1.5]").unwrap()),
         Edit::Set("safety", serde_yaml::from_str("{check_setpoints: false}").unwrap()),
@@ -78,6 +81,9 @@ fn a_set_point_outside_its_drives_window_or_rate_is_held_and_named_in_the_same_c
     arm.set_mode(1, position(0.3));
     step_100hz(&mut arm, 0..151);
     assert_eq!((arm.slots[1].fault, arm.last_setpoints()[1]), (0, MotorSetpoint::move_to(2.0)));
+    step_100hz(&mut arm, 151..400);
+    let reached = arm.last_readings().drives[1].position_rad.value;
+    assert!((reached - 1.5).abs() < 0.01, "the drive stopped at its limit: {reached} rad");
 }
 
 /// Finding: a plugin that stalls froze every joint and was never faulted (30 ms stalls gave

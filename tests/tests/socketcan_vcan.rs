@@ -59,6 +59,9 @@ struct SimNode {
     /// The drive produces its heartbeat (a drive whose producer is broken or off answers
     /// everything else but never sends one).
     heartbeats: Arc<AtomicBool>,
+    /// An object index the drive stores one more than it is given (a drive that rounds or
+    /// clamps a limit); 0: none.
+    misstore: Arc<AtomicU32>,
     /// Every expedited SDO write received: (index, sub, data).
     sdo_log: Arc<Mutex<Vec<(u16, u8, u32)>>>,
     /// The last statusword.
@@ -76,13 +79,14 @@ impl SimNode {
         let stop = Arc::new(AtomicBool::new(false));
         let fault = Arc::new(AtomicBool::new(false));
         let heartbeats = Arc::new(AtomicBool::new(true));
+        let misstore = Arc::new(AtomicU32::new(0));
         let drop_per_mille = Arc::new(AtomicU32::new(0));
         let zero_per_mille = Arc::new(AtomicU32::new(0));
         let truth = Arc::new(Mutex::new(Vec::new()));
         let sdo_log = Arc::new(Mutex::new(Vec::new()));
         let status = Arc::new(AtomicU32::new(0));
         let (s, f, d, z, t) = (stop.clone(), fault.clone(), drop_per_mille.clone(), zero_per_mille.clone(), truth.clone());
-        let (log, sw, beats) = (sdo_log.clone(), status.clone(), heartbeats.clone());
+        let (log, sw, beats, wrong) = (sdo_log.clone(), status.clone(), heartbeats.clone(), misstore.clone());
         let thread = std::thread::spawn(move || {
             let sock = CanSocket::open("vcan0").unwrap();
             sock.set_read_timeout(Duration::from_millis(2)).unwrap();
@@ -97,6 +101,8 @@ impl SimNode {
             // (producer node, consumer time) from 0x1016:01, and when the producer was last heard.
             let mut consumer: Option<(u8, Duration)> = None;
             let mut host_heard: Option<Instant> = None;
+            // The object dictionary as written: what an upload reads back.
+            let mut objects = std::collections::HashMap::<(u16, u8), u32>::new();
             let mut last_move = Instant::now();
             let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d ^ node as u64);
             let mut roll = || (rng.next_u64() % 1000) as u32;
@@ -146,8 +152,23 @@ impl SimNode {
                 {
                     host_heard = Some(Instant::now());
                 } else if let Some((n, cmd, index, sub, data)) = co::decode_sdo_request(&frame) {
-                    if n == node && cmd & 0xE0 == 0x20 {
+                    if n == node && cmd == 0x40 {
+                        let i = index.to_le_bytes();
+                        let reply = match objects.get(&(index, sub)) {
+                            Some(v) => {
+                                let b = v.to_le_bytes();
+                                [0x43, i[0], i[1], sub, b[0], b[1], b[2], b[3]]
+                            }
+                            // Abort: the object does not exist (CiA 301 0x06020000).
+                            None => [0x80, i[0], i[1], sub, 0x00, 0x00, 0x02, 0x06],
+                        };
+                        send(&sock, &Frame::new(co::cob::SDO_TX + node as u16, &reply));
+                    } else if n == node && cmd & 0xE0 == 0x20 {
                         log.lock().unwrap().push((index, sub, data));
+                        let len = 4 - ((cmd >> 2) & 0x3);
+                        let mask = if len == 4 { u32::MAX } else { (1u32 << (8 * len)) - 1 };
+                        let stored = if u32::from(index) == wrong.load(Ordering::Relaxed) { (data & mask).wrapping_add(1) } else { data & mask };
+                        objects.insert((index, sub), stored);
                         match (index, sub) {
                             (0x6060, 0) => profile_mode = data & 0xFF == 1,
                             (0x6007, 0) => abort_option = (data & 0xFFFF) as u16 as i16,
@@ -194,7 +215,7 @@ impl SimNode {
                 }
             }
         });
-        SimNode { stop, fault, heartbeats, sdo_log, statusword: status, drop_per_mille, zero_per_mille, truth, thread: Some(thread) }
+        SimNode { stop, fault, heartbeats, misstore, sdo_log, statusword: status, drop_per_mille, zero_per_mille, truth, thread: Some(thread) }
     }
 }
 
@@ -548,4 +569,42 @@ fn the_stop_sequence_goes_to_the_drives_frame_by_frame() {
     sent.dedup();
     assert_eq!(sent, ["cw 0x0002", "cw 0x0007", "nmt 0x80 0"], "frames: {sent:?}");
     assert_eq!(co::state_of(node.statusword.load(Ordering::Relaxed) as u16), DriveState::SwitchedOn);
+}
+
+/// Issue 37, finding 2: the drives were not told their limits at start-up, so nothing below the
+/// host caught a bad set-point. Pass: a drive with a set-point window of [-1.5, 2] rad and every
+/// limit of `limits` gets each object written (0x607D:01/02, 0x607F, 0x6072, 0x6065, 0x6066,
+/// 0x6085, in counts at 1000 counts/rad) and read back before NMT start; a drive that holds
+/// another value than written (here 0x607F, one count more) is a start-up error naming the
+/// object and both values.
+#[test]
+#[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
+fn the_drives_limits_are_written_and_read_back_at_start_up() {
+    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
+    require_vcan();
+    let with_limits = |node: u8| {
+        let mut cfg = config(node);
+        let d = &mut cfg.buses.can[0].drives[0];
+        d.setpoint_window_rad = Some([-1.5, 2.0]);
+        d.limits = jointctl_config::DriveLimitsConfig {
+            max_profile_velocity_rad_s: Some(3.0),
+            max_torque_permille: Some(800),
+            following_error_window_rad: Some(0.05),
+            following_error_timeout_ms: Some(20),
+            quick_stop_deceleration_rad_s2: Some(30.0),
+        };
+        cfg
+    };
+    let node = SimNode::start(16);
+    let rig = Rig::with(with_limits(16));
+    let log = node.sdo_log.lock().unwrap().clone();
+    for expected in [(0x607D, 1, (-1500i32) as u32), (0x607D, 2, 2000), (0x607F, 0, 3000), (0x6072, 0, 800), (0x6065, 0, 50), (0x6066, 0, 20), (0x6085, 0, 30000)] {
+        assert!(log.iter().any(|(i, s, v)| (*i, *s) == (expected.0, expected.1) && *v == expected.2), "{expected:x?} not written: {log:x?}");
+    }
+    drop((rig, node));
+    let node = SimNode::start(17);
+    node.misstore.store(0x607F, Ordering::Relaxed);
+    let err = HardwareHal::new(&with_limits(17)).map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("0x607f:00 = 3001 after 3000 was written"), "{err}");
+    assert!(err.contains("limits.max_profile_velocity_rad_s"), "{err}");
 }

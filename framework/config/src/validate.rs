@@ -177,6 +177,23 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             {
                 err(format!("{path}.setpoint_window_rad"), format!("lower end {} must be below upper end {}", crate::short_number(lo), crate::short_number(hi)));
             }
+            for (name, value) in [
+                ("max_profile_velocity_rad_s", d.limits.max_profile_velocity_rad_s),
+                ("following_error_window_rad", d.limits.following_error_window_rad),
+                ("quick_stop_deceleration_rad_s2", d.limits.quick_stop_deceleration_rad_s2),
+            ] {
+                // In counts, each must fit the object's 32 bits.
+                if let Some(v) = value
+                    && !(v > 0.0 && v * d.counts_per_rad <= f64::from(u32::MAX))
+                {
+                    err(format!("{path}.limits.{name}"), format!("must be > 0 and at most {} in counts, got {}", u32::MAX, crate::short_number(v)));
+                }
+            }
+            if let Some(p) = d.limits.max_torque_permille
+                && p == 0
+            {
+                err(format!("{path}.limits.max_torque_permille"), "must be > 0 (0 allows no torque)".into());
+            }
             if let Some(r) = d.max_setpoint_rate_rad_s
                 && !(r > 0.0 && r <= 1000.0)
             {

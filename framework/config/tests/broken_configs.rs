@@ -73,6 +73,9 @@ const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
     ("a file from a newer jointctl", "rate_hz: 40", "version: 2\nrate_hz: 40\nspeed: 3", 2, "version", "format 2 is from a newer jointctl; this one reads formats 1 to 1"),
     ("format 0", "rate_hz: 40", "version: 0\nrate_hz: 40", 2, "version", "there is no format 0"),
     ("a version that is not a number", "rate_hz: 40", "version: one\nrate_hz: 40", 2, "version", "must be the file format's number"),
+    // Issue 37, finding 2: the drive's own limits are checked before they are written to it.
+    ("a drive limit of no torque", "{name: m2, node_id: 2}", "{name: m2, node_id: 2, limits: {max_torque_permille: 0}}", 10, "buses.can[0].drives[1].limits.max_torque_permille", "must be > 0"),
+    ("a set-point window upside down", "{name: m2, node_id: 2}", "{name: m2, node_id: 2, setpoint_window_rad: [1.0, -1.0]}", 10, "buses.can[0].drives[1].setpoint_window_rad", "lower end 1 must be below upper end -1"),
     ("joint time budget beyond the period", "    plugin: elastic\n", "    plugin: elastic\n    budget_us: 30000\n", 25, "joints[1].budget_us", "at most the period (25000 us)"),
 ];
 

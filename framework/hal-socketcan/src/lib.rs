@@ -7,7 +7,10 @@
 //! Start-up (blocking, before the loop): per drive, SDO writes of the mode of operation
 //! (0x6060), the heartbeat producer time (0x1017), SYNC-triggered TPDO1 (0x1800:02 = 1), the
 //! consumer heartbeat of the host (0x1016:01) and what to do when it stops (0x6007, abort
-//! connection option: quick stop by default); then NMT start. So a host that stalls or dies
+//! connection option: quick stop by default) and the drive's own limits of the config (software
+//! position limits 0x607D, max profile velocity 0x607F, max torque 0x6072, following error
+//! window and time out 0x6065/0x6066, quick stop deceleration 0x6085), each read back; then NMT
+//! start. So a host that stalls or dies
 //! cannot leave a drive moving: the drive stops on its own after `comm_loss_timeout_ms`. The
 //! write step sends the host's heartbeat every `host_heartbeat_ms`.
 //!
@@ -178,6 +181,88 @@ impl CanBus {
         })
     }
 
+    /// Blocking SDO read of an expedited value with a timeout (start-up only).
+    fn sdo_read(&mut self, d: usize, index: u16, sub: u8, timeout: Duration) -> Result<u32, HalSetupError> {
+        let node = self.drives[d].node;
+        let name = self.drives[d].name.clone();
+        let field = format!("buses.can[{}].drives[{d}]", self.index);
+        let req = co::sdo_read(node, index, sub);
+        let cf = to_socketcan(&req).ok_or_else(|| HalSetupError::Config { field: field.clone(), message: "bad SDO frame".into() })?;
+        self.socket.write_frame(&cf).map_err(|e| HalSetupError::Config { field: field.clone(), message: format!("cannot send on {}: {e}", self.interface) })?;
+        let deadline = Instant::now() + timeout;
+        while Instant::now() < deadline {
+            match self.socket.read_frame_timeout(deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1))) {
+                Ok(frame) => match from_socketcan(&frame).and_then(|f| co::decode_sdo_response(&f)) {
+                    Some(co::SdoResponse::Value { node: n, index: i, sub: s, value, .. }) if n == node && i == index && s == sub => return Ok(value),
+                    Some(co::SdoResponse::Abort { node: n, index: i, sub: s, code }) if n == node && i == index && s == sub => {
+                        return Err(HalSetupError::Config {
+                            field,
+                            message: format!("drive `{name}` (node {node} on {}) refused SDO read {index:#06x}:{sub:02x} (abort code {code:#010x})", self.interface),
+                        });
+                    }
+                    _ => {}
+                },
+                Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::TimedOut => {}
+                Err(e) => return Err(HalSetupError::Config { field, message: format!("cannot read from {}: {e}", self.interface) }),
+            }
+        }
+        Err(HalSetupError::Config {
+            field,
+            message: format!("drive `{name}` (node {node} on {}) did not answer SDO read {index:#06x}:{sub:02x} within {:.0} ms", self.interface, timeout.as_secs_f64() * 1e3),
+        })
+    }
+
+    /// Writes a limit and reads it back: a drive that holds another value (out of its range,
+    /// rounded, write-protected) is a start-up error naming the object and both values.
+    fn write_limit(&mut self, d: usize, index: u16, sub: u8, value: &[u8], what: &str, timeout: Duration) -> Result<(), HalSetupError> {
+        self.sdo_write(d, index, sub, value, timeout)?;
+        let held = self.sdo_read(d, index, sub, timeout)?;
+        let mut bytes = [0u8; 4];
+        bytes[..value.len().min(4)].copy_from_slice(&value[..value.len().min(4)]);
+        let wanted = u32::from_le_bytes(bytes);
+        let mask = if value.len() >= 4 { u32::MAX } else { (1u32 << (8 * value.len())) - 1 };
+        if held & mask != wanted {
+            return Err(HalSetupError::Config {
+                field: format!("buses.can[{}].drives[{d}].{what}", self.index),
+                message: format!(
+                    "drive `{}` (node {} on {}) holds {index:#06x}:{sub:02x} = {} after {wanted} was written to it: check the drive's range for this object",
+                    self.drives[d].name,
+                    self.drives[d].node,
+                    self.interface,
+                    held & mask
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The drive's own limits of the config, each written and read back.
+    fn write_limits(&mut self, d: usize, drive: &jointctl_config::DriveConfig, timeout: Duration) -> Result<(), HalSetupError> {
+        let counts = |rad: f64| (rad * drive.counts_per_rad).round();
+        if let Some([lo, hi]) = drive.setpoint_window_rad {
+            self.write_limit(d, 0x607D, 1, &(counts(lo) as i32).to_le_bytes(), "setpoint_window_rad", timeout)?;
+            self.write_limit(d, 0x607D, 2, &(counts(hi) as i32).to_le_bytes(), "setpoint_window_rad", timeout)?;
+        }
+        let l = drive.limits;
+        let unsigned = [
+            (l.max_profile_velocity_rad_s, 0x607F, "limits.max_profile_velocity_rad_s"),
+            (l.following_error_window_rad, 0x6065, "limits.following_error_window_rad"),
+            (l.quick_stop_deceleration_rad_s2, 0x6085, "limits.quick_stop_deceleration_rad_s2"),
+        ];
+        for (value, index, what) in unsigned {
+            if let Some(v) = value {
+                self.write_limit(d, index, 0, &(counts(v) as u32).to_le_bytes(), what, timeout)?;
+            }
+        }
+        if let Some(p) = l.max_torque_permille {
+            self.write_limit(d, 0x6072, 0, &p.to_le_bytes(), "limits.max_torque_permille", timeout)?;
+        }
+        if let Some(ms) = l.following_error_timeout_ms {
+            self.write_limit(d, 0x6066, 0, &ms.to_le_bytes(), "limits.following_error_timeout_ms", timeout)?;
+        }
+        Ok(())
+    }
+
     fn handle(&mut self, frame: &CanFrame, now_s: f64) {
         if let CanFrame::Error(e) = frame {
             self.health.error_frames += 1;
@@ -261,6 +346,7 @@ impl HardwareHal {
                 let consumer = (u32::from(co_cfg.host_node_id) << 16) | u32::from(co_cfg.comm_loss_timeout_ms);
                 can.sdo_write(i, 0x1016, 1, &consumer.to_le_bytes(), timeout)?;
                 can.sdo_write(i, 0x6007, 0, &co_cfg.on_comm_loss.code().to_le_bytes(), timeout)?;
+                can.write_limits(i, d, timeout)?;
             }
             can.send(&co::nmt(co::NmtCommand::Start, 0));
             can.socket.set_nonblocking(true).map_err(|e| HalSetupError::Config { field, message: format!("cannot make the socket non-blocking: {e}") })?;

@@ -72,12 +72,20 @@ pub struct ElmoDrive {
     pub velocity: f64,
     /// Torque the drive applied in the last step [Nm].
     pub torque: f64,
+    /// Software position limits (0x607D) [rad]: a target outside is held at the nearer limit,
+    /// as a CiA 402 drive does (the config's `setpoint_window_rad`).
+    pub position_limits_rad: Option<[f64; 2]>,
 }
 
 impl ElmoDrive {
     /// A drive at rest at `position`, holding it.
     pub fn new(cfg: ElmoConfig, position: f64) -> Self {
-        ElmoDrive { cfg, profile: Profile { position, velocity: 0.0 }, target: position, integral: 0.0, position, velocity: 0.0, torque: 0.0 }
+        ElmoDrive { cfg, profile: Profile { position, velocity: 0.0 }, target: position, integral: 0.0, position, velocity: 0.0, torque: 0.0, position_limits_rad: None }
+    }
+
+    /// The drive with software position limits [rad] (`None`: none).
+    pub fn with_position_limits(self, position_limits_rad: Option<[f64; 2]>) -> Self {
+        ElmoDrive { position_limits_rad, ..self }
     }
 
     /// The drive's settings.
@@ -88,7 +96,10 @@ impl ElmoDrive {
     /// A new set-point (the ELMO replans its profile from where the profile is).
     pub fn set_target(&mut self, target: f64) {
         if target.is_finite() {
-            self.target = target;
+            self.target = match self.position_limits_rad {
+                Some([lo, hi]) => target.clamp(lo, hi),
+                None => target,
+            };
         }
     }
 

@@ -213,7 +213,12 @@ impl SimHal {
             }
             (elmo[d].kp, elmo[d].ki, elmo[d].kd) = (g.kp, g.ki, g.kd);
         }
-        let drives: Vec<ElmoDrive> = elmo.iter().map(|e| ElmoDrive::new(*e, 0.0)).collect();
+        // Each drive keeps its target inside its software position limits, as told at start-up.
+        let drives: Vec<ElmoDrive> = elmo
+            .iter()
+            .zip(&drive_cfgs)
+            .map(|(e, c)| ElmoDrive::new(*e, 0.0).with_position_limits(c.setpoint_window_rad))
+            .collect();
 
         let mut units = Vec::new();
         let mut unit_joint = Vec::new();
@@ -619,7 +624,7 @@ impl SimHal {
     pub fn start_at(&mut self, positions: &[Option<f64>]) {
         for (d, p) in self.drives.iter_mut().zip(positions) {
             if let Some(p) = p.filter(|p| p.is_finite()) {
-                *d = ElmoDrive::new(d.config(), p);
+                *d = ElmoDrive::new(d.config(), p).with_position_limits(d.position_limits_rad);
             }
         }
         for (i, d) in self.drives.iter().enumerate() {

@@ -123,8 +123,10 @@ pub struct DriveConfig {
     /// Motor positions a set-point may name [rad], as the drive reports them (`[low, high]`).
     /// The runtime checks every set-point a plugin writes against it before the HAL sees it: one
     /// outside holds the joint with a fault that names the plugin, the drive and the value (with
-    /// `safety.check_setpoints`). None: unchecked, since the motor's range follows from the
-    /// joint's transmission, which only the plugin knows.
+    /// `safety.check_setpoints`). The drive is told it too, as its software position limits
+    /// (0x607D, written and read back at start-up), and the simulated drive keeps its target
+    /// inside it: a second guard below the host's. None: unchecked, since the motor's range
+    /// follows from the joint's transmission, which only the plugin knows.
     #[serde(default, deserialize_with = "finite_pair_opt")]
     pub setpoint_window_rad: Option<[f64; 2]>,
     /// Fastest a set-point may move [rad/s]: from the last one written, or from the drive's
@@ -134,6 +136,35 @@ pub struct DriveConfig {
     #[serde(default, deserialize_with = "finite_opt")]
     #[schemars(range(min = 0.0, max = 1000.0))]
     pub max_setpoint_rate_rad_s: Option<f64>,
+    /// The drive's own limits, written over SDO at start-up and read back (a drive that holds
+    /// another value is a start-up error naming the object and both values). None given: the
+    /// drive keeps its own settings.
+    #[serde(default)]
+    pub limits: DriveLimitsConfig,
+}
+
+/// Limits a CiA 402 drive enforces itself, below the host: what stops a bad set-point when
+/// nothing above does. Each is optional; positions and rates at the gearbox output, converted
+/// with `counts_per_rad`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DriveLimitsConfig {
+    /// Max profile velocity (0x607F) [rad/s].
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub max_profile_velocity_rad_s: Option<f64>,
+    /// Max torque (0x6072) [per mille of the motor's rated torque].
+    #[serde(default)]
+    pub max_torque_permille: Option<u16>,
+    /// Following error window (0x6065) [rad]: a larger error for `following_error_timeout_ms`
+    /// faults the drive.
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub following_error_window_rad: Option<f64>,
+    /// Following error time out (0x6066) [ms].
+    #[serde(default)]
+    pub following_error_timeout_ms: Option<u16>,
+    /// Quick stop deceleration (0x6085) [rad/s^2]: the ramp of `safety.stop_sequence`'s quick stop.
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub quick_stop_deceleration_rad_s2: Option<f64>,
 }
 
 fn default_counts_per_rad() -> f64 {

@@ -28,8 +28,8 @@ struct Params {
     /// Stall by sleeping (blocking) instead of spinning.
     #[serde(default)]
     stall_sleeps: bool,
-    /// Write a move to `wild_setpoint_rad` on this cycle, whatever the command (a plugin bug
-    /// that drives a motor somewhere the joint's limits never allowed).
+    /// Write a move to `wild_setpoint_rad` from this cycle on, whatever the command (a plugin
+    /// bug that drives a motor somewhere the joint's limits never allowed).
     #[serde(default)]
     wild_setpoint_at: Option<u64>,
     /// Where the wild set-point goes [rad].
@@ -78,7 +78,7 @@ impl Controller for Faulty {
         if self.p.panic_in_control_at == Some(self.cycle.saturating_sub(1)) {
             panic!("faulty joint: deliberate panic in control");
         }
-        if self.p.wild_setpoint_at == Some(self.cycle.saturating_sub(1)) {
+        if self.p.wild_setpoint_at.is_some_and(|at| self.cycle.saturating_sub(1) >= at) {
             out[0] = MotorSetpoint::move_to(self.p.wild_setpoint_rad);
             return Ok(());
         }
