@@ -75,6 +75,28 @@ struct Params {
     /// cubic stiffness, offset, scale), observed online (section 6.2); none by default.
     #[serde(default)]
     model_extension: Option<ExtensionSpec>,
+    /// The calibrated zero (`jointctl calibrate`): the readings of the motor side (the input
+    /// encoder, or the drive) and of the output encoder where the element carries no torque.
+    /// With it, the deflection at activation is measured, not taken as zero: an arm that starts
+    /// loaded (under gravity) reads its load. Without it, the element is taken as relaxed at
+    /// activation (what the thesis' set-up did, section 3.4.1).
+    #[serde(default)]
+    zero: Option<Zero>,
+    /// The spring's deflection range [rad], `[low, high]`: a calibrated joint whose deflection at
+    /// activation lies outside refuses to activate (a wrong zero, a broken element). Default: the
+    /// characteristic's `range_rad`; none for a linear stiffness without it.
+    #[serde(default)]
+    deflection_range_rad: Option<[f64; 2]>,
+}
+
+/// A calibrated zero of the deflection.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Zero {
+    /// The motor side's reading at zero deflection [rad].
+    input_rad: f64,
+    /// The output encoder's reading at zero deflection [rad].
+    output_rad: f64,
 }
 
 fn default_settle_s() -> f64 {
@@ -156,6 +178,16 @@ impl JointPlugin for ElasticJoint {
         if p.compliance == Compliance::DriveGain && curve.is_some() {
             return Err(PluginError::at("compliance", "`drive_gain` takes a linear `stiffness_nm_per_rad` (the drive's gain at the joint), not a characteristic"));
         }
+        if let Some(z) = p.zero
+            && !(z.input_rad.is_finite() && z.output_rad.is_finite())
+        {
+            return Err(PluginError::at("zero", "input_rad and output_rad must be finite"));
+        }
+        if let Some([lo, hi]) = p.deflection_range_rad
+            && !(lo < hi && lo.is_finite() && hi.is_finite())
+        {
+            return Err(PluginError::at("deflection_range_rad", format!("must be [low, high] with low < high, got [{lo}, {hi}]")));
+        }
         let position = PositionLoop::from_params(p.position_pi)?;
         if p.model_extension.as_ref().is_some_and(|e| !e.by_pivot.is_empty()) {
             return Err(PluginError::at("model_extension.by_pivot", "an elastic joint has one setting: give its terms flat (by_pivot is for joints with pivot settings, the shoulder and the wrist)"));
@@ -191,8 +223,21 @@ impl JointPlugin for ElasticJoint {
         match (q, m, input) {
             (Some(q), Some(m), Some(input)) => {
                 self.transmission = self.transmission.anchored(q, m);
-                self.input_origin = input;
-                self.output_origin = q;
+                // Calibrated: the zero is the calibration's, and the deflection now is measured
+                // (and must lie in the spring's range); otherwise it is taken as zero now.
+                (self.input_origin, self.output_origin) = self.params.zero.map_or((input, q), |z| (z.input_rad, z.output_rad));
+                let range = self.params.deflection_range_rad.or_else(|| self.params.characteristic.as_ref().and_then(|c| c.curves.first()).and_then(|c| c.range_rad));
+                if self.params.zero.is_some()
+                    && let Some([lo, hi]) = range
+                {
+                    let now = self.deflection(q, input);
+                    if !(lo..=hi).contains(&now) {
+                        return Err(PluginError::at(
+                            "zero",
+                            format!("the deflection at activation is {now:.5} rad with the calibrated zero, outside the spring's range [{lo}, {hi}] rad: recalibrate (jointctl calibrate) or check the element"),
+                        ));
+                    }
+                }
                 // The drive holds where it is: its set-point is its position.
                 self.setpoint_rad = m;
                 self.since_change_s = self.params.settle_s;

@@ -13,6 +13,7 @@ macro_rules! outln {
 }
 
 mod bridge;
+mod calibrate;
 mod cmd;
 mod doctor;
 mod experiment;
@@ -93,6 +94,10 @@ enum Command {
     /// configured priority, the loop's CPU, the config's CAN interfaces up at their bitrate, and a
     /// short 1 kHz loop's lateness, each with what to do (exit 1 when the arm cannot run here).
     Doctor(doctor::DoctorArgs),
+    /// Measure each elastic joint's deflection zero with the arm at rest, every element
+    /// unloaded, and write it (`zero:` under the joint's params): a calibrated joint reads its
+    /// load at start and refuses a deflection outside its spring's range.
+    Calibrate(calibrate::CalibrateArgs),
     /// Read a running arm's shared memory from this separate process.
     Inspect {
         #[command(subcommand)]
@@ -314,5 +319,6 @@ fn main() -> ExitCode {
         Command::Sim { command } => experiment::sim(command),
         Command::Gravity(args) => gravity::run(args),
         Command::Doctor(args) => doctor::doctor(&args),
+        Command::Calibrate(args) => calibrate::calibrate(&args),
     }
 }

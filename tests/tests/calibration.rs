@@ -1,0 +1,38 @@
+//! Calibrated zeros (issue 37, finding 5): the elastic plugin took the readings at activation as
+//! zero deflection, so an arm that started loaded read 0 Nm while it carried its load.
+
+use std::process::Command;
+
+use jointctl_runtime::PluginLoader;
+use jointctl_tests::{Edit, arm_name, jointctl, root, sherpa_with};
+
+/// Pass: `jointctl calibrate` writes each elastic joint's zero (q4, q5) in a file of this format;
+/// q4 given a zero whose motor side is 0.01 rad from where the drive starts reads that
+/// deflection (eq. 3.1's 2:1, 0.02 rad, 2.3 Nm on the fitted line) at activation, where
+/// without a zero it read 0; a zero 0.5 rad off puts the deflection outside the spring's range
+/// (the characteristic's range_rad) and activation is refused naming it.
+#[test]
+fn a_calibrated_joint_reads_its_deflection_at_start_and_refuses_one_outside_its_range() {
+    let out = Command::new(jointctl()).arg("calibrate").arg(root().join("configs/sherpa_arm.yaml")).args(["--cycles", "20"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let written: serde_yaml::Value = serde_yaml::from_slice(&out.stdout).unwrap();
+    assert_eq!(written["version"].as_u64(), Some(jointctl_config::FORMAT_VERSION));
+    for joint in ["q4", "q5"] {
+        assert!(written["joints"][joint]["zero"]["input_rad"].as_f64().is_some(), "{joint}: {written:?}");
+    }
+    let q4_torque_at_start = |test: &str, zero: Option<&str>| {
+        let edits: Vec<Edit> = zero.map(|z| Edit::Set("joints[q4].params.zero", serde_yaml::from_str(z).unwrap())).into_iter().collect();
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
+        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+        arm.activate().map(|()| {
+            arm.step(0.0);
+            arm.states[3].torque().unwrap()
+        })
+    };
+    assert!(q4_torque_at_start("zero-none", None).unwrap().abs() < 1e-6);
+    let loaded_start = q4_torque_at_start("zero-offset", Some("{input_rad: -0.01, output_rad: 0.0}")).unwrap();
+    println!("q4 at activation with the motor side 0.01 rad from its zero: {loaded_start:.3} Nm");
+    assert!((loaded_start - 0.02 * 117.47).abs() < 0.1, "{loaded_start} Nm");
+    let refused = q4_torque_at_start("zero-wrong", Some("{input_rad: -0.5, output_rad: 0.0}")).unwrap_err().to_string();
+    assert!(refused.contains("the deflection at activation is 1.00000 rad with the calibrated zero, outside the spring's range"), "{refused}");
+}
