@@ -4,7 +4,16 @@
 use std::process::Command;
 
 use jointctl_runtime::PluginLoader;
-use jointctl_tests::{Edit, arm_name, jointctl, root, sherpa_with};
+use jointctl_tests::{Edit, arm_name, jointctl, sherpa_with};
+
+/// `jointctl calibrate` on the simulated SHERPA arm (under a name of its own: each runtime of an
+/// arm takes its lock), as parsed YAML.
+fn calibrated(test: &str) -> serde_yaml::Value {
+    let config = sherpa_with(test, &arm_name(test), &[]);
+    let out = Command::new(jointctl()).arg("calibrate").arg(&config).args(["--cycles", "20"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_yaml::from_slice(&out.stdout).unwrap()
+}
 
 /// Pass: `jointctl calibrate` writes each elastic joint's zero (q4, q5) in a file of this format;
 /// q4 given a zero whose motor side is 0.01 rad from where the drive starts reads that
@@ -13,9 +22,7 @@ use jointctl_tests::{Edit, arm_name, jointctl, root, sherpa_with};
 /// (the characteristic's range_rad) and activation is refused naming it.
 #[test]
 fn a_calibrated_joint_reads_its_deflection_at_start_and_refuses_one_outside_its_range() {
-    let out = Command::new(jointctl()).arg("calibrate").arg(root().join("configs/sherpa_arm.yaml")).args(["--cycles", "20"]).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let written: serde_yaml::Value = serde_yaml::from_slice(&out.stdout).unwrap();
+    let written = calibrated("calibrate-elastic");
     assert_eq!(written["version"].as_u64(), Some(jointctl_config::FORMAT_VERSION));
     for joint in ["q4", "q5"] {
         assert!(written["joints"][joint]["zero"]["input_rad"].as_f64().is_some(), "{joint}: {written:?}");
@@ -35,4 +42,28 @@ fn a_calibrated_joint_reads_its_deflection_at_start_and_refuses_one_outside_its_
     assert!((loaded_start - 0.02 * 117.47).abs() < 0.1, "{loaded_start} Nm");
     let refused = q4_torque_at_start("zero-wrong", Some("{input_rad: -0.5, output_rad: 0.0}")).unwrap_err().to_string();
     assert!(refused.contains("the deflection at activation is 1.00000 rad with the calibrated zero, outside the spring's range"), "{refused}");
+}
+
+/// The same for the shoulder's q2 (its deflection encoder, section 3.4.1). Pass: `calibrate`
+/// writes the shoulder's zero; a zero 0.01 rad below the encoder's reading at start makes q2 read
+/// 0.01 rad of deflection at activation (0 without a zero); one 1 rad off, beyond the table's
+/// range at every pivot setting, is refused naming it.
+#[test]
+fn a_calibrated_shoulder_reads_its_deflection_at_start_and_refuses_one_outside_its_table() {
+    let written = calibrated("calibrate-shoulder");
+    let zero = written["joints"]["shoulder"]["zero"]["deflection_rad"].as_f64().expect("the shoulder's zero");
+    let q2_deflection_at_start = |test: &str, zero: Option<f64>| {
+        let edits: Vec<Edit> = zero.map(|z| Edit::Set("joints[shoulder].params.zero", serde_yaml::from_str(&format!("{{deflection_rad: {z}}}")).unwrap())).into_iter().collect();
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
+        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+        arm.activate().map(|()| {
+            arm.step(0.0);
+            arm.states[1].deflection().unwrap()
+        })
+    };
+    assert!(q2_deflection_at_start("q2-zero-none", None).unwrap().abs() < 1e-6);
+    let offset = q2_deflection_at_start("q2-zero-offset", Some(zero - 0.01)).unwrap();
+    assert!((offset - 0.01).abs() < 1e-3, "{offset} rad");
+    let refused = q2_deflection_at_start("q2-zero-wrong", Some(zero - 1.0)).unwrap_err().to_string();
+    assert!(refused.contains("the q2 deflection at activation is 1.00000 rad with the calibrated zero, outside the table's range"), "{refused}");
 }

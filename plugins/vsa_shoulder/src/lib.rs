@@ -64,6 +64,20 @@ struct Params {
     /// offset, scale), observed online (section 6.2); none by default.
     #[serde(default)]
     model_extension: Option<ExtensionSpec>,
+    /// The calibrated zero (`jointctl calibrate`): the q2 deflection encoder's reading where the
+    /// element carries no torque. With it, the deflection at activation is measured, not taken as
+    /// zero, and one outside the table's deflection range refuses activation. Without it, the
+    /// shoulder's angle at activation is subtracted (section 3.4.1).
+    #[serde(default)]
+    zero: Option<ShoulderZero>,
+}
+
+/// The shoulder's calibrated zero.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShoulderZero {
+    /// The q2 deflection encoder's reading at zero deflection [rad].
+    deflection_rad: f64,
 }
 
 fn harmonic_drive() -> f64 {
@@ -121,6 +135,9 @@ impl JointPlugin for VsaShoulder {
         if !(p.torque_filter_s.is_finite() && p.torque_filter_s >= 0.0) {
             return Err(PluginError::at("torque_filter_s", "must be finite and >= 0"));
         }
+        if p.zero.is_some_and(|z| !z.deflection_rad.is_finite()) {
+            return Err(PluginError::at("zero.deflection_rad", "must be finite"));
+        }
         let position = PositionLoop::from_params(p.position_pi)?;
         let extension = match p.model_extension.clone() {
             Some(spec) => Some(ModelExtension::new(spec).map_err(|e| PluginError::at(format!("model_extension.{}", e.field), e.message))?),
@@ -144,7 +161,24 @@ impl JointPlugin for VsaShoulder {
         let age = self.p.max_age_s;
         let need = |r: Option<f64>, what: &str| r.ok_or_else(|| PluginError::new(format!("cannot activate: {what} is not readable")));
         // Section 3.4.1: the shoulder may start at a non-zero angle; subtract it.
-        self.deflection_origin_rad = need(raw.encoder(Q2_DEFLECTION).usable(age), "the q2 deflection encoder")?;
+        let reading = need(raw.encoder(Q2_DEFLECTION).usable(age), "the q2 deflection encoder")?;
+        self.deflection_origin_rad = match self.p.zero {
+            Some(z) => {
+                // The table's deflection range over every pivot setting.
+                let range = self.p.characteristic.curves.iter().filter_map(|c| c.range_rad).reduce(|a, b| [a[0].min(b[0]), a[1].max(b[1])]);
+                let now = reading - z.deflection_rad;
+                if let Some([lo, hi]) = range
+                    && !(lo..=hi).contains(&now)
+                {
+                    return Err(PluginError::at(
+                        "zero",
+                        format!("the q2 deflection at activation is {now:.5} rad with the calibrated zero, outside the table's range [{lo}, {hi}] rad: recalibrate (jointctl calibrate) or check the element"),
+                    ));
+                }
+                z.deflection_rad
+            }
+            None => reading,
+        };
         let q2 = need(raw.encoder(Q2_OUTPUT).usable(age), "the q2 output encoder")?;
         let q3 = need(self.q3(raw), "a differential pulley encoder")?;
         let a = need(raw.drive(ACTUATOR_A).position_rad.usable(age), "actuator a")?;

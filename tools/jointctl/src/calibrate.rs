@@ -24,7 +24,9 @@ pub struct CalibrateArgs {
 
 /// The pose: every elastic element unloaded (the arm's links supported, or each joint's output
 /// free of torque), the drives holding. Each `elastic` joint's zero is the mean of its motor
-/// side (its `input` encoder, or its `motor` drive) and of its `output` encoder over the cycles.
+/// side (its `input` encoder, or its `motor` drive) and of its `output` encoder over the cycles;
+/// the shoulder's, the mean of its q2 deflection encoder. The wrist is not calibrated yet: it
+/// keeps its activation zero.
 pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
     let loaded = match jointctl_config::load(&a.config) {
         Ok(l) => l,
@@ -58,10 +60,19 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
             joints.push((j.name.clone(), input, output));
         }
     }
-    if joints.is_empty() {
-        return fail(format!("{}: no elastic joint with an output encoder and a motor side to calibrate", a.config.display()));
+    // The shoulder's q2 deflection encoder (section 3.4.1 measures the deflection directly).
+    let shoulders: Vec<(String, usize)> = loaded
+        .config
+        .joints
+        .iter()
+        .filter(|j| j.plugin.name == "vsa_shoulder")
+        .filter_map(|j| Some((j.name.clone(), devices.encoder(j.encoders.get("q2_deflection")?)?)))
+        .collect();
+    if joints.is_empty() && shoulders.is_empty() {
+        return fail(format!("{}: no elastic joint (output encoder and motor side) or shoulder (q2 deflection encoder) to calibrate", a.config.display()));
     }
     let mut sums = vec![(0.0, 0.0, 0u32); joints.len()];
+    let mut shoulder_sums = vec![(0.0, 0u32); shoulders.len()];
     let period = std::time::Duration::from_secs_f64(arm.dt_s);
     for cycle in 0..a.cycles {
         arm.step(f64::from(cycle) * arm.dt_s);
@@ -71,6 +82,11 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
             let input = if *is_encoder { r.encoders[*i].usable(fresh) } else { r.drives[*i].position_rad.usable(fresh) };
             if let (Some(input), Some(output)) = (input, r.encoders[*o].usable(fresh)) {
                 *sum = (sum.0 + input, sum.1 + output, sum.2 + 1);
+            }
+        }
+        for ((_, e), sum) in shoulders.iter().zip(&mut shoulder_sums) {
+            if let Some(d) = r.encoders[*e].usable(2.0 * arm.dt_s) {
+                *sum = (sum.0 + d, sum.1 + 1);
             }
         }
         if loaded.config.hal.backend == jointctl_config::HalBackend::Socketcan {
@@ -90,12 +106,18 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
         }
         let _ = writeln!(text, "  {name}:\n    zero: {{input_rad: {:.9}, output_rad: {:.9}}}", input / f64::from(*n), output / f64::from(*n));
     }
+    for ((name, _), (d, n)) in shoulders.iter().zip(&shoulder_sums) {
+        if *n == 0 {
+            return fail(format!("joint `{name}`: no fresh reading of its q2 deflection encoder in {} cycles", a.cycles));
+        }
+        let _ = writeln!(text, "  {name}:\n    zero: {{deflection_rad: {:.9}}}", d / f64::from(*n));
+    }
     match &a.out {
         Some(path) => {
             if let Err(e) = std::fs::write(path, &text) {
                 return fail(format!("cannot write {}: {e}", path.display()));
             }
-            eprintln!("zeros of {} joint(s) written to {}", joints.len(), path.display());
+            eprintln!("zeros of {} joint(s) written to {}", joints.len() + shoulders.len(), path.display());
         }
         None => print_out(&text),
     }
