@@ -68,6 +68,25 @@ pub fn stop(child: &mut std::process::Child) {
     let _ = child.wait();
 }
 
+/// Removes the management segment iceoryx2 keeps per domain in /dev/shm (a node counter, left
+/// on purpose after every clean exit: `<domain><hash>_node.<version>.global_mgmt`) of a domain a
+/// test made for itself, once everything in it has stopped, so that test runs do not pile them
+/// up. Only that file: anything else left behind is a leak a test should see.
+pub fn forget_test_domain(domain: &str) {
+    let Ok(entries) = std::fs::read_dir("/dev/shm") else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().to_string();
+        // The domain, then its 40-digit hash, then the node's segment: `other12` must not take
+        // `other123`'s.
+        let ours = name.strip_prefix(domain).is_some_and(|rest| {
+            rest.len() > 40 && rest.is_char_boundary(40) && rest[..40].bytes().all(|b| b.is_ascii_hexdigit()) && rest[40..].starts_with("_node.") && rest.ends_with(".global_mgmt")
+        });
+        if ours {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
 /// A unique arm name for a test, so that parallel tests never share services.
 pub fn arm_name(test: &str) -> String {
     format!("t{}-{test}", std::process::id())

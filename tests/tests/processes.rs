@@ -571,6 +571,7 @@ fn another_user_can_neither_tamper_with_nor_squat_the_shared_memory() {
     std::fs::write(&yaml, jointctl_tests::yaml_with(&text, &[jointctl_tests::Edit::Set("ipc", ipc)])).unwrap();
     let out = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "3"]).output().unwrap();
     let _ = std::fs::remove_file(&planted);
+    jointctl_tests::forget_test_domain(&domain);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("belongs to uid 65534") && err.contains("another user created this domain's management segment"), "{err}");
@@ -849,6 +850,7 @@ fn a_second_runtime_on_the_same_can_interface_is_refused_whatever_its_domain() {
     assert_eq!(second.status.code(), Some(1), "{err}");
     assert!(err.contains(&format!("CAN interface `{interface}` is driven by another runtime (process {})", std::process::id())), "{err}");
     let alone = Command::new(jointctl()).arg("run").arg(&can_yaml).args(["--cycles", "3"]).output().unwrap();
+    jointctl_tests::forget_test_domain(&format!("other{}", std::process::id()));
     let err = String::from_utf8_lossy(&alone.stderr);
     assert!(err.contains(&interface) && !err.contains("driven by another runtime"), "{err}");
 }
@@ -871,6 +873,7 @@ fn a_second_runtime_of_the_same_arm_is_refused_whatever_its_domain() {
     assert_eq!(second.status.code(), Some(1), "{err}");
     assert!(err.contains(&format!("arm `{arm}` is already running on this machine (process {})", first.id())), "{err}");
     let alone = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
+    jointctl_tests::forget_test_domain(&domain);
     assert!(alone.status.success(), "{}", String::from_utf8_lossy(&alone.stderr));
 }
 

@@ -97,6 +97,7 @@ fn the_python_inspector_follows_the_domain_and_reads_diagnostics() {
     let py_state = Command::new(python()).arg(&script).args([&arm, "--domain", &domain, "--count", "1"]).output().unwrap();
     let lost = Command::new(python()).arg(&script).args([&arm, "--count", "1", "--timeout", "1"]).output().unwrap();
     stop(&mut run);
+    jointctl_tests::forget_test_domain(&domain);
     assert!(up.status.success() && rust.status.success(), "{}", String::from_utf8_lossy(&rust.stderr));
     assert!(py.status.success(), "python --diag: {}", String::from_utf8_lossy(&py.stderr));
     assert!(py_state.status.success(), "python --domain: {}", String::from_utf8_lossy(&py_state.stderr));
