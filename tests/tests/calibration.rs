@@ -27,7 +27,8 @@ fn a_calibrated_joint_reads_its_deflection_at_start_and_refuses_one_outside_its_
     for joint in ["q4", "q5"] {
         assert!(written["joints"][joint]["zero"]["input_rad"].as_f64().is_some(), "{joint}: {written:?}");
     }
-    let q4_torque_at_start = |test: &str, zero: Option<&str>| {
+    let (input, output) = (written["joints"]["q4"]["zero"]["input_rad"].as_f64().unwrap(), written["joints"]["q4"]["zero"]["output_rad"].as_f64().unwrap());
+    let q4_torque_at_start = |test: &str, zero: Option<&str>| -> Result<f64, jointctl_runtime::ActivateError> {
         let edits: Vec<Edit> = zero.map(|z| Edit::Set("joints[q4].params.zero", serde_yaml::from_str(z).unwrap())).into_iter().collect();
         let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
         let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
@@ -37,10 +38,12 @@ fn a_calibrated_joint_reads_its_deflection_at_start_and_refuses_one_outside_its_
         })
     };
     assert!(q4_torque_at_start("zero-none", None).unwrap().abs() < 1e-6);
-    let loaded_start = q4_torque_at_start("zero-offset", Some("{input_rad: -0.01, output_rad: 0.0}")).unwrap();
+    // The calibrated zero itself reads no torque; its motor side moved by -0.01 rad, 0.02 rad.
+    assert!(q4_torque_at_start("zero-calibrated", Some(&format!("{{input_rad: {input}, output_rad: {output}}}"))).unwrap().abs() < 1e-6);
+    let loaded_start = q4_torque_at_start("zero-offset", Some(&format!("{{input_rad: {}, output_rad: {output}}}", input - 0.01))).unwrap();
     println!("q4 at activation with the motor side 0.01 rad from its zero: {loaded_start:.3} Nm");
     assert!((loaded_start - 0.02 * 117.47).abs() < 0.1, "{loaded_start} Nm");
-    let refused = q4_torque_at_start("zero-wrong", Some("{input_rad: -0.5, output_rad: 0.0}")).unwrap_err().to_string();
+    let refused = q4_torque_at_start("zero-wrong", Some(&format!("{{input_rad: {}, output_rad: {output}}}", input - 0.5))).unwrap_err().to_string();
     assert!(refused.contains("the deflection at activation is 1.00000 rad with the calibrated zero, outside the spring's range"), "{refused}");
 }
 

@@ -309,7 +309,7 @@ impl jointctl_hal::Hal for StopRecorder {
 /// Issue 37, finding 4: stop and shutdown wrote a hold and returned; nothing took the drives
 /// through a stop sequence, and a panic of the runtime itself skipped even the hold. Pass: the
 /// configured `safety.stop_sequence` goes to the HAL exactly once on every path: the loop's end
-/// (cycles, duration), a stop request (a signal or `cmd stop` set it), and a panic unwinding
+/// (here its cycles; a duration ends it the same way), a stop request (a signal or `cmd stop` set it), and a panic unwinding
 /// through the loop; the default is `[quick_stop, pre_operational]`.
 #[test]
 fn the_stop_sequence_runs_once_on_every_path_that_ends_the_runtime() {
@@ -336,6 +336,6 @@ fn the_stop_sequence_runs_once_on_every_path_that_ends_the_runtime() {
     assert_eq!(run_with("", None, false), (true, vec![default.clone()]), "the loop's end");
     assert_eq!(run_with("", None, true), (true, vec![default.clone()]), "a stop request");
     assert_eq!(run_with("", Some(10), false), (false, vec![default]), "a panic of the runtime");
-    let configured = run_with("safety: {stop_sequence: [quick_stop, disable_operation, pre_operational]}", None, false);
-    assert_eq!(configured.1, vec![vec![StopStep::QuickStop, StopStep::DisableOperation, StopStep::PreOperational]]);
+    let configured = run_with("safety: {stop_sequence: [quick_stop, disable_voltage, pre_operational]}", None, false);
+    assert_eq!(configured.1, vec![vec![StopStep::QuickStop, StopStep::DisableVoltage, StopStep::PreOperational]]);
 }

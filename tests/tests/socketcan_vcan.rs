@@ -192,8 +192,9 @@ impl SimNode {
                         (DriveState::SwitchedOn, 0x0F) | (DriveState::OperationEnabled, 0x0F) => 0x0237,
                         // Quick stop (0x605A = 6: stay in quick stop active, holding).
                         (DriveState::OperationEnabled, 0x02) => 0x0217,
-                        // Disable operation.
-                        (DriveState::OperationEnabled | DriveState::QuickStopActive, 0x07) => 0x0233,
+                        // Disable operation (not from quick stop active: CiA 402 has no such
+                        // transition; disable voltage, above, leaves it).
+                        (DriveState::OperationEnabled, 0x07) => 0x0233,
                         (_, 0x06) => 0x0231,
                         _ => statusword,
                     };
@@ -537,10 +538,11 @@ fn doctor_finds_vcan0_up() {
 
 /// Issue 37, finding 4: stop and shutdown wrote a hold and returned, so the drives stayed enabled
 /// with the host gone until their comm-loss reaction fired. Pass, frame by frame on vcan0 (a
-/// candump-like socket sees every frame): the stop sequence `[quick_stop, disable_operation,
+/// candump-like socket sees every frame): the stop sequence `[quick_stop, disable_voltage,
 /// pre_operational]` sends the drive RPDO1s with controlword 0x0002 until it reports quick stop
-/// active, then 0x0007 until it reports switched on, then one NMT pre-operational to all nodes,
-/// after which its heartbeat says pre-operational; every step is reached, in that order.
+/// active, then 0x0000 until it reports switch on disabled (CiA 402's way out of quick stop),
+/// then one NMT pre-operational to all nodes, after which its heartbeat says pre-operational;
+/// every step is reached, in that order.
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn the_stop_sequence_goes_to_the_drives_frame_by_frame() {
@@ -552,9 +554,9 @@ fn the_stop_sequence_goes_to_the_drives_frame_by_frame() {
     rig.until(MotorSetpoint::HOLD, "enabled", |r| r.enabled == 1);
     let listener = CanSocket::open("vcan0").unwrap();
     listener.set_nonblocking(true).unwrap();
-    let reports = rig.hal.stop(&[StopStep::QuickStop, StopStep::DisableOperation, StopStep::PreOperational], 0.5);
+    let reports = rig.hal.stop(&[StopStep::QuickStop, StopStep::DisableVoltage, StopStep::PreOperational], 0.5);
     assert!(reports.iter().all(|r| r.pending.is_empty()), "{reports:?}");
-    assert_eq!(reports.iter().map(|r| r.step).collect::<Vec<_>>(), [StopStep::QuickStop, StopStep::DisableOperation, StopStep::PreOperational]);
+    assert_eq!(reports.iter().map(|r| r.step).collect::<Vec<_>>(), [StopStep::QuickStop, StopStep::DisableVoltage, StopStep::PreOperational]);
     // What went over the bus, in order: the host's controlwords to node 15 and its NMT frames.
     let mut sent = Vec::new();
     while let Ok(CanFrame::Data(f)) = listener.read_frame() {
@@ -567,8 +569,8 @@ fn the_stop_sequence_goes_to_the_drives_frame_by_frame() {
         }
     }
     sent.dedup();
-    assert_eq!(sent, ["cw 0x0002", "cw 0x0007", "nmt 0x80 0"], "frames: {sent:?}");
-    assert_eq!(co::state_of(node.statusword.load(Ordering::Relaxed) as u16), DriveState::SwitchedOn);
+    assert_eq!(sent, ["cw 0x0002", "cw 0x0000", "nmt 0x80 0"], "frames: {sent:?}");
+    assert_eq!(co::state_of(node.statusword.load(Ordering::Relaxed) as u16), DriveState::SwitchOnDisabled);
 }
 
 /// Issue 37, finding 2: the drives were not told their limits at start-up, so nothing below the

@@ -128,6 +128,11 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         }
     }
 
+    // CiA 402: from "quick stop active" a drive goes on only to "switch on disabled" (or back to
+    // operation enabled); it ignores "disable operation".
+    if let Some(i) = c.safety.stop_sequence.windows(2).position(|w| w == [crate::StopStep::QuickStop, crate::StopStep::DisableOperation]) {
+        err(format!("safety.stop_sequence[{}]", i + 1), "a drive in quick stop does not take disable_operation (CiA 402); use disable_voltage after quick_stop".into());
+    }
     if !(0.01..=10.0).contains(&c.safety.stop_step_timeout_s) {
         err("safety.stop_step_timeout_s".into(), format!("must be in [0.01, 10] s, got {}", crate::short_number(c.safety.stop_step_timeout_s)));
     }
@@ -172,10 +177,18 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             if !(d.max_velocity_rad_s > 0.0) {
                 err(format!("{path}.max_velocity_rad_s"), format!("must be > 0, got {}", d.max_velocity_rad_s));
             }
-            if let Some([lo, hi]) = d.setpoint_window_rad
-                && !(lo < hi)
+            if let Some([lo, hi]) = d.setpoint_window_rad {
+                if !(lo < hi) {
+                    err(format!("{path}.setpoint_window_rad"), format!("lower end {} must be below upper end {}", crate::short_number(lo), crate::short_number(hi)));
+                } else if lo.abs().max(hi.abs()) * d.counts_per_rad > f64::from(i32::MAX) {
+                    // Written to the drive as 32-bit counts (0x607D).
+                    err(format!("{path}.setpoint_window_rad"), format!("does not fit the drive's 32-bit counts at {} counts/rad", crate::short_number(d.counts_per_rad)));
+                }
+            }
+            if let Some(w) = d.limits.following_error_window_rad
+                && w * d.counts_per_rad < 1.0
             {
-                err(format!("{path}.setpoint_window_rad"), format!("lower end {} must be below upper end {}", crate::short_number(lo), crate::short_number(hi)));
+                err(format!("{path}.limits.following_error_window_rad"), format!("{} rad is less than one count: the drive would fault on every cycle", crate::short_number(w)));
             }
             for (name, value) in [
                 ("max_profile_velocity_rad_s", d.limits.max_profile_velocity_rad_s),

@@ -76,6 +76,8 @@ const CASES: &[(&str, &str, &str, usize, &str, &str)] = &[
     // Issue 37, finding 2: the drive's own limits are checked before they are written to it.
     ("a drive limit of no torque", "{name: m2, node_id: 2}", "{name: m2, node_id: 2, limits: {max_torque_permille: 0}}", 10, "buses.can[0].drives[1].limits.max_torque_permille", "must be > 0"),
     ("a set-point window upside down", "{name: m2, node_id: 2}", "{name: m2, node_id: 2, setpoint_window_rad: [1.0, -1.0]}", 10, "buses.can[0].drives[1].setpoint_window_rad", "lower end 1 must be below upper end -1"),
+    ("a stop sequence CiA 402 cannot follow", "rate_hz: 40", "rate_hz: 40\nsafety: {stop_sequence: [quick_stop, disable_operation]}", 3, "safety.stop_sequence[1]", "a drive in quick stop does not take disable_operation"),
+    ("a following error window below one count", "{name: m2, node_id: 2}", "{name: m2, node_id: 2, limits: {following_error_window_rad: 1e-9}}", 10, "buses.can[0].drives[1].limits.following_error_window_rad", "less than one count"),
     ("joint time budget beyond the period", "    plugin: elastic\n", "    plugin: elastic\n    budget_us: 30000\n", 25, "joints[1].budget_us", "at most the period (25000 us)"),
 ];
 

@@ -238,11 +238,16 @@ pub struct Arm {
     shut_down: bool,
 }
 
-/// An arm dropped without [`Arm::shutdown`] (a panic of the runtime unwinding through it, an
-/// early return) still holds its drives and runs the stop sequence.
+/// An arm dropped without [`Arm::shutdown`] (on any drop: a panic of the runtime unwinding
+/// through it, an early return) still holds its drives, runs the stop sequence and deactivates
+/// its plugins. While a panic unwinds, a second panic in the HAL is caught here: it would abort.
 impl Drop for Arm {
     fn drop(&mut self) {
-        self.shutdown();
+        if std::thread::panicking() {
+            let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.shutdown()));
+        } else {
+            self.shutdown();
+        }
     }
 }
 
@@ -513,6 +518,8 @@ impl Arm {
 
     /// [`Arm::activate`] with an explicit timeout [s].
     pub fn activate_within(&mut self, timeout_s: f64) -> Result<(), ActivateError> {
+        // Activated again after a shutdown: the next shutdown stops the drives again.
+        self.shut_down = false;
         let attempts = ((timeout_s * self.rate_hz).ceil() as usize).max(1);
         let mut done = vec![false; self.slots.len()];
         let mut last_error = None;

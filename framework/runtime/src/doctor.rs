@@ -105,6 +105,17 @@ fn memory_lock() -> Check {
 /// # Errors
 /// The system refused (the memlock limit, no permission).
 pub fn lock_all_memory() -> std::io::Result<()> {
+    // With MCL_FUTURE, memory mapped beyond a finite memlock limit fails to map, and an
+    // allocation that fails aborts the program: lock only where no limit applies (an unlimited
+    // limit, or root, whom it does not bind).
+    let mut limit = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+    // SAFETY: getrlimit writes the struct it is given; geteuid has no arguments.
+    let (known, root) = unsafe { (libc::getrlimit(libc::RLIMIT_MEMLOCK, &mut limit) == 0, libc::geteuid() == 0) };
+    let unlimited = known && limit.rlim_cur == libc::RLIM_INFINITY;
+    if !(root || unlimited) {
+        let shown = if known { format!("{} KiB", limit.rlim_cur / 1024) } else { "unknown".into() };
+        return Err(std::io::Error::other(format!("the memlock limit is {shown}, not unlimited: memory the runtime maps later would fail to map")));
+    }
     // SAFETY: mlockall takes flags only.
     if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
 }
@@ -152,7 +163,10 @@ fn realtime_priority(configured: Option<u8>) -> Check {
 }
 
 fn loop_cpu(configured: Option<usize>) -> Check {
-    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // Every CPU the machine has, isolated ones included (available_parallelism counts only the
+    // CPUs this process may use, which leaves isolated ones out).
+    // SAFETY: sysconf takes a name only.
+    let cpus = usize::try_from(unsafe { libc::sysconf(libc::_SC_NPROCESSORS_CONF) }).unwrap_or(1).max(1);
     let isolated = read_trimmed("/sys/devices/system/cpu/isolated").unwrap_or_default();
     let isolated_list = cpu_list(&isolated);
     let shown = if isolated.is_empty() { "none".to_string() } else { isolated.clone() };

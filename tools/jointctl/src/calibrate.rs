@@ -28,10 +28,17 @@ pub struct CalibrateArgs {
 /// the shoulder's, the mean of its q2 deflection encoder. The wrist is not calibrated yet: it
 /// keeps its activation zero.
 pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
-    let loaded = match jointctl_config::load(&a.config) {
+    let mut loaded = match jointctl_config::load(&a.config) {
         Ok(l) => l,
         Err(e) => return fail_err(e),
     };
+    // Measured against the raw readings: a zero already in the config (maybe the wrong one that
+    // made activation refuse) is not used.
+    for j in &mut loaded.config.joints {
+        if let Some(params) = j.params.0.as_object_mut() {
+            params.remove("zero");
+        }
+    }
     let _locks = match crate::run::lock_hardware(&loaded) {
         Ok(l) => l,
         Err(e) => return fail(e),

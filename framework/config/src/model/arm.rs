@@ -60,8 +60,9 @@ pub struct SafetyConfig {
     /// stop`, SIGINT/SIGTERM, the end of `--duration`, an error after start, a panic of the
     /// runtime), after the last hold is written. Default `[quick_stop, pre_operational]`: the
     /// drives decelerate and hold where they are, powered (an arm without brakes does not fall),
-    /// and stop taking PDOs. `disable_operation` (the motor unpowered, brakes where fitted)
-    /// belongs only on an arm whose brakes hold it. The simulated backend has no drive states:
+    /// and stop taking PDOs. `disable_operation` and `disable_voltage` (the motor unpowered,
+    /// brakes where fitted) belong only on an arm whose brakes hold it; after `quick_stop` only
+    /// `disable_voltage` is a CiA 402 transition. The simulated backend has no drive states:
     /// there the last hold is the stop.
     pub stop_sequence: Vec<StopStep>,
     /// How long each step waits for every drive to report its state [s]; a drive that does not

@@ -129,8 +129,8 @@ pub struct DriveConfig {
     /// follows from the joint's transmission, which only the plugin knows.
     #[serde(default, deserialize_with = "finite_pair_opt")]
     pub setpoint_window_rad: Option<[f64; 2]>,
-    /// Fastest a set-point may move [rad/s]: from the last one written, or from the drive's
-    /// position after a hold. In cyclic synchronous position mode a step beyond what the drive
+    /// Fastest a set-point may move [rad/s]: from the drive's target (the last move written,
+    /// which a hold keeps), or from its position before the first move. In cyclic synchronous position mode a step beyond what the drive
     /// follows in a cycle is a following error; in profile position mode (the thesis') the drive
     /// profiles a far target itself, so a far step may be legitimate there. None: unchecked.
     #[serde(default, deserialize_with = "finite_opt")]

@@ -389,12 +389,28 @@ pub fn decode_sdo_response(frame: &Frame) -> Option<SdoResponse> {
     match b[0] {
         0x60 => Some(SdoResponse::WriteOk { node, index, sub }),
         0x80 => Some(SdoResponse::Abort { node, index, sub, code: value }),
-        c if c & 0xE3 == 0x43 => {
-            let len = 4 - ((c >> 2) & 0x3);
+        // Expedited upload: with its size (0x43/47/4B/4F), or without (0x42: four bytes, CiA 301).
+        c if c & 0xE2 == 0x42 => {
+            let len = if c & 0x01 != 0 { 4 - ((c >> 2) & 0x3) } else { 4 };
             let mask = if len == 4 { u32::MAX } else { (1u32 << (8 * len)) - 1 };
             Some(SdoResponse::Value { node, index, sub, value: value & mask, len })
         }
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod upload_tests {
+    use super::*;
+
+    #[test]
+    fn an_expedited_upload_without_its_size_is_four_bytes() {
+        // CiA 301 allows 0x42 (expedited, size not indicated); a drive that answers so was not
+        // read (every read-back timed out).
+        let f = Frame::new(cob::SDO_TX + 3, &[0x42, 0x7F, 0x60, 0x00, 0xB8, 0x0B, 0x00, 0x00]);
+        assert_eq!(decode_sdo_response(&f), Some(SdoResponse::Value { node: 3, index: 0x607F, sub: 0, value: 3000, len: 4 }));
+        let sized = Frame::new(cob::SDO_TX + 3, &[0x4B, 0x72, 0x60, 0x00, 0x20, 0x03, 0xFF, 0xFF]);
+        assert_eq!(decode_sdo_response(&sized), Some(SdoResponse::Value { node: 3, index: 0x6072, sub: 0, value: 800, len: 2 }));
     }
 }
 
