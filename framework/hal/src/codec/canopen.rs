@@ -399,21 +399,6 @@ pub fn decode_sdo_response(frame: &Frame) -> Option<SdoResponse> {
     }
 }
 
-#[cfg(test)]
-mod upload_tests {
-    use super::*;
-
-    #[test]
-    fn an_expedited_upload_without_its_size_is_four_bytes() {
-        // CiA 301 allows 0x42 (expedited, size not indicated); a drive that answers so was not
-        // read (every read-back timed out).
-        let f = Frame::new(cob::SDO_TX + 3, &[0x42, 0x7F, 0x60, 0x00, 0xB8, 0x0B, 0x00, 0x00]);
-        assert_eq!(decode_sdo_response(&f), Some(SdoResponse::Value { node: 3, index: 0x607F, sub: 0, value: 3000, len: 4 }));
-        let sized = Frame::new(cob::SDO_TX + 3, &[0x4B, 0x72, 0x60, 0x00, 0x20, 0x03, 0xFF, 0xFF]);
-        assert_eq!(decode_sdo_response(&sized), Some(SdoResponse::Value { node: 3, index: 0x6072, sub: 0, value: 800, len: 2 }));
-    }
-}
-
 /// Decodes an SDO request (for the simulated drive): (node, command byte, index, sub, data).
 pub fn decode_sdo_request(frame: &Frame) -> Option<(u8, u8, u16, u8, u32)> {
     let node = node_of(frame.id, cob::SDO_RX)?;
@@ -432,4 +417,19 @@ pub fn frame_bits(data_bytes: u8) -> (u32, u32) {
     let plain = 47 + 8 * n;
     // Stuffing applies to the 34 + 8n bits from SOF to the CRC: at most one stuff bit per 4.
     (plain, plain + (34 + 8 * n - 1) / 4)
+}
+
+#[cfg(test)]
+mod upload_tests {
+    use super::*;
+
+    #[test]
+    fn an_expedited_upload_without_its_size_is_four_bytes() {
+        // CiA 301 allows 0x42 (expedited, size not indicated); a drive that answers so was not
+        // read (every read-back timed out).
+        let f = Frame::new(cob::SDO_TX + 3, &[0x42, 0x7F, 0x60, 0x00, 0xB8, 0x0B, 0x00, 0x00]);
+        assert_eq!(decode_sdo_response(&f), Some(SdoResponse::Value { node: 3, index: 0x607F, sub: 0, value: 3000, len: 4 }));
+        let sized = Frame::new(cob::SDO_TX + 3, &[0x4B, 0x72, 0x60, 0x00, 0x20, 0x03, 0xFF, 0xFF]);
+        assert_eq!(decode_sdo_response(&sized), Some(SdoResponse::Value { node: 3, index: 0x6072, sub: 0, value: 800, len: 2 }));
+    }
 }
