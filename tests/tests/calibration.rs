@@ -70,3 +70,30 @@ fn a_calibrated_shoulder_reads_its_deflection_at_start_and_refuses_one_outside_i
     let refused = q2_deflection_at_start("q2-zero-wrong", Some(zero - 1.0)).unwrap_err().to_string();
     assert!(refused.contains("the q2 deflection at activation is 1.00000 rad with the calibrated zero, outside the table's range"), "{refused}");
 }
+
+/// The same for the wrist (its planet-carrier and bevel-input encoders, section 3.5.1). Pass:
+/// `calibrate` writes the wrist's zero; that zero reads no deflection at activation; a bevel-a
+/// zero 0.01 rad off reads a deflection on both DOFs (eq. 3.7 shares it); one 1 rad off is
+/// refused naming the DOF.
+#[test]
+fn a_calibrated_wrist_reads_its_deflections_at_start_and_refuses_one_outside_its_table() {
+    let written = calibrated("calibrate-wrist");
+    let z = &written["joints"]["wrist"]["zero"];
+    let (carrier, bevel): (Vec<f64>, Vec<f64>) = (serde_yaml::from_value(z["carrier_rad"].clone()).unwrap(), serde_yaml::from_value(z["bevel_rad"].clone()).unwrap());
+    let deflections_at_start = |test: &str, bevel_a_offset: f64| -> Result<(f64, f64), jointctl_runtime::ActivateError> {
+        let zero = format!("{{carrier_rad: [{}, {}], bevel_rad: [{}, {}]}}", carrier[0], carrier[1], bevel[0] + bevel_a_offset, bevel[1]);
+        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &[Edit::Set("joints[wrist].params.zero", serde_yaml::from_str(&zero).unwrap())])).unwrap();
+        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+        arm.activate().map(|()| {
+            arm.step(0.0);
+            (arm.states[5].deflection().unwrap(), arm.states[6].deflection().unwrap())
+        })
+    };
+    let (d6, d7) = deflections_at_start("wrist-zero", 0.0).unwrap();
+    assert!(d6.abs() < 1e-6 && d7.abs() < 1e-6, "{d6} {d7}");
+    let (d6, d7) = deflections_at_start("wrist-zero-offset", -0.01).unwrap();
+    println!("wrist at activation with bevel a 0.01 rad from its zero: q6 {d6:.5} rad, q7 {d7:.5} rad");
+    assert!(d6.abs() > 1e-3 && d7.abs() > 1e-3, "{d6} {d7}");
+    let refused = deflections_at_start("wrist-zero-wrong", -1.0).unwrap_err().to_string();
+    assert!(refused.contains("deflection at activation is") && refused.contains("with the calibrated zero, outside the table's range"), "{refused}");
+}

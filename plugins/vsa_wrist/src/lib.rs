@@ -64,6 +64,22 @@ struct Params {
     /// `null`), observed online (section 6.2); none by default.
     #[serde(default)]
     model_extension: Vec<Option<ExtensionSpec>>,
+    /// The calibrated zero (`jointctl calibrate`): the two planet-carrier and the two
+    /// bevel-input encoders' readings where both elements carry no torque. With it, the
+    /// deflections at activation are measured, not taken as zero, and one outside the table's
+    /// deflection range refuses activation. Without it, the readings at activation are the zero.
+    #[serde(default)]
+    zero: Option<WristZero>,
+}
+
+/// The wrist's calibrated zero.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WristZero {
+    /// Planet-carrier encoders a and b at zero deflection [rad].
+    carrier_rad: [f64; 2],
+    /// Bevel-input encoders a and b at zero deflection [rad].
+    bevel_rad: [f64; 2],
 }
 
 fn belt() -> f64 {
@@ -122,6 +138,9 @@ impl JointPlugin for VsaWrist {
         params::positive("belt_ratio", p.belt_ratio)?;
         params::positive("max_age_s", p.max_age_s)?;
         params::nonzero("pivot_mm_per_rad", p.pivot_mm_per_rad)?;
+        if p.zero.is_some_and(|z| !z.carrier_rad.iter().chain(&z.bevel_rad).all(|x| x.is_finite())) {
+            return Err(PluginError::at("zero", "carrier_rad and bevel_rad must be finite"));
+        }
         let position = PositionLoop::from_params(p.position_pi)?;
         if !matches!(p.model_extension.len(), 0 | 2) {
             return Err(PluginError::at("model_extension", format!("give one entry per DOF, [q6, q7] (null for none), got {}", p.model_extension.len())));
@@ -154,6 +173,20 @@ impl JointPlugin for VsaWrist {
             self.carrier_origin[i] = need(self.read(raw, c), "a planet-carrier encoder")?;
             self.bevel_origin[i] = need(self.read(raw, b), "a bevel-input encoder")?;
             self.motor_origin[i] = need(raw.drive(m).position_rad.usable(self.p.max_age_s), "a wrist motor")?;
+        }
+        if let Some(z) = self.p.zero {
+            (self.carrier_origin, self.bevel_origin) = (z.carrier_rad, z.bevel_rad);
+            // The table's deflection range over every curve.
+            let range = self.p.characteristic.curves.iter().filter_map(|c| c.range_rad).reduce(|a, b| [a[0].min(b[0]), a[1].max(b[1])]);
+            let (d6, d7) = self.deflections(raw).ok_or_else(|| PluginError::new("cannot activate: a wrist encoder is not readable"))?;
+            if let Some([lo, hi]) = range
+                && let Some((dof, d)) = [("q6", d6), ("q7", d7)].into_iter().find(|(_, d)| !(lo..=hi).contains(d))
+            {
+                return Err(PluginError::at(
+                    "zero",
+                    format!("the {dof} deflection at activation is {d:.5} rad with the calibrated zero, outside the table's range [{lo}, {hi}] rad: recalibrate (jointctl calibrate) or check the element"),
+                ));
+            }
         }
         let (q6, q7) = self.positions(raw).ok_or_else(|| PluginError::new("cannot activate: the bevel inputs are not readable"))?;
         self.joint_origin = [q6, q7];

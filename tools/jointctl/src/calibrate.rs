@@ -25,8 +25,8 @@ pub struct CalibrateArgs {
 /// The pose: every elastic element unloaded (the arm's links supported, or each joint's output
 /// free of torque), the drives holding. Each `elastic` joint's zero is the mean of its motor
 /// side (its `input` encoder, or its `motor` drive) and of its `output` encoder over the cycles;
-/// the shoulder's, the mean of its q2 deflection encoder. The wrist is not calibrated yet: it
-/// keeps its activation zero.
+/// the shoulder's, the mean of its q2 deflection encoder; the wrist's, the means of its two
+/// planet-carrier and two bevel-input encoders.
 pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
     let mut loaded = match jointctl_config::load(&a.config) {
         Ok(l) => l,
@@ -75,11 +75,23 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
         .filter(|j| j.plugin.name == "vsa_shoulder")
         .filter_map(|j| Some((j.name.clone(), devices.encoder(j.encoders.get("q2_deflection")?)?)))
         .collect();
-    if joints.is_empty() && shoulders.is_empty() {
-        return fail(format!("{}: no elastic joint (output encoder and motor side) or shoulder (q2 deflection encoder) to calibrate", a.config.display()));
+    // The wrist's carrier and bevel-input encoders (section 3.5.1), a then b.
+    let wrists: Vec<(String, [usize; 4])> = loaded
+        .config
+        .joints
+        .iter()
+        .filter(|j| j.plugin.name == "vsa_wrist")
+        .filter_map(|j| {
+            let at = |role: &str| devices.encoder(j.encoders.get(role)?);
+            Some((j.name.clone(), [at("carrier_a")?, at("carrier_b")?, at("bevel_a")?, at("bevel_b")?]))
+        })
+        .collect();
+    if joints.is_empty() && shoulders.is_empty() && wrists.is_empty() {
+        return fail(format!("{}: no elastic joint (output encoder and motor side), shoulder (q2 deflection encoder) or wrist (carrier and bevel encoders) to calibrate", a.config.display()));
     }
     let mut sums = vec![(0.0, 0.0, 0u32); joints.len()];
     let mut shoulder_sums = vec![(0.0, 0u32); shoulders.len()];
+    let mut wrist_sums = vec![([0.0; 4], 0u32); wrists.len()];
     let period = std::time::Duration::from_secs_f64(arm.dt_s);
     for cycle in 0..a.cycles {
         arm.step(f64::from(cycle) * arm.dt_s);
@@ -94,6 +106,13 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
         for ((_, e), sum) in shoulders.iter().zip(&mut shoulder_sums) {
             if let Some(d) = r.encoders[*e].usable(2.0 * arm.dt_s) {
                 *sum = (sum.0 + d, sum.1 + 1);
+            }
+        }
+        for ((_, encoders), sum) in wrists.iter().zip(&mut wrist_sums) {
+            let read: Option<Vec<f64>> = encoders.iter().map(|e| r.encoders[*e].usable(2.0 * arm.dt_s)).collect();
+            if let Some(read) = read {
+                read.iter().zip(sum.0.iter_mut()).for_each(|(x, s)| *s += x);
+                sum.1 += 1;
             }
         }
         if loaded.config.hal.backend == jointctl_config::HalBackend::Socketcan {
@@ -119,12 +138,19 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
         }
         let _ = writeln!(text, "  {name}:\n    zero: {{deflection_rad: {:.9}}}", d / f64::from(*n));
     }
+    for ((name, _), (sum, n)) in wrists.iter().zip(&wrist_sums) {
+        if *n == 0 {
+            return fail(format!("joint `{name}`: no fresh reading of all four carrier and bevel encoders in {} cycles", a.cycles));
+        }
+        let m = sum.map(|x| x / f64::from(*n));
+        let _ = writeln!(text, "  {name}:\n    zero: {{carrier_rad: [{:.9}, {:.9}], bevel_rad: [{:.9}, {:.9}]}}", m[0], m[1], m[2], m[3]);
+    }
     match &a.out {
         Some(path) => {
             if let Err(e) = std::fs::write(path, &text) {
                 return fail(format!("cannot write {}: {e}", path.display()));
             }
-            eprintln!("zeros of {} joint(s) written to {}", joints.len() + shoulders.len(), path.display());
+            eprintln!("zeros of {} joint(s) written to {}", joints.len() + shoulders.len() + wrists.len(), path.display());
         }
         None => print_out(&text),
     }
