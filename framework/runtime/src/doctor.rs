@@ -86,7 +86,7 @@ fn memory_lock() -> Check {
         (true, n) => format!("{} KiB", n / 1024),
     };
     // A real attempt: lock what this process has mapped now and will map, then let it go.
-    let locked = lock_all_memory().is_ok();
+    let locked = crate::timing::lock_all_memory().is_ok();
     if locked {
         // SAFETY: undoes the lock just taken; no memory is freed.
         unsafe { libc::munlockall() };
@@ -99,52 +99,15 @@ fn memory_lock() -> Check {
     )
 }
 
-/// Locks every page this process has mapped and will map (`mlockall`): no page fault stalls the
-/// loop once it runs.
-///
-/// # Errors
-/// The system refused (the memlock limit, no permission).
-pub fn lock_all_memory() -> std::io::Result<()> {
-    // With MCL_FUTURE, memory mapped beyond a finite memlock limit fails to map, and an
-    // allocation that fails aborts the program: lock only where no limit applies (an unlimited
-    // limit, or root, whom it does not bind).
-    let mut limit = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
-    // SAFETY: getrlimit writes the struct it is given; geteuid has no arguments.
-    let (known, root) = unsafe { (libc::getrlimit(libc::RLIMIT_MEMLOCK, &mut limit) == 0, libc::geteuid() == 0) };
-    let unlimited = known && limit.rlim_cur == libc::RLIM_INFINITY;
-    if !(root || unlimited) {
-        let shown = if known { format!("{} KiB", limit.rlim_cur / 1024) } else { "unknown".into() };
-        return Err(std::io::Error::other(format!("the memlock limit is {shown}, not unlimited: memory the runtime maps later would fail to map")));
-    }
-    // SAFETY: mlockall takes flags only.
-    if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
-}
-
 /// Runs `f` on a new thread (scheduling settings are per thread and must not stick to the
 /// caller's).
 fn on_own_thread<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> Option<T> {
     std::thread::spawn(f).join().ok()
 }
 
-fn set_fifo(priority: u8) -> std::io::Result<()> {
-    let param = libc::sched_param { sched_priority: i32::from(priority) };
-    // SAFETY: a valid sched_param for the calling thread.
-    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
-}
-
-fn pin(cpu: usize) -> std::io::Result<()> {
-    // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < 1024.
-    let ok = unsafe {
-        let mut set: libc::cpu_set_t = core::mem::zeroed();
-        libc::CPU_SET(cpu, &mut set);
-        libc::sched_setaffinity(0, core::mem::size_of::<libc::cpu_set_t>(), &set) == 0
-    };
-    if ok { Ok(()) } else { Err(std::io::Error::last_os_error()) }
-}
-
 fn realtime_priority(configured: Option<u8>) -> Check {
     let priority = configured.unwrap_or(1);
-    let result = on_own_thread(move || set_fifo(priority).map_err(|e| e.to_string())).unwrap_or_else(|| Err("the check's thread died".into()));
+    let result = on_own_thread(move || crate::timing::set_fifo(priority).map_err(|e| e.to_string())).unwrap_or_else(|| Err("the check's thread died".into()));
     let found = match (&result, configured) {
         (Ok(()), Some(p)) => format!("SCHED_FIFO at the configured priority {p} permitted"),
         (Ok(()), None) => "SCHED_FIFO permitted (timing.realtime_priority is not set: the loop runs without it)".to_string(),
@@ -235,7 +198,7 @@ fn lateness_1khz(seconds: f64, priority: Option<u8>, cpu: Option<usize>) -> Chec
     const PERIOD_NS: u64 = 1_000_000;
     let cycles = ((seconds * 1e3).ceil() as usize).max(10);
     let measured = on_own_thread(move || {
-        let applied = (priority.is_some_and(|p| set_fifo(p).is_ok()), cpu.is_some_and(|c| pin(c).is_ok()));
+        let applied = (priority.is_some_and(|p| crate::timing::set_fifo(p).is_ok()), cpu.is_some_and(|c| crate::timing::pin_to_cpu(c).is_ok()));
         let stop = crate::signals::StopRequest::manual();
         let mut pacer = crate::timing::Pacer::new(PERIOD_NS, 200_000);
         let (mut late, mut missed) = (Vec::with_capacity(cycles), 0u64);

@@ -586,27 +586,19 @@ impl Drop for ArmPublisher {
 /// Applies the timing settings that need privileges; says what it could not do.
 fn apply_thread_settings(timing: &TimingConfig) {
     if timing.lock_memory
-        && let Err(e) = crate::doctor::lock_all_memory()
+        && let Err(e) = crate::timing::lock_all_memory()
     {
         tracing::warn!("could not lock the runtime's memory (timing.lock_memory): {e}; page faults can stall the loop. Raise the memlock limit of this user (limits.conf `memlock unlimited`, or LimitMEMLOCK=infinity); `jointctl doctor` checks it");
     }
-    if let Some(cpu) = timing.cpu {
-        // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < 1024.
-        let ok = unsafe {
-            let mut set: libc::cpu_set_t = core::mem::zeroed();
-            libc::CPU_SET(cpu, &mut set);
-            libc::sched_setaffinity(0, core::mem::size_of::<libc::cpu_set_t>(), &set) == 0
-        };
-        if !ok {
-            tracing::warn!(cpu, "could not pin the loop thread: {}", std::io::Error::last_os_error());
-        }
+    if let Some(cpu) = timing.cpu
+        && let Err(e) = crate::timing::pin_to_cpu(cpu)
+    {
+        tracing::warn!(cpu, "could not pin the loop thread: {e}");
     }
-    if let Some(priority) = timing.realtime_priority {
-        let param = libc::sched_param { sched_priority: priority as i32 };
-        // SAFETY: valid sched_param for the calling thread.
-        if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
-            tracing::warn!(priority, "could not switch the loop to SCHED_FIFO: {}", std::io::Error::last_os_error());
-        }
+    if let Some(priority) = timing.realtime_priority
+        && let Err(e) = crate::timing::set_fifo(priority)
+    {
+        tracing::warn!(priority, "could not switch the loop to SCHED_FIFO: {e}");
     }
 }
 

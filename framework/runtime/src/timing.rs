@@ -21,6 +21,69 @@ fn sleep_until_ns(deadline_ns: u64) {
     unsafe { libc::clock_nanosleep(libc::CLOCK_MONOTONIC, libc::TIMER_ABSTIME, &ts, core::ptr::null_mut()) };
 }
 
+/// Locks every page this process has mapped and will map (`mlockall`): no page fault stalls the
+/// loop once it runs.
+///
+/// # Errors
+/// The system refused (the memlock limit, no permission).
+///
+/// ```no_run
+/// if let Err(e) = jointctl_runtime::timing::lock_all_memory() {
+///     eprintln!("page faults may stall the loop: {e}");
+/// }
+/// ```
+pub fn lock_all_memory() -> std::io::Result<()> {
+    // With MCL_FUTURE, memory mapped beyond a finite memlock limit fails to map, and an
+    // allocation that fails aborts the program: lock only where no limit applies (an unlimited
+    // limit, or root, whom it does not bind).
+    let mut limit = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+    // SAFETY: getrlimit writes the struct it is given; geteuid has no arguments.
+    let (known, root) = unsafe { (libc::getrlimit(libc::RLIMIT_MEMLOCK, &mut limit) == 0, libc::geteuid() == 0) };
+    let unlimited = known && limit.rlim_cur == libc::RLIM_INFINITY;
+    if !(root || unlimited) {
+        let shown = if known { format!("{} KiB", limit.rlim_cur / 1024) } else { "unknown".into() };
+        return Err(std::io::Error::other(format!("the memlock limit is {shown}, not unlimited: memory the runtime maps later would fail to map")));
+    }
+    // SAFETY: mlockall takes flags only.
+    if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
+}
+
+/// Runs the calling thread with SCHED_FIFO at `priority` (1-99).
+///
+/// # Errors
+/// The system refused (no CAP_SYS_NICE, RLIMIT_RTPRIO below `priority`).
+///
+/// ```no_run
+/// std::thread::spawn(|| jointctl_runtime::timing::set_fifo(80)).join().unwrap().ok();
+/// ```
+pub fn set_fifo(priority: u8) -> std::io::Result<()> {
+    let param = libc::sched_param { sched_priority: i32::from(priority) };
+    // SAFETY: a valid sched_param for the calling thread.
+    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
+}
+
+/// Pins the calling thread to CPU `cpu`.
+///
+/// # Errors
+/// The system refused (no such CPU, outside the process's affinity), or `cpu` is beyond what a
+/// CPU set holds (1024).
+///
+/// ```
+/// assert!(jointctl_runtime::timing::pin_to_cpu(5000).is_err());
+/// ```
+pub fn pin_to_cpu(cpu: usize) -> std::io::Result<()> {
+    if cpu >= libc::CPU_SETSIZE as usize {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("CPU {cpu} is beyond a CPU set's {}", libc::CPU_SETSIZE)));
+    }
+    // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < CPU_SETSIZE.
+    let ok = unsafe {
+        let mut set: libc::cpu_set_t = core::mem::zeroed();
+        libc::CPU_SET(cpu, &mut set);
+        libc::sched_setaffinity(0, core::mem::size_of::<libc::cpu_set_t>(), &set) == 0
+    };
+    if ok { Ok(()) } else { Err(std::io::Error::last_os_error()) }
+}
+
 /// Wakes the loop at `start + k * period`: sleeps until `spin` before the deadline, then spins.
 #[derive(Clone, Debug)]
 pub struct Pacer {
