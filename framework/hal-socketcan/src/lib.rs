@@ -104,6 +104,7 @@ struct Encoder {
     path: String,
     device: Option<spidev::Spidev>,
     offset_rad: f64,
+    reversed: bool,
     conditioner: Conditioner,
 }
 
@@ -381,6 +382,7 @@ impl HardwareHal {
                     path,
                     device,
                     offset_rad: e.offset_rad,
+                    reversed: e.reversed,
                     conditioner: Conditioner::new(Plausibility::absolute_encoder(e.max_velocity_rad_s)),
                 });
             }
@@ -470,7 +472,7 @@ impl Hal for HardwareHal {
         }
         for (i, e) in self.encoders.iter_mut().enumerate() {
             let sample = match spi_word(e, as5048::READ_ANGLE).map(as5048::decode) {
-                Some(Ok(counts)) => Sample::Value { value: as5048::counts_to_rad(counts) - e.offset_rad, age_s: 0.0 },
+                Some(Ok(counts)) => Sample::Value { value: as5048::joint_angle_rad(counts, e.offset_rad, e.reversed), age_s: 0.0 },
                 Some(Err(_)) => Sample::Invalid,
                 None => Sample::Missing,
             };

@@ -202,9 +202,15 @@ pub struct EncoderConfig {
     pub name: String,
     /// Chip-select line, 0-15.
     pub chip_select: u8,
-    /// Subtracted from the raw angle [rad].
+    /// Subtracted from the raw angle [rad]: the calibrated position zero.
     #[serde(default, deserialize_with = "finite")]
     pub offset_rad: f64,
+    /// The encoder is mounted to count against the joint's positive direction: its raw angle is
+    /// negated before `offset_rad` is subtracted (the position's sign; default false). The
+    /// simulated encoders model the mounting and this correction together, so a simulated
+    /// arm reads the same either way.
+    #[serde(default)]
+    pub reversed: bool,
     /// Fastest the measured angle can change [rad/s] (plausibility). Assumption: 10 rad/s.
     #[serde(default = "default_drive_rate", deserialize_with = "finite")]
     pub max_velocity_rad_s: f64,

@@ -50,6 +50,21 @@ pub fn counts_to_rad(counts: u16) -> f64 {
     counts as f64 * std::f64::consts::TAU / COUNTS as f64
 }
 
+/// The joint's angle from an encoder's counts [rad]: negated when the encoder is mounted to count
+/// against the joint's positive direction (`reversed`), then its `offset_rad` subtracted (the
+/// calibrated position zero).
+///
+/// ```
+/// use jointctl_hal::codec::as5048::{COUNTS, joint_angle_rad};
+/// let quarter = (COUNTS / 4) as u16;
+/// assert!((joint_angle_rad(quarter, 0.5, false) - (std::f64::consts::FRAC_PI_2 - 0.5)).abs() < 1e-12);
+/// assert!((joint_angle_rad(quarter, 0.5, true) - (-std::f64::consts::FRAC_PI_2 - 0.5)).abs() < 1e-12);
+/// ```
+pub fn joint_angle_rad(counts: u16, offset_rad: f64, reversed: bool) -> f64 {
+    let raw = counts_to_rad(counts);
+    (if reversed { -raw } else { raw }) - offset_rad
+}
+
 /// Angle → nearest counts (wrapped into one revolution): the 14-bit quantisation.
 pub fn rad_to_counts(rad: f64) -> u16 {
     let c = (rad / std::f64::consts::TAU * COUNTS as f64).round().rem_euclid(COUNTS as f64);
