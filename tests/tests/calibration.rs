@@ -6,6 +6,17 @@ use std::process::Command;
 use jointctl_runtime::PluginLoader;
 use jointctl_tests::{Edit, arm_name, jointctl, sherpa_with};
 
+/// Every DOF's state in the first cycle of the simulated SHERPA arm with `edits`, or why it
+/// did not activate.
+fn states_at_activation(test: &str, edits: &[Edit]) -> Result<Vec<jointctl_api::JointState>, jointctl_runtime::ActivateError> {
+    let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), edits)).unwrap();
+    let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+    arm.activate().map(|()| {
+        arm.step(0.0);
+        arm.states.clone()
+    })
+}
+
 /// `jointctl calibrate` on the simulated SHERPA arm (under a name of its own: each runtime of an
 /// arm takes its lock), as parsed YAML.
 fn calibrated(test: &str) -> serde_yaml::Value {
@@ -30,12 +41,7 @@ fn a_calibrated_joint_reads_its_deflection_at_start_and_refuses_one_outside_its_
     let (input, output) = (written["joints"]["q4"]["zero"]["input_rad"].as_f64().unwrap(), written["joints"]["q4"]["zero"]["output_rad"].as_f64().unwrap());
     let q4_torque_at_start = |test: &str, zero: Option<&str>| -> Result<f64, jointctl_runtime::ActivateError> {
         let edits: Vec<Edit> = zero.map(|z| Edit::Set("joints[q4].params.zero", serde_yaml::from_str(z).unwrap())).into_iter().collect();
-        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
-        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
-        arm.activate().map(|()| {
-            arm.step(0.0);
-            arm.states[3].torque().unwrap()
-        })
+        states_at_activation(test, &edits).map(|s| s[3].torque().unwrap())
     };
     assert!(q4_torque_at_start("zero-none", None).unwrap().abs() < 1e-6);
     // The calibrated zero itself reads no torque; its motor side moved by -0.01 rad, 0.02 rad.
@@ -57,12 +63,7 @@ fn a_calibrated_shoulder_reads_its_deflection_at_start_and_refuses_one_outside_i
     let zero = written["joints"]["shoulder"]["zero"]["deflection_rad"].as_f64().expect("the shoulder's zero");
     let q2_deflection_at_start = |test: &str, zero: Option<f64>| {
         let edits: Vec<Edit> = zero.map(|z| Edit::Set("joints[shoulder].params.zero", serde_yaml::from_str(&format!("{{deflection_rad: {z}}}")).unwrap())).into_iter().collect();
-        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &edits)).unwrap();
-        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
-        arm.activate().map(|()| {
-            arm.step(0.0);
-            arm.states[1].deflection().unwrap()
-        })
+        states_at_activation(test, &edits).map(|s| s[1].deflection().unwrap())
     };
     assert!(q2_deflection_at_start("q2-zero-none", None).unwrap().abs() < 1e-6);
     let offset = q2_deflection_at_start("q2-zero-offset", Some(zero - 0.01)).unwrap();
@@ -82,12 +83,8 @@ fn a_calibrated_wrist_reads_its_deflections_at_start_and_refuses_one_outside_its
     let (carrier, bevel): (Vec<f64>, Vec<f64>) = (serde_yaml::from_value(z["carrier_rad"].clone()).unwrap(), serde_yaml::from_value(z["bevel_rad"].clone()).unwrap());
     let deflections_at_start = |test: &str, bevel_a_offset: f64| -> Result<(f64, f64), jointctl_runtime::ActivateError> {
         let zero = format!("{{carrier_rad: [{}, {}], bevel_rad: [{}, {}]}}", carrier[0], carrier[1], bevel[0] + bevel_a_offset, bevel[1]);
-        let loaded = jointctl_config::load(sherpa_with(test, &arm_name(test), &[Edit::Set("joints[wrist].params.zero", serde_yaml::from_str(&zero).unwrap())])).unwrap();
-        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
-        arm.activate().map(|()| {
-            arm.step(0.0);
-            (arm.states[5].deflection().unwrap(), arm.states[6].deflection().unwrap())
-        })
+        let edits = [Edit::Set("joints[wrist].params.zero", serde_yaml::from_str(&zero).unwrap())];
+        states_at_activation(test, &edits).map(|s| (s[5].deflection().unwrap(), s[6].deflection().unwrap()))
     };
     let (d6, d7) = deflections_at_start("wrist-zero", 0.0).unwrap();
     assert!(d6.abs() < 1e-6 && d7.abs() < 1e-6, "{d6} {d7}");

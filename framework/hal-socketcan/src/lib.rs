@@ -144,64 +144,58 @@ impl CanBus {
 
     /// Blocking SDO write with a timeout (start-up only).
     fn sdo_write(&mut self, d: usize, index: u16, sub: u8, value: &[u8], timeout: Duration) -> Result<(), HalSetupError> {
-        let node = self.drives[d].node;
-        let name = self.drives[d].name.clone();
-        let field = format!("buses.can[{}].drives[{d}]", self.index);
-        let req = co::sdo_write(node, index, sub, value);
-        let cf = to_socketcan(&req).ok_or_else(|| HalSetupError::Config { field: field.clone(), message: "bad SDO frame".into() })?;
-        self.socket.write_frame(&cf).map_err(|e| HalSetupError::Config {
-            field: field.clone(),
-            message: format!("cannot send on {}: {e}", self.interface),
-        })?;
-        let deadline = Instant::now() + timeout;
-        while Instant::now() < deadline {
-            match self.socket.read_frame_timeout(deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1))) {
-                Ok(frame) => match from_socketcan(&frame).and_then(|f| co::decode_sdo_response(&f)) {
-                    Some(co::SdoResponse::WriteOk { node: n, index: i, sub: s }) if n == node && i == index && s == sub => return Ok(()),
-                    Some(co::SdoResponse::Abort { node: n, index: i, sub: s, code }) if n == node && i == index && s == sub => {
-                        return Err(HalSetupError::Config {
-                            field,
-                            message: format!("drive `{name}` (node {node} on {}) refused SDO write {index:#06x}:{sub:02x} (abort code {code:#010x})", self.interface),
-                        });
-                    }
-                    _ => {}
-                },
-                Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::TimedOut => {}
-                Err(e) => {
-                    return Err(HalSetupError::Config { field, message: format!("cannot read from {}: {e}", self.interface) });
-                }
-            }
-        }
-        Err(HalSetupError::Config {
-            field,
-            message: format!(
-                "drive `{name}` (node {node} on {}) did not answer SDO write {index:#06x}:{sub:02x} within {:.0} ms: is it powered and its node id right?",
-                self.interface,
-                timeout.as_secs_f64() * 1e3
-            ),
-        })
+        let req = co::sdo_write(self.drives[d].node, index, sub, value);
+        self.sdo_exchange(d, &req, "write", index, sub, timeout, |r| matches!(r, co::SdoResponse::WriteOk { .. }).then_some(()))
     }
 
     /// Blocking SDO read of an expedited value with a timeout (start-up only).
     fn sdo_read(&mut self, d: usize, index: u16, sub: u8, timeout: Duration) -> Result<u32, HalSetupError> {
+        let req = co::sdo_read(self.drives[d].node, index, sub);
+        self.sdo_exchange(d, &req, "read", index, sub, timeout, |r| match r {
+            co::SdoResponse::Value { value, .. } => Some(value),
+            _ => None,
+        })
+    }
+
+    /// Sends an SDO request to drive `d` and waits for its answer about `index:sub`: what
+    /// `answer` takes from it, or an error for an abort, a bus failure or no answer in time.
+    #[allow(clippy::too_many_arguments)]
+    fn sdo_exchange<T>(
+        &mut self,
+        d: usize,
+        req: &Frame,
+        what: &str,
+        index: u16,
+        sub: u8,
+        timeout: Duration,
+        answer: impl Fn(co::SdoResponse) -> Option<T>,
+    ) -> Result<T, HalSetupError> {
         let node = self.drives[d].node;
         let name = self.drives[d].name.clone();
         let field = format!("buses.can[{}].drives[{d}]", self.index);
-        let req = co::sdo_read(node, index, sub);
-        let cf = to_socketcan(&req).ok_or_else(|| HalSetupError::Config { field: field.clone(), message: "bad SDO frame".into() })?;
+        let cf = to_socketcan(req).ok_or_else(|| HalSetupError::Config { field: field.clone(), message: "bad SDO frame".into() })?;
         self.socket.write_frame(&cf).map_err(|e| HalSetupError::Config { field: field.clone(), message: format!("cannot send on {}: {e}", self.interface) })?;
+        let about = |r: &co::SdoResponse| match *r {
+            co::SdoResponse::WriteOk { node: n, index: i, sub: s } | co::SdoResponse::Value { node: n, index: i, sub: s, .. } | co::SdoResponse::Abort { node: n, index: i, sub: s, .. } => {
+                (n, i, s) == (node, index, sub)
+            }
+        };
         let deadline = Instant::now() + timeout;
         while Instant::now() < deadline {
             match self.socket.read_frame_timeout(deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1))) {
-                Ok(frame) => match from_socketcan(&frame).and_then(|f| co::decode_sdo_response(&f)) {
-                    Some(co::SdoResponse::Value { node: n, index: i, sub: s, value, .. }) if n == node && i == index && s == sub => return Ok(value),
-                    Some(co::SdoResponse::Abort { node: n, index: i, sub: s, code }) if n == node && i == index && s == sub => {
+                Ok(frame) => match from_socketcan(&frame).and_then(|f| co::decode_sdo_response(&f)).filter(about) {
+                    Some(co::SdoResponse::Abort { code, .. }) => {
                         return Err(HalSetupError::Config {
                             field,
-                            message: format!("drive `{name}` (node {node} on {}) refused SDO read {index:#06x}:{sub:02x} (abort code {code:#010x})", self.interface),
+                            message: format!("drive `{name}` (node {node} on {}) refused SDO {what} {index:#06x}:{sub:02x} (abort code {code:#010x})", self.interface),
                         });
                     }
-                    _ => {}
+                    Some(r) => {
+                        if let Some(v) = answer(r) {
+                            return Ok(v);
+                        }
+                    }
+                    None => {}
                 },
                 Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::TimedOut => {}
                 Err(e) => return Err(HalSetupError::Config { field, message: format!("cannot read from {}: {e}", self.interface) }),
@@ -209,7 +203,11 @@ impl CanBus {
         }
         Err(HalSetupError::Config {
             field,
-            message: format!("drive `{name}` (node {node} on {}) did not answer SDO read {index:#06x}:{sub:02x} within {:.0} ms", self.interface, timeout.as_secs_f64() * 1e3),
+            message: format!(
+                "drive `{name}` (node {node} on {}) did not answer SDO {what} {index:#06x}:{sub:02x} within {:.0} ms: is it powered and its node id right?",
+                self.interface,
+                timeout.as_secs_f64() * 1e3
+            ),
         })
     }
 

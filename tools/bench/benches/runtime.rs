@@ -54,6 +54,14 @@ fn compute_ns(arm: &mut Arm, batch: usize) -> f64 {
     t.elapsed().as_nanos() as f64 / batch as f64
 }
 
+/// `rounds` of [`compute_ns`] on `a` then `b` in turn, after one warm-up batch each, so that
+/// machine noise hits both alike: each arm's ns per cycle, round by round.
+fn interleaved(a: &mut Arm, b: &mut Arm, batch: usize, rounds: usize) -> (Vec<f64>, Vec<f64>) {
+    compute_ns(a, batch);
+    compute_ns(b, batch);
+    (0..rounds).map(|_| (compute_ns(a, batch), compute_ns(b, batch))).unzip()
+}
+
 /// A busy-polling inspector thread on `arm`'s joint-state service: collects, until the flag is
 /// set, how long after each sample's `stamp_ns` it arrived [ns].
 fn latency_subscriber(arm: &'static str) -> (std::sync::Arc<std::sync::atomic::AtomicBool>, std::thread::JoinHandle<Vec<u64>>) {
@@ -101,13 +109,7 @@ fn main() {
     let (mut static_arm, _) = build(true, 1000.0, "bench-b");
     let batch = if quick { 2_000 } else { 20_000 };
     let rounds = if quick { 5 } else { 21 };
-    let (mut l, mut s) = (Vec::new(), Vec::new());
-    compute_ns(&mut loaded_arm, batch);
-    compute_ns(&mut static_arm, batch);
-    for _ in 0..rounds {
-        l.push(compute_ns(&mut loaded_arm, batch));
-        s.push(compute_ns(&mut static_arm, batch));
-    }
+    let (mut l, mut s) = interleaved(&mut loaded_arm, &mut static_arm, batch, rounds);
     let (lm, sm) = (median(&mut l), median(&mut s));
     let mut ratios: Vec<f64> = l.iter().zip(&s).map(|(a, b)| a / b).collect();
     println!("## Cycle compute, 7-joint SHERPA config (read HAL + observe + control + write HAL), {rounds} x {batch} cycles");
@@ -131,13 +133,7 @@ fn main() {
     };
     let (mut on_arm, _) = build_with(true, 1000.0, "bench-guard-on", checked(true));
     let (mut off_arm, _) = build_with(true, 1000.0, "bench-guard-off", checked(false));
-    let (mut on, mut off) = (Vec::new(), Vec::new());
-    compute_ns(&mut on_arm, batch);
-    compute_ns(&mut off_arm, batch);
-    for _ in 0..rounds {
-        on.push(compute_ns(&mut on_arm, batch));
-        off.push(compute_ns(&mut off_arm, batch));
-    }
+    let (mut on, mut off) = interleaved(&mut on_arm, &mut off_arm, batch, rounds);
     let mut ratios: Vec<f64> = on.iter().zip(&off).map(|(a, b)| a / b).collect();
     println!("## The set-point check (every drive's window and rate), statically linked, {rounds} x {batch} cycles");
     println!("| check | median ns/cycle |");
