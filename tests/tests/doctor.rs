@@ -57,3 +57,18 @@ fn lock_memory_locks_the_runtime_or_says_why_not() {
     assert!(locked_kb > 0 || err.contains("could not lock the runtime's memory (timing.lock_memory)"), "VmLck {locked_kb} kB, stderr: {err}");
     println!("VmLck {locked_kb} kB");
 }
+
+/// A CPU the machine lacks, asked for in `timing.cpu`: the runtime says so for the loop and for
+/// the thread that publishes its state, and runs on unpinned.
+#[test]
+fn a_cpu_the_machine_cannot_give_is_a_warning_for_the_loop_and_its_publisher() {
+    let arm = jointctl_tests::arm_name("cpu-warning");
+    let yaml = scratch("cpu-warning").join("rig.yaml");
+    let missing_cpu = std::thread::available_parallelism().map_or(1, |n| n.get()) + 60;
+    std::fs::write(&yaml, jointctl_tests::rig_yaml(&arm, 200.0, "").replace("timing: {spin_us: 100}", &format!("timing: {{spin_us: 100, cpu: {missing_cpu}}}"))).unwrap();
+    let out = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "20"]).env("RUST_LOG", "warn").output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("could not pin the loop thread") && err.contains("could not pin the publisher thread beside the loop"), "{err}");
+    assert!(err.contains("20 cycles"), "{err}");
+}

@@ -4,8 +4,8 @@ use std::collections::{HashMap, HashSet};
 
 use crate::model::{ArmConfig, LimitsConfig};
 
-/// Most DOFs one arm may publish (the size of the shared-memory sample).
-pub use jointctl_api::MAX_ARM_DOF;
+/// Bounds on any arm description (published or not).
+pub use jointctl_api::{MAX_LOOP_DEVICES, MAX_LOOP_DOF};
 /// Longest joint name (it is published in a fixed 16-byte field, NUL-terminated).
 pub use jointctl_api::MAX_JOINT_NAME;
 
@@ -272,8 +272,8 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             }
         }
     }
-    if c.buses.force_torque.len() > jointctl_api::MAX_ARM_TORQUE_SENSORS {
-        err("buses.force_torque".into(), format!("{} force/torque sensors exceed the maximum of {}", c.buses.force_torque.len(), jointctl_api::MAX_ARM_TORQUE_SENSORS));
+    if c.buses.force_torque.len() > MAX_LOOP_DEVICES {
+        err("buses.force_torque".into(), format!("{} force/torque sensors exceed the maximum of {MAX_LOOP_DEVICES}", c.buses.force_torque.len()));
     }
     for (j, joint) in c.joints.iter().enumerate() {
         if !joint.dofs.is_empty() && joint.torque_sensor.is_some() {
@@ -396,17 +396,19 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             }
         }
     }
-    if total_dof > MAX_ARM_DOF {
-        err("joints".into(), format!("{total_dof} DOFs exceed the maximum of {MAX_ARM_DOF}"));
+    // Bounds on what one runtime builds; whether the arm fits the shared-memory samples
+    // (jointctl_api::MAX_ARM_DOF and its kin) is checked where they are made, so that a bigger
+    // arm can still run without publishing.
+    if total_dof > MAX_LOOP_DOF {
+        err("joints".into(), format!("{total_dof} DOFs exceed the maximum of {MAX_LOOP_DOF}"));
     }
-    // Raw readings travel in fixed-size shared-memory samples.
     let encoders: usize = c.buses.spi.iter().map(|b| b.encoders.len()).sum();
-    if encoders > jointctl_api::MAX_ARM_ENCODERS {
-        err("buses.spi".into(), format!("{encoders} encoders exceed the maximum of {}", jointctl_api::MAX_ARM_ENCODERS));
+    if encoders > MAX_LOOP_DEVICES {
+        err("buses.spi".into(), format!("{encoders} encoders exceed the maximum of {MAX_LOOP_DEVICES}"));
     }
     let drives: usize = c.buses.can.iter().map(|b| b.drives.len()).sum();
-    if drives > jointctl_api::MAX_ARM_DRIVES {
-        err("buses.can".into(), format!("{drives} drives exceed the maximum of {}", jointctl_api::MAX_ARM_DRIVES));
+    if drives > MAX_LOOP_DEVICES {
+        err("buses.can".into(), format!("{drives} drives exceed the maximum of {MAX_LOOP_DEVICES}"));
     }
     errs
 }

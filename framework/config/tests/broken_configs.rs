@@ -180,12 +180,33 @@ fn a_huge_value_is_shortened_in_the_error() {
 }
 
 #[test]
-fn more_encoders_than_a_raw_frame_carries_are_refused_at_the_bus() {
-    // Raw readings travel in fixed-size shared-memory samples (`<arm>/raw`): an arm with more
-    // devices than they hold would lose some silently.
-    let extra: String = (2..=jointctl_api::MAX_ARM_ENCODERS).map(|i| format!("        - {{name: x{i}, chip_select: {}}}\n", i + 10)).collect();
-    let text = GOOD.replacen("        - {name: e2, chip_select: 1}\n", &format!("        - {{name: e2, chip_select: 1}}\n{extra}"), 1);
+fn more_encoders_than_one_runtime_builds_are_refused_at_the_bus() {
+    // Whether an arm fits the shared-memory samples is the publisher's check (a bigger arm runs
+    // without publishing); a description beyond what one runtime builds is refused here.
+    let buses = jointctl_config::MAX_LOOP_DEVICES / 16 + 1;
+    let extra: String = (0..buses)
+        .map(|b| {
+            let encoders: String = (0..16).map(|cs| format!("        - {{name: x{b}_{cs}, chip_select: {cs}}}\n")).collect();
+            format!("    - device: /dev/spidev9.{b}\n      encoders:\n{encoders}")
+        })
+        .collect();
+    let text = GOOD.replacen("joints:\n", &format!("{extra}joints:\n"), 1);
     let errs = parse_str(&text, "rig.yaml").unwrap_err();
     let e = errs.0.iter().find(|e| e.field == "buses.spi").unwrap_or_else(|| panic!("{errs:?}"));
-    assert!(e.message.contains("33 encoders exceed the maximum of 32"), "{}", e.message);
+    let expected = format!("{} encoders exceed the maximum of {}", buses * 16 + 2, jointctl_config::MAX_LOOP_DEVICES);
+    assert!(e.message.contains(&expected), "{}", e.message);
+}
+
+#[test]
+fn an_arm_bigger_than_the_shared_memory_samples_is_a_valid_description() {
+    // 17 DOFs: one more than jointctl_api::MAX_ARM_DOF; the runtime decides whether it publishes.
+    let joints: String = (3..=17).map(|i| format!("  - {{name: q{i}, plugin: rigid, encoders: {{output: e{i}}}, drives: {{motor: m{i}}}}}\n")).collect();
+    let drives: String = (3..=17).map(|i| format!("        - {{name: m{i}, node_id: {i}}}\n")).collect();
+    let encoders: String = (3..=17).map(|i| format!("        - {{name: e{i}, chip_select: {}}}\n", i % 16)).collect();
+    let text = GOOD
+        .replacen("        - {name: m2, node_id: 2}\n", &format!("        - {{name: m2, node_id: 2}}\n{drives}"), 1)
+        .replacen("joints:\n", &format!("    - device: /dev/spidev1\n      encoders:\n{encoders}joints:\n"), 1)
+        + &joints;
+    const { assert!(jointctl_api::MAX_ARM_DOF < 17) };
+    parse_str(&text, "rig.yaml").unwrap_or_else(|e| panic!("{e}"));
 }

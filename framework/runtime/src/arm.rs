@@ -217,6 +217,9 @@ pub struct Arm {
     pub now_s: f64,
     /// HAL read or write failures.
     pub hal_errors: u64,
+    /// CLOCK_MONOTONIC time the current cycle's HAL read returned [ns]: the readings in hand
+    /// (the simulated HAL steps its physics inside the read).
+    pub readings_ns: u64,
     sensor: SensorFrame,
     actuator: ActuatorFrame,
     hal: Box<dyn Hal>,
@@ -482,6 +485,7 @@ impl Arm {
             stop_requested: false,
             now_s: 0.0,
             hal_errors: 0,
+            readings_ns: 0,
             sensor: SensorFrame::new(&devices),
             actuator: ActuatorFrame::new(&devices),
             hal,
@@ -555,6 +559,7 @@ impl Arm {
             // The HAL marks what it could not read as stale or missing; the count is published.
             self.hal_errors += 1;
         }
+        self.readings_ns = monotonic_ns();
         for slot in &mut self.slots {
             slot.gather(&self.sensor, stamp_s, self.dt_s);
             let out = &mut self.states[slot.dofs.clone()];

@@ -19,7 +19,7 @@ pub mod timing;
 
 pub use arm::{ActivateError, Arm, JointSlot};
 pub use loader::{LoadPluginError, PluginLoader, PluginSource};
-pub use runner::{ArmPublisher, ControlLoop, RunError, RunOptions, RunReport, run};
+pub use runner::{ArmPublisher, ControlLoop, HopSample, RunError, RunOptions, RunReport, fits_shared_memory, run};
 
 use jointctl_config::LoadedConfig;
 

@@ -65,6 +65,18 @@ pub enum RunError {
         /// iceoryx2's reason.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// The arm has more of something than its shared-memory samples carry.
+    #[error("arm `{arm}` has {count} {what}; its shared-memory samples carry at most {max}: run it without publishing (`jointctl run --no-ipc`) or split it into arms of at most {max}")]
+    TooLargeToPublish {
+        /// Arm name.
+        arm: String,
+        /// "DOFs", "encoders", "drives", "force/torque sensors" or "devices".
+        what: &'static str,
+        /// How many the arm has.
+        count: usize,
+        /// How many the samples carry.
+        max: usize,
+    },
     /// The publisher thread could not start.
     #[error("cannot start the publisher thread: {0}")]
     Thread(String),
@@ -139,6 +151,34 @@ struct CycleRecord {
     state: ArmState,
     diagnostics: Diagnostics,
     raw: RawFrame,
+    /// When the HAL read returned, when the cycle's work ended and when the record went into
+    /// the ring [ns, CLOCK_MONOTONIC]; written only while a [`HopSample`] log is kept (0
+    /// otherwise).
+    readings_ns: u64,
+    done_ns: u64,
+    handed_ns: u64,
+}
+
+/// Where one cycle's state spent its time between the sensor read and iceoryx2, all
+/// CLOCK_MONOTONIC [ns]: kept by the publisher thread when asked for
+/// ([`ArmPublisher::with_hop_log`]) so that a benchmark can split the sensor → inspector latency
+/// hop by hop (the inspector's receive time is the subscriber's to take).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HopSample {
+    /// The cycle.
+    pub cycle: u64,
+    /// The sensor read began: the sample's `stamp_ns`.
+    pub read_ns: u64,
+    /// The HAL read returned: the readings in hand (the simulated HAL's physics in between).
+    pub readings_ns: u64,
+    /// The cycle's control work ended (set-points written).
+    pub done_ns: u64,
+    /// The record was handed to the publisher thread (state and diagnostics filled).
+    pub handed_ns: u64,
+    /// The publisher thread took it from the ring.
+    pub taken_ns: u64,
+    /// The joint-state sample was sent (iceoryx2's `send` returned).
+    pub sent_ns: u64,
 }
 
 /// Capacity of the loop → publisher ring [cycles]: 64 ms at 1 kHz before records are dropped.
@@ -319,15 +359,24 @@ impl PublisherPorts {
         mut commands: rtrb::Producer<ArmCommand>,
         mut desk: CommandDesk,
         stop: &AtomicBool,
-    ) -> u64 {
+        hop_log_capacity: usize,
+    ) -> (u64, Vec<HopSample>) {
         let mut failures = 0u64;
+        // Allocated here, on the publisher thread, once.
+        let mut hops = Vec::with_capacity(hop_log_capacity);
         let mut accepted_count = 0u64;
         let mut faults_seen = [0u64; jointctl_ipc::MAX_JOINTS];
         loop {
             let stopping = stop.load(Ordering::Acquire);
             while let Ok(rec) = records.pop() {
-                log_new_faults(&rec.diagnostics, &mut faults_seen);
+                // The final sample, published outside any cycle, has no hops.
+                let taken_ns = if hops.len() < hop_log_capacity && rec.state.final_sample == 0 { monotonic_ns() } else { 0 };
                 let ok_state = self.state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
+                if taken_ns != 0 {
+                    let (cycle, read_ns) = (rec.state.cycle, rec.state.stamp_ns);
+                    hops.push(HopSample { cycle, read_ns, readings_ns: rec.readings_ns, done_ns: rec.done_ns, handed_ns: rec.handed_ns, taken_ns, sent_ns: monotonic_ns() });
+                }
+                log_new_faults(&rec.diagnostics, &mut faults_seen);
                 let ok_diag = self.diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
                 let ok_raw = self.raw.loan_uninit().map(|s| s.write_payload(rec.raw).send().is_ok()).unwrap_or(false);
                 failures += u64::from(!ok_state) + u64::from(!ok_diag) + u64::from(!ok_raw);
@@ -362,7 +411,7 @@ impl PublisherPorts {
         let PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server } = self;
         // Ports before the node: shared memory released in order.
         drop((server, state, diagnostics, raw, descriptor, joints, accepted, node));
-        failures
+        (failures, hops)
     }
 }
 
@@ -380,6 +429,24 @@ fn fill_raw(raw: &mut RawFrame, arm: &Arm) {
     }
 }
 
+/// Refuses an arm with more DOFs or devices than the shared-memory samples carry: the
+/// samples are fixed-size, and filling them from a bigger arm would drop joints or devices
+/// without a word.
+pub fn fits_shared_memory(arm: &Arm) -> Result<(), RunError> {
+    let (encoders, drives) = arm.raw_devices();
+    let counts = [
+        ("DOFs", arm.dof_names.len(), jointctl_ipc::MAX_JOINTS),
+        ("encoders", encoders.len(), jointctl_ipc::raw::MAX_RAW_ENCODERS),
+        ("drives", drives.len(), jointctl_ipc::raw::MAX_RAW_DRIVES),
+        ("force/torque sensors", arm.torque_sensor_names().len(), jointctl_ipc::raw::MAX_RAW_TORQUE_SENSORS),
+        ("devices (drives, encoders and force/torque sensors)", arm.device_names().count(), jointctl_ipc::MAX_DEVICES),
+    ];
+    match counts.into_iter().find(|&(_, count, max)| count > max) {
+        Some((what, count, max)) => Err(RunError::TooLargeToPublish { arm: arm.name.clone(), what, count, max }),
+        None => Ok(()),
+    }
+}
+
 /// The loop's shared-memory side.
 ///
 /// iceoryx2 0.10 allocates a small reference count in every `loan`, so the control thread never
@@ -392,9 +459,15 @@ pub struct ArmPublisher {
     commands: rtrb::Consumer<ArmCommand>,
     status: Arc<crate::status::LoopStatus>,
     record: Box<CycleRecord>,
-    thread: Option<std::thread::JoinHandle<u64>>,
+    thread: Option<std::thread::JoinHandle<(u64, Vec<HopSample>)>>,
+    /// The publisher thread's Linux thread id, for its scheduling settings.
+    thread_tid: libc::pid_t,
     stop: Arc<AtomicBool>,
     drops: u64,
+    /// Stamps each record's hand-off for the publisher thread's [`HopSample`] log.
+    log_hops: bool,
+    hops: Vec<HopSample>,
+    failures: u64,
 }
 
 impl ArmPublisher {
@@ -407,12 +480,21 @@ impl ArmPublisher {
     /// [`ArmPublisher::new`] in a whole scope (domain, root), admitting `limits` subscribers and
     /// command clients (the YAML's `ipc` section).
     pub fn with_limits(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
+        Self::with_hop_log(arm, scope, limits, 0)
+    }
+
+    /// [`ArmPublisher::with_limits`], and the publisher thread logs where the first
+    /// `capacity` cycles' states spent their time ([`HopSample`], read after [`ArmPublisher::close`]
+    /// with [`ArmPublisher::hops`]): one clock read more per cycle on the loop thread, two on
+    /// the publisher's; the log's memory is taken once, on the publisher thread.
+    pub fn with_hop_log(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits, capacity: usize) -> Result<Self, RunError> {
+        fits_shared_memory(arm)?;
         let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
         let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
         let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
         let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)).with_loop_rate(1.0 / arm.dt_s), arm.dt_s);
         let stop = Arc::new(AtomicBool::new(false));
-        let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), RunError>>();
+        let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<libc::pid_t, RunError>>();
         let arm_name = arm.name.clone();
         let scope = scope.clone();
         let (encoders, drives) = arm.raw_devices();
@@ -425,27 +507,27 @@ impl ArmPublisher {
             .spawn(move || {
                 let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description, &instances) {
                     Ok(ports) => {
-                        let _ = ready_tx.send(Ok(()));
+                        let _ = ready_tx.send(Ok(crate::timing::thread_id()));
                         ports
                     }
                     Err(e) => {
                         let _ = ready_tx.send(Err(e));
-                        return 0;
+                        return (0, Vec::new());
                     }
                 };
-                ports.serve(consumer, command_producer, desk, &thread_stop)
+                ports.serve(consumer, command_producer, desk, &thread_stop, capacity)
             })
             .map_err(|e| RunError::Thread(e.to_string()))?;
-        match ready_rx.recv() {
-            Ok(Ok(())) => {}
+        let thread_tid = match ready_rx.recv() {
+            Ok(Ok(tid)) => tid,
             Ok(Err(e)) => {
                 let _ = thread.join();
                 return Err(e);
             }
             Err(_) => return Err(RunError::Thread("the publisher thread ended during setup".into())),
-        }
+        };
         // Every cycle's raw frame holds the described devices: the activation frame's shape.
-        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: description.activation });
+        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: description.activation, readings_ns: 0, done_ns: 0, handed_ns: 0 });
         record.state.joint_count = arm.dof_names.len() as u32;
         record.diagnostics.joint_count = record.state.joint_count;
         record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
@@ -460,7 +542,7 @@ impl ArmPublisher {
         }
         record.diagnostics.device_count = devices as u32;
         let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
-        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), stop, drops: 0 })
+        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0 })
     }
 
     /// Fills the state and raw parts of this cycle's record.
@@ -550,6 +632,10 @@ impl ArmPublisher {
         for (d, h) in self.record.diagnostics.devices.iter_mut().zip(&self.health) {
             (d.missing, d.invalid, d.implausible, d.emcy, d.flags) = (h.missing, h.invalid, h.implausible, h.emcy, h.flags);
         }
+        if self.log_hops {
+            self.record.readings_ns = arm.readings_ns;
+            self.record.handed_ns = monotonic_ns();
+        }
         if self.producer.push(*self.record).is_err() {
             self.drops += 1;
         }
@@ -567,13 +653,17 @@ impl ArmPublisher {
     /// the samples iceoryx2 refused.
     pub fn close(&mut self) -> u64 {
         self.stop.store(true, Ordering::Release);
-        match self.thread.take() {
-            Some(t) => {
-                t.thread().unpark();
-                t.join().unwrap_or(0)
-            }
-            None => 0,
+        if let Some(t) = self.thread.take() {
+            t.thread().unpark();
+            (self.failures, self.hops) = t.join().unwrap_or_default();
         }
+        self.failures
+    }
+
+    /// The publisher thread's [`HopSample`] log ([`ArmPublisher::with_hop_log`]), in cycle
+    /// order; empty before [`ArmPublisher::close`] or when no log was asked for.
+    pub fn hops(&self) -> &[HopSample] {
+        &self.hops
     }
 }
 
@@ -583,8 +673,10 @@ impl Drop for ArmPublisher {
     }
 }
 
-/// Applies the timing settings that need privileges; says what it could not do.
-fn apply_thread_settings(timing: &TimingConfig) {
+/// Applies the timing settings that need privileges; says what it could not do. The publisher
+/// thread (`publisher_tid`) follows the loop: one priority below it and on its CPU, so that it
+/// runs as soon as the loop sleeps after handing a cycle over, and never before the loop.
+fn apply_thread_settings(timing: &TimingConfig, publisher_tid: Option<libc::pid_t>) {
     if timing.lock_memory
         && let Err(e) = crate::timing::lock_all_memory()
     {
@@ -599,6 +691,17 @@ fn apply_thread_settings(timing: &TimingConfig) {
         && let Err(e) = crate::timing::set_fifo(priority)
     {
         tracing::warn!(priority, "could not switch the loop to SCHED_FIFO: {e}");
+    }
+    let Some(tid) = publisher_tid else { return };
+    if let Some(cpu) = timing.cpu
+        && let Err(e) = crate::timing::pin_to_cpu_of(tid, cpu)
+    {
+        tracing::warn!(cpu, "could not pin the publisher thread beside the loop: {e}");
+    }
+    if let Some(priority) = timing.realtime_priority
+        && let Err(e) = crate::timing::set_fifo_of(tid, priority.saturating_sub(1).max(1))
+    {
+        tracing::warn!(priority, "could not switch the publisher thread to SCHED_FIFO: {e}");
     }
 }
 
@@ -640,6 +743,7 @@ impl<'a> ControlLoop<'a> {
         let missed = pacer.map_or(0, |p| p.advance(done));
         self.stats.record(woke_ns.saturating_sub(deadline_ns), done - woke_ns, missed);
         if let Some(p) = self.publisher.as_deref_mut() {
+            p.record.done_ns = done;
             p.publish_state(self.arm, self.cycle, woke_ns, false);
             p.publish_diagnostics(self.arm, &self.stats, self.cycle, woke_ns);
         }
@@ -689,7 +793,7 @@ pub fn run(
         Some(s) => s.clone(),
         None => StopRequest::install().map_err(RunError::Signals)?,
     };
-    apply_thread_settings(timing);
+    apply_thread_settings(timing, publisher.as_ref().map(|p| p.thread_tid));
     let period_ns = (1e9 / arm.rate_hz).round() as u64;
     let max_cycles = opts.cycles.unwrap_or(u64::MAX);
     let end_ns = opts.duration_s.map(|d| monotonic_ns() + (d * 1e9) as u64);

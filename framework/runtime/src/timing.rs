@@ -57,9 +57,22 @@ pub fn lock_all_memory() -> std::io::Result<()> {
 /// std::thread::spawn(|| jointctl_runtime::timing::set_fifo(80)).join().unwrap().ok();
 /// ```
 pub fn set_fifo(priority: u8) -> std::io::Result<()> {
+    set_fifo_of(0, priority)
+}
+
+/// Runs thread `tid` (a Linux thread id, `gettid`; 0 for the calling thread) with SCHED_FIFO at
+/// `priority` (1-99).
+///
+/// # Errors
+/// As [`set_fifo`], or no such thread.
+///
+/// ```
+/// assert!(jointctl_runtime::timing::set_fifo_of(-1, 10).is_err());
+/// ```
+pub fn set_fifo_of(tid: libc::pid_t, priority: u8) -> std::io::Result<()> {
     let param = libc::sched_param { sched_priority: i32::from(priority) };
-    // SAFETY: a valid sched_param for the calling thread.
-    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
+    // SAFETY: a valid sched_param; the kernel checks the thread id.
+    if unsafe { libc::sched_setscheduler(tid, libc::SCHED_FIFO, &param) } == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
 }
 
 /// Pins the calling thread to CPU `cpu`.
@@ -72,16 +85,39 @@ pub fn set_fifo(priority: u8) -> std::io::Result<()> {
 /// assert!(jointctl_runtime::timing::pin_to_cpu(5000).is_err());
 /// ```
 pub fn pin_to_cpu(cpu: usize) -> std::io::Result<()> {
+    pin_to_cpu_of(0, cpu)
+}
+
+/// Pins thread `tid` (a Linux thread id; 0 for the calling thread) to CPU `cpu`.
+///
+/// # Errors
+/// As [`pin_to_cpu`], or no such thread.
+///
+/// ```
+/// assert!(jointctl_runtime::timing::pin_to_cpu_of(-1, 0).is_err());
+/// ```
+pub fn pin_to_cpu_of(tid: libc::pid_t, cpu: usize) -> std::io::Result<()> {
     if cpu >= libc::CPU_SETSIZE as usize {
         return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("CPU {cpu} is beyond a CPU set's {}", libc::CPU_SETSIZE)));
     }
-    // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < CPU_SETSIZE.
+    // SAFETY: a zeroed cpu_set_t is valid; CPU_SET stays within it for cpu < CPU_SETSIZE; the
+    // kernel checks the thread id.
     let ok = unsafe {
         let mut set: libc::cpu_set_t = core::mem::zeroed();
         libc::CPU_SET(cpu, &mut set);
-        libc::sched_setaffinity(0, core::mem::size_of::<libc::cpu_set_t>(), &set) == 0
+        libc::sched_setaffinity(tid, core::mem::size_of::<libc::cpu_set_t>(), &set) == 0
     };
     if ok { Ok(()) } else { Err(std::io::Error::last_os_error()) }
+}
+
+/// The calling thread's Linux thread id.
+///
+/// ```
+/// assert!(jointctl_runtime::timing::thread_id() > 0);
+/// ```
+pub fn thread_id() -> libc::pid_t {
+    // SAFETY: gettid has no arguments and cannot fail.
+    unsafe { libc::gettid() }
 }
 
 /// Wakes the loop at `start + k * period`: sleeps until `spin` before the deadline, then spins.

@@ -148,6 +148,8 @@ pub struct SimHal {
     /// conditioner.
     torque_sensors: Vec<((usize, usize), f64, Conditioner)>,
     counts_per_rad: Vec<f64>,
+    /// Each drive's CANopen node id (its TPDO1's COB-ID), as configured.
+    node_ids: Vec<u8>,
     noise_rad: f64,
     loss_rate: f64,
     loss_mode: CanLossMode,
@@ -359,6 +361,7 @@ impl SimHal {
             drive_conditioners: drive_cfgs.iter().map(|d| Conditioner::new(Plausibility::drive_position(d.max_velocity_rad_s))).collect(),
             torque_sensors,
             counts_per_rad: drive_cfgs.iter().map(|d| d.counts_per_rad).collect(),
+            node_ids: drive_cfgs.iter().map(|d| d.node_id).collect(),
             encoders,
             quantized,
             encoder_faults: vec![None; offsets.len()],
@@ -529,8 +532,8 @@ impl Hal for SimHal {
             let counts = (position * self.counts_per_rad[i]).round() as i32;
             let lost = self.loss_rate > 0.0 && self.rng.uniform() < self.loss_rate;
             let frame_out = match (lost, self.loss_mode) {
-                (false, _) => Some(canopen::tpdo1(i as u8 + 1, 0x0237, counts)),
-                (true, CanLossMode::Zero) => Some(canopen::tpdo1(i as u8 + 1, 0x0237, 0)),
+                (false, _) => Some(canopen::tpdo1(self.node_ids[i], 0x0237, counts)),
+                (true, CanLossMode::Zero) => Some(canopen::tpdo1(self.node_ids[i], 0x0237, 0)),
                 (true, CanLossMode::Missing) => None,
             };
             let sample = match frame_out.as_ref().and_then(canopen::decode_tpdo1) {

@@ -5,6 +5,7 @@
 //! every framework crate; this one on none).
 
 mod counting_alloc;
+pub mod generated_arm;
 pub mod hidden_effects;
 
 pub use counting_alloc::{CountingAlloc, count_allocations};

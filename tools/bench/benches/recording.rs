@@ -11,17 +11,6 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 
-/// CPU time [s] of the children waited for so far (user + system).
-fn children_cpu_s() -> f64 {
-    // SAFETY: getrusage writes into a valid rusage.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: a valid `who` and a valid pointer.
-    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
-    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
-    t(u.ru_utime) + t(u.ru_stime)
-}
-
-
 fn main() {
     let quick = std::env::var("BENCH_QUICK").is_ok();
     let seconds: f64 = std::env::var("BENCH_RECORD_S").ok().and_then(|v| v.parse().ok()).unwrap_or(if quick { 5.0 } else { 60.0 });
@@ -32,7 +21,7 @@ fn main() {
 
     let alone = jointctl_bench::run_sherpa_loop(seconds, "bench-rec-alone");
     let file = std::env::temp_dir().join(format!("jointctl-bench-{}.mcap", std::process::id()));
-    let cpu_before = children_cpu_s();
+    let cpu_before = jointctl_bench::children_cpu_s();
     // The recorder stops on the arm's final sample, when the loop below ends.
     let recorder = Command::new(&exe)
         .args(["record", "--arm", "bench-rec-with", "--json", "--timeout", "10", "--out"])
@@ -43,7 +32,7 @@ fn main() {
         .unwrap();
     let with = jointctl_bench::run_sherpa_loop(seconds, "bench-rec-with");
     let out = recorder.wait_with_output().unwrap();
-    let recorder_cpu_s = children_cpu_s() - cpu_before;
+    let recorder_cpu_s = jointctl_bench::children_cpu_s() - cpu_before;
     assert!(out.status.success(), "record: {}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let duration = summary["duration_s"].as_f64().unwrap_or(f64::NAN);
@@ -62,12 +51,7 @@ fn main() {
 
     // `jointctl sim replay` on this recording: the whole arm's commands re-run at 1 kHz; then
     // on a recording of one joint (the elbow alone), the measure.
-    let config = std::env::temp_dir().join(format!("jointctl-bench-{}-sherpa.yaml", std::process::id()));
-    let text = std::fs::read_to_string(jointctl_bench::root().join("configs/sherpa_arm.yaml")).unwrap().replacen("rate_hz: 40 ", "rate_hz: 1000 ", 1);
-    // Includes stay next to the original file.
-    let text = text.replace("include: sherpa_", &format!("include: {}/configs/sherpa_", jointctl_bench::root().display()));
-    let text = text.replace("urdf: sherpa_", &format!("urdf: {}/configs/sherpa_", jointctl_bench::root().display()));
-    std::fs::write(&config, text).unwrap();
+    let config = jointctl_bench::sherpa_file("sherpa", 1000.0);
     let t = Instant::now();
     let replay = Command::new(&exe).args(["sim", "replay", "--json", "--config"]).arg(&config).arg(&file).output().unwrap();
     let wall = t.elapsed().as_secs_f64();

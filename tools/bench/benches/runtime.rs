@@ -3,46 +3,20 @@
 //! Environment: `BENCH_CYCLES_40HZ` (default 10000, i.e. 250 s) and `BENCH_CYCLES_1KHZ`
 //! (default 10000) set the loop-jitter runs; `BENCH_QUICK=1` shortens everything for a smoke run.
 
-use jointctl_modes::Mode;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use jointctl_runtime::timing::monotonic_ns;
+use jointctl_bench::{build, build_with, median};
 use jointctl_runtime::{Arm, ArmPublisher, PluginLoader, RunOptions};
 
 fn root() -> PathBuf {
     jointctl_bench::root()
 }
 
-fn sherpa(rate_hz: f64, arm: &str) -> jointctl_config::LoadedConfig {
-    jointctl_bench::sherpa(rate_hz, arm)
-}
 
 fn plugin_dir() -> PathBuf {
     jointctl_bench::release_dir()
-}
-
-fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::LoadedConfig) {
-    build_with(statically, rate_hz, arm, |_| {})
-}
-
-/// [`build`] with the config edited before the arm is built.
-fn build_with(statically: bool, rate_hz: f64, arm: &str, edit: impl FnOnce(&mut jointctl_config::ArmConfig)) -> (Arm, jointctl_config::LoadedConfig) {
-    let mut loaded = sherpa(rate_hz, arm);
-    edit(&mut loaded.config);
-    let mut loader = PluginLoader::new([plugin_dir()]);
-    if statically {
-        jointctl_bench::register_sherpa_plugins(&mut loader);
-    }
-    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| {
-        panic!("{e}\n(build the plugins first: cargo build --release --workspace)")
-    });
-    arm.activate().unwrap();
-    for i in 0..arm.dof_names.len() {
-        arm.set_mode(i, position(0.1 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }));
-    }
-    (arm, loaded)
 }
 
 /// Median ns per cycle of `arm.step` over `rounds` batches of `batch` cycles.
@@ -60,38 +34,6 @@ fn interleaved(a: &mut Arm, b: &mut Arm, batch: usize, rounds: usize) -> (Vec<f6
     compute_ns(a, batch);
     compute_ns(b, batch);
     (0..rounds).map(|_| (compute_ns(a, batch), compute_ns(b, batch))).unzip()
-}
-
-/// A busy-polling inspector thread on `arm`'s joint-state service: collects, until the flag is
-/// set, how long after each sample's `stamp_ns` it arrived [ns].
-fn latency_subscriber(arm: &'static str) -> (std::sync::Arc<std::sync::atomic::AtomicBool>, std::thread::JoinHandle<Vec<u64>>) {
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let sub_stop = stop.clone();
-    let subscriber = std::thread::spawn(move || {
-        let node = jointctl_ipc::create_node(None, &format!("{arm}-inspector")).unwrap();
-        let names = jointctl_ipc::ServiceNames::for_arm(arm);
-        let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
-        let mut lat = Vec::with_capacity(10_000);
-        while !sub_stop.load(std::sync::atomic::Ordering::Relaxed) {
-            if let Some(s) = sub.receive().unwrap() {
-                lat.push(monotonic_ns().saturating_sub(s.stamp_ns));
-            } else {
-                std::hint::spin_loop();
-            }
-        }
-        lat
-    });
-    (stop, subscriber)
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    v[v.len() / 2]
-}
-
-fn percentile(v: &mut [u64], p: f64) -> u64 {
-    v.sort_unstable();
-    v[((p / 100.0) * (v.len() - 1) as f64).round() as usize]
 }
 
 fn env_usize(name: &str, default: usize) -> usize {
@@ -170,54 +112,6 @@ fn main() {
         );
     }
     println!();
-
-    // 3. Sensor read → subscriber receive latency at 1 kHz: a subscriber thread busy-polls.
-    let cycles = if quick { 500 } else { 5_000 };
-    let (mut arm, loaded) = build(false, 1000.0, "bench-latency");
-    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
-    let (stop, subscriber) = latency_subscriber("bench-latency");
-    std::thread::sleep(Duration::from_millis(200));
-    let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0, stop: None };
-    jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
-    drop(publisher);
-    std::thread::sleep(Duration::from_millis(100));
-    stop.store(true, std::sync::atomic::Ordering::Relaxed);
-    let mut lat = subscriber.join().unwrap();
-    lat.retain(|l| *l < 1_000_000_000); // the history sample of an earlier run, if any
-    println!("## Sensor read → subscriber receive, 1 kHz, {} samples (includes the cycle's compute and the hand-off to the publisher thread)", lat.len());
-    println!("| p50 us | p99 us | max us | target p99 |");
-    println!("|---|---|---|---|");
-    let (p50, p99) = (percentile(&mut lat, 50.0), percentile(&mut lat, 99.0));
-    println!("| {:.1} | {:.1} | {:.1} | <= 20 |", p50 as f64 / 1e3, p99 as f64 / 1e3, lat.iter().max().copied().unwrap_or(0) as f64 / 1e3);
-    println!();
-
-    // 3b. Publish → inspector receive alone (the definition): the arm-state type over the
-    // same iceoryx2 service kind, stamped at send, 1 kHz, a busy-polling subscriber thread.
-    {
-        let samples = if quick { 1_000 } else { 10_000 };
-        let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
-        let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
-        let publisher = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, Default::default()).unwrap().publisher_builder().create().unwrap();
-        let (stop, subscriber) = latency_subscriber("bench-ipc");
-        std::thread::sleep(Duration::from_millis(200));
-        let mut state = jointctl_ipc::ArmState::EMPTY;
-        for cycle in 0..samples {
-            state.cycle = cycle;
-            state.stamp_ns = monotonic_ns();
-            publisher.loan_uninit().unwrap().write_payload(state).send().unwrap();
-            std::thread::sleep(Duration::from_millis(1));
-        }
-        std::thread::sleep(Duration::from_millis(100));
-        stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        let mut lat = subscriber.join().unwrap();
-        lat.retain(|l| *l < 1_000_000_000);
-        println!("## Publish → inspector receive (iceoryx2 alone, arm-state payload), 1 kHz, {} samples", lat.len());
-        println!("| p50 us | p99 us | max us | target p99 |");
-        println!("|---|---|---|---|");
-        let (p50, p99) = (percentile(&mut lat, 50.0), percentile(&mut lat, 99.0));
-        println!("| {:.1} | {:.1} | {:.1} | <= 20 |", p50 as f64 / 1e3, p99 as f64 / 1e3, lat.iter().max().copied().unwrap_or(0) as f64 / 1e3);
-        println!();
-    }
 
     // 4. Simulation speed: the whole 7-joint arm, every plant effect on, 1 kHz loop (observers,
     // controllers and physics), simulated time over wall time on this core.
@@ -374,7 +268,3 @@ fn main() {
     }
 }
 
-
-fn position(target_rad: f64) -> Mode {
-    Mode::Position { target_rad }
-}

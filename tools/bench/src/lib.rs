@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use jointctl_runtime::PluginLoader;
+use jointctl_runtime::{Arm, PluginLoader};
 
 /// The repository's root.
 pub fn root() -> PathBuf {
@@ -100,3 +100,125 @@ pub fn print_side_by_side(title: &str, runs: [(&str, &LoopRun); 2]) {
     println!("| with - without | | {:+.1} | {:+.1} | {:+.1} | {:+} | |", with.p50_us - alone.p50_us, with.p99_us - alone.p99_us, with.max_us - alone.max_us, with.overruns as i64 - alone.overruns as i64);
     println!();
 }
+
+/// The SHERPA arm as `arm` at `rate_hz`, activated, every DOF holding a position a little off
+/// zero; its plugins linked in (`statically`) or loaded from the release build.
+pub fn build(statically: bool, rate_hz: f64, arm: &str) -> (Arm, jointctl_config::LoadedConfig) {
+    build_with(statically, rate_hz, arm, |_| {})
+}
+
+/// [`build`] with the config edited before the arm is built.
+pub fn build_with(statically: bool, rate_hz: f64, arm: &str, edit: impl FnOnce(&mut jointctl_config::ArmConfig)) -> (Arm, jointctl_config::LoadedConfig) {
+    let mut loaded = sherpa(rate_hz, arm);
+    edit(&mut loaded.config);
+    let mut loader = PluginLoader::new([release_dir()]);
+    if statically {
+        register_sherpa_plugins(&mut loader);
+    }
+    let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| panic!("{e}\n(build the plugins first: cargo build --release --workspace)"));
+    arm.activate().expect("the simulated arm activates");
+    hold_near_zero(&mut arm);
+    (arm, loaded)
+}
+
+/// Every DOF of `arm` holding a position 0.1 rad x its index off zero, alternating in sign.
+pub fn hold_near_zero(arm: &mut Arm) {
+    for i in 0..arm.dof_names.len() {
+        let target_rad = 0.1 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 };
+        arm.set_mode(i, jointctl_modes::Mode::Position { target_rad });
+    }
+}
+
+/// The median of `v` (sorted in place).
+///
+/// ```
+/// assert_eq!(jointctl_bench::median(&mut [3.0, 1.0, 2.0]), 2.0);
+/// ```
+pub fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The `p`th percentile of `v` (sorted in place), nearest rank.
+///
+/// ```
+/// assert_eq!(jointctl_bench::percentile(&mut [5, 1, 9, 3], 50.0), 5);
+/// ```
+pub fn percentile(v: &mut [u64], p: f64) -> u64 {
+    v.sort_unstable();
+    v[((p / 100.0) * (v.len() - 1) as f64).round() as usize]
+}
+
+/// A HAL with no physics behind it, to time the runtime alone: every drive reads back, fresh
+/// and enabled, the last position it was sent, and encoder `i` reads drive `i`'s position (the
+/// generated arms' wiring, [`jointctl_test_support::generated_arm`]); an encoder without a
+/// drive of its index reads 0. Allocation-free after construction.
+///
+/// ```
+/// use jointctl_hal::{ActuatorFrame, DeviceIndex, Hal, SensorFrame};
+/// let devices = DeviceIndex { encoders: vec!["e0".into()], drives: vec!["m0".into()], torque_sensors: vec![] };
+/// let mut hal = jointctl_bench::EchoHal::new(&devices);
+/// let mut out = ActuatorFrame::new(&devices);
+/// out.drives[0] = jointctl_api::MotorSetpoint::move_to(0.3);
+/// hal.write(&out, 1e-3).unwrap();
+/// let mut frame = SensorFrame::new(&devices);
+/// hal.read(&mut frame).unwrap();
+/// assert_eq!(frame.encoders[0].usable(1.0), Some(0.3));
+/// ```
+pub struct EchoHal {
+    positions_rad: Vec<f64>,
+}
+
+impl EchoHal {
+    /// Every drive of `devices` at 0 rad.
+    pub fn new(devices: &jointctl_hal::DeviceIndex) -> Self {
+        EchoHal { positions_rad: vec![0.0; devices.drives.len()] }
+    }
+}
+
+impl jointctl_hal::Hal for EchoHal {
+    fn read(&mut self, frame: &mut jointctl_hal::SensorFrame) -> Result<(), jointctl_hal::HalIoError> {
+        use jointctl_api::{DriveReading, Reading};
+        for (d, &q) in frame.drives.iter_mut().zip(&self.positions_rad) {
+            *d = DriveReading::new(Reading::valid(q), Reading::valid(0.0), true, false);
+        }
+        for (i, e) in frame.encoders.iter_mut().enumerate() {
+            *e = Reading::valid(self.positions_rad.get(i).copied().unwrap_or(0.0));
+        }
+        frame.torque_sensors.fill(Reading::MISSING);
+        Ok(())
+    }
+
+    fn write(&mut self, frame: &jointctl_hal::ActuatorFrame, _dt_s: f64) -> Result<(), jointctl_hal::HalIoError> {
+        for (q, sp) in self.positions_rad.iter_mut().zip(&frame.drives) {
+            if sp.action == jointctl_api::DriveAction::MOVE {
+                *q = sp.position_rad;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The SHERPA config as arm `arm` at `rate_hz` in a temporary file (its includes made
+/// absolute), for a `jointctl` process to run; the caller removes it.
+pub fn sherpa_file(arm: &str, rate_hz: f64) -> std::path::PathBuf {
+    let root = root();
+    let text = std::fs::read_to_string(root.join("configs/sherpa_arm.yaml")).unwrap();
+    let text = text.replacen("arm: sherpa", &format!("arm: {arm}"), 1).replacen("rate_hz: 40 ", &format!("rate_hz: {rate_hz} "), 1);
+    let text = text.replace("include: sherpa_", &format!("include: {}/configs/sherpa_", root.display()));
+    let text = text.replace("urdf: sherpa_", &format!("urdf: {}/configs/sherpa_", root.display()));
+    let path = std::env::temp_dir().join(format!("jointctl-bench-{}-{arm}.yaml", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// CPU time [s] of the children waited for so far (user + system).
+pub fn children_cpu_s() -> f64 {
+    // SAFETY: getrusage writes into a valid rusage.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: a valid `who` and a valid pointer.
+    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
+    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
+    t(u.ru_utime) + t(u.ru_stime)
+}
+

@@ -1,0 +1,163 @@
+//! `cargo bench -p jointctl-bench --bench latency`: where the time goes between a sensor read and
+//! an inspector holding the sample, hop by hop, against the iceoryx2 hand-off alone measured in
+//! the same run (issue 34). `BENCH_QUICK=1` shortens it for a smoke run.
+//!
+//! The runtime's publisher thread logs, per cycle, when the HAL read returned, when the cycle's
+//! work ended, when its record was handed over, taken and sent ([`jointctl_runtime::HopSample`]);
+//! a subscriber thread busy-polls and notes each sample's arrival.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use jointctl_bench::{build_with, percentile};
+use jointctl_runtime::timing::monotonic_ns;
+use jointctl_runtime::{ArmPublisher, HopSample, RunOptions};
+
+/// What a subscriber saw of one sample: its cycle, its `stamp_ns` and when it arrived [ns].
+type Arrival = (u64, u64, u64);
+
+/// A busy-polling inspector thread on `arm`'s joint-state service, pinned to `cpu` when given:
+/// collects, until the flag is set, every sample's cycle, stamp and arrival time.
+fn latency_subscriber(arm: &str, cpu: Option<usize>) -> (Arc<AtomicBool>, std::thread::JoinHandle<Vec<Arrival>>) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let sub_stop = stop.clone();
+    let arm = arm.to_string();
+    let subscriber = std::thread::spawn(move || {
+        if let Some(cpu) = cpu {
+            let _ = jointctl_runtime::timing::pin_to_cpu(cpu);
+        }
+        let node = jointctl_ipc::create_node(None, &format!("{arm}-inspector")).unwrap();
+        let names = jointctl_ipc::ServiceNames::for_arm(&arm);
+        let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
+        let mut seen = Vec::with_capacity(10_000);
+        while !sub_stop.load(Ordering::Relaxed) {
+            if let Some(s) = sub.receive().unwrap() {
+                seen.push((s.cycle, s.stamp_ns, monotonic_ns()));
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+        seen
+    });
+    (stop, subscriber)
+}
+
+/// Latencies [ns] of the arrivals, without the history sample of an earlier run.
+fn latencies(seen: &[Arrival]) -> Vec<u64> {
+    seen.iter().map(|&(_, stamp, at)| at.saturating_sub(stamp)).filter(|l| *l < 1_000_000_000).collect()
+}
+
+/// p50, p99 and max of `v` [ns] in us, as table cells.
+fn cells(v: &mut [u64]) -> String {
+    if v.is_empty() {
+        return "- | - | -".into();
+    }
+    let (p50, p99) = (percentile(v, 50.0), percentile(v, 99.0));
+    format!("{:.1} | {:.1} | {:.1}", p50 as f64 / 1e3, p99 as f64 / 1e3, v.iter().max().copied().unwrap_or(0) as f64 / 1e3)
+}
+
+/// The hops of one run: each hop's latencies [ns], and the two totals.
+struct Hops {
+    rows: Vec<(&'static str, Vec<u64>)>,
+    /// Sensor read began → received.
+    total: Vec<u64>,
+    /// HAL read returned → received.
+    from_readings: Vec<u64>,
+}
+
+/// The 7-DOF SHERPA arm at 1 kHz for `cycles`, with the loop (and its publisher thread) on the
+/// last CPU at SCHED_FIFO 80 when `realtime`, the subscriber on CPU 0 then; on a thread of its
+/// own, since scheduling settings are per thread.
+fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool) -> Hops {
+    let name = name.to_string();
+    std::thread::spawn(move || {
+        let last_cpu = std::thread::available_parallelism().map_or(1, |n| n.get()) - 1;
+        let (mut arm, loaded) = build_with(false, 1000.0, &name, |c| {
+            if realtime {
+                (c.timing.realtime_priority, c.timing.cpu) = (Some(80), Some(last_cpu));
+            }
+        });
+        let scope = jointctl_ipc::IpcScope::domain(None);
+        let mut publisher = ArmPublisher::with_hop_log(&arm, &scope, Default::default(), cycles as usize).unwrap();
+        let (stop, subscriber) = latency_subscriber(&name, realtime.then_some(0));
+        std::thread::sleep(Duration::from_millis(200));
+        let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0, stop: None };
+        jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
+        publisher.close();
+        std::thread::sleep(Duration::from_millis(100));
+        stop.store(true, Ordering::Relaxed);
+        let seen = subscriber.join().unwrap();
+        let arrived: std::collections::HashMap<u64, u64> = seen.iter().map(|&(cycle, _, at)| (cycle, at)).collect();
+        let hops = publisher.hops();
+        let hop = |f: fn(&HopSample) -> u64| hops.iter().map(f).collect::<Vec<u64>>();
+        let after_send: Vec<(u64, u64)> = hops.iter().filter_map(|h| arrived.get(&h.cycle).map(|&at| (at.saturating_sub(h.sent_ns), at.saturating_sub(h.readings_ns)))).collect();
+        let rows = vec![
+            ("sensor read began → HAL read returned (the simulated physics)", hop(|h| h.readings_ns - h.read_ns)),
+            ("HAL read returned → control done (observe, control, write HAL)", hop(|h| h.done_ns - h.readings_ns)),
+            ("control done → record handed to the publisher thread (state, diagnostics, raw filled)", hop(|h| h.handed_ns - h.done_ns)),
+            ("handed → taken by the publisher thread (its wake-up)", hop(|h| h.taken_ns - h.handed_ns)),
+            ("taken → joint state sent (iceoryx2 loan, copy, send)", hop(|h| h.sent_ns - h.taken_ns)),
+            ("sent → received by the subscriber", after_send.iter().map(|p| p.0).collect()),
+        ];
+        Hops { rows, total: latencies(&seen), from_readings: after_send.iter().map(|p| p.1).collect() }
+    })
+    .join()
+    .expect("the loop thread")
+}
+
+/// The iceoryx2 hand-off alone: the arm-state type over the same service kind, stamped at send,
+/// 1 kHz, a busy-polling subscriber thread: latencies [ns].
+fn handoff_alone(samples: u64) -> Vec<u64> {
+    let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
+    let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
+    let publisher = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, Default::default()).unwrap().publisher_builder().create().unwrap();
+    let (stop, subscriber) = latency_subscriber("bench-ipc", None);
+    std::thread::sleep(Duration::from_millis(200));
+    let mut state = jointctl_ipc::ArmState::EMPTY;
+    for cycle in 0..samples {
+        state.cycle = cycle;
+        state.stamp_ns = monotonic_ns();
+        publisher.loan_uninit().unwrap().write_payload(state).send().unwrap();
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    std::thread::sleep(Duration::from_millis(100));
+    stop.store(true, Ordering::Relaxed);
+    latencies(&subscriber.join().unwrap())
+}
+
+fn main() {
+    let quick = std::env::var("BENCH_QUICK").is_ok();
+    let cycles = if quick { 1_000 } else { 10_000 };
+    println!("jointctl latency benchmark ({} cores), 7-DOF SHERPA arm at 1 kHz, {cycles} cycles per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
+    println!();
+    let mut alone = handoff_alone(cycles);
+    let alone_p99 = percentile(&mut alone, 99.0);
+    let runs = [("default timing", false), ("loop and publisher thread SCHED_FIFO 80/79 on the last CPU, subscriber on CPU 0", true)];
+    let mut summary = Vec::new();
+    for (i, (what, realtime)) in runs.into_iter().enumerate() {
+        let mut h = sensor_to_inspector(&format!("bench-latency-{i}"), cycles, realtime);
+        println!("## Sensor read → subscriber receive, hop by hop, {what} ({} samples received)", h.total.len());
+        println!("| hop | p50 us | p99 us | max us |");
+        println!("|---|---|---|---|");
+        for (name, v) in &mut h.rows {
+            println!("| {name} | {} |", cells(v));
+        }
+        println!("| **sensor read began → received** | {} |", cells(&mut h.total));
+        println!("| **HAL read returned → received** | {} |", cells(&mut h.from_readings));
+        println!();
+        summary.push((what, percentile(&mut h.total, 99.0), percentile(&mut h.from_readings, 99.0)));
+    }
+    println!("## Publish → inspector receive (iceoryx2 alone, arm-state payload), 1 kHz, {} samples", alone.len());
+    println!("| p50 us | p99 us | max us |");
+    println!("|---|---|---|");
+    println!("| {} |", cells(&mut alone));
+    println!();
+    println!("## Sensor → inspector p99 against the hand-off alone (same run; target <= 20 us and <= 3x)");
+    println!("| run | from the read's start us | ratio | from the readings in hand us | ratio |");
+    println!("|---|---|---|---|---|");
+    for (what, total, readings) in summary {
+        let ratio = |v: u64| v as f64 / alone_p99.max(1) as f64;
+        println!("| {what} | {:.1} | {:.2} | {:.1} | {:.2} |", total as f64 / 1e3, ratio(total), readings as f64 / 1e3, ratio(readings));
+    }
+}
