@@ -7,7 +7,7 @@ use std::sync::atomic::AtomicBool;
 
 use clap::Subcommand;
 
-use crate::inspect::RunningArm;
+use crate::arm_view::RunningArm;
 
 #[derive(Subcommand)]
 pub enum BridgeCommand {

@@ -12,6 +12,7 @@ macro_rules! outln {
     ($($arg:tt)*) => { $crate::print_out(&format!("{}\n", format_args!($($arg)*))) };
 }
 
+mod arm_view;
 mod bridge;
 mod calibrate;
 mod cmd;

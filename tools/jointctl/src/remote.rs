@@ -62,7 +62,7 @@ pub fn command(endpoint: &str, arm: &str, credentials: &CredentialArgs, request:
 }
 
 /// `jointctl inspect echo --zenoh ENDPOINT`: the arm's joint states from its bridge.
-pub fn echo(endpoint: &str, arm: &str, credentials: &CredentialArgs, timeout_s: f64, opts: &crate::inspect::EchoOptions) -> ExitCode {
+pub fn echo(endpoint: &str, arm: &str, credentials: &CredentialArgs, timeout_s: f64, opts: &crate::arm_view::EchoOptions) -> ExitCode {
     let session = match session(endpoint, credentials, timeout_s) {
         Ok(s) => s,
         Err(e) => return crate::fail(e),
@@ -73,7 +73,7 @@ pub fn echo(endpoint: &str, arm: &str, credentials: &CredentialArgs, timeout_s: 
         Err(e) => return crate::fail(format!("cannot subscribe to `{topic}`: {e}")),
     };
     let mut last = Instant::now();
-    crate::inspect::echo(opts, || match subscriber.try_recv() {
+    crate::arm_view::echo(opts, || match subscriber.try_recv() {
         Ok(Some(sample)) => {
             last = Instant::now();
             let text = sample.payload().try_to_string().map_err(|e| format!("`{topic}`: not UTF-8: {e}"))?.into_owned();

@@ -11,7 +11,7 @@ use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Modifier, Style};
 use ratatui::widgets::{Block, Paragraph, Row, Table};
 
-use crate::inspect::RunningArm;
+use crate::arm_view::RunningArm;
 
 /// The upper bound [us] of the lateness histogram bucket holding quantile `q` (0..1) of the
 /// cycles; `Some(None)` when that is the open last bucket, `None` with no cycles.
@@ -70,7 +70,7 @@ pub fn draw(frame: &mut Frame, view: &TopView) {
     ];
     frame.render_widget(Paragraph::new(lines.join("\n")).block(Block::bordered().title(" jointctl inspect top (q quits) ")), header);
 
-    let view_json = crate::inspect::joints_json(&view.instances, &view.state, d);
+    let view_json = crate::arm_view::joints_json(&view.instances, &view.state, d);
     let empty = Vec::new();
     let mut rows = Vec::new();
     for j in view_json["joints"].as_array().unwrap_or(&empty) {
@@ -114,12 +114,12 @@ pub fn run(at: RunningArm, interval_s: f64, timeout_s: f64) -> ExitCode {
     if !std::io::IsTerminal::is_terminal(&std::io::stdout()) {
         return crate::fail("inspect top needs a terminal; `inspect joints --json` and `inspect diag --json` print the same once");
     }
-    let instances = match crate::inspect::newest_of(&at, timeout_s, |n| n.joints.clone(), jointctl_ipc::joints_service) {
+    let instances = match crate::arm_view::newest_of(&at, timeout_s, |n| n.joints.clone(), jointctl_ipc::joints_service) {
         Ok(i) => i,
         Err(e) => return crate::fail(e),
     };
-    let subscribed = crate::inspect::subscription_of(&at, timeout_s, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service)
-        .and_then(|s| Ok((s, crate::inspect::subscription_of(&at, timeout_s, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service)?)));
+    let subscribed = crate::arm_view::subscription_of(&at, timeout_s, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service)
+        .and_then(|s| Ok((s, crate::arm_view::subscription_of(&at, timeout_s, |n| n.diagnostics.clone(), jointctl_ipc::diagnostics_service)?)));
     let ((_state_node, states), (_diag_node, diagnostics)) = match subscribed {
         Ok(s) => s,
         Err(e) => return crate::fail(e),

@@ -6,7 +6,7 @@ use std::ops::Range;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::BaselineModel;
+use super::baseline::BaselineModel;
 use super::causes::{CandidateCause, Inputs, Samples};
 
 /// Prepared samples of one part of the data (training or held out).

@@ -1,11 +1,26 @@
 //! An experiment that tells confounded causes apart (issue 32): when the record cannot tell a
-//! named cause from an alternative (see [`super::Confound`]), the two depend on the motion in
+//! named cause from an alternative (see [`Confound`]), the two depend on the motion in
 //! different ways, and a motion that varies what one depends on and not the other separates
 //! them. The experiment is a list of flow-source sines run one after the other, each from rest
 //! (`jointctl sim record --experiment`, or the same references on the arm), never beyond the
 //! recorded amplitude or peak rate: what the arm already did is known to be safe.
 
 use serde::{Deserialize, Serialize};
+
+/// A named cause and a candidate that explains the training part about as well in its place:
+/// the data cannot tell them apart, and the name given is one of the two.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Confound {
+    /// The named cause.
+    pub effect: String,
+    /// The candidate that fits the training part about as well instead.
+    pub alternative: String,
+    /// Training BIC of the model with the named cause and with the alternative in its place
+    /// (decimated training part, in the step the cause was named).
+    pub bic: [f64; 2],
+    /// One sentence: what cannot be told apart, and why.
+    pub evidence: String,
+}
 
 /// What a cause's torque depends on, for choosing what to vary.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

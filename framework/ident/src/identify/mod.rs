@@ -21,6 +21,7 @@ use serde::Serialize;
 
 use crate::csv::Data;
 
+mod baseline;
 pub mod causes;
 mod design;
 pub mod experiment;
@@ -31,6 +32,9 @@ mod select;
 pub mod significance;
 mod spectrum;
 
+pub use baseline::{BaselineModel, NO_SPRING_SHARE};
+use baseline::reads_as_friction;
+pub use experiment::Confound;
 pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Samples, SearchContext};
 pub use prepare::PrepareError;
 pub use select::BIC_THRESHOLD;
@@ -64,21 +68,6 @@ pub struct NegligibleCause {
     /// One of the vocabulary's names.
     pub effect: String,
     /// The judgement (gain and the relevance threshold it missed).
-    pub evidence: String,
-}
-
-/// A named cause and a candidate that explains the training part about as well in its place:
-/// the data cannot tell them apart, and the name given is one of the two.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct Confound {
-    /// The named cause.
-    pub effect: String,
-    /// The candidate that fits the training part about as well instead.
-    pub alternative: String,
-    /// Training BIC of the model with the named cause and with the alternative in its place
-    /// (decimated training part, in the step the cause was named).
-    pub bic: [f64; 2],
-    /// One sentence: what cannot be told apart, and why.
     pub evidence: String,
 }
 
@@ -152,23 +141,6 @@ pub const BEYOND_TRAINING_RANGE: f64 = 2.0;
 /// times the noise floor (issue 36's bound for "far above the noise").
 pub const FAR_ABOVE_NOISE: f64 = 10.0;
 
-/// The share of the torque's variance that a straight line in the deflection explains below
-/// which a record is read as having no spring: its first column a joint position, its torque
-/// friction (a friction test of a rigid joint). An assumption of this project, measured on the
-/// training parts of the blind generator's and the shared records: spring records lie at 0.40
-/// and above (the lowest a large viscous friction beside the spring), friction records at 0.086
-/// and below (the highest l3-case036, whose offset follows the position a little).
-pub const NO_SPRING_SHARE: f64 = 0.2;
-
-/// Whether a record is read as a joint's friction (no spring): the baseline is fitted on the data
-/// (a configured joint has its spring) and a line in the deflection explains less than
-/// [`NO_SPRING_SHARE`] of the torque's variance. The one rule the search (which tries the
-/// friction's Stribeck dip only then) and the report (which moves the pre-sliding and the dip
-/// to [`NoSpring`]) both follow.
-pub(crate) fn reads_as_friction(p: &prepare::Prepared, baseline: &BaselineModel) -> bool {
-    matches!(baseline, BaselineModel::Polynomial(_)) && p.spring_share < NO_SPRING_SHARE
-}
-
 /// A record without a spring: what the baseline's friction took on for it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NoSpring {
@@ -234,14 +206,6 @@ pub struct Report {
     /// causes whose held-out gain is not significant.
     #[serde(skip)]
     pub rejected: Vec<String>,
-}
-
-/// The model the baseline starts from.
-pub enum BaselineModel {
-    /// A polynomial through zero of this order, fitted on the data (the thesis' structure).
-    Polynomial(usize),
-    /// A given characteristic `torque(deflection, pivot_mm)` (a joint from a config), not refitted.
-    Given(Box<dyn Fn(f64, f64) -> f64 + Send + Sync>),
 }
 
 /// How to identify.
@@ -319,7 +283,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
         }
         let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
-        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p, baseline));
+        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
         let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, history_rad: &part.warm, model_nm: &model_nm };
@@ -458,7 +422,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     // A record without a spring (the first column a joint position): a Dahl loop is the
     // friction's pre-sliding (Dahl's model is a friction model), not an elastic element's
     // hysteresis: it stays in the extended model and is reported with the friction.
-    let no_spring = reads_as_friction(p, &opts.baseline).then(|| {
+    let no_spring = reads_as_friction(p.spring_share, &opts.baseline).then(|| {
         let mut take = |effect: &str| found.iter().position(|c| c.effect == effect).map(|i| found.remove(i).params);
         let (presliding, stribeck) = (take("hysteresis"), take("stribeck_friction"));
         let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ");
