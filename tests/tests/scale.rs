@@ -108,12 +108,14 @@ fn scheduling_of(tid: i32) -> (i32, i32, Vec<usize>) {
 
 #[test]
 fn the_publisher_thread_follows_the_loop_one_priority_below_on_its_cpu_and_logs_every_hop() {
-    // Whether this machine grants SCHED_FIFO at all (root or CAP_SYS_NICE): without it the
-    // runtime warns and runs unprivileged, which is what is checked then.
-    let granted = std::thread::spawn(|| jointctl_runtime::timing::set_fifo(10).is_ok()).join().unwrap();
-    let arm_name = "sched-follow";
-    let mut loaded = jointctl_config::parse_str(&arm_yaml(arm_name, 2, JointKind::Rigid, 1000.0), "generated.yaml").unwrap();
-    let cpu = std::thread::available_parallelism().map_or(1, |n| n.get()) - 1;
+    // Whether this machine grants SCHED_FIFO at the loop's priority (root, CAP_SYS_NICE or an
+    // rtprio limit of 30): without it the runtime warns, the loop and its publisher stay
+    // unprivileged, and only the pinning (which needs no privilege) is checked.
+    let granted = std::thread::spawn(|| jointctl_runtime::timing::set_fifo(30).is_ok()).join().unwrap();
+    let arm_name = arm_name("sched-follow");
+    let mut loaded = jointctl_config::parse_str(&arm_yaml(&arm_name, 2, JointKind::Rigid, 1000.0), "generated.yaml").unwrap();
+    // The last CPU this process may run on (a container may allow fewer than the machine has).
+    let cpu = *scheduling_of(0).2.last().expect("at least one allowed CPU");
     (loaded.config.timing.realtime_priority, loaded.config.timing.cpu) = (Some(30), Some(cpu));
     let mut loader = PluginLoader::new([]);
     loader.register_static(jointctl_plugin_rigid::plugin_descriptor()).unwrap();
@@ -127,26 +129,34 @@ fn the_publisher_thread_follows_the_loop_one_priority_below_on_its_cpu_and_logs_
         jointctl_runtime::run(&mut arm, &timing, Some(&mut publisher), &opts).unwrap();
         publisher
     });
-    std::thread::sleep(std::time::Duration::from_millis(300));
+    let thread_name = format!("{arm_name}-publisher");
     let task_of = |name: &str| {
         std::fs::read_dir("/proc/self/task").unwrap().flatten().find_map(|t| {
             let comm = std::fs::read_to_string(t.path().join("comm")).unwrap_or_default();
             (comm.trim() == name).then(|| t.file_name().to_string_lossy().parse::<i32>().unwrap())
         })
     };
-    let publisher_tid = task_of(&format!("{arm_name}-publisher")[..15]).expect("the publisher thread");
-    let (policy, priority, cpus) = scheduling_of(publisher_tid);
+    let publisher_tid = task_of(&thread_name[..15.min(thread_name.len())]).expect("the publisher thread");
+    // The settings are applied as the loop starts: wait for them (at most the run's 0.6 s).
+    let start = std::time::Instant::now();
+    let mut seen = scheduling_of(publisher_tid);
+    while seen.2 != vec![cpu] && start.elapsed() < std::time::Duration::from_millis(500) {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+        seen = scheduling_of(publisher_tid);
+    }
     let publisher = looping.join().unwrap();
+    let (policy, priority, cpus) = seen;
+    assert_eq!(cpus, vec![cpu], "the publisher thread pinned beside the loop");
     if granted {
-        assert_eq!((policy, priority, cpus), (libc::SCHED_FIFO, 29, vec![cpu]), "the publisher thread's scheduling");
+        assert_eq!((policy, priority), (libc::SCHED_FIFO, 29), "the publisher thread one below the loop");
     } else {
-        assert_eq!(policy, libc::SCHED_OTHER, "refused: the publisher thread stays as it was");
+        assert_eq!(policy, libc::SCHED_OTHER, "refused: the publisher thread stays unprivileged");
     }
     let hops = publisher.hops();
-    assert_eq!(hops.len(), 600, "one per cycle (not the final sample, outside any cycle)");
+    // A record the publisher thread could not take in time is dropped and counted, never waited for.
+    assert_eq!(hops.len() as u64 + publisher.drops(), 600, "one hop per cycle (not the final sample, outside any cycle)");
     for h in hops {
         let order = [h.read_ns, h.readings_ns, h.done_ns, h.handed_ns, h.taken_ns, h.sent_ns];
         assert!(order.windows(2).all(|w| w[0] <= w[1]), "hops out of order in cycle {}: {order:?}", h.cycle);
     }
-    assert_eq!(hops.last().map(|h| h.cycle), Some(599));
 }

@@ -45,7 +45,8 @@ pub const MAX_ARM_TORQUE_SENSORS: usize = 8;
 /// arm can show how the loop scales (700 DOFs in the scale benchmark). An assumption, not a
 /// measured limit of the loop.
 pub const MAX_LOOP_DOF: usize = 1024;
-/// Most encoders, and most drives, of any arm description (four per DOF at [`MAX_LOOP_DOF`]).
+/// Most encoders, most drives, and most force/torque sensors of any arm description (four per
+/// DOF at [`MAX_LOOP_DOF`]).
 pub const MAX_LOOP_DEVICES: usize = 4 * MAX_LOOP_DOF;
 
 /// Longest joint or device name in bytes: names travel in fixed 16-byte, NUL-padded fields.

@@ -217,8 +217,8 @@ pub struct Arm {
     pub now_s: f64,
     /// HAL read or write failures.
     pub hal_errors: u64,
-    /// CLOCK_MONOTONIC time the current cycle's HAL read returned [ns]: the readings in hand
-    /// (the simulated HAL steps its physics inside the read).
+    /// CLOCK_MONOTONIC time the current cycle's HAL read returned [ns]: the readings in hand.
+    /// One clock read per cycle (a vDSO call), for the publisher's hop log.
     pub readings_ns: u64,
     sensor: SensorFrame,
     actuator: ActuatorFrame,

@@ -167,11 +167,12 @@ struct CycleRecord {
 pub struct HopSample {
     /// The cycle.
     pub cycle: u64,
-    /// The sensor read began: the sample's `stamp_ns`.
+    /// The cycle began (its wake-up, just before the HAL read): the sample's `stamp_ns`.
     pub read_ns: u64,
-    /// The HAL read returned: the readings in hand (the simulated HAL's physics in between).
+    /// The HAL read returned: the readings in hand.
     pub readings_ns: u64,
-    /// The cycle's control work ended (set-points written).
+    /// The cycle's control work ended: set-points written (the simulated HAL steps its physics
+    /// in that write).
     pub done_ns: u64,
     /// The record was handed to the publisher thread (state and diagnostics filled).
     pub handed_ns: u64,
@@ -180,6 +181,9 @@ pub struct HopSample {
     /// The joint-state sample was sent (iceoryx2's `send` returned).
     pub sent_ns: u64,
 }
+
+/// Most cycles a [`HopSample`] log keeps (48 MB; 2.8 hours at 1 kHz).
+pub const MAX_HOP_LOG: usize = 10_000_000;
 
 /// Capacity of the loop → publisher ring [cycles]: 64 ms at 1 kHz before records are dropped.
 const RING_CAPACITY: usize = 64;
@@ -362,7 +366,8 @@ impl PublisherPorts {
         hop_log_capacity: usize,
     ) -> (u64, Vec<HopSample>) {
         let mut failures = 0u64;
-        // Allocated here, on the publisher thread, once.
+        // Allocated here, on the publisher thread, once; at most MAX_HOP_LOG entries.
+        let hop_log_capacity = hop_log_capacity.min(MAX_HOP_LOG);
         let mut hops = Vec::with_capacity(hop_log_capacity);
         let mut accepted_count = 0u64;
         let mut faults_seen = [0u64; jointctl_ipc::MAX_JOINTS];
@@ -486,7 +491,8 @@ impl ArmPublisher {
     /// [`ArmPublisher::with_limits`], and the publisher thread logs where the first
     /// `capacity` cycles' states spent their time ([`HopSample`], read after [`ArmPublisher::close`]
     /// with [`ArmPublisher::hops`]): one clock read more per cycle on the loop thread, two on
-    /// the publisher's; the log's memory is taken once, on the publisher thread.
+    /// the publisher's (the HAL read's return is always timed); the log's memory, at most
+/// [`MAX_HOP_LOG`] entries, is taken once, on the publisher thread.
     pub fn with_hop_log(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits, capacity: usize) -> Result<Self, RunError> {
         fits_shared_memory(arm)?;
         let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
@@ -655,7 +661,11 @@ impl ArmPublisher {
         self.stop.store(true, Ordering::Release);
         if let Some(t) = self.thread.take() {
             t.thread().unpark();
-            (self.failures, self.hops) = t.join().unwrap_or_default();
+            match t.join() {
+                Ok(done) => (self.failures, self.hops) = done,
+                // Outside the loop: the arm is held already; say that its last samples may be missing.
+                Err(_) => tracing::error!("the publisher thread panicked: the last samples may not have been published"),
+            }
         }
         self.failures
     }
@@ -674,8 +684,9 @@ impl Drop for ArmPublisher {
 }
 
 /// Applies the timing settings that need privileges; says what it could not do. The publisher
-/// thread (`publisher_tid`) follows the loop: one priority below it and on its CPU, so that it
-/// runs as soon as the loop sleeps after handing a cycle over, and never before the loop.
+/// thread (`publisher_tid`) follows the loop: on its CPU, and one priority below it when the loop
+/// got SCHED_FIFO at 2 or more, so that it runs as soon as the loop sleeps after handing a cycle
+/// over, and never before the loop.
 fn apply_thread_settings(timing: &TimingConfig, publisher_tid: Option<libc::pid_t>) {
     if timing.lock_memory
         && let Err(e) = crate::timing::lock_all_memory()
@@ -687,19 +698,24 @@ fn apply_thread_settings(timing: &TimingConfig, publisher_tid: Option<libc::pid_
     {
         tracing::warn!(cpu, "could not pin the loop thread: {e}");
     }
-    if let Some(priority) = timing.realtime_priority
-        && let Err(e) = crate::timing::set_fifo(priority)
-    {
-        tracing::warn!(priority, "could not switch the loop to SCHED_FIFO: {e}");
-    }
+    let loop_fifo = timing.realtime_priority.filter(|&priority| match crate::timing::set_fifo(priority) {
+        Ok(()) => true,
+        Err(e) => {
+            tracing::warn!(priority, "could not switch the loop to SCHED_FIFO: {e}");
+            false
+        }
+    });
     let Some(tid) = publisher_tid else { return };
     if let Some(cpu) = timing.cpu
         && let Err(e) = crate::timing::pin_to_cpu_of(tid, cpu)
     {
         tracing::warn!(cpu, "could not pin the publisher thread beside the loop: {e}");
     }
-    if let Some(priority) = timing.realtime_priority
-        && let Err(e) = crate::timing::set_fifo_of(tid, priority.saturating_sub(1).max(1))
+    // Strictly below the loop, and only when the loop got its priority: at the loop's own
+    // priority (1) a publisher still sending would hold the waking loop off; above an
+    // unprivileged loop it would preempt it.
+    if let Some(priority) = loop_fifo.filter(|&p| p >= 2)
+        && let Err(e) = crate::timing::set_fifo_of(tid, priority - 1)
     {
         tracing::warn!(priority, "could not switch the publisher thread to SCHED_FIFO: {e}");
     }

@@ -36,9 +36,6 @@ fn interleaved(a: &mut Arm, b: &mut Arm, batch: usize, rounds: usize) -> (Vec<f6
     (0..rounds).map(|_| (compute_ns(a, batch), compute_ns(b, batch))).unzip()
 }
 
-fn env_usize(name: &str, default: usize) -> usize {
-    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
-}
 
 fn main() {
     // `cargo bench` passes `--bench`; ignore arguments.
@@ -91,7 +88,7 @@ fn main() {
     println!("| rate | cycles | p50 lateness us | p99 lateness us | max lateness us | p50 compute us | p99 compute us | overruns | missed deadlines |");
     println!("|---|---|---|---|---|---|---|---|---|");
     for (rate, var, default) in [(1000.0, "BENCH_CYCLES_1KHZ", 10_000), (40.0, "BENCH_CYCLES_40HZ", 10_000)] {
-        let cycles = env_usize(var, if quick { 400 } else { default }) as u64;
+        let cycles = jointctl_bench::env_or(var, if quick { 400 } else { default }) as u64;
         let name = format!("bench-loop-{}", rate as u64);
         let (mut arm, loaded) = build(false, rate, &name);
         let mut publisher = ArmPublisher::new(&arm, None).unwrap();

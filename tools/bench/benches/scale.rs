@@ -16,12 +16,8 @@ use std::time::Duration;
 
 use jointctl_bench::{EchoHal, median, percentile};
 use jointctl_runtime::timing::monotonic_ns;
-use jointctl_runtime::{Arm, ArmPublisher, PluginLoader, RunOptions};
+use jointctl_runtime::{Arm, ArmPublisher, PluginLoader};
 use jointctl_test_support::generated_arm::{JointKind, arm_yaml};
-
-fn env_f64(name: &str, default: f64) -> f64 {
-    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
-}
 
 /// A generated arm, plugins linked in, on the simulated HAL or the echo HAL, activated and
 /// holding.
@@ -174,7 +170,7 @@ fn run_summary(stderr: &str) -> Option<[f64; 5]> {
 
 fn several_arms(quick: bool) {
     let exe = jointctl_bench::release_dir().join("jointctl");
-    let seconds = env_f64("BENCH_ARMS_S", if quick { 3.0 } else { 10.0 });
+    let seconds = jointctl_bench::env_or("BENCH_ARMS_S", if quick { 3.0 } else { 10.0 });
     println!("## Several arms on one machine: each a `jointctl run` process of the 7-DOF SHERPA arm at 1 kHz (simulated, publishing), {seconds} s");
     println!("| arms | cycles (all) | overruns (all) | missed deadlines (all) | worst max compute us | worst max lateness us | CPU, % of one core per arm |");
     println!("|---|---|---|---|---|---|---|");
@@ -211,54 +207,8 @@ struct Settings {
     lock_memory: bool,
 }
 
-/// The 7-DOF SHERPA arm at 1 kHz for `seconds` on a thread of its own (scheduling settings are
-/// per thread), publishing: (p50, p99, max lateness us, overruns, missed deadlines, publish
-/// drops, faulted joints).
-fn sherpa_run(name: &str, s: Settings, seconds: f64) -> (f64, f64, f64, u64, u64, u64, usize) {
-    let name = name.to_string();
-    std::thread::spawn(move || {
-        let last_cpu = std::thread::available_parallelism().map_or(1, |n| n.get()) - 1;
-        let (mut arm, loaded) = jointctl_bench::build_with(true, 1000.0, &name, |c| {
-            if s.realtime {
-                c.timing.realtime_priority = Some(80);
-                c.timing.cpu = Some(last_cpu);
-            }
-            c.timing.lock_memory = s.lock_memory;
-        });
-        let mut publisher = ArmPublisher::new(&arm, None).expect("the arm's shared memory");
-        let cycles = (seconds * 1000.0) as u64;
-        let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: cycles as usize, stop: None };
-        let r = jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).expect("the loop runs");
-        let st = &r.stats;
-        let us = |v: Option<u64>| v.map_or(f64::NAN, |n| n as f64 / 1e3);
-        let faulted = arm.slots.iter().filter(|slot| slot.fault != 0).count();
-        (us(st.jitter_percentile_ns(50.0)), us(st.jitter_percentile_ns(99.0)), st.max_jitter_ns as f64 / 1e3, st.overruns, st.missed_deadlines, publisher.drops(), faulted)
-    })
-    .join()
-    .expect("the loop thread")
-}
-
-/// A busy loop per core, as separate processes (ordinary priority), until dropped.
-struct Hogs(Vec<Child>);
-
-impl Hogs {
-    fn start() -> Hogs {
-        let n = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Hogs((0..n).map(|_| Command::new("sh").args(["-c", "while :; do :; done"]).spawn().expect("sh")).collect())
-    }
-}
-
-impl Drop for Hogs {
-    fn drop(&mut self) {
-        for c in &mut self.0 {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
-    }
-}
-
 fn loaded_machine(quick: bool) {
-    let seconds = env_f64("BENCH_LOAD_S", if quick { 3.0 } else { 60.0 });
+    let seconds = jointctl_bench::env_or("BENCH_LOAD_S", if quick { 3.0 } else { 60.0 });
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     // Locked memory last: mlockall holds for the whole process once granted.
     let runs = [
@@ -273,9 +223,23 @@ fn loaded_machine(quick: bool) {
     println!("|---|---|---|---|---|---|---|---|");
     let mut missed = Vec::new();
     for (i, (what, s)) in runs.iter().enumerate() {
-        let hogs = s.loaded.then(Hogs::start);
+        let hogs = s.loaded.then(jointctl_bench::Hogs::start);
         std::thread::sleep(Duration::from_millis(200));
-        let (p50, p99, max, overruns, miss, drops, faulted) = sherpa_run(&format!("bench-load-{i}"), *s, seconds);
+        let s = *s;
+        let name = format!("bench-load-{i}");
+        let last_cpu = std::thread::available_parallelism().map_or(1, |n| n.get()) - 1;
+        // On a thread of its own: scheduling settings are per thread.
+        let r = std::thread::spawn(move || {
+            jointctl_bench::run_sherpa_loop_with(seconds, &name, |c| {
+                if s.realtime {
+                    (c.timing.realtime_priority, c.timing.cpu) = (Some(80), Some(last_cpu));
+                }
+                c.timing.lock_memory = s.lock_memory;
+            })
+        })
+        .join()
+        .expect("the loop thread");
+        let (p50, p99, max, overruns, miss, drops, faulted) = (r.p50_us, r.p99_us, r.max_us, r.overruns, r.missed, r.drops, r.faulted);
         drop(hogs);
         missed.push(miss);
         println!("| {what} | {p50:.1} | {p99:.1} | {max:.1} | {overruns} | {miss} | {drops} | {faulted} |");

@@ -1,5 +1,5 @@
-//! What the benchmarks (`benches/runtime.rs`, `benches/soak.rs`, `benches/recording.rs`,
-//! `benches/bridges.rs`) share.
+//! What the benchmarks (`benches/runtime.rs`, `benches/latency.rs`, `benches/scale.rs`,
+//! `benches/soak.rs`, `benches/recording.rs`, `benches/bridges.rs`) share.
 
 use std::path::{Path, PathBuf};
 
@@ -57,15 +57,26 @@ pub struct LoopRun {
     pub max_us: f64,
     /// Cycles whose work ended after the next deadline.
     pub overruns: u64,
+    /// Deadlines skipped.
+    pub missed: u64,
     /// Records the publisher thread could not take.
     pub drops: u64,
+    /// Joints faulted by the end of the run.
+    pub faulted: usize,
 }
 
 /// The full SHERPA arm as `arm_name` at 1 kHz for `seconds`, publishing to shared memory, q2
 /// tracking a 5 Nm, 0.5 Hz torque sine and the others holding (the plugins from the release
 /// build).
 pub fn run_sherpa_loop(seconds: f64, arm_name: &str) -> LoopRun {
-    let loaded = sherpa(1000.0, arm_name);
+    run_sherpa_loop_with(seconds, arm_name, |_| {})
+}
+
+/// [`run_sherpa_loop`] with the config edited first (its `timing`, say). Scheduling settings
+/// hold for the calling thread after the run: call it on a thread of its own to keep them apart.
+pub fn run_sherpa_loop_with(seconds: f64, arm_name: &str, edit: impl FnOnce(&mut jointctl_config::ArmConfig)) -> LoopRun {
+    let mut loaded = sherpa(1000.0, arm_name);
+    edit(&mut loaded.config);
     let loader = PluginLoader::new([release_dir()]);
     let mut arm = jointctl_backends::build_arm(&loaded, &loader).unwrap_or_else(|e| panic!("{e}\n(build first: cargo build --release --workspace)"));
     arm.activate().expect("the simulated arm activates");
@@ -83,8 +94,19 @@ pub fn run_sherpa_loop(seconds: f64, arm_name: &str) -> LoopRun {
         p99_us: us(st.jitter_percentile_ns(99.0)),
         max_us: st.max_jitter_ns as f64 / 1e3,
         overruns: st.overruns,
+        missed: st.missed_deadlines,
         drops: publisher.drops(),
+        faulted: arm.slots.iter().filter(|slot| slot.fault != 0).count(),
     }
+}
+
+/// An environment variable's value, or `default` when it is unset or does not parse.
+///
+/// ```
+/// assert_eq!(jointctl_bench::env_or("JOINTCTL_BENCH_UNSET_EXAMPLE", 7_usize), 7);
+/// ```
+pub fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
 /// Prints the loop's figures of a run without and a run with something attached, and their
@@ -139,12 +161,16 @@ pub fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-/// The `p`th percentile of `v` (sorted in place), nearest rank.
+/// The `p`th percentile of `v` (sorted in place), nearest rank; 0 for no values.
 ///
 /// ```
 /// assert_eq!(jointctl_bench::percentile(&mut [5, 1, 9, 3], 50.0), 5);
+/// assert_eq!(jointctl_bench::percentile(&mut [], 99.0), 0);
 /// ```
 pub fn percentile(v: &mut [u64], p: f64) -> u64 {
+    if v.is_empty() {
+        return 0;
+    }
     v.sort_unstable();
     v[((p / 100.0) * (v.len() - 1) as f64).round() as usize]
 }
@@ -203,12 +229,12 @@ impl jointctl_hal::Hal for EchoHal {
 /// absolute), for a `jointctl` process to run; the caller removes it.
 pub fn sherpa_file(arm: &str, rate_hz: f64) -> std::path::PathBuf {
     let root = root();
-    let text = std::fs::read_to_string(root.join("configs/sherpa_arm.yaml")).unwrap();
+    let text = std::fs::read_to_string(root.join("configs/sherpa_arm.yaml")).expect("configs/sherpa_arm.yaml");
     let text = text.replacen("arm: sherpa", &format!("arm: {arm}"), 1).replacen("rate_hz: 40 ", &format!("rate_hz: {rate_hz} "), 1);
     let text = text.replace("include: sherpa_", &format!("include: {}/configs/sherpa_", root.display()));
     let text = text.replace("urdf: sherpa_", &format!("urdf: {}/configs/sherpa_", root.display()));
     let path = std::env::temp_dir().join(format!("jointctl-bench-{}-{arm}.yaml", std::process::id()));
-    std::fs::write(&path, text).unwrap();
+    std::fs::write(&path, text).expect("a temporary config");
     path
 }
 
@@ -222,3 +248,23 @@ pub fn children_cpu_s() -> f64 {
     t(u.ru_utime) + t(u.ru_stime)
 }
 
+
+/// A busy loop per core, as separate processes (ordinary priority), until dropped.
+pub struct Hogs(Vec<std::process::Child>);
+
+impl Hogs {
+    /// Starts them.
+    pub fn start() -> Hogs {
+        let n = std::thread::available_parallelism().map_or(1, |n| n.get());
+        Hogs((0..n).map(|_| std::process::Command::new("sh").args(["-c", "while :; do :; done"]).spawn().expect("sh")).collect())
+    }
+}
+
+impl Drop for Hogs {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
