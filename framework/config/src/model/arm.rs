@@ -120,9 +120,9 @@ pub struct TimingConfig {
     /// The loop sleeps until this long before each deadline, then spins [us], trading CPU for
     /// jitter. Assumption: 200 us.
     pub spin_us: u32,
-    /// Run the loop thread with SCHED_FIFO at this priority (1-99) when permitted; the thread
-    /// that publishes each cycle's state runs one below it, so that it sends as soon as the loop
-    /// has handed a cycle over and sleeps, and never delays the loop.
+    /// Run the loop thread with SCHED_FIFO at this priority (1-99) when permitted; from 2 on, the
+    /// thread that publishes each cycle's state runs one below it, so that it sends as soon as
+    /// the loop has handed a cycle over and sleeps, and never delays the loop.
     pub realtime_priority: Option<u8>,
     /// Pin the loop thread, and the thread that publishes its state, to this CPU.
     pub cpu: Option<usize>,
