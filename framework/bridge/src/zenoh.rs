@@ -359,7 +359,7 @@ fn forward(arm: &str, payload: Option<&zenoh::bytes::ZBytes>, client: &CommandCl
         .ok_or_else(|| "the query carries no command (send it as the query's payload)".to_string())
         .and_then(|p| p.try_to_string().map_err(|e| format!("the command is not UTF-8 text: {e}")).map(|s| s.into_owned()))
         .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).map_err(|e| format!("the command is not JSON: {e}")))
-        .and_then(|v| messages::parse_request(&v));
+        .and_then(|v| messages::parse_request(&v).map_err(|e| e.to_string()));
     let request = match parsed {
         Ok(r) => r,
         Err(why) => {

@@ -140,7 +140,7 @@ pub fn parse_str(text: &str, file: impl AsRef<Path>) -> Result<LoadedConfig, Con
         && let Some(v) = doc.get("version")
         && let Err(message) = format_version(v)
     {
-        return Err(ConfigErrors(vec![source.error("version", message)]));
+        return Err(ConfigErrors(vec![source.error("version", message.to_string())]));
     }
     let de = serde_yaml::Deserializer::from_str(text);
     let config: ArmConfig = serde_path_to_error::deserialize(de).map_err(|e| {
@@ -287,24 +287,43 @@ fn include_params(source: &ConfigSource, params: &mut Params) -> Result<Option<P
 /// older format in [`format_version`].
 pub const FORMAT_VERSION: u64 = 1;
 
+/// Why a file's `version:` value cannot be read ([`format_version`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FormatVersionError {
+    /// A format this jointctl does not know yet.
+    #[error("format {found} is from a newer jointctl; this one reads formats 1 to {FORMAT_VERSION}: upgrade jointctl, or rewrite the file for format {FORMAT_VERSION}")]
+    Newer {
+        /// The file's format.
+        found: u64,
+    },
+    /// Format 0, which never existed.
+    #[error("there is no format 0; this jointctl reads formats 1 to {FORMAT_VERSION}")]
+    Zero,
+    /// Not a whole number.
+    #[error("must be the file format's number, an integer from 1 to {FORMAT_VERSION}, got {got}")]
+    NotANumber {
+        /// The value as written.
+        got: String,
+    },
+}
+
 /// Checks a file's `version:` value: an integer from 1 to [`FORMAT_VERSION`].
 ///
 /// ```
-/// use jointctl_config::format_version;
+/// use jointctl_config::{FormatVersionError, format_version};
 /// assert!(format_version(&serde_yaml::Value::from(1)).is_ok());
-/// assert!(format_version(&serde_yaml::Value::from(7)).unwrap_err().contains("newer jointctl"));
+/// assert_eq!(format_version(&serde_yaml::Value::from(7)), Err(FormatVersionError::Newer { found: 7 }));
+/// assert!(format_version(&serde_yaml::Value::from(7)).unwrap_err().to_string().contains("newer jointctl"));
 /// ```
 ///
 /// # Errors
 /// The reason, to be shown at the file's `version` field.
-pub fn format_version(v: &serde_yaml::Value) -> Result<u64, String> {
+pub fn format_version(v: &serde_yaml::Value) -> Result<u64, FormatVersionError> {
     match v.as_u64() {
         Some(n) if (1..=FORMAT_VERSION).contains(&n) => Ok(n),
-        Some(n) if n > FORMAT_VERSION => Err(format!(
-            "format {n} is from a newer jointctl; this one reads formats 1 to {FORMAT_VERSION}: upgrade jointctl, or rewrite the file for format {FORMAT_VERSION}"
-        )),
-        Some(0) => Err(format!("there is no format 0; this jointctl reads formats 1 to {FORMAT_VERSION}")),
-        _ => Err(format!("must be the file format's number, an integer from 1 to {FORMAT_VERSION}, got {}", serde_yaml::to_string(v).unwrap_or_default().trim())),
+        Some(n) if n > FORMAT_VERSION => Err(FormatVersionError::Newer { found: n }),
+        Some(_) => Err(FormatVersionError::Zero),
+        None => Err(FormatVersionError::NotANumber { got: serde_yaml::to_string(v).unwrap_or_default().trim().to_string() }),
     }
 }
 

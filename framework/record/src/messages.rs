@@ -137,24 +137,25 @@ pub fn write_joint_state(out: &mut String, s: &ArmState) {
 /// assert_eq!((back.cycle, back.joints()[0].torque_nm, back.joints()[0].valid_mask), (7, 1.5, jointctl_ipc::FieldMask::TORQUE));
 /// assert!(back.joints()[0].position_rad.is_nan());
 /// ```
-pub fn parse_joint_state(v: &Value) -> Result<ArmState, String> {
-    let count = |key: &str| v[key].as_u64().ok_or_else(|| format!("`{key}` is not a count"));
+pub fn parse_joint_state(v: &Value) -> Result<ArmState, MessageError> {
+    let count = |key: &str| v[key].as_u64().ok_or_else(|| MessageError::new(key, "is not a count"));
     let mut s = ArmState::EMPTY;
     s.cycle = count("cycle")?;
     s.stamp_ns = count("stamp_ns")?;
     s.final_sample = u32::from(v["final"].as_bool().unwrap_or(false));
-    let joints = v["joints"].as_array().ok_or("`joints` is not an array")?;
+    let joints = v["joints"].as_array().ok_or_else(|| MessageError::new("joints", "is not an array"))?;
     if joints.len() > s.joints.len() {
-        return Err(format!("`joints`: at most {}, got {}", s.joints.len(), joints.len()));
+        return Err(MessageError::new("joints", format!("holds at most {}, got {}", s.joints.len(), joints.len())));
     }
     for (i, (out, j)) in s.joints.iter_mut().zip(joints).enumerate() {
-        let name = j["name"].as_str().ok_or_else(|| format!("`joints[{i}].name` is not a string"))?;
+        let at = |key: &str| format!("joints[{i}].{key}");
+        let name = j["name"].as_str().ok_or_else(|| MessageError::new(at("name"), "is not a string"))?;
         out.name = jointctl_ipc::encode_name(name);
-        let mut field = |key: &str, bit: u32| -> Result<f64, String> {
+        let mut field = |key: &str, bit: u32| -> Result<f64, MessageError> {
             match &j[key] {
                 Value::Null => Ok(f64::NAN),
                 x => {
-                    let value = x.as_f64().ok_or_else(|| format!("`joints[{i}].{key}` is not a number"))?;
+                    let value = x.as_f64().ok_or_else(|| MessageError::new(at(key), "is not a number"))?;
                     out.valid_mask |= bit;
                     Ok(value)
                 }
@@ -171,12 +172,47 @@ pub fn parse_joint_state(v: &Value) -> Result<ArmState, String> {
         out.sensor_torque_nm = field("sensor_torque_nm", 0)?;
         out.gravity_nm = field("gravity_nm", 0)?;
         let mode = j["mode"].as_str().unwrap_or("hold");
-        out.mode = jointctl_ipc::JointMode::from_name(mode).ok_or_else(|| format!("`joints[{i}].mode`: unknown mode `{mode}`"))?;
+        out.mode = jointctl_ipc::JointMode::from_name(mode).ok_or_else(|| MessageError::new(at("mode"), format!("is an unknown mode `{mode}`")))?;
         out.enabled = u32::from(j["enabled"].as_bool().unwrap_or(true));
         out.fault_code = j["fault_code"].as_u64().and_then(|c| u32::try_from(c).ok()).unwrap_or(0);
     }
     s.joint_count = joints.len() as u32;
     Ok(s)
+}
+
+/// A JSON message that does not have the shape of a jointctl message ([`parse_joint_state`],
+/// [`parse_request`]): the field, as a path into the message, and what is wrong with it.
+///
+/// ```
+/// let e = jointctl_record::messages::parse_request(&serde_json::json!({"kind": "fly"})).unwrap_err();
+/// assert_eq!(e.field, "kind");
+/// assert!(e.to_string().starts_with("`kind`: unknown command `fly`"), "{e}");
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MessageError {
+    /// Where: `kind`, `values[2]`, `joints[0].mode`; empty for the message as a whole.
+    pub field: String,
+    /// What is wrong.
+    pub problem: String,
+}
+
+impl std::fmt::Display for MessageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.field.as_str(), self.problem.starts_with("is ") || self.problem.starts_with("must ")) {
+            ("", _) => write!(f, "{}", self.problem),
+            (field, true) => write!(f, "`{field}` {}", self.problem),
+            (field, false) => write!(f, "`{field}`: {}", self.problem),
+        }
+    }
+}
+
+impl std::error::Error for MessageError {}
+
+impl MessageError {
+    /// The error of `field`.
+    pub fn new(field: impl Into<String>, problem: impl Into<String>) -> Self {
+        MessageError { field: field.into(), problem: problem.into() }
+    }
 }
 
 /// A joint-state sample.
@@ -367,64 +403,65 @@ pub fn request(q: &CommandRequest) -> Value {
 /// let r = parse_request(&v).unwrap();
 /// assert_eq!((r.kind, r.waveform, r.values[1]), (jointctl_ipc::CommandKind::TORQUE, jointctl_ipc::TorqueWaveform::SINE, 0.1));
 /// assert_eq!(request(&r)["values"], serde_json::json!([5.0, 0.1]));
-/// assert!(parse_request(&serde_json::json!({"kind": "fly"})).unwrap_err().contains("`kind`"));
+/// assert_eq!(parse_request(&serde_json::json!({"kind": "fly"})).unwrap_err().field, "kind");
 /// ```
-pub fn parse_request(v: &Value) -> Result<CommandRequest, String> {
-    let object = v.as_object().ok_or("a command is a JSON object")?;
+pub fn parse_request(v: &Value) -> Result<CommandRequest, MessageError> {
+    let object = v.as_object().ok_or_else(|| MessageError::new("", "a command is a JSON object"))?;
     for key in object.keys() {
         if !["kind", "joint", "streamed", "waveform", "values", "points"].contains(&key.as_str()) {
-            return Err(format!("unknown field `{key}` (expected kind, joint, streamed, waveform, values, points)"));
+            return Err(MessageError::new(key.as_str(), "is an unknown field (expected kind, joint, streamed, waveform, values, points)"));
         }
     }
-    let text = |key: &str| -> Result<Option<&str>, String> {
+    let text = |key: &str| -> Result<Option<&str>, MessageError> {
         match object.get(key) {
             None | Some(Value::Null) => Ok(None),
             Some(Value::String(s)) => Ok(Some(s)),
-            Some(other) => Err(format!("`{key}` must be a string, got {other}")),
+            Some(other) => Err(MessageError::new(key, format!("must be a string, got {other}"))),
         }
     };
-    let kind_name = text("kind")?.ok_or("`kind` is missing")?;
-    let kind = jointctl_ipc::CommandKind::from_name(kind_name)
-        .ok_or_else(|| format!("`kind`: unknown command `{kind_name}` (one of {})", jointctl_ipc::CommandKind::ALL.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(", ")))?;
+    let kind_name = text("kind")?.ok_or_else(|| MessageError::new("kind", "is missing"))?;
+    let kind = jointctl_ipc::CommandKind::from_name(kind_name).ok_or_else(|| {
+        MessageError::new("kind", format!("unknown command `{kind_name}` (one of {})", jointctl_ipc::CommandKind::ALL.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(", ")))
+    })?;
     let joint = text("joint")?.unwrap_or("");
     if joint.len() >= jointctl_ipc::NAME_LEN {
-        return Err(format!("`joint`: `{joint}` is longer than any joint name ({} bytes at most)", jointctl_ipc::NAME_LEN - 1));
+        return Err(MessageError::new("joint", format!("`{joint}` is longer than any joint name ({} bytes at most)", jointctl_ipc::NAME_LEN - 1)));
     }
-    let number = |x: &Value, at: &str| -> Result<f64, String> {
+    let number = |x: &Value, at: String| -> Result<f64, MessageError> {
         match x {
             Value::Null => Ok(f64::NAN),
-            Value::Number(n) => n.as_f64().filter(|f| f.is_finite()).ok_or_else(|| format!("{at}: {n} is not a finite number")),
-            other => Err(format!("{at}: {other} is not a number")),
+            Value::Number(n) => n.as_f64().filter(|f| f.is_finite()).ok_or_else(|| MessageError::new(at, format!("{n} is not a finite number"))),
+            other => Err(MessageError::new(at, format!("{other} is not a number"))),
         }
     };
     let values: Vec<f64> = match object.get("values") {
         None | Some(Value::Null) => Vec::new(),
-        Some(Value::Array(a)) if a.len() <= 8 => a.iter().enumerate().map(|(i, x)| number(x, &format!("`values[{i}]`"))).collect::<Result<_, _>>()?,
-        Some(Value::Array(a)) => return Err(format!("`values`: at most 8, got {}", a.len())),
-        Some(other) => return Err(format!("`values` must be an array of numbers, got {other}")),
+        Some(Value::Array(a)) if a.len() <= 8 => a.iter().enumerate().map(|(i, x)| number(x, format!("values[{i}]"))).collect::<Result<_, _>>()?,
+        Some(Value::Array(a)) => return Err(MessageError::new("values", format!("at most 8, got {}", a.len()))),
+        Some(other) => return Err(MessageError::new("values", format!("must be an array of numbers, got {other}"))),
     };
     let mut r = CommandRequest::new(kind, joint, &values);
     if let Some(w) = text("waveform")? {
-        r.waveform = jointctl_ipc::TorqueWaveform::from_name(w).ok_or_else(|| format!("`waveform`: unknown waveform `{w}` (step, sine or cosine)"))?;
+        r.waveform = jointctl_ipc::TorqueWaveform::from_name(w).ok_or_else(|| MessageError::new("waveform", format!("unknown waveform `{w}` (step, sine or cosine)")))?;
     }
     r.streamed = match object.get("streamed") {
         None | Some(Value::Null) | Some(Value::Bool(false)) => 0,
         Some(Value::Bool(true)) => 1,
-        Some(other) => return Err(format!("`streamed` must be true or false, got {other}")),
+        Some(other) => return Err(MessageError::new("streamed", format!("must be true or false, got {other}"))),
     };
     match object.get("points") {
         None | Some(Value::Null) => {}
         Some(Value::Array(points)) if points.len() <= jointctl_ipc::MAX_COMMAND_POINTS => {
             for (i, p) in points.iter().enumerate() {
-                let triple = p.as_array().filter(|t| (2..=3).contains(&t.len())).ok_or_else(|| format!("`points[{i}]` must be [t, q] or [t, q, v]"))?;
+                let triple = p.as_array().filter(|t| (2..=3).contains(&t.len())).ok_or_else(|| MessageError::new(format!("points[{i}]"), "must be [t, q] or [t, q, v]"))?;
                 for (k, x) in triple.iter().enumerate() {
-                    r.points[i][k] = number(x, &format!("`points[{i}][{k}]`"))?;
+                    r.points[i][k] = number(x, format!("points[{i}][{k}]"))?;
                 }
             }
             r.point_count = points.len() as u32;
         }
-        Some(Value::Array(points)) => return Err(format!("`points`: at most {}, got {}", jointctl_ipc::MAX_COMMAND_POINTS, points.len())),
-        Some(other) => return Err(format!("`points` must be an array, got {other}")),
+        Some(Value::Array(points)) => return Err(MessageError::new("points", format!("at most {}, got {}", jointctl_ipc::MAX_COMMAND_POINTS, points.len()))),
+        Some(other) => return Err(MessageError::new("points", format!("must be an array, got {other}"))),
     }
     Ok(r)
 }

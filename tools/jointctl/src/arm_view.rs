@@ -261,7 +261,7 @@ pub struct EchoOptions {
 
 /// Prints the samples `next` gives (`Ok(None)`: none yet) until the count, the arm's final
 /// sample, SIGINT/SIGTERM or a closed pipe; `next`'s error ends it with exit 1.
-pub fn echo(opts: &EchoOptions, mut next: impl FnMut() -> Result<Option<(ArmState, Option<u64>)>, String>) -> ExitCode {
+pub fn echo<E: std::fmt::Display>(opts: &EchoOptions, mut next: impl FnMut() -> Result<Option<(ArmState, Option<u64>)>, E>) -> ExitCode {
     let keep = |name: &str| opts.joint.is_empty() || opts.joint.iter().any(|j| j == name);
     let min_gap = opts.rate.map(|hz| Duration::from_secs_f64(1.0 / hz));
     let mut received = 0u64;
@@ -292,7 +292,7 @@ pub fn echo(opts: &EchoOptions, mut next: impl FnMut() -> Result<Option<(ArmStat
                 }
             }
             Ok(None) => std::thread::sleep(Duration::from_micros(500)),
-            Err(e) => return crate::fail(e),
+            Err(e) => return crate::fail(e.to_string()),
         }
     }
     ExitCode::SUCCESS
