@@ -12,6 +12,8 @@ pub mod guard;
 pub mod joint;
 pub mod loader;
 pub mod lock;
+pub mod publisher;
+mod run_error;
 pub mod runner;
 pub mod signals;
 pub mod status;
@@ -19,7 +21,9 @@ pub mod timing;
 
 pub use arm::{ActivateError, Arm, JointSlot};
 pub use loader::{LoadPluginError, PluginLoader, PluginSource};
-pub use runner::{ArmPublisher, ControlLoop, HopSample, RunError, RunOptions, RunReport, fits_shared_memory, run};
+pub use publisher::{ArmPublisher, HopSample, fits_shared_memory};
+pub use run_error::RunError;
+pub use runner::{ControlLoop, RunOptions, RunReport, run};
 
 use jointctl_config::LoadedConfig;
 

@@ -1,0 +1,575 @@
+//! The loop's shared-memory side: each cycle's record goes from the loop thread into a
+//! wait-free ring, and a publisher thread, which owns the iceoryx2 node, sends it, answers
+//! commands and logs where each record spent its time ([`HopSample`]).
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::prelude::*;
+use iceoryx2::port::update_connections::UpdateConnections;
+use jointctl_modes::Mode;
+use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDrive, RawFrame, RawReading};
+use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointMode, JointSample, JointsDescriptor, ServiceNames, decode_name, encode_name};
+
+use crate::arm::Arm;
+use crate::commands::{ArmCommand, CommandValidator};
+use crate::run_error::{RunError, port_error};
+use crate::timing::{LoopStats, monotonic_ns};
+
+/// One cycle's record, handed from the loop thread to the publisher thread.
+#[derive(Clone, Copy)]
+struct CycleRecord {
+    state: ArmState,
+    diagnostics: Diagnostics,
+    raw: RawFrame,
+    /// When the HAL read returned, when the cycle's work ended and when the record went into
+    /// the ring [ns, CLOCK_MONOTONIC]; written only while a [`HopSample`] log is kept (0
+    /// otherwise).
+    readings_ns: u64,
+    done_ns: u64,
+    handed_ns: u64,
+}
+
+/// Where one cycle's state spent its time between the sensor read and iceoryx2, all
+/// CLOCK_MONOTONIC [ns]: kept by the publisher thread when asked for
+/// ([`ArmPublisher::with_hop_log`]) so that a benchmark can split the sensor → inspector latency
+/// hop by hop (the inspector's receive time is the subscriber's to take).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HopSample {
+    /// The cycle.
+    pub cycle: u64,
+    /// The cycle began (its wake-up, just before the HAL read): the sample's `stamp_ns`.
+    pub read_ns: u64,
+    /// The HAL read returned: the readings in hand.
+    pub readings_ns: u64,
+    /// The cycle's control work ended: set-points written (the simulated HAL steps its physics
+    /// in that write).
+    pub done_ns: u64,
+    /// The record was handed to the publisher thread (state and diagnostics filled).
+    pub handed_ns: u64,
+    /// The publisher thread took it from the ring.
+    pub taken_ns: u64,
+    /// The joint-state sample was sent (iceoryx2's `send` returned).
+    pub sent_ns: u64,
+}
+
+/// Most cycles a [`HopSample`] log keeps (48 MB; 2.8 hours at 1 kHz).
+pub const MAX_HOP_LOG: usize = 10_000_000;
+
+/// Capacity of the loop → publisher ring [cycles]: 64 ms at 1 kHz before records are dropped.
+const RING_CAPACITY: usize = 64;
+/// Capacity of the IPC → loop command ring.
+const COMMAND_CAPACITY: usize = 32;
+
+/// The mode published in [`JointSample::mode`].
+pub fn published_mode(mode: &Mode) -> JointMode {
+    match mode {
+        Mode::Hold => JointMode::HOLD,
+        Mode::Position { .. } => JointMode::POSITION,
+        Mode::Manual { .. } => JointMode::MANUAL,
+        Mode::Trajectory { .. } => JointMode::TRAJECTORY,
+        Mode::Torque { .. } => JointMode::TORQUE,
+        Mode::Impedance { .. } => JointMode::IMPEDANCE,
+    }
+}
+
+/// Answers command requests: validates them against the loop's published status, queues the
+/// valid ones for the loop, and waits for the loop to apply an enable or disable before it
+/// answers (so that the next command is validated against the new state).
+pub struct CommandDesk {
+    validator: CommandValidator,
+    period: std::time::Duration,
+}
+
+impl CommandDesk {
+    /// A desk for a loop of this period.
+    pub fn new(validator: CommandValidator, period_s: f64) -> Self {
+        CommandDesk { validator, period: std::time::Duration::from_secs_f64(period_s) }
+    }
+
+    /// The answer to one request; a valid command is pushed into `queue` for the loop.
+    pub fn answer(&mut self, request: &jointctl_ipc::CommandRequest, queue: &mut rtrb::Producer<ArmCommand>) -> CommandResponse {
+        let (command, text) = match self.validator.validate(request) {
+            Ok(ok) => ok,
+            Err(reason) => return CommandResponse::new(false, &reason.to_string()),
+        };
+        if queue.push(command).is_err() {
+            return CommandResponse::new(false, "the runtime's command queue is full; try again");
+        }
+        if let ArmCommand::Stop = command {
+            self.validator.stop_queued();
+        }
+        if let ArmCommand::Enable { dof, enabled } = command
+            && !self.wait_applied(|s| s.enabled(dof) == enabled)
+        {
+            return CommandResponse::new(true, &format!("{text}; queued, the loop has not applied it yet"));
+        }
+        CommandResponse::new(true, &text)
+    }
+
+    /// Waits up to five periods (and at least 20 ms) for the loop to publish a status where
+    /// `applied` holds.
+    fn wait_applied(&self, applied: impl Fn(&crate::status::LoopStatus) -> bool) -> bool {
+        let status = self.validator.status();
+        let end = std::time::Instant::now() + (self.period * 5).max(std::time::Duration::from_millis(20));
+        loop {
+            if applied(status) {
+                return true;
+            }
+            if std::time::Instant::now() >= end || status.stopping() {
+                return false;
+            }
+            std::thread::sleep(std::time::Duration::from_micros(500));
+        }
+    }
+}
+
+/// Logs each joint whose fault count grew since `seen` (the publisher thread's view of the
+/// diagnostics), with its fault code and reason.
+fn log_new_faults(d: &Diagnostics, seen: &mut [u64; jointctl_ipc::MAX_JOINTS]) {
+    for (j, seen) in d.joints[..(d.joint_count as usize).min(d.joints.len())].iter().zip(seen.iter_mut()) {
+        if j.fault_count > *seen {
+            *seen = j.fault_count;
+            tracing::error!(joint = decode_name(&j.name), fault = j.fault_code, "joint faulted and is held: {}", decode_name(&j.fault_message));
+        }
+    }
+}
+
+/// The arm's plugin instances as `inspect joints` reads them.
+fn joints_descriptor(arm: &Arm) -> Box<JointsDescriptor> {
+    let mut d = Box::new(JointsDescriptor::EMPTY);
+    d.rate_hz = arm.rate_hz;
+    for (entry, slot) in d.joints.iter_mut().zip(&arm.slots) {
+        let dofs = slot.dofs();
+        *entry = JointDescriptor {
+            name: encode_name(&slot.name),
+            plugin: encode_name(&slot.plugin),
+            version: encode_name(&slot.plugin_version),
+            library: slot.plugin_library.as_deref().map_or([0; jointctl_ipc::raw::PATH_LEN], |p| encode_name(&p.to_string_lossy())),
+            first_dof: dofs.start as u32,
+            dof_count: dofs.len() as u32,
+            budget_ns: slot.budget_ns,
+        };
+        d.joint_count += 1;
+    }
+    d
+}
+
+/// Publishes the one sample a service keeps for late subscribers (descriptors); a failure is
+/// logged, since readers then wait for it in vain.
+fn publish_kept<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend>(publisher: &Publisher<ipc::Service, T, ()>, value: &T, service: &str) {
+    let sent = publisher.loan_uninit().map(|s| s.write_payload(*value).send().is_ok()).unwrap_or(false);
+    if !sent {
+        tracing::warn!(service, "could not publish the service's kept sample");
+    }
+}
+
+/// What the publisher thread owns: the arm's node and ports.
+struct PublisherPorts {
+    node: Node<ipc::Service>,
+    state: Publisher<ipc::Service, ArmState, ()>,
+    diagnostics: Publisher<ipc::Service, Diagnostics, ()>,
+    raw: Publisher<ipc::Service, RawFrame, ()>,
+    /// Kept so that its one sample stays in the service's history for late subscribers.
+    descriptor: Publisher<ipc::Service, RawDescriptor, ()>,
+    /// Kept likewise: the arm's plugin instances.
+    joints: Publisher<ipc::Service, JointsDescriptor, ()>,
+    accepted: Publisher<ipc::Service, CommandRecord, ()>,
+    server: iceoryx2::port::server::Server<ipc::Service, jointctl_ipc::CommandRequest, (), CommandResponse, ()>,
+}
+
+impl PublisherPorts {
+    /// Creates the arm's node and services; a taken publisher or server slot means another
+    /// runtime runs this arm.
+    fn open(
+        scope: &jointctl_ipc::IpcScope,
+        arm_name: &str,
+        limits: jointctl_ipc::PortLimits,
+        description: &RawDescriptor,
+        instances: &JointsDescriptor,
+    ) -> Result<Self, RunError> {
+        let node = jointctl_ipc::create_node_in(scope, &format!("jointctl-run-{arm_name}"))?;
+        let names = ServiceNames::for_arm(arm_name);
+        // The command server and the raw services first, the joint state and diagnostics last:
+        // a client that waits for the state (every inspector does) finds all of them there.
+        let command_name = jointctl_ipc::command_service_name(arm_name);
+        let server = jointctl_ipc::command_service(&node, &command_name, Some(limits))?
+            .server_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &command_name, e))?;
+        let raw = jointctl_ipc::create_raw_service(&node, &names.raw, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.raw, e))?;
+        let descriptor = jointctl_ipc::create_raw_descriptor_service(&node, &names.raw_descriptor, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.raw_descriptor, e))?;
+        publish_kept(&descriptor, description, &names.raw_descriptor);
+        let joints = jointctl_ipc::create_joints_service(&node, &names.joints, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.joints, e))?;
+        publish_kept(&joints, instances, &names.joints);
+        let accepted = jointctl_ipc::create_commands_service(&node, &names.commands, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.commands, e))?;
+        let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.joint_state, e))?;
+        let diagnostics = jointctl_ipc::create_diagnostics_service(&node, &names.diagnostics, limits)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
+        Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server })
+    }
+
+    /// Publishes the loop's records and answers commands until `stop`; returns the samples
+    /// iceoryx2 refused. Dropping the ports at the end releases the shared memory.
+    fn serve(
+        self,
+        mut records: rtrb::Consumer<CycleRecord>,
+        mut commands: rtrb::Producer<ArmCommand>,
+        mut desk: CommandDesk,
+        stop: &AtomicBool,
+        hop_log_capacity: usize,
+    ) -> (u64, Vec<HopSample>) {
+        let mut failures = 0u64;
+        // Allocated here, on the publisher thread, once; at most MAX_HOP_LOG entries.
+        let hop_log_capacity = hop_log_capacity.min(MAX_HOP_LOG);
+        let mut hops = Vec::with_capacity(hop_log_capacity);
+        let mut accepted_count = 0u64;
+        let mut faults_seen = [0u64; jointctl_ipc::MAX_JOINTS];
+        loop {
+            let stopping = stop.load(Ordering::Acquire);
+            while let Ok(rec) = records.pop() {
+                // The final sample, published outside any cycle, has no hops.
+                let taken_ns = if hops.len() < hop_log_capacity && rec.state.final_sample == 0 { monotonic_ns() } else { 0 };
+                let ok_state = self.state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
+                if taken_ns != 0 {
+                    let (cycle, read_ns) = (rec.state.cycle, rec.state.stamp_ns);
+                    hops.push(HopSample { cycle, read_ns, readings_ns: rec.readings_ns, done_ns: rec.done_ns, handed_ns: rec.handed_ns, taken_ns, sent_ns: monotonic_ns() });
+                }
+                log_new_faults(&rec.diagnostics, &mut faults_seen);
+                let ok_diag = self.diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
+                let ok_raw = self.raw.loan_uninit().map(|s| s.write_payload(rec.raw).send().is_ok()).unwrap_or(false);
+                failures += u64::from(!ok_state) + u64::from(!ok_diag) + u64::from(!ok_raw);
+            }
+            // Commands are validated here, outside the control thread; only valid ones reach
+            // the loop, and every request gets an answer. The accepted ones are published for
+            // recorders, numbered so that a lost one shows.
+            while let Ok(Some(request)) = self.server.receive() {
+                let response = desk.answer(request.payload(), &mut commands);
+                let (kind, joint) = (request.payload().kind.name(), decode_name(&request.payload().joint));
+                if response.accepted == 1 {
+                    tracing::info!(command = kind, joint, "accepted: {}", response.text());
+                } else {
+                    tracing::info!(command = kind, joint, "refused: {}", response.text());
+                }
+                if response.accepted == 1 {
+                    accepted_count += 1;
+                    let record = CommandRecord { sequence: accepted_count, stamp_ns: crate::timing::monotonic_ns(), request: *request.payload(), response };
+                    let ok = self.accepted.loan_uninit().map(|s| s.write_payload(record).send().is_ok()).unwrap_or(false);
+                    failures += u64::from(!ok);
+                }
+                let _ = request.send_copy(response);
+            }
+            // A subscriber that arrived since gets the descriptor from the history now.
+            let _ = self.descriptor.update_connections();
+            let _ = self.joints.update_connections();
+            if stopping {
+                break;
+            }
+            std::thread::park_timeout(std::time::Duration::from_millis(5));
+        }
+        let PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server } = self;
+        // Ports before the node: shared memory released in order.
+        drop((server, state, diagnostics, raw, descriptor, joints, accepted, node));
+        (failures, hops)
+    }
+}
+
+/// The arm's last readings and set-points into a raw frame. Allocation-free.
+fn fill_raw(raw: &mut RawFrame, arm: &Arm) {
+    let readings = arm.last_readings();
+    for (out, r) in raw.encoders.iter_mut().zip(&readings.encoders) {
+        *out = RawReading::from_reading(r);
+    }
+    for ((out, r), sp) in raw.drives.iter_mut().zip(&readings.drives).zip(arm.last_setpoints()) {
+        *out = RawDrive::new(r, sp);
+    }
+    for (out, r) in raw.torque_sensors.iter_mut().zip(&readings.torque_sensors) {
+        *out = RawReading::from_reading(r);
+    }
+}
+
+/// Refuses an arm with more DOFs or devices than the shared-memory samples carry: the
+/// samples are fixed-size, and filling them from a bigger arm would drop joints or devices
+/// without a word.
+pub fn fits_shared_memory(arm: &Arm) -> Result<(), RunError> {
+    let (encoders, drives) = arm.raw_devices();
+    let counts = [
+        ("DOFs", arm.dof_names.len(), jointctl_ipc::MAX_JOINTS),
+        ("encoders", encoders.len(), jointctl_ipc::raw::MAX_RAW_ENCODERS),
+        ("drives", drives.len(), jointctl_ipc::raw::MAX_RAW_DRIVES),
+        ("force/torque sensors", arm.torque_sensor_names().len(), jointctl_ipc::raw::MAX_RAW_TORQUE_SENSORS),
+        ("devices (drives, encoders and force/torque sensors)", arm.device_names().count(), jointctl_ipc::MAX_DEVICES),
+    ];
+    match counts.into_iter().find(|&(_, count, max)| count > max) {
+        Some((what, count, max)) => Err(RunError::TooLargeToPublish { arm: arm.name.clone(), what, count, max }),
+        None => Ok(()),
+    }
+}
+
+/// The loop's shared-memory side.
+///
+/// iceoryx2 0.10 allocates a small reference count in every `loan`, so the control thread never
+/// calls it: each cycle's record goes into a wait-free single-producer ring (no lock, no
+/// allocation, never waits) and a publisher thread, which owns the iceoryx2 node, sends it. A
+/// full ring drops the record and counts it (`publish_drops`); the loop never slows down.
+pub struct ArmPublisher {
+    producer: rtrb::Producer<CycleRecord>,
+    health: Vec<jointctl_hal::DeviceHealth>,
+    commands: rtrb::Consumer<ArmCommand>,
+    status: Arc<crate::status::LoopStatus>,
+    record: Box<CycleRecord>,
+    thread: Option<std::thread::JoinHandle<(u64, Vec<HopSample>)>>,
+    /// The publisher thread's Linux thread id, for its scheduling settings.
+    thread_tid: libc::pid_t,
+    stop: Arc<AtomicBool>,
+    drops: u64,
+    /// Stamps each record's hand-off for the publisher thread's [`HopSample`] log.
+    log_hops: bool,
+    hops: Vec<HopSample>,
+    failures: u64,
+}
+
+impl ArmPublisher {
+    /// Creates the arm's services in its iceoryx2 domain (cleaning up after crashed runs) on a
+    /// publisher thread, and returns once they exist.
+    pub fn new(arm: &Arm, domain: Option<&str>) -> Result<Self, RunError> {
+        Self::with_limits(arm, &jointctl_ipc::IpcScope::domain(domain), jointctl_ipc::PortLimits::default())
+    }
+
+    /// [`ArmPublisher::new`] in a whole scope (domain, root), admitting `limits` subscribers and
+    /// command clients (the YAML's `ipc` section).
+    pub fn with_limits(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits) -> Result<Self, RunError> {
+        Self::with_hop_log(arm, scope, limits, 0)
+    }
+
+    /// [`ArmPublisher::with_limits`], and the publisher thread logs where the first
+    /// `capacity` cycles' states spent their time ([`HopSample`], read after [`ArmPublisher::close`]
+    /// with [`ArmPublisher::hops`]): one clock read more per cycle on the loop thread, two on
+    /// the publisher's (the HAL read's return is always timed); the log's memory, at most
+/// [`MAX_HOP_LOG`] entries, is taken once, on the publisher thread.
+    pub fn with_hop_log(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits, capacity: usize) -> Result<Self, RunError> {
+        fits_shared_memory(arm)?;
+        let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
+        let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
+        let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
+        let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)).with_loop_rate(1.0 / arm.dt_s), arm.dt_s);
+        let stop = Arc::new(AtomicBool::new(false));
+        let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<libc::pid_t, RunError>>();
+        let arm_name = arm.name.clone();
+        let scope = scope.clone();
+        let (encoders, drives) = arm.raw_devices();
+        let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
+        fill_raw(&mut description.activation, arm);
+        let instances = joints_descriptor(arm);
+        let thread_stop = Arc::clone(&stop);
+        let thread = std::thread::Builder::new()
+            .name(format!("{arm_name}-publisher"))
+            .spawn(move || {
+                let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description, &instances) {
+                    Ok(ports) => {
+                        let _ = ready_tx.send(Ok(crate::timing::thread_id()));
+                        ports
+                    }
+                    Err(e) => {
+                        let _ = ready_tx.send(Err(e));
+                        return (0, Vec::new());
+                    }
+                };
+                ports.serve(consumer, command_producer, desk, &thread_stop, capacity)
+            })
+            .map_err(|e| RunError::Thread(e.to_string()))?;
+        let thread_tid = match ready_rx.recv() {
+            Ok(Ok(tid)) => tid,
+            Ok(Err(e)) => {
+                let _ = thread.join();
+                return Err(e);
+            }
+            Err(_) => return Err(RunError::Thread("the publisher thread ended during setup".into())),
+        };
+        // Every cycle's raw frame holds the described devices: the activation frame's shape.
+        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: description.activation, readings_ns: 0, done_ns: 0, handed_ns: 0 });
+        record.state.joint_count = arm.dof_names.len() as u32;
+        record.diagnostics.joint_count = record.state.joint_count;
+        record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
+        for (i, name) in arm.dof_names.iter().enumerate() {
+            record.state.joints[i].name = encode_name(name);
+            record.diagnostics.joints[i].name = encode_name(name);
+        }
+        let mut devices = 0;
+        for (d, name) in record.diagnostics.devices.iter_mut().zip(arm.device_names()) {
+            d.name = encode_name(name);
+            devices += 1;
+        }
+        record.diagnostics.device_count = devices as u32;
+        let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
+        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0 })
+    }
+
+    /// Fills the state and raw parts of this cycle's record.
+    pub fn publish_state(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64, final_sample: bool) {
+        let raw = &mut self.record.raw;
+        raw.cycle = cycle;
+        raw.stamp_ns = stamp_ns;
+        fill_raw(raw, arm);
+        let s = &mut self.record.state;
+        s.cycle = cycle;
+        s.stamp_ns = stamp_ns;
+        s.final_sample = final_sample as u32;
+        if final_sample || arm.stop_requested {
+            self.status.set_stopping();
+        }
+        for slot in &arm.slots {
+            for i in slot.dofs() {
+                self.status.set_dof(i, arm.enabled[i], slot.fault);
+                let st = &arm.states[i];
+                s.joints[i] = JointSample {
+                    name: s.joints[i].name,
+                    reference_torque_nm: arm.torque_references[i],
+                    sensor_torque_nm: arm.sensor_torque(i).unwrap_or(f64::NAN),
+                    gravity_nm: arm.gravity_torques[i],
+                    mode: published_mode(arm.controllers[i].mode()),
+                    enabled: arm.enabled[i] as u32,
+                    position_rad: st.position_rad,
+                    velocity_rad_s: st.velocity_rad_s,
+                    deflection_rad: st.deflection_rad,
+                    torque_nm: st.torque_nm,
+                    stiffness_nm_per_rad: st.stiffness_nm_per_rad,
+                    pivot_mm: st.pivot_mm,
+                    valid_mask: st.valid.0,
+                    fault_code: slot.fault,
+                };
+            }
+        }
+    }
+
+    /// Applies the commands the desk accepted since the last cycle, in order. Allocation-free.
+    pub(crate) fn apply_commands(&mut self, arm: &mut Arm) {
+        while let Ok(command) = self.commands.pop() {
+            arm.apply(command);
+            // Numbered as the desk numbered them when it accepted them (one queue, in order).
+            self.record.raw.commands_applied += 1;
+        }
+    }
+
+    /// When this cycle's control work ended [ns], for the hop log.
+    pub(crate) fn set_done_ns(&mut self, done_ns: u64) {
+        self.record.done_ns = done_ns;
+    }
+
+    /// The publisher thread's Linux thread id, for its scheduling settings.
+    pub(crate) fn thread_id(&self) -> libc::pid_t {
+        self.thread_tid
+    }
+
+    /// The status the command desk reads.
+    pub fn status(&self) -> &Arc<crate::status::LoopStatus> {
+        &self.status
+    }
+
+    /// Fills the diagnostics part and hands the record to the publisher thread.
+    pub fn publish_diagnostics(&mut self, arm: &Arm, stats: &LoopStats, cycle: u64, stamp_ns: u64) {
+        let d = &mut self.record.diagnostics;
+        d.cycle = cycle;
+        d.stamp_ns = stamp_ns;
+        d.overruns = stats.overruns;
+        d.missed_deadlines = stats.missed_deadlines;
+        d.hal_errors = arm.hal_errors;
+        d.publish_drops = self.drops;
+        d.last_compute_ns = stats.last_compute_ns;
+        d.max_compute_ns = stats.max_compute_ns;
+        d.max_jitter_ns = stats.max_jitter_ns;
+        d.jitter_histogram = stats.jitter_histogram;
+        for slot in &arm.slots {
+            for i in slot.dofs() {
+                let j: &mut JointDiagnostics = &mut d.joints[i];
+                j.valid_mask = arm.states[i].valid.0;
+                j.fault_code = slot.fault;
+                j.held = slot.held as u32;
+                j.invalid_cycles = slot.invalid_cycles;
+                j.fault_count = slot.fault_count;
+                let e = arm.controllers[i].events;
+                j.setpoint_clamps = e.setpoint_clamps;
+                j.torque_clamps = e.torque_clamps;
+                j.rate_limited = e.rate_limited;
+                j.watchdog_trips = e.watchdog_trips;
+                j.missing_inputs = e.missing_inputs;
+                j.plugin_budget_ns = slot.budget_ns;
+                j.plugin_max_ns = slot.max_used_ns;
+                j.over_budget_cycles = slot.over_budget_cycles;
+                j.setpoint_rejections = slot.setpoint_rejections;
+                // Written when it changes only: faults are rare and hold until restart.
+                if slot.fault == 0 {
+                    if j.fault_message[0] != 0 {
+                        j.fault_message = [0; jointctl_ipc::FAULT_MESSAGE_LEN];
+                    }
+                } else if j.fault_message[0] == 0 {
+                    j.fault_message = encode_name(if slot.fault_reason().is_empty() { "no reason given" } else { slot.fault_reason() });
+                }
+            }
+        }
+        arm.device_health(&mut self.health);
+        for (d, h) in self.record.diagnostics.devices.iter_mut().zip(&self.health) {
+            (d.missing, d.invalid, d.implausible, d.emcy, d.flags) = (h.missing, h.invalid, h.implausible, h.emcy, h.flags);
+        }
+        if self.log_hops {
+            self.record.readings_ns = arm.readings_ns;
+            self.record.handed_ns = monotonic_ns();
+        }
+        if self.producer.push(*self.record).is_err() {
+            self.drops += 1;
+        }
+        if let Some(t) = &self.thread {
+            t.thread().unpark();
+        }
+    }
+
+    /// Records dropped because the publisher thread fell behind.
+    pub fn drops(&self) -> u64 {
+        self.drops
+    }
+
+    /// Sends what is queued, stops the publisher thread and releases shared memory. Returns
+    /// the samples iceoryx2 refused.
+    pub fn close(&mut self) -> u64 {
+        self.stop.store(true, Ordering::Release);
+        if let Some(t) = self.thread.take() {
+            t.thread().unpark();
+            match t.join() {
+                Ok(done) => (self.failures, self.hops) = done,
+                // Outside the loop: the arm is held already; say that its last samples may be missing.
+                Err(_) => tracing::error!("the publisher thread panicked: the last samples may not have been published"),
+            }
+        }
+        self.failures
+    }
+
+    /// The publisher thread's [`HopSample`] log ([`ArmPublisher::with_hop_log`]), in cycle
+    /// order; empty before [`ArmPublisher::close`] or when no log was asked for.
+    pub fn hops(&self) -> &[HopSample] {
+        &self.hops
+    }
+}
+
+impl Drop for ArmPublisher {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
