@@ -8,14 +8,16 @@
 
 #![forbid(unsafe_code)]
 
+mod controller_config;
 mod joint_controller;
+mod mode;
 mod reference;
 mod schema;
 mod trajectory;
 
-pub use joint_controller::{
-    ControllerConfig, ControllerConfigError, ControllerEvents, DofLimits, GainPoint, JointController, Mode, Observed, Output, StartupMode,
-};
+pub use controller_config::{ControllerConfig, ControllerConfigError, DofLimits, GainPoint, StartupMode};
+pub use joint_controller::{ControllerEvents, JointController, Observed, Output};
+pub use mode::Mode;
 pub use reference::{Reference, Waveform};
 pub use schema::PiGainsSchema;
 pub use trajectory::{MAX_TRAJECTORY_POINTS, Trajectory, TrajectoryError, TrajectoryPoint};
