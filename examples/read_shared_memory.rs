@@ -12,7 +12,8 @@ use jointctl_ipc::{FieldMask, ServiceNames, decode_name};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arm_name = format!("example-reader-{}", std::process::id());
-    let runtime = start_arm(&arm_name)?;
+    let stop = jointctl_runtime::signals::StopRequest::manual();
+    let runtime = start_arm(&arm_name, stop.clone())?;
 
     // The reader: a node in the default iceoryx2 domain, a subscriber to `<arm>/joint_state`.
     let node = jointctl_ipc::create_node(None, "example-reader")?;
@@ -21,7 +22,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let deadline = Instant::now() + Duration::from_secs(5);
     let mut printed = 0;
     while printed < 5 {
+        if runtime.is_finished() {
+            // The arm's loop ended early: its error says why.
+            return Err(runtime.join().map_err(|_| "the arm's thread panicked")?.err().unwrap_or_else(|| "the arm stopped before 5 samples were read".into()).into());
+        }
         if Instant::now() > deadline {
+            stop.request();
             return Err("no joint state within 5 s".into());
         }
         // The newest sample: a reader that looks every 20 ms skips what came in between.
@@ -43,13 +49,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         std::thread::sleep(Duration::from_millis(20));
     }
     drop(subscriber);
+    // Stop the arm as `jointctl cmd stop` or Ctrl-C would: it holds its joint, publishes a final
+    // sample and releases the shared memory.
+    stop.request();
     runtime.join().map_err(|_| "the arm's thread panicked")??;
     Ok(())
 }
 
-/// A one-joint simulated arm at 200 Hz for 1 s, publishing to shared memory, its joint moving to
-/// 0.2 rad: the loop `jointctl run` runs, on a thread.
-fn start_arm(arm_name: &str) -> Result<std::thread::JoinHandle<Result<(), String>>, Box<dyn std::error::Error>> {
+/// A one-joint simulated arm at 200 Hz, publishing to shared memory, its joint moving to 0.2 rad,
+/// until `stop` is requested (at most 60 s): the loop `jointctl run` runs, on a thread.
+fn start_arm(arm_name: &str, stop: jointctl_runtime::signals::StopRequest) -> Result<std::thread::JoinHandle<Result<(), String>>, Box<dyn std::error::Error>> {
     let yaml = jointctl_examples::one_joint_arm(arm_name, "rigid", 200.0, "{stiffness_nm_per_rad: 8.3e4, position_pi: {kp: 0.2, ki: 0.5, output_limit: 0.05}}");
     let loaded = jointctl_config::parse_str(&yaml, "reader.yaml")?;
     let mut loader = jointctl_runtime::PluginLoader::new([]);
@@ -59,7 +68,7 @@ fn start_arm(arm_name: &str) -> Result<std::thread::JoinHandle<Result<(), String
     arm.set_mode(0, jointctl_modes::Mode::Position { target_rad: 0.2 });
     let mut publisher = jointctl_runtime::ArmPublisher::new(&arm, None)?;
     Ok(std::thread::spawn(move || {
-        let opts = jointctl_runtime::RunOptions { cycles: Some(200), ..Default::default() };
+        let opts = jointctl_runtime::RunOptions { cycles: Some(12_000), stop: Some(stop), ..Default::default() };
         jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).map(|_| ()).map_err(|e| e.to_string())
     }))
 }

@@ -46,6 +46,9 @@ pub const STATUS_OK: u32 = 0;
 pub const STATUS_PANICKED: u32 = 1;
 /// Return code of an entry point: the plugin returned an error (see the [`ErrorBuf`]).
 pub const STATUS_FAILED: u32 = 2;
+// The faults a host raises for these codes carry the same numbers (the plugin module, below the
+// ABI, does not import it).
+const _: () = assert!(crate::JointFault::PANICKED.code() == STATUS_PANICKED && crate::JointFault::BAD_STATUS.code() == STATUS_FAILED);
 
 /// An opaque plugin instance, owned by the plugin.
 pub type Handle = *mut c_void;

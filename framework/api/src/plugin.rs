@@ -38,10 +38,11 @@ pub struct JointFault(u32);
 impl JointFault {
     /// First code available to plugins.
     pub const FIRST_PLUGIN_CODE: u32 = 16;
-    /// The plugin panicked; the panic was caught at the library boundary.
-    pub const PANICKED: JointFault = JointFault(crate::abi::STATUS_PANICKED);
-    /// The plugin returned an unknown status.
-    pub const BAD_STATUS: JointFault = JointFault(crate::abi::STATUS_FAILED);
+    /// The plugin panicked; the panic was caught at the library boundary (the ABI's
+    /// `STATUS_PANICKED`, which `abi` checks at compile time).
+    pub const PANICKED: JointFault = JointFault(1);
+    /// The plugin returned an unknown status (the ABI's `STATUS_FAILED`, checked likewise).
+    pub const BAD_STATUS: JointFault = JointFault(2);
     /// Raised by the host, never by a plugin: the plugin's calls in one cycle took longer than
     /// the joint's time budget, so it is not called again.
     pub const OVER_BUDGET: JointFault = JointFault(3);

@@ -22,12 +22,14 @@ pub mod access;
 mod command;
 mod descriptor;
 mod diagnostics;
+mod open;
 mod services;
 mod state;
 
 pub use command::*;
 pub use descriptor::*;
 pub use diagnostics::*;
+pub use open::*;
 pub use services::*;
 pub use state::*;
 

@@ -145,7 +145,7 @@ pub fn parse_joint_state(v: &Value) -> Result<ArmState, MessageError> {
     s.final_sample = u32::from(v["final"].as_bool().unwrap_or(false));
     let joints = v["joints"].as_array().ok_or_else(|| MessageError::new("joints", "is not an array"))?;
     if joints.len() > s.joints.len() {
-        return Err(MessageError::new("joints", format!("holds at most {}, got {}", s.joints.len(), joints.len())));
+        return Err(MessageError::new("joints", format!("at most {}, got {}", s.joints.len(), joints.len())));
     }
     for (i, (out, j)) in s.joints.iter_mut().zip(joints).enumerate() {
         let at = |key: &str| format!("joints[{i}].{key}");
@@ -172,7 +172,7 @@ pub fn parse_joint_state(v: &Value) -> Result<ArmState, MessageError> {
         out.sensor_torque_nm = field("sensor_torque_nm", 0)?;
         out.gravity_nm = field("gravity_nm", 0)?;
         let mode = j["mode"].as_str().unwrap_or("hold");
-        out.mode = jointctl_ipc::JointMode::from_name(mode).ok_or_else(|| MessageError::new(at("mode"), format!("is an unknown mode `{mode}`")))?;
+        out.mode = jointctl_ipc::JointMode::from_name(mode).ok_or_else(|| MessageError::new(at("mode"), format!("unknown mode `{mode}`")))?;
         out.enabled = u32::from(j["enabled"].as_bool().unwrap_or(true));
         out.fault_code = j["fault_code"].as_u64().and_then(|c| u32::try_from(c).ok()).unwrap_or(0);
     }

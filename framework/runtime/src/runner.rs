@@ -9,7 +9,7 @@
 use jointctl_config::TimingConfig;
 
 use crate::arm::Arm;
-use crate::publisher::ArmPublisher;
+pub use crate::publisher::{ArmPublisher, HopSample, fits_shared_memory};
 pub use crate::run_error::RunError;
 use crate::signals::StopRequest;
 use crate::timing::{LoopStats, Pacer, monotonic_ns};

@@ -22,7 +22,7 @@ pub const NO_SPRING_SHARE: f64 = 0.2;
 /// (a configured joint has its spring) and a line in the deflection explains less than
 /// [`NO_SPRING_SHARE`] of the torque's variance. The one rule the search (which tries the
 /// friction's Stribeck dip only then) and the report (which moves the pre-sliding and the dip
-/// to [`NoSpring`]) both follow.
+/// to [`super::NoSpring`]) both follow.
 pub(crate) fn reads_as_friction(spring_share: f64, baseline: &BaselineModel) -> bool {
     matches!(baseline, BaselineModel::Polynomial(_)) && spring_share < NO_SPRING_SHARE
 }
