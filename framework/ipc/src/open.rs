@@ -10,6 +10,10 @@ use crate::raw;
 use crate::services::{IpcSetupError, PortLimits, SUBSCRIBER_BUFFER, service_name};
 use crate::state::ArmState;
 
+/// What each `create_*_service` function is: the runtime's way to create one of an arm's
+/// publish-subscribe services with payload `T`.
+pub type ServiceCreator<T> = fn(&Node<ipc::Service>, &str, PortLimits) -> Result<PortFactory<ipc::Service, T, ()>, IpcSetupError>;
+
 macro_rules! service_opener {
     ($open:ident, $create:ident, $ty:ty, $what:literal) => {
         #[doc = concat!("Opens an arm's ", $what, " service as a reader: it must exist (a runtime created it), and")]

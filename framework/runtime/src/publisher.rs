@@ -179,6 +179,18 @@ struct PublisherPorts {
     server: iceoryx2::port::server::Server<ipc::Service, jointctl_ipc::CommandRequest, (), CommandResponse, ()>,
 }
 
+/// One of the arm's publish-subscribe services created with `create` (one of
+/// `jointctl_ipc::create_*_service`) and this runtime's publisher on it.
+fn publisher_of<T: std::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<ipc::Service>,
+    arm_name: &str,
+    service: &str,
+    limits: jointctl_ipc::PortLimits,
+    create: jointctl_ipc::ServiceCreator<T>,
+) -> Result<Publisher<ipc::Service, T, ()>, RunError> {
+    create(node, service, limits)?.publisher_builder().create().map_err(|e| port_error(arm_name, service, e))
+}
+
 impl PublisherPorts {
     /// Creates the arm's node and services; a taken publisher or server slot means another
     /// runtime runs this arm.
@@ -198,32 +210,14 @@ impl PublisherPorts {
             .server_builder()
             .create()
             .map_err(|e| port_error(arm_name, &command_name, e))?;
-        let raw = jointctl_ipc::create_raw_service(&node, &names.raw, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.raw, e))?;
-        let descriptor = jointctl_ipc::create_raw_descriptor_service(&node, &names.raw_descriptor, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.raw_descriptor, e))?;
+        let raw = publisher_of(&node, arm_name, &names.raw, limits, jointctl_ipc::create_raw_service)?;
+        let descriptor = publisher_of(&node, arm_name, &names.raw_descriptor, limits, jointctl_ipc::create_raw_descriptor_service)?;
         publish_kept(&descriptor, description, &names.raw_descriptor);
-        let joints = jointctl_ipc::create_joints_service(&node, &names.joints, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.joints, e))?;
+        let joints = publisher_of(&node, arm_name, &names.joints, limits, jointctl_ipc::create_joints_service)?;
         publish_kept(&joints, instances, &names.joints);
-        let accepted = jointctl_ipc::create_commands_service(&node, &names.commands, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.commands, e))?;
-        let state = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.joint_state, e))?;
-        let diagnostics = jointctl_ipc::create_diagnostics_service(&node, &names.diagnostics, limits)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| port_error(arm_name, &names.diagnostics, e))?;
+        let accepted = publisher_of(&node, arm_name, &names.commands, limits, jointctl_ipc::create_commands_service)?;
+        let state = publisher_of(&node, arm_name, &names.joint_state, limits, jointctl_ipc::create_joint_state_service)?;
+        let diagnostics = publisher_of(&node, arm_name, &names.diagnostics, limits, jointctl_ipc::create_diagnostics_service)?;
         Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server })
     }
 
