@@ -35,6 +35,12 @@ pub struct DahlSpec {
     pub sigma_nm_per_rad: f64,
     /// Limit F_c [Nm].
     pub limit_nm: f64,
+    /// Width of a dead band between the deflection reading and the Dahl state [rad] (0: none):
+    /// the state takes a reading only once it is more than half the width from the last one
+    /// taken, or each flicker between encoder counts would walk the state off its limit
+    /// (`identify` chooses the width from the reading's scatter).
+    #[serde(default)]
+    pub input_dead_band_rad: f64,
 }
 
 /// The terms of the sum in the module docs, without the rate estimate's settings: what changes
@@ -92,10 +98,10 @@ impl Terms {
     /// ```
     /// use jointctl_models::extension::{DahlSpec, Terms};
     /// let a = Terms { cubic_nm_per_rad3: 100.0, ..Default::default() };
-    /// let b = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 }), ..Default::default() };
+    /// let b = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4, input_dead_band_rad: 0.0 }), ..Default::default() };
     /// let mid = a.blend(&b, 0.5);
     /// assert_eq!(mid.cubic_nm_per_rad3, 200.0);
-    /// assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.2 }));
+    /// assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.2, input_dead_band_rad: 0.0 }));
     /// ```
     pub fn blend(&self, other: &Terms, w: f64) -> Terms {
         let mix = |a: f64, b: f64| a + (b - a) * w;
@@ -109,8 +115,8 @@ impl Terms {
         let hysteresis = match (self.hysteresis, other.hysteresis) {
             (None, None) => None,
             (a, b) => {
-                let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0 }) }));
-                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm) }).filter(|h| h.limit_nm > 0.0)
+                let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0 }) }));
+                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm), input_dead_band_rad: mix(a.input_dead_band_rad, b.input_dead_band_rad) }).filter(|h| h.limit_nm > 0.0)
             }
         };
         Terms {
@@ -155,6 +161,11 @@ impl Terms {
             && !(h.sigma_nm_per_rad > 0.0 && h.limit_nm > 0.0 && h.sigma_nm_per_rad.is_finite() && h.limit_nm.is_finite())
         {
             return bad("hysteresis", format!("needs sigma_nm_per_rad > 0 and limit_nm > 0, got {} and {}", h.sigma_nm_per_rad, h.limit_nm));
+        }
+        if let Some(h) = self.hysteresis
+            && !(h.input_dead_band_rad >= 0.0 && h.input_dead_band_rad.is_finite())
+        {
+            return bad("hysteresis.input_dead_band_rad", format!("must be >= 0, got {}", h.input_dead_band_rad));
         }
         Ok(())
     }
@@ -426,8 +437,8 @@ impl ModelExtension {
         crate::play::elastic_deflection(phi, self.live.dead_zone_rad, self.live.dead_zone_ramp_rad)
     }
 
-    /// Dahl's model, exact per step: `u <- sgn(dphi) + (u - sgn(dphi)) exp(-|dphi| / lambda)`;
-    /// returns `F_c u` [Nm] (0 without hysteresis).
+    /// Dahl's model, exact per step: `u <- sgn(dphi) + (u - sgn(dphi)) exp(-|dphi| / lambda)`,
+    /// `phi` through the loop's input dead band first; returns `F_c u` [Nm] (0 without hysteresis).
     pub fn dahl_torque(&mut self, phi: f64) -> f64 {
         let Some(h) = self.live.hysteresis else {
             // Kept up to date: terms weighed at a pivot can switch the loop on later.
@@ -436,6 +447,13 @@ impl ModelExtension {
         };
         let lambda = h.limit_nm / h.sigma_nm_per_rad;
         let (u, last) = self.dahl;
+        // The dead band: the state's input takes the reading once it is more than half the
+        // width from the last reading taken (a flicker inside the band is not a motion).
+        let half = 0.5 * h.input_dead_band_rad;
+        let phi = match last {
+            Some(prev) if (phi - prev).abs() <= half => prev,
+            _ => phi,
+        };
         let u = match last {
             Some(prev) if phi != prev => {
                 let step = phi - prev;
@@ -534,7 +552,7 @@ mod tests {
 
     #[test]
     fn the_dahl_state_follows_identifys_per_step_solution_and_resets() {
-        let mut e = ModelExtension::new(ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2 }), ..Default::default() }).unwrap();
+        let mut e = ModelExtension::new(ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0 }), ..Default::default() }).unwrap();
         // Up by far more than lambda (4 mrad): the limit; back down: the other limit.
         assert_eq!(e.dahl_torque(0.0), 0.0);
         assert!((e.dahl_torque(0.1) - 1.2).abs() < 1e-9);
@@ -545,6 +563,34 @@ mod tests {
         assert!((e.dahl_torque(-0.1 + lambda) - expected).abs() < 1e-12);
         e.reset();
         assert_eq!(e.dahl_torque(0.3), 0.0, "a reset state starts at zero, where it is");
+    }
+
+    #[test]
+    fn a_reading_that_flickers_inside_the_input_dead_band_leaves_the_dahl_state_at_its_limit() {
+        // A stiff loop (lambda 1.3 mrad) read by a 2 um encoder that flickers one count: each
+        // flicker steps the state back by 2 s / lambda and the next step returns almost nothing
+        // near the limit, so without a band the flicker walks the state towards zero.
+        let spec = |band: f64| ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 1800.0, limit_nm: 2.4, input_dead_band_rad: band }), ..Default::default() };
+        let (mut bare, mut banded) = (ModelExtension::new(spec(0.0)).unwrap(), ModelExtension::new(spec(8e-6)).unwrap());
+        // Loaded to the limit (20 mrad, 15 lambda), then the reading flickers between two counts.
+        let (mut a, mut b) = (0.0, 0.0);
+        for k in 0..=100 {
+            (a, b) = (bare.dahl_torque(k as f64 * 2e-4), banded.dahl_torque(k as f64 * 2e-4));
+        }
+        assert!((b - 2.4).abs() < 1e-3 && (a - 2.4).abs() < 1e-3, "{a} {b}");
+        for k in 0..400 {
+            let phi = 0.02 - (k % 2) as f64 * 2e-6;
+            (a, b) = (bare.dahl_torque(phi), banded.dahl_torque(phi));
+        }
+        assert!((b - 2.4).abs() < 1e-3, "behind the band the state holds its limit: {b}");
+        assert!(a < 1.5, "without it the flicker walks the state off its limit: {a}");
+        // A real reversal passes the band: the state turns once the reading has moved half the
+        // width back, and reaches the other limit.
+        for k in 0..=200 {
+            b = banded.dahl_torque(0.02 - k as f64 * 2e-4);
+        }
+        assert!((b + 2.4).abs() < 1e-3, "{b}");
+        assert!(ModelExtension::new(spec(-1e-6)).is_err(), "a negative band is refused");
     }
 
     #[test]
@@ -622,7 +668,7 @@ mod tests {
     /// sample; between two it weighs each parameter linearly; bad settings are errors at their field.
     #[test]
     fn terms_by_pivot_are_each_settings_own_and_weighted_between() {
-        let a = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 }), friction: Some(FrictionSpec { ka_nm: 0.1, kb_s_per_rad: 50.0 }), ..Default::default() };
+        let a = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4, input_dead_band_rad: 0.0 }), friction: Some(FrictionSpec { ka_nm: 0.1, kb_s_per_rad: 50.0 }), ..Default::default() };
         let b = Terms { torque_scale: 0.95, dead_zone_rad: 0.002, viscous_nms_per_rad: 0.3, torque_offset_nm: -0.1, ..Default::default() };
         let flat = |t: Terms| ExtensionSpec {
             torque_scale: t.torque_scale,
@@ -654,7 +700,7 @@ mod tests {
         assert_eq!(run(by_pivot.clone(), 20.0), run(flat(a.blend(&b, 0.4)), 20.0));
         let mid = a.blend(&b, 0.4);
         assert!((mid.cubic_nm_per_rad3 - 180.0).abs() < 1e-9 && (mid.dead_zone_rad - 0.0008).abs() < 1e-12);
-        assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 * 0.6 }));
+        assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 * 0.6, input_dead_band_rad: 0.0 }));
 
         let err = |spec: ExtensionSpec| ModelExtension::new(spec).unwrap_err();
         let both = ExtensionSpec { cubic_nm_per_rad3: 1.0, ..by_pivot.clone() };
@@ -665,7 +711,7 @@ mod tests {
         assert_eq!(e.field, "by_pivot[1].pivot_mm");
         assert!(e.message.contains("increasing"), "{e}");
         let mut bad = by_pivot;
-        bad.by_pivot[1].terms.hysteresis = Some(DahlSpec { sigma_nm_per_rad: -1.0, limit_nm: 0.2 });
+        bad.by_pivot[1].terms.hysteresis = Some(DahlSpec { sigma_nm_per_rad: -1.0, limit_nm: 0.2, input_dead_band_rad: 0.0 });
         assert_eq!(err(bad).field, "by_pivot[1].terms.hysteresis");
     }
 
@@ -682,7 +728,7 @@ mod tests {
     /// static terms at once; with no filter, the swing is there at once.
     #[test]
     fn the_dynamic_terms_are_low_passed_and_the_static_ones_are_not() {
-        let hysteresis = Some(DahlSpec { sigma_nm_per_rad: 1e6, limit_nm: 1.0 });
+        let hysteresis = Some(DahlSpec { sigma_nm_per_rad: 1e6, limit_nm: 1.0, input_dead_band_rad: 0.0 });
         let run = |filter_s: f64| {
             let mut e = ModelExtension::new(ExtensionSpec { hysteresis, torque_offset_nm: 0.5, dynamic_terms_filter_s: filter_s, ..Default::default() }).unwrap();
             // Up (u = +1, settled), then one step down (u = -1 at once: sigma is huge).

@@ -503,7 +503,8 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     let turning = reversals(&d);
     // The deflection's noise: its quantisation (uniform over a step) and what else scatters it
     // about a line from sample to sample (see [`scatter_rms`]).
-    let deflection_noise = (resolution * resolution / 12.0 + scatter_rms(&d, &starts).powi(2)).sqrt();
+    let deflection_scatter = scatter_rms(&d, &starts);
+    let deflection_noise = (resolution * resolution / 12.0 + deflection_scatter.powi(2)).sqrt();
     let v = velocity_by_segment(&t, &d, &starts, deflection_noise, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
@@ -567,7 +568,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     // beyond (their standard errors shrink as 1/sqrt(n)), and a long record stays fast.
     // The held-out part: its first HELD_OUT_SAMPLES after the split.
     let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len().min(split + HELD_OUT_SAMPLES)));
-    let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt };
+    let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter };
     let stretch = train.first(STRETCH_SAMPLES);
     let spring_share = spring_share(&train);
     Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share })

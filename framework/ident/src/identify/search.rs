@@ -51,7 +51,13 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
             // a 48 ms lead), and its grid is a few dozen values.
             let mut scores = vec![f64::INFINITY; p.grid.len()];
             for (k, x) in p.grid.iter().enumerate() {
-                scores[k] = at(*x);
+                scores[k] = if matches!(p.refine, Refine::Nested) {
+                    let mut q = best.clone();
+                    q[j] = *x;
+                    rss(&q, stretch)
+                } else {
+                    at(*x)
+                };
             }
             let i = (0..p.grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
             let chosen = match p.refine {
@@ -79,6 +85,10 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
                     integer_search(at_unit, centre - span, centre + span)? as f64 * unit
                 }
                 Refine::Not => p.grid[i],
+                Refine::Nested => {
+                    let n = stretch.t.len() as f64;
+                    if i == 0 || n * (scores[0] / scores[i]).ln() > n.ln() { p.grid[i] } else { p.grid[0] }
+                }
             };
             best[j] = chosen;
         }

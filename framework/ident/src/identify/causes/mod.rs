@@ -24,7 +24,7 @@ mod viscous_friction;
 pub use coulomb_friction::CoulombFriction;
 pub use reversals::reversals;
 pub use dead_zone::DeadZone;
-pub use hysteresis::{Hysteresis, dahl_unit};
+pub use hysteresis::{Hysteresis, dahl_unit, dead_band};
 pub use reversal_ringing::ReversalRinging;
 pub use sensor_offset::SensorOffset;
 pub use speed_vibration::SpeedVibration;
@@ -63,6 +63,9 @@ pub struct Excitation {
     pub frequency_hz: f64,
     /// Sample period of the data the search runs on [s].
     pub sample_period_s: f64,
+    /// The deflection reading's scatter from sample to sample beyond its quantisation [rad]
+    /// (an encoder that flickers between counts), as the data shows it.
+    pub deflection_scatter_rad: f64,
 }
 
 /// What a candidate sees when it chooses its parameter grid: the experiment's scales and the
@@ -164,6 +167,12 @@ pub enum Refine {
     Samples,
     /// The grid value as it is (already refined by the cause).
     Not,
+    /// The grid's first value is the simpler model (a dead band of zero width); another value is
+    /// taken only when it betters the fit of the full-rate stretch of the training part (what
+    /// it acts on may not show on the decimated part) by more than BIC charges for one more
+    /// parameter (`n ln(RSS_0 / RSS) > ln n`): a freedom the data does not need would bend the
+    /// cause's shape towards what other causes leave.
+    Nested,
 }
 
 /// The inputs of the model, as the torque channel sees them. A cause may transform them (a delay
