@@ -77,3 +77,18 @@ fn a_friction_records_stribeck_dip_is_reported_with_the_friction_not_as_ringing(
     let (size, speed) = (stribeck.get("stribeck_nm").copied().unwrap_or(0.0), stribeck.get("stribeck_speed_rad_per_s").copied().unwrap_or(0.0));
     assert!(size > 0.05 && size < 0.3 && speed > 0.01 && speed < 0.1, "{stribeck:?}");
 }
+
+#[test]
+fn a_friction_records_lag_is_reported_with_the_friction_not_as_a_time_delay() {
+    // Found on this file's record with b = 0.4 Nm s/rad and on the blind generator's friction
+    // records (063-067 on seeds 1-4: a `time_delay` named on 7 of 20, three of them clean or
+    // beside the hidden cause): the torque follows a joint's motion through the friction's sign
+    // at each reversal, where the bristles' own transition (their stiffness and damping) acts,
+    // so a lag between the channels is not told apart from the friction's dynamics.
+    let b = 0.4;
+    let report = identify(&lugre_record(b, 0x51ed_270b_a1c3_9f47), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    let no_spring = report.no_spring.as_ref().expect("read as a friction record");
+    assert_eq!(named, ["viscous_friction"], "{no_spring:?}");
+    assert!(no_spring.lag.contains_key("delay_s") && no_spring.note.contains("lag"), "{no_spring:?}");
+}

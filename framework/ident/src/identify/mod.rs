@@ -153,6 +153,12 @@ pub struct NoSpring {
     /// The friction's Stribeck dip (the `stribeck_friction` candidate, tried on friction records
     /// only), in the extended model; empty when none was found.
     pub stribeck: BTreeMap<String, f64>,
+    /// A lag between the torque and the position (the `time_delay` candidate), in the extended
+    /// model, not among the causes: in a friction record the torque follows the motion through
+    /// the friction's sign at each reversal, where the friction's own transition (a LuGre
+    /// model's bristles, their damping) acts too, so the two are not told apart; empty when
+    /// none was found.
+    pub lag: BTreeMap<String, f64>,
     /// One sentence for the report.
     pub note: String,
 }
@@ -421,19 +427,22 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         .collect();
     // A record without a spring (the first column a joint position): a Dahl loop is the
     // friction's pre-sliding (Dahl's model is a friction model), not an elastic element's
-    // hysteresis: it stays in the extended model and is reported with the friction.
+    // hysteresis: it stays in the extended model and is reported with the friction. So does a
+    // time delay: the torque follows the motion through the friction's sign at the reversals,
+    // where the friction's own transition acts, and the two cannot be told apart there.
     let no_spring = reads_as_friction(p.spring_share, &opts.baseline).then(|| {
         let mut take = |effect: &str| found.iter().position(|c| c.effect == effect).map(|i| found.remove(i).params);
-        let (presliding, stribeck) = (take("hysteresis"), take("stribeck_friction"));
-        let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ");
+        let (presliding, stribeck, lag) = (take("hysteresis"), take("stribeck_friction"), take("time_delay"));
+        let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| if *v != 0.0 && v.abs() < 1e-2 { format!("{k} = {v:.3e}") } else { format!("{k} = {v:.4}") }).collect::<Vec<_>>().join(", ");
         let note = format!(
-            "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}",
+            "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",
             100.0 * p.spring_share,
             100.0 * NO_SPRING_SHARE,
             presliding.as_ref().map_or("no Dahl pre-sliding found".into(), |c| format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", listed(c))),
             stribeck.as_ref().map_or(String::new(), |c| format!("; its Stribeck dip: {}", listed(c))),
+            lag.as_ref().map_or(String::new(), |c| format!("; a lag between torque and position ({}), not told apart from the friction's own transition after each reversal", listed(c))),
         );
-        NoSpring { deflection_share: p.spring_share, presliding: presliding.unwrap_or_default(), stribeck: stribeck.unwrap_or_default(), note }
+        NoSpring { deflection_share: p.spring_share, presliding: presliding.unwrap_or_default(), stribeck: stribeck.unwrap_or_default(), lag: lag.unwrap_or_default(), note }
     });
     let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
     let mut rejected = selection.rejected;
