@@ -373,14 +373,41 @@ fn private_copy(data: &[u8]) -> std::io::Result<std::fs::File> {
     Ok(file)
 }
 
+/// Why a library's bytes were refused, or could not be loaded, before the host loaded them (in
+/// a probe process, or in the host from its private copy).
+#[derive(Debug, thiserror::Error)]
+pub enum ProbeError {
+    /// The bytes fail the structure check.
+    #[error(transparent)]
+    Malformed(Box<LoadPluginError>),
+    /// The private copy the library is loaded from could not be made.
+    #[error("cannot make the private copy it is loaded from: {0}")]
+    PrivateCopy(#[source] std::io::Error),
+    /// The dynamic loader refused the library.
+    #[error(transparent)]
+    Load(libloading::Error),
+    /// Loading did not return in a probe process.
+    #[error("loading it did not finish in {seconds} s in a probe process")]
+    TimedOut {
+        /// How long the probe was given [s].
+        seconds: u64,
+    },
+    /// Loading killed a probe process.
+    #[error("loading it killed a probe process with {signal} before this process loaded it (the dynamic loader trusts its relocations and dynamic section, and they are corrupt); rebuild it or copy it again")]
+    Killed {
+        /// The signal's name (SIGSEGV, ...).
+        signal: String,
+    },
+}
+
 /// Loads a library's bytes through a [`private_copy`], which stays open as the library stays
 /// loaded: a descriptor closed here is the next copy's, and the dynamic loader, which knows a
 /// loaded library by its path, handed the next plugin the first one's library.
-fn load_private_copy(data: &[u8]) -> Result<libloading::Library, String> {
-    let copy = private_copy(data).map_err(|e| format!("cannot make the private copy it is loaded from: {e}"))?;
+fn load_private_copy(data: &[u8]) -> Result<libloading::Library, ProbeError> {
+    let copy = private_copy(data).map_err(ProbeError::PrivateCopy)?;
     // SAFETY: loading a library runs its initialisers; jointctl plugins have none beyond Rust's
     // (and a probe process loads a library precisely to die in the host's place).
-    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }.map_err(|e| e.to_string())?;
+    let lib = unsafe { libloading::Library::new(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&copy))) }.map_err(ProbeError::Load)?;
     std::mem::forget(copy);
     Ok(lib)
 }
@@ -389,7 +416,7 @@ fn load_private_copy(data: &[u8]) -> Result<libloading::Library, String> {
 /// structure check cannot see everything the dynamic loader trusts (relocations that point out
 /// of the library crashed `check` and `run` inside it, exit 139, issue 40, finding 4). `Err`
 /// says why the library is refused.
-pub type Probe = fn(&[u8]) -> Result<(), String>;
+pub type Probe = fn(&[u8]) -> Result<(), ProbeError>;
 
 static PROBE: std::sync::OnceLock<Probe> = std::sync::OnceLock::new();
 
@@ -398,7 +425,7 @@ static PROBE: std::sync::OnceLock<Probe> = std::sync::OnceLock::new();
 /// loaded after the structure check alone.
 ///
 /// ```
-/// fn accept(_: &[u8]) -> Result<(), String> { Ok(()) }
+/// fn accept(_: &[u8]) -> Result<(), jointctl_runtime::loader::ProbeError> { Ok(()) }
 /// jointctl_runtime::loader::set_probe(accept);
 /// ```
 pub fn set_probe(probe: Probe) {
@@ -407,8 +434,8 @@ pub fn set_probe(probe: Probe) {
 
 /// What a probe process does with a library's bytes: loads them from a private copy, as the
 /// host would. It returns if the load returns; the caller's process dies where the host would.
-pub fn probe_load(data: &[u8]) -> Result<(), String> {
-    check_library_bytes(Path::new("<probe>"), data).map_err(|e| e.to_string())?;
+pub fn probe_load(data: &[u8]) -> Result<(), ProbeError> {
+    check_library_bytes(Path::new("<probe>"), data).map_err(|e| ProbeError::Malformed(Box::new(e)))?;
     std::mem::forget(load_private_copy(data)?);
     Ok(())
 }
@@ -422,9 +449,9 @@ fn load_library(file: &Path) -> Result<&'static libloading::Library, LoadPluginE
     let data = jointctl_files::read(&canonical, jointctl_files::FileKind::Plugin).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     check_library_bytes(&canonical, &data)?;
     if let Some(probe) = PROBE.get() {
-        probe(&data).map_err(|reason| LoadPluginError::Malformed { file: file.into(), reason })?;
+        probe(&data).map_err(|e| LoadPluginError::Malformed { file: file.into(), reason: e.to_string() })?;
     }
-    let lib = load_private_copy(&data).map_err(|reason| LoadPluginError::Open { file: file.into(), reason })?;
+    let lib = load_private_copy(&data).map_err(|e| LoadPluginError::Open { file: file.into(), reason: e.to_string() })?;
     // Never unloaded: see the module docs.
     let lib: &'static libloading::Library = Box::leak(Box::new(lib));
     loaded.push((canonical, lib));

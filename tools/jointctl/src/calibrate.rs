@@ -41,7 +41,7 @@ pub fn calibrate(a: &CalibrateArgs) -> ExitCode {
     }
     let _locks = match crate::run::lock_hardware(&loaded) {
         Ok(l) => l,
-        Err(e) => return fail(e),
+        Err(e) => return fail_err(e),
     };
     let loader = match crate::experiment_loader(&loaded) {
         Ok(l) => l,

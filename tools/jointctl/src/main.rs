@@ -159,7 +159,7 @@ fn seconds(text: &str) -> Result<f64, String> {
 
 /// Loads a plugin library's bytes in a short-lived child of this program before this process
 /// loads them: a library that kills the dynamic loader kills the child, and is refused here.
-fn probe_in_child(data: &[u8]) -> Result<(), String> {
+fn probe_in_child(data: &[u8]) -> Result<(), jointctl_runtime::loader::ProbeError> {
     use std::io::Write as _;
     use std::os::unix::process::ExitStatusExt as _;
     const PROBE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
@@ -189,15 +189,12 @@ fn probe_in_child(data: &[u8]) -> Result<(), String> {
             _ => {
                 let _ = child.kill();
                 let _ = child.wait();
-                return Err(format!("loading it did not finish in {} s in a probe process", PROBE_TIMEOUT.as_secs()));
+                return Err(jointctl_runtime::loader::ProbeError::TimedOut { seconds: PROBE_TIMEOUT.as_secs() });
             }
         }
     };
     match status.signal() {
-        Some(signal) => Err(format!(
-            "loading it killed a probe process with {} before this process loaded it (the dynamic loader trusts its relocations and dynamic section, and they are corrupt); rebuild it or copy it again",
-            jointctl_runtime::signals::signal_name(signal)
-        )),
+        Some(signal) => Err(jointctl_runtime::loader::ProbeError::Killed { signal: jointctl_runtime::signals::signal_name(signal) }),
         // Loaded, or refused with a reason the host's own load gives again.
         None => Ok(()),
     }
@@ -262,7 +259,7 @@ fn main() -> ExitCode {
             }
             match jointctl_runtime::loader::probe_load(&data) {
                 Ok(()) => ExitCode::SUCCESS,
-                Err(e) => fail(e),
+                Err(e) => fail_err(e),
             }
         }
         Command::Run(args) => run::run(args),

@@ -54,20 +54,38 @@ pub struct HardwareLocks {
     _machine: Vec<jointctl_runtime::lock::MachineLock>,
 }
 
+/// Why the locks for driving an arm's hardware were not taken: each step's own error, whose
+/// message says what and where (the lock file, the process holding it).
+#[derive(Debug, thiserror::Error)]
+pub enum LockHardwareError {
+    /// The arm's shared-memory root could not be made or used.
+    #[error(transparent)]
+    Root(jointctl_ipc::IpcSetupError),
+    /// The folder of the arm's lock in its domain and root could not be found.
+    #[error(transparent)]
+    LockDir(jointctl_ipc::IpcSetupError),
+    /// The arm's lock in its domain and root is held, or could not be taken.
+    #[error(transparent)]
+    Arm(jointctl_runtime::lock::LockError),
+    /// A machine-wide lock (the arm's name, a CAN interface) is held, or could not be taken.
+    #[error(transparent)]
+    Machine(jointctl_runtime::lock::LockError),
+}
+
 /// Takes, before any bus is opened, the locks a process must hold to drive the arm of `loaded`:
 /// the arm's in its domain and root (where `cmd stop` finds the runtime), and machine-wide the
 /// arm name's and every CAN interface's, whatever the domain or root (one runtime per arm and
 /// one host per bus). `jointctl run` and `jointctl check-transmission` both command the drives.
-pub fn lock_hardware(loaded: &jointctl_config::LoadedConfig) -> Result<HardwareLocks, String> {
+pub fn lock_hardware(loaded: &jointctl_config::LoadedConfig) -> Result<HardwareLocks, LockHardwareError> {
     let scope = ipc_scope(&loaded.config);
-    jointctl_ipc::prepare_root(&scope).map_err(|e| crate::chain(&e))?;
-    let lock_dir = jointctl_ipc::lock_dir_in(&scope).map_err(|e| crate::chain(&e))?;
-    let arm = jointctl_runtime::lock::ArmLock::acquire(&lock_dir, &loaded.config.arm).map_err(|e| crate::chain(&e))?;
+    jointctl_ipc::prepare_root(&scope).map_err(LockHardwareError::Root)?;
+    let lock_dir = jointctl_ipc::lock_dir_in(&scope).map_err(LockHardwareError::LockDir)?;
+    let arm = jointctl_runtime::lock::ArmLock::acquire(&lock_dir, &loaded.config.arm).map_err(LockHardwareError::Arm)?;
     let machine_dir = jointctl_runtime::lock::machine_lock_dir();
-    let mut machine = vec![jointctl_runtime::lock::MachineLock::arm(&machine_dir, &loaded.config.arm).map_err(|e| crate::chain(&e))?];
+    let mut machine = vec![jointctl_runtime::lock::MachineLock::arm(&machine_dir, &loaded.config.arm).map_err(LockHardwareError::Machine)?];
     if loaded.config.hal.backend == jointctl_config::HalBackend::Socketcan {
         for bus in &loaded.config.buses.can {
-            machine.push(jointctl_runtime::lock::MachineLock::bus(&machine_dir, &bus.interface).map_err(|e| crate::chain(&e))?);
+            machine.push(jointctl_runtime::lock::MachineLock::bus(&machine_dir, &bus.interface).map_err(LockHardwareError::Machine)?);
         }
     }
     Ok(HardwareLocks { _arm: arm, _machine: machine })
@@ -97,7 +115,7 @@ pub fn run(a: RunArgs) -> ExitCode {
     // Before any bus is opened: a second runtime of this arm must not touch its drives.
     let _locks = match lock_hardware(&loaded) {
         Ok(l) => l,
-        Err(e) => return fail(e),
+        Err(e) => return fail_err(e),
     };
     let mut loader = jointctl_runtime::loader_for(&loaded);
     if a.static_plugins && let Err(e) = static_loader(&mut loader) {

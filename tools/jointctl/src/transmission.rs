@@ -98,7 +98,7 @@ fn check(config: &Path, step_rad: f64) -> Result<bool, String> {
     let (q2_output, q2_deflection) = (role(&joint.encoders, "q2_output", "encoder", &enc)?, role(&joint.encoders, "q2_deflection", "encoder", &enc)?);
     let actuators = [("actuator_a", role(&joint.drives, "actuator_a", "drive", &drv)?), ("actuator_b", role(&joint.drives, "actuator_b", "drive", &drv)?)];
     // It commands the drives: not beside a runtime of this arm, nor on a bus another drives.
-    let _locks = crate::run::lock_hardware(&loaded)?;
+    let _locks = crate::run::lock_hardware(&loaded).map_err(|e| crate::chain(&e))?;
     let hal = jointctl_backends::build_hal(&loaded).map_err(|e| e.to_string())?;
     let mut rig = Rig { hal, sensors: SensorFrame::new(&devices), out: ActuatorFrame::new(&devices), dt_s: 1.0 / loaded.config.rate_hz, q2_output, q2_deflection };
     eprintln!("check-transmission: every drive holds; each shoulder actuator moves {step_rad} rad alone and back");
