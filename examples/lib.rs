@@ -15,6 +15,11 @@
 
 use std::path::PathBuf;
 
+/// The book's chapters with Rust in them, compiled and run as doctests here, where the jointctl
+/// crates are in scope (`mdbook build docs` renders the same files).
+#[doc = include_str!("../docs/writing-a-plugin.md")]
+pub mod book_writing_a_plugin {}
+
 /// The repository's root (the examples read its `configs/` and `tests/data/`).
 ///
 /// ```
