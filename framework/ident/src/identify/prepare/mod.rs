@@ -3,6 +3,13 @@
 
 use std::borrow::Cow;
 
+mod noise;
+mod rate;
+
+pub use noise::noise_floor;
+use noise::scatter_rms;
+use rate::{velocity_by_segment, velocity_half_widths};
+
 use super::causes::{Excitation, reversals};
 use super::design::Part;
 use crate::csv::Data;
@@ -208,131 +215,6 @@ fn dropouts_by_segment(series: &[f64], starts: &[usize], uncertainty: f64) -> Ve
     starts.iter().enumerate().flat_map(|(k, &a)| dropouts(&series[a..starts.get(k + 1).copied().unwrap_or(series.len())], uncertainty)).collect()
 }
 
-/// The half-width of the velocity's window is this fraction of the local period of the motion:
-/// a least-squares slope over +-P/50 reads a sine's rate 0.16 % low (its gain is
-/// `3 (sin x - x cos x) / x^3`, `x = 2 pi / 50`).
-const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
-
-/// The widest the velocity window may be per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`]
-/// of the local period, twice the stroke between the reversals around the sample (debounced at
-/// a tenth of the range), never more than of the fundamental's `period_samples`; between 2 and
-/// 25 samples. A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
-/// in places than its fundamental says: a window sized on the fundamental reads those rates low,
-/// and every rate-driven torque (viscous friction most) comes out too large. Where the motion
-/// bends faster than its strokes tell (a corner between a hold and a ramp; every sample of a
-/// slow log), [`adaptive_velocity`] narrows the window further.
-fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64) -> Vec<usize> {
-    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(2, 25);
-    let mut out = vec![half(period_samples); n];
-    for w in reversals.windows(2) {
-        let h = half(2.0 * (w[1] - w[0]) as f64);
-        out[w[0]..w[1].min(n)].iter_mut().for_each(|x| *x = h);
-    }
-    out
-}
-
-/// Deflection rate: the slope of a local least-squares line (a Savitzky-Golay derivative) over
-/// `+-half[i]` samples around sample `i`: no lag, and it averages out the quantisation. Running window sums
-/// make it one pass whatever the window; they are summed afresh around a new time origin every
-/// 1024 samples so that rounding cannot build up over a long record.
-#[cfg(test)]
-fn velocity(t: &[f64], d: &[f64], half: &[usize]) -> Vec<f64> {
-    slopes(t, d, half).into_iter().map(|(slope, _)| slope).collect()
-}
-
-/// [`velocity`]'s slopes with the spread of each window's time stamps about their mean,
-/// `sum (t - mean t)^2` [s^2]: a slope's standard error is the deflection's noise over its root.
-fn slopes(t: &[f64], d: &[f64], half: &[usize]) -> Vec<(f64, f64)> {
-    let n = d.len();
-    let mut out = Vec::with_capacity(n);
-    let (mut st, mut sd, mut stt, mut std_) = (0.0, 0.0, 0.0, 0.0);
-    let (mut a, mut b, mut t0) = (0usize, 0usize, t[0]);
-    for (i, &h) in half.iter().enumerate().take(n) {
-        let (lo, hi) = (i.saturating_sub(h), (i + h).min(n - 1) + 1);
-        if i % 1024 == 0 {
-            // Afresh: the window [lo, hi) around the origin t[lo].
-            t0 = t[lo];
-            (st, sd, stt, std_) = (0.0, 0.0, 0.0, 0.0);
-            for k in lo..hi {
-                let x = t[k] - t0;
-                (st, sd, stt, std_) = (st + x, sd + d[k], stt + x * x, std_ + x * d[k]);
-            }
-            (a, b) = (lo, hi);
-        }
-        // The window moves on and, where its width changes, grows or shrinks at either end.
-        while b < hi {
-            let x = t[b] - t0;
-            (st, sd, stt, std_) = (st + x, sd + d[b], stt + x * x, std_ + x * d[b]);
-            b += 1;
-        }
-        while b > hi {
-            b -= 1;
-            let x = t[b] - t0;
-            (st, sd, stt, std_) = (st - x, sd - d[b], stt - x * x, std_ - x * d[b]);
-        }
-        while a < lo {
-            let x = t[a] - t0;
-            (st, sd, stt, std_) = (st - x, sd - d[a], stt - x * x, std_ - x * d[a]);
-            a += 1;
-        }
-        while a > lo {
-            a -= 1;
-            let x = t[a] - t0;
-            (st, sd, stt, std_) = (st + x, sd + d[a], stt + x * x, std_ + x * d[a]);
-        }
-        let m = (hi - lo) as f64;
-        let den = stt - st * st / m;
-        let num = std_ - st * sd / m;
-        out.push(if den > 1e-300 { (num / den, den) } else { (0.0, 0.0) });
-    }
-    out
-}
-
-/// The half-widths the rate's window is chosen from [samples], narrowest first (an assumption:
-/// steps of about 1.4 in width, so the chosen window is at most 40 % narrower than the widest
-/// the data allow, up to the 25 samples of [`velocity_half_widths`]).
-const RATE_HALF_WIDTHS: [usize; 9] = [1, 2, 3, 4, 6, 8, 11, 16, 25];
-
-/// Standard errors a wider window's slope may lie from every narrower one's before the wider
-/// window is refused (an assumption: three, a 0.3 % chance each that noise alone refuses it).
-const RATE_WINDOW_SIGMAS: f64 = 3.0;
-
-/// Deflection rate with a window chosen at each sample by the intersection of confidence
-/// intervals (Goldenshluger and Nemirovski 1997; Katkovnik 1999): the slope of the widest window
-/// among [`RATE_HALF_WIDTHS`] narrower than `widest[i]` (see [`velocity_half_widths`]) and
-/// `widest[i]` itself whose interval `slope +- RATE_WINDOW_SIGMAS se` still meets the intervals
-/// of all narrower ones, `se = noise / sqrt(sum (t - mean t)^2)` with `noise_rad` the
-/// deflection's noise (its quantisation and its own noise). Where the motion is a line to within
-/// the noise it is the widest window (quantisation averaged out); where it bends more than the
-/// noise, narrower. The window sized on the motion's strokes alone read a 20 Hz log's rate over
-/// +-2 to +-7 samples (0.2-0.7 s): the corners between its holds and ramps were smeared, and a
-/// delay of 85 ms with them (the blind devices' delay binned to 20 Hz was not named).
-fn adaptive_velocity(t: &[f64], d: &[f64], noise_rad: f64, widest: &[usize]) -> Vec<f64> {
-    let n = d.len();
-    let (mut lo, mut hi) = (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]);
-    let mut out = vec![0.0; n];
-    let mut open = vec![true; n];
-    // The ladder's rungs narrower than the widest allowed, then the widest itself.
-    let rungs = RATE_HALF_WIDTHS.iter().map(|h| vec![*h; n]).chain(std::iter::once(widest.to_vec()));
-    for (rung, half) in rungs.enumerate() {
-        let last = rung == RATE_HALF_WIDTHS.len();
-        for (i, (slope, spread)) in slopes(t, d, &half).into_iter().enumerate() {
-            if !open[i] || (!last && half[i] >= widest[i]) {
-                continue;
-            }
-            let reach = if spread > 0.0 { RATE_WINDOW_SIGMAS * noise_rad / spread.sqrt() } else { f64::INFINITY };
-            lo[i] = lo[i].max(slope - reach);
-            hi[i] = hi[i].min(slope + reach);
-            if lo[i] > hi[i] {
-                open[i] = false;
-            } else {
-                out[i] = slope;
-            }
-        }
-    }
-    out
-}
-
 /// The excitation's fundamental [Hz]: the slope of the upward mean-crossing times (each
 /// interpolated between samples) against their count, a least-squares line. Exact to a small
 /// fraction of 1/duration even when the amplitude varies, which harmonics of it (periodic model
@@ -378,90 +260,6 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
         (Some(a), Some(b)) => a + train_fraction * (b - a),
         _ => 0.0,
     }
-}
-
-/// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a gap.
-fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise_rad: f64, half: &[usize]) -> Vec<f64> {
-    let mut v = Vec::with_capacity(d.len());
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(d.len());
-        if b - a >= 2 {
-            v.extend(adaptive_velocity(&t[a..b], &d[a..b], noise_rad, &half[a..b]));
-        } else {
-            v.extend(std::iter::repeat_n(0.0, b - a));
-        }
-    }
-    v
-}
-
-/// The squared pseudo-residuals `(y[i-1] + y[i+1]) / 2 - y[i]` within each segment, scaled to
-/// unit variance for white noise (a factor 2/3 on their mean square).
-fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
-    let mut squares = Vec::with_capacity(y.len());
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(y.len());
-        for i in a + 1..b.saturating_sub(1) {
-            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
-            squares.push(e * e / 1.5);
-        }
-    }
-    squares
-}
-
-/// The noise floor of a series in time order [same unit]: Gasser, Sroka and Jennen-Steinmetz's
-/// (1986) pseudo-residuals, `(y[i-1] + y[i+1]) / 2 - y[i]` scaled to unit variance for white
-/// noise (a factor 2/3 on their mean square), within each segment; the median of the squares
-/// over ln 2's quantile ratio (0.4549) makes it robust to the few steps where the signal itself
-/// jumps (a reversal, a gap left inside a segment). A smooth signal sampled finely adds almost
-/// nothing; what is left is the white part of the noise.
-///
-/// ```
-/// use jointctl_ident::identify::prepare::noise_floor;
-/// let t: Vec<f64> = (0..20_000).map(|i| i as f64 * 0.001).collect();
-/// let mut rng = 12345u64;
-/// let y: Vec<f64> = t.iter().map(|t| {
-///     // Two uniforms summed: a noise of standard deviation 0.1 * sqrt(2 / 12).
-///     let mut u = || { rng ^= rng << 13; rng ^= rng >> 7; rng ^= rng << 17; (rng % 1_000_000) as f64 / 1e6 };
-///     10.0 * (3.0 * t).sin() + 0.1 * (u() + u() - 1.0)
-/// }).collect();
-/// let floor = noise_floor(&y, &[0]);
-/// assert!((floor / (0.1 * (2.0f64 / 12.0).sqrt()) - 1.0).abs() < 0.1, "{floor}");
-/// ```
-pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
-    let mut squares = pseudo_residual_squares(y, starts);
-    if squares.is_empty() {
-        return 0.0;
-    }
-    let mid = squares.len() / 2;
-    // The median of a chi-square with one degree of freedom is 0.4549 times its mean.
-    (*squares.select_nth_unstable_by(mid, f64::total_cmp).1 / 0.4549).sqrt()
-}
-
-/// The share of Gasser, Sroka and Jennen-Steinmetz's pseudo-residuals (see [`noise_floor`])
-/// that [`scatter_rms`] keeps: the smallest 90 % (an assumption: a slow log's corners between
-/// holds and ramps, a few per cent of its samples, are bends, not scatter).
-const SCATTER_KEPT: f64 = 0.9;
-
-/// The mean of a normal variable's square over its central 90 %, as a share of its variance:
-/// `1 - 2 z phi(z) / 0.9` at `z = 1.645`.
-const SCATTER_TRIMMED_SHARE: f64 = 0.623;
-
-/// The deflection's scatter about a line from sample to sample: the root mean square of the
-/// smallest [`SCATTER_KEPT`] of the pseudo-residuals within each segment, scaled back to a
-/// normal variable's standard deviation. Not the median: a deflection that is the difference of
-/// two quantised encoders (an output encoder less a finer motor encoder through a gear ratio)
-/// moves in steps of many sizes; the median of its pseudo-residuals is zero where it holds a
-/// count, and its 2nd-percentile step (the resolution) 1.5e-5 rad on the elbow, where it
-/// scatters ten times that. Not the whole mean either: the corners of a 20 Hz log's holds and
-/// ramps are bends of the motion, and taken as scatter they widened every window again.
-fn scatter_rms(y: &[f64], starts: &[usize]) -> f64 {
-    let mut squares = pseudo_residual_squares(y, starts);
-    if squares.is_empty() {
-        return 0.0;
-    }
-    let keep = ((squares.len() as f64 * SCATTER_KEPT).ceil() as usize).clamp(1, squares.len());
-    squares.select_nth_unstable_by(keep - 1, f64::total_cmp);
-    (squares[..keep].iter().sum::<f64>() / keep as f64 / SCATTER_TRIMMED_SHARE).sqrt()
 }
 
 pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
@@ -619,75 +417,6 @@ mod tests {
         let whole = dropouts(&torque, 0.01);
         assert!(whole[3..7].iter().all(|d| *d), "the finding: {whole:?}");
         assert!(!dropouts_by_segment(&torque, &starts, 0.01).iter().any(|d| *d));
-    }
-
-    #[test]
-    fn the_rate_of_a_deflection_between_two_encoders_is_read_over_a_wide_window() {
-        // Finding (the project's simulated elbow, after the rate's window began to narrow where
-        // the deflection bends): the deflection is a 14-bit output encoder less a finer motor
-        // encoder through the tendon ratio, so its steps come in many sizes and its smallest
-        // common step (1.5e-5 rad) is far below its scatter. Taken as its noise, every window
-        // wider than +-2 samples looked bent, and the rate read 35 % high at mid-stroke; the
-        // identified hysteresis came out at 357 Nm/rad instead of about 100.
-        use std::f64::consts::TAU;
-        let (q_out, q_motor) = (TAU / 16384.0, TAU / 1_048_576.0);
-        let t: Vec<f64> = (0..16_000).map(|i| f64::from(i) * 0.005).collect();
-        let deflection: Vec<f64> = t
-            .iter()
-            .map(|t| {
-                let motor = 1e-3 * (TAU * 0.25 * t + 0.3).sin();
-                let output = 2.0 * motor + 0.1 * (TAU * 0.25 * t).sin();
-                (output / q_out).round() * q_out - 2.0 * (motor / q_motor).round() * q_motor
-            })
-            .collect();
-        let torque = deflection.iter().map(|d| 100.0 * d).collect();
-        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
-        let truth = |t: f64| 0.1 * TAU * 0.25 * (TAU * 0.25 * t).cos();
-        let worst = p.train.t.iter().zip(&p.train.v).skip(100).map(|(t, v)| (v - truth(*t)).abs()).fold(0.0, f64::max);
-        assert!(worst < 0.05 * 0.1 * TAU * 0.25, "rate off by up to {worst} rad/s");
-    }
-
-    /// The least-squares line's slope through samples `a..=b`, summed directly.
-    fn line_slope(t: &[f64], d: &[f64], a: usize, b: usize) -> f64 {
-        let n = (b - a + 1) as f64;
-        let (tm, dm) = (t[a..=b].iter().sum::<f64>() / n, d[a..=b].iter().sum::<f64>() / n);
-        let num: f64 = (a..=b).map(|k| (t[k] - tm) * (d[k] - dm)).sum();
-        let den: f64 = (a..=b).map(|k| (t[k] - tm).powi(2)).sum();
-        num / den
-    }
-
-    #[test]
-    fn the_running_sum_derivative_equals_the_local_line_slope_over_a_long_record() {
-        // 2 million samples at 200 Hz: 10 000 s, where sums of t^2 would lose the window's spread.
-        let t: Vec<f64> = (0..2_000_000).map(|i| 10.0 + i as f64 * 0.005).collect();
-        let d: Vec<f64> = t.iter().map(|t| (1.3 * t).sin()).collect();
-        let v = velocity(&t, &d, &vec![5; t.len()]);
-        for i in [0usize, 3, 250, 1023, 1024, 1_999_990, 1_999_999] {
-            let slope = line_slope(&t, &d, i.saturating_sub(5), (i + 5).min(1_999_999));
-            assert!((v[i] - slope).abs() < 1e-6, "{i}: {} vs {slope}", v[i]);
-        }
-    }
-
-    #[test]
-    fn a_window_that_changes_width_is_still_the_local_line_slope() {
-        // Widths that grow and shrink by several samples from one sample to the next.
-        let t: Vec<f64> = (0..3000).map(|i| i as f64 * 0.004 + 0.0005 * ((i * 7) % 3) as f64).collect();
-        let d: Vec<f64> = t.iter().map(|t| (2.1 * t).sin() + 0.3 * (9.0 * t).cos()).collect();
-        let half: Vec<usize> = (0..3000).map(|i| [2, 9, 25, 4, 13][(i / 37) % 5]).collect();
-        let v = velocity(&t, &d, &half);
-        for i in (0..3000usize).step_by(7) {
-            let slope = line_slope(&t, &d, i.saturating_sub(half[i]), (i + half[i]).min(2999));
-            assert!((v[i] - slope).abs() < 1e-6, "{i}: {} vs {slope}", v[i]);
-        }
-    }
-
-    #[test]
-    fn the_window_follows_the_local_motion() {
-        // Strokes of 1000 samples (a period of 2000, capped by the fundamental's 1000: a
-        // window of +-20), then of 50 (+-2); after the last reversal the fundamental's.
-        let reversals = [0, 1000, 2000, 2050, 2100, 2150];
-        let half = velocity_half_widths(2300, &reversals, 1000.0);
-        assert_eq!((half[500], half[1500], half[2020], half[2120], half[2200]), (20, 20, 2, 2, 20));
     }
 
     #[test]

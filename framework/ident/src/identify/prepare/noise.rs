@@ -1,0 +1,72 @@
+//! How noisy a series is, from its own samples: the white part of the noise (the torque's floor)
+//! and the scatter from sample to sample (the deflection's).
+
+/// The squared pseudo-residuals `(y[i-1] + y[i+1]) / 2 - y[i]` within each segment, scaled to
+/// unit variance for white noise (a factor 2/3 on their mean square).
+pub(super) fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
+    let mut squares = Vec::with_capacity(y.len());
+    for (k, &a) in starts.iter().enumerate() {
+        let b = starts.get(k + 1).copied().unwrap_or(y.len());
+        for i in a + 1..b.saturating_sub(1) {
+            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
+            squares.push(e * e / 1.5);
+        }
+    }
+    squares
+}
+
+/// The noise floor of a series in time order [same unit]: Gasser, Sroka and Jennen-Steinmetz's
+/// (1986) pseudo-residuals, `(y[i-1] + y[i+1]) / 2 - y[i]` scaled to unit variance for white
+/// noise (a factor 2/3 on their mean square), within each segment; the median of the squares
+/// over ln 2's quantile ratio (0.4549) makes it robust to the few steps where the signal itself
+/// jumps (a reversal, a gap left inside a segment). A smooth signal sampled finely adds almost
+/// nothing; what is left is the white part of the noise.
+///
+/// ```
+/// use jointctl_ident::identify::prepare::noise_floor;
+/// let t: Vec<f64> = (0..20_000).map(|i| i as f64 * 0.001).collect();
+/// let mut rng = 12345u64;
+/// let y: Vec<f64> = t.iter().map(|t| {
+///     // Two uniforms summed: a noise of standard deviation 0.1 * sqrt(2 / 12).
+///     let mut u = || { rng ^= rng << 13; rng ^= rng >> 7; rng ^= rng << 17; (rng % 1_000_000) as f64 / 1e6 };
+///     10.0 * (3.0 * t).sin() + 0.1 * (u() + u() - 1.0)
+/// }).collect();
+/// let floor = noise_floor(&y, &[0]);
+/// assert!((floor / (0.1 * (2.0f64 / 12.0).sqrt()) - 1.0).abs() < 0.1, "{floor}");
+/// ```
+pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
+    let mut squares = pseudo_residual_squares(y, starts);
+    if squares.is_empty() {
+        return 0.0;
+    }
+    let mid = squares.len() / 2;
+    // The median of a chi-square with one degree of freedom is 0.4549 times its mean.
+    (*squares.select_nth_unstable_by(mid, f64::total_cmp).1 / 0.4549).sqrt()
+}
+
+/// The share of Gasser, Sroka and Jennen-Steinmetz's pseudo-residuals (see [`noise_floor`])
+/// that [`scatter_rms`] keeps: the smallest 90 % (an assumption: a slow log's corners between
+/// holds and ramps, a few per cent of its samples, are bends, not scatter).
+const SCATTER_KEPT: f64 = 0.9;
+
+/// The mean of a normal variable's square over its central 90 %, as a share of its variance:
+/// `1 - 2 z phi(z) / 0.9` at `z = 1.645`.
+const SCATTER_TRIMMED_SHARE: f64 = 0.623;
+
+/// The deflection's scatter about a line from sample to sample: the root mean square of the
+/// smallest [`SCATTER_KEPT`] of the pseudo-residuals within each segment, scaled back to a
+/// normal variable's standard deviation. Not the median: a deflection that is the difference of
+/// two quantised encoders (an output encoder less a finer motor encoder through a gear ratio)
+/// moves in steps of many sizes; the median of its pseudo-residuals is zero where it holds a
+/// count, and its 2nd-percentile step (the resolution) 1.5e-5 rad on the elbow, where it
+/// scatters ten times that. Not the whole mean either: the corners of a 20 Hz log's holds and
+/// ramps are bends of the motion, and taken as scatter they widened every window again.
+pub(super) fn scatter_rms(y: &[f64], starts: &[usize]) -> f64 {
+    let mut squares = pseudo_residual_squares(y, starts);
+    if squares.is_empty() {
+        return 0.0;
+    }
+    let keep = ((squares.len() as f64 * SCATTER_KEPT).ceil() as usize).clamp(1, squares.len());
+    squares.select_nth_unstable_by(keep - 1, f64::total_cmp);
+    (squares[..keep].iter().sum::<f64>() / keep as f64 / SCATTER_TRIMMED_SHARE).sqrt()
+}
