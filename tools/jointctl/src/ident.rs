@@ -228,8 +228,9 @@ impl ConfiguredJoint {
     }
 }
 
-/// A parameter's value with five significant figures at least: a play of 2.2e-5 rad printed
-/// with five decimals read 0.00002.
+/// A parameter's value with its figures: below 0.01 (and from 1e6) in scientific notation with
+/// five significant figures, else with five decimals (a band of 2.2e-5 rad printed with five
+/// decimals read 0.00002).
 fn five_digits(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-2 || v.abs() >= 1e6) { format!("{v:.4e}") } else { format!("{v:.5}") }
 }

@@ -261,7 +261,9 @@ impl Model<'_> {
         let transforms: SpecKey = Spec { terms: spec.terms.iter().filter(|t| self.causes[t.cause].transforms()).cloned().collect() }.key();
         for term in &spec.terms {
             let cause = self.causes[term.cause];
-            nonlinear += term.params.len();
+            // A nested parameter left at its simpler value (a dead band of zero width) is no
+            // freedom used: not charged.
+            nonlinear += term.params.iter().enumerate().filter(|(j, x)| !term.grids.get(*j).is_some_and(|g| matches!(g.refine, super::causes::Refine::Nested) && g.grid.first() == Some(*x))).count();
             let key = (part, transforms.clone(), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
             let c = (*self.columns.get_or(key, || cause.columns(&term.params, &samples))).clone();
             match cause.segments(&term.params, &samples) {
