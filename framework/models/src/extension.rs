@@ -447,13 +447,7 @@ impl ModelExtension {
         };
         let lambda = h.limit_nm / h.sigma_nm_per_rad;
         let (u, last) = self.dahl;
-        // The dead band: the state's input takes the reading once it is more than half the
-        // width from the last reading taken (a flicker inside the band is not a motion).
-        let half = 0.5 * h.input_dead_band_rad;
-        let phi = match last {
-            Some(prev) if (phi - prev).abs() <= half => prev,
-            _ => phi,
-        };
+        let phi = dead_band_step(last, phi, h.input_dead_band_rad);
         let u = match last {
             Some(prev) if phi != prev => {
                 let step = phi - prev;
@@ -543,6 +537,24 @@ impl ModelExtension {
             self.filtered = Some((dynamic, t_s));
         }
         self.live.torque_scale * curve_torque_nm + self.cubic_torque(phi_e) + dynamic + self.live.torque_offset_nm
+    }
+}
+
+/// One step of a dead band of `width_rad` in front of a Dahl state: the reading when it is more
+/// than half the width from the value last taken (`held`; none at the start), else that value.
+/// A flicker between encoder counts inside the band is not a motion. `identify` filters a record
+/// with the same step, so the observer runs the band its parameters were fitted with.
+///
+/// ```
+/// use jointctl_models::extension::dead_band_step;
+/// assert_eq!(dead_band_step(None, 0.3, 0.5), 0.3);
+/// assert_eq!(dead_band_step(Some(1.0), 0.8, 0.5), 1.0);
+/// assert_eq!(dead_band_step(Some(1.0), 1.3, 0.5), 1.3);
+/// ```
+pub fn dead_band_step(held: Option<f64>, reading: f64, width_rad: f64) -> f64 {
+    match held {
+        Some(prev) if (reading - prev).abs() <= 0.5 * width_rad => prev,
+        _ => reading,
     }
 }
 

@@ -228,13 +228,6 @@ impl ConfiguredJoint {
     }
 }
 
-/// A parameter's value with its figures: below 0.01 (and from 1e6) in scientific notation with
-/// five significant figures, else with five decimals (a band of 2.2e-5 rad printed with five
-/// decimals read 0.00002).
-fn five_digits(v: f64) -> String {
-    if v != 0.0 && (v.abs() < 1e-2 || v.abs() >= 1e6) { format!("{v:.4e}") } else { format!("{v:.5}") }
-}
-
 pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     if a.joint.is_some() && a.config.is_none() && !jointctl_record::reader::is_mcap(&a.data) {
         return crate::fail("--joint without --config picks a joint of a recording (.mcap); a CSV file holds one joint");
@@ -355,8 +348,8 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
                 .params
                 .iter()
                 .map(|(k, v)| match c.uncertainty.get(k) {
-                    Some(e) => format!("{k} = {} ± {e:.2e}", five_digits(*v)),
-                    None => format!("{k} = {}", five_digits(*v)),
+                    Some(e) => format!("{k} = {} ± {e:.2e}", jointctl_ident::identify::format_value(*v)),
+                    None => format!("{k} = {}", jointctl_ident::identify::format_value(*v)),
                 })
                 .collect();
             let _ = writeln!(md, "| {} | {} | {:.4} | {} |", c.effect, params.join(", "), c.rmse_gain, c.evidence);

@@ -26,6 +26,7 @@ pub mod causes;
 mod design;
 pub mod experiment;
 mod numeric;
+pub use numeric::format_value;
 pub mod prepare;
 mod search;
 mod select;
@@ -433,7 +434,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let no_spring = reads_as_friction(p.spring_share, &opts.baseline).then(|| {
         let mut take = |effect: &str| found.iter().position(|c| c.effect == effect).map(|i| found.remove(i).params);
         let (presliding, stribeck, lag) = (take("hysteresis"), take("stribeck_friction"), take("time_delay"));
-        let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| if *v != 0.0 && v.abs() < 1e-2 { format!("{k} = {v:.3e}") } else { format!("{k} = {v:.4}") }).collect::<Vec<_>>().join(", ");
+        let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {}", format_value(*v))).collect::<Vec<_>>().join(", ");
         let note = format!(
             "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",
             100.0 * p.spring_share,

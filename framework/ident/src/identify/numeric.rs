@@ -1,5 +1,6 @@
 //! Numerical helpers of the search that know nothing of causes or models: a log-spaced grid and
-//! a golden-section minimum on a log scale. A leaf: every other module of `identify` may use it.
+//! a golden-section minimum on a log scale, and how a report prints a value. A leaf: every other
+//! module of `identify` may use it.
 
 /// A log-spaced grid of `n` values from `lo` to `hi` (both > 0).
 pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
@@ -44,4 +45,16 @@ pub(crate) fn median_step(t: &[f64]) -> f64 {
     }
     let mid = steps.len() / 2;
     *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// A parameter's value as the reports print it: below 0.01 (and from 1e6) in scientific notation
+/// with five significant figures, else with five decimals (a band of 2.2e-5 rad printed with five
+/// decimals read 0.00002).
+///
+/// ```
+/// assert_eq!(jointctl_ident::identify::format_value(2.2e-5), "2.2000e-5");
+/// assert_eq!(jointctl_ident::identify::format_value(1.5), "1.50000");
+/// ```
+pub fn format_value(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-2 || v.abs() >= 1e6) { format!("{v:.4e}") } else { format!("{v:.5}") }
 }

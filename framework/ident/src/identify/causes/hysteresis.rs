@@ -53,16 +53,14 @@ pub fn dahl_unit(d: &[f64], lambda: f64) -> Vec<f64> {
 /// assert_eq!(out, vec![0.0, 1.0, 1.0, 1.0, 1.3, -1.0]);
 /// ```
 pub fn dead_band(d: &[f64], width_rad: f64) -> Vec<f64> {
-    let half = 0.5 * width_rad;
-    let mut out = Vec::with_capacity(d.len());
-    let mut f = d.first().copied().unwrap_or(0.0);
-    for &x in d {
-        if (x - f).abs() > half {
-            f = x;
-        }
-        out.push(f);
-    }
-    out
+    let mut held = None;
+    d.iter()
+        .map(|&x| {
+            let f = jointctl_models::extension::dead_band_step(held, x, width_rad);
+            held = Some(f);
+            f
+        })
+        .collect()
 }
 
 /// The dead bands tried in front of the Dahl state, in units of the deflection reading's
