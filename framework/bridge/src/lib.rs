@@ -109,7 +109,7 @@ mod tests {
             if self.empty.contains(&self.polls) {
                 return Ok(0);
             }
-            each(FeedMessage { topic: "joint_state", number: self.polls as u64, stamp_ns: 0, json: "{}", final_sample: false });
+            each(FeedMessage { topic: "joint_state", number: self.polls as u64, stamp_ns: 0, json: "{}", final_sample: false, sample: jointctl_record::feed::Sample::State(&jointctl_ipc::ArmState::EMPTY) });
             Ok(1)
         }
     }

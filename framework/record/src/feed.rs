@@ -62,6 +62,21 @@ pub struct FeedMessage<'a> {
     pub json: &'a str,
     /// The runtime's final joint state (the arm stopped).
     pub final_sample: bool,
+    /// The sample itself, for a writer of another form (the ROS 2 profile).
+    pub sample: Sample<'a>,
+}
+
+/// The typed sample a [`FeedMessage`] was made from.
+#[derive(Clone, Copy, Debug)]
+pub enum Sample<'a> {
+    /// A raw frame (`raw`); its devices are named by [`ArmFeed::descriptor`].
+    Raw(&'a RawFrame),
+    /// A joint state (`joint_state`).
+    State(&'a ArmState),
+    /// Diagnostics (`diagnostics`).
+    Diagnostics(&'a Diagnostics),
+    /// An accepted command (`commands`).
+    Command(&'a CommandRecord),
 }
 
 /// Subscribers to every published service of one arm.
@@ -159,22 +174,22 @@ impl ArmFeed {
         let text = &mut self.text;
         while let Some(s) = self.raw.receive().map_err(receive_error(&self.names.raw))? {
             messages::write_raw(text, &s, &self.descriptor);
-            each(FeedMessage { topic: "raw", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false })?;
+            each(FeedMessage { topic: "raw", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Raw(&s) })?;
             n += 1;
         }
         while let Some(s) = self.state.receive().map_err(receive_error(&self.names.joint_state))? {
             messages::write_joint_state(text, &s);
-            each(FeedMessage { topic: "joint_state", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: s.final_sample != 0 })?;
+            each(FeedMessage { topic: "joint_state", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: s.final_sample != 0, sample: Sample::State(&s) })?;
             n += 1;
         }
         while let Some(s) = self.diagnostics.receive().map_err(receive_error(&self.names.diagnostics))? {
             messages::write_diagnostics(text, &s);
-            each(FeedMessage { topic: "diagnostics", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false })?;
+            each(FeedMessage { topic: "diagnostics", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Diagnostics(&s) })?;
             n += 1;
         }
         while let Some(s) = self.commands.receive().map_err(receive_error(&self.names.commands))? {
             *text = messages::command(&s).to_string();
-            each(FeedMessage { topic: "commands", number: s.sequence, stamp_ns: s.stamp_ns, json: text, final_sample: false })?;
+            each(FeedMessage { topic: "commands", number: s.sequence, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Command(&s) })?;
             n += 1;
         }
         Ok(n)

@@ -535,4 +535,20 @@ mod tests {
         assert!(v["x"].is_null() && v["y"].is_null());
         assert_eq!((v["z"].as_f64(), v["n"].as_u64(), v["b"].as_bool()), (Some(-0.25), Some(u64::MAX), Some(true)));
     }
+
+    /// Finding: the JSON form of a recording read an F/T torque of 0.012394129711854647 Nm back as
+    /// ...648 (serde_json's default float parser is not correctly rounded), where the ROS 2 form
+    /// of the same cycle gave the recorded bits. A number written here reads back to its bits.
+    #[test]
+    fn a_written_number_reads_back_to_the_same_bits() {
+        let mut state = jointctl_ipc::ArmState::EMPTY;
+        state.joint_count = 1;
+        for x in [0.012394129711854647, -0.005743346888941898, 1.0 / 3.0, 2.2250738585072014e-308, 123456.78901234567] {
+            state.joints[0].sensor_torque_nm = x;
+            let mut text = String::new();
+            super::write_joint_state(&mut text, &state);
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(v["joints"][0]["sensor_torque_nm"].as_f64().map(f64::to_bits), Some(x.to_bits()), "{x:e} via {text}");
+        }
+    }
 }

@@ -202,9 +202,33 @@ impl RawJson<'_> {
     }
 }
 
-/// Calls `each(topic, sequence, data)` for every message of one of `topics`, in file order
-/// (the file is read and decompressed once).
-fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
+/// How a message is written: the JSON form, or the ROS 2 profile's CDR.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Encoding {
+    Json,
+    Cdr,
+}
+
+/// The arm's channel a file's channel holds: itself in the JSON form; in the ROS 2 profile the
+/// jointctl topic made from it (`/joint_states` is a subset of `/jointctl/joint_details`, and
+/// not read).
+fn source_of(topic: &str, message_encoding: &str) -> Option<(&'static str, Encoding)> {
+    if message_encoding == "cdr" {
+        return match topic {
+            jointctl_ros2::JOINT_DETAILS => Some(("joint_state", Encoding::Cdr)),
+            jointctl_ros2::RAW => Some(("raw", Encoding::Cdr)),
+            jointctl_ros2::COMMANDS => Some(("commands", Encoding::Cdr)),
+            jointctl_ros2::DIAGNOSTICS => Some(("diagnostics", Encoding::Cdr)),
+            _ => None,
+        };
+    }
+    crate::messages::CHANNELS.iter().find(|(t, _)| *t == topic).map(|(t, _)| (*t, Encoding::Json))
+}
+
+/// Calls `each(channel, encoding, sequence, data)` for every message of one of the arm's
+/// channels `topics`, in file order (the file is read and decompressed once), whichever form
+/// the file has.
+fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, Encoding, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
     let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
     // A file without its end (the recorder killed, the machine off, the disk full) is read up to
@@ -215,8 +239,10 @@ fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, u32
         match message {
             Ok(m) => {
                 read += 1;
-                if topics.contains(&m.channel.topic.as_str()) {
-                    each(&m.channel.topic, m.sequence, &m.data)?;
+                if let Some((source, encoding)) = source_of(&m.channel.topic, &m.channel.message_encoding)
+                    && topics.contains(&source)
+                {
+                    each(source, encoding, m.sequence, &m.data)?;
                 }
             }
             Err(source) if is_cut(&bytes) && read > 0 => {
@@ -228,6 +254,11 @@ fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, u32
         }
     }
     Ok(())
+}
+
+/// A ROS 2 profile message as its type, or the error that names file, topic and message.
+fn cdr<M: jointctl_ros2::msg::Message>(path: &Path, topic: &str, sequence: u32, data: &[u8]) -> Result<M, ReadError> {
+    jointctl_ros2::decode(data).map_err(|e| ReadError::Message { file: path.into(), topic: topic.into(), sequence, reason: e.to_string() })
 }
 
 /// A file that does not end with MCAP's closing magic was cut short while it was written.
@@ -267,14 +298,43 @@ struct JointStates {
 }
 
 impl JointStates {
-    fn add(&mut self, path: &Path, sequence: u32, data: &[u8]) -> Result<(), ReadError> {
-        let v: StateJson = serde_json::from_slice(data).map_err(|e| ReadError::Message { file: path.into(), topic: "joint_state".into(), sequence, reason: e.to_string() })?;
+    fn add(&mut self, path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<(), ReadError> {
+        match encoding {
+            Encoding::Json => {
+                let v: StateJson = serde_json::from_slice(data).map_err(|e| ReadError::Message { file: path.into(), topic: "joint_state".into(), sequence, reason: e.to_string() })?;
+                self.add_state(&v);
+            }
+            Encoding::Cdr => {
+                let m: jointctl_ros2::msg::JointDetails = cdr(path, jointctl_ros2::JOINT_DETAILS, sequence, data)?;
+                let known = |x: f64| Some(x).filter(|x| x.is_finite());
+                let joints = m
+                    .joints
+                    .iter()
+                    .map(|j| JointJson {
+                        name: &j.name,
+                        position_rad: known(j.position_rad),
+                        deflection_rad: known(j.deflection_rad),
+                        torque_nm: known(j.torque_nm),
+                        sensor_torque_nm: known(j.sensor_torque_nm),
+                        reference_torque_nm: known(j.reference_torque_nm),
+                        pivot_mm: known(j.pivot_mm),
+                        stiffness_nm_per_rad: known(j.stiffness_nm_per_rad),
+                        mode: &j.mode,
+                    })
+                    .collect();
+                self.add_state(&StateJson { cycle: m.cycle, stamp_ns: m.stamp_ns, final_sample: m.final_sample, joints });
+            }
+        }
+        Ok(())
+    }
+
+    fn add_state(&mut self, v: &StateJson<'_>) {
         if self.names.is_empty() {
             self.names = v.joints.iter().map(|j| j.name.to_string()).collect();
         }
         // The final sample (the runtime stopping) holds every joint: not part of the experiment.
         if v.final_sample {
-            return Ok(());
+            return;
         }
         let t0 = *self.first_stamp.get_or_insert(v.stamp_ns);
         for j in &v.joints {
@@ -294,11 +354,23 @@ impl JointStates {
             s.stiffness_nm_per_rad.push(nan(j.stiffness_nm_per_rad));
             s.mode.push(j.mode.to_string());
         }
-        Ok(())
     }
 }
 
-fn parse_raw(path: &Path, sequence: u32, data: &[u8]) -> Result<RawSample, ReadError> {
+fn parse_raw(path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<RawSample, ReadError> {
+    if encoding == Encoding::Cdr {
+        let m: jointctl_ros2::msg::RawFrame = cdr(path, jointctl_ros2::RAW, sequence, data)?;
+        let known = |x: f64| Some(x).filter(|x| !x.is_nan());
+        let r = |x: &jointctl_ros2::msg::RawReading| ReadingJson { name: &x.name, value: known(x.value), status: &x.status, age_s: known(x.age_s) }.reading();
+        return Ok(RawSample {
+            cycle: m.cycle,
+            stamp_ns: m.stamp_ns,
+            commands_applied: Some(m.commands_applied),
+            encoders: m.encoders.iter().map(|e| (e.name.clone(), r(e))).collect(),
+            drives: m.drives.iter().map(|d| (d.name.clone(), DriveReading::new(r(&d.position_rad), r(&d.velocity_rad_s), d.enabled, d.fault), d.setpoint_rad)).collect(),
+            torque_sensors: m.torque_sensors.iter().map(|e| (e.name.clone(), r(e))).collect(),
+        });
+    }
     let v: RawJson = serde_json::from_slice(data).map_err(|e| ReadError::Message { file: path.into(), topic: "raw".into(), sequence, reason: e.to_string() })?;
     Ok(v.sample())
 }
@@ -328,11 +400,11 @@ pub struct Recording {
 /// ```
 pub fn read(path: &Path) -> Result<Recording, ReadError> {
     let (mut raw, mut states, mut commands) = (Vec::new(), JointStates::default(), Vec::new());
-    for_each_message(path, &["raw", "joint_state", "commands"], |topic, sequence, data| {
+    for_each_message(path, &["raw", "joint_state", "commands"], |topic, encoding, sequence, data| {
         match topic {
-            "raw" => raw.push(parse_raw(path, sequence, data)?),
-            "joint_state" => states.add(path, sequence, data)?,
-            _ => commands.push(parse_command(path, sequence, data)?),
+            "raw" => raw.push(parse_raw(path, encoding, sequence, data)?),
+            "joint_state" => states.add(path, encoding, sequence, data)?,
+            _ => commands.push(parse_command(path, encoding, sequence, data)?),
         }
         Ok(())
     })?;
@@ -355,7 +427,7 @@ pub fn joint_series(path: &Path, joint: &str) -> Result<JointSeries, ReadError> 
 /// Every DOF's signals in one pass over the file, and the DOF names in the recording's order.
 pub fn all_joint_series(path: &Path) -> Result<(std::collections::HashMap<String, JointSeries>, Vec<String>), ReadError> {
     let mut states = JointStates::default();
-    for_each_message(path, &["joint_state"], |_, sequence, data| states.add(path, sequence, data))?;
+    for_each_message(path, &["joint_state"], |_, encoding, sequence, data| states.add(path, encoding, sequence, data))?;
     Ok((states.series, states.names))
 }
 
@@ -402,8 +474,8 @@ pub struct RecordedCommand {
 /// The recording's `raw` messages, in order.
 pub fn raw_samples(path: &Path) -> Result<Vec<RawSample>, ReadError> {
     let mut out = Vec::new();
-    for_each_message(path, &["raw"], |_, sequence, data| {
-        out.push(parse_raw(path, sequence, data)?);
+    for_each_message(path, &["raw"], |_, encoding, sequence, data| {
+        out.push(parse_raw(path, encoding, sequence, data)?);
         Ok(())
     })?;
     Ok(out)
@@ -567,33 +639,45 @@ pub fn config_attachment(path: &Path) -> Result<Option<(String, String)>, ReadEr
 /// The recording's accepted commands, in order, rebuilt as requests.
 pub fn commands(path: &Path) -> Result<Vec<RecordedCommand>, ReadError> {
     let mut out = Vec::new();
-    for_each_message(path, &["commands"], |_, sequence, data| {
-        out.push(parse_command(path, sequence, data)?);
+    for_each_message(path, &["commands"], |_, encoding, sequence, data| {
+        out.push(parse_command(path, encoding, sequence, data)?);
         Ok(())
     })?;
     Ok(out)
 }
 
-fn parse_command(path: &Path, sequence: u32, data: &[u8]) -> Result<RecordedCommand, ReadError> {
+fn parse_command(path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<RecordedCommand, ReadError> {
     let bad = |reason: String| ReadError::Message { file: path.into(), topic: "commands".into(), sequence, reason };
-    let v: Value = serde_json::from_slice(data).map_err(|e| bad(e.to_string()))?;
-    let kind = v["kind"].as_str().and_then(CommandKind::from_name).ok_or_else(|| bad(format!("unknown kind {}", v["kind"])))?;
-    let values: Vec<f64> = v["values"].as_array().map_or_else(Vec::new, |a| a.iter().map(number).collect());
-    let mut request = CommandRequest::new(kind, v["joint"].as_str().unwrap_or(""), &values);
-    request.joint = encode_name(v["joint"].as_str().unwrap_or(""));
-    request.streamed = u32::from(v["streamed"] == true);
-    request.waveform = v["waveform"].as_str().and_then(TorqueWaveform::from_name).unwrap_or(TorqueWaveform::STEP);
-    let points = v["points"].as_array().cloned().unwrap_or_default();
-    if points.len() > MAX_COMMAND_POINTS {
-        return Err(bad(format!("{} trajectory points, at most {MAX_COMMAND_POINTS}", points.len())));
+    let m = match encoding {
+        Encoding::Cdr => cdr::<jointctl_ros2::msg::CommandRecord>(path, jointctl_ros2::COMMANDS, sequence, data)?,
+        Encoding::Json => {
+            // The JSON form read into the ROS 2 message's fields: one way to build the request.
+            let v: Value = serde_json::from_slice(data).map_err(|e| bad(e.to_string()))?;
+            let points = v["points"].as_array().cloned().unwrap_or_default();
+            jointctl_ros2::msg::CommandRecord {
+                sequence: v["sequence"].as_u64().ok_or_else(|| bad("no `sequence`".into()))?,
+                stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?,
+                kind: v["kind"].as_str().unwrap_or_default().to_string(),
+                joint: v["joint"].as_str().unwrap_or("").to_string(),
+                streamed: v["streamed"] == true,
+                waveform: v["waveform"].as_str().unwrap_or_default().to_string(),
+                values: v["values"].as_array().map_or_else(Vec::new, |a| a.iter().map(number).collect()),
+                points: points.iter().map(|p| jointctl_ros2::msg::CommandPoint { t_s: number(&p[0]), position_rad: number(&p[1]), velocity_rad_s: number(&p[2]) }).collect(),
+                ..Default::default()
+            }
+        }
+    };
+    let kind = CommandKind::from_name(&m.kind).ok_or_else(|| bad(format!("unknown kind `{}`", m.kind)))?;
+    if m.points.len() > MAX_COMMAND_POINTS {
+        return Err(bad(format!("{} trajectory points, at most {MAX_COMMAND_POINTS}", m.points.len())));
     }
-    for (slot, p) in request.points.iter_mut().zip(&points) {
-        *slot = [number(&p[0]), number(&p[1]), number(&p[2])];
+    let mut request = CommandRequest::new(kind, &m.joint, &m.values);
+    request.joint = encode_name(&m.joint);
+    request.streamed = u32::from(m.streamed);
+    request.waveform = TorqueWaveform::from_name(&m.waveform).unwrap_or(TorqueWaveform::STEP);
+    for (slot, p) in request.points.iter_mut().zip(&m.points) {
+        *slot = [p.t_s, p.position_rad, p.velocity_rad_s];
     }
-    request.point_count = points.len() as u32;
-    Ok(RecordedCommand {
-        sequence: v["sequence"].as_u64().ok_or_else(|| bad("no `sequence`".into()))?,
-        stamp_ns: v["stamp_ns"].as_u64().ok_or_else(|| bad("no `stamp_ns`".into()))?,
-        request,
-    })
+    request.point_count = m.points.len() as u32;
+    Ok(RecordedCommand { sequence: m.sequence, stamp_ns: m.stamp_ns, request })
 }

@@ -26,6 +26,46 @@ pub struct RecordOptions {
     pub duration_s: Option<f64>,
     /// How long to wait for the arm's services to appear, and for a sample [s].
     pub timeout_s: f64,
+    /// The file's form.
+    pub profile: Profile,
+}
+
+/// The form of a recording.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Profile {
+    /// jointctl's channels (`raw`, `joint_state`, `diagnostics`, `commands`) as JSON with JSON
+    /// schemas: what Foxglove opens and the `mcap` CLI prints.
+    #[default]
+    Json,
+    /// The ROS 2 profile: CDR messages with `ros2msg` schemas on ROS 2 topics
+    /// ([`jointctl_ros2::topics`]): what `ros2 bag play`, rosbags and PlotJuggler read. Stamps
+    /// are the wall clock, as `ros2 bag record` writes them.
+    Ros2,
+}
+
+impl Profile {
+    /// The profile of this name (`json`, `ros2`).
+    ///
+    /// ```
+    /// use jointctl_record::recorder::Profile;
+    /// assert_eq!(Profile::from_name("ros2"), Some(Profile::Ros2));
+    /// assert_eq!(Profile::from_name("ros"), None);
+    /// ```
+    pub fn from_name(name: &str) -> Option<Profile> {
+        match name {
+            "json" => Some(Profile::Json),
+            "ros2" => Some(Profile::Ros2),
+            _ => None,
+        }
+    }
+
+    /// The file's channels: (topic, the arm's channel it comes from).
+    fn channels(self) -> Vec<(&'static str, &'static str)> {
+        match self {
+            Profile::Json => messages::CHANNELS.iter().map(|(t, _)| (*t, *t)).collect(),
+            Profile::Ros2 => jointctl_ros2::topics().iter().map(|t| (t.topic, t.source)).collect(),
+        }
+    }
 }
 
 /// What a recording holds.
@@ -47,8 +87,8 @@ pub struct RecordSummary {
 
 impl RecordSummary {
     /// A recording of `file` that holds no sample (yet).
-    fn empty(file: PathBuf) -> Self {
-        let zero = || messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect();
+    fn empty(file: PathBuf, profile: Profile) -> Self {
+        let zero = || profile.channels().iter().map(|(t, _)| (t.to_string(), 0)).collect();
         let bytes = std::fs::metadata(&file).map_or(0, |m| m.len());
         RecordSummary { file, duration_s: 0.0, messages: zero(), lost_by_channel: zero(), bytes, arm_stopped: false }
     }
@@ -137,9 +177,17 @@ impl Gaps {
 /// Where the recorder writes: the file, and what it counts on the way.
 struct Sink<W: std::io::Write + std::io::Seek> {
     writer: mcap::Writer<W>,
-    channel: BTreeMap<&'static str, u16>,
+    /// The file's channels: topic, the arm's channel it comes from, id.
+    channels: Vec<(&'static str, &'static str, u16)>,
     out: PathBuf,
+    profile: Profile,
+    /// The ROS 2 profile's stamps: the arm's monotonic clock on the wall clock.
+    clock: jointctl_ros2::from_arm::WallClock,
+    arm: String,
+    descriptor: jointctl_ipc::raw::RawDescriptor,
+    /// Messages written, by the file's topic.
     counts: BTreeMap<&'static str, u64>,
+    /// Numbering gaps, by the arm's channel.
     gaps: BTreeMap<&'static str, Gaps>,
     first_stamp: Option<u64>,
     last_stamp: u64,
@@ -153,11 +201,40 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             self.last_stamp = self.last_stamp.max(m.stamp_ns);
             self.arm_stopped |= m.final_sample;
         }
-        let count = self.counts.entry(m.topic).or_default();
-        let header = mcap::records::MessageHeader { channel_id: self.channel[m.topic], sequence: *count as u32, log_time: m.stamp_ns, publish_time: m.stamp_ns };
-        *count += 1;
         self.gaps.entry(m.topic).or_default().see(m.number);
-        self.writer.write_to_known_channel(&header, m.json.as_bytes()).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })
+        let stamp = match self.profile {
+            Profile::Json => m.stamp_ns,
+            Profile::Ros2 => self.clock.unix_ns(m.stamp_ns),
+        };
+        for i in 0..self.channels.len() {
+            let (topic, source, channel_id) = self.channels[i];
+            if source != m.topic {
+                continue;
+            }
+            let count = self.counts.entry(topic).or_default();
+            let header = mcap::records::MessageHeader { channel_id, sequence: *count as u32, log_time: stamp, publish_time: stamp };
+            *count += 1;
+            let data = match self.profile {
+                Profile::Json => std::borrow::Cow::Borrowed(m.json.as_bytes()),
+                Profile::Ros2 => std::borrow::Cow::Owned(self.ros2(topic, &m.sample)),
+            };
+            self.writer.write_to_known_channel(&header, &data).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })?;
+        }
+        Ok(())
+    }
+
+    /// The CDR of `sample` as the message of ROS 2 topic `topic`.
+    fn ros2(&self, topic: &str, sample: &crate::feed::Sample<'_>) -> Vec<u8> {
+        use crate::feed::Sample;
+        use jointctl_ros2::{encode, from_arm};
+        let (clock, arm) = (&self.clock, self.arm.as_str());
+        match sample {
+            Sample::State(s) if topic == jointctl_ros2::JOINT_STATES => encode(&from_arm::joint_state(s, clock, arm)),
+            Sample::State(s) => encode(&from_arm::joint_details(s, clock, arm)),
+            Sample::Raw(f) => encode(&from_arm::raw_frame(f, &self.descriptor, clock, arm)),
+            Sample::Diagnostics(d) => encode(&from_arm::diagnostic_array(d, clock, arm)),
+            Sample::Command(c) => encode(&from_arm::command_record(c, clock, arm)),
+        }
     }
 
     /// The newest cycle (or command sequence) written on `topic`.
@@ -171,7 +248,7 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             file: self.out.clone(),
             duration_s: self.first_stamp.map_or(0.0, |f| self.last_stamp.saturating_sub(f) as f64 * 1e-9),
             messages: self.counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-            lost_by_channel: self.gaps.iter().map(|(k, g)| (k.to_string(), g.lost)).collect(),
+            lost_by_channel: self.channels.iter().map(|(topic, source, _)| (topic.to_string(), self.gaps.get(source).map_or(0, |g| g.lost))).collect(),
             bytes: 0,
             arm_stopped: self.arm_stopped,
         }
@@ -193,6 +270,10 @@ fn config_files(config: &Path) -> Vec<(String, Vec<u8>)> {
     out
 }
 
+/// The QoS a ROS 2 player offers each topic, in rosbag2's YAML form: ROS 2's defaults (reliable,
+/// volatile, keep last 10).
+const OFFERED_QOS: &str = "- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n  deadline:\n    sec: 9223372036\n    nsec: 854775807\n  lifespan:\n    sec: 9223372036\n    nsec: 854775807\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n  avoid_ros_namespace_conventions: false\n";
+
 fn unix_ns() -> u64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
 }
@@ -204,6 +285,7 @@ fn unix_ns() -> u64 {
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let opts = jointctl_record::recorder::RecordOptions {
 ///     arm: "sherpa".into(), scope: Default::default(), out: "r.mcap".into(), duration_s: Some(10.0), timeout_s: 5.0,
+///     profile: jointctl_record::recorder::Profile::Json,
 /// };
 /// let summary = jointctl_record::recorder::record(&opts, &std::sync::atomic::AtomicBool::new(false))?;
 /// assert_eq!(summary.lost(), 0);
@@ -219,7 +301,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     // A file that cannot be written from its start (a full disk) is a recording stopped before
     // its first sample: the summary says so too.
     let before_start = |source: mcap::McapError| RecordError::Stopped {
-        summary: Box::new(RecordSummary::empty(opts.out.clone())),
+        summary: Box::new(RecordSummary::empty(opts.out.clone(), opts.profile)),
         source: Box::new(mcap_error(source)),
     };
     let mut writer = mcap::WriteOptions::new()
@@ -231,16 +313,31 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         // the SHERPA arm at 40 Hz, 30 ms at 1 kHz; the default 768 KiB held three seconds) bound
         // that, at a few dozen bytes of index each.
         .chunk_size(Some(256 * 1024))
-        .profile("")
+        .profile(match opts.profile {
+            Profile::Json => "",
+            Profile::Ros2 => "ros2",
+        })
         .library(format!("jointctl-record {}", env!("CARGO_PKG_VERSION")))
         .create(BufWriter::new(file))
         .map_err(before_start)?;
-    let mut channel = BTreeMap::new();
-    for (topic, schema_name) in messages::CHANNELS {
-        let schema = messages::schema(topic).map(|s| s.to_string()).unwrap_or_default();
-        let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes()).map_err(before_start)?;
-        let id = writer.add_channel(schema_id, topic, "json", &BTreeMap::new()).map_err(before_start)?;
-        channel.insert(topic, id);
+    let mut channels = Vec::new();
+    match opts.profile {
+        Profile::Json => {
+            for (topic, schema_name) in messages::CHANNELS {
+                let schema = messages::schema(topic).map(|s| s.to_string()).unwrap_or_default();
+                let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes()).map_err(before_start)?;
+                channels.push((topic, topic, writer.add_channel(schema_id, topic, "json", &BTreeMap::new()).map_err(before_start)?));
+            }
+        }
+        Profile::Ros2 => {
+            for t in jointctl_ros2::topics() {
+                let schema_id = writer.add_schema(t.type_name, "ros2msg", t.schema.as_bytes()).map_err(before_start)?;
+                // The QoS `ros2 bag play` publishes with: reliable, volatile, a history of the
+                // recorder's depth (rosbag2's offered_qos_profiles metadata, as it records them).
+                let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), OFFERED_QOS.to_string())]);
+                channels.push((t.topic, t.source, writer.add_channel(schema_id, t.topic, "cdr", &metadata).map_err(before_start)?));
+            }
+        }
     }
     let start_unix_ns = unix_ns();
     let start_monotonic_ns = monotonic_ns();
@@ -267,10 +364,14 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
 
     let mut sink = Sink {
         writer,
-        channel,
+        counts: channels.iter().map(|(t, ..)| (*t, 0)).collect(),
+        gaps: channels.iter().map(|(_, source, _)| (*source, Gaps::default())).collect(),
+        channels,
         out: opts.out.clone(),
-        counts: messages::CHANNELS.iter().map(|(t, _)| (*t, 0)).collect(),
-        gaps: messages::CHANNELS.iter().map(|(t, _)| (*t, Gaps::default())).collect(),
+        profile: opts.profile,
+        clock: jointctl_ros2::from_arm::WallClock::from_pair(start_unix_ns, start_monotonic_ns),
+        arm: opts.arm.clone(),
+        descriptor,
         first_stamp: None,
         last_stamp: 0,
         arm_stopped: false,
@@ -279,13 +380,14 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     // says how far it got.
     let outcome = take_samples(&mut feed, &mut sink, opts, stop, timeout, descriptor.rate_hz);
     let mut summary = sink.summary();
+    let got_state = sink.newest("joint_state").is_some();
     let finished = sink.writer.finish().map_err(mcap_error);
     drop(sink);
     summary.bytes = std::fs::metadata(&opts.out).map_or(0, |m| m.len());
     if let Err(source) = outcome.and(finished) {
         return Err(RecordError::Stopped { summary: Box::new(summary), source: Box::new(source) });
     }
-    if summary.messages.get("joint_state").is_none_or(|n| *n == 0) {
+    if !got_state {
         return Err(FeedError::Silent { arm: opts.arm.clone(), what: "joint state", timeout_s: opts.timeout_s }.into());
     }
     Ok(summary)

@@ -35,7 +35,7 @@ fn the_last_joint_state_comes_with_its_raw_readings_and_diagnostics() {
     descriptor_pub.send_copy(RawDescriptor::of(100.0, &[], &[], &[], None)).unwrap();
 
     let out = std::env::temp_dir().join(format!("jointctl-test-{}-tail.mcap", std::process::id()));
-    let opts = RecordOptions { arm: arm.into(), scope: scope.clone(), out: out.clone(), duration_s: Some(0.1), timeout_s: 5.0 };
+    let opts = RecordOptions { arm: arm.into(), scope: scope.clone(), out: out.clone(), duration_s: Some(0.1), timeout_s: 5.0, profile: Default::default() };
     let recorder = std::thread::spawn(move || record(&opts, &AtomicBool::new(false)));
     let started = std::time::Instant::now();
     // The recorder subscribes to the descriptor last; it reaches it from the service's history

@@ -29,6 +29,12 @@ pub struct RecordArgs {
     /// Give up when the arm's services do not appear, or nothing arrives, for this long [s].
     #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
     timeout: f64,
+    /// The file's form: `json` (jointctl's channels as JSON, what Foxglove opens) or `ros2`
+    /// (ROS 2 topics and types as CDR, what `ros2 bag play`, rosbags and PlotJuggler read:
+    /// /joint_states, /diagnostics, /jointctl/joint_details, /jointctl/raw, /jointctl/commands).
+    /// fit, identify and replay read both.
+    #[arg(long, default_value = "json", value_parser = ["json", "ros2"])]
+    profile: String,
     /// Print one JSON object: `{"file", "duration_s", "messages": {...}, "lost", ...}`.
     #[arg(long)]
     json: bool,
@@ -48,6 +54,7 @@ pub fn run(a: RecordArgs) -> ExitCode {
         out: a.out,
         duration_s: a.duration,
         timeout_s: a.timeout,
+        profile: jointctl_record::recorder::Profile::from_name(&a.profile).unwrap_or_default(),
     };
     let (summary, failure) = match jointctl_record::recorder::record(&opts, &stop) {
         Ok(s) => (s, None),
@@ -64,7 +71,7 @@ pub fn run(a: RecordArgs) -> ExitCode {
     } else {
         eprintln!("{}: {:.2} s of arm `{}`, {} bytes", summary.file.display(), summary.duration_s, opts.arm, summary.bytes);
         for (channel, n) in &summary.messages {
-            eprintln!("  {channel:<12} {n:>8} messages, {} lost", summary.lost_by_channel.get(channel).copied().unwrap_or(0));
+            eprintln!("  {channel:<24} {n:>8} messages, {} lost", summary.lost_by_channel.get(channel).copied().unwrap_or(0));
         }
     }
     if let Some(e) = failure {

@@ -1,0 +1,296 @@
+//! The ROS 2 message types the arm's samples are written as, field for field in the order of
+//! their `.msg` definitions (CDR has no field names: the order is the format), and each type's
+//! definition as ROS 2 tools read it from an MCAP schema (`ros2msg`: the type's text, then every
+//! type it uses after a line of `=`, as `ros2 bag record` writes them).
+//!
+//! Two standard types carry what every ROS 2 tool knows: `sensor_msgs/msg/JointState` and
+//! `diagnostic_msgs/msg/DiagnosticArray`. The `jointctl_msgs` types carry the rest, with their
+//! units in their field names; a value that is not known is NaN (ROS 2 has no null).
+
+use serde::{Deserialize, Serialize};
+
+/// `builtin_interfaces/msg/Time`: the wall clock (UNIX time).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Time {
+    /// Whole seconds since 1970-01-01 UTC.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+impl Time {
+    /// UNIX time [ns] as a ROS 2 time (seconds saturate at `i32::MAX`, in 2038, as ROS 2's do).
+    ///
+    /// ```
+    /// let t = jointctl_ros2::msg::Time::from_unix_ns(1_700_000_000_250_000_000);
+    /// assert_eq!((t.sec, t.nanosec), (1_700_000_000, 250_000_000));
+    /// assert_eq!(t.unix_ns(), 1_700_000_000_250_000_000);
+    /// ```
+    pub fn from_unix_ns(ns: u64) -> Time {
+        Time { sec: i32::try_from(ns / 1_000_000_000).unwrap_or(i32::MAX), nanosec: (ns % 1_000_000_000) as u32 }
+    }
+
+    /// Back to UNIX time [ns] (a negative second counts as 0).
+    pub fn unix_ns(&self) -> u64 {
+        u64::try_from(self.sec).unwrap_or(0) * 1_000_000_000 + u64::from(self.nanosec)
+    }
+}
+
+/// `std_msgs/msg/Header`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// When the sample was taken, on the wall clock.
+    pub stamp: Time,
+    /// The frame; jointctl writes the arm's name.
+    pub frame_id: String,
+}
+
+/// `sensor_msgs/msg/JointState`: one entry per DOF; `effort` is the observed joint torque [Nm].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JointState {
+    /// Header.
+    pub header: Header,
+    /// DOF names.
+    pub name: Vec<String>,
+    /// Link-side positions [rad].
+    pub position: Vec<f64>,
+    /// Velocities [rad/s].
+    pub velocity: Vec<f64>,
+    /// Observed joint torques [Nm].
+    pub effort: Vec<f64>,
+}
+
+/// `diagnostic_msgs/msg/KeyValue`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct KeyValue {
+    /// Key.
+    pub key: String,
+    /// Value, as text.
+    pub value: String,
+}
+
+/// `diagnostic_msgs/msg/DiagnosticStatus`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosticStatus {
+    /// [`DiagnosticStatus::OK`], `WARN`, `ERROR` or `STALE`.
+    pub level: u8,
+    /// What it is about: `jointctl/<arm>/loop`, `.../joint/<name>`, `.../device/<name>`.
+    pub name: String,
+    /// One line for a person.
+    pub message: String,
+    /// The arm's name.
+    pub hardware_id: String,
+    /// The counters, by name.
+    pub values: Vec<KeyValue>,
+}
+
+impl DiagnosticStatus {
+    /// Level: fine.
+    pub const OK: u8 = 0;
+    /// Level: works, with a problem.
+    pub const WARN: u8 = 1;
+    /// Level: does not work.
+    pub const ERROR: u8 = 2;
+}
+
+/// `diagnostic_msgs/msg/DiagnosticArray`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosticArray {
+    /// Header.
+    pub header: Header,
+    /// One status per part.
+    pub status: Vec<DiagnosticStatus>,
+}
+
+/// `jointctl_msgs/msg/JointDetail`: one DOF's observed state.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct JointDetail {
+    pub name: String,
+    pub position_rad: f64,
+    pub velocity_rad_s: f64,
+    pub deflection_rad: f64,
+    pub torque_nm: f64,
+    pub stiffness_nm_per_rad: f64,
+    pub pivot_mm: f64,
+    pub reference_torque_nm: f64,
+    pub sensor_torque_nm: f64,
+    pub gravity_nm: f64,
+    pub mode: String,
+    pub enabled: bool,
+    pub fault_code: u32,
+}
+
+/// `jointctl_msgs/msg/JointDetails`: every DOF's observed state in one cycle.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JointDetails {
+    /// Header (the cycle's sensor read on the wall clock).
+    pub header: Header,
+    /// Cycle counter.
+    pub cycle: u64,
+    /// CLOCK_MONOTONIC of the cycle's sensor read [ns] (the runtime's clock).
+    pub stamp_ns: u64,
+    /// The runtime's last sample (the arm stopped).
+    pub final_sample: bool,
+    /// One per DOF.
+    pub joints: Vec<JointDetail>,
+}
+
+/// `jointctl_msgs/msg/RawReading`: one device reading as the HAL gave it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RawReading {
+    /// Device name (empty inside a [`RawDrive`]).
+    pub name: String,
+    /// Value [rad or Nm]; NaN when there is none.
+    pub value: f64,
+    /// `missing`, `valid`, `stale` or `invalid`.
+    pub status: String,
+    /// Age [s]; infinite when it never arrived.
+    pub age_s: f64,
+}
+
+/// `jointctl_msgs/msg/RawDrive`: one drive's reading and what it was sent.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct RawDrive {
+    pub name: String,
+    pub position_rad: RawReading,
+    pub velocity_rad_s: RawReading,
+    pub enabled: bool,
+    pub fault: bool,
+    pub action: String,
+    pub setpoint_rad: f64,
+    pub velocity_ff_rad_s: f64,
+}
+
+/// `jointctl_msgs/msg/RawFrame`: every device's reading and every set-point of one cycle.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct RawFrame {
+    pub header: Header,
+    pub cycle: u64,
+    /// CLOCK_MONOTONIC of the cycle's sensor read [ns].
+    pub stamp_ns: u64,
+    /// Accepted commands applied up to this cycle.
+    pub commands_applied: u64,
+    pub encoders: Vec<RawReading>,
+    pub drives: Vec<RawDrive>,
+    pub torque_sensors: Vec<RawReading>,
+}
+
+/// `jointctl_msgs/msg/CommandPoint`: one point of a position trajectory.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct CommandPoint {
+    pub t_s: f64,
+    pub position_rad: f64,
+    pub velocity_rad_s: f64,
+}
+
+/// `jointctl_msgs/msg/CommandRecord`: a command the runtime accepted.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct CommandRecord {
+    pub header: Header,
+    /// Accepted commands so far, from 1.
+    pub sequence: u64,
+    /// CLOCK_MONOTONIC of the acceptance [ns].
+    pub stamp_ns: u64,
+    pub kind: String,
+    pub joint: String,
+    pub streamed: bool,
+    pub waveform: String,
+    pub values: Vec<f64>,
+    pub points: Vec<CommandPoint>,
+    /// The runtime's answer.
+    pub message: String,
+}
+
+/// A message type: its ROS 2 name and its `.msg` text.
+pub trait Message: Serialize + for<'de> Deserialize<'de> {
+    /// `package/msg/Type`.
+    const NAME: &'static str;
+    /// The `.msg` text of this type alone.
+    const DEFINITION: &'static str;
+    /// The types its fields use, nested ones included, each once.
+    const USES: &'static [(&'static str, &'static str)];
+
+    /// The MCAP `ros2msg` schema: this type's text, then each used type after a separator and
+    /// `MSG: package/Type`.
+    ///
+    /// ```
+    /// use jointctl_ros2::msg::{JointState, Message};
+    /// let s = JointState::schema();
+    /// assert!(s.starts_with("std_msgs/Header header\n"));
+    /// assert!(s.contains("\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"));
+    /// ```
+    fn schema() -> String {
+        let mut out = Self::DEFINITION.to_string();
+        for (name, text) in Self::USES {
+            out.push_str(SEPARATOR);
+            out.push_str("MSG: ");
+            out.push_str(&name.replace("/msg/", "/"));
+            out.push('\n');
+            out.push_str(text);
+        }
+        out
+    }
+}
+
+const SEPARATOR: &str = "================================================================================\n";
+
+const TIME: (&str, &str) = ("builtin_interfaces/msg/Time", "int32 sec\nuint32 nanosec\n");
+const HEADER: (&str, &str) = ("std_msgs/msg/Header", "builtin_interfaces/Time stamp\nstring frame_id\n");
+
+impl Message for JointState {
+    const NAME: &'static str = "sensor_msgs/msg/JointState";
+    const DEFINITION: &'static str = "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME];
+}
+
+const KEY_VALUE: (&str, &str) = ("diagnostic_msgs/msg/KeyValue", "string key\nstring value\n");
+const DIAGNOSTIC_STATUS: (&str, &str) = (
+    "diagnostic_msgs/msg/DiagnosticStatus",
+    "byte OK=0\nbyte WARN=1\nbyte ERROR=2\nbyte STALE=3\nbyte level\nstring name\nstring message\nstring hardware_id\ndiagnostic_msgs/KeyValue[] values\n",
+);
+
+impl Message for DiagnosticArray {
+    const NAME: &'static str = "diagnostic_msgs/msg/DiagnosticArray";
+    const DEFINITION: &'static str = "std_msgs/Header header\ndiagnostic_msgs/DiagnosticStatus[] status\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME, DIAGNOSTIC_STATUS, KEY_VALUE];
+}
+
+const JOINT_DETAIL: (&str, &str) = (
+    "jointctl_msgs/msg/JointDetail",
+    "string name\nfloat64 position_rad\nfloat64 velocity_rad_s\nfloat64 deflection_rad\nfloat64 torque_nm\nfloat64 stiffness_nm_per_rad\nfloat64 pivot_mm\n\
+     float64 reference_torque_nm\nfloat64 sensor_torque_nm\nfloat64 gravity_nm\nstring mode\nbool enabled\nuint32 fault_code\n",
+);
+
+impl Message for JointDetails {
+    const NAME: &'static str = "jointctl_msgs/msg/JointDetails";
+    const DEFINITION: &'static str = "# Every DOF's observed state, once per cycle (SI units; NaN: not known).\n\
+         std_msgs/Header header\nuint64 cycle\nuint64 stamp_ns\nbool final_sample\njointctl_msgs/JointDetail[] joints\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME, JOINT_DETAIL];
+}
+
+const RAW_READING: (&str, &str) = ("jointctl_msgs/msg/RawReading", "string name\nfloat64 value\nstring status\nfloat64 age_s\n");
+const RAW_DRIVE: (&str, &str) = (
+    "jointctl_msgs/msg/RawDrive",
+    "string name\njointctl_msgs/RawReading position_rad\njointctl_msgs/RawReading velocity_rad_s\nbool enabled\nbool fault\nstring action\nfloat64 setpoint_rad\nfloat64 velocity_ff_rad_s\n",
+);
+
+impl Message for RawFrame {
+    const NAME: &'static str = "jointctl_msgs/msg/RawFrame";
+    const DEFINITION: &'static str = "# Every device's reading as the HAL gave it and every set-point written, once per cycle.\n\
+         std_msgs/Header header\nuint64 cycle\nuint64 stamp_ns\nuint64 commands_applied\njointctl_msgs/RawReading[] encoders\njointctl_msgs/RawDrive[] drives\njointctl_msgs/RawReading[] torque_sensors\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME, RAW_READING, RAW_DRIVE];
+}
+
+const COMMAND_POINT: (&str, &str) = ("jointctl_msgs/msg/CommandPoint", "float64 t_s\nfloat64 position_rad\nfloat64 velocity_rad_s\n");
+
+impl Message for CommandRecord {
+    const NAME: &'static str = "jointctl_msgs/msg/CommandRecord";
+    const DEFINITION: &'static str = "# A command the runtime accepted.\n\
+         std_msgs/Header header\nuint64 sequence\nuint64 stamp_ns\nstring kind\nstring joint\nbool streamed\nstring waveform\nfloat64[] values\njointctl_msgs/CommandPoint[] points\nstring message\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME, COMMAND_POINT];
+}
