@@ -59,3 +59,19 @@ fn a_reader_that_goes_away_ends_the_output_not_the_program_with_a_panic() {
         }
     }
 }
+
+/// The ROS 2 bridge's DDS domain has the range RTPS maps to UDP ports (0-232): check refuses a
+/// domain beyond it with the range and the field, and the bridge's `--domain-id` likewise.
+#[test]
+fn a_dds_domain_beyond_232_is_refused_with_the_range() {
+    let arm = jointctl_tests::arm_name("number_ranges_dds");
+    let network: serde_yaml::Value = serde_yaml::from_str("{ros2: {domain_id: 233}}").unwrap();
+    let yaml = jointctl_tests::sherpa_with("number_ranges_dds", &arm, &[jointctl_tests::Edit::Set("network", network)]);
+    let o = Command::new(jointctl()).arg("check").arg(&yaml).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("network.ros2.domain_id") && err.contains("must be 0-232"), "{err}");
+    let o = Command::new(jointctl()).args(["bridge", "ros2", "--domain-id", "233"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("233 is not in 0..=232"), "{err}");
+}

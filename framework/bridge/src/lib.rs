@@ -8,13 +8,16 @@
 //!   JSON-schema channel per recorded topic, so a layout made on a recording works live.
 //! - [`zenoh`]: the same messages over Zenoh for other machines, and commands from them, only
 //!   when the arm's YAML allows them and only from peers that authenticate.
+//! - [`ros2`]: ROS 2 topics over DDS (`/joint_states`, `/diagnostics`, the jointctl topics),
+//!   the ROS 2 recording profile's messages, read-only.
 //!
-//! Both send the recording's JSON ([`jointctl_record::messages`]): SI units in the field names,
+//! Foxglove and Zenoh send the recording's JSON ([`jointctl_record::messages`]): SI units in the field names,
 //! `null` for a value that is not known.
 
 #![deny(unsafe_code)]
 
 pub mod foxglove;
+pub mod ros2;
 pub mod zenoh;
 
 use std::collections::BTreeMap;

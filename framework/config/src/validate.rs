@@ -128,6 +128,10 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
         }
     }
 
+    if c.network.ros2.domain_id > 232 {
+        err("network.ros2.domain_id".into(), format!("must be 0-232 (the DDS domains RTPS maps to UDP ports), got {}", c.network.ros2.domain_id));
+    }
+
     // CiA 402: from "quick stop active" a drive goes on only to "switch on disabled" (or back to
     // operation enabled); it ignores "disable operation".
     if let Some(i) = c.safety.stop_sequence.windows(2).position(|w| w == [crate::StopStep::QuickStop, crate::StopStep::DisableOperation]) {

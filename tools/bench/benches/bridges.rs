@@ -9,6 +9,10 @@
 //! are this machine's. The Zenoh client is this process (zenoh's Rust API); the Foxglove client
 //! is the Python `websockets` client of the tests, so its figure includes Python's decoding.
 //!
+//! A third run has `jointctl bridge ros2` attached with a Cyclone DDS listener (the Python
+//! client of the tests, `tests/interop/ros2_listener.py`): the loop's figures beside the run
+//! alone, and the share of joint states that reached the listener.
+//!
 //! Environment: `BENCH_BRIDGE_S` (default 30) seconds per run; `BENCH_QUICK=1` for 5 s.
 //! Needs `cargo build --release --workspace` first and `bash .ci/setup-python-venv`.
 
@@ -31,6 +35,21 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[((p / 100.0 * (sorted.len() - 1) as f64).round() as usize).min(sorted.len() - 1)]
 }
 
+/// Waits for a child and returns the CPU time it used, user and system [s] (its rusage).
+#[allow(unsafe_code)]
+fn wait_cpu_s(child: Child) -> f64 {
+    let mut status = 0;
+    // SAFETY: an all-zero rusage is a valid value for wait4 to fill in.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: our own child, not yet reaped (Child only reaps in wait, which is not called).
+    let pid = unsafe { libc::wait4(child.id() as i32, &mut status, 0, &mut usage) };
+    if pid <= 0 {
+        return f64::NAN;
+    }
+    let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    seconds(usage.ru_utime) + seconds(usage.ru_stime)
+}
+
 /// Starts `jointctl bridge ARGS` and returns it with the log line containing `ready` (waits
 /// in a thread so that the loop can start meanwhile).
 fn bridge(exe: &std::path::Path, args: &[String], ready: &'static str) -> (Child, std::sync::mpsc::Receiver<String>) {
@@ -45,6 +64,63 @@ fn bridge(exe: &std::path::Path, args: &[String], ready: &'static str) -> (Child
         }
     });
     (child, rx)
+}
+
+/// One run of the loop with `jointctl bridge ros2` attached, and with a DDS listener or none.
+struct Ros2Run {
+    run: jointctl_bench::LoopRun,
+    states: usize,
+    bridge_cpu_s: f64,
+    listener_cpu_s: f64,
+    listener_error: String,
+}
+
+/// The loop's `timing`: SCHED_FIFO 80 on the machine's last CPU, or the defaults.
+fn timing(realtime: bool) -> impl FnOnce(&mut jointctl_config::ArmConfig) {
+    move |c| {
+        if realtime {
+            let last_cpu = std::thread::available_parallelism().map_or(0, |n| n.get() - 1);
+            (c.timing.realtime_priority, c.timing.cpu) = (Some(80), Some(last_cpu));
+        }
+    }
+}
+
+fn ros2_run(exe: &std::path::Path, python: &std::path::Path, seconds: f64, arm: &'static str, listen: bool, realtime: bool) -> Ros2Run {
+    // A DDS domain of this run's own.
+    let domain = (100 + std::process::id() % 130).to_string();
+    let (bridge_child, ready) = bridge(exe, &["ros2".into(), "--arm".into(), arm.into(), "--domain-id".into(), domain.clone(), "--timeout".into(), "10".into()], "publishing in DDS domain");
+    let looping = std::thread::spawn(move || jointctl_bench::run_sherpa_loop_with(seconds, arm, timing(realtime)));
+    ready.recv_timeout(Duration::from_secs(20)).expect("the ROS 2 bridge never started");
+    let mut out = Ros2Run { run: jointctl_bench::LoopRun::default(), states: 0, bridge_cpu_s: 0.0, listener_cpu_s: 0.0, listener_error: String::new() };
+    let listener = listen.then(|| {
+        let mut child = Command::new(python)
+            .arg(jointctl_bench::root().join("tests/interop/ros2_listener.py"))
+            .args([domain.as_str(), &format!("{}", seconds + 3.0), &format!("{}", (seconds * 2000.0) as u64)])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (mut stdout, mut stderr) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
+        let reading = std::thread::spawn(move || {
+            let (mut text, mut err) = (Vec::new(), String::new());
+            let _ = std::io::Read::read_to_end(&mut stdout, &mut text);
+            let _ = std::io::Read::read_to_string(&mut stderr, &mut err);
+            (text, err)
+        });
+        (child, reading)
+    });
+    out.run = looping.join().unwrap();
+    if let Some((child, reading)) = listener {
+        out.listener_cpu_s = wait_cpu_s(child);
+        let (text, err) = reading.join().unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&text).unwrap_or_default();
+        out.states = v["joint_states"].as_array().map_or(0, Vec::len);
+        if v.is_null() {
+            out.listener_error = err.lines().last().unwrap_or("").to_string();
+        }
+    }
+    out.bridge_cpu_s = wait_cpu_s(bridge_child);
+    out
 }
 
 fn main() {
@@ -62,8 +138,8 @@ fn main() {
     let arm = "bench-br-with";
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let endpoint = format!("tcp/127.0.0.1:{port}");
-    let (mut zenoh_bridge, zenoh_ready) = bridge(&exe, &["zenoh".into(), "--arm".into(), arm.into(), "--listen".into(), endpoint.clone(), "--timeout".into(), "10".into()], "publishing on");
-    let (mut foxglove_bridge, foxglove_ready) = bridge(&exe, &["foxglove".into(), "--arm".into(), arm.into(), "--port".into(), "0".into(), "--timeout".into(), "10".into()], "listening on ws://");
+    let (zenoh_bridge, zenoh_ready) = bridge(&exe, &["zenoh".into(), "--arm".into(), arm.into(), "--listen".into(), endpoint.clone(), "--timeout".into(), "10".into()], "publishing on");
+    let (foxglove_bridge, foxglove_ready) = bridge(&exe, &["foxglove".into(), "--arm".into(), arm.into(), "--port".into(), "0".into(), "--timeout".into(), "10".into()], "listening on ws://");
     let looping = std::thread::spawn(move || jointctl_bench::run_sherpa_loop(seconds, arm));
     // The bridges find the arm once its loop runs; then the clients attach.
     zenoh_ready.recv_timeout(Duration::from_secs(20)).expect("the Zenoh bridge never started");
@@ -99,8 +175,8 @@ fn main() {
     done.store(true, Ordering::Relaxed);
     let _ = receiving.join();
     let fox = foxglove_client.wait_with_output().unwrap();
-    let _ = zenoh_bridge.wait();
-    let _ = foxglove_bridge.wait();
+    let zenoh_cpu_s = wait_cpu_s(zenoh_bridge);
+    let foxglove_cpu_s = wait_cpu_s(foxglove_bridge);
     let mut fox_latencies: Vec<f64> = String::from_utf8_lossy(&fox.stdout)
         .lines()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
@@ -123,6 +199,41 @@ fn main() {
             percentile(l, 99.0) / 1e3,
             l.last().copied().unwrap_or(f64::NAN) / 1e3
         );
+    }
+    println!();
+
+    let ros2_alone = ros2_run(&exe, &python, seconds, "bench-br-ros2-alone", false, false);
+    let ros2_heard = ros2_run(&exe, &python, seconds, "bench-br-ros2", true, false);
+    // The same with the loop at SCHED_FIFO on a CPU of its own (`timing`, docs/real-time.md).
+    let alone_rt = std::thread::spawn(move || jointctl_bench::run_sherpa_loop_with(seconds, "bench-br-alone-rt", timing(true))).join().unwrap();
+    let ros2_heard_rt = ros2_run(&exe, &python, seconds, "bench-br-ros2-rt", true, true);
+    jointctl_bench::print_side_by_side("The loop with the ROS 2 bridge, nobody listening", [("no bridge", &alone), ("`bridge ros2` attached, no DDS reader", &ros2_alone.run)]);
+    jointctl_bench::print_side_by_side("The loop with the ROS 2 bridge and a listener", [("no bridge", &alone), ("`bridge ros2` attached, a Cyclone DDS listener", &ros2_heard.run)]);
+    jointctl_bench::print_side_by_side(
+        "The loop at SCHED_FIFO 80 on the last CPU, with the ROS 2 bridge and a listener",
+        [("no bridge, SCHED_FIFO", &alone_rt), ("`bridge ros2` + Cyclone DDS listener, SCHED_FIFO", &ros2_heard_rt.run)],
+    );
+    println!(
+        "ROS 2: {} /joint_states messages reached the Cyclone DDS listener, {:.0} % of the run's {} cycles (it attaches after DDS discovery, a second or two into the run)",
+        ros2_heard.states,
+        100.0 * ros2_heard.states as f64 / ros2_heard.run.cycles.max(1) as f64,
+        ros2_heard.run.cycles
+    );
+    println!();
+    println!("## CPU of the processes beside the loop (user + system, share of one core over the run)");
+    println!("| process | % of a core |");
+    println!("|---|---|");
+    for (name, cpu_s) in [
+        ("`bridge zenoh` (a Rust subscriber attached)", zenoh_cpu_s),
+        ("`bridge foxglove` (a Python client attached)", foxglove_cpu_s),
+        ("`bridge ros2`, no DDS reader", ros2_alone.bridge_cpu_s),
+        ("`bridge ros2`, a Cyclone DDS listener attached", ros2_heard.bridge_cpu_s),
+        ("the Python Cyclone DDS listener", ros2_heard.listener_cpu_s),
+    ] {
+        println!("| {name} | {:.0} |", 100.0 * cpu_s / seconds);
+    }
+    if !ros2_heard.listener_error.is_empty() {
+        println!("(the DDS listener: {})", ros2_heard.listener_error);
     }
     if !fox.status.success() {
         println!("\n(the Foxglove client: {})", String::from_utf8_lossy(&fox.stderr).lines().last().unwrap_or(""));

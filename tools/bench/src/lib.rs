@@ -45,7 +45,7 @@ pub fn register_sherpa_plugins(loader: &mut PluginLoader) {
 }
 
 /// The loop's timing in one run of [`run_sherpa_loop`].
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct LoopRun {
     /// Cycles run.
     pub cycles: u64,

@@ -27,6 +27,22 @@ pub enum BridgeCommand {
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
     },
+    /// ROS 2: the arm's topics over DDS, read-only (/joint_states, /diagnostics once a second,
+    /// /jointctl/joint_details, /jointctl/raw, /jointctl/commands; ROS 2's default QoS), from a
+    /// node `jointctl_<arm>`. No ROS installation needed. See docs/ros2.md.
+    Ros2 {
+        #[command(flatten)]
+        at: RunningArm,
+        /// The DDS domain (ROS_DOMAIN_ID), 0-232; default: the YAML's `network.ros2.domain_id`.
+        #[arg(long, value_parser = clap::value_parser!(u16).range(0..=232))]
+        domain_id: Option<u16>,
+        /// The arm's YAML, for its `network` section; default: the file the runtime runs.
+        #[arg(long, value_name = "YAML")]
+        config: Option<PathBuf>,
+        /// Give up when the arm's services do not appear, or the arm is silent, for this long [s].
+        #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
+        timeout: f64,
+    },
     /// Other machines: the arm's samples over Zenoh (`jointctl/<arm>/<topic>`, JSON), and
     /// commands from authenticated peers when the arm's YAML allows them
     /// (`network.zenoh.commands`); every other command is refused with the reason.
@@ -68,6 +84,19 @@ pub fn run(command: BridgeCommand) -> ExitCode {
             match served {
                 Ok(summary) => {
                     tracing::info!(arm = %opts.arm, messages = ?summary.messages, arm_stopped = summary.arm_stopped, "Foxglove bridge stopped");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => crate::fail_err(e),
+            }
+        }
+        BridgeCommand::Ros2 { at, domain_id, config, timeout } => {
+            let opts = jointctl_bridge::ros2::Ros2Options { arm: at.arm.clone(), scope: at.scope(), domain_id, config, timeout_s: timeout };
+            let served = jointctl_bridge::ros2::serve(&opts, &stop, |node, domain| {
+                tracing::info!(arm = %opts.arm, "ROS 2 bridge: node /{node} publishing in DDS domain {domain}");
+            });
+            match served {
+                Ok(summary) => {
+                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, arm_stopped = summary.arm_stopped, "ROS 2 bridge stopped");
                     ExitCode::SUCCESS
                 }
                 Err(e) => crate::fail_err(e),

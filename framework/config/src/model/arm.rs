@@ -193,6 +193,20 @@ pub struct NetworkConfig {
     /// The Zenoh bridge (`jointctl bridge zenoh`).
     #[serde(default)]
     pub zenoh: ZenohConfig,
+    /// The ROS 2 bridge (`jointctl bridge ros2`).
+    #[serde(default)]
+    pub ros2: Ros2Config,
+}
+
+/// The ROS 2 bridge: the arm's topics over DDS. It only publishes; DDS has no authentication
+/// without DDS Security, so any host on the network segment could send what it accepts.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Ros2Config {
+    /// The DDS domain (`ROS_DOMAIN_ID`), 0 to 232 (the RTPS port mapping's limit for UDP).
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 232))]
+    pub domain_id: u16,
 }
 
 /// The Zenoh bridge. Without `commands` it only publishes (state, diagnostics, raw readings,

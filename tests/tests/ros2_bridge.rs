@@ -1,0 +1,72 @@
+//! `jointctl bridge ros2` (issue 33, item 1): a DDS client that is not jointctl's (PyPI
+//! cyclonedds, the DDS of rmw_cyclonedds, `tests/interop/ros2_listener.py`) reads the arm's
+//! ROS 2 topics by their ROS 2 DDS names and types, and finds what `inspect echo` shows.
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use jointctl_tests::{arm_name, interop_python, jointctl, root, sherpa_with, stop};
+
+#[test]
+fn a_cyclone_dds_listener_reads_the_arms_joint_states_and_diagnostics() {
+    let test = "bridge-ros2";
+    let arm = arm_name(test);
+    let config = sherpa_with(test, &arm, &[]);
+    // A DDS domain of this test run's own: another run on the network sees nothing of it.
+    let domain = (100 + std::process::id() % 130).to_string();
+    let mut run = Command::new(jointctl()).arg("run").arg(&config).args(["--duration", "40"]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
+    let mut bridge = Command::new(jointctl()).args(["bridge", "ros2", "--arm", &arm, "--domain-id", &domain]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let listener = Command::new(interop_python())
+        .arg(root().join("tests/interop/ros2_listener.py"))
+        .args([&domain, "25", "160"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // DDS discovery takes a moment; the echo covers the listener's whole window.
+    std::thread::sleep(Duration::from_millis(1500));
+    let echo = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "200", "--timeout", "10"]).stdout(Stdio::piped()).spawn().unwrap();
+    let cmd = Command::new(jointctl()).args(["cmd", "position", "q1", "0.2", "--arm", &arm]).output().unwrap();
+    assert!(cmd.status.success(), "{}", String::from_utf8_lossy(&cmd.stderr));
+    let (heard, echoed) = (listener.wait_with_output().unwrap(), echo.wait_with_output().unwrap());
+    stop(&mut bridge);
+    let bridge_out = bridge.wait_with_output().unwrap();
+    stop(&mut run);
+    assert!(heard.status.success(), "listener: {}", String::from_utf8_lossy(&heard.stderr));
+    assert!(bridge_out.status.success(), "the bridge ends cleanly on SIGINT: {}", String::from_utf8_lossy(&bridge_out.stderr));
+    assert!(!String::from_utf8_lossy(&bridge_out.stderr).contains("rustdds"), "the DDS stack's INFO lines stay out of the log: {}", String::from_utf8_lossy(&bridge_out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&heard.stdout).unwrap();
+
+    let states = v["joint_states"].as_array().unwrap();
+    assert!(states.len() >= 100, "{} joint states over DDS", states.len());
+    assert_eq!(states[0][1], serde_json::json!(["q1", "q2", "q3", "q4", "q5", "q6", "q7"]));
+    // Each /joint_states message to its cycle (the /jointctl/joint_details message with the same
+    // header stamp), then to the state `inspect echo` printed for that cycle.
+    let cycle_of: std::collections::HashMap<u64, u64> = v["joint_details"].as_array().unwrap().iter().map(|d| (d[1].as_u64().unwrap(), d[0].as_u64().unwrap())).collect();
+    let echoed: std::collections::HashMap<u64, Vec<serde_json::Value>> = String::from_utf8_lossy(&echoed.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .map(|s| (s["cycle"].as_u64().unwrap(), s["joints"].as_array().unwrap().iter().map(|j| j["position"].clone()).collect()))
+        .collect();
+    let mut compared = 0;
+    let mut moved = false;
+    for s in states {
+        let Some(cycle) = cycle_of.get(&s[0].as_u64().unwrap()) else { continue };
+        let Some(positions) = echoed.get(cycle) else { continue };
+        assert_eq!(&s[2].as_array().unwrap()[..], &positions[..], "positions of cycle {cycle}: DDS vs inspect echo");
+        moved |= s[2][0].as_f64().is_some_and(|q1| q1.abs() > 1e-3);
+        compared += 1;
+    }
+    assert!(compared >= 50, "{compared} cycles both in the DDS stream and in inspect echo's");
+    assert!(moved, "q1 moved to its position command while compared");
+
+    // Diagnostics once a second, a status for the loop and for each joint and device.
+    let arrays = v["diagnostic_arrays"].as_u64().unwrap();
+    assert!(arrays >= 1 && arrays <= states.len() as u64 / 10, "{arrays} diagnostic arrays for {} joint states", states.len());
+    let names: Vec<&str> = v["diagnostics"].as_array().unwrap().iter().filter_map(|s| s[1].as_str()).collect();
+    for expected in [format!("jointctl/{arm}/loop"), format!("jointctl/{arm}/joint/q2"), format!("jointctl/{arm}/device/ft_q2")] {
+        assert!(names.contains(&expected.as_str()), "{expected} in {names:?}");
+    }
+}
