@@ -75,3 +75,24 @@ fn a_dds_domain_beyond_232_is_refused_with_the_range() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("233 is not in 0..=232"), "{err}");
 }
+
+/// `network.ros2.commands.allow` names command kinds: an unknown one or none is refused by check,
+/// naming the entry.
+#[test]
+fn ros2_commands_allow_only_known_kinds() {
+    for (i, (section, expected)) in [
+        ("{ros2: {commands: {allow: [trajectory, fly]}}}", "network.ros2.commands.allow[1]: unknown command kind `fly` (one of hold, position"),
+        ("{ros2: {commands: {allow: []}}}", "network.ros2.commands.allow: names no command kind"),
+        ("{ros2: {commands: {allow: [hold], max_commands_per_s: 0}}}", "network.ros2.commands.max_commands_per_s: must be in [0.1, 1000]"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let test = format!("number_ranges_ros2_{i}");
+        let arm = jointctl_tests::arm_name(&test);
+        let yaml = jointctl_tests::sherpa_with(&test, &arm, &[jointctl_tests::Edit::Set("network", serde_yaml::from_str(section).unwrap())]);
+        let o = Command::new(jointctl()).arg("check").arg(&yaml).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(expected), "{section}: {err}");
+    }
+}

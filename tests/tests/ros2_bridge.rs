@@ -70,3 +70,55 @@ fn a_cyclone_dds_listener_reads_the_arms_joint_states_and_diagnostics() {
         assert!(names.contains(&expected.as_str()), "{expected} in {names:?}");
     }
 }
+
+/// Runs the arm (with `edits`) and `bridge ros2`, sends q1 a trajectory to 0.3 rad at 1 s and a
+/// `torque` CommandRequest from a Cyclone DDS participant, and returns the answers and q1's
+/// position 2.5 s later.
+fn command_over_dds(test: &str, edits: &[jointctl_tests::Edit]) -> (Vec<serde_json::Value>, f64) {
+    let arm = arm_name(test);
+    let config = sherpa_with(test, &arm, edits);
+    let domain = (100 + (std::process::id() + 7) % 130).to_string();
+    let mut run = Command::new(jointctl()).arg("run").arg(&config).args(["--duration", "40"]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
+    let mut bridge = Command::new(jointctl()).args(["bridge", "ros2", "--arm", &arm, "--domain-id", &domain]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let sent = Command::new(interop_python()).arg(root().join("tests/interop/ros2_commander.py")).args([&domain, "q1", "0.3", "torque"]).output().unwrap();
+    std::thread::sleep(Duration::from_millis(2500));
+    let state = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1"]).output().unwrap();
+    stop(&mut bridge);
+    let bridge_log = String::from_utf8_lossy(&bridge.wait_with_output().unwrap().stderr).into_owned();
+    stop(&mut run);
+    assert!(sent.status.success(), "commander: {}", String::from_utf8_lossy(&sent.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&sent.stdout).unwrap();
+    let s: serde_json::Value = serde_json::from_slice(&state.stdout).unwrap();
+    let q1 = s["joints"][0]["position"].as_f64().unwrap();
+    let responses = v["responses"].as_array().unwrap().clone();
+    assert_eq!(responses.len(), 2, "{v}\n{bridge_log}");
+    // Every command is logged and counted, accepted or refused.
+    let logged = bridge_log.matches("a command from ROS 2").count();
+    assert_eq!(logged, 2, "{bridge_log}");
+    assert!(bridge_log.contains("accepted=") && bridge_log.contains("refused="), "{bridge_log}");
+    (responses, q1)
+}
+
+/// Issue 33, item 2: a JointTrajectory moves a joint when the YAML allows trajectories; a kind the
+/// YAML does not list is refused with the reason; without `network.ros2.commands` every command
+/// is refused and nothing moves.
+#[test]
+fn a_joint_trajectory_moves_a_joint_only_when_the_yaml_allows_it() {
+    let allow: serde_yaml::Value = serde_yaml::from_str("{ros2: {commands: {allow: [trajectory]}}}").unwrap();
+    let (responses, q1) = command_over_dds("bridge-ros2-allowed", &[jointctl_tests::Edit::Set("network", allow)]);
+    let trajectory = responses.iter().find(|r| r[0] == "trajectory").unwrap();
+    assert_eq!((trajectory[1].as_str(), trajectory[2].as_bool()), (Some("q1"), Some(true)), "{responses:?}");
+    assert!((q1 - 0.3).abs() < 0.03, "q1 reached the trajectory's 0.3 rad: {q1}");
+    let torque = responses.iter().find(|r| r[0] == "torque").unwrap();
+    assert_eq!(torque[2], false);
+    assert!(torque[3].as_str().unwrap().contains("`torque` is not in network.ros2.commands.allow (trajectory)"), "{torque}");
+
+    let (responses, q1) = command_over_dds("bridge-ros2-refused", &[]);
+    for r in &responses {
+        assert_eq!(r[2], false, "{r}");
+        assert!(r[3].as_str().unwrap().contains("does not allow commands from ROS 2 (it has no `network.ros2.commands`)"), "{r}");
+    }
+    assert!(q1.abs() < 1e-3, "q1 stayed where it was: {q1}");
+}

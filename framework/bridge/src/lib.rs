@@ -9,7 +9,7 @@
 //! - [`zenoh`]: the same messages over Zenoh for other machines, and commands from them, only
 //!   when the arm's YAML allows them and only from peers that authenticate.
 //! - [`ros2`]: ROS 2 topics over DDS (`/joint_states`, `/diagnostics`, the jointctl topics),
-//!   the ROS 2 recording profile's messages, read-only.
+//!   the ROS 2 recording profile's messages; commands only of the kinds the YAML allows.
 //!
 //! Foxglove and Zenoh send the recording's JSON ([`jointctl_record::messages`]): SI units in the field names,
 //! `null` for a value that is not known.
@@ -96,9 +96,64 @@ fn pump(
     }
 }
 
+/// Commands forwarded at most `per_s` a second: a token bucket of at most a second's worth (at
+/// least one), refilled continuously.
+pub(crate) struct RateLimit {
+    pub(crate) per_s: f64,
+    tokens: f64,
+    at: Instant,
+}
+
+impl RateLimit {
+    pub(crate) fn new(per_s: f64) -> Self {
+        RateLimit { per_s, tokens: per_s.max(1.0), at: Instant::now() }
+    }
+
+    /// Takes a token at `now` if there is one.
+    pub(crate) fn take(&mut self, now: Instant) -> bool {
+        self.tokens = (self.tokens + self.per_s * now.saturating_duration_since(self.at).as_secs_f64()).min(self.per_s.max(1.0));
+        self.at = now;
+        if self.tokens >= 1.0 {
+            self.tokens -= 1.0;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+#[cfg(test)]
+mod rate_limit_tests {
+    use crate::RateLimit;
+    use std::time::{Duration, Instant};
+
+    #[test]
+    fn the_bucket_holds_a_seconds_worth_and_refills_at_the_rate() {
+        let start = Instant::now();
+        let mut limit = RateLimit { per_s: 5.0, tokens: 5.0, at: start };
+        assert_eq!((0..8).filter(|_| limit.take(start)).count(), 5, "a second's worth at once");
+        assert!(!limit.take(start + Duration::from_millis(100)), "half a token after 0.1 s");
+        assert!(limit.take(start + Duration::from_millis(200)), "one after 0.2 s");
+        // Idle for a minute: still a second's worth, not sixty.
+        let later = start + Duration::from_secs(60);
+        assert_eq!((0..8).filter(|_| limit.take(later)).count(), 5);
+        // Below one a second: one token, refilled in 1 / rate.
+        let mut slow = RateLimit { per_s: 0.1, tokens: 1.0, at: start };
+        assert!(slow.take(start) && !slow.take(start + Duration::from_secs(9)) && slow.take(start + Duration::from_millis(10_500)));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The config checks `network.*.commands.allow` against its own list of command kinds (it
+    /// does not link the shared-memory crate): the two lists must be the same.
+    #[test]
+    fn the_configs_command_kinds_are_the_runtimes() {
+        let runtime: Vec<&str> = jointctl_ipc::CommandKind::ALL.iter().map(|(_, n)| *n).collect();
+        assert_eq!(jointctl_config::COMMAND_KINDS.to_vec(), runtime);
+    }
 
     /// A stand-in for the arm: one joint state a poll, except the polls listed as empty.
     struct Arm {

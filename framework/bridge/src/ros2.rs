@@ -3,9 +3,11 @@
 //! installation to build or run). The topics and types are the ROS 2 recording profile's
 //! ([`jointctl_ros2::topics`]), with ROS 2's default QoS (reliable, volatile, keep last 10).
 //!
-//! It only publishes. DDS has no authentication unless DDS Security is set up, so any host that
-//! reaches the domain could send whatever a bridge accepted: commands stay with the
-//! authenticated Zenoh bridge.
+//! Commands from ROS 2 (`trajectory_msgs/JointTrajectory` on `/jointctl/joint_trajectory`,
+//! `jointctl_msgs/CommandRequest` on `/jointctl/command`) are refused, each answered on
+//! `/jointctl/command_responses` with the reason, unless the arm's YAML allows their kind
+//! (`network.ros2.commands.allow`). DDS has no authentication unless DDS Security is set up: any
+//! host that reaches the domain can send what the YAML allows.
 
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
@@ -13,9 +15,12 @@ use std::time::{Duration, Instant};
 use jointctl_ipc::IpcScope;
 use jointctl_record::feed::{ArmFeed, FeedError, Sample};
 use jointctl_ros2::from_arm::{self, WallClock};
-use jointctl_ros2::msg;
+use jointctl_ros2::msg::{self, Time};
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile};
+use jointctl_ipc::CommandClient;
+use jointctl_record::messages;
+use ros2_client::{Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription};
+use serde_json::{Value, json};
 
 use crate::BridgeSummary;
 
@@ -32,6 +37,8 @@ pub struct Ros2Options {
     pub config: Option<std::path::PathBuf>,
     /// How long to wait for the arm's services, and how long the arm may be silent [s].
     pub timeout_s: f64,
+    /// How long to wait for the runtime's answer to a command [s].
+    pub command_timeout_s: f64,
 }
 
 /// Why the bridge stopped with an error.
@@ -48,6 +55,9 @@ pub enum Ros2BridgeError {
         /// Why.
         reason: String,
     },
+    /// The runtime's command service could not be reached.
+    #[error(transparent)]
+    Runtime(jointctl_ipc::CommandError),
     /// The DDS participant, the node or a publisher could not be created.
     #[error("cannot create the ROS 2 {what} (DDS domain {domain_id}): {reason}")]
     Dds {
@@ -85,17 +95,145 @@ struct Publishers {
     commands: Publisher<msg::CommandRecord>,
 }
 
-fn publisher<M: msg::Message>(node: &mut Node, topic: &str, domain_id: u16) -> Result<Publisher<M>, Ros2BridgeError> {
-    let dds = |reason: String| Ros2BridgeError::Dds { what: format!("publisher of {topic}"), domain_id, reason };
+/// A topic of `M` on the node, with ROS 2's default QoS. A reliable writer with a bounded
+/// history replaces its oldest sample rather than waiting for a slow reader: the bridge never
+/// blocks on the network.
+fn topic<M: msg::Message>(node: &Node, topic: &str, domain_id: u16, what: &str) -> Result<ros2_client::dds::rustdds::Topic, Ros2BridgeError> {
+    let dds = |reason: String| Ros2BridgeError::Dds { what: format!("{what} of {topic}"), domain_id, reason };
     let (package, rest) = M::NAME.split_once("/msg/").ok_or_else(|| dds(format!("type name {} is not package/msg/Type", M::NAME)))?;
     // `/jointctl/raw`: the namespace `/jointctl`, the name `raw`.
     let (namespace, base) = topic.rsplit_once('/').map_or(("/", topic), |(ns, b)| (if ns.is_empty() { "/" } else { ns }, b));
     let name = Name::new(namespace, base).map_err(|e| dds(format!("{e:?}")))?;
-    // ROS 2's default QoS. A reliable writer with a bounded history replaces its oldest sample
-    // rather than waiting for a slow reader: the bridge never blocks on the network.
     let qos = QosProfile::publisher_default().reliability_reliable(WhenFull::Fail).durability(Durability::Volatile).history(History::KeepLast { depth: 10 });
-    let t = node.create_topic(&name, MessageTypeName::new(package, rest), &qos).map_err(|e| dds(e.to_string()))?;
-    node.create_publisher::<M>(&t, None).map_err(|e| dds(e.to_string()))
+    node.create_topic(&name, MessageTypeName::new(package, rest), &qos).map_err(|e| dds(e.to_string()))
+}
+
+fn publisher<M: msg::Message>(node: &mut Node, name: &str, domain_id: u16) -> Result<Publisher<M>, Ros2BridgeError> {
+    let t = topic::<M>(node, name, domain_id, "publisher")?;
+    node.create_publisher::<M>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("publisher of {name}"), domain_id, reason: e.to_string() })
+}
+
+fn subscription<M: msg::Message + 'static>(node: &mut Node, name: &str, domain_id: u16) -> Result<Subscription<M>, Ros2BridgeError> {
+    let t = topic::<M>(node, name, domain_id, "subscription")?;
+    node.create_subscription::<M>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("subscription of {name}"), domain_id, reason: e.to_string() })
+}
+
+/// A JointTrajectory as one jointctl trajectory command per DOF, each in the JSON form a network
+/// command takes ([`messages::parse_request`] checks it). Points without velocities leave them
+/// unset; a point with fewer positions than DOFs makes the whole message refused.
+///
+/// ```
+/// use jointctl_ros2::msg::{Duration, JointTrajectory, JointTrajectoryPoint};
+/// let t = JointTrajectory {
+///     joint_names: vec!["q1".into(), "q4".into()],
+///     points: vec![JointTrajectoryPoint { positions: vec![0.1, 0.2], time_from_start: Duration { sec: 1, nanosec: 0 }, ..Default::default() }],
+///     ..Default::default()
+/// };
+/// let per_dof = jointctl_bridge::ros2::trajectory_commands(&t).unwrap();
+/// assert_eq!(per_dof[1], serde_json::json!({"kind": "trajectory", "joint": "q4", "points": [[1.0, 0.2, null]]}));
+/// ```
+pub fn trajectory_commands(t: &msg::JointTrajectory) -> Result<Vec<Value>, String> {
+    if t.joint_names.is_empty() {
+        return Err("the trajectory names no joint (joint_names is empty)".into());
+    }
+    for (i, p) in t.points.iter().enumerate() {
+        if p.positions.len() != t.joint_names.len() {
+            return Err(format!("points[{i}] has {} positions for {} joints", p.positions.len(), t.joint_names.len()));
+        }
+        if !p.velocities.is_empty() && p.velocities.len() != t.joint_names.len() {
+            return Err(format!("points[{i}] has {} velocities for {} joints", p.velocities.len(), t.joint_names.len()));
+        }
+    }
+    Ok(t.joint_names
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let points: Vec<Value> = t.points.iter().map(|p| json!([p.time_from_start.seconds(), p.positions[j], p.velocities.get(j)])).collect();
+            json!({"kind": "trajectory", "joint": name, "points": points})
+        })
+        .collect())
+}
+
+/// A `jointctl_msgs/CommandRequest` in the JSON form a network command takes.
+fn request_json(r: &msg::CommandRequest) -> Value {
+    let mut v = json!({"kind": r.kind, "joint": r.joint, "values": r.values, "points": r.points.iter().map(|p| json!([p.t_s, p.position_rad, p.velocity_rad_s])).collect::<Vec<_>>()});
+    if !r.waveform.is_empty() {
+        v["waveform"] = Value::from(r.waveform.as_str());
+    }
+    v
+}
+
+/// Commands from ROS 2: what the YAML allows, the runtime's client when it allows any, the rate
+/// limit, the answers, and the counts.
+struct Commands {
+    allowed: Result<(Vec<String>, CommandClient, crate::RateLimit), String>,
+    trajectories: Subscription<msg::JointTrajectory>,
+    requests: Subscription<msg::CommandRequest>,
+    responses: Publisher<msg::CommandResponse>,
+    accepted: u64,
+    refused: u64,
+}
+
+impl Commands {
+    /// Answers every command that has arrived.
+    fn serve(&mut self, arm: &str, timeout_s: f64, clock: &WallClock) {
+        let mut incoming: Vec<Result<Value, String>> = Vec::new();
+        while let Ok(Some((t, _))) = self.trajectories.take() {
+            match trajectory_commands(&t) {
+                Ok(per_dof) => incoming.extend(per_dof.into_iter().map(Ok)),
+                Err(why) => incoming.push(Err(why)),
+            }
+        }
+        while let Ok(Some((r, _))) = self.requests.take() {
+            incoming.push(Ok(request_json(&r)));
+        }
+        for command in incoming {
+            let (kind, joint) = match &command {
+                Ok(v) => (v["kind"].as_str().unwrap_or("").to_string(), v["joint"].as_str().unwrap_or("").to_string()),
+                Err(_) => ("trajectory".to_string(), String::new()),
+            };
+            let (accepted, message) = self.answer(arm, command, &kind, timeout_s);
+            if accepted {
+                self.accepted += 1;
+                tracing::info!(arm, kind = %kind, joint = %joint, message = %message, "accepted a command from ROS 2");
+            } else {
+                self.refused += 1;
+                tracing::info!(arm, kind = %kind, joint = %joint, reason = %message, "refused a command from ROS 2");
+            }
+            let stamp = Time::from_unix_ns(clock.unix_ns(jointctl_record::feed::monotonic_ns()));
+            let response = msg::CommandResponse { header: msg::Header { stamp, frame_id: arm.to_string() }, kind, joint, accepted, message };
+            let _ = self.responses.publish(response);
+        }
+    }
+
+    /// Whether the command was accepted, and the runtime's answer or the reason it was refused.
+    fn answer(&mut self, arm: &str, command: Result<Value, String>, kind: &str, timeout_s: f64) -> (bool, String) {
+        let (allow, client, limit) = match &mut self.allowed {
+            Ok(a) => (&a.0, &a.1, &mut a.2),
+            Err(why) => return (false, why.clone()),
+        };
+        let v = match command {
+            Ok(v) => v,
+            Err(why) => return (false, why),
+        };
+        if !allow.iter().any(|k| k == kind) {
+            return (false, format!("`{kind}` is not in network.ros2.commands.allow ({}) of the arm's YAML", allow.join(", ")));
+        }
+        if !limit.take(Instant::now()) {
+            return (false, format!("more than {} commands a second from ROS 2 (network.ros2.commands.max_commands_per_s); this one was not forwarded", jointctl_config::short_number(limit.per_s)));
+        }
+        let request = match messages::parse_request(&v) {
+            Ok(r) => r,
+            Err(e) => return (false, e.to_string()),
+        };
+        match client.send(request, timeout_s) {
+            Ok(response) => (response.accepted != 0, response.text().to_string()),
+            Err(e) => {
+                tracing::warn!(arm, error = %e, "a command from ROS 2 got no answer from the runtime");
+                (false, format!("no answer from the runtime: {e}"))
+            }
+        }
+    }
 }
 
 /// Publishes the arm until `stop` is set or the arm stops or falls silent; `ready` learns the
@@ -104,7 +242,7 @@ fn publisher<M: msg::Message>(node: &mut Node, topic: &str, domain_id: u16) -> R
 /// ```no_run
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// use jointctl_bridge::ros2::{Ros2Options, serve};
-/// let opts = Ros2Options { arm: "sherpa".into(), scope: Default::default(), domain_id: Some(0), config: None, timeout_s: 5.0 };
+/// let opts = Ros2Options { arm: "sherpa".into(), scope: Default::default(), domain_id: Some(0), config: None, timeout_s: 5.0, command_timeout_s: 2.0 };
 /// let summary = serve(&opts, &std::sync::atomic::AtomicBool::new(false), |node, domain| eprintln!("node /{node} in DDS domain {domain}"))?;
 /// println!("{:?}", summary.messages);
 /// # Ok(()) }
@@ -114,10 +252,18 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
     let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-bridge-ros2-{}", std::process::id()))?;
     let descriptor = *feed.descriptor();
     let config_file = opts.config.clone().or_else(|| descriptor.config_path());
-    let domain_id = match (opts.domain_id, &config_file) {
-        (Some(d), _) => d,
-        (None, Some(file)) => jointctl_config::load(file).map_err(|e| Ros2BridgeError::Config { file: file.clone(), reason: e.to_string() })?.config.network.ros2.domain_id,
-        (None, None) => 0,
+    let section = match &config_file {
+        Some(file) => Some(jointctl_config::load(file).map_err(|e| Ros2BridgeError::Config { file: file.clone(), reason: e.to_string() })?.config.network.ros2),
+        None => None,
+    };
+    let domain_id = opts.domain_id.or(section.as_ref().map(|r| r.domain_id)).unwrap_or(0);
+    let allowed = match (&config_file, section.and_then(|r| r.commands)) {
+        (None, _) => Err("the runtime did not say which YAML it runs, so none allows commands from ROS 2".to_string()),
+        (Some(file), None) => Err(format!("the arm's YAML ({}) does not allow commands from ROS 2 (it has no `network.ros2.commands`)", file.display())),
+        (Some(_), Some(c)) => {
+            let client = CommandClient::open(&opts.scope, &opts.arm, &format!("jointctl-bridge-ros2-cmd-{}", std::process::id())).map_err(Ros2BridgeError::Runtime)?;
+            Ok((c.allow, client, crate::RateLimit::new(c.max_commands_per_s)))
+        }
     };
     let dds = |what: &'static str| move |e: String| Ros2BridgeError::Dds { what: what.to_string(), domain_id, reason: e };
     let context = Context::with_options(ContextOptions::new().domain_id(domain_id)).map_err(|e| dds("DDS participant")(e.to_string()))?;
@@ -131,6 +277,18 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
         raw: publisher(&mut node, jointctl_ros2::RAW, domain_id)?,
         commands: publisher(&mut node, jointctl_ros2::COMMANDS, domain_id)?,
     };
+    let mut commands = Commands {
+        trajectories: subscription(&mut node, jointctl_ros2::JOINT_TRAJECTORY, domain_id)?,
+        requests: subscription(&mut node, jointctl_ros2::COMMAND, domain_id)?,
+        responses: publisher(&mut node, jointctl_ros2::COMMAND_RESPONSES, domain_id)?,
+        allowed,
+        accepted: 0,
+        refused: 0,
+    };
+    match &commands.allowed {
+        Ok((allow, ..)) => tracing::info!(arm = %opts.arm, "commands from ROS 2 taken: {} (network.ros2.commands.allow)", allow.join(", ")),
+        Err(why) => tracing::info!(arm = %opts.arm, "commands from ROS 2 refused: {why}"),
+    }
     ready(&name, domain_id);
     let (arm, mut last_diagnostics, mut failed_writes) = (opts.arm.as_str(), None::<Instant>, 0u64);
     // The arm's monotonic stamps on the wall clock, as ROS 2 stamps are: both clocks read now.
@@ -167,7 +325,8 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
                 }
             }
         },
-        || {},
+        || commands.serve(arm, opts.command_timeout_s, &clock),
     );
+    tracing::info!(arm, accepted = commands.accepted, refused = commands.refused, "commands from ROS 2");
     Ok(result?)
 }

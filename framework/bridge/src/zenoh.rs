@@ -260,7 +260,7 @@ pub fn serve(opts: &ZenohOptions, stop: &AtomicBool, ready: impl FnOnce(&Listeni
         let client = CommandClient::open(&opts.scope, &opts.arm, &format!("jointctl-bridge-zenoh-cmd-{}", std::process::id()))
             .map_err(ZenohBridgeError::Runtime)?;
         tracing::info!(arm = %opts.arm, endpoint = %c.listen, "serving commands to authenticated peers");
-        serving = Some((session, queryable, client, RateLimit::new(c.max_commands_per_s)));
+        serving = Some((session, queryable, client, crate::RateLimit::new(c.max_commands_per_s)));
     }
     ready(&Listening { listen: opts.listen.clone(), commands: commands.as_ref().ok().map(|c| c.listen.clone()) });
 
@@ -304,53 +304,6 @@ pub fn serve(opts: &ZenohOptions, stop: &AtomicBool, ready: impl FnOnce(&Listeni
     drop((refusals, publishers));
     let _ = open.close().wait();
     Ok(result?)
-}
-
-/// Commands forwarded at most `per_s` a second: a token bucket of at most a second's worth (at
-/// least one), refilled continuously.
-struct RateLimit {
-    per_s: f64,
-    tokens: f64,
-    at: Instant,
-}
-
-impl RateLimit {
-    fn new(per_s: f64) -> Self {
-        RateLimit { per_s, tokens: per_s.max(1.0), at: Instant::now() }
-    }
-
-    /// Takes a token at `now` if there is one.
-    fn take(&mut self, now: Instant) -> bool {
-        self.tokens = (self.tokens + self.per_s * now.saturating_duration_since(self.at).as_secs_f64()).min(self.per_s.max(1.0));
-        self.at = now;
-        if self.tokens >= 1.0 {
-            self.tokens -= 1.0;
-            true
-        } else {
-            false
-        }
-    }
-}
-
-#[cfg(test)]
-mod rate_limit_tests {
-    use super::RateLimit;
-    use std::time::{Duration, Instant};
-
-    #[test]
-    fn the_bucket_holds_a_seconds_worth_and_refills_at_the_rate() {
-        let start = Instant::now();
-        let mut limit = RateLimit { per_s: 5.0, tokens: 5.0, at: start };
-        assert_eq!((0..8).filter(|_| limit.take(start)).count(), 5, "a second's worth at once");
-        assert!(!limit.take(start + Duration::from_millis(100)), "half a token after 0.1 s");
-        assert!(limit.take(start + Duration::from_millis(200)), "one after 0.2 s");
-        // Idle for a minute: still a second's worth, not sixty.
-        let later = start + Duration::from_secs(60);
-        assert_eq!((0..8).filter(|_| limit.take(later)).count(), 5);
-        // Below one a second: one token, refilled in 1 / rate.
-        let mut slow = RateLimit { per_s: 0.1, tokens: 1.0, at: start };
-        assert!(slow.take(start) && !slow.take(start + Duration::from_secs(9)) && slow.take(start + Duration::from_millis(10_500)));
-    }
 }
 
 /// A command from an authenticated peer, to the runtime; the reply says what it answered.

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 pub use error::{ConfigError, ConfigErrors, bounded_message, short_number};
 pub use model::*;
 pub use spans::{Location, SpanIndex};
-pub use validate::{MAX_JOINT_NAME, MAX_LOOP_DEVICES, MAX_LOOP_DOF};
+pub use validate::{COMMAND_KINDS, MAX_JOINT_NAME, MAX_LOOP_DEVICES, MAX_LOOP_DOF};
 
 /// A parsed and validated arm description with what is needed to point back into its file.
 #[derive(Clone, Debug)]

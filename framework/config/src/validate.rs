@@ -9,6 +9,10 @@ pub use jointctl_api::{MAX_LOOP_DEVICES, MAX_LOOP_DOF};
 /// Longest joint name (it is published in a fixed 16-byte field, NUL-terminated).
 pub use jointctl_api::MAX_JOINT_NAME;
 
+/// The command kinds a network section may allow, by name: `jointctl_ipc::CommandKind`'s (the
+/// config does not link the shared-memory crate; the bridge's tests check the two lists agree).
+pub const COMMAND_KINDS: [&str; 10] = ["hold", "position", "manual", "trajectory", "torque", "impedance", "stiffness", "enable", "disable", "stop"];
+
 fn valid_name(s: &str, max: usize) -> bool {
     !s.is_empty() && s.len() <= max && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
 }
@@ -130,6 +134,19 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
 
     if c.network.ros2.domain_id > 232 {
         err("network.ros2.domain_id".into(), format!("must be 0-232 (the DDS domains RTPS maps to UDP ports), got {}", c.network.ros2.domain_id));
+    }
+    if let Some(r) = &c.network.ros2.commands {
+        if r.allow.is_empty() {
+            err("network.ros2.commands.allow".into(), "names no command kind: list what ROS 2 may send (e.g. [trajectory, hold]), or remove `commands`".into());
+        }
+        for (i, kind) in r.allow.iter().enumerate() {
+            if !COMMAND_KINDS.contains(&kind.as_str()) {
+                err(format!("network.ros2.commands.allow[{i}]"), format!("unknown command kind `{kind}` (one of {})", COMMAND_KINDS.join(", ")));
+            }
+        }
+        if !(r.max_commands_per_s >= 0.1 && r.max_commands_per_s <= 1000.0) {
+            err("network.ros2.commands.max_commands_per_s".into(), format!("must be in [0.1, 1000] commands a second, got {}", crate::short_number(r.max_commands_per_s)));
+        }
     }
 
     // CiA 402: from "quick stop active" a drive goes on only to "switch on disabled" (or back to

@@ -50,6 +50,12 @@ pub const DIAGNOSTICS: &str = "/diagnostics";
 pub const RAW: &str = "/jointctl/raw";
 /// `jointctl_msgs/msg/CommandRecord`.
 pub const COMMANDS: &str = "/jointctl/commands";
+/// `trajectory_msgs/msg/JointTrajectory`, to the arm (the live bridge, when its YAML allows).
+pub const JOINT_TRAJECTORY: &str = "/jointctl/joint_trajectory";
+/// `jointctl_msgs/msg/CommandRequest`, to the arm (the live bridge, when its YAML allows).
+pub const COMMAND: &str = "/jointctl/command";
+/// `jointctl_msgs/msg/CommandResponse`: the answer to each command from ROS 2.
+pub const COMMAND_RESPONSES: &str = "/jointctl/command_responses";
 
 /// One ROS 2 topic of a recording.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -117,7 +123,11 @@ mod tests {
 
     #[test]
     fn every_schema_names_each_type_it_uses() {
-        for t in topics() {
+        let mut all = topics();
+        all.push(Topic { topic: JOINT_TRAJECTORY, source: "", type_name: msg::JointTrajectory::NAME, schema: msg::JointTrajectory::schema() });
+        all.push(Topic { topic: COMMAND, source: "", type_name: msg::CommandRequest::NAME, schema: msg::CommandRequest::schema() });
+        all.push(Topic { topic: COMMAND_RESPONSES, source: "", type_name: msg::CommandResponse::NAME, schema: msg::CommandResponse::schema() });
+        for t in all {
             let used: Vec<&str> = t.schema.lines().filter_map(|l| l.strip_prefix("MSG: ")).collect();
             for line in t.schema.lines().filter(|l| !l.starts_with('#') && !l.starts_with("MSG: ") && !l.starts_with('=')) {
                 let ty = line.split_whitespace().next().unwrap_or("").trim_end_matches("[]");

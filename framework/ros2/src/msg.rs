@@ -294,3 +294,104 @@ impl Message for CommandRecord {
          std_msgs/Header header\nuint64 sequence\nuint64 stamp_ns\nstring kind\nstring joint\nbool streamed\nstring waveform\nfloat64[] values\njointctl_msgs/CommandPoint[] points\nstring message\n";
     const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME, COMMAND_POINT];
 }
+
+/// `builtin_interfaces/msg/Duration`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Duration {
+    /// Whole seconds.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+impl Duration {
+    /// In seconds.
+    ///
+    /// ```
+    /// assert_eq!(jointctl_ros2::msg::Duration { sec: 1, nanosec: 500_000_000 }.seconds(), 1.5);
+    /// ```
+    pub fn seconds(&self) -> f64 {
+        f64::from(self.sec) + f64::from(self.nanosec) * 1e-9
+    }
+}
+
+/// `trajectory_msgs/msg/JointTrajectoryPoint`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[allow(missing_docs)]
+pub struct JointTrajectoryPoint {
+    /// One per joint of the trajectory [rad].
+    pub positions: Vec<f64>,
+    /// One per joint [rad/s], or empty.
+    pub velocities: Vec<f64>,
+    pub accelerations: Vec<f64>,
+    pub effort: Vec<f64>,
+    /// When the point is to be reached, from the trajectory's start.
+    pub time_from_start: Duration,
+}
+
+/// `trajectory_msgs/msg/JointTrajectory`: what ROS 2 sends a joint trajectory controller.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JointTrajectory {
+    /// Header.
+    pub header: Header,
+    /// The DOFs the points are for, in the points' order.
+    pub joint_names: Vec<String>,
+    /// The points.
+    pub points: Vec<JointTrajectoryPoint>,
+}
+
+/// `jointctl_msgs/msg/CommandRequest`: a command for the arm (what `jointctl cmd` sends).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CommandRequest {
+    /// `hold`, `position`, `torque`, `impedance`, `stiffness`, ... (`jointctl cmd --help`).
+    pub kind: String,
+    /// The DOF; empty for the whole arm (`hold`, `stop`).
+    pub joint: String,
+    /// A torque command's `step`, `sine` or `cosine`; empty otherwise.
+    pub waveform: String,
+    /// The command's numbers, as `jointctl cmd` takes them (SI units).
+    pub values: Vec<f64>,
+    /// A trajectory's points.
+    pub points: Vec<CommandPoint>,
+}
+
+/// `jointctl_msgs/msg/CommandResponse`: what became of a command from ROS 2.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CommandResponse {
+    /// Header (when it was answered).
+    pub header: Header,
+    /// The command's kind.
+    pub kind: String,
+    /// Its DOF.
+    pub joint: String,
+    /// Accepted by the runtime.
+    pub accepted: bool,
+    /// The runtime's answer, or why the bridge refused it.
+    pub message: String,
+}
+
+const DURATION: (&str, &str) = ("builtin_interfaces/msg/Duration", "int32 sec\nuint32 nanosec\n");
+const TRAJECTORY_POINT: (&str, &str) = (
+    "trajectory_msgs/msg/JointTrajectoryPoint",
+    "float64[] positions\nfloat64[] velocities\nfloat64[] accelerations\nfloat64[] effort\nbuiltin_interfaces/Duration time_from_start\n",
+);
+
+impl Message for JointTrajectory {
+    const NAME: &'static str = "trajectory_msgs/msg/JointTrajectory";
+    const DEFINITION: &'static str = "std_msgs/Header header\nstring[] joint_names\ntrajectory_msgs/JointTrajectoryPoint[] points\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME, TRAJECTORY_POINT, DURATION];
+}
+
+impl Message for CommandRequest {
+    const NAME: &'static str = "jointctl_msgs/msg/CommandRequest";
+    const DEFINITION: &'static str = "# A command for the arm, as jointctl cmd sends it (SI units).\n\
+         string kind\nstring joint\nstring waveform\nfloat64[] values\njointctl_msgs/CommandPoint[] points\n";
+    const USES: &'static [(&'static str, &'static str)] = &[COMMAND_POINT];
+}
+
+impl Message for CommandResponse {
+    const NAME: &'static str = "jointctl_msgs/msg/CommandResponse";
+    const DEFINITION: &'static str = "# What became of a command from ROS 2.\n\
+         std_msgs/Header header\nstring kind\nstring joint\nbool accepted\nstring message\n";
+    const USES: &'static [(&'static str, &'static str)] = &[HEADER, TIME];
+}

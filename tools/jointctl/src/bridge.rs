@@ -27,9 +27,11 @@ pub enum BridgeCommand {
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
     },
-    /// ROS 2: the arm's topics over DDS, read-only (/joint_states, /diagnostics once a second,
+    /// ROS 2: the arm's topics over DDS (/joint_states, /diagnostics once a second,
     /// /jointctl/joint_details, /jointctl/raw, /jointctl/commands; ROS 2's default QoS), from a
-    /// node `jointctl_<arm>`. No ROS installation needed. See docs/ros2.md.
+    /// node `jointctl_<arm>`; commands (/jointctl/joint_trajectory, /jointctl/command) only of
+    /// the kinds the YAML's `network.ros2.commands.allow` lists, each answered on
+    /// /jointctl/command_responses. No ROS installation needed. See docs/ros2.md.
     Ros2 {
         #[command(flatten)]
         at: RunningArm,
@@ -90,7 +92,7 @@ pub fn run(command: BridgeCommand) -> ExitCode {
             }
         }
         BridgeCommand::Ros2 { at, domain_id, config, timeout } => {
-            let opts = jointctl_bridge::ros2::Ros2Options { arm: at.arm.clone(), scope: at.scope(), domain_id, config, timeout_s: timeout };
+            let opts = jointctl_bridge::ros2::Ros2Options { arm: at.arm.clone(), scope: at.scope(), domain_id, config, timeout_s: timeout, command_timeout_s: 2.0 };
             let served = jointctl_bridge::ros2::serve(&opts, &stop, |node, domain| {
                 tracing::info!(arm = %opts.arm, "ROS 2 bridge: node /{node} publishing in DDS domain {domain}");
             });

@@ -198,8 +198,8 @@ pub struct NetworkConfig {
     pub ros2: Ros2Config,
 }
 
-/// The ROS 2 bridge: the arm's topics over DDS. It only publishes; DDS has no authentication
-/// without DDS Security, so any host on the network segment could send what it accepts.
+/// The ROS 2 bridge: the arm's topics over DDS. Without `commands` it only publishes and refuses
+/// every command from ROS 2, saying why.
 #[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Ros2Config {
@@ -207,6 +207,24 @@ pub struct Ros2Config {
     #[serde(default)]
     #[schemars(range(min = 0, max = 232))]
     pub domain_id: u16,
+    /// Take commands from ROS 2. DDS has no authentication without DDS Security: any host that
+    /// reaches the domain can send them. Allow only what such a host may do.
+    pub commands: Option<Ros2CommandsConfig>,
+}
+
+/// Commands from ROS 2: which kinds, and how many a second.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Ros2CommandsConfig {
+    /// The command kinds taken (`trajectory` for `trajectory_msgs/JointTrajectory`; `hold`,
+    /// `position`, `torque`, `impedance`, `stiffness`, ... on `/jointctl/command`); any other
+    /// is refused with the reason. At least one.
+    pub allow: Vec<String>,
+    /// Commands a second the bridge forwards to the runtime, 0.1 to 1000 (a trajectory counts
+    /// once per DOF); those beyond are refused with the reason. Default 20, as for Zenoh.
+    #[serde(default = "default_max_commands_per_s", deserialize_with = "finite")]
+    #[schemars(range(min = 0.1, max = 1000.0))]
+    pub max_commands_per_s: f64,
 }
 
 /// The Zenoh bridge. Without `commands` it only publishes (state, diagnostics, raw readings,
