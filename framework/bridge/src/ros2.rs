@@ -95,9 +95,9 @@ struct Publishers {
     commands: Publisher<msg::CommandRecord>,
 }
 
-/// A topic of `M` on the node, with ROS 2's default QoS. A reliable writer with a bounded
-/// history replaces its oldest sample rather than waiting for a slow reader: the bridge never
-/// blocks on the network.
+/// A topic of `M` on the node, with ROS 2's default QoS (reliable: a default ROS 2 subscription
+/// matches only a reliable writer). The writers never wait: once a reader has left a writer's
+/// limit of samples unacknowledged (RustDDS: 8192), a write fails at once and is counted.
 fn topic<M: msg::Message>(node: &Node, topic: &str, domain_id: u16, what: &str) -> Result<ros2_client::dds::rustdds::Topic, Ros2BridgeError> {
     let dds = |reason: String| Ros2BridgeError::Dds { what: format!("{what} of {topic}"), domain_id, reason };
     let (package, rest) = M::NAME.split_once("/msg/").ok_or_else(|| dds(format!("type name {} is not package/msg/Type", M::NAME)))?;
@@ -291,42 +291,46 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
     }
     ready(&name, domain_id);
     let (arm, mut last_diagnostics, mut failed_writes) = (opts.arm.as_str(), None::<Instant>, 0u64);
-    // The arm's monotonic stamps on the wall clock, as ROS 2 stamps are: both clocks read now.
-    let clock = WallClock::from_pair(
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64),
-        jointctl_record::feed::monotonic_ns(),
-    );
+    // The arm's monotonic stamps on the wall clock, as ROS 2 stamps are: both clocks read
+    // together, again once a second (an NTP step then reaches the stamps within a second).
+    let clocks_now = || {
+        WallClock::from_pair(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64), jointctl_record::feed::monotonic_ns())
+    };
+    let clock = std::cell::Cell::new(clocks_now());
     let result = crate::pump(
         &mut feed,
         stop,
         timeout,
         "ROS 2",
         |m| {
+            let stamps = clock.get();
             let written = match m.sample {
                 Sample::State(s) => [
-                    publishers.joint_states.publish(from_arm::joint_state(s, &clock, arm)).is_ok(),
-                    publishers.joint_details.publish(from_arm::joint_details(s, &clock, arm)).is_ok(),
+                    publishers.joint_states.publish(from_arm::joint_state(s, &stamps, arm)).is_ok(),
+                    publishers.joint_details.publish(from_arm::joint_details(s, &stamps, arm)).is_ok(),
                 ]
                 .iter()
                 .all(|ok| *ok),
                 Sample::Diagnostics(d) if last_diagnostics.is_none_or(|t| t.elapsed() >= DIAGNOSTICS_PERIOD) => {
                     last_diagnostics = Some(Instant::now());
-                    publishers.diagnostics.publish(from_arm::diagnostic_array(d, &clock, arm)).is_ok()
+                    clock.set(clocks_now());
+                    publishers.diagnostics.publish(from_arm::diagnostic_array(d, &stamps, arm)).is_ok()
                 }
                 Sample::Diagnostics(_) => true,
-                Sample::Raw(f) => publishers.raw.publish(from_arm::raw_frame(f, &descriptor, &clock, arm)).is_ok(),
-                Sample::Command(c) => publishers.commands.publish(from_arm::command_record(c, &clock, arm)).is_ok(),
+                Sample::Raw(f) => publishers.raw.publish(from_arm::raw_frame(f, &descriptor, &stamps, arm)).is_ok(),
+                Sample::Command(c) => publishers.commands.publish(from_arm::command_record(c, &stamps, arm)).is_ok(),
             };
             if !written {
                 failed_writes += 1;
-                // The first, then every thousandth: a network that is gone does not flood the log.
+                // The first, then every thousandth: a reader that is gone does not flood the log
+                // (RustDDS's own line for each is kept below ERROR by jointctl's log filter).
                 if failed_writes % 1000 == 1 {
                     tracing::warn!(failed_writes, "a ROS 2 write failed (the DDS writer's queue is full or its transport failed)");
                 }
             }
         },
-        || commands.serve(arm, opts.command_timeout_s, &clock),
+        || commands.serve(arm, opts.command_timeout_s, &clock.get()),
     );
-    tracing::info!(arm, accepted = commands.accepted, refused = commands.refused, "commands from ROS 2");
+    tracing::info!(arm, accepted = commands.accepted, refused = commands.refused, failed_writes, "commands from ROS 2, and writes that failed");
     Ok(result?)
 }

@@ -78,8 +78,8 @@ pub enum ReadError {
         /// Where reading stopped.
         source: mcap::McapError,
     },
-    /// A message that is not the documented JSON.
-    #[error("{}: message {sequence} on `{topic}` is not the documented JSON: {reason}", .file.display())]
+    /// A message that is not the documented JSON (or, in the ROS 2 profile, CDR of its type).
+    #[error("{}: message {sequence} on `{topic}` cannot be read: {reason}", .file.display())]
     Message {
         /// The file.
         file: PathBuf,
@@ -256,8 +256,14 @@ fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, Enc
     Ok(())
 }
 
+/// A number the JSON form would write as a number (it writes every other as `null`): the two
+/// forms read the same.
+fn finite(x: f64) -> Option<f64> {
+    Some(x).filter(|x| x.is_finite())
+}
+
 /// A ROS 2 profile message as its type, or the error that names file, topic and message.
-fn cdr<M: jointctl_ros2::msg::Message>(path: &Path, topic: &str, sequence: u32, data: &[u8]) -> Result<M, ReadError> {
+fn decode_cdr<M: jointctl_ros2::msg::Message>(path: &Path, topic: &str, sequence: u32, data: &[u8]) -> Result<M, ReadError> {
     jointctl_ros2::decode(data).map_err(|e| ReadError::Message { file: path.into(), topic: topic.into(), sequence, reason: e.to_string() })
 }
 
@@ -305,20 +311,19 @@ impl JointStates {
                 self.add_state(&v);
             }
             Encoding::Cdr => {
-                let m: jointctl_ros2::msg::JointDetails = cdr(path, jointctl_ros2::JOINT_DETAILS, sequence, data)?;
-                let known = |x: f64| Some(x).filter(|x| x.is_finite());
+                let m: jointctl_ros2::msg::JointDetails = decode_cdr(path, jointctl_ros2::JOINT_DETAILS, sequence, data)?;
                 let joints = m
                     .joints
                     .iter()
                     .map(|j| JointJson {
                         name: &j.name,
-                        position_rad: known(j.position_rad),
-                        deflection_rad: known(j.deflection_rad),
-                        torque_nm: known(j.torque_nm),
-                        sensor_torque_nm: known(j.sensor_torque_nm),
-                        reference_torque_nm: known(j.reference_torque_nm),
-                        pivot_mm: known(j.pivot_mm),
-                        stiffness_nm_per_rad: known(j.stiffness_nm_per_rad),
+                        position_rad: finite(j.position_rad),
+                        deflection_rad: finite(j.deflection_rad),
+                        torque_nm: finite(j.torque_nm),
+                        sensor_torque_nm: finite(j.sensor_torque_nm),
+                        reference_torque_nm: finite(j.reference_torque_nm),
+                        pivot_mm: finite(j.pivot_mm),
+                        stiffness_nm_per_rad: finite(j.stiffness_nm_per_rad),
                         mode: &j.mode,
                     })
                     .collect();
@@ -359,15 +364,14 @@ impl JointStates {
 
 fn parse_raw(path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<RawSample, ReadError> {
     if encoding == Encoding::Cdr {
-        let m: jointctl_ros2::msg::RawFrame = cdr(path, jointctl_ros2::RAW, sequence, data)?;
-        let known = |x: f64| Some(x).filter(|x| !x.is_nan());
-        let r = |x: &jointctl_ros2::msg::RawReading| ReadingJson { name: &x.name, value: known(x.value), status: &x.status, age_s: known(x.age_s) }.reading();
+        let m: jointctl_ros2::msg::RawFrame = decode_cdr(path, jointctl_ros2::RAW, sequence, data)?;
+        let r = |x: &jointctl_ros2::msg::RawReading| ReadingJson { name: &x.name, value: finite(x.value), status: &x.status, age_s: finite(x.age_s) }.reading();
         return Ok(RawSample {
             cycle: m.cycle,
             stamp_ns: m.stamp_ns,
             commands_applied: Some(m.commands_applied),
             encoders: m.encoders.iter().map(|e| (e.name.clone(), r(e))).collect(),
-            drives: m.drives.iter().map(|d| (d.name.clone(), DriveReading::new(r(&d.position_rad), r(&d.velocity_rad_s), d.enabled, d.fault), d.setpoint_rad)).collect(),
+            drives: m.drives.iter().map(|d| (d.name.clone(), DriveReading::new(r(&d.position_rad), r(&d.velocity_rad_s), d.enabled, d.fault), finite(d.setpoint_rad).unwrap_or(f64::NAN))).collect(),
             torque_sensors: m.torque_sensors.iter().map(|e| (e.name.clone(), r(e))).collect(),
         });
     }
@@ -465,7 +469,7 @@ pub struct RecordedCommand {
     pub sequence: u64,
     /// When the runtime accepted it [ns] (it was applied at the next cycle).
     pub stamp_ns: u64,
-    /// The request, rebuilt from its JSON.
+    /// The request, rebuilt from its message.
     pub request: CommandRequest,
 }
 
@@ -649,7 +653,7 @@ pub fn commands(path: &Path) -> Result<Vec<RecordedCommand>, ReadError> {
 fn parse_command(path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<RecordedCommand, ReadError> {
     let bad = |reason: String| ReadError::Message { file: path.into(), topic: "commands".into(), sequence, reason };
     let m = match encoding {
-        Encoding::Cdr => cdr::<jointctl_ros2::msg::CommandRecord>(path, jointctl_ros2::COMMANDS, sequence, data)?,
+        Encoding::Cdr => decode_cdr::<jointctl_ros2::msg::CommandRecord>(path, jointctl_ros2::COMMANDS, sequence, data)?,
         Encoding::Json => {
             // The JSON form read into the ROS 2 message's fields: one way to build the request.
             let v: Value = serde_json::from_slice(data).map_err(|e| bad(e.to_string()))?;

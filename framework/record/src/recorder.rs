@@ -38,27 +38,12 @@ pub enum Profile {
     #[default]
     Json,
     /// The ROS 2 profile: CDR messages with `ros2msg` schemas on ROS 2 topics
-    /// ([`jointctl_ros2::topics`]): what `ros2 bag play`, rosbags and PlotJuggler read. Stamps
-    /// are the wall clock, as `ros2 bag record` writes them.
+    /// ([`jointctl_ros2::topics`]), as `ros2 bag record -s mcap` writes them (read by rosbags and
+    /// mcap-ros2-support in the tests). Stamps are the wall clock.
     Ros2,
 }
 
 impl Profile {
-    /// The profile of this name (`json`, `ros2`).
-    ///
-    /// ```
-    /// use jointctl_record::recorder::Profile;
-    /// assert_eq!(Profile::from_name("ros2"), Some(Profile::Ros2));
-    /// assert_eq!(Profile::from_name("ros"), None);
-    /// ```
-    pub fn from_name(name: &str) -> Option<Profile> {
-        match name {
-            "json" => Some(Profile::Json),
-            "ros2" => Some(Profile::Ros2),
-            _ => None,
-        }
-    }
-
     /// The file's channels: (topic, the arm's channel it comes from).
     fn channels(self) -> Vec<(&'static str, &'static str)> {
         match self {
@@ -75,9 +60,10 @@ pub struct RecordSummary {
     pub file: PathBuf,
     /// From the first to the last joint-state stamp [s].
     pub duration_s: f64,
-    /// Messages per channel.
+    /// Messages per channel of the file (the ROS 2 profile's topics, or the JSON form's channels).
     pub messages: BTreeMap<String, u64>,
-    /// Samples lost per channel (gaps in cycle or sequence numbers).
+    /// Samples lost per channel of the arm (`raw`, `joint_state`, `diagnostics`, `commands`:
+    /// gaps in cycle or sequence numbers), whichever form the file has.
     pub lost_by_channel: BTreeMap<String, u64>,
     /// Size of the file [bytes].
     pub bytes: u64,
@@ -88,9 +74,10 @@ pub struct RecordSummary {
 impl RecordSummary {
     /// A recording of `file` that holds no sample (yet).
     fn empty(file: PathBuf, profile: Profile) -> Self {
-        let zero = || profile.channels().iter().map(|(t, _)| (t.to_string(), 0)).collect();
+        let messages = profile.channels().iter().map(|(t, _)| (t.to_string(), 0)).collect();
+        let lost_by_channel = messages::CHANNELS.iter().map(|(t, _)| (t.to_string(), 0)).collect();
         let bytes = std::fs::metadata(&file).map_or(0, |m| m.len());
-        RecordSummary { file, duration_s: 0.0, messages: zero(), lost_by_channel: zero(), bytes, arm_stopped: false }
+        RecordSummary { file, duration_s: 0.0, messages, lost_by_channel, bytes, arm_stopped: false }
     }
 
     /// Samples lost on every channel together.
@@ -140,6 +127,14 @@ pub enum RecordError {
         summary: Box<RecordSummary>,
         /// The failure.
         source: Box<RecordError>,
+    },
+    /// A sample could not be written as its ROS 2 message.
+    #[error("cannot write {}: {source}", .file.display())]
+    Encode {
+        /// The file.
+        file: PathBuf,
+        /// The reason.
+        source: jointctl_ros2::EncodeError,
     },
     /// The MCAP writer failed.
     #[error("cannot write {} as MCAP", .file.display())]
@@ -216,7 +211,7 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             *count += 1;
             let data = match self.profile {
                 Profile::Json => std::borrow::Cow::Borrowed(m.json.as_bytes()),
-                Profile::Ros2 => std::borrow::Cow::Owned(self.ros2(topic, &m.sample)),
+                Profile::Ros2 => std::borrow::Cow::Owned(self.ros2(topic, &m.sample)?),
             };
             self.writer.write_to_known_channel(&header, &data).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })?;
         }
@@ -224,17 +219,18 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
     }
 
     /// The CDR of `sample` as the message of ROS 2 topic `topic`.
-    fn ros2(&self, topic: &str, sample: &crate::feed::Sample<'_>) -> Vec<u8> {
+    fn ros2(&self, topic: &str, sample: &crate::feed::Sample<'_>) -> Result<Vec<u8>, RecordError> {
         use crate::feed::Sample;
         use jointctl_ros2::{encode, from_arm};
         let (clock, arm) = (&self.clock, self.arm.as_str());
-        match sample {
+        let encoded = match sample {
             Sample::State(s) if topic == jointctl_ros2::JOINT_STATES => encode(&from_arm::joint_state(s, clock, arm)),
             Sample::State(s) => encode(&from_arm::joint_details(s, clock, arm)),
             Sample::Raw(f) => encode(&from_arm::raw_frame(f, &self.descriptor, clock, arm)),
             Sample::Diagnostics(d) => encode(&from_arm::diagnostic_array(d, clock, arm)),
             Sample::Command(c) => encode(&from_arm::command_record(c, clock, arm)),
-        }
+        };
+        encoded.map_err(|source| RecordError::Encode { file: self.out.clone(), source })
     }
 
     /// The newest cycle (or command sequence) written on `topic`.
@@ -248,7 +244,7 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             file: self.out.clone(),
             duration_s: self.first_stamp.map_or(0.0, |f| self.last_stamp.saturating_sub(f) as f64 * 1e-9),
             messages: self.counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-            lost_by_channel: self.channels.iter().map(|(topic, source, _)| (topic.to_string(), self.gaps.get(source).map_or(0, |g| g.lost))).collect(),
+            lost_by_channel: self.gaps.iter().map(|(source, g)| (source.to_string(), g.lost)).collect(),
             bytes: 0,
             arm_stopped: self.arm_stopped,
         }
@@ -270,9 +266,10 @@ fn config_files(config: &Path) -> Vec<(String, Vec<u8>)> {
     out
 }
 
-/// The QoS a ROS 2 player offers each topic, in rosbag2's YAML form: ROS 2's defaults (reliable,
-/// volatile, keep last 10).
-const OFFERED_QOS: &str = "- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n  deadline:\n    sec: 9223372036\n    nsec: 854775807\n  lifespan:\n    sec: 9223372036\n    nsec: 854775807\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n  avoid_ros_namespace_conventions: false\n";
+/// The QoS a ROS 2 player offers each topic, in rosbag2's YAML form of Iron and later (policy
+/// names, not the older enum numbers: a file without rosbag2's metadata record is read as the
+/// newest version): ROS 2's defaults, reliable, volatile, keep last 10.
+const OFFERED_QOS: &str = "- history: keep_last\n  depth: 10\n  reliability: reliable\n  durability: volatile\n  deadline:\n    sec: 9223372036\n    nsec: 854775807\n  lifespan:\n    sec: 9223372036\n    nsec: 854775807\n  liveliness: automatic\n  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n  avoid_ros_namespace_conventions: false\n";
 
 fn unix_ns() -> u64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
@@ -346,7 +343,10 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         ("start_unix_ns".to_string(), start_unix_ns.to_string()),
         ("start_monotonic_ns".to_string(), start_monotonic_ns.to_string()),
         ("rate_hz".to_string(), descriptor.rate_hz.to_string()),
-        ("log_time".to_string(), "CLOCK_MONOTONIC of each cycle's sensor read [ns]; start_unix_ns and start_monotonic_ns were taken together".to_string()),
+        ("log_time".to_string(), match opts.profile {
+            Profile::Json => "CLOCK_MONOTONIC of each cycle's sensor read [ns]; start_unix_ns and start_monotonic_ns were taken together",
+            Profile::Ros2 => "each cycle's sensor read on the wall clock (UNIX time [ns]): its CLOCK_MONOTONIC stamp (stamp_ns in the jointctl messages) plus start_unix_ns - start_monotonic_ns, taken together",
+        }.to_string()),
     ]);
     if let Some(path) = descriptor.config_path() {
         metadata.insert("config".to_string(), path.display().to_string());
@@ -357,7 +357,9 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     writer.write_metadata(&mcap::records::Metadata { name: "activation".into(), metadata: BTreeMap::from([("raw".to_string(), activation)]) }).map_err(before_start)?;
     if let Some(path) = descriptor.config_path() {
         for (name, data) in config_files(&path) {
-            let attachment = mcap::Attachment { log_time: start_monotonic_ns, create_time: start_unix_ns, name, media_type: "application/yaml".into(), data: data.into() };
+            // On the file's clock, as its messages.
+            let log_time = if opts.profile == Profile::Ros2 { start_unix_ns } else { start_monotonic_ns };
+            let attachment = mcap::Attachment { log_time, create_time: start_unix_ns, name, media_type: "application/yaml".into(), data: data.into() };
             writer.attach(&attachment).map_err(before_start)?;
         }
     }

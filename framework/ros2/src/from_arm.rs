@@ -27,6 +27,11 @@ impl WallClock {
     }
 
     /// A monotonic stamp [ns] as UNIX time [ns] (0 before the epoch).
+    ///
+    /// ```
+    /// let c = jointctl_ros2::from_arm::WallClock::from_pair(1_000, 5_000);
+    /// assert_eq!((c.unix_ns(5_500), c.unix_ns(0)), (1_500, 0));
+    /// ```
     pub fn unix_ns(&self, monotonic_ns: u64) -> u64 {
         u64::try_from((i128::from(monotonic_ns) + self.offset_ns).max(0)).unwrap_or(u64::MAX)
     }
@@ -65,6 +70,15 @@ pub fn joint_state(s: &ArmState, clock: &WallClock, arm: &str) -> msg::JointStat
 }
 
 /// Every DOF's observed state (what the JSON form's `joint_state` holds).
+///
+/// ```
+/// let mut s = jointctl_ipc::ArmState::EMPTY;
+/// (s.cycle, s.joint_count) = (7, 1);
+/// s.joints[0].sensor_torque_nm = 1.5;
+/// let m = jointctl_ros2::from_arm::joint_details(&s, &jointctl_ros2::from_arm::WallClock::from_pair(0, 0), "sherpa");
+/// assert_eq!((m.cycle, m.joints[0].sensor_torque_nm), (7, 1.5));
+/// assert!(m.joints[0].deflection_rad.is_nan(), "not observed");
+/// ```
 pub fn joint_details(s: &ArmState, clock: &WallClock, arm: &str) -> msg::JointDetails {
     msg::JointDetails {
         header: clock.header(s.stamp_ns, arm),
@@ -98,6 +112,16 @@ fn reading(name: &str, r: &RawReading) -> msg::RawReading {
 }
 
 /// A raw frame, its devices named by the descriptor.
+///
+/// ```
+/// use jointctl_ipc::raw::{RawDescriptor, RawFrame, RawReading};
+/// let d = RawDescriptor::of(40.0, &[("enc_q2_out", 0)], &[], &[], None);
+/// let mut f = RawFrame::EMPTY;
+/// f.encoder_count = 1;
+/// f.encoders[0] = RawReading::from_reading(&jointctl_api::Reading::valid(0.25));
+/// let m = jointctl_ros2::from_arm::raw_frame(&f, &d, &jointctl_ros2::from_arm::WallClock::from_pair(0, 0), "sherpa");
+/// assert_eq!((m.encoders[0].name.as_str(), m.encoders[0].value, m.encoders[0].status.as_str()), ("enc_q2_out", 0.25, "valid"));
+/// ```
 pub fn raw_frame(f: &RawFrame, d: &RawDescriptor, clock: &WallClock, arm: &str) -> msg::RawFrame {
     msg::RawFrame {
         header: clock.header(f.stamp_ns, arm),
@@ -125,6 +149,17 @@ pub fn raw_frame(f: &RawFrame, d: &RawDescriptor, clock: &WallClock, arm: &str) 
 }
 
 /// An accepted command.
+///
+/// ```
+/// use jointctl_ipc::{CommandRequest, CommandResponse, TorqueWaveform};
+/// let r = jointctl_ipc::raw::CommandRecord {
+///     sequence: 1, stamp_ns: 5,
+///     request: CommandRequest::torque("q2", TorqueWaveform::SINE, &[5.0, 0.1]),
+///     response: CommandResponse::new(true, "q2: torque sine"),
+/// };
+/// let m = jointctl_ros2::from_arm::command_record(&r, &jointctl_ros2::from_arm::WallClock::from_pair(0, 0), "sherpa");
+/// assert_eq!((m.kind.as_str(), m.waveform.as_str(), m.values.len()), ("torque", "sine", 2));
+/// ```
 pub fn command_record(r: &CommandRecord, clock: &WallClock, arm: &str) -> msg::CommandRecord {
     let q = &r.request;
     // Trailing unset values (NaN) are not part of the command (as in the JSON form).
@@ -206,6 +241,7 @@ pub fn diagnostic_array(d: &Diagnostics, clock: &WallClock, arm: &str) -> msg::D
         });
     }
     for x in &d.devices[..(d.device_count as usize).min(d.devices.len())] {
+        // The bits of `DeviceDiagnostics::flags` (jointctl_ipc), the HAL's device health.
         let flags: Vec<&str> = [(1, "silent"), (2, "fault"), (4, "bus-off"), (8, "error-passive")].iter().filter(|(bit, _)| x.flags & bit != 0).map(|(_, n)| *n).collect();
         status.push(DiagnosticStatus {
             level: if flags.is_empty() { DiagnosticStatus::OK } else { DiagnosticStatus::ERROR },

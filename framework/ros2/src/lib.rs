@@ -72,35 +72,64 @@ pub struct Topic {
 
 /// A message that is not the CDR of its type.
 #[derive(Debug, thiserror::Error)]
-#[error("not a CDR-encoded {type_name}: {source}")]
+#[error("not a CDR-encoded {type_name}: {reason}")]
 pub struct DecodeError {
     /// The type it was read as.
     pub type_name: &'static str,
-    /// The CDR reader's reason.
-    pub source: cdr::Error,
+    /// What is wrong.
+    pub reason: String,
 }
+
+/// A message that could not be written as CDR (only a type CDR cannot carry fails: a map, an
+/// optional field; none of this crate's).
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write a {type_name} as CDR: {source}")]
+pub struct EncodeError {
+    /// The type.
+    pub type_name: &'static str,
+    /// The encoder's reason.
+    pub source: cdr_encoding::Error,
+}
+
+/// The encapsulation header of little-endian plain CDR (XCDR1): the representation id
+/// `CDR_LE` and two bytes of options.
+const CDR_LE: [u8; 4] = [0, 1, 0, 0];
+/// The same for big-endian (`CDR_BE`).
+const CDR_BE: [u8; 4] = [0, 0, 0, 0];
 
 /// A message as CDR, little-endian, with its encapsulation header.
 ///
 /// ```
-/// let t = jointctl_ros2::msg::Time { sec: 1, nanosec: 2 };
-/// assert_eq!(jointctl_ros2::encode(&t), [0, 1, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0]);
+/// let p = jointctl_ros2::msg::CommandPoint { t_s: 1.0, position_rad: 0.0, velocity_rad_s: 0.0 };
+/// let b = jointctl_ros2::encode(&p).unwrap();
+/// assert_eq!((&b[..4], &b[4..12]), (&[0, 1, 0, 0][..], &1.0f64.to_le_bytes()[..]));
 /// ```
-pub fn encode<M: serde::Serialize>(m: &M) -> Vec<u8> {
-    // Only a type serde cannot write as CDR fails (an Option, a map): none of this crate's.
-    cdr::serialize::<_, _, cdr::CdrLe>(m, cdr::Infinite).unwrap_or_default()
+pub fn encode<M: msg::Message>(m: &M) -> Result<Vec<u8>, EncodeError> {
+    let body = cdr_encoding::to_vec::<M, byteorder::LittleEndian>(m).map_err(|source| EncodeError { type_name: M::NAME, source })?;
+    let mut out = Vec::with_capacity(4 + body.len());
+    out.extend_from_slice(&CDR_LE);
+    out.extend_from_slice(&body);
+    Ok(out)
 }
 
-/// A CDR message (either byte order, as its header says) as `M`.
+/// A CDR message (either byte order, as its header says) as `M`. Every length in it is checked
+/// against the bytes left before anything is allocated for it.
 ///
 /// ```
 /// use jointctl_ros2::msg::{JointState, Message};
 /// let m = JointState { name: vec!["q1".into()], position: vec![0.5], ..Default::default() };
-/// assert_eq!(jointctl_ros2::decode::<JointState>(&jointctl_ros2::encode(&m)).unwrap(), m);
+/// assert_eq!(jointctl_ros2::decode::<JointState>(&jointctl_ros2::encode(&m).unwrap()).unwrap(), m);
 /// assert!(jointctl_ros2::decode::<JointState>(&[0, 1, 0, 0, 9]).is_err());
 /// ```
-pub fn decode<M: Message>(bytes: &[u8]) -> Result<M, DecodeError> {
-    cdr::deserialize(bytes).map_err(|source| DecodeError { type_name: M::NAME, source })
+pub fn decode<M: msg::Message>(bytes: &[u8]) -> Result<M, DecodeError> {
+    let bad = |reason: String| DecodeError { type_name: M::NAME, reason };
+    let (header, body) = bytes.split_at_checked(4).ok_or_else(|| bad(format!("{} bytes, shorter than the 4-byte encapsulation header", bytes.len())))?;
+    let decoded = match header[..2] {
+        [a, b] if [a, b] == CDR_LE[..2] => cdr_encoding::from_bytes::<M, byteorder::LittleEndian>(body),
+        [a, b] if [a, b] == CDR_BE[..2] => cdr_encoding::from_bytes::<M, byteorder::BigEndian>(body),
+        _ => return Err(bad(format!("encapsulation {:02x}{:02x} is not plain CDR (00 00 or 00 01)", header[0], header[1]))),
+    };
+    decoded.map(|(m, _)| m).map_err(|e| bad(e.to_string()))
 }
 
 #[cfg(test)]
@@ -113,12 +142,43 @@ mod tests {
     #[test]
     fn cdr_layout_is_xcdr1_little_endian() {
         let r = msg::RawReading { name: "ab".into(), value: 1.0, status: "v".into(), age_s: 0.0 };
-        let b = encode(&r);
+        let b = encode(&r).unwrap();
         assert_eq!(&b[..4], &[0, 1, 0, 0], "CDR_LE encapsulation");
         assert_eq!(&b[4..8], &3u32.to_le_bytes(), "length with the NUL");
         assert_eq!(&b[8..11], b"ab\0");
         assert_eq!(b[11], 0, "padding to 8");
         assert_eq!(&b[12..20], &1.0f64.to_le_bytes());
+    }
+
+    /// Finding (review): the `cdr` crate allocated a string's stated length before checking that
+    /// the bytes were there: a length of 4 GiB in a damaged file took 29 s and 4.2 GB, or aborted
+    /// the process under a memory limit. Read now, they are an error at once.
+    #[test]
+    fn a_length_beyond_the_message_is_an_error_not_an_allocation() {
+        let started = std::time::Instant::now();
+        // A JointState's header: its stamp (8 bytes), then frame_id's length.
+        let e = decode::<msg::JointState>(&[0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xf0, 0xff, 0xff, 0xff]).unwrap_err();
+        assert!(started.elapsed() < std::time::Duration::from_secs(1), "{e}");
+        assert!(decode::<msg::JointState>(&[0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f]).is_err());
+        assert!(decode::<msg::JointDetail>(&[0, 9, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0]).unwrap_err().to_string().contains("encapsulation 0009"));
+    }
+
+    /// CDR has no field names: a struct's fields must be in its definition's order. Each
+    /// jointctl message written with distinct values is read back field by field from the bytes
+    /// at the offsets its definition gives.
+    #[test]
+    fn the_rust_fields_are_in_the_definitions_order() {
+        let detail = msg::JointDetail {
+            name: "q".into(), position_rad: 1.0, velocity_rad_s: 2.0, deflection_rad: 3.0, torque_nm: 4.0, stiffness_nm_per_rad: 5.0, pivot_mm: 6.0,
+            reference_torque_nm: 7.0, sensor_torque_nm: 8.0, gravity_nm: 9.0, mode: "m".into(), enabled: true, fault_code: 10,
+        };
+        let b = encode(&detail).unwrap();
+        // After the header and the name (4-byte length, "q\0", padding to 8): nine float64 in
+        // the definition's order.
+        let floats: Vec<f64> = (0..9).map(|i| f64::from_le_bytes(b[12 + 8 * i..20 + 8 * i].try_into().unwrap())).collect();
+        assert_eq!(floats, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+        let names: Vec<&str> = msg::JointDetail::DEFINITION.lines().filter_map(|l| l.split_whitespace().nth(1)).collect();
+        assert_eq!(&names[1..10], ["position_rad", "velocity_rad_s", "deflection_rad", "torque_nm", "stiffness_nm_per_rad", "pivot_mm", "reference_torque_nm", "sensor_torque_nm", "gravity_nm"]);
     }
 
     #[test]

@@ -19,20 +19,20 @@ pub struct Time {
 }
 
 impl Time {
-    /// UNIX time [ns] as a ROS 2 time (seconds saturate at `i32::MAX`, in 2038, as ROS 2's do).
+    /// UNIX time [ns] as a ROS 2 time. Beyond what `int32` seconds hold (2038) it stays at the
+    /// last time they hold, rather than wrapping to 1901.
     ///
     /// ```
-    /// let t = jointctl_ros2::msg::Time::from_unix_ns(1_700_000_000_250_000_000);
+    /// use jointctl_ros2::msg::Time;
+    /// let t = Time::from_unix_ns(1_700_000_000_250_000_000);
     /// assert_eq!((t.sec, t.nanosec), (1_700_000_000, 250_000_000));
-    /// assert_eq!(t.unix_ns(), 1_700_000_000_250_000_000);
+    /// assert_eq!(Time::from_unix_ns(u64::MAX), Time { sec: i32::MAX, nanosec: 999_999_999 });
     /// ```
     pub fn from_unix_ns(ns: u64) -> Time {
-        Time { sec: i32::try_from(ns / 1_000_000_000).unwrap_or(i32::MAX), nanosec: (ns % 1_000_000_000) as u32 }
-    }
-
-    /// Back to UNIX time [ns] (a negative second counts as 0).
-    pub fn unix_ns(&self) -> u64 {
-        u64::try_from(self.sec).unwrap_or(0) * 1_000_000_000 + u64::from(self.nanosec)
+        match i32::try_from(ns / 1_000_000_000) {
+            Ok(sec) => Time { sec, nanosec: (ns % 1_000_000_000) as u32 },
+            Err(_) => Time { sec: i32::MAX, nanosec: 999_999_999 },
+        }
     }
 }
 
@@ -91,6 +91,8 @@ impl DiagnosticStatus {
     pub const WARN: u8 = 1;
     /// Level: does not work.
     pub const ERROR: u8 = 2;
+    /// Level: no news (jointctl does not send it: a bridge that stops sends nothing).
+    pub const STALE: u8 = 3;
 }
 
 /// `diagnostic_msgs/msg/DiagnosticArray`.
@@ -104,20 +106,32 @@ pub struct DiagnosticArray {
 
 /// `jointctl_msgs/msg/JointDetail`: one DOF's observed state.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)]
 pub struct JointDetail {
+    /// DOF name.
     pub name: String,
+    /// Link-side position [rad].
     pub position_rad: f64,
+    /// Velocity [rad/s].
     pub velocity_rad_s: f64,
+    /// Deflection of the elastic element [rad].
     pub deflection_rad: f64,
+    /// Observed joint torque [Nm].
     pub torque_nm: f64,
+    /// Stiffness now [Nm/rad].
     pub stiffness_nm_per_rad: f64,
+    /// VSA pivot setting [mm] (section 3.3).
     pub pivot_mm: f64,
+    /// Torque reference [Nm] (NaN outside torque modes).
     pub reference_torque_nm: f64,
+    /// The F/T sensor's torque about the axis [Nm].
     pub sensor_torque_nm: f64,
+    /// Gravity torque of the pose [Nm].
     pub gravity_nm: f64,
+    /// Control mode (`hold`, `position`, `torque`, ...).
     pub mode: String,
+    /// Accepts commands.
     pub enabled: bool,
+    /// 0, or the joint's fault.
     pub fault_code: u32,
 }
 
@@ -151,56 +165,75 @@ pub struct RawReading {
 
 /// `jointctl_msgs/msg/RawDrive`: one drive's reading and what it was sent.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)]
 pub struct RawDrive {
+    /// Drive name.
     pub name: String,
+    /// Its position reading [rad].
     pub position_rad: RawReading,
+    /// Its velocity reading [rad/s].
     pub velocity_rad_s: RawReading,
+    /// Enabled (CiA 402 operation enabled).
     pub enabled: bool,
+    /// In fault.
     pub fault: bool,
+    /// What it was sent (`hold`, `move`, ...).
     pub action: String,
+    /// Position set-point sent [rad] (NaN: none).
     pub setpoint_rad: f64,
+    /// Velocity feed-forward sent [rad/s].
     pub velocity_ff_rad_s: f64,
 }
 
 /// `jointctl_msgs/msg/RawFrame`: every device's reading and every set-point of one cycle.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)]
 pub struct RawFrame {
+    /// Header.
     pub header: Header,
+    /// Cycle counter.
     pub cycle: u64,
     /// CLOCK_MONOTONIC of the cycle's sensor read [ns].
     pub stamp_ns: u64,
     /// Accepted commands applied up to this cycle.
     pub commands_applied: u64,
+    /// Encoders [rad].
     pub encoders: Vec<RawReading>,
+    /// Drives.
     pub drives: Vec<RawDrive>,
+    /// F/T sensors, about their joint's axis [Nm].
     pub torque_sensors: Vec<RawReading>,
 }
 
 /// `jointctl_msgs/msg/CommandPoint`: one point of a position trajectory.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)]
 pub struct CommandPoint {
+    /// Time from the trajectory's start [s].
     pub t_s: f64,
+    /// Position [rad].
     pub position_rad: f64,
+    /// Velocity [rad/s] (NaN: not given).
     pub velocity_rad_s: f64,
 }
 
 /// `jointctl_msgs/msg/CommandRecord`: a command the runtime accepted.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)]
 pub struct CommandRecord {
+    /// Header (the acceptance, on the wall clock).
     pub header: Header,
     /// Accepted commands so far, from 1.
     pub sequence: u64,
     /// CLOCK_MONOTONIC of the acceptance [ns].
     pub stamp_ns: u64,
+    /// `hold`, `position`, `trajectory`, `torque`, ...
     pub kind: String,
+    /// The DOF (empty: the whole arm).
     pub joint: String,
+    /// Part of a stream of set-points.
     pub streamed: bool,
+    /// A torque command's `step`, `sine` or `cosine`.
     pub waveform: String,
+    /// The command's numbers (SI units).
     pub values: Vec<f64>,
+    /// A trajectory's points.
     pub points: Vec<CommandPoint>,
     /// The runtime's answer.
     pub message: String,
@@ -266,6 +299,12 @@ const JOINT_DETAIL: (&str, &str) = (
      float64 reference_torque_nm\nfloat64 sensor_torque_nm\nfloat64 gravity_nm\nstring mode\nbool enabled\nuint32 fault_code\n",
 );
 
+impl Message for JointDetail {
+    const NAME: &'static str = "jointctl_msgs/msg/JointDetail";
+    const DEFINITION: &'static str = JOINT_DETAIL.1;
+    const USES: &'static [(&'static str, &'static str)] = &[];
+}
+
 impl Message for JointDetails {
     const NAME: &'static str = "jointctl_msgs/msg/JointDetails";
     const DEFINITION: &'static str = "# Every DOF's observed state, once per cycle (SI units; NaN: not known).\n\
@@ -279,6 +318,12 @@ const RAW_DRIVE: (&str, &str) = (
     "string name\njointctl_msgs/RawReading position_rad\njointctl_msgs/RawReading velocity_rad_s\nbool enabled\nbool fault\nstring action\nfloat64 setpoint_rad\nfloat64 velocity_ff_rad_s\n",
 );
 
+impl Message for RawReading {
+    const NAME: &'static str = "jointctl_msgs/msg/RawReading";
+    const DEFINITION: &'static str = RAW_READING.1;
+    const USES: &'static [(&'static str, &'static str)] = &[];
+}
+
 impl Message for RawFrame {
     const NAME: &'static str = "jointctl_msgs/msg/RawFrame";
     const DEFINITION: &'static str = "# Every device's reading as the HAL gave it and every set-point written, once per cycle.\n\
@@ -287,6 +332,12 @@ impl Message for RawFrame {
 }
 
 const COMMAND_POINT: (&str, &str) = ("jointctl_msgs/msg/CommandPoint", "float64 t_s\nfloat64 position_rad\nfloat64 velocity_rad_s\n");
+
+impl Message for CommandPoint {
+    const NAME: &'static str = "jointctl_msgs/msg/CommandPoint";
+    const DEFINITION: &'static str = COMMAND_POINT.1;
+    const USES: &'static [(&'static str, &'static str)] = &[];
+}
 
 impl Message for CommandRecord {
     const NAME: &'static str = "jointctl_msgs/msg/CommandRecord";
@@ -317,13 +368,14 @@ impl Duration {
 
 /// `trajectory_msgs/msg/JointTrajectoryPoint`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)]
 pub struct JointTrajectoryPoint {
     /// One per joint of the trajectory [rad].
     pub positions: Vec<f64>,
     /// One per joint [rad/s], or empty.
     pub velocities: Vec<f64>,
+    /// One per joint [rad/s^2], or empty (not used).
     pub accelerations: Vec<f64>,
+    /// One per joint [Nm], or empty (not used).
     pub effort: Vec<f64>,
     /// When the point is to be reached, from the trajectory's start.
     pub time_from_start: Duration,

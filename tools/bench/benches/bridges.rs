@@ -9,9 +9,11 @@
 //! are this machine's. The Zenoh client is this process (zenoh's Rust API); the Foxglove client
 //! is the Python `websockets` client of the tests, so its figure includes Python's decoding.
 //!
-//! A third run has `jointctl bridge ros2` attached with a Cyclone DDS listener (the Python
-//! client of the tests, `tests/interop/ros2_listener.py`): the loop's figures beside the run
-//! alone, and the share of joint states that reached the listener.
+//! Then four runs for the ROS 2 bridge: `jointctl bridge ros2` with no DDS reader; with a Cyclone
+//! DDS listener (the Python client of the tests, `tests/interop/ros2_listener.py`); and with the
+//! listener and the loop at SCHED_FIFO on its CPU, beside a run alone at that setting. The loop's
+//! figures side by side, the share of joint states that reached the listener, and each helper
+//! process's CPU as a share of one core over its own lifetime.
 //!
 //! Environment: `BENCH_BRIDGE_S` (default 30) seconds per run; `BENCH_QUICK=1` for 5 s.
 //! Needs `cargo build --release --workspace` first and `bash .ci/setup-python-venv`.
@@ -35,9 +37,10 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[((p / 100.0 * (sorted.len() - 1) as f64).round() as usize).min(sorted.len() - 1)]
 }
 
-/// Waits for a child and returns the CPU time it used, user and system [s] (its rusage).
+/// Waits for a child started at `started` and returns the CPU time it used (user and system, its
+/// rusage) as a share of its lifetime [0..1 per core].
 #[allow(unsafe_code)]
-fn wait_cpu_s(child: Child) -> f64 {
+fn wait_cpu_share(child: Child, started: std::time::Instant) -> f64 {
     let mut status = 0;
     // SAFETY: an all-zero rusage is a valid value for wait4 to fill in.
     let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
@@ -47,13 +50,14 @@ fn wait_cpu_s(child: Child) -> f64 {
         return f64::NAN;
     }
     let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    seconds(usage.ru_utime) + seconds(usage.ru_stime)
+    (seconds(usage.ru_utime) + seconds(usage.ru_stime)) / started.elapsed().as_secs_f64()
 }
 
 /// Starts `jointctl bridge ARGS` and returns it with the log line containing `ready` (waits
 /// in a thread so that the loop can start meanwhile).
-fn bridge(exe: &std::path::Path, args: &[String], ready: &'static str) -> (Child, std::sync::mpsc::Receiver<String>) {
+fn bridge(exe: &std::path::Path, args: &[String], ready: &'static str) -> ((Child, std::time::Instant), std::sync::mpsc::Receiver<String>) {
     let mut child = Command::new(exe).arg("bridge").args(args).env("RUST_LOG", "info").stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let started = std::time::Instant::now();
     let stderr = child.stderr.take().unwrap();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -63,15 +67,15 @@ fn bridge(exe: &std::path::Path, args: &[String], ready: &'static str) -> (Child
             }
         }
     });
-    (child, rx)
+    ((child, started), rx)
 }
 
 /// One run of the loop with `jointctl bridge ros2` attached, and with a DDS listener or none.
 struct Ros2Run {
     run: jointctl_bench::LoopRun,
     states: usize,
-    bridge_cpu_s: f64,
-    listener_cpu_s: f64,
+    bridge_cpu: f64,
+    listener_cpu: f64,
     listener_error: String,
 }
 
@@ -91,8 +95,9 @@ fn ros2_run(exe: &std::path::Path, python: &std::path::Path, seconds: f64, arm: 
     let (bridge_child, ready) = bridge(exe, &["ros2".into(), "--arm".into(), arm.into(), "--domain-id".into(), domain.clone(), "--timeout".into(), "10".into()], "publishing in DDS domain");
     let looping = std::thread::spawn(move || jointctl_bench::run_sherpa_loop_with(seconds, arm, timing(realtime)));
     ready.recv_timeout(Duration::from_secs(20)).expect("the ROS 2 bridge never started");
-    let mut out = Ros2Run { run: jointctl_bench::LoopRun::default(), states: 0, bridge_cpu_s: 0.0, listener_cpu_s: 0.0, listener_error: String::new() };
+    let mut out = Ros2Run { run: jointctl_bench::LoopRun::default(), states: 0, bridge_cpu: 0.0, listener_cpu: 0.0, listener_error: String::new() };
     let listener = listen.then(|| {
+        let started = std::time::Instant::now();
         let mut child = Command::new(python)
             .arg(jointctl_bench::root().join("tests/interop/ros2_listener.py"))
             .args([domain.as_str(), &format!("{}", seconds + 3.0), &format!("{}", (seconds * 2000.0) as u64)])
@@ -107,11 +112,11 @@ fn ros2_run(exe: &std::path::Path, python: &std::path::Path, seconds: f64, arm: 
             let _ = std::io::Read::read_to_string(&mut stderr, &mut err);
             (text, err)
         });
-        (child, reading)
+        (child, started, reading)
     });
     out.run = looping.join().unwrap();
-    if let Some((child, reading)) = listener {
-        out.listener_cpu_s = wait_cpu_s(child);
+    if let Some((child, started, reading)) = listener {
+        out.listener_cpu = wait_cpu_share(child, started);
         let (text, err) = reading.join().unwrap();
         let v: serde_json::Value = serde_json::from_slice(&text).unwrap_or_default();
         out.states = v["joint_states"].as_array().map_or(0, Vec::len);
@@ -119,7 +124,7 @@ fn ros2_run(exe: &std::path::Path, python: &std::path::Path, seconds: f64, arm: 
             out.listener_error = err.lines().last().unwrap_or("").to_string();
         }
     }
-    out.bridge_cpu_s = wait_cpu_s(bridge_child);
+    out.bridge_cpu = wait_cpu_share(bridge_child.0, bridge_child.1);
     out
 }
 
@@ -175,8 +180,8 @@ fn main() {
     done.store(true, Ordering::Relaxed);
     let _ = receiving.join();
     let fox = foxglove_client.wait_with_output().unwrap();
-    let zenoh_cpu_s = wait_cpu_s(zenoh_bridge);
-    let foxglove_cpu_s = wait_cpu_s(foxglove_bridge);
+    let zenoh_cpu = wait_cpu_share(zenoh_bridge.0, zenoh_bridge.1);
+    let foxglove_cpu = wait_cpu_share(foxglove_bridge.0, foxglove_bridge.1);
     let mut fox_latencies: Vec<f64> = String::from_utf8_lossy(&fox.stdout)
         .lines()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
@@ -220,17 +225,17 @@ fn main() {
         ros2_heard.run.cycles
     );
     println!();
-    println!("## CPU of the processes beside the loop (user + system, share of one core over the run)");
+    println!("## CPU of the processes beside the loop (user + system, share of one core over each one's lifetime)");
     println!("| process | % of a core |");
     println!("|---|---|");
-    for (name, cpu_s) in [
-        ("`bridge zenoh` (a Rust subscriber attached)", zenoh_cpu_s),
-        ("`bridge foxglove` (a Python client attached)", foxglove_cpu_s),
-        ("`bridge ros2`, no DDS reader", ros2_alone.bridge_cpu_s),
-        ("`bridge ros2`, a Cyclone DDS listener attached", ros2_heard.bridge_cpu_s),
-        ("the Python Cyclone DDS listener", ros2_heard.listener_cpu_s),
+    for (name, share) in [
+        ("`bridge zenoh` (a Rust subscriber attached)", zenoh_cpu),
+        ("`bridge foxglove` (a Python client attached)", foxglove_cpu),
+        ("`bridge ros2`, no DDS reader", ros2_alone.bridge_cpu),
+        ("`bridge ros2`, a Cyclone DDS listener attached", ros2_heard.bridge_cpu),
+        ("the Python Cyclone DDS listener", ros2_heard.listener_cpu),
     ] {
-        println!("| {name} | {:.0} |", 100.0 * cpu_s / seconds);
+        println!("| {name} | {:.0} |", 100.0 * share);
     }
     if !ros2_heard.listener_error.is_empty() {
         println!("(the DDS listener: {})", ros2_heard.listener_error);

@@ -241,9 +241,10 @@ fn main() -> ExitCode {
         // Zenoh's own lines are off unless RUST_LOG asks for them: jointctl reports each failure
         // it meets through Zenoh as its own error, with the endpoint and why, and Zenoh's lines
         // before it (source paths, "Timeout!") only confused that (issue 40, finding 14). The DDS
-        // stack's INFO lines (every matched reader and locator) likewise: its warnings stay.
+        // stack's lines likewise: INFO for every matched reader and locator, WARN for every write
+        // a slow reader refuses (the ROS 2 bridge counts those and says so itself).
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info,zenoh=off,rustdds=warn,ros2_client=warn".into()),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info,zenoh=off,rustdds=error,ros2_client=warn".into()),
         )
         .with_writer(log_writer)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))

@@ -8,6 +8,13 @@ use std::sync::atomic::AtomicBool;
 
 use clap::Args;
 
+/// `--profile`'s values.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ProfileArg {
+    Json,
+    Ros2,
+}
+
 #[derive(Args)]
 pub struct RecordArgs {
     /// The arm (its YAML `arm:` name).
@@ -33,8 +40,8 @@ pub struct RecordArgs {
     /// (ROS 2 topics and types as CDR, what `ros2 bag play`, rosbags and PlotJuggler read:
     /// /joint_states, /diagnostics, /jointctl/joint_details, /jointctl/raw, /jointctl/commands).
     /// fit, identify and replay read both.
-    #[arg(long, default_value = "json", value_parser = ["json", "ros2"])]
-    profile: String,
+    #[arg(long, value_enum, default_value_t = ProfileArg::Json)]
+    profile: ProfileArg,
     /// Print one JSON object: `{"file", "duration_s", "messages": {...}, "lost", ...}`.
     #[arg(long)]
     json: bool,
@@ -54,7 +61,10 @@ pub fn run(a: RecordArgs) -> ExitCode {
         out: a.out,
         duration_s: a.duration,
         timeout_s: a.timeout,
-        profile: jointctl_record::recorder::Profile::from_name(&a.profile).unwrap_or_default(),
+        profile: match a.profile {
+            ProfileArg::Json => jointctl_record::recorder::Profile::Json,
+            ProfileArg::Ros2 => jointctl_record::recorder::Profile::Ros2,
+        },
     };
     let (summary, failure) = match jointctl_record::recorder::record(&opts, &stop) {
         Ok(s) => (s, None),
@@ -71,8 +81,12 @@ pub fn run(a: RecordArgs) -> ExitCode {
     } else {
         eprintln!("{}: {:.2} s of arm `{}`, {} bytes", summary.file.display(), summary.duration_s, opts.arm, summary.bytes);
         for (channel, n) in &summary.messages {
-            eprintln!("  {channel:<24} {n:>8} messages, {} lost", summary.lost_by_channel.get(channel).copied().unwrap_or(0));
+            eprintln!("  {channel:<24} {n:>8} messages");
         }
+        // Losses are the arm's samples, counted per channel of the arm (the ROS 2 profile writes
+        // a joint state on two topics).
+        let lost: Vec<String> = summary.lost_by_channel.iter().map(|(c, n)| format!("{c} {n}")).collect();
+        eprintln!("  lost samples: {}", lost.join(", "));
     }
     if let Some(e) = failure {
         return crate::fail_err(jointctl_record::recorder::RecordError::Stopped { summary: Box::new(summary), source: e });
