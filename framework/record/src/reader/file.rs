@@ -1,0 +1,87 @@
+//! The file: its messages in order, in either form, up to a cut a crash left.
+
+use std::path::{Path, PathBuf};
+
+use super::ReadError;
+
+/// How a message is written: the JSON form, or the ROS 2 profile's CDR.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Encoding {
+    Json,
+    Cdr,
+}
+
+/// The arm's channel a file's channel holds: itself in the JSON form; in the ROS 2 profile the
+/// jointctl topic made from it (`/joint_states` is a subset of `/jointctl/joint_details`, and
+/// not read).
+pub(super) fn source_of(topic: &str, message_encoding: &str) -> Option<(&'static str, Encoding)> {
+    if message_encoding == "cdr" {
+        return match topic {
+            jointctl_ros2::JOINT_DETAILS => Some(("joint_state", Encoding::Cdr)),
+            jointctl_ros2::RAW => Some(("raw", Encoding::Cdr)),
+            jointctl_ros2::COMMANDS => Some(("commands", Encoding::Cdr)),
+            jointctl_ros2::DIAGNOSTICS => Some(("diagnostics", Encoding::Cdr)),
+            _ => None,
+        };
+    }
+    crate::messages::CHANNELS.iter().find(|(t, _)| *t == topic).map(|(t, _)| (*t, Encoding::Json))
+}
+
+/// Calls `each(channel, encoding, sequence, data)` for every message of one of the arm's
+/// channels `topics`, in file order (the file is read and decompressed once), whichever form
+/// the file has.
+pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, Encoding, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
+    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
+    let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
+    // A file without its end (the recorder killed, the machine off, the disk full) is read up to
+    // its last complete chunk.
+    let stream = mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into()).map_err(mcap_error)?;
+    let mut read = 0u64;
+    for message in stream {
+        match message {
+            Ok(m) => {
+                read += 1;
+                if let Some((source, encoding)) = source_of(&m.channel.topic, &m.channel.message_encoding)
+                    && topics.contains(&source)
+                {
+                    each(source, encoding, m.sequence, &m.data)?;
+                }
+            }
+            Err(source) if is_cut(&bytes) && read > 0 => {
+                warn_cut(path, read, &source);
+                break;
+            }
+            Err(source) if is_cut(&bytes) => return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source }),
+            Err(source) => return Err(mcap_error(source)),
+        }
+    }
+    Ok(())
+}
+
+/// A file that does not end with MCAP's closing magic was cut short while it was written.
+pub(super) fn is_cut(bytes: &[u8]) -> bool {
+    bytes.len() < 2 * mcap::MAGIC.len() || !bytes.ends_with(mcap::MAGIC)
+}
+
+/// Says once per file that a recording was cut short and what is read of it.
+pub(super) fn warn_cut(path: &Path, messages: u64, source: &mcap::McapError) {
+    static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    let mut warned = WARNED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !warned.iter().any(|p| p == path) {
+        warned.push(path.to_path_buf());
+        tracing::warn!(
+            "{}: the recording was cut short (its writer was killed, the machine stopped or the disk filled: {source}); \
+             reading the {messages} messages of its complete chunks, the rest is lost",
+            path.display()
+        );
+    }
+}
+
+/// The top-level records of a file that was cut short, up to the cut (its summary, at the end, is
+/// not there to index them).
+pub(super) fn records_before_cut(bytes: &[u8]) -> Vec<mcap::records::Record<'_>> {
+    match mcap::read::LinearReader::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into()) {
+        Ok(reader) => reader.map_while(Result::ok).collect(),
+        Err(_) => Vec::new(),
+    }
+}
