@@ -24,6 +24,7 @@ use crate::csv::Data;
 mod baseline;
 pub mod causes;
 mod design;
+pub(crate) mod least_squares;
 pub mod experiment;
 mod numeric;
 pub use numeric::format_value;

@@ -319,7 +319,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     let noise_floor_nm = {
         let ones = vec![1.0; d.len()];
         let cols = [d.to_vec(), v.clone(), ones];
-        let residual: Vec<f64> = match super::design::least_squares(&cols, &tau) {
+        let residual: Vec<f64> = match super::least_squares::least_squares(&cols, &tau) {
             Some(c) => (0..tau.len()).map(|i| tau[i] - c[0] * d[i] - c[1] * v[i] - c[2]).collect(),
             None => tau.to_vec(),
         };
