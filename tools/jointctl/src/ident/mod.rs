@@ -1,4 +1,5 @@
-//! `jointctl fit` and `jointctl identify`.
+//! `jointctl fit` and `jointctl identify`: `fit` the thesis' fit step, `extension` the extended
+//! model identify writes; here the data and the identify command.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -6,40 +7,14 @@ use std::process::ExitCode;
 
 use clap::Args;
 use jointctl_experiments::plot::{COLORS, Series, lines};
-use jointctl_ident::fit::{FitOptions, Order, fit};
-use jointctl_experiments::model_loop::{Extension, Found, Gain};
-use jointctl_ident::identify::{BaselineModel, IdentifyOptions, Report, identify};
+use jointctl_experiments::model_loop::{Found, Gain};
+use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
 
-#[derive(Args)]
-pub struct FitArgs {
-    /// Measured experiment: CSV (t, deflection, torque[, pivot_mm, angle_deg, ...]) or a
-    /// recording (`jointctl record`, .mcap, with --joint).
-    data: PathBuf,
-    /// The joint to take from a recording (.mcap): its deflection and F/T torque.
-    #[arg(long)]
-    joint: Option<String>,
-    /// Moving-average window [samples]; default the thesis': 8 for a shoulder characterisation
-    /// (by pivot), 5 for the wrist's (by pivot and direction), none otherwise.
-    #[arg(long)]
-    smooth: Option<usize>,
-    /// Polynomial order 1-6, or `auto` (the lowest whose curve runs through the middle of the
-    /// hysteresis band and the dead zone as well as higher orders, section 3.3.2).
-    #[arg(long, default_value = "auto")]
-    order: String,
-    /// Separate fits for positive and negative deflection.
-    #[arg(long)]
-    branches: bool,
-    /// Do not force zero torque at zero deflection (the curve gets an offset).
-    #[arg(long)]
-    no_through_zero: bool,
-    /// Write the characteristic here, in the form the joint plugins load (use it with
-    /// `params: {include: FILE}`); default: print it.
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Write plots (measured loop and fitted curve per setting) into this folder.
-    #[arg(long)]
-    report: Option<PathBuf>,
-}
+mod extension;
+mod fit;
+
+pub use fit::{FitArgs, run_fit};
+use extension::{extend, extension_json, gains_table, loop_causes, loop_table, write_extension};
 
 #[derive(Args)]
 pub struct IdentifyArgs {
@@ -91,92 +66,6 @@ fn load_data(path: &Path, joint: Option<&str>) -> Result<jointctl_ident::csv::Da
         data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection or F/T torque unknown", m.left_out, m.samples));
     }
     Ok(data)
-}
-
-pub fn run_fit(a: FitArgs) -> ExitCode {
-    let data = match load_data(&a.data, a.joint.as_deref()) {
-        Ok(d) => d,
-        Err(e) => return crate::fail(e),
-    };
-    for n in &data.notes {
-        eprintln!("note: {n}");
-    }
-    let order = match a.order.as_str() {
-        "auto" => Order::Auto(6),
-        s => match s.parse::<usize>() {
-            Ok(n) => Order::Fixed(n),
-            Err(_) => return crate::fail(format!("--order must be 1-6 or `auto`, got `{s}`")),
-        },
-    };
-    let smoothing_window = a.smooth.unwrap_or_else(|| jointctl_ident::fit::thesis_smoothing(&data)).max(1);
-    let opts = FitOptions { smoothing_window, order, branches: a.branches, through_zero: !a.no_through_zero };
-    let result = match fit(&data, &opts) {
-        Ok(r) => r,
-        Err(e) => return crate::fail(format!("{}: {e}", a.data.display())),
-    };
-    eprintln!("| pivot [mm] | angle [deg] | samples | order | stiffness [Nm/rad] | RMSE [Nm] | max error [Nm] | RMSE + / - [Nm] |");
-    eprintln!("|---|---|---|---|---|---|---|---|");
-    for g in &result.groups {
-        eprintln!(
-            "| {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} / {:.4} |",
-            g.pivot_mm.map_or("-".into(), |p| p.to_string()),
-            g.angle_deg.map_or("-".into(), |p| p.to_string()),
-            g.samples,
-            g.order,
-            g.curve.stiffness_nm_per_rad,
-            g.rmse_nm,
-            g.max_error_nm,
-            g.branch_rmse_nm.0,
-            g.branch_rmse_nm.1
-        );
-    }
-    let yaml = match serde_yaml::to_string(&serde_json::json!({ "version": jointctl_config::FORMAT_VERSION, "characteristic": result.spec })) {
-        Ok(y) => format!("# Fitted by `jointctl fit {}` (smoothing {}, order {}, branches {}, through zero {}).\n{y}", a.data.display(), opts.smoothing_window, a.order, opts.branches, opts.through_zero),
-        Err(e) => return crate::fail_err(e),
-    };
-    match &a.out {
-        Some(path) => {
-            let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-            if let Err(e) = parent.map_or(Ok(()), std::fs::create_dir_all).and_then(|_| std::fs::write(path, &yaml)) {
-                return crate::fail(format!("cannot write {}: {e}", path.display()));
-            }
-            eprintln!("characteristic written to {}", path.display());
-        }
-        None => out!("{yaml}"),
-    }
-    if let Some(dir) = &a.report {
-        if let Err(e) = std::fs::create_dir_all(dir) {
-            return crate::fail(format!("cannot create {}: {e}", dir.display()));
-        }
-        for g in &result.groups {
-            let single = jointctl_models::characteristic::CharacteristicSpec {
-                source: result.spec.source,
-                curves: vec![jointctl_models::characteristic::CurveSpec { pivot_mm: None, angle_deg: None, ..g.curve.clone() }],
-            };
-            let Ok(curve) = jointctl_models::characteristic::PivotCharacteristic::from_spec(&single) else { continue };
-            let (lo, hi) = g.points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.0), h.max(p.0)));
-            let fitted: Vec<(f64, f64)> = (0..=200).map(|i| lo + (hi - lo) * i as f64 / 200.0).map(|x| (x, curve.evaluate(0.0, x).torque_nm)).collect();
-            // Files and titles name only the settings the data has.
-            let (mut name, mut title) = (String::from("fit"), format!("torque-deflection, order {}", g.order));
-            if let Some(p) = g.pivot_mm {
-                name += &format!("-pivot{p}mm");
-                title += &format!(", pivot {p} mm");
-            }
-            if let Some(a) = g.angle_deg {
-                name += &format!("-angle{a}deg");
-                title += &format!(", angle {a} deg");
-            }
-            name += ".svg";
-            if let Err(e) = lines(&dir.join(name), &title, "deflection [rad]", "torque [Nm]", &[
-                Series { name: "measured", points: g.points.clone(), color: COLORS[1] },
-                Series { name: "fitted", points: fitted, color: COLORS[2] },
-            ]) {
-                return crate::fail_err(e);
-            }
-        }
-        eprintln!("plots written to {}", dir.display());
-    }
-    ExitCode::SUCCESS
 }
 
 /// A config's joint as identify uses it: its params, which DOF of it, and its characteristic.
@@ -558,86 +447,4 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
         out!("{md}");
     }
     ExitCode::SUCCESS
-}
-
-/// The extension of `joint` in `config` from the report's causes, with the config it extends.
-fn extend(config: &Path, joint: &str, report: &Report, data: &jointctl_ident::csv::Data) -> Result<(Extension, jointctl_config::LoadedConfig), String> {
-    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
-    let found: Vec<Found> = report.causes.iter().map(|c| Found { effect: c.effect.clone(), plant: c.fragments.plant.clone(), observer: c.fragments.observer.clone() }).collect();
-    let ext = jointctl_experiments::model_loop::extend(&loaded, joint, &found, data, IdentifyOptions::default().train_fraction).map_err(|e| format!("{}: {e}", config.display()))?;
-    Ok((ext, loaded))
-}
-
-/// The causes in the loop of `joint` in the closed-loop recording `data`.
-fn loop_causes(data: &Path, config: &Path, joint: &str) -> Result<jointctl_experiments::loop_causes::LoopReport, String> {
-    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
-    let rec = jointctl_experiments::loop_causes::read(data, &loaded, joint).map_err(|e| e.to_string())?;
-    Ok(jointctl_experiments::loop_causes::identify_loop(&rec, &loaded))
-}
-
-/// The loop's values as a Markdown table.
-fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> String {
-    let mut md = String::from("\n## In the loop (closed-loop recording)\n\nFitted on the first 70 %, scored on the rest; a cause when the identified value explains the held-out part better than the configured one (block t-test of log RMSE ratios).\n\n| value | key | identified | configured | held-out RMSE configured | identified | t (critical) | cause |\n|---|---|---|---|---|---|---|---|\n");
-    for v in &l.values {
-        let _ = writeln!(md, "| {} | `{}` | {:.4} | {:.4} | {:.4e} | {:.4e} | {:.1} ({:.1}) | {} |", v.name, v.key, v.value, v.configured, v.rmse_configured, v.rmse_identified, v.t, v.critical, if v.cause { "yes" } else { "no" });
-    }
-    for n in &l.notes {
-        let _ = writeln!(md, "- {n}");
-    }
-    md
-}
-
-/// The gains as a Markdown table, with what was left out and why.
-/// The extension in `--json`: the observer's terms, the plant's effects and the notes.
-fn extension_json(ext: &Extension) -> serde_json::Value {
-    serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes})
-}
-
-/// The extension's files (`--out`) and gain plots (`--report`, else `--out`), each said in `md`.
-fn write_extension(a: &IdentifyArgs, ext: &Extension, loaded: &jointctl_config::LoadedConfig, provenance: &str, loop_sim: &serde_json::Map<String, serde_json::Value>, md: &mut String) -> Result<(), String> {
-    if let Some(dir) = &a.out {
-        let w = jointctl_experiments::model_loop::write(ext, loaded, dir, provenance, loop_sim).map_err(|e| e.to_string())?;
-        let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
-        if let Some(l) = &w.loop_sim {
-            let _ = writeln!(md, "The loop's `hal.sim` values: {} (also in the extended config).", l.display());
-        }
-    }
-    if let Some(dir) = a.report.as_ref().or(a.out.as_ref()) {
-        for (title, file) in gain_plots(dir, ext)? {
-            let _ = writeln!(md, "\n![{title}]({file})");
-        }
-    }
-    Ok(())
-}
-
-fn gains_table(ext: &Extension) -> String {
-    let mut md = String::from("\n## Gains on the held-out part\n\n| | before [Nm] | after [Nm] | gain |\n|---|---|---|---|\n");
-    for (name, g) in [("simulation (replayed along the recorded motion, vs F/T)", ext.simulation), ("observer (recorded deflections, vs F/T)", ext.observer)] {
-        let _ = writeln!(md, "| {name} | {:.4} | {:.4} | {:.0} % |", g.rmse_before, g.rmse_after, 100.0 * g.relative());
-    }
-    let taken = if ext.plant_causes.is_empty() { "none".to_string() } else { ext.plant_causes.join(", ") };
-    let _ = writeln!(md, "\nInto the simulation: {taken}.");
-    for n in &ext.notes {
-        let _ = writeln!(md, "- {n}");
-    }
-    md
-}
-
-/// One plot per side: the held-out F/T torque with the configured and the extended model.
-fn gain_plots(dir: &Path, ext: &Extension) -> Result<Vec<(String, String)>, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let mut files = Vec::new();
-    for (side, trace, g) in [("simulation", &ext.simulation_trace, ext.simulation), ("observer", &ext.observer_trace, ext.observer)] {
-        let pick = |v: &[f64]| trace.t_s.iter().zip(v).filter(|(_, y)| y.is_finite()).map(|(t, y)| (*t, *y)).collect::<Vec<_>>();
-        let title = format!("{} {side} vs F/T, held-out part (RMSE {:.4} -> {:.4} Nm)", ext.dof, g.rmse_before, g.rmse_after);
-        let file = format!("gain-{side}.svg");
-        lines(&dir.join(&file), &title, "t [s]", "torque [Nm]", &[
-            Series { name: "F/T sensor", points: pick(&trace.measured_nm), color: COLORS[0] },
-            Series { name: "configured", points: pick(&trace.before_nm), color: COLORS[1] },
-            Series { name: "extended", points: pick(&trace.after_nm), color: COLORS[2] },
-        ])
-        .map_err(|e| e.to_string())?;
-        files.push((title, file));
-    }
-    Ok(files)
 }
