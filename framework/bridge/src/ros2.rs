@@ -251,6 +251,8 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
     let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
     let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-bridge-ros2-{}", std::process::id()))?;
     let descriptor = *feed.descriptor();
+    // The ROS 2 messages are made from the typed samples: no JSON.
+    feed.set_json(false);
     let config_file = opts.config.clone().or_else(|| descriptor.config_path());
     let section = match &config_file {
         Some(file) => Some(jointctl_config::load(file).map_err(|e| Ros2BridgeError::Config { file: file.clone(), reason: e.to_string() })?.config.network.ros2),

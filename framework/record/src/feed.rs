@@ -58,7 +58,7 @@ pub struct FeedMessage<'a> {
     pub number: u64,
     /// CLOCK_MONOTONIC stamp of the cycle (or of the command's acceptance) [ns].
     pub stamp_ns: u64,
-    /// The JSON text.
+    /// The JSON text (empty when the feed was told not to write it, [`ArmFeed::set_json`]).
     pub json: &'a str,
     /// The runtime's final joint state (the arm stopped).
     pub final_sample: bool,
@@ -89,6 +89,8 @@ pub struct ArmFeed {
     descriptor: RawDescriptor,
     // One text buffer, reused: at 1 kHz, three messages a cycle.
     text: String,
+    // Whether to write the JSON text at all (a reader of the typed samples alone does not).
+    json: bool,
     // Last: the ports above must be dropped before their node.
     _node: Node<ipc::Service>,
 }
@@ -155,7 +157,28 @@ impl ArmFeed {
             std::thread::sleep(Duration::from_millis(5));
         };
         drop(descriptor_sub);
-        Ok(ArmFeed { names, raw, state, diagnostics, commands, descriptor, text: String::with_capacity(16 * 1024), _node: node })
+        Ok(ArmFeed { names, raw, state, diagnostics, commands, descriptor, text: String::with_capacity(16 * 1024), json: true, _node: node })
+    }
+
+    /// Whether [`FeedMessage::json`] is written (on by default). A reader that uses only
+    /// [`FeedMessage::sample`] (the ROS 2 recorder and bridge) turns it off, and saves encoding
+    /// three JSON messages a cycle; `json` is then empty.
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let mut feed = jointctl_record::feed::ArmFeed::open("sherpa", &Default::default(), std::time::Duration::from_secs(5), "typed-reader")?;
+    /// feed.set_json(false);
+    /// feed.poll(|m| {
+    ///     assert!(m.json.is_empty());
+    ///     Ok::<_, jointctl_record::feed::FeedError>(())
+    /// })?;
+    /// # Ok(()) }
+    /// ```
+    pub fn set_json(&mut self, on: bool) {
+        self.json = on;
+        if !on {
+            self.text.clear();
+        }
     }
 
     /// The arm's raw-reading descriptor (devices, rate, activation readings, YAML path).
@@ -171,24 +194,32 @@ impl ArmFeed {
             move |e: iceoryx2::port::ReceiveError| FeedError::Receive { service: service.clone(), reason: format!("{e:?}") }
         };
         let mut n = 0;
-        let text = &mut self.text;
+        let (text, json) = (&mut self.text, self.json);
         while let Some(s) = self.raw.receive().map_err(receive_error(&self.names.raw))? {
-            messages::write_raw(text, &s, &self.descriptor);
+            if json {
+                messages::write_raw(text, &s, &self.descriptor);
+            }
             each(FeedMessage { topic: "raw", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Raw(&s) })?;
             n += 1;
         }
         while let Some(s) = self.state.receive().map_err(receive_error(&self.names.joint_state))? {
-            messages::write_joint_state(text, &s);
+            if json {
+                messages::write_joint_state(text, &s);
+            }
             each(FeedMessage { topic: "joint_state", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: s.final_sample != 0, sample: Sample::State(&s) })?;
             n += 1;
         }
         while let Some(s) = self.diagnostics.receive().map_err(receive_error(&self.names.diagnostics))? {
-            messages::write_diagnostics(text, &s);
+            if json {
+                messages::write_diagnostics(text, &s);
+            }
             each(FeedMessage { topic: "diagnostics", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Diagnostics(&s) })?;
             n += 1;
         }
         while let Some(s) = self.commands.receive().map_err(receive_error(&self.names.commands))? {
-            *text = messages::command(&s).to_string();
+            if json {
+                *text = messages::command(&s).to_string();
+            }
             each(FeedMessage { topic: "commands", number: s.sequence, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Command(&s) })?;
             n += 1;
         }

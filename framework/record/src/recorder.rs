@@ -292,6 +292,8 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
     let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-record-{}", std::process::id()))?;
     let descriptor = *feed.descriptor();
+    // The ROS 2 profile's messages are made from the typed samples: no JSON.
+    feed.set_json(opts.profile == Profile::Json);
 
     let file = std::fs::File::create(&opts.out).map_err(|source| RecordError::File { file: opts.out.clone(), source })?;
     let mcap_error = |source| RecordError::Mcap { file: opts.out.clone(), source };
