@@ -75,24 +75,28 @@ fn gravity_feedforward_holds_three_poses_of_the_free_arm_ten_times_closer() {
         assert!((without.stiffness_nm_per_rad * without.error_rad + without.reference_nm).abs() < 0.05 * without.reference_nm.abs() + 0.05, "{without:?}");
         assert!(without.error_rad.abs() > 0.05, "gravity pulls {} away from its target: {without:?}", r.dof);
         // With feed-forward the loop holds the *observed* torque. The element's hysteresis (a band
-        // of 2 x limit_nm) and friction, which the observer does not model, leave the true torque
-        // anywhere inside them, so the pose rests within band / K of its target, where along the
-        // band depending on the path there. Where band / K is more than a tenth of the error
-        // without feed-forward, ten times cannot be promised, and the band is what is asked:
-        // only q7, (2 x 0.05 + 0.03) Nm / 10 Nm/rad = 13 mrad against about 100 mrad. Found when
-        // the parameters' JSON was read to the last bit (1 ulp) and folded-back q7 went from
-        // 57x to 9.7x. Bands from configs/sherpa_arm.yaml (hysteresis 2 x limit_nm plus the
-        // arctan friction's k_a * pi / 2).
-        let band_nm = match r.dof.as_str() {
-            "q2" => 2.0 * 0.4 + 0.16,
-            "q4" => 2.0 * 0.2 + 0.08,
-            "q7" => 2.0 * 0.05 + 0.03,
-            other => panic!("no band for {other}"),
-        };
+        // of 2 x limit_nm) and friction (arctan, about k_a * pi / 2), which the observer does not
+        // model, leave the true torque anywhere inside them, so the pose rests within band / K of
+        // its target, where along the band depending on the path there. Where band / K is more
+        // than a tenth of the error without feed-forward, ten times cannot be promised, and the
+        // band is what is asked: only q7, (2 x 0.05 + 0.03) Nm / 10 Nm/rad = 13 mrad against
+        // about 100 mrad. Found when the parameters' JSON was read to the last bit (1 ulp) and
+        // folded-back q7 went from 57x to 9.7x.
+        let band_nm = plant_band_nm(&loaded, &r.dof);
         let allowed = (without.error_rad.abs() / 10.0).max(band_nm / r.stiffness_nm_per_rad);
         assert!(r.error_rad.abs() <= allowed, "{} {}: with {} rad, without {} rad, allowed {allowed} rad", r.pose, r.dof, r.error_rad, without.error_rad);
         assert!(r.ripple_rad < 0.005 && without.ripple_rad < 0.005, "a hold, not a swing: {r:?} {without:?}");
     }
+}
+
+/// The band of the plant effects the observer does not model on `dof` [Nm]: the hysteresis'
+/// 2 x limit_nm plus the arctan friction's k_a * pi / 2 (the joint's effects, or the DOF's own).
+fn plant_band_nm(loaded: &jointctl_config::LoadedConfig, dof: &str) -> f64 {
+    let joint = loaded.config.joints.iter().find(|j| j.dof_names().contains(&dof)).unwrap_or_else(|| panic!("no joint has {dof}"));
+    let sim = joint.sim.as_ref().unwrap_or_else(|| panic!("{dof}: no sim section"));
+    let k = joint.dof_names().iter().position(|d| *d == dof).unwrap_or(0);
+    let effects = sim.effects_per_dof.get(k).unwrap_or(&sim.effects);
+    2.0 * effects.hysteresis.as_ref().map_or(0.0, |h| h.limit_nm) + effects.arctan_friction.as_ref().map_or(0.0, |a| a.k_a_nm * std::f64::consts::FRAC_PI_2)
 }
 
 /// A free arm without a URDF, or with a URDF joint nobody simulates, is refused with where.
