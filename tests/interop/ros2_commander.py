@@ -11,75 +11,12 @@ JOINT (no values); prints one JSON object: {"responses": [[kind, joint, accepted
 import json
 import sys
 import time
-from dataclasses import dataclass
-
-from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float64, int32, sequence, uint32
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
-
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: int32
-    nanosec: uint32
-
-
-@dataclass
-class Duration(IdlStruct, typename="builtin_interfaces::msg::dds_::Duration_"):
-    sec: int32
-    nanosec: uint32
-
-
-@dataclass
-class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time
-    frame_id: str
-
-
-@dataclass
-class JointTrajectoryPoint(IdlStruct, typename="trajectory_msgs::msg::dds_::JointTrajectoryPoint_"):
-    positions: sequence[float64]
-    velocities: sequence[float64]
-    accelerations: sequence[float64]
-    effort: sequence[float64]
-    time_from_start: Duration
-
-
-@dataclass
-class JointTrajectory(IdlStruct, typename="trajectory_msgs::msg::dds_::JointTrajectory_"):
-    header: Header
-    joint_names: sequence[str]
-    points: sequence[JointTrajectoryPoint]
-
-
-@dataclass
-class CommandPoint(IdlStruct, typename="jointctl_msgs::msg::dds_::CommandPoint_"):
-    t_s: float64
-    position_rad: float64
-    velocity_rad_s: float64
-
-
-@dataclass
-class CommandRequest(IdlStruct, typename="jointctl_msgs::msg::dds_::CommandRequest_"):
-    kind: str
-    joint: str
-    waveform: str
-    values: sequence[float64]
-    points: sequence[CommandPoint]
-
-
-@dataclass
-class CommandResponse(IdlStruct, typename="jointctl_msgs::msg::dds_::CommandResponse_"):
-    header: Header
-    kind: str
-    joint: str
-    accepted: bool
-    message: str
+from ros2_types import CommandRequest, CommandResponse, Duration, Header, JointTrajectory, JointTrajectoryPoint, Time, ros2_qos, valid
 
 
 def wait_until(condition, seconds):
@@ -94,7 +31,7 @@ def wait_until(condition, seconds):
 def main():
     domain, joint, position, kind = int(sys.argv[1]), sys.argv[2], float(sys.argv[3]), sys.argv[4]
     dp = DomainParticipant(domain)
-    qos = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.Volatile, Policy.History.KeepLast(10))
+    qos = ros2_qos(10)
     responses = DataReader(dp, Topic(dp, "rt/jointctl/command_responses", CommandResponse), qos=qos)
     trajectories = DataWriter(dp, Topic(dp, "rt/jointctl/joint_trajectory", JointTrajectory), qos=qos)
     requests = DataWriter(dp, Topic(dp, "rt/jointctl/command", CommandRequest), qos=qos)
@@ -109,7 +46,7 @@ def main():
     requests.write(CommandRequest(kind, joint, "", [], []))
     got = []
     wait_until(lambda: got.extend(
-        [r.kind, r.joint, r.accepted, r.message] for r in responses.take(N=10) if type(r).__name__ != "InvalidSample"
+        [r.kind, r.joint, r.accepted, r.message] for r in valid(responses.take(N=10))
     ) or len(got) >= 2, 10)
     print(json.dumps({"responses": got}))
 

@@ -13,92 +13,15 @@ import json
 import math
 import sys
 import time
-from dataclasses import dataclass
-
-from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float64, int32, sequence, uint8, uint32, uint64
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
-
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: int32
-    nanosec: uint32
-
-
-@dataclass
-class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time
-    frame_id: str
-
-
-@dataclass
-class JointState(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
-    header: Header
-    name: sequence[str]
-    position: sequence[float64]
-    velocity: sequence[float64]
-    effort: sequence[float64]
-
-
-@dataclass
-class JointDetail(IdlStruct, typename="jointctl_msgs::msg::dds_::JointDetail_"):
-    name: str
-    position_rad: float64
-    velocity_rad_s: float64
-    deflection_rad: float64
-    torque_nm: float64
-    stiffness_nm_per_rad: float64
-    pivot_mm: float64
-    reference_torque_nm: float64
-    sensor_torque_nm: float64
-    gravity_nm: float64
-    mode: str
-    enabled: bool
-    fault_code: uint32
-
-
-@dataclass
-class JointDetails(IdlStruct, typename="jointctl_msgs::msg::dds_::JointDetails_"):
-    header: Header
-    cycle: uint64
-    stamp_ns: uint64
-    final_sample: bool
-    joints: sequence[JointDetail]
-
-
-@dataclass
-class KeyValue(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
-    key: str
-    value: str
-
-
-@dataclass
-class DiagnosticStatus(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticStatus_"):
-    level: uint8
-    name: str
-    message: str
-    hardware_id: str
-    values: sequence[KeyValue]
-
-
-@dataclass
-class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticArray_"):
-    header: Header
-    status: sequence[DiagnosticStatus]
+from ros2_types import DiagnosticArray, JointDetails, JointState, ros2_qos, valid
 
 
 def stamp_ns(h):
     return h.stamp.sec * 1_000_000_000 + h.stamp.nanosec
-
-
-def valid(samples):
-    """The samples that carry data (a writer going away arrives as an InvalidSample)."""
-    return [s for s in samples if type(s).__name__ != "InvalidSample"]
 
 
 def clean(xs):
@@ -110,7 +33,7 @@ def main():
     dp = DomainParticipant(domain)
     # ROS 2's default QoS: reliable, volatile, keep last (a deeper history so a slow poll here
     # loses nothing).
-    qos = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.Volatile, Policy.History.KeepLast(1000))
+    qos = ros2_qos(1000)
     states = DataReader(dp, Topic(dp, "rt/joint_states", JointState), qos=qos)
     details = DataReader(dp, Topic(dp, "rt/jointctl/joint_details", JointDetails), qos=qos)
     diagnostics = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray), qos=qos)
