@@ -8,7 +8,7 @@ mod rate;
 
 pub use noise::noise_floor;
 use noise::scatter_rms;
-use rate::{velocity_by_segment, velocity_half_widths};
+use rate::{DeflectionNoise, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals};
 use super::design::Part;
@@ -302,8 +302,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     // The deflection's noise: its quantisation (uniform over a step) and what else scatters it
     // about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
-    let deflection_noise = (resolution * resolution / 12.0 + deflection_scatter.powi(2)).sqrt();
-    let v = velocity_by_segment(&t, &d, &starts, deflection_noise, &velocity_half_widths(d.len(), &turning, period_samples));
+    let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { resolution_rad: resolution, scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = turning.len();

@@ -9,13 +9,15 @@ const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
 /// The widest the velocity window may be per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`]
 /// of the local period, twice the stroke between the reversals around the sample (debounced at
 /// a tenth of the range), never more than of the fundamental's `period_samples`; between 2 and
-/// 25 samples. A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
+/// 100 samples (an assumption: +-0.1 s at 1 kHz, where a hand's motion of a few hertz bends;
+/// the first version stopped at 25, which at 1 kHz left a 14-bit encoder's staircase in the rate
+/// of a slow stroke). A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
 /// in places than its fundamental says: a window sized on the fundamental reads those rates low,
 /// and every rate-driven torque (viscous friction most) comes out too large. Where the motion
 /// bends faster than its strokes tell (a corner between a hold and a ramp; every sample of a
 /// slow log), [`adaptive_velocity`] narrows the window further.
 pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64) -> Vec<usize> {
-    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(2, 25);
+    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(2, 100);
     let mut out = vec![half(period_samples); n];
     for w in reversals.windows(2) {
         let h = half(2.0 * (w[1] - w[0]) as f64);
@@ -83,8 +85,8 @@ fn slopes(t: &[f64], d: &[f64], half: &[usize]) -> Vec<(f64, f64)> {
 
 /// The half-widths the rate's window is chosen from [samples], narrowest first (an assumption:
 /// steps of about 1.4 in width, so the chosen window is at most 40 % narrower than the widest
-/// the data allow, up to the 25 samples of [`velocity_half_widths`]).
-const RATE_HALF_WIDTHS: [usize; 9] = [1, 2, 3, 4, 6, 8, 11, 16, 25];
+/// the data allow, up to the 100 samples of [`velocity_half_widths`]).
+const RATE_HALF_WIDTHS: [usize; 13] = [1, 2, 3, 4, 6, 8, 11, 16, 25, 35, 50, 70, 100];
 
 /// Standard errors a wider window's slope may lie from every narrower one's before the wider
 /// window is refused (an assumption: three, a 0.3 % chance each that noise alone refuses it).
@@ -93,14 +95,13 @@ const RATE_WINDOW_SIGMAS: f64 = 3.0;
 /// Deflection rate with a window chosen at each sample by the intersection of confidence
 /// intervals (Goldenshluger and Nemirovski 1997; Katkovnik 1999): the slope of the widest window
 /// among [`RATE_HALF_WIDTHS`] narrower than `widest[i]` (see [`velocity_half_widths`]) and
-/// `widest[i]` itself whose interval `slope +- RATE_WINDOW_SIGMAS se` still meets the intervals
-/// of all narrower ones, `se = noise / sqrt(sum (t - mean t)^2)` with `noise_rad` the
-/// deflection's noise (its quantisation and its own noise). Where the motion is a line to within
+/// `widest[i]` itself whose interval (`slope +-` [`DeflectionNoise::slope_reach`]) still meets
+/// the intervals of all narrower ones. Where the motion is a line to within
 /// the noise it is the widest window (quantisation averaged out); where it bends more than the
 /// noise, narrower. The window sized on the motion's strokes alone read a 20 Hz log's rate over
 /// +-2 to +-7 samples (0.2-0.7 s): the corners between its holds and ramps were smeared, and a
 /// delay of 85 ms with them (the blind devices' delay binned to 20 Hz was not named).
-fn adaptive_velocity(t: &[f64], d: &[f64], noise_rad: f64, widest: &[usize]) -> Vec<f64> {
+fn adaptive_velocity(t: &[f64], d: &[f64], noise: DeflectionNoise, widest: &[usize]) -> Vec<f64> {
     let n = d.len();
     let (mut lo, mut hi) = (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]);
     let mut out = vec![0.0; n];
@@ -113,7 +114,8 @@ fn adaptive_velocity(t: &[f64], d: &[f64], noise_rad: f64, widest: &[usize]) -> 
             if !open[i] || (!last && half[i] >= widest[i]) {
                 continue;
             }
-            let reach = if spread > 0.0 { RATE_WINDOW_SIGMAS * noise_rad / spread.sqrt() } else { f64::INFINITY };
+            let m = ((i + half[i]).min(n - 1) + 1 - i.saturating_sub(half[i])) as f64;
+            let reach = if spread > 0.0 { noise.slope_reach(m, spread) } else { f64::INFINITY };
             lo[i] = lo[i].max(slope - reach);
             hi[i] = hi[i].min(slope + reach);
             if lo[i] > hi[i] {
@@ -126,13 +128,38 @@ fn adaptive_velocity(t: &[f64], d: &[f64], noise_rad: f64, widest: &[usize]) -> 
     out
 }
 
+/// What scatters a deflection reading about the motion: its quantisation and its own noise.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DeflectionNoise {
+    /// The encoder's step [rad]: a reading is off by at most half of it.
+    pub resolution_rad: f64,
+    /// What else scatters the deflection from sample to sample, rms [rad].
+    pub scatter_rad: f64,
+}
+
+impl DeflectionNoise {
+    /// How far a window's least-squares slope may lie from the motion's rate [rad/s], for a
+    /// window of `m` samples whose time stamps spread `spread` [s^2] about their mean:
+    /// [`RATE_WINDOW_SIGMAS`] standard errors of the scatter, plus the most that quantisation
+    /// can tilt it. Quantisation is no white noise on a slow motion: its error is a sawtooth that
+    /// keeps its sign for many samples, bounded by half a step, so its tilt is bounded by
+    /// `q/2 sum|t - mean t| / spread <= q/2 sqrt(m / spread)` (Cauchy-Schwarz). Taken as white
+    /// (`q / sqrt 12` per sample), a 14-bit encoder's staircase at 1 kHz refused every window
+    /// wider than a few samples on a slow stroke, and the rate read off by a tenth of its rms:
+    /// a viscous friction of a fifth of the arctan's slope was buried under it (the blind
+    /// devices' viscous friction was named at 20 Hz and missed at full rate).
+    pub fn slope_reach(&self, m: f64, spread: f64) -> f64 {
+        RATE_WINDOW_SIGMAS * self.scatter_rad / spread.sqrt() + 0.5 * self.resolution_rad * (m / spread).sqrt()
+    }
+}
+
 /// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a gap.
-pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise_rad: f64, half: &[usize]) -> Vec<f64> {
+pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise: DeflectionNoise, half: &[usize]) -> Vec<f64> {
     let mut v = Vec::with_capacity(d.len());
     for (k, &a) in starts.iter().enumerate() {
         let b = starts.get(k + 1).copied().unwrap_or(d.len());
         if b - a >= 2 {
-            v.extend(adaptive_velocity(&t[a..b], &d[a..b], noise_rad, &half[a..b]));
+            v.extend(adaptive_velocity(&t[a..b], &d[a..b], noise, &half[a..b]));
         } else {
             v.extend(std::iter::repeat_n(0.0, b - a));
         }
@@ -170,6 +197,30 @@ mod tests {
         let truth = |t: f64| 0.1 * TAU * 0.25 * (TAU * 0.25 * t).cos();
         let worst = p.train.t.iter().zip(&p.train.v).skip(100).map(|(t, v)| (v - truth(*t)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.05 * 0.1 * TAU * 0.25, "rate off by up to {worst} rad/s");
+    }
+
+    #[test]
+    fn a_slow_stroke_through_a_coarse_encoder_at_a_high_rate_is_read_through_its_staircase() {
+        // Finding (the blind devices' viscous friction, named at 20 Hz and missed at 1 kHz): a
+        // 14-bit encoder's step taken as white noise made every window wider than a few samples
+        // look bent on a slow stroke (its quantisation error is a sawtooth that keeps its sign),
+        // and a window cap of 25 samples (+-25 ms) could not average the staircase out; the rate
+        // was off by a tenth of its rms, which an arctan friction's slope turned into torque.
+        // A 0.2 Hz sine of 0.04 rad (about 100 counts) at 1 kHz, and its truth.
+        use std::f64::consts::TAU;
+        let q = TAU / 16384.0;
+        let t: Vec<f64> = (0..40_000).map(|i| f64::from(i) * 1e-3).collect();
+        let deflection: Vec<f64> = t.iter().map(|t| (0.04 * (TAU * 0.2 * t).sin() / q).round() * q).collect();
+        let torque = deflection.iter().map(|d| 60.0 * d).collect();
+        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
+        let truth = |t: f64| 0.04 * TAU * 0.2 * (TAU * 0.2 * t).cos();
+        let (mut error, mut signal) = (0.0, 0.0);
+        for (t, v) in p.train.t.iter().zip(&p.train.v).skip(200) {
+            error += (v - truth(*t)).powi(2);
+            signal += truth(*t).powi(2);
+        }
+        let share = (error / signal).sqrt();
+        assert!(share < 0.03, "the rate is off by {:.1} % of its rms", 100.0 * share);
     }
 
     /// The least-squares line's slope through samples `a..=b`, summed directly.
