@@ -1,0 +1,109 @@
+//! The observer's model offline: a joint's configured characteristic and its `model_extension`
+//! along recorded deflections, as the plugins compute them online.
+
+use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
+use jointctl_models::extension::{ExtensionSpec, ModelExtension};
+use serde_json::Value;
+
+use super::err;
+use crate::ExperimentError;
+
+/// The observer's torque along the recorded deflections [Nm]: the joint's characteristic
+/// (`params.characteristic` at the recorded pivot, or `params.stiffness_nm_per_rad`), through its
+/// `model_extension` when it has one, as the elastic and shoulder plugins compute it online.
+/// NaN where the deflection is unknown (and the extension's state starts again after it).
+///
+/// ```
+/// let params = serde_json::json!({"stiffness_nm_per_rad": 100.0, "model_extension": {"torque_offset_nm": 0.5}});
+/// let tau = jointctl_experiments::model_loop::observer_torque(&params, &[0.0, 0.01], &[0.0, 0.02], &[f64::NAN; 2]).unwrap();
+/// assert!((tau[1] - 2.5).abs() < 1e-12);
+/// ```
+pub fn observer_torque(params: &Value, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    observer_torque_of(params, 0, t_s, deflection_rad, pivot_mm)
+}
+
+/// `params.characteristic`, if the joint has one.
+fn characteristic(params: &Value) -> Result<Option<CharacteristicSpec>, ExperimentError> {
+    params.get("characteristic").map(|spec| serde_json::from_value(spec.clone()).map_err(|e| err(format!("params.characteristic: {e}")))).transpose()
+}
+
+/// Whether `params` hold a 2-DOF (wrist) characteristic, whose curves have directions.
+pub(super) fn two_dof(params: &Value) -> bool {
+    characteristic(params).ok().flatten().is_some_and(|s| s.is_two_dof())
+}
+
+/// The torque [Nm] a joint's params give DOF `dof` at `(pivot [mm], deflection [rad])`: its
+/// characteristic at the pivot (the wrist's for that DOF with the other undeflected, section
+/// 3.5.2), or `stiffness_nm_per_rad` times the deflection; the configured model `identify --config`
+/// takes as its baseline and the observer starts from.
+///
+/// ```
+/// let params = serde_json::json!({"stiffness_nm_per_rad": 100.0});
+/// let curve = jointctl_experiments::model_loop::configured_torque(&params, 0).unwrap();
+/// assert!((curve(0.0, 0.01) - 1.0).abs() < 1e-12);
+/// ```
+pub fn configured_torque(params: &Value, dof: usize) -> Result<Box<dyn Fn(f64, f64) -> f64 + Send + Sync>, ExperimentError> {
+    let table_err = |e: jointctl_models::characteristic::SpecError| err(format!("params.characteristic.{}: {}", e.field, e.message));
+    match characteristic(params)? {
+        Some(spec) if spec.is_two_dof() => {
+            let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(table_err)?;
+            Ok(Box::new(move |pivot, x| table.torque_of_dof(pivot, dof, x)))
+        }
+        Some(spec) => {
+            let table = PivotCharacteristic::from_spec(&spec).map_err(table_err)?;
+            Ok(Box::new(move |pivot, x| table.evaluate(pivot, x).torque_nm))
+        }
+        None => match params.get("stiffness_nm_per_rad").and_then(Value::as_f64) {
+            Some(k) => Ok(Box::new(move |_, x| k * x)),
+            None => Err(err("params: neither `characteristic` nor `stiffness_nm_per_rad`: the joint has no elastic observer model")),
+        },
+    }
+}
+
+/// [`observer_torque`] for DOF `dof` of the joint: for the wrist (section 3.5.2), that DOF's
+/// table torque with the other DOF undeflected, through `model_extension[dof]`, as the wrist
+/// plugin computes it online along a record that deflects that DOF alone.
+///
+/// ```
+/// let params = serde_json::json!({"stiffness_nm_per_rad": 100.0});
+/// let tau = jointctl_experiments::model_loop::observer_torque_of(&params, 0, &[0.0], &[0.01], &[f64::NAN]).unwrap();
+/// assert!((tau[0] - 1.0).abs() < 1e-12);
+/// ```
+pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    let curve = configured_torque(params, dof)?;
+    let needs_pivot = characteristic(params)?.is_some_and(|s| s.pivot_settings_mm().len() > 1);
+    // The wrist's extension is a list, one entry per DOF.
+    let (given, field) = match params.get("model_extension") {
+        Some(Value::Array(list)) => (list.get(dof).cloned(), format!("params.model_extension[{dof}]")),
+        other => (other.cloned(), "params.model_extension".to_string()),
+    };
+    let mut extension = match given {
+        None | Some(Value::Null) => None,
+        Some(v) => {
+            let spec: ExtensionSpec = serde_json::from_value(v).map_err(|e| err(format!("{field}: {e}")))?;
+            Some(ModelExtension::new(spec).map_err(|e| err(format!("{field}.{}: {}", e.field, e.message)))?)
+        }
+    };
+    let mut out = Vec::with_capacity(t_s.len());
+    for (k, (&t, &phi)) in t_s.iter().zip(deflection_rad).enumerate() {
+        // A model that changes with the pivot has no torque without a pivot reading (the plugins
+        // leave it unknown online); one that does not reads at its one setting.
+        let pivot = pivot_mm.get(k).copied().filter(|p| p.is_finite() || needs_pivot).unwrap_or(0.0);
+        if !phi.is_finite() || !pivot.is_finite() {
+            if let Some(e) = &mut extension {
+                e.reset();
+            }
+            out.push(f64::NAN);
+            continue;
+        }
+        out.push(match &mut extension {
+            Some(e) => {
+                e.at_pivot(pivot);
+                let tau = curve(pivot, e.elastic_deflection(phi));
+                e.torque(t, phi, tau)
+            }
+            None => curve(pivot, phi),
+        });
+    }
+    Ok(out)
+}
