@@ -5,7 +5,7 @@
 //!
 //! The pairs: a stiffening cubic against a play, eq. 3.5's arctan friction against Dahl
 //! hysteresis, Dahl hysteresis against viscous friction. Even seeds hide the pair's first cause,
-//! odd seeds its second, at the sizes of `model_loop.rs`'s draws (a few per cent to a tenth of
+//! odd seeds its second, at the sizes of `model_loop/`'s draws (a few per cent to a tenth of
 //! the characterisation's ~11 Nm).
 //!
 //! A campaign, not a gate: it runs two simulated records and two identifications per case, and

@@ -1,6 +1,6 @@
 //! The fault-injection suite: each case injects one fault into a running arm and states its
 //! pass criterion in its doc comment. Cases that need processes, signals or the CAN VM live in
-//! `processes.rs`, `frame_loss.rs` and `socketcan_vcan.rs`; this file holds the in-process ones.
+//! `processes/`, `frame_loss.rs` and `socketcan_vcan/`; this file holds the in-process ones.
 
 use jointctl_api::{JointFault, MotorSetpoint};
 use jointctl_modes::Mode;

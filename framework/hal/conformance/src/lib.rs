@@ -4,7 +4,7 @@
 //! `iceoryx2-cal/conformance-tests` test every implementation of a trait: a backend is
 //! conformant when [`hal_conformance_tests!`] passes for it. The null and simulated backends
 //! run it in this crate's tests; the SocketCAN backend runs it inside the CAN VM
-//! (`tests/tests/socketcan_vcan.rs`) against a simulated ELMO drive on `vcan0`.
+//! (`tests/tests/socketcan_vcan/`) against a simulated ELMO drive on `vcan0`.
 //!
 //! The contract (each a function here, each a test per backend):
 //! - [`frames_keep_their_sizes`]: `read` and `write` never resize a frame;
