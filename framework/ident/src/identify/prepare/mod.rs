@@ -299,8 +299,8 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
     };
     let turning = reversals(&d);
-    // The deflection's noise: its quantisation (uniform over a step) and what else scatters it
-    // about a line from sample to sample (see [`scatter_rms`]).
+    // The deflection's noise: its quantisation (at most half a step, see `DeflectionNoise`) and
+    // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
     let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { resolution_rad: resolution, scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
