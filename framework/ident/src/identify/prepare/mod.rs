@@ -302,7 +302,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     // The deflection's noise: its quantisation (at most half a step, see `DeflectionNoise`) and
     // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
-    let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { resolution_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples));
+    let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = turning.len();

@@ -32,12 +32,22 @@ pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples
 /// 1024 samples so that rounding cannot build up over a long record.
 #[cfg(test)]
 fn velocity(t: &[f64], d: &[f64], half: &[usize]) -> Vec<f64> {
-    slopes(t, d, half).into_iter().map(|(slope, _)| slope).collect()
+    slopes(t, d, half).into_iter().map(|w| w.slope).collect()
 }
 
-/// [`velocity`]'s slopes with the spread of each window's time stamps about their mean,
-/// `sum (t - mean t)^2` [s^2]: a slope's standard error is the deflection's noise over its root.
-fn slopes(t: &[f64], d: &[f64], half: &[usize]) -> Vec<(f64, f64)> {
+/// One window's least-squares line.
+struct Window {
+    /// Its slope [rad/s].
+    slope: f64,
+    /// The spread of its time stamps about their mean, `sum (t - mean t)^2` [s^2].
+    spread: f64,
+    /// Its samples.
+    samples: f64,
+}
+
+/// [`velocity`]'s windows: each one's slope, the spread of its time stamps (a slope's standard
+/// error is the deflection's noise over its root) and its number of samples.
+fn slopes(t: &[f64], d: &[f64], half: &[usize]) -> Vec<Window> {
     let n = d.len();
     let mut out = Vec::with_capacity(n);
     let (mut st, mut sd, mut stt, mut std_) = (0.0, 0.0, 0.0, 0.0);
@@ -78,7 +88,7 @@ fn slopes(t: &[f64], d: &[f64], half: &[usize]) -> Vec<(f64, f64)> {
         let m = (hi - lo) as f64;
         let den = stt - st * st / m;
         let num = std_ - st * sd / m;
-        out.push(if den > 1e-300 { (num / den, den) } else { (0.0, 0.0) });
+        out.push(if den > 1e-300 { Window { slope: num / den, spread: den, samples: m } } else { Window { slope: 0.0, spread: 0.0, samples: m } });
     }
     out
 }
@@ -110,12 +120,11 @@ fn adaptive_velocity(t: &[f64], d: &[f64], noise: DeflectionNoise, widest: &[usi
     let rungs = RATE_HALF_WIDTHS.iter().map(|h| vec![*h; n]).chain(std::iter::once(widest.to_vec()));
     for (rung, half) in rungs.enumerate() {
         let last = rung == RATE_HALF_WIDTHS.len();
-        for (i, (slope, spread)) in slopes(t, d, &half).into_iter().enumerate() {
+        for (i, Window { slope, spread, samples }) in slopes(t, d, &half).into_iter().enumerate() {
             if !open[i] || (!last && half[i] >= widest[i]) {
                 continue;
             }
-            let m = ((i + half[i]).min(n - 1) + 1 - i.saturating_sub(half[i])) as f64;
-            let reach = if spread > 0.0 { noise.slope_reach(m, spread) } else { f64::INFINITY };
+            let reach = if spread > 0.0 { noise.slope_reach(samples, spread) } else { f64::INFINITY };
             lo[i] = lo[i].max(slope - reach);
             hi[i] = hi[i].min(slope + reach);
             if lo[i] > hi[i] {
@@ -137,7 +146,7 @@ pub(super) struct DeflectionNoise {
     /// bounded by it, a 0.02 rad stroke at 1 kHz through a 14-bit output and a 20-bit motor
     /// encoder read its rate 157 % of its rms off (0.9 % now); taking the step from the scatter
     /// (`2 sqrt 3` times it) left 76 %.
-    pub resolution_rad: f64,
+    pub quantum_rad: f64,
     /// The deflection's scatter about a line from sample to sample, rms [rad] (quantisation's
     /// share included: counted twice on a clean staircase, a margin on the safe side).
     pub scatter_rad: f64,
@@ -157,7 +166,7 @@ impl DeflectionNoise {
     /// error after the offset was 0.041 Nm for 0.029 now (noise 0.024). That viscous friction is
     /// still not named at full rate: eq. 3.5's arctan at a low `k_b` stands in for it.
     pub fn slope_reach(&self, m: f64, spread: f64) -> f64 {
-        RATE_WINDOW_SIGMAS * self.scatter_rad / spread.sqrt() + 0.5 * self.resolution_rad * (m / spread).sqrt()
+        RATE_WINDOW_SIGMAS * self.scatter_rad / spread.sqrt() + 0.5 * self.quantum_rad * (m / spread).sqrt()
     }
 }
 
@@ -249,15 +258,7 @@ mod tests {
         let q = TAU / 16384.0;
         let t: Vec<f64> = (0..40_000).map(|i| f64::from(i) * 1e-3).collect();
         let deflection: Vec<f64> = t.iter().map(|t| (0.04 * (TAU * 0.2 * t).sin() / q).round() * q).collect();
-        let torque = deflection.iter().map(|d| 60.0 * d).collect();
-        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
-        let truth = |t: f64| 0.04 * TAU * 0.2 * (TAU * 0.2 * t).cos();
-        let (mut error, mut signal) = (0.0, 0.0);
-        for (t, v) in p.train.t.iter().zip(&p.train.v).skip(200) {
-            error += (v - truth(*t)).powi(2);
-            signal += truth(*t).powi(2);
-        }
-        let share = (error / signal).sqrt();
+        let share = rate_error_share(t, deflection, |t| 0.04 * TAU * 0.2 * (TAU * 0.2 * t).cos());
         assert!(share < 0.015, "the rate is off by {:.1} % of its rms", 100.0 * share);
     }
 
@@ -278,16 +279,21 @@ mod tests {
                 (output / q_out).round() * q_out - 2.0 * (motor / q_motor).round() * q_motor
             })
             .collect();
-        let torque = deflection.iter().map(|d| 100.0 * d).collect();
+        let share = rate_error_share(t, deflection, |t| 0.02 * TAU * 0.25 * (TAU * 0.25 * t).cos());
+        assert!(share < 0.05, "the rate is off by {:.1} % of its rms", 100.0 * share);
+    }
+
+    /// The rms error of the rate `prepare` reads on the training part (its first 200 samples
+    /// left out) as a share of the rms of the true rate `truth(t)`.
+    fn rate_error_share(t: Vec<f64>, deflection: Vec<f64>, truth: impl Fn(f64) -> f64) -> f64 {
+        let torque = deflection.iter().map(|d| 60.0 * d).collect();
         let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
-        let truth = |t: f64| 0.02 * TAU * 0.25 * (TAU * 0.25 * t).cos();
         let (mut error, mut signal) = (0.0, 0.0);
         for (t, v) in p.train.t.iter().zip(&p.train.v).skip(200) {
             error += (v - truth(*t)).powi(2);
             signal += truth(*t).powi(2);
         }
-        let share = (error / signal).sqrt();
-        assert!(share < 0.05, "the rate is off by {:.1} % of its rms", 100.0 * share);
+        (error / signal).sqrt()
     }
 
     /// The least-squares line's slope through samples `a..=b`, summed directly.
