@@ -205,15 +205,26 @@ fn bad_identify_arguments_are_errors_not_silently_changed() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(expected), "expected `{expected}` in: {err}");
     }
-    // A wrist DOF against the wrist's table needs a record along that DOF: at 45 deg both deflect.
-    let dir = scratch("identify-wrist-45");
-    let along_45 = dir.join("q6-45.csv");
-    let rows: String = (0..400).map(|i| format!("{},{},{},20,45\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.05).sin(), 1.0 * (i as f64 * 0.05).sin())).collect();
-    std::fs::write(&along_45, format!("t,deflection,torque,pivot_mm,angle_deg\n{rows}")).unwrap();
-    let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&along_45).args(["--config", "configs/sherpa_arm.yaml", "--joint", "q6"]).output().unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("sample 1: deflection direction 45 deg; `q6` is identified from a record along it (90 deg"), "{err}");
+    // A wrist DOF against the wrist's table: a record along the other DOF's axis names the DOF to
+    // identify from it, an axis reversed (its torque and deflection negated) the axes, and a record of several directions the sample where the direction changes
+    // (a diagonal's record alone is identified against the table along it: tests/model_loop.rs).
+    let dir = scratch("identify-wrist-directions");
+    let write = |name: &str, angle: &dyn Fn(usize) -> f64| {
+        let path = dir.join(name);
+        let rows: String = (0..400).map(|i| format!("{},{},{},20,{}\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.05).sin(), 1.0 * (i as f64 * 0.05).sin(), angle(i))).collect();
+        std::fs::write(&path, format!("t,deflection,torque,pivot_mm,angle_deg\n{rows}")).unwrap();
+        path
+    };
+    for (file, expected) in [
+        (write("q7-axis.csv", &|_| 0.0), "deflection direction 0 deg is the other wrist DOF's axis: identify `q7` from this record (`q6` from one along 90 deg)"),
+        (write("q6-axis-reversed.csv", &|_| 270.0), "deflection direction 270 deg is a wrist axis reversed: record q7 along 0 deg and q6 along 90 deg"),
+        (write("two-directions.csv", &|i| if i < 200 { 45.0 } else { 135.0 }), "sample 201: deflection direction 135 deg after 45 deg: identify one direction's record at a time"),
+    ] {
+        let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&file).args(["--config", "configs/sherpa_arm.yaml", "--joint", "q6"]).output().unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "expected `{expected}` in: {err}");
+    }
 }
 
 #[test]

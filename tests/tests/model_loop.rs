@@ -391,3 +391,69 @@ fn the_wrist_with_a_hidden_hysteresis_in_one_dof_is_named_on_that_dof() {
         assert!(extended.contains("effects_per_dof"), "q7's plant terms go to its own effects");
     }
 }
+
+/// Section 3.5.2's diagonal directions (issue 32): along 45 and 135 deg both wrist DOFs deflect
+/// (q6 by sin, q7 by cos of the direction), and the baseline is the table's torque along that
+/// direction. A Dahl loop in q7 alone (60 Nm/rad, 0.25 Nm) shows along either diagonal as a loop
+/// of `cos(45 deg)` its limit (q7's torque projected) and `cos^2` its rest stiffness (q7 deflected
+/// by the deflection times `cos` of the direction): named with that limit; the clean plant along 45 deg gets no
+/// cause. A diagonal's causes belong to the pair: `--out` is refused with the reason, and a
+/// record along the other DOF's axis names the DOF to identify from it.
+#[test]
+fn the_wrist_recorded_along_its_diagonals_is_identified_against_the_tables_torque_along_them() {
+    let name = "ml-wrist-diag";
+    let arm = arm_name(name);
+    let edits = |q7: &str| {
+        vec![
+            Edit::Set("joints[wrist].sim.effects", serde_yaml::from_str("{}").unwrap()),
+            Edit::Set("joints[wrist].sim.effects_per_dof", serde_yaml::from_str(&format!("[{{torque_noise_nm: 0.005}}, {{torque_noise_nm: 0.005, {q7}}}]")).unwrap()),
+            Edit::Set("joints[wrist].sim.element", serde_yaml::from_str("{kind: wrist_table}").unwrap()),
+        ]
+    };
+    let config = sherpa_with(&format!("{name}-c"), &arm, &edits(""));
+    let plant = sherpa_with(&format!("{name}-p"), &arm, &edits("hysteresis: {sigma_nm_per_rad: 60.0, limit_nm: 0.25}"));
+    let work = scratch(&format!("{name}-w"));
+    let record = |plant: &Path, angle: &str| {
+        let label = if plant == config.as_path() { "clean" } else { "hidden" };
+        let csv = work.join(format!("{label}-{angle}.csv"));
+        let mut record = Command::new(jointctl());
+        record.args(["sim", "record"]).arg(plant).args(["--joint", "q6", "--angle-deg", angle, "--out"]).arg(&csv);
+        record.args(["--amplitude", "0.1", "--frequency", "0.25", "--duration", "80", "--rate", "200", "--pivot-mm", "20"]);
+        run_ok(&mut record);
+        csv
+    };
+    let identify = |csv: &Path| -> serde_json::Value {
+        serde_json::from_str(&run_ok(Command::new(jointctl()).args(["identify", "--data"]).arg(csv).arg("--config").arg(&config).args(["--joint", "q6", "--json"]))).unwrap()
+    };
+    let expected_limit = 0.25 * std::f64::consts::FRAC_1_SQRT_2;
+    // q7's extension, identified along its own axis, explains the diagonals in the observer.
+    let out = work.join("q7-ext");
+    run_ok(Command::new(jointctl()).args(["identify", "--data"]).arg(record(&plant, "0")).arg("--config").arg(&config).args(["--joint", "q7", "--out"]).arg(&out));
+    for angle in ["45", "135"] {
+        let csv = record(&plant, angle);
+        let json = identify(&csv);
+        let causes: Vec<&str> = json["causes"].as_array().unwrap().iter().map(|c| c["effect"].as_str().unwrap()).collect();
+        println!("{name} along {angle} deg: named {causes:?}; {}", json["causes"]);
+        assert_eq!(json["direction"]["angle_deg"].as_f64(), Some(angle.parse().unwrap()), "the report says the direction");
+        let hysteresis = json["causes"].as_array().unwrap().iter().find(|c| c["effect"] == "hysteresis").unwrap_or_else(|| panic!("along {angle} deg: hysteresis not named: {causes:?}"));
+        let limit = hysteresis["params"]["limit_nm"].as_f64().unwrap();
+        let sigma = hysteresis["params"]["sigma_nm_per_rad"].as_f64().unwrap();
+        assert!((limit / expected_limit - 1.0).abs() < 0.25, "along {angle} deg: limit {limit:.4} Nm, expected {expected_limit:.4}");
+        assert!((sigma / 30.0 - 1.0).abs() < 0.25, "along {angle} deg: rest stiffness {sigma:.1} Nm/rad, expected 30 (60 cos^2 45 deg)");
+        let extended: serde_json::Value = serde_json::from_str(&run_ok(Command::new(jointctl()).args(["identify", "--data"]).arg(&csv).arg("--config").arg(out.join("extended.yaml")).args(["--joint", "q6", "--json"]))).unwrap();
+        let observer = &extended["direction"]["observer"];
+        let (table, with) = (observer["rmse_table"].as_f64().unwrap(), observer["rmse_extended"].as_f64().unwrap());
+        println!("{name} along {angle} deg: the observer with q7's extension from 0 deg: held-out {table:.4} -> {with:.4} Nm");
+        assert!(with <= 0.5 * table, "along {angle} deg: q7's extension leaves {with:.4} of the table's {table:.4} Nm");
+    }
+    let clean = record(&config, "45");
+    let json = identify(&clean);
+    assert!(json["causes"].as_array().unwrap().is_empty(), "the clean wrist along 45 deg: {}", json["causes"]);
+    let refused = Command::new(jointctl()).args(["identify", "--data"]).arg(&clean).arg("--config").arg(&config).args(["--joint", "q6", "--out"]).arg(work.join("x")).output().unwrap();
+    let why = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && why.contains("per DOF"), "--out along a diagonal: {why}");
+    let along_q7 = record(&config, "0");
+    let refused = Command::new(jointctl()).args(["identify", "--data"]).arg(&along_q7).arg("--config").arg(&config).args(["--joint", "q6"]).output().unwrap();
+    let why = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && why.contains("identify `q7`"), "a record along q7's axis given as q6: {why}");
+}

@@ -60,3 +60,41 @@ pub(super) fn trace(data: &Data, mask: &[bool], before: &[f64], after: &[f64]) -
     }
     t
 }
+
+/// The wrist observer's held-out gain along a diagonal deflection direction `angle_deg`
+/// (section 3.5.2): the table alone against the table with the joint's per-DOF
+/// `model_extension` (see [`super::observer_torque_along`]), both scored on the same held-out
+/// samples (those `identify` holds out, where the measurement and both models are known). How an
+/// extension identified along the DOFs' axes explains a record along a diagonal. `None` when the
+/// params have no extension entry, or no held-out sample has both models.
+///
+/// ```
+/// use jointctl_ident::csv::Data;
+/// let params: serde_json::Value = serde_json::json!({
+///     "characteristic": {"source": "assumed", "curves": [
+///         {"pivot_mm": 20.0, "angle_deg": 0.0, "coefficients": [10.0], "stiffness_nm_per_rad": 10.0},
+///         {"pivot_mm": 20.0, "angle_deg": 90.0, "coefficients": [30.0], "stiffness_nm_per_rad": 30.0}]},
+///     "model_extension": [null, {"torque_offset_nm": 0.5}]});
+/// // Measured: the table along 45 deg plus q7's offset projected onto the direction.
+/// let t: Vec<f64> = (0..100).map(|k| k as f64 * 0.01).collect();
+/// let x: Vec<f64> = t.iter().map(|t| 0.01 * (6.0 * t).sin()).collect();
+/// let tau = x.iter().map(|x| 20.0 * x + 0.5 * std::f64::consts::FRAC_1_SQRT_2).collect();
+/// let data = Data::from_columns(t, x, tau);
+/// let gain = jointctl_experiments::model_loop::observer_gain_along(&params, 45.0, &data, 0.7).unwrap().unwrap();
+/// assert!(gain.rmse_after < 1e-9 && (gain.rmse_before - 0.5 * std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-9);
+/// ```
+pub fn observer_gain_along(params: &serde_json::Value, angle_deg: f64, data: &Data, train_fraction: f64) -> Result<Option<Gain>, crate::ExperimentError> {
+    if params.get("model_extension").is_none_or(|e| e.is_null()) {
+        return Ok(None);
+    }
+    let mut table_alone = params.clone();
+    if let Some(p) = table_alone.as_object_mut() {
+        p.remove("model_extension");
+    }
+    let after = super::observer_torque_along(params, angle_deg, &data.t, &data.deflection, &data.pivot_mm)?;
+    let before = super::observer_torque_along(&table_alone, angle_deg, &data.t, &data.deflection, &data.pivot_mm)?;
+    // One set of samples for both: where the measurement and both models are known.
+    let mask: Vec<bool> = held_out_mask(&data.t, train_fraction).iter().zip(before.iter().zip(&after)).map(|(k, (b, a))| *k && b.is_finite() && a.is_finite()).collect();
+    let (rmse_before, rmse_after) = (rmse(&squared_errors(&data.torque, &before, &mask, true)), rmse(&squared_errors(&data.torque, &after, &mask, true)));
+    Ok((rmse_before.is_finite() && rmse_after.is_finite()).then_some(Gain { rmse_before, rmse_after }))
+}

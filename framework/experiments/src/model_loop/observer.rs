@@ -60,6 +60,87 @@ pub fn configured_torque(params: &Value, dof: usize) -> Result<Box<dyn Fn(f64, f
     }
 }
 
+/// The torque [Nm] the wrist's table (section 3.5.2) gives along deflection direction
+/// `angle_deg` (0 = q7 only, 90 = q6 only) at `(pivot [mm], deflection along the direction
+/// [rad])`: q6 deflected by `deflection sin(angle)`, q7 by `deflection cos(angle)`, and their
+/// torques projected back onto the direction, as `sim record --angle-deg` projects a wrist's F/T
+/// torques. Along
+/// 0 and 90 deg it is [`configured_torque`] of q7 and q6. An error for a joint that is not a
+/// 2-DOF wrist.
+///
+/// ```
+/// let params: serde_json::Value = serde_json::json!({"characteristic": {"source": "assumed", "curves": [
+///     {"pivot_mm": 20.0, "angle_deg": 0.0, "coefficients": [10.0], "stiffness_nm_per_rad": 10.0},
+///     {"pivot_mm": 20.0, "angle_deg": 90.0, "coefficients": [30.0], "stiffness_nm_per_rad": 30.0}]}});
+/// let along_q7 = jointctl_experiments::model_loop::configured_torque_along(&params, 0.0).unwrap();
+/// assert!((along_q7(20.0, 0.01) - 0.1).abs() < 1e-12);
+/// let diagonal = jointctl_experiments::model_loop::configured_torque_along(&params, 45.0).unwrap();
+/// assert!((diagonal(20.0, 0.01) - 0.2).abs() < 1e-9);
+/// ```
+pub fn configured_torque_along(params: &Value, angle_deg: f64) -> Result<Box<dyn Fn(f64, f64) -> f64 + Send + Sync>, ExperimentError> {
+    let spec = characteristic(params)?.filter(|s| s.is_two_dof()).ok_or_else(|| err("params.characteristic: not a 2-DOF (wrist) table: a deflection direction needs one"))?;
+    let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+    let (sin, cos) = angle_deg.to_radians().sin_cos();
+    Ok(Box::new(move |pivot, x| {
+        let e = table.evaluate(pivot, x * sin, x * cos);
+        e.torque_q6_nm * sin + e.torque_q7_nm * cos
+    }))
+}
+
+/// The wrist observer's torque along deflection direction `angle_deg` [Nm], as the wrist plugin
+/// computes it online for a deflection on that line (the record of `sim record --angle-deg`
+/// holds the deflection along the line only, so a sideways deflection is not seen here): q6
+/// deflected by `deflection sin(angle)`, q7 by `deflection cos(angle)`, the table at each DOF's
+/// elastic deflection, each DOF's `model_extension` entry added, the two torques projected back
+/// onto the direction, as the record projects the F/T sensor's. NaN where the deflection or a
+/// needed pivot is unknown (the extensions' states start again after it).
+///
+/// ```
+/// let params: serde_json::Value = serde_json::json!({
+///     "characteristic": {"source": "assumed", "curves": [
+///         {"pivot_mm": 20.0, "angle_deg": 0.0, "coefficients": [10.0], "stiffness_nm_per_rad": 10.0},
+///         {"pivot_mm": 20.0, "angle_deg": 90.0, "coefficients": [30.0], "stiffness_nm_per_rad": 30.0}]},
+///     "model_extension": [null, {"torque_offset_nm": 0.5}]});
+/// let tau = jointctl_experiments::model_loop::observer_torque_along(&params, 45.0, &[0.0], &[0.01], &[20.0]).unwrap();
+/// // The table's 0.2 Nm along 45 deg, and q7's offset projected: 0.5 cos(45 deg).
+/// assert!((tau[0] - (0.2 + 0.5 * std::f64::consts::FRAC_1_SQRT_2)).abs() < 1e-9);
+/// ```
+pub fn observer_torque_along(params: &Value, angle_deg: f64, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    let spec = characteristic(params)?.filter(|s| s.is_two_dof()).ok_or_else(|| err("params.characteristic: not a 2-DOF (wrist) table: a deflection direction needs one"))?;
+    let needs_pivot = spec.pivot_settings_mm().len() > 1;
+    let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+    let mut extension: [Option<ModelExtension>; 2] = [None, None];
+    if let Some(list) = params.get("model_extension").filter(|v| !v.is_null()) {
+        let list = list.as_array().filter(|l| l.len() == 2).ok_or_else(|| err("params.model_extension: the wrist's is a list of one entry per DOF, [q6, q7]"))?;
+        for (i, v) in list.iter().enumerate().filter(|(_, v)| !v.is_null()) {
+            let spec: ExtensionSpec = serde_json::from_value(v.clone()).map_err(|e| err(format!("params.model_extension[{i}]: {e}")))?;
+            extension[i] = Some(ModelExtension::new(spec).map_err(|e| err(format!("params.model_extension[{i}].{}: {}", e.field, e.message)))?);
+        }
+    }
+    let (sin, cos) = angle_deg.to_radians().sin_cos();
+    let mut out = Vec::with_capacity(t_s.len());
+    for (k, (&t, &x)) in t_s.iter().zip(deflection_rad).enumerate() {
+        let pivot = pivot_mm.get(k).copied().filter(|p| p.is_finite() || needs_pivot).unwrap_or(0.0);
+        if !x.is_finite() || !pivot.is_finite() {
+            extension.iter_mut().flatten().for_each(ModelExtension::reset);
+            out.push(f64::NAN);
+            continue;
+        }
+        let d = [x * sin, x * cos];
+        extension.iter_mut().flatten().for_each(|e| e.at_pivot(pivot));
+        let elastic = |i: usize| extension[i].as_ref().map_or(d[i], |e| e.elastic_deflection(d[i]));
+        let at = table.evaluate(pivot, elastic(0), elastic(1));
+        let mut torque = [at.torque_q6_nm, at.torque_q7_nm];
+        for (i, e) in extension.iter_mut().enumerate() {
+            if let Some(e) = e {
+                torque[i] = e.torque(t, d[i], torque[i]);
+            }
+        }
+        out.push(torque[0] * sin + torque[1] * cos);
+    }
+    Ok(out)
+}
+
 /// [`observer_torque`] for DOF `dof` of the joint: for the wrist (section 3.5.2), that DOF's
 /// table torque with the other DOF undeflected, through `model_extension[dof]`, as the wrist
 /// plugin computes it online along a record that deflects that DOF alone.

@@ -98,23 +98,49 @@ impl ConfiguredJoint {
         self.spec.as_ref().is_some_and(|s| s.pivot_settings_mm().len() > 1)
     }
 
-    /// A wrist DOF is identified from a record along it (section 3.5.2's 0 deg for q7, 90 deg
-    /// for q6): along another direction both DOFs deflect, and one DOF's model cannot be the
-    /// baseline.
-    fn check_direction(&self, joint: &str, data: &jointctl_ident::csv::Data, data_file: &Path) -> Result<(), String> {
+    /// The direction a wrist record deflects along, if it is not the DOF's own axis (section
+    /// 3.5.2's 0 deg for q7, 90 deg for q6): `Some(45.0)` for a record along 45 deg, where both
+    /// DOFs deflect and the baseline is the table's torque along that direction. A record along
+    /// the other DOF's axis, or along several directions, is refused.
+    fn diagonal(&self, joint: &str, data: &jointctl_ident::csv::Data, data_file: &Path) -> Result<Option<f64>, String> {
         if !self.spec.as_ref().is_some_and(|s| s.is_two_dof()) {
-            return Ok(());
+            return Ok(None);
         }
-        let along = if self.dof == 0 { 90.0 } else { 0.0 };
-        match data.angle_deg.iter().enumerate().find(|(_, a)| a.is_finite() && (*a - along).abs() > 0.5) {
-            Some((i, a)) => Err(format!(
-                "{}: sample {}: deflection direction {a} deg; `{joint}` is identified from a record along it ({along} deg, `jointctl sim record --joint {joint} --angle-deg {along}`): along another direction both wrist DOFs deflect",
-                data_file.display(),
-                i + 1
-            )),
-            None => Ok(()),
+        let (own, other, other_joint) = if self.dof == 0 { (90.0, 0.0, "q7") } else { (0.0, 90.0, "q6") };
+        let mut angles = data.angle_deg.iter().enumerate().filter(|(_, a)| a.is_finite());
+        let Some((_, &first)) = angles.next() else { return Ok(None) };
+        if let Some((i, a)) = angles.find(|(_, a)| (*a - first).abs() > 0.5) {
+            return Err(format!("{}: sample {}: deflection direction {a} deg after {first} deg: identify one direction's record at a time", data_file.display(), i + 1));
+        }
+        // The table's own axes are 0 deg (q7) and 90 deg (q6), each with its sign: an axis
+        // reversed (180, 270 deg) holds the DOF's deflection and torque negated.
+        let near = |a: f64| {
+            let d = (first - a).rem_euclid(360.0);
+            d <= 0.5 || d >= 359.5
+        };
+        if near(own) {
+            Ok(None)
+        } else if near(other) {
+            Err(format!(
+                "{}: deflection direction {first} deg is the other wrist DOF's axis: identify `{other_joint}` from this record (`{joint}` from one along {own} deg)",
+                data_file.display()
+            ))
+        } else if near(own + 180.0) || near(other + 180.0) {
+            Err(format!(
+                "{}: deflection direction {first} deg is a wrist axis reversed: record q7 along 0 deg and q6 along 90 deg (the table's axes, with their signs)",
+                data_file.display()
+            ))
+        } else {
+            Ok(Some(first))
         }
     }
+}
+
+/// What a record along a diagonal direction of the wrist says, in the report and its JSON.
+fn diagonal_note(angle_deg: f64) -> String {
+    format!(
+        "a wrist record along {angle_deg} deg deflects both DOFs (q6 by sin, q7 by cos of the direction): the baseline is the table's torque along it, and a cause found here belongs to the pair; the extension is per DOF and is written from records along 90 deg (q6) and 0 deg (q7)"
+    )
 }
 
 pub fn run_identify(a: IdentifyArgs) -> ExitCode {
@@ -138,7 +164,8 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         },
         _ => None,
     };
-    let baseline = match &configured {
+    let mut diagonal = None;
+    let mut baseline = match &configured {
         Some(cj) => match cj.baseline() {
             Ok(b) => b,
             Err(e) => return crate::fail(e),
@@ -148,8 +175,22 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
     if let (Some(cj), Some(config), Some(joint)) = (&configured, &a.config, &a.joint) {
-        if let Err(e) = cj.check_direction(joint, &data, &a.data) {
-            return crate::fail(e);
+        diagonal = match cj.diagonal(joint, &data, &a.data) {
+            Ok(d) => d,
+            Err(e) => return crate::fail(e),
+        };
+        if let Some(angle) = diagonal {
+            if a.out.is_some() {
+                return crate::fail(format!("{}: --out is refused: {}", a.data.display(), diagonal_note(angle)));
+            }
+            let settings: Vec<String> = data.pivot_settings(MIN_SETTING_SAMPLES).iter().map(|(p, _)| format!("{p:.2}")).collect();
+            if settings.len() >= 2 {
+                return crate::fail(format!("{}: {} pivot settings along {angle} deg ({} mm): identify one setting's record at a time along a diagonal", a.data.display(), settings.len(), settings.join(", ")));
+            }
+            baseline = match jointctl_experiments::model_loop::configured_torque_along(&cj.params, angle) {
+                Ok(torque) => BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))),
+                Err(e) => return crate::fail(e.to_string()),
+            };
         }
         // A record of several pivot settings against a joint with pivot settings: each setting apart.
         let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
@@ -182,7 +223,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     // With a config: the extension written out for the observer and the simulation, and the
     // gain of each on the held-out part.
     let extension = match (&a.config, &a.joint) {
-        (Some(config), Some(joint)) => match extend(config, joint, &report, &data) {
+        (Some(config), Some(joint)) if diagonal.is_none() => match extend(config, joint, &report, &data) {
             Ok(e) => Some(e),
             Err(e) if a.out.is_some() => return crate::fail(format!("cannot write the extension: {e}")),
             // The causes stand without it (a config with no simulated joint): said, not fatal.
@@ -195,7 +236,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     // A closed-loop recording (set-points and readings of a running arm): the causes in the loop.
     let loop_report = match (&a.config, &a.joint) {
-        (Some(config), Some(joint)) if jointctl_record::reader::is_mcap(&a.data) => match loop_causes(&a.data, config, joint) {
+        (Some(config), Some(joint)) if diagonal.is_none() && jointctl_record::reader::is_mcap(&a.data) => match loop_causes(&a.data, config, joint) {
             Ok(r) => Some(r),
             Err(e) => {
                 eprintln!("note: no causes in the loop: {e}");
@@ -216,6 +257,24 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.rmse_after,
         u.noise_floor_nm
     );
+    // The configured extension's gain along the diagonal; the causes stand without it (a bad
+    // extension in the config is said, not fatal, as for the gains along an axis).
+    let along_observer = match (diagonal, &configured, &a.config) {
+        (Some(angle), Some(cj), Some(config)) => match jointctl_experiments::model_loop::observer_gain_along(&cj.params, angle, &data, IdentifyOptions::default().train_fraction) {
+            Ok(g) => g,
+            Err(e) => {
+                eprintln!("note: no observer gain along {angle} deg: {}: {e}", config.display());
+                None
+            }
+        },
+        _ => None,
+    };
+    if let Some(angle) = diagonal {
+        let _ = writeln!(md, "Direction: {}.\n", diagonal_note(angle));
+        if let Some(g) = along_observer {
+            let _ = writeln!(md, "The configured wrist observer along {angle} deg, held-out RMSE: {:.4} Nm with the table alone, {:.4} Nm with its model_extension.\n", g.rmse_before, g.rmse_after);
+        }
+    }
     if let Some(n) = &report.no_spring {
         let _ = writeln!(md, "Read as a friction record: {}.\n", n.note);
     }
@@ -335,6 +394,12 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             json["extension"] = extension_json(ext);
         }
         json["gains"] = gains;
+        if let Some(angle) = diagonal {
+            json["direction"] = serde_json::json!({"angle_deg": angle, "note": diagonal_note(angle)});
+            if let Some(g) = along_observer {
+                json["direction"]["observer"] = serde_json::json!({"rmse_table": g.rmse_before, "rmse_extended": g.rmse_after});
+            }
+        }
         if let Some(l) = &loop_report {
             json["loop"] = serde_json::json!({"values": l.values, "notes": l.notes, "hal_sim": l.hal_sim()});
         }
