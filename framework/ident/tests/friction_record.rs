@@ -10,6 +10,12 @@ use jointctl_ident::identify::{IdentifyOptions, identify};
 /// 0.01 Nm of noise; the position from a 17-bit encoder. Integrated here with 10 sub-steps a
 /// sample, not with the project's Dahl or arctan.
 fn lugre_record(b: f64, seed: u64) -> jointctl_ident::csv::Data {
+    lugre_record_about(b, 0.0, -0.3, 1.0, seed)
+}
+
+/// [`lugre_record`] with a torque sensor's offset `offset_nm` added to every reading, the joint
+/// moved about `centre_rad` with its amplitudes times `scale`.
+fn lugre_record_about(b: f64, offset_nm: f64, centre_rad: f64, scale: f64, seed: u64) -> jointctl_ident::csv::Data {
     use std::f64::consts::TAU;
     let (rate, sub) = (1000.0, 10);
     let (fc, fs, vs, sigma0, sigma1) = (0.5, 0.65, 0.03, 900.0, 2.0);
@@ -19,7 +25,7 @@ fn lugre_record(b: f64, seed: u64) -> jointctl_ident::csv::Data {
     let mut z = 0.0;
     let mut t = 0.0;
     while t < 60.0 {
-        let (f, a) = (0.2 + 0.6 * rng.uniform(), 0.2 + 0.3 * rng.uniform());
+        let (f, a) = (0.2 + 0.6 * rng.uniform(), scale * (0.2 + 0.3 * rng.uniform()));
         let start = t;
         let mut v = 0.0;
         let mut dz = 0.0;
@@ -31,10 +37,10 @@ fn lugre_record(b: f64, seed: u64) -> jointctl_ident::csv::Data {
                 dz = v - sigma0 * v.abs() * z / g;
                 z += dz / (rate * sub as f64);
             }
-            let x = -0.3 + a * (TAU * f * (t + 1.0 / rate - start)).sin();
+            let x = centre_rad + a * (TAU * f * (t + 1.0 / rate - start)).sin();
             t_s.push(t);
             position.push((x / q).round() * q);
-            torque.push(sigma0 * z + sigma1 * dz + b * v + 0.01 * rng.normal());
+            torque.push(sigma0 * z + sigma1 * dz + b * v + offset_nm + 0.01 * rng.normal());
             t += 1.0 / rate;
         }
     }
@@ -91,4 +97,20 @@ fn a_friction_records_lag_is_reported_with_the_friction_not_as_a_time_delay() {
     let no_spring = report.no_spring.as_ref().expect("read as a friction record");
     assert_eq!(named, ["viscous_friction"], "{no_spring:?}");
     assert!(no_spring.lag.contains_key("delay_s") && no_spring.note.contains("lag"), "{no_spring:?}");
+}
+
+#[test]
+fn a_friction_records_sensor_offset_is_named_where_the_joint_moves_far_from_its_zero() {
+    // Found on the blind generator's friction record with a hidden offset 065 (seed 2: 1.05 Nm,
+    // the joint moved by 0.075 rad about -0.38 rad): the baseline's polynomial in the position,
+    // taken through the position's zero as a spring's is through zero deflection, made the
+    // offset its linear term times the motion's distance from that zero, and the offset was not
+    // named. A joint position's zero is arbitrary: the polynomial is taken about the training
+    // part's mean position. This record moves by 0.04-0.1 rad about -1.5 rad (before: the
+    // viscous friction named, the offset not).
+    let (b, offset) = (1.2, 0.3);
+    let report = identify(&lugre_record_about(b, offset, -1.5, 0.2, 0x51ed_270b_a1c3_9f47 ^ 1), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    let found = report.causes.iter().find(|c| c.effect == "sensor_offset").map(|c| c.params["offset_nm"]);
+    assert!(found.is_some_and(|o| (o / offset - 1.0).abs() < 0.1), "named {named:?}, offset {found:?}");
 }

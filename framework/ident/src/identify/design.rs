@@ -145,6 +145,12 @@ struct Design {
 
 pub(crate) struct Model<'a> {
     pub baseline: &'a BaselineModel,
+    /// The deflection the baseline's polynomial is taken about [rad]: zero for a spring (no
+    /// torque at zero deflection, the thesis' fits); for a record read as a joint's friction,
+    /// whose first column is a joint position with an arbitrary zero, the training part's mean
+    /// position, so that a constant torque is a sensor offset's and not the polynomial's linear
+    /// term times the distance of the motion from that zero.
+    pub centre_rad: f64,
     pub causes: &'a [&'a dyn CandidateCause],
     /// Held-out errors of the models evaluated so far (selection, the final check and the report
     /// ask for the same models again).
@@ -233,10 +239,11 @@ impl Model<'_> {
         match self.baseline {
             BaselineModel::Polynomial(order) => {
                 // Each power from the one before (a power by a run-time exponent is a call a sample).
+                let about = self.centre_rad;
                 for k in 1..=*order {
                     let next = match cols.last() {
-                        Some(below) if k > 1 => below.iter().zip(&inputs.elastic_rad).map(|(b, x)| b * x).collect(),
-                        _ => inputs.elastic_rad.clone(),
+                        Some(below) if k > 1 => below.iter().zip(&inputs.elastic_rad).map(|(b, x)| b * (x - about)).collect(),
+                        _ => inputs.elastic_rad.iter().map(|x| x - about).collect(),
                     };
                     cols.push(next);
                 }

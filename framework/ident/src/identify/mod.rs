@@ -347,7 +347,8 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
 /// The search, the selection and the report on prepared data.
 fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
-    let model = Model { baseline: &opts.baseline, causes: &all, held_out: Default::default(), columns: Default::default() };
+    let centre_rad = if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
+    let model = Model { baseline: &opts.baseline, centre_rad, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
