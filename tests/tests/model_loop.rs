@@ -343,6 +343,16 @@ fn the_shoulder_with_a_hidden_effect_is_identified_and_extended_per_pivot_settin
     }
 }
 
+/// The wrist's plant made its own table (`wrist_table`) with the sensor's noise, and `q7`'s
+/// effects (YAML mapping entries) in q7's own set (`effects_per_dof`).
+fn wrist_edits(q7: &str) -> Vec<Edit<'static>> {
+    vec![
+        Edit::Set("joints[wrist].sim.effects", serde_yaml::from_str("{}").unwrap()),
+        Edit::Set("joints[wrist].sim.effects_per_dof", serde_yaml::from_str(&format!("[{{torque_noise_nm: 0.005}}, {{torque_noise_nm: 0.005, {q7}}}]")).unwrap()),
+        Edit::Set("joints[wrist].sim.element", serde_yaml::from_str("{kind: wrist_table}").unwrap()),
+    ]
+}
+
 /// The wrist (section 3.5.2, issue 32): its plant is the observer's own table (`wrist_table`)
 /// plus the sensor's noise, and a hidden Dahl hysteresis in q7 alone (`effects_per_dof`). Each
 /// DOF recorded along itself (0 deg for q7, 90 deg for q6) is identified against the table's
@@ -354,15 +364,8 @@ fn the_wrist_with_a_hidden_hysteresis_in_one_dof_is_named_on_that_dof() {
     let name = "ml-wrist";
     let arm = arm_name(name);
     let hidden = "hysteresis: {sigma_nm_per_rad: 60.0, limit_nm: 0.25}";
-    let edits = |q7: &str| {
-        vec![
-            Edit::Set("joints[wrist].sim.effects", serde_yaml::from_str("{}").unwrap()),
-            Edit::Set("joints[wrist].sim.effects_per_dof", serde_yaml::from_str(&format!("[{{torque_noise_nm: 0.005}}, {{torque_noise_nm: 0.005, {q7}}}]")).unwrap()),
-            Edit::Set("joints[wrist].sim.element", serde_yaml::from_str("{kind: wrist_table}").unwrap()),
-        ]
-    };
-    let config = sherpa_with(&format!("{name}-c"), &arm, &edits(""));
-    let plant = sherpa_with(&format!("{name}-p"), &arm, &edits(hidden));
+    let config = sherpa_with(&format!("{name}-c"), &arm, &wrist_edits(""));
+    let plant = sherpa_with(&format!("{name}-p"), &arm, &wrist_edits(hidden));
     let work = scratch(&format!("{name}-w"));
     for (dof, angle, index) in [("q7", "0", 1), ("q6", "90", 0)] {
         let csv = work.join(format!("{dof}.csv"));
@@ -403,15 +406,8 @@ fn the_wrist_with_a_hidden_hysteresis_in_one_dof_is_named_on_that_dof() {
 fn the_wrist_recorded_along_its_diagonals_is_identified_against_the_tables_torque_along_them() {
     let name = "ml-wrist-diag";
     let arm = arm_name(name);
-    let edits = |q7: &str| {
-        vec![
-            Edit::Set("joints[wrist].sim.effects", serde_yaml::from_str("{}").unwrap()),
-            Edit::Set("joints[wrist].sim.effects_per_dof", serde_yaml::from_str(&format!("[{{torque_noise_nm: 0.005}}, {{torque_noise_nm: 0.005, {q7}}}]")).unwrap()),
-            Edit::Set("joints[wrist].sim.element", serde_yaml::from_str("{kind: wrist_table}").unwrap()),
-        ]
-    };
-    let config = sherpa_with(&format!("{name}-c"), &arm, &edits(""));
-    let plant = sherpa_with(&format!("{name}-p"), &arm, &edits("hysteresis: {sigma_nm_per_rad: 60.0, limit_nm: 0.25}"));
+    let config = sherpa_with(&format!("{name}-c"), &arm, &wrist_edits(""));
+    let plant = sherpa_with(&format!("{name}-p"), &arm, &wrist_edits("hysteresis: {sigma_nm_per_rad: 60.0, limit_nm: 0.25}"));
     let work = scratch(&format!("{name}-w"));
     let record = |plant: &Path, angle: &str| {
         let label = if plant == config.as_path() { "clean" } else { "hidden" };

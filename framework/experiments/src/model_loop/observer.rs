@@ -60,12 +60,35 @@ pub fn configured_torque(params: &Value, dof: usize) -> Result<Box<dyn Fn(f64, f
     }
 }
 
+/// The wrist's table from `params.characteristic`, and whether it changes with the pivot (then
+/// a torque needs a pivot reading). An error for a joint that is not a 2-DOF wrist.
+fn wrist_table(params: &Value) -> Result<(jointctl_models::characteristic::WristCharacteristic, bool), ExperimentError> {
+    let spec = characteristic(params)?.filter(|s| s.is_two_dof()).ok_or_else(|| err("params.characteristic: not a 2-DOF (wrist) table: a deflection direction needs one"))?;
+    let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+    Ok((table, spec.pivot_settings_mm().len() > 1))
+}
+
+/// DOF `dof`'s `model_extension`, if the joint has one: the list's entry `dof` for a joint with
+/// one entry per DOF (the wrist), the one given otherwise; the error names the field.
+fn extension_of(params: &Value, dof: usize) -> Result<Option<ModelExtension>, ExperimentError> {
+    let (given, field) = match params.get("model_extension") {
+        Some(Value::Array(list)) => (list.get(dof).cloned(), format!("params.model_extension[{dof}]")),
+        other => (other.cloned(), "params.model_extension".to_string()),
+    };
+    match given {
+        None | Some(Value::Null) => Ok(None),
+        Some(v) => {
+            let spec: ExtensionSpec = serde_json::from_value(v).map_err(|e| err(format!("{field}: {e}")))?;
+            Ok(Some(ModelExtension::new(spec).map_err(|e| err(format!("{field}.{}: {}", e.field, e.message)))?))
+        }
+    }
+}
+
 /// The torque [Nm] the wrist's table (section 3.5.2) gives along deflection direction
 /// `angle_deg` (0 = q7 only, 90 = q6 only) at `(pivot [mm], deflection along the direction
 /// [rad])`: q6 deflected by `deflection sin(angle)`, q7 by `deflection cos(angle)`, and their
 /// torques projected back onto the direction, as `sim record --angle-deg` projects a wrist's F/T
-/// torques. Along
-/// 0 and 90 deg it is [`configured_torque`] of q7 and q6. An error for a joint that is not a
+/// torques. Along 0 and 90 deg it is [`configured_torque`] of q7 and q6. An error for a joint that is not a
 /// 2-DOF wrist.
 ///
 /// ```
@@ -78,8 +101,7 @@ pub fn configured_torque(params: &Value, dof: usize) -> Result<Box<dyn Fn(f64, f
 /// assert!((diagonal(20.0, 0.01) - 0.2).abs() < 1e-9);
 /// ```
 pub fn configured_torque_along(params: &Value, angle_deg: f64) -> Result<Box<dyn Fn(f64, f64) -> f64 + Send + Sync>, ExperimentError> {
-    let spec = characteristic(params)?.filter(|s| s.is_two_dof()).ok_or_else(|| err("params.characteristic: not a 2-DOF (wrist) table: a deflection direction needs one"))?;
-    let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
+    let (table, _) = wrist_table(params)?;
     let (sin, cos) = angle_deg.to_radians().sin_cos();
     Ok(Box::new(move |pivot, x| {
         let e = table.evaluate(pivot, x * sin, x * cos);
@@ -106,17 +128,11 @@ pub fn configured_torque_along(params: &Value, angle_deg: f64) -> Result<Box<dyn
 /// assert!((tau[0] - (0.2 + 0.5 * std::f64::consts::FRAC_1_SQRT_2)).abs() < 1e-9);
 /// ```
 pub fn observer_torque_along(params: &Value, angle_deg: f64, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
-    let spec = characteristic(params)?.filter(|s| s.is_two_dof()).ok_or_else(|| err("params.characteristic: not a 2-DOF (wrist) table: a deflection direction needs one"))?;
-    let needs_pivot = spec.pivot_settings_mm().len() > 1;
-    let table = jointctl_models::characteristic::WristCharacteristic::from_spec(&spec).map_err(|e| err(format!("params.characteristic.{}: {}", e.field, e.message)))?;
-    let mut extension: [Option<ModelExtension>; 2] = [None, None];
-    if let Some(list) = params.get("model_extension").filter(|v| !v.is_null()) {
-        let list = list.as_array().filter(|l| l.len() == 2).ok_or_else(|| err("params.model_extension: the wrist's is a list of one entry per DOF, [q6, q7]"))?;
-        for (i, v) in list.iter().enumerate().filter(|(_, v)| !v.is_null()) {
-            let spec: ExtensionSpec = serde_json::from_value(v.clone()).map_err(|e| err(format!("params.model_extension[{i}]: {e}")))?;
-            extension[i] = Some(ModelExtension::new(spec).map_err(|e| err(format!("params.model_extension[{i}].{}: {}", e.field, e.message)))?);
-        }
+    let (table, needs_pivot) = wrist_table(params)?;
+    if params.get("model_extension").is_some_and(|v| !v.is_null() && v.as_array().is_none_or(|l| l.len() != 2)) {
+        return Err(err("params.model_extension: the wrist's is a list of one entry per DOF, [q6, q7]"));
     }
+    let mut extension = [extension_of(params, 0)?, extension_of(params, 1)?];
     let (sin, cos) = angle_deg.to_radians().sin_cos();
     let mut out = Vec::with_capacity(t_s.len());
     for (k, (&t, &x)) in t_s.iter().zip(deflection_rad).enumerate() {
@@ -154,17 +170,7 @@ pub fn observer_torque_of(params: &Value, dof: usize, t_s: &[f64], deflection_ra
     let curve = configured_torque(params, dof)?;
     let needs_pivot = characteristic(params)?.is_some_and(|s| s.pivot_settings_mm().len() > 1);
     // The wrist's extension is a list, one entry per DOF.
-    let (given, field) = match params.get("model_extension") {
-        Some(Value::Array(list)) => (list.get(dof).cloned(), format!("params.model_extension[{dof}]")),
-        other => (other.cloned(), "params.model_extension".to_string()),
-    };
-    let mut extension = match given {
-        None | Some(Value::Null) => None,
-        Some(v) => {
-            let spec: ExtensionSpec = serde_json::from_value(v).map_err(|e| err(format!("{field}: {e}")))?;
-            Some(ModelExtension::new(spec).map_err(|e| err(format!("{field}.{}: {}", e.field, e.message)))?)
-        }
-    };
+    let mut extension = extension_of(params, dof)?;
     let mut out = Vec::with_capacity(t_s.len());
     for (k, (&t, &phi)) in t_s.iter().zip(deflection_rad).enumerate() {
         // A model that changes with the pivot has no torque without a pivot reading (the plugins

@@ -175,6 +175,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
     if let (Some(cj), Some(config), Some(joint)) = (&configured, &a.config, &a.joint) {
+        let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
         diagonal = match cj.diagonal(joint, &data, &a.data) {
             Ok(d) => d,
             Err(e) => return crate::fail(e),
@@ -183,9 +184,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             if a.out.is_some() {
                 return crate::fail(format!("{}: --out is refused: {}", a.data.display(), diagonal_note(angle)));
             }
-            let settings: Vec<String> = data.pivot_settings(MIN_SETTING_SAMPLES).iter().map(|(p, _)| format!("{p:.2}")).collect();
             if settings.len() >= 2 {
-                return crate::fail(format!("{}: {} pivot settings along {angle} deg ({} mm): identify one setting's record at a time along a diagonal", a.data.display(), settings.len(), settings.join(", ")));
+                let listed: Vec<String> = settings.iter().map(|(p, _)| format!("{p:.2}")).collect();
+                return crate::fail(format!("{}: {} pivot settings along {angle} deg ({} mm): identify one setting's record at a time along a diagonal", a.data.display(), settings.len(), listed.join(", ")));
             }
             baseline = match jointctl_experiments::model_loop::configured_torque_along(&cj.params, angle) {
                 Ok(torque) => BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))),
@@ -193,7 +194,6 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             };
         }
         // A record of several pivot settings against a joint with pivot settings: each setting apart.
-        let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
         if settings.len() >= 2 {
             if !cj.has_pivot_settings() {
                 return crate::fail(format!(
