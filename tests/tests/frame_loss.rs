@@ -106,3 +106,45 @@ fn frame_loss_from_0_to_20_percent_in_both_modes_causes_no_spike_and_no_motion()
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// Appendix A for the drives' torque readings (their current, TPDO1's torque actual value): a
+/// zeroed frame carries a zero torque as well as a zero position, and neither is used. The
+/// elbow's drive holds 0.5 rad against its clamped link (about 57 Nm through the spring); every
+/// torque reading that is usable is within 10 % of the drive's true torque, zeroed frames (30 %)
+/// are stale or invalid, never a valid zero.
+#[test]
+fn a_zeroed_frames_torque_is_never_read_as_a_value() {
+    use jointctl_hal::Hal;
+    let path = sherpa_with("loss-torque", &jointctl_tests::arm_name("loss-torque"), &[
+        Edit::Set("hal.sim.can_loss_rate", 0.3.into()),
+        Edit::Set("hal.sim.can_loss_mode", "zero".into()),
+        Edit::Set("joints[q4].sim.environment", serde_yaml::from_str("{kind: fixed, position_rad: 0.0}").unwrap()),
+    ]);
+    let loaded = jointctl_config::load(&path).unwrap();
+    let mut sim = jointctl_sim::SimHal::load(&loaded).unwrap();
+    let devices = jointctl_hal::DeviceIndex::of(&loaded.config);
+    let mut frame = jointctl_hal::SensorFrame::new(&devices);
+    let elbow = 4; // elmo_q4 in the SHERPA config's device order
+    sim.set_drive_target(elbow, 0.5);
+    let (mut valid, mut held, mut worst) = (0, 0, 0.0_f64);
+    for i in 0..400 {
+        sim.advance(0.025);
+        sim.read(&mut frame).unwrap();
+        let truth = sim.drives()[elbow].torque;
+        let r = frame.drives[elbow].torque_nm;
+        if i < 80 || truth.abs() < 20.0 {
+            continue; // still moving to the hold
+        }
+        match r.status {
+            s if s == jointctl_api::ReadingStatus::VALID => valid += 1,
+            s if s == jointctl_api::ReadingStatus::STALE || s == jointctl_api::ReadingStatus::INVALID => held += 1,
+            _ => panic!("cycle {i}: the drive's torque is configured, read and missing: {r:?}"),
+        }
+        if let Some(nm) = r.usable(1.0) {
+            worst = worst.max((nm - truth).abs() / truth.abs());
+        }
+    }
+    println!("elbow drive's torque under 30 % zeroed frames: {valid} valid, {held} held readings, worst relative error {worst:.4}");
+    assert!(worst < 0.1, "a torque reading {worst:.3} off the drive's torque (a zeroed frame read as a value)");
+    assert!(valid > 100 && held > 30, "{valid} valid, {held} held");
+}

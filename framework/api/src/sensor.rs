@@ -88,7 +88,8 @@ impl Default for Reading {
     }
 }
 
-/// What a motor drive reports each cycle (ELMO: motor-side position from its incremental encoder).
+/// What a motor drive reports each cycle (ELMO: motor-side position from its incremental encoder,
+/// and the torque its current loop applies).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct DriveReading {
@@ -96,6 +97,10 @@ pub struct DriveReading {
     pub position_rad: Reading,
     /// Motor (gearbox output) velocity [rad/s].
     pub velocity_rad_s: Reading,
+    /// The motor's torque at the gearbox output [Nm]: the drive's current reading (CiA 402
+    /// torque actual value 0x6077, per mille of the rated torque). What the drive's position
+    /// loop applies, its load and inertia included; missing where the drive does not report it.
+    pub torque_nm: Reading,
     /// 1 when the drive reports it is enabled and following set-points.
     pub enabled: u8,
     /// 1 when the drive reports a fault.
@@ -115,10 +120,23 @@ impl DriveReading {
         DriveReading {
             position_rad,
             velocity_rad_s,
+            torque_nm: Reading::MISSING,
             enabled: enabled as u8,
             fault: fault as u8,
             _reserved: [0; 6],
         }
+    }
+
+    /// The reading with the motor's torque [Nm] (the drive's current reading).
+    ///
+    /// ```
+    /// use jointctl_api::{DriveReading, Reading};
+    /// let d = DriveReading::new(Reading::valid(1.0), Reading::MISSING, true, false);
+    /// assert_eq!(d.torque_nm.usable(0.0), None, "not reported unless given");
+    /// assert_eq!(d.with_torque(Reading::valid(2.5)).torque_nm.usable(0.0), Some(2.5));
+    /// ```
+    pub const fn with_torque(self, torque_nm: Reading) -> Self {
+        DriveReading { torque_nm, ..self }
     }
 }
 

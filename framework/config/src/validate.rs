@@ -228,6 +228,11 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             {
                 err(format!("{path}.limits.max_torque_permille"), "must be > 0 (0 allows no torque)".into());
             }
+            if let Some(r) = d.rated_torque_nm
+                && !(r > 0.0 && r <= 1e6)
+            {
+                err(format!("{path}.rated_torque_nm"), format!("must be in (0, 1e6] Nm, got {}", crate::short_number(r)));
+            }
             if let Some(r) = d.max_setpoint_rate_rad_s
                 && !(r > 0.0 && r <= 1000.0)
             {

@@ -5,6 +5,7 @@
 use std::io::ErrorKind;
 use std::time::{Duration, Instant};
 
+use jointctl_api::{Reading, ReadingStatus};
 use jointctl_config::StopStep;
 use socketcan::{CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, StandardId};
 
@@ -45,6 +46,13 @@ pub(crate) struct Drive {
     pub(crate) name: String,
     pub(crate) node: u8,
     pub(crate) counts_per_rad: f64,
+    /// The unit of the torque actual value [Nm per 1000], when the drive's torque is read.
+    pub(crate) rated_torque_nm: Option<f64>,
+    /// This cycle's newest TPDO1's torque actual value [Nm], not yet trusted: it is taken when
+    /// the same frame's position is (a zeroed frame's torque is as wrong as its position).
+    pub(crate) torque_in_frame: Option<f64>,
+    /// The last trusted torque actual value [Nm] and when its frame came [s].
+    pub(crate) torque: Option<(f64, f64)>,
     pub(crate) conditioner: Conditioner,
     pub(crate) fresh: Option<(i32, f64)>,
     pub(crate) statusword: Option<u16>,
@@ -58,6 +66,28 @@ pub(crate) struct Drive {
     pub(crate) toggle: bool,
     pub(crate) reset_requested: bool,
     pub(crate) health: DriveHealth,
+}
+
+impl Drive {
+    /// The drive's torque reading this cycle, given its conditioned position: valid from this
+    /// cycle's TPDO1 when that frame's position was accepted, stale from the last accepted
+    /// frame (its age says how old), invalid with an invalid position (a silent node), missing
+    /// when the drive's torque is not read or none was accepted yet.
+    pub(crate) fn torque_reading(&mut self, position: &Reading, now_s: f64) -> Reading {
+        if self.rated_torque_nm.is_none() {
+            return Reading::MISSING;
+        }
+        if position.status == ReadingStatus::INVALID {
+            return Reading::invalid();
+        }
+        match (self.fresh, self.torque_in_frame.take()) {
+            (Some((_, rx)), Some(nm)) if position.status == ReadingStatus::VALID => {
+                self.torque = Some((nm, rx));
+                Reading::valid_aged(nm, now_s - rx)
+            }
+            _ => self.torque.map_or(Reading::MISSING, |(nm, rx)| Reading::stale(nm, now_s - rx)),
+        }
+    }
 }
 
 pub(crate) struct CanBus {
@@ -185,6 +215,24 @@ impl CanBus {
         Ok(())
     }
 
+    /// Maps the torque actual value (0x6077) into TPDO1 behind the statusword and the position
+    /// (CiA 301's procedure: the PDO off, its map emptied, three entries, their count, the PDO
+    /// on), each entry read back. Its unit, the motor's rated torque (0x6076) at the gearbox
+    /// output, is the bus entry's `rated_torque_nm` (the gear ratio is not in the config, so it
+    /// cannot be checked against 0x6076 here).
+    pub(crate) fn map_torque(&mut self, d: usize, timeout: Duration) -> Result<(), HalSetupError> {
+        let cob_id = u32::from(co::cob::TPDO1) + u32::from(self.drives[d].node);
+        let what = "rated_torque_nm";
+        self.write_limit(d, 0x1800, 1, &(cob_id | 0x8000_0000).to_le_bytes(), what, timeout)?;
+        self.write_limit(d, 0x1A00, 0, &[0], what, timeout)?;
+        for (sub, entry) in [(1u8, 0x6041_0010u32), (2, 0x6064_0020), (3, 0x6077_0010)] {
+            self.write_limit(d, 0x1A00, sub, &entry.to_le_bytes(), what, timeout)?;
+        }
+        self.write_limit(d, 0x1A00, 0, &[3], what, timeout)?;
+        self.write_limit(d, 0x1800, 1, &cob_id.to_le_bytes(), what, timeout)?;
+        Ok(())
+    }
+
     /// The drive's own limits of the config, each written and read back.
     pub(crate) fn write_limits(&mut self, d: usize, drive: &jointctl_config::DriveConfig, timeout: Duration) -> Result<(), HalSetupError> {
         let counts = |rad: f64| (rad * drive.counts_per_rad).round();
@@ -229,6 +277,7 @@ impl CanBus {
         if let Some(t) = co::decode_tpdo1(&f) {
             if let Some(d) = self.drives.iter_mut().find(|d| d.node == t.node) {
                 d.fresh = Some((t.position_counts, now_s));
+                d.torque_in_frame = t.torque_permille.zip(d.rated_torque_nm).map(|(p, rated)| f64::from(p) / 1000.0 * rated);
                 d.statusword = Some(t.statusword);
                 d.health.state = Some(co::state_of(t.statusword));
             }

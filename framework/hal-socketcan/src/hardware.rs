@@ -53,6 +53,9 @@ impl HardwareHal {
                     name: d.name.clone(),
                     node: d.node_id,
                     counts_per_rad: d.counts_per_rad,
+                    rated_torque_nm: d.rated_torque_nm,
+                    torque_in_frame: None,
+                    torque: None,
                     conditioner: Conditioner::new(Plausibility::drive_position(d.max_velocity_rad_s)),
                     fresh: None,
                     statusword: None,
@@ -79,6 +82,9 @@ impl HardwareHal {
                 can.sdo_write(i, 0x1016, 1, &consumer.to_le_bytes(), timeout)?;
                 can.sdo_write(i, 0x6007, 0, &co_cfg.on_comm_loss.code().to_le_bytes(), timeout)?;
                 can.write_limits(i, d, timeout)?;
+                if d.rated_torque_nm.is_some() {
+                    can.map_torque(i, timeout)?;
+                }
             }
             can.send(&co::nmt(co::NmtCommand::Start, 0));
             can.socket.set_nonblocking(true).map_err(|e| HalSetupError::Config { field, message: format!("cannot make the socket non-blocking: {e}") })?;
@@ -159,6 +165,7 @@ impl Hal for HardwareHal {
         for (b, bus) in self.buses.iter_mut().enumerate() {
             for d in &mut bus.drives {
                 d.fresh = None;
+                d.torque_in_frame = None;
             }
             loop {
                 match bus.socket.read_frame() {
@@ -188,7 +195,8 @@ impl Hal for HardwareHal {
                     Reading::MISSING,
                     state == Some(DriveState::OperationEnabled) && !d.health.silent,
                     state == Some(DriveState::Fault),
-                );
+                )
+                .with_torque(d.torque_reading(&position, now));
             }
             base += bus.drives.len();
         }

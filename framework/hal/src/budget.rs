@@ -1,5 +1,6 @@
 //! How much of a CAN bus one control cycle uses: per drive an RPDO (controlword + target, 6
-//! bytes) and a TPDO (statusword + position, 6 bytes), one SYNC per cycle, and every drive's
+//! bytes) and a TPDO (statusword + position, 6 bytes; 8 with the torque actual value of a drive
+//! whose entry has `rated_torque_nm`), one SYNC per cycle, and every drive's
 //! heartbeat at its own period plus the host's (which the drives consume). Bit counts are for base-format data frames, without stuffing and
 //! with worst-case stuffing ([`frame_bits`]); the load and the highest loop rate use the worst
 //! case.
@@ -39,14 +40,24 @@ pub struct BusBudget {
 /// let b = jointctl_hal::budget::bus_budget(&cfg.buses.can[0], cfg.rate_hz, 50);
 /// // RPDO + TPDO (6 bytes: 95..115 bits) + SYNC with counter (1 byte: 55..65 bits).
 /// assert_eq!((b.frames_per_cycle, b.bits_per_cycle, b.bits_per_cycle_min), (3, 295, 245));
+/// // The drive's torque read too: its TPDO carries 8 bytes (111..135 bits).
+/// let mut bus = cfg.buses.can[0].clone();
+/// bus.drives[0].rated_torque_nm = Some(50.0);
+/// let b = jointctl_hal::budget::bus_budget(&bus, cfg.rate_hz, 50);
+/// assert_eq!((b.frames_per_cycle, b.bits_per_cycle, b.bits_per_cycle_min), (3, 315, 261));
 /// ```
 pub fn bus_budget(bus: &CanBusConfig, rate_hz: f64, host_heartbeat_ms: u16) -> BusBudget {
     let (pdo_min, pdo_max) = frame_bits(6);
     let (sync_min, sync_max) = frame_bits(1);
     let (_, hb_max) = frame_bits(1);
     let n = bus.drives.len();
-    let bits_per_cycle = 2 * n as u32 * pdo_max + sync_max;
-    let bits_per_cycle_min = 2 * n as u32 * pdo_min + sync_min;
+    // Each drive's RPDO and TPDO.
+    let (drive_min, drive_max) = bus.drives.iter().fold((0, 0), |(lo, hi), d| {
+        let (tpdo_min, tpdo_max) = frame_bits(if d.rated_torque_nm.is_some() { 8 } else { 6 });
+        (lo + pdo_min + tpdo_min, hi + pdo_max + tpdo_max)
+    });
+    let bits_per_cycle = drive_max + sync_max;
+    let bits_per_cycle_min = drive_min + sync_min;
     let heartbeats_per_s: f64 =
         bus.drives.iter().map(|d| 1000.0 / d.heartbeat_ms.max(1) as f64).sum::<f64>() + 1000.0 / f64::from(host_heartbeat_ms.max(1));
     let heartbeat_bits_per_s = heartbeats_per_s * hb_max as f64;

@@ -27,9 +27,11 @@ proptest! {
     }
 
     #[test]
-    fn pdos_round_trip(node in 1u8..=127, word in any::<u16>(), counts in any::<i32>()) {
+    fn pdos_round_trip(node in 1u8..=127, word in any::<u16>(), counts in any::<i32>(), torque in any::<i16>()) {
         let t = decode_tpdo1(&tpdo1(node, word, counts)).unwrap();
-        prop_assert_eq!((t.node, t.statusword, t.position_counts), (node, word, counts));
+        prop_assert_eq!((t.node, t.statusword, t.position_counts, t.torque_permille), (node, word, counts, None));
+        let t = decode_tpdo1(&tpdo1_with_torque(node, word, counts, torque)).unwrap();
+        prop_assert_eq!((t.node, t.statusword, t.position_counts, t.torque_permille), (node, word, counts, Some(torque)));
         prop_assert_eq!(decode_rpdo1(&rpdo1(node, word, counts)), Some((node, word, counts)));
     }
 

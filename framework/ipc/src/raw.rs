@@ -94,6 +94,8 @@ pub struct RawDrive {
     pub position_rad: RawReading,
     /// Motor velocity [rad/s].
     pub velocity_rad_s: RawReading,
+    /// The motor's torque at the gearbox output [Nm], from the drive's current reading.
+    pub torque_nm: RawReading,
     /// 1 when the drive reported it follows set-points.
     pub enabled: u32,
     /// 1 when the drive reported a fault.
@@ -112,6 +114,7 @@ impl RawDrive {
     pub const EMPTY: RawDrive = RawDrive {
         position_rad: RawReading::MISSING,
         velocity_rad_s: RawReading::MISSING,
+        torque_nm: RawReading::MISSING,
         enabled: 0,
         fault: 0,
         setpoint_rad: f64::NAN,
@@ -132,6 +135,7 @@ impl RawDrive {
         RawDrive {
             position_rad: RawReading::from_reading(&reading.position_rad),
             velocity_rad_s: RawReading::from_reading(&reading.velocity_rad_s),
+            torque_nm: RawReading::from_reading(&reading.torque_nm),
             enabled: u32::from(reading.enabled),
             fault: u32::from(reading.fault),
             setpoint_rad: if moving { setpoint.position_rad } else { f64::NAN },
@@ -145,7 +149,7 @@ impl RawDrive {
 /// Every device of the arm in one cycle, in the order of [`RawDescriptor`].
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.RawFrame.v1")]
+#[type_name("jointctl.RawFrame.v2")]
 pub struct RawFrame {
     /// Cycle counter, the same as the cycle's [`crate::ArmState::cycle`].
     pub cycle: u64,

@@ -312,6 +312,8 @@ pub fn write_raw(out: &mut String, f: &RawFrame, d: &RawDescriptor) {
         reading(j, &r.position_rad);
         j.raw("}").key("velocity_rad_s").raw("{");
         reading(j, &r.velocity_rad_s);
+        j.raw("}").key("torque_nm").raw("{");
+        reading(j, &r.torque_nm);
         j.raw("}")
             .bool("enabled", r.enabled != 0)
             .bool("fault", r.fault != 0)
@@ -497,7 +499,7 @@ pub fn schema(topic: &str) -> Option<Value> {
             "cycle": count, "stamp_ns": count, "commands_applied": count,
             "encoders": {"type": "array", "items": {"type": "object", "properties": {"name": {"type": "string"}, "value": number(), "status": {"type": "string"}, "age_s": number()}}},
             "drives": {"type": "array", "items": {"type": "object", "properties": {
-                "name": {"type": "string"}, "position_rad": reading_schema(), "velocity_rad_s": reading_schema(),
+                "name": {"type": "string"}, "position_rad": reading_schema(), "velocity_rad_s": reading_schema(), "torque_nm": reading_schema(),
                 "enabled": {"type": "boolean"}, "fault": {"type": "boolean"}, "action": {"type": "string"}, "setpoint_rad": number(), "velocity_ff_rad_s": number(),
             }}},
             "torque_sensors": {"type": "array", "items": {"type": "object", "properties": {"name": {"type": "string"}, "value": number(), "status": {"type": "string"}, "age_s": number()}}},

@@ -137,6 +137,7 @@ pub fn raw_frame(f: &RawFrame, d: &RawDescriptor, clock: &WallClock, arm: &str) 
                 name: decode_name(&dev.name).to_string(),
                 position_rad: reading("", &r.position_rad),
                 velocity_rad_s: reading("", &r.velocity_rad_s),
+                torque_nm: reading("", &r.torque_nm),
                 enabled: r.enabled != 0,
                 fault: r.fault != 0,
                 action: r.action.name().to_string(),

@@ -172,6 +172,8 @@ pub struct RawDrive {
     pub position_rad: RawReading,
     /// Its velocity reading [rad/s].
     pub velocity_rad_s: RawReading,
+    /// Its motor torque at the gearbox output [Nm] (the drive's current reading).
+    pub torque_nm: RawReading,
     /// Enabled (CiA 402 operation enabled).
     pub enabled: bool,
     /// In fault.
@@ -315,7 +317,7 @@ impl Message for JointDetails {
 const RAW_READING: (&str, &str) = ("jointctl_msgs/msg/RawReading", "string name\nfloat64 value\nstring status\nfloat64 age_s\n");
 const RAW_DRIVE: (&str, &str) = (
     "jointctl_msgs/msg/RawDrive",
-    "string name\njointctl_msgs/RawReading position_rad\njointctl_msgs/RawReading velocity_rad_s\nbool enabled\nbool fault\nstring action\nfloat64 setpoint_rad\nfloat64 velocity_ff_rad_s\n",
+    "string name\njointctl_msgs/RawReading position_rad\njointctl_msgs/RawReading velocity_rad_s\njointctl_msgs/RawReading torque_nm\nbool enabled\nbool fault\nstring action\nfloat64 setpoint_rad\nfloat64 velocity_ff_rad_s\n",
 );
 
 impl Message for RawReading {

@@ -58,16 +58,17 @@ fn check_prints_the_can_bus_budget_and_refuses_a_rate_the_bus_cannot_carry() {
     let out = Command::new(jointctl()).arg("check").arg(&cfg).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
-    // 9 drives: 9 RPDO + 9 TPDO + 1 SYNC per cycle; 6-byte PDOs 95-115 bits, SYNC 55-65 bits;
-    // heartbeats: 9 drives at 100 ms and the host's at 50 ms (which the drives consume).
-    assert!(text.contains("can0: 9 drives at 1000 kbit/s: 19 frames per cycle (1765-2135 bits) + 110 heartbeats/s"), "{text}");
-    assert!(text.contains("highest loop rate 465 Hz"), "{text}");
+    // 9 drives: 9 RPDO + 9 TPDO + 1 SYNC per cycle; 6-byte RPDOs 95-115 bits, 8-byte TPDOs (the
+    // drives' torque read: `rated_torque_nm`) 111-135 bits, SYNC 55-65 bits; heartbeats: 9
+    // drives at 100 ms and the host's at 50 ms (which the drives consume).
+    assert!(text.contains("can0: 9 drives at 1000 kbit/s: 19 frames per cycle (1909-2315 bits) + 110 heartbeats/s"), "{text}");
+    assert!(text.contains("highest loop rate 429 Hz"), "{text}");
     let fast = scratch("budget").join("fast.yaml");
     std::fs::write(&fast, jointctl_tests::replace_once(&std::fs::read_to_string(&cfg).unwrap(), "rate_hz: 40 ", "rate_hz: 1000 ")).unwrap();
     let out = Command::new(jointctl()).arg("check").arg(&fast).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("rate_hz: the CAN bus cannot carry this rate") && err.contains("load 214.2 %"), "{err}");
+    assert!(err.contains("rate_hz: the CAN bus cannot carry this rate") && err.contains("load 232.2 %"), "{err}");
 }
 
 /// Finding: `check` passed what `run` refused (a simulation matrix of the wrong shape). Pass:

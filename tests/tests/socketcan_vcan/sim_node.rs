@@ -1,7 +1,7 @@
 //! The simulated ELMO drive on vcan0 the tests talk to (CANopen NMT, SDO, heartbeat, PDOs,
 //! CiA 402), with faults and frame loss on request.
 
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -34,6 +34,9 @@ pub(crate) struct SimNode {
     /// Per mille of TPDOs dropped, and of TPDOs sent with an all-zero position (appendix A).
     pub(crate) drop_per_mille: Arc<AtomicU32>,
     pub(crate) zero_per_mille: Arc<AtomicU32>,
+    /// The torque actual value (0x6077, per mille of the rated torque) the drive reports once
+    /// the host has mapped it into TPDO1; `i32::MIN`: a drive that does not report it.
+    pub(crate) torque_permille: Arc<AtomicI32>,
     /// True position [counts] as last sent, for comparing.
     pub(crate) truth: Arc<Mutex<Vec<(f64, i32)>>>,
     thread: Option<std::thread::JoinHandle<()>>,
@@ -48,6 +51,8 @@ impl SimNode {
         let drop_per_mille = Arc::new(AtomicU32::new(0));
         let zero_per_mille = Arc::new(AtomicU32::new(0));
         let truth = Arc::new(Mutex::new(Vec::new()));
+        let torque_permille = Arc::new(AtomicI32::new(i32::MIN));
+        let torque = torque_permille.clone();
         let sdo_log = Arc::new(Mutex::new(Vec::new()));
         let status = Arc::new(AtomicU32::new(0));
         let (s, f, d, z, t) = (stop.clone(), fault.clone(), drop_per_mille.clone(), zero_per_mille.clone(), truth.clone());
@@ -177,11 +182,22 @@ impl SimNode {
                         continue; // lost
                     }
                     let sent = if roll() < z.load(Ordering::Relaxed) { 0 } else { position };
-                    send(&sock, &co::tpdo1(node, statusword, sent));
+                    // 0x6077 is in the frame once the host has mapped it (three entries, the
+                    // third the torque actual value) and the PDO is on.
+                    let mapped = objects.get(&(0x1A00, 0)) == Some(&3)
+                        && objects.get(&(0x1A00, 3)) == Some(&0x6077_0010)
+                        && objects.get(&(0x1800, 1)).is_none_or(|c| c & 0x8000_0000 == 0);
+                    match torque.load(Ordering::Relaxed) {
+                        _ if !mapped => send(&sock, &co::tpdo1(node, statusword, sent)),
+                        i32::MIN => send(&sock, &co::tpdo1(node, statusword, sent)),
+                        // A zeroed frame is zero throughout (appendix A).
+                        _ if sent == 0 => send(&sock, &co::tpdo1_with_torque(node, statusword, 0, 0)),
+                        p => send(&sock, &co::tpdo1_with_torque(node, statusword, sent, p as i16)),
+                    }
                 }
             }
         });
-        SimNode { stop, fault, heartbeats, misstore, sdo_log, statusword: status, drop_per_mille, zero_per_mille, truth, thread: Some(thread) }
+        SimNode { stop, fault, heartbeats, misstore, sdo_log, statusword: status, drop_per_mille, zero_per_mille, torque_permille, truth, thread: Some(thread) }
     }
 }
 

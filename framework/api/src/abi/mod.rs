@@ -27,7 +27,7 @@ use hash::{mix_bytes, mix_tokens, mix_usize};
 /// First 8 bytes of every descriptor: "JNTCTL" + format 1.
 pub const ABI_MAGIC: u64 = u64::from_le_bytes(*b"JNTCTL\x00\x01");
 /// Bumped on any incompatible change of the shared types or entry points.
-pub const ABI_MAJOR: u32 = 1;
+pub const ABI_MAJOR: u32 = 2;
 /// Bumped on compatible additions; a host accepts plugins with a minor version up to its own.
 pub const ABI_MINOR: u32 = 1;
 /// Version of the `jointctl-api` crate the library was built against.
@@ -69,7 +69,7 @@ pub const LAYOUT_HASH: u64 = {
     let mut hash = 0xcbf2_9ce4_8422_2325_u64;
     hash_layouts!(hash;
         Reading { value: f64, age_s: f64, status: ReadingStatus }
-        DriveReading { position_rad: Reading, velocity_rad_s: Reading, enabled: u8, fault: u8 }
+        DriveReading { position_rad: Reading, velocity_rad_s: Reading, torque_nm: Reading, enabled: u8, fault: u8 }
         RawJointView { stamp_s: f64, dt_s: f64, encoders: [Reading; crate::MAX_ENCODERS], drives: [DriveReading; crate::MAX_DRIVES] }
         JointState { position_rad: f64, velocity_rad_s: f64, deflection_rad: f64, torque_nm: f64, stiffness_nm_per_rad: f64, pivot_mm: f64, valid: FieldMask }
         JointCommand { mode: ControlMode, position_feedback: u8, position_rad: f64, velocity_rad_s: f64, stiffness_nm_per_rad: f64 }

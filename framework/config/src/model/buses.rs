@@ -114,6 +114,13 @@ pub struct DriveConfig {
     /// not given: a 2048-line quadrature encoder behind a 100:1 gear, 8192 * 100 / (2 pi).
     #[serde(default = "default_counts_per_rad", deserialize_with = "finite")]
     pub counts_per_rad: f64,
+    /// The unit of the drive's torque actual value (0x6077, per mille): the motor's rated torque
+    /// (0x6076) times the gear ratio [Nm at the gearbox output]. Given, the HAL maps 0x6077 into
+    /// TPDO1 behind the statusword and the position at start-up (8 bytes; `jointctl check`'s bus
+    /// budget counts them) and reads it into the drive's `torque_nm` reading. None: TPDO1 is left
+    /// as the drive has it and no torque is read (the shoulder's loop causes need it).
+    #[serde(default, deserialize_with = "finite_opt")]
+    pub rated_torque_nm: Option<f64>,
     /// Heartbeat producer time written to 0x1017 [ms]. Assumption: 100 ms.
     #[serde(default = "default_heartbeat_ms")]
     pub heartbeat_ms: u16,

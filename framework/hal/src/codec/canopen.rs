@@ -191,6 +191,24 @@ pub fn tpdo1(node: u8, statusword: u16, position_counts: i32) -> Frame {
     Frame::new(cob::TPDO1 + node as u16, &d)
 }
 
+/// TPDO1 with the torque actual value mapped behind the position (the frame's last two bytes):
+/// statusword (u16) + actual position (i32 counts) + torque actual value (0x6077, i16 per mille
+/// of the motor's rated torque, 0x6076).
+///
+/// ```
+/// use jointctl_hal::codec::canopen::*;
+/// let f = tpdo1_with_torque(5, 0x0237, -1234, -250);
+/// assert_eq!(decode_tpdo1(&f).and_then(|t| t.torque_permille), Some(-250));
+/// assert_eq!(decode_tpdo1(&tpdo1(5, 0x0237, -1234)).unwrap().torque_permille, None);
+/// ```
+pub fn tpdo1_with_torque(node: u8, statusword: u16, position_counts: i32, torque_permille: i16) -> Frame {
+    let mut d = [0u8; 8];
+    d[..2].copy_from_slice(&statusword.to_le_bytes());
+    d[2..6].copy_from_slice(&position_counts.to_le_bytes());
+    d[6..].copy_from_slice(&torque_permille.to_le_bytes());
+    Frame::new(cob::TPDO1 + node as u16, &d)
+}
+
 /// A decoded TPDO1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Tpdo1 {
@@ -200,6 +218,8 @@ pub struct Tpdo1 {
     pub statusword: u16,
     /// Position actual value (0x6064) [counts].
     pub position_counts: i32,
+    /// Torque actual value (0x6077) [per mille of the rated torque], when the drive maps it.
+    pub torque_permille: Option<i16>,
 }
 
 fn node_of(id: u16, base: u16) -> Option<u8> {
@@ -207,21 +227,23 @@ fn node_of(id: u16, base: u16) -> Option<u8> {
     (1..=127).contains(&n).then_some(n as u8)
 }
 
-/// Decodes a TPDO1; `None` for any other frame or a wrong length.
+/// Decodes a TPDO1 (6 bytes, or 8 with the torque); `None` for any other frame or length.
 ///
 /// ```
 /// use jointctl_hal::codec::canopen::*;
 /// let f = tpdo1(5, 0x0237, -1234);
-/// assert_eq!(decode_tpdo1(&f), Some(Tpdo1 { node: 5, statusword: 0x0237, position_counts: -1234 }));
+/// assert_eq!(decode_tpdo1(&f), Some(Tpdo1 { node: 5, statusword: 0x0237, position_counts: -1234, torque_permille: None }));
 /// assert_eq!(decode_tpdo1(&Frame::new(0x185, &[1, 2])), None);
+/// assert_eq!(decode_tpdo1(&Frame::new(0x185, &[1, 2, 3, 4, 5, 6, 7])), None);
 /// ```
 pub fn decode_tpdo1(frame: &Frame) -> Option<Tpdo1> {
     let node = node_of(frame.id, cob::TPDO1)?;
     let b = frame.bytes();
-    (b.len() == 6).then(|| Tpdo1 {
+    (b.len() == 6 || b.len() == 8).then(|| Tpdo1 {
         node,
         statusword: u16::from_le_bytes([b[0], b[1]]),
         position_counts: i32::from_le_bytes([b[2], b[3], b[4], b[5]]),
+        torque_permille: (b.len() == 8).then(|| i16::from_le_bytes([b[6], b[7]])),
     })
 }
 
@@ -422,6 +444,18 @@ pub fn frame_bits(data_bytes: u8) -> (u32, u32) {
 #[cfg(test)]
 mod upload_tests {
     use super::*;
+
+    #[test]
+    fn a_tpdo1_of_another_length_than_six_or_eight_bytes_is_not_read() {
+        // Six bytes: statusword and position; eight: with the torque actual value. A frame cut
+        // short or padded is not half-read.
+        for len in [0usize, 2, 5, 7] {
+            let f = Frame::new(cob::TPDO1 + 3, &[0x37, 0x02, 1, 2, 3, 4, 5, 6][..len]);
+            assert_eq!(decode_tpdo1(&f), None, "{len} bytes");
+        }
+        let f = tpdo1_with_torque(3, 0x0237, 70_000, i16::MIN);
+        assert_eq!(decode_tpdo1(&f), Some(Tpdo1 { node: 3, statusword: 0x0237, position_counts: 70_000, torque_permille: Some(i16::MIN) }));
+    }
 
     #[test]
     fn an_expedited_upload_without_its_size_is_four_bytes() {

@@ -8,7 +8,7 @@ use jointctl_ipc::{CommandKind, CommandRequest, MAX_COMMAND_POINTS, TorqueWavefo
 use serde_json::Value;
 
 use super::file::Encoding;
-use super::{JointSeries, RawSample, ReadError, RecordedCommand};
+use super::{JointSeries, RawSample, ReadError, RecordedCommand, before_torque};
 
 fn number(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)
@@ -35,6 +35,9 @@ struct DriveJson<'a> {
     position_rad: ReadingJson<'a>,
     #[serde(borrow)]
     velocity_rad_s: ReadingJson<'a>,
+    /// Absent in recordings made before drives reported their torque.
+    #[serde(borrow, default)]
+    torque_nm: Option<ReadingJson<'a>>,
     enabled: bool,
     fault: bool,
     setpoint_rad: Option<f64>,
@@ -103,7 +106,10 @@ impl RawJson<'_> {
             drives: self
                 .drives
                 .iter()
-                .map(|d| (d.name.to_string(), DriveReading::new(d.position_rad.reading(), d.velocity_rad_s.reading(), d.enabled, d.fault), d.setpoint_rad.unwrap_or(f64::NAN)))
+                .map(|d| {
+                    let reading = DriveReading::new(d.position_rad.reading(), d.velocity_rad_s.reading(), d.enabled, d.fault);
+                    (d.name.to_string(), reading.with_torque(d.torque_nm.as_ref().map_or(Reading::MISSING, ReadingJson::reading)), d.setpoint_rad.unwrap_or(f64::NAN))
+                })
                 .collect(),
             torque_sensors: self.torque_sensors.iter().map(|e| (e.name.to_string(), e.reading())).collect(),
         }
@@ -112,7 +118,7 @@ impl RawJson<'_> {
 
 /// A number the JSON form would write as a number (it writes every other as `null`): the two
 /// forms read the same.
-pub(super) fn finite(x: f64) -> Option<f64> {
+fn finite(x: f64) -> Option<f64> {
     Some(x).filter(|x| x.is_finite())
 }
 
@@ -136,7 +142,7 @@ impl JointStates {
                 let v: StateJson = serde_json::from_slice(data).map_err(|e| ReadError::Message { file: path.into(), topic: "joint_state".into(), sequence, reason: e.to_string() })?;
                 self.add_state(&v);
             }
-            Encoding::Cdr => {
+            Encoding::Cdr | Encoding::CdrRawBeforeTorque => {
                 let m: jointctl_ros2::msg::JointDetails = decode_cdr(path, jointctl_ros2::JOINT_DETAILS, sequence, data)?;
                 let joints = m
                     .joints
@@ -188,16 +194,25 @@ impl JointStates {
     }
 }
 
+/// A CDR raw reading as the HAL's reading (its NaN and infinite numbers: none).
+fn reading_of(x: &jointctl_ros2::msg::RawReading) -> Reading {
+    ReadingJson { name: &x.name, value: finite(x.value), status: &x.status, age_s: finite(x.age_s) }.reading()
+}
+
 pub(super) fn parse_raw(path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<RawSample, ReadError> {
-    if encoding == Encoding::Cdr {
-        let m: jointctl_ros2::msg::RawFrame = decode_cdr(path, jointctl_ros2::RAW, sequence, data)?;
-        let r = |x: &jointctl_ros2::msg::RawReading| ReadingJson { name: &x.name, value: finite(x.value), status: &x.status, age_s: finite(x.age_s) }.reading();
+    if encoding == Encoding::Cdr || encoding == Encoding::CdrRawBeforeTorque {
+        let m: jointctl_ros2::msg::RawFrame = if encoding == Encoding::Cdr {
+            decode_cdr(path, jointctl_ros2::RAW, sequence, data)?
+        } else {
+            before_torque::decode(data).map_err(|e| ReadError::Message { file: path.into(), topic: jointctl_ros2::RAW.into(), sequence, reason: e.to_string() })?
+        };
+        let r = reading_of;
         return Ok(RawSample {
             cycle: m.cycle,
             stamp_ns: m.stamp_ns,
             commands_applied: Some(m.commands_applied),
             encoders: m.encoders.iter().map(|e| (e.name.clone(), r(e))).collect(),
-            drives: m.drives.iter().map(|d| (d.name.clone(), DriveReading::new(r(&d.position_rad), r(&d.velocity_rad_s), d.enabled, d.fault), finite(d.setpoint_rad).unwrap_or(f64::NAN))).collect(),
+            drives: m.drives.iter().map(|d| (d.name.clone(), DriveReading::new(r(&d.position_rad), r(&d.velocity_rad_s), d.enabled, d.fault).with_torque(r(&d.torque_nm)), finite(d.setpoint_rad).unwrap_or(f64::NAN))).collect(),
             torque_sensors: m.torque_sensors.iter().map(|e| (e.name.clone(), r(e))).collect(),
         });
     }
@@ -208,7 +223,7 @@ pub(super) fn parse_raw(path: &Path, encoding: Encoding, sequence: u32, data: &[
 pub(super) fn parse_command(path: &Path, encoding: Encoding, sequence: u32, data: &[u8]) -> Result<RecordedCommand, ReadError> {
     let bad = |reason: String| ReadError::Message { file: path.into(), topic: "commands".into(), sequence, reason };
     let m = match encoding {
-        Encoding::Cdr => decode_cdr::<jointctl_ros2::msg::CommandRecord>(path, jointctl_ros2::COMMANDS, sequence, data)?,
+        Encoding::Cdr | Encoding::CdrRawBeforeTorque => decode_cdr::<jointctl_ros2::msg::CommandRecord>(path, jointctl_ros2::COMMANDS, sequence, data)?,
         Encoding::Json => {
             // The JSON form read into the ROS 2 message's fields: one way to build the request.
             let v: Value = serde_json::from_slice(data).map_err(|e| bad(e.to_string()))?;
@@ -239,4 +254,33 @@ pub(super) fn parse_command(path: &Path, encoding: Encoding, sequence: u32, data
     }
     request.point_count = m.points.len() as u32;
     Ok(RecordedCommand { sequence: m.sequence, stamp_ns: m.stamp_ns, request })
+}
+
+#[cfg(test)]
+mod tests {
+    use jointctl_api::ReadingStatus;
+
+    use super::*;
+
+    fn drive_of(json: &str) -> DriveReading {
+        parse_raw(Path::new("t.mcap"), Encoding::Json, 1, json.as_bytes()).unwrap().drives[0].1
+    }
+
+    /// A JSON raw frame with the drive's torque reading reads it; one written before drives
+    /// reported their torque reads it as missing, the rest as recorded.
+    #[test]
+    fn a_drives_torque_reading_is_read_and_its_absence_is_missing() {
+        let drive = |torque: &str| {
+            format!(
+                r#"{{"cycle": 3, "stamp_ns": 75000000, "encoders": [], "torque_sensors": [], "drives": [{{"name": "m",
+                "position_rad": {{"value": 0.5, "status": "valid", "age_s": 0.02}}, "velocity_rad_s": {{"value": null, "status": "missing", "age_s": null}},
+                {torque} "enabled": true, "fault": false, "setpoint_rad": 0.6}}]}}"#
+            )
+        };
+        let now = drive_of(&drive(r#""torque_nm": {"value": -12.5, "status": "stale", "age_s": 0.05},"#));
+        assert_eq!((now.torque_nm.status, now.torque_nm.value, now.torque_nm.age_s), (ReadingStatus::STALE, -12.5, 0.05));
+        let before = drive_of(&drive(""));
+        assert_eq!(before.torque_nm.status, ReadingStatus::MISSING);
+        assert_eq!(before.position_rad.usable(1.0), Some(0.5));
+    }
 }

@@ -9,6 +9,9 @@ use super::ReadError;
 pub(super) enum Encoding {
     Json,
     Cdr,
+    /// The ROS 2 profile's raw frames as written before drives reported their torque (their
+    /// `jointctl_msgs/RawDrive` has no `torque_nm`): read with that definition.
+    CdrRawBeforeTorque,
 }
 
 /// The arm's channel a file's channel holds: itself in the JSON form; in the ROS 2 profile the
@@ -41,9 +44,12 @@ pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMu
         match message {
             Ok(m) => {
                 read += 1;
-                if let Some((source, encoding)) = source_of(&m.channel.topic, &m.channel.message_encoding)
+                if let Some((source, mut encoding)) = source_of(&m.channel.topic, &m.channel.message_encoding)
                     && topics.contains(&source)
                 {
+                    if encoding == Encoding::Cdr && source == "raw" && m.channel.schema.as_ref().is_some_and(|s| !super::before_torque::raw_schema_has_torque(&String::from_utf8_lossy(&s.data))) {
+                        encoding = Encoding::CdrRawBeforeTorque;
+                    }
                     each(source, encoding, m.sequence, &m.data)?;
                 }
             }

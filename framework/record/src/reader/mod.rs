@@ -105,6 +105,7 @@ pub enum ReadError {
     },
 }
 
+mod before_torque;
 mod decode;
 mod file;
 mod measured;

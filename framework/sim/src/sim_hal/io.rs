@@ -35,21 +35,43 @@ impl Hal for SimHal {
             };
         }
         for (i, d) in frame.drives.iter_mut().enumerate() {
-            // The same TPDO1 frames and decoder as the robot's CAN bus, with latency and losses.
-            let position = self.drive_history[i].at(now - self.can_feedback_latency_s);
+            // The same TPDO1 frames and decoder as the robot's CAN bus, with latency and losses;
+            // with the torque actual value (per mille of the rated torque) when it is read.
+            let read_at = now - self.can_feedback_latency_s;
+            let position = self.drive_history[i].at(read_at);
             let counts = (position * self.counts_per_rad[i]).round() as i32;
+            let rated = self.rated_torque_nm[i];
+            let tpdo1 = |counts: i32, torque_nm: f64| match rated {
+                Some(r) => canopen::tpdo1_with_torque(self.node_ids[i], 0x0237, counts, (torque_nm / r * 1000.0).round().clamp(-32767.0, 32767.0) as i16),
+                None => canopen::tpdo1(self.node_ids[i], 0x0237, counts),
+            };
             let lost = self.loss_rate > 0.0 && self.rng.uniform() < self.loss_rate;
             let frame_out = match (lost, self.loss_mode) {
-                (false, _) => Some(canopen::tpdo1(self.node_ids[i], 0x0237, counts)),
-                (true, CanLossMode::Zero) => Some(canopen::tpdo1(self.node_ids[i], 0x0237, 0)),
+                (false, _) => Some(tpdo1(counts, self.drive_torque_history[i].at(read_at))),
+                (true, CanLossMode::Zero) => Some(tpdo1(0, 0.0)),
                 (true, CanLossMode::Missing) => None,
             };
-            let sample = match frame_out.as_ref().and_then(canopen::decode_tpdo1) {
+            let decoded = frame_out.as_ref().and_then(canopen::decode_tpdo1);
+            let sample = match decoded {
                 Some(t) => Sample::Value { value: t.position_counts as f64 / self.counts_per_rad[i], age_s: self.can_feedback_latency_s },
                 None => Sample::Missing,
             };
             let reading = self.drive_conditioners[i].update(sample, now);
-            *d = DriveReading::new(reading, Reading::valid(self.drives[i].velocity), true, false);
+            // As the robot's HAL: valid from this cycle's frame when its position was accepted
+            // (a zeroed frame's torque is as wrong as its position), stale from the last
+            // accepted one, invalid with an invalid position.
+            let in_frame = decoded.and_then(|t| t.torque_permille).zip(rated).map(|(p, r)| f64::from(p) / 1000.0 * r);
+            let torque = match (in_frame, self.drive_torque_last[i]) {
+                _ if rated.is_none() => Reading::MISSING,
+                _ if reading.status == jointctl_api::ReadingStatus::INVALID => Reading::invalid(),
+                (Some(nm), _) if reading.status == jointctl_api::ReadingStatus::VALID => {
+                    self.drive_torque_last[i] = Some((nm, read_at));
+                    Reading::valid_aged(nm, now - read_at)
+                }
+                (_, Some((nm, at))) => Reading::stale(nm, now - at),
+                (_, None) => Reading::MISSING,
+            };
+            *d = DriveReading::new(reading, Reading::valid(self.drives[i].velocity), true, false).with_torque(torque);
         }
         // Force/torque sensors: the simulated sensor's torque (effects and noise included), read
         // as it is now (a Net F/T box streams at kHz rates: no bus latency modelled), beyond its

@@ -38,6 +38,10 @@ pub struct SimHal {
     /// them at the instant the encoders' readings were taken.
     sensor_history: Vec<DelayLine>,
     drive_history: Vec<DelayLine>,
+    /// The torque each drive's current loop applied, read with its position (one TPDO1).
+    drive_torque_history: Vec<DelayLine>,
+    /// Each drive's last torque reading [Nm] and the time its frame came [s].
+    drive_torque_last: Vec<Option<(f64, f64)>>,
     encoder_conditioners: Vec<Conditioner>,
     drive_conditioners: Vec<Conditioner>,
     /// Force/torque sensors: (unit, DOF) whose torque sensor each reads, its range [Nm] and its
@@ -46,6 +50,8 @@ pub struct SimHal {
     counts_per_rad: Vec<f64>,
     /// Each drive's CANopen node id (its TPDO1's COB-ID), as configured.
     node_ids: Vec<u8>,
+    /// Each drive's `rated_torque_nm`: the unit of the torque its TPDO1 carries (none: no torque).
+    rated_torque_nm: Vec<Option<f64>>,
     noise_rad: f64,
     loss_rate: f64,
     loss_mode: CanLossMode,
@@ -116,8 +122,9 @@ impl SimHal {
             let v = self.truth(&self.encoders[i]);
             self.encoder_history[i].push(self.time_s, v);
         }
-        for (h, d) in self.drive_history.iter_mut().zip(&self.drives) {
+        for ((h, ht), d) in self.drive_history.iter_mut().zip(&mut self.drive_torque_history).zip(&self.drives) {
             h.push(self.time_s, d.position);
+            ht.push(self.time_s, d.torque);
         }
     }
 
