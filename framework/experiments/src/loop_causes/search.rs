@@ -1,0 +1,86 @@
+//! The searches of the loop's values: a grid then a finer look around its best (one value), and
+//! the Nelder-Mead simplex (several values that trade off).
+
+/// The minimum of `f` over `[lo, hi]`: a grid of 41 points, then around the best at `step`.
+pub(super) fn search(lo: f64, hi: f64, step: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let coarse = (hi - lo) / 40.0;
+    let mut best = (lo, f64::INFINITY);
+    for k in 0..=40 {
+        let x = lo + coarse * k as f64;
+        let v = f(x);
+        if v < best.1 {
+            best = (x, v);
+        }
+    }
+    let (a, b) = ((best.0 - coarse).max(lo), (best.0 + coarse).min(hi));
+    let n = ((b - a) / step).round() as usize;
+    for k in 0..=n {
+        let x = a + step * k as f64;
+        let v = f(x);
+        if v < best.1 {
+            best = (x, v);
+        }
+    }
+    best.0
+}
+
+/// The minimum of `f` near `start` by the Nelder-Mead simplex (`steps`: the first simplex's
+/// edges), after at most `iterations`.
+pub(super) fn nelder_mead<const N: usize>(f: impl Fn([f64; N]) -> f64, start: [f64; N], steps: [f64; N], iterations: usize) -> [f64; N] {
+    let mut simplex: Vec<([f64; N], f64)> = (0..=N)
+        .map(|k| {
+            let mut x = start;
+            if k > 0 {
+                x[k - 1] += steps[k - 1];
+            }
+            (x, f(x))
+        })
+        .collect();
+    let along = |a: &[f64; N], b: &[f64; N], t: f64| -> [f64; N] { std::array::from_fn(|i| a[i] + t * (b[i] - a[i])) };
+    for _ in 0..iterations {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let centroid: [f64; N] = std::array::from_fn(|i| simplex[..N].iter().map(|p| p.0[i]).sum::<f64>() / N as f64);
+        let worst = simplex[N];
+        let reflected = along(&centroid, &worst.0, -1.0);
+        let fr = f(reflected);
+        if fr < simplex[0].1 {
+            let expanded = along(&centroid, &worst.0, -2.0);
+            let fe = f(expanded);
+            simplex[N] = if fe < fr { (expanded, fe) } else { (reflected, fr) };
+        } else if fr < simplex[N - 1].1 {
+            simplex[N] = (reflected, fr);
+        } else {
+            let contracted = along(&centroid, &worst.0, 0.5);
+            let fc = f(contracted);
+            if fc < worst.1 {
+                simplex[N] = (contracted, fc);
+            } else {
+                let best = simplex[0].0;
+                for p in simplex.iter_mut().skip(1) {
+                    p.0 = along(&best, &p.0, 0.5);
+                    p.1 = f(p.0);
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex[0].0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_simplex_follows_a_narrow_valley() {
+        // Rosenbrock's valley: the minimum at (1, 1).
+        let x = nelder_mead(|x: [f64; 2]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2), [-1.0, 1.0], [0.1, 0.1], 2000);
+        assert!((x[0] - 1.0).abs() < 1e-3 && (x[1] - 1.0).abs() < 1e-3, "{x:?}");
+    }
+
+    #[test]
+    fn the_search_finds_a_minimum_between_grid_points() {
+        let x = search(0.0, 0.2, 0.0005, |l| (l - 0.0317).abs());
+        assert!((x - 0.0317).abs() <= 0.00025, "{x}");
+    }
+}

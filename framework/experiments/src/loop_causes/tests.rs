@@ -1,0 +1,36 @@
+//! Tests of the loop's helpers: interpolation, rates, and what a report writes.
+
+use super::*;
+
+fn value(name: &str, key: &str, value: f64, cause: bool) -> LoopValue {
+    LoopValue { name: name.into(), key: key.into(), value, configured: 0.03, rmse_configured: 1.0, rmse_identified: 0.5, t: 1.0, critical: 3.6, cause }
+}
+
+/// A named command latency is written with the feedback latencies estimated beside it,
+/// named or not (their sums are what the data tells); without it none is written.
+#[test]
+fn a_command_latency_is_written_with_the_feedback_latencies_it_was_fitted_beside() {
+    let mut report = LoopReport {
+        values: vec![value("feedback_latency_can", "hal.sim.can_feedback_latency_s", 0.025, false), value("feedback_latency_spi", "hal.sim.spi_latency_s", 0.021, false)],
+        configured_can_feedback_s: 0.03,
+        ..Default::default()
+    };
+    assert!(report.hal_sim().is_empty());
+    report.values.push(value("command_latency", "hal.sim.can_latency_s", 0.045, true));
+    let sim = report.hal_sim();
+    assert_eq!((sim["can_latency_s"].as_f64(), sim["can_feedback_latency_s"].as_f64(), sim["spi_latency_s"].as_f64()), (Some(0.045), Some(0.025), Some(0.021)));
+    // No estimate of the readings' age (the drives did not move): the configured age stays.
+    report.values.retain(|v| v.name == "command_latency");
+    assert_eq!(report.hal_sim()["can_feedback_latency_s"].as_f64(), Some(0.03));
+    assert!(!report.hal_sim().contains_key("spi_latency_s"));
+}
+
+#[test]
+fn interpolation_and_rate_say_unknown_where_they_do_not_know() {
+    let t = [0.0, 1.0, 2.0];
+    assert_eq!(at(&t, &[0.0, 2.0, 4.0], 1.5), 3.0);
+    assert!(at(&t, &[0.0, 2.0, 4.0], 2.5).is_nan());
+    assert!(at(&t, &[0.0, f64::NAN, 4.0], 0.5).is_nan());
+    let r = rate(&t, &[0.0, 2.0, 4.0]);
+    assert!(r[0].is_nan() && r[1] == 2.0 && r[2].is_nan());
+}
