@@ -221,7 +221,9 @@ impl CanBus {
     /// output, is the bus entry's `rated_torque_nm` (the gear ratio is not in the config, so it
     /// cannot be checked against 0x6076 here).
     pub(crate) fn map_torque(&mut self, d: usize, timeout: Duration) -> Result<(), HalSetupError> {
-        let cob_id = u32::from(co::cob::TPDO1) + u32::from(self.drives[d].node);
+        // The PDO's COB-ID entry as the drive has it (some hard-wire other bits, such as RTR):
+        // only its valid bit (31) is turned off and on again.
+        let cob_id = self.sdo_read(d, 0x1800, 1, timeout)? & !0x8000_0000;
         let what = "rated_torque_nm";
         self.write_limit(d, 0x1800, 1, &(cob_id | 0x8000_0000).to_le_bytes(), what, timeout)?;
         self.write_limit(d, 0x1A00, 0, &[0], what, timeout)?;
@@ -277,7 +279,10 @@ impl CanBus {
         if let Some(t) = co::decode_tpdo1(&f) {
             if let Some(d) = self.drives.iter_mut().find(|d| d.node == t.node) {
                 d.fresh = Some((t.position_counts, now_s));
-                d.torque_in_frame = t.torque_permille.zip(d.rated_torque_nm).map(|(p, rated)| f64::from(p) / 1000.0 * rated);
+                // An operating drive never reports statusword 0: such a frame is appendix A's
+                // zeroed frame, and its torque is not one, even where its zero position passes
+                // as plausible (a drive resting at zero).
+                d.torque_in_frame = t.torque_permille.zip(d.rated_torque_nm).filter(|_| t.statusword != 0).map(|(p, rated)| f64::from(p) / 1000.0 * rated);
                 d.statusword = Some(t.statusword);
                 d.health.state = Some(co::state_of(t.statusword));
             }

@@ -73,6 +73,8 @@ impl SimNode {
             let mut host_heard: Option<Instant> = None;
             // The object dictionary as written: what an upload reads back.
             let mut objects = std::collections::HashMap::<(u16, u8), u32>::new();
+            // TPDO1's COB-ID (CiA 301's default, the RTR bit set as many drives have it).
+            objects.insert((0x1800, 1), 0x4000_0000 | (0x180 + u32::from(node)));
             let mut last_move = Instant::now();
             let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d ^ node as u64);
             let mut roll = || (rng.next_u64() % 1000) as u32;
@@ -186,7 +188,7 @@ impl SimNode {
                     // third the torque actual value) and the PDO is on.
                     let mapped = objects.get(&(0x1A00, 0)) == Some(&3)
                         && objects.get(&(0x1A00, 3)) == Some(&0x6077_0010)
-                        && objects.get(&(0x1800, 1)).is_none_or(|c| c & 0x8000_0000 == 0);
+                        && objects.get(&(0x1800, 1)).is_some_and(|c| c & 0x8000_0000 == 0 && c & 0x7FF == 0x180 + u32::from(node));
                     match torque.load(Ordering::Relaxed) {
                         _ if !mapped => send(&sock, &co::tpdo1(node, statusword, sent)),
                         i32::MIN => send(&sock, &co::tpdo1(node, statusword, sent)),

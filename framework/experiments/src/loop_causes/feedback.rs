@@ -3,11 +3,12 @@
 use super::search::search;
 use super::{LoopRecording, MAX_LATENCY_S, at, rate, rms_where};
 
-/// A feedback latency is fitted on samples whose readings moved one way this long [s].
-/// Measured on the shoulder's and the elbow's closed-loop sessions (readings 20 ms old): with
-/// every sample the SPI latency came out 21.5-25 ms for 15 and the elbow's 22.5 ms, and a clean
-/// session's SPI latency was once named (t = 4.6); with 0.1 s, over seven sessions, 20.5-23 ms,
-/// 21.5-22 ms and t <= 3.5 (0.2 s did no better). Assumption: the hysteresis loop closes within that time at the
+/// A feedback latency is fitted on samples whose readings moved one way this long before them
+/// [s]. Measured on the shoulder's and the elbow's closed-loop sessions (readings 20 ms old,
+/// encoders 15 ms): with every sample the shoulder's SPI latency came out 21.5-25 ms and the
+/// elbow's CAN latency 22.5 ms, and a clean session's SPI latency was named (t = 4.6); with 0.1 s,
+/// over seven sessions each, 20.5-23.5 ms and 21.5-22 ms, and t <= 3.0 on the clean sessions
+/// (0.2 s did no better). Assumption: the hysteresis loop closes within that time at the
 /// sessions' speeds.
 const SETTLED_S: f64 = 0.1;
 
@@ -39,15 +40,19 @@ pub(super) fn feedback_latency(rec: &LoopRecording, group: &[&[f64]], split_s: f
     let t = rec.t_s.clone();
     let torque_rate = rate(&t, &rec.sensor_torque_nm);
     let group: Vec<Vec<f64>> = group.iter().map(|x| x.to_vec()).collect();
-    // Only samples whose readings have moved one way for `SETTLED_S`: a reversal starts the
+    // Only samples before which no reading reversed for `SETTLED_S`: a reversal starts the
     // element's hysteresis loop and friction, whose torque changes lead the deflection's, and a
     // regression on the rates alone takes that lead for a later reading. The mask comes from the
-    // unshifted readings, so that every latency is scored on the same samples.
-    let first = rate(&t, &group[0]);
+    // unshifted readings, so that every latency is scored on the same samples. A rate of zero (a
+    // quantised reading at rest) is no direction. The window ends at the sample, although the
+    // readings of its state come one latency later: extended by the latest latency searched, the
+    // elbow's estimates came out right (20.5 ms for 20) but the shoulder's clean sessions' were
+    // erratic (13-33.5 ms for 30, from the few samples left) and one got a command latency named.
+    let rates: Vec<Vec<f64>> = group.iter().map(|x| rate(&t, x)).collect();
     let settled: Vec<bool> = (0..t.len())
         .map(|i| {
             let from = t.partition_point(|s| *s < t[i] - SETTLED_S);
-            (from..=i).all(|j| first[j].is_finite() && first[j].signum() == first[i].signum())
+            rates.iter().all(|r| one_way(&r[from..=i]))
         })
         .collect();
     let residuals = move |latency: f64| {
@@ -60,4 +65,21 @@ pub(super) fn feedback_latency(rec: &LoopRecording, group: &[&[f64]], split_s: f
     let score = |l: f64| rms_where(&residuals(l), |i| rec.t_s[i] < split_s);
     let best = search(0.0, MAX_LATENCY_S, 0.0005, score);
     score(best).is_finite().then_some((best, residuals))
+}
+
+/// Whether rates keep one direction: all known, and no two of opposite signs (zeros ignored).
+fn one_way(rates: &[f64]) -> bool {
+    rates.iter().all(|r| r.is_finite()) && !(rates.iter().any(|r| *r > 0.0) && rates.iter().any(|r| *r < 0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_way;
+
+    #[test]
+    fn a_reversal_breaks_one_way_and_a_rest_does_not() {
+        assert!(one_way(&[0.1, 0.0, 0.2]) && one_way(&[-0.1, 0.0, -0.3]) && one_way(&[0.0, 0.0]));
+        assert!(!one_way(&[0.1, 0.0, -0.2]), "a reversal across a rest");
+        assert!(!one_way(&[0.1, f64::NAN]), "an unknown rate");
+    }
 }

@@ -54,7 +54,8 @@ const LIMIT_EVIDENCE: f64 = 0.05;
 /// drive, not a mis-tuned one.
 const KP_DECADES: f64 = 1.5;
 
-/// The stiffness factors' logarithms the simplex starts from (1/10 to 10 of the configured kp).
+/// The stiffness factors' logarithms whose best latencies start the search (1/10 to 10 of the
+/// configured kp).
 const KP_STARTS: [f64; 5] = [-1.0, -0.5, 0.0, 0.5, 1.0];
 
 /// Acceleration limits tried on the first grid: this many steps over 4 decades (12 a decade,
@@ -179,8 +180,9 @@ impl LoopReport {
         // estimated against the F/T torque, whose element effects lead it: the feedback
         // latencies come out late and the command latency, fitted on the drives' readings aged
         // by the CAN one, early by as much, so the loop's delays add up only when written
-        // together (the shoulder's closed-loop replay, F/T torque RMSE over four sessions: 4.8-5.1
-        // Nm with C, 1.1-5.9 Nm with the command latency alone, 0.27-4.7 Nm with all three).
+        // together (the shoulder's closed-loop replay, F/T torque RMSE over seven sessions: 4.8-5.1
+        // Nm with C, 0.27-4.72 Nm with all three; with the command latency alone two of four
+        // sessions got worse, 4.91 -> 5.93 and 4.79 -> 5.27 Nm, before the reversal mask).
         // Without an estimate the readings keep their configured age (it defaults to the
         // command latency: a new command latency alone must not age them too).
         if out.contains_key("can_latency_s") {
@@ -235,18 +237,24 @@ pub fn read(path: &Path, loaded: &LoadedConfig, dof: &str) -> Result<LoopRecordi
         let mut d = DriveTrace { name: name.clone(), elmo, ..Default::default() };
         for (n, &(_, r)) in rows.iter().enumerate() {
             let reading = raw[r].drives.iter().find(|(x, ..)| x == name);
-            d.position_rad.push(reading.and_then(|(_, r, _)| r.position_rad.usable(f64::INFINITY)).unwrap_or(f64::NAN));
+            d.position_rad.push(reading.map_or(f64::NAN, |(_, r, _)| this_cycles(&r.position_rad)));
             d.setpoint_rad.push(reading.map_or(f64::NAN, |(_, _, s)| *s));
-            d.torque_nm.push(reading.and_then(|(_, r, _)| r.torque_nm.usable(f64::INFINITY)).unwrap_or(f64::NAN));
+            d.torque_nm.push(reading.map_or(f64::NAN, |(_, r, _)| this_cycles(&r.torque_nm)));
             d.load_nm.push(sim.matrix.iter().zip(&torques).map(|(row, tau)| row.get(k).copied().unwrap_or(0.0) * tau[n]).sum());
         }
         rec.drives.push(d);
     }
     for name in joint.encoders.values() {
-        let values = rows.iter().map(|&(_, r)| raw[r].encoders.iter().find(|(x, _)| x == name).and_then(|(_, v)| v.usable(f64::INFINITY)).unwrap_or(f64::NAN)).collect();
+        let values = rows.iter().map(|&(_, r)| raw[r].encoders.iter().find(|(x, _)| x == name).map_or(f64::NAN, |(_, v)| this_cycles(v))).collect();
         rec.encoders.push((name.clone(), values));
     }
     Ok(rec)
+}
+
+/// A reading's value when it came this cycle (valid), else NaN: a held (stale) value is an old
+/// sample, not this cycle's state, and taken as one it would shift the fits' timing.
+fn this_cycles(r: &jointctl_api::Reading) -> f64 {
+    if r.status == jointctl_api::ReadingStatus::VALID { r.value } else { f64::NAN }
 }
 
 /// `x` at time `q` by linear interpolation of the samples (`t` rising); NaN outside or next to
@@ -355,7 +363,8 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     };
     // The drives' readings (CAN).
     let moving: Vec<&DriveTrace> = rec.drives.iter().filter(|d| moves(&d.position_rad)).collect();
-    let mut can_feedback = sim.can_latency_s;
+    let configured_age = sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s);
+    let mut can_feedback = configured_age;
     if moving.is_empty() {
         report.notes.push("the joint's drives did not move: no CAN latency or drive response to identify".into());
     } else {
@@ -465,7 +474,12 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         // acceleration limit.
         for (k, half, step) in [(0, 0.005, 0.00025), (3, 0.25, 0.01), (1, 0.2, 0.01)] {
             let x0 = best[k];
-            best[k] = search((x0 - half).max(if k == 0 { 0.0 } else { f64::NEG_INFINITY }), x0 + half, step, |x| {
+            let (lo, hi) = match k {
+                0 => (0.0, MAX_LATENCY_S),
+                3 => (-KP_DECADES, KP_DECADES),
+                _ => (f64::NEG_INFINITY, f64::INFINITY),
+            };
+            best[k] = search((x0 - half).max(lo), (x0 + half).min(hi), step, |x| {
                 let mut y = best;
                 y[k] = x;
                 whole_fit(y)
@@ -493,7 +507,6 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     // The configured loop whole: its command latency and limits against the readings aged as
     // configured (not by the estimate, whose bias the identified command latency takes up: a
     // clean shoulder session's command latency was named 21.5 ms for 30).
-    let configured_age = sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s);
     let as_configured = squared_against(&truth_aged(configured_age), sim.can_latency_s, &limit(a0, v0, 1.0));
     let whole = compare(&as_configured, &identified);
     let trained = rms_where(&identified, train);
@@ -536,7 +549,7 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         let l = search(0.0, MAX_LATENCY_S, 0.0005, |l| score(l, a_used, v_used, k));
         score(l, a_used, v_used, k)
     };
-    let fits = [rms_where(&without_kp, train), profile(0.5), profile(2.0)];
+    let fits = [profile(1.0 / kp), profile(0.5), profile(2.0)];
     let kp_told = fits.iter().all(|f| *f > (1.0 + LIMIT_EVIDENCE) * fit_with_kp);
     if !kp_told {
         report.notes.push(format!(

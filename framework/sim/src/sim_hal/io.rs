@@ -41,14 +41,15 @@ impl Hal for SimHal {
             let position = self.drive_history[i].at(read_at);
             let counts = (position * self.counts_per_rad[i]).round() as i32;
             let rated = self.rated_torque_nm[i];
-            let tpdo1 = |counts: i32, torque_nm: f64| match rated {
-                Some(r) => canopen::tpdo1_with_torque(self.node_ids[i], 0x0237, counts, (torque_nm / r * 1000.0).round().clamp(-32767.0, 32767.0) as i16),
-                None => canopen::tpdo1(self.node_ids[i], 0x0237, counts),
+            let tpdo1 = |statusword: u16, counts: i32, torque_nm: f64| match rated {
+                Some(r) => canopen::tpdo1_with_torque(self.node_ids[i], statusword, counts, (torque_nm / r * 1000.0).round().clamp(-32767.0, 32767.0) as i16),
+                None => canopen::tpdo1(self.node_ids[i], statusword, counts),
             };
             let lost = self.loss_rate > 0.0 && self.rng.uniform() < self.loss_rate;
             let frame_out = match (lost, self.loss_mode) {
-                (false, _) => Some(tpdo1(counts, self.drive_torque_history[i].at(read_at))),
-                (true, CanLossMode::Zero) => Some(tpdo1(0, 0.0)),
+                (false, _) => Some(tpdo1(0x0237, counts, self.drive_torque_history[i].at(read_at))),
+                // Appendix A: the whole frame reads zero.
+                (true, CanLossMode::Zero) => Some(tpdo1(0, 0, 0.0)),
                 (true, CanLossMode::Missing) => None,
             };
             let decoded = frame_out.as_ref().and_then(canopen::decode_tpdo1);
@@ -57,10 +58,11 @@ impl Hal for SimHal {
                 None => Sample::Missing,
             };
             let reading = self.drive_conditioners[i].update(sample, now);
-            // As the robot's HAL: valid from this cycle's frame when its position was accepted
-            // (a zeroed frame's torque is as wrong as its position), stale from the last
+            // As the robot's HAL: valid from this cycle's frame when its position was accepted and
+            // it is not a zeroed frame (statusword 0: its torque is not one even where its zero
+            // position passes, a drive resting at zero), stale from the last
             // accepted one, invalid with an invalid position.
-            let in_frame = decoded.and_then(|t| t.torque_permille).zip(rated).map(|(p, r)| f64::from(p) / 1000.0 * r);
+            let in_frame = decoded.filter(|t| t.statusword != 0).and_then(|t| t.torque_permille).zip(rated).map(|(p, r)| f64::from(p) / 1000.0 * r);
             let torque = match (in_frame, self.drive_torque_last[i]) {
                 _ if rated.is_none() => Reading::MISSING,
                 _ if reading.status == jointctl_api::ReadingStatus::INVALID => Reading::invalid(),
