@@ -191,3 +191,27 @@ fn a_drives_torque_reading_is_its_current_and_says_when_it_is_old() {
         assert_eq!(r.torque_nm.status, ReadingStatus::MISSING, "{:?}", r.torque_nm);
     }
 }
+
+/// Appendix A's zeroed frame is zero throughout, its statusword too: that is not the drive's
+/// state. Taken as "not ready to switch on", the HAL sent the enabled drive SHUTDOWN on the next
+/// cycle, and the drive left operation (an arm that falls). The drive holds, enabled, through
+/// 30 % all-zero frames.
+#[test]
+#[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
+fn an_all_zero_frame_does_not_disable_the_drive() {
+    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
+    require_vcan();
+    let node = SimNode::start(13);
+    let mut rig = Rig::new(13);
+    rig.until(MotorSetpoint::HOLD, "enabled", |r| r.enabled == 1);
+    node.zero_whole_frame.store(true, Ordering::Relaxed);
+    node.zero_per_mille.store(300, Ordering::Relaxed);
+    for i in 0..100 {
+        let r = rig.cycle(MotorSetpoint::HOLD);
+        let state = co::state_of(node.statusword.load(Ordering::Relaxed) as u16);
+        assert_eq!(state, DriveState::OperationEnabled, "cycle {i}: the drive left operation");
+        assert_eq!(r.enabled, 1, "cycle {i}: read as not enabled");
+    }
+    let losses = rig.hal.drive_health().next().unwrap().1.losses;
+    assert!(losses.implausible > 0, "the zeroed frames were seen and rejected: {losses:?}");
+}

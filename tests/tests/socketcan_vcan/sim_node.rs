@@ -34,6 +34,8 @@ pub(crate) struct SimNode {
     /// Per mille of TPDOs dropped, and of TPDOs sent with an all-zero position (appendix A).
     pub(crate) drop_per_mille: Arc<AtomicU32>,
     pub(crate) zero_per_mille: Arc<AtomicU32>,
+    /// A zeroed TPDO is zero throughout, its statusword too (else it keeps the statusword).
+    pub(crate) zero_whole_frame: Arc<AtomicBool>,
     /// The torque actual value (0x6077, per mille of the rated torque) the drive reports once
     /// the host has mapped it into TPDO1; `i32::MIN`: a drive that does not report it.
     pub(crate) torque_permille: Arc<AtomicI32>,
@@ -53,6 +55,8 @@ impl SimNode {
         let truth = Arc::new(Mutex::new(Vec::new()));
         let torque_permille = Arc::new(AtomicI32::new(i32::MIN));
         let torque = torque_permille.clone();
+        let zero_whole_frame = Arc::new(AtomicBool::new(false));
+        let whole = zero_whole_frame.clone();
         let sdo_log = Arc::new(Mutex::new(Vec::new()));
         let status = Arc::new(AtomicU32::new(0));
         let (s, f, d, z, t) = (stop.clone(), fault.clone(), drop_per_mille.clone(), zero_per_mille.clone(), truth.clone());
@@ -184,6 +188,7 @@ impl SimNode {
                         continue; // lost
                     }
                     let sent = if roll() < z.load(Ordering::Relaxed) { 0 } else { position };
+                    let statusword = if sent == 0 && whole.load(Ordering::Relaxed) { 0 } else { statusword };
                     // 0x6077 is in the frame once the host has mapped it (three entries, the
                     // third the torque actual value) and the PDO is on.
                     let mapped = objects.get(&(0x1A00, 0)) == Some(&3)
@@ -199,7 +204,7 @@ impl SimNode {
                 }
             }
         });
-        SimNode { stop, fault, heartbeats, misstore, sdo_log, statusword: status, drop_per_mille, zero_per_mille, torque_permille, truth, thread: Some(thread) }
+        SimNode { stop, fault, heartbeats, misstore, sdo_log, statusword: status, drop_per_mille, zero_per_mille, zero_whole_frame, torque_permille, truth, thread: Some(thread) }
     }
 }
 
