@@ -34,3 +34,38 @@ fn interpolation_and_rate_say_unknown_where_they_do_not_know() {
     let r = rate(&t, &[0.0, 2.0, 4.0]);
     assert!(r[0].is_nan() && r[1] == 2.0 && r[2].is_nan());
 }
+
+/// A joint whose drives also move a DOF without an F/T sensor needs their torque readings for
+/// its load: a drive without them is named, with the fix, and no drive response is identified
+/// (rather than one fitted against a load that leaves the unmeasured DOF out).
+#[test]
+fn a_drive_without_torque_readings_is_named_and_its_response_not_identified() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/sherpa_arm.yaml");
+    let loaded = jointctl_config::load(&path).unwrap();
+    let t: Vec<f64> = (0..800).map(|k| f64::from(k) * 0.025).collect();
+    let motion: Vec<f64> = t.iter().map(|x| 0.2 * (2.0 * x).sin()).collect();
+    let drive = |name: &str, torque_nm: f64| DriveTrace {
+        name: name.into(),
+        setpoint_rad: motion.clone(),
+        position_rad: motion.clone(),
+        load_nm: vec![0.0; t.len()],
+        torque_nm: vec![torque_nm; t.len()],
+        elmo: loaded.config.hal.sim.elmo,
+    };
+    let rec = LoopRecording {
+        dof: "q2".into(),
+        t_s: t.clone(),
+        sensor_torque_nm: motion.iter().map(|m| 50.0 * m).collect(),
+        drives: vec![drive("elmo_shoulder_a", 1.0), drive("elmo_shoulder_b", f64::NAN)],
+        encoders: Vec::new(),
+        unmeasured_dofs: vec!["q3".into()],
+        unmeasured_rows: vec![vec![0.5, -0.5]],
+    };
+    let report = identify_loop(&rec, &loaded);
+    assert!(
+        report.notes.iter().any(|n| n.contains("`elmo_shoulder_b` reported no torque") && n.contains("rated_torque_nm")),
+        "names the drive and the fix: {:?}",
+        report.notes
+    );
+    assert!(!report.values.iter().any(|v| v.name == "command_latency" || v.name == "drive_kp"), "{:?}", report.values);
+}
