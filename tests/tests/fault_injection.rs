@@ -7,6 +7,14 @@ use jointctl_modes::Mode;
 use jointctl_runtime::{PluginLoader, RunOptions};
 use jointctl_tests::rig_yaml;
 
+/// The cases run one at a time: two of them pace a loop in real time (a plugin's stall is
+/// measured against a 10 ms cycle), and a case computing beside them on this 2-core machine
+/// cost that loop a second overrun (12 ms of jitter) where the stall alone costs one.
+fn alone() -> std::sync::MutexGuard<'static, ()> {
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 /// Steps an arm through cycles `cycles` at 100 Hz (unpaced).
 fn step_100hz(arm: &mut jointctl_runtime::Arm, cycles: std::ops::Range<usize>) {
     for i in cycles {
@@ -47,6 +55,7 @@ fn arm_with_faulty_and(rate_hz: f64, params: &str, edits: &[jointctl_tests::Edit
 /// and the simulated drive, told the window as its software position limits, stops at 1.5 rad.
 #[test]
 fn a_set_point_outside_its_drives_window_or_rate_is_held_and_named_in_the_same_cycle() {
+    let _alone = alone();
     use jointctl_tests::Edit;
     let window = Edit::Set("buses.can[0].drives[m1].setpoint_window_rad", serde_yaml::from_str("[-1.5, 1.5]").unwrap());
     let rate = Edit::Set("buses.can[0].drives[m1].max_setpoint_rate_rad_s", 5.0.into());
@@ -93,6 +102,7 @@ fn a_set_point_outside_its_drives_window_or_rate_is_held_and_named_in_the_same_c
 /// and never called again, and the other joint goes on to its set-point.
 #[test]
 fn a_stalling_plugin_costs_one_overrun_then_is_faulted_and_the_loop_goes_on() {
+    let _alone = alone();
     for sleeps in [false, true] {
         a_stall_costs_one_overrun(&format!("{{stall_us: 30000, stall_every: 20, stall_sleeps: {sleeps}}}"));
     }
@@ -120,6 +130,7 @@ fn a_stall_costs_one_overrun(params: &str) {
 /// platform stalls threads too: a 10-minute soak at 1 kHz faulted healthy joints otherwise.
 #[test]
 fn a_joints_own_budget_overrides_the_default() {
+    let _alone = alone();
     let stall = "{stall_us: 2000, stall_every: 3}";
     let mut arm = arm_with_faulty(100.0, stall);
     step_100hz(&mut arm, 0..9);
@@ -149,6 +160,7 @@ fn a_joints_own_budget_overrides_the_default() {
 /// clamping is counted.
 #[test]
 fn the_velocity_limit_bounds_the_set_point_rate() {
+    let _alone = alone();
     let yaml = rig_yaml("velocity-limit", 100.0, "").replace("limits: {position_rad: [-1.0, 1.0]}", "limits: {position_rad: [-1.0, 1.0], velocity_rad_s: 0.5}");
     let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
     assert_eq!(loaded.config.joints[0].limits.unwrap().velocity_rad_s, Some(0.5), "the edit took");
@@ -172,6 +184,7 @@ fn the_velocity_limit_bounds_the_set_point_rate() {
 /// is published whole and the names are distinct.
 #[test]
 fn diagnostics_carry_whole_device_names() {
+    let _alone = alone();
     let arm_id = jointctl_tests::arm_name("device-names");
     let path = jointctl_tests::sherpa_with("device-names", &arm_id, &[]);
     let loaded = jointctl_config::load(&path).unwrap();
@@ -218,6 +231,7 @@ fn inject(sim: &jointctl_sim::SharedSim, fault: Option<jointctl_sim::EncoderFaul
 /// 1 mrad while held, and it resumes to its target when the encoder answers again.
 #[test]
 fn a_silent_or_corrupt_encoder_holds_its_joint_within_its_maximum_age() {
+    let _alone = alone();
     for fault in [jointctl_sim::EncoderFault::Silent, jointctl_sim::EncoderFault::Corrupt] {
         let (mut arm, sim) = rig_on_shared_sim("silent-encoder");
         arm.set_mode(0, position(0.3));
@@ -256,6 +270,7 @@ fn a_silent_or_corrupt_encoder_holds_its_joint_within_its_maximum_age() {
 /// counts it, and a jump that persists holds the joint within its maximum age plus one cycle.
 #[test]
 fn an_implausible_encoder_jump_never_reaches_the_state() {
+    let _alone = alone();
     let (mut arm, sim) = rig_on_shared_sim("jumping-encoder");
     arm.set_mode(0, position(0.3));
     for i in 0..50 {
@@ -313,6 +328,7 @@ impl jointctl_hal::Hal for StopRecorder {
 /// through the loop; the default is `[quick_stop, pre_operational]`.
 #[test]
 fn the_stop_sequence_runs_once_on_every_path_that_ends_the_runtime() {
+    let _alone = alone();
     use jointctl_config::StopStep;
     let run_with = |yaml_extra: &str, panic_at_write: Option<u64>, stop_first: bool| {
         let yaml = rig_yaml("stop-sequence", 100.0, "").replace("timing: {spin_us: 100}", &format!("timing: {{spin_us: 100}}\n{yaml_extra}"));
