@@ -64,17 +64,26 @@ fn replay_ft_rmse(recording: &Path, config: &Path, dof: &str) -> f64 {
     v["channels"].as_array().unwrap().iter().find(|c| c["joint"] == dof && c["channel"] == "ft_torque").expect("ft_torque channel")["rmse"].as_f64().unwrap()
 }
 
+/// The plant's loop in both tests: set-points 50 ms late (the config: 30), readings 20 ms old,
+/// the drives' profile at 8 rad/s^2 (30) and, on the drives at `gains` (their
+/// `hal.sim.drive_gains` paths), kp 1000 Nm/rad (4000).
+fn hidden_loop(gains: &[&'static str]) -> Vec<Edit<'static>> {
+    let mut edits = vec![
+        Edit::Set("hal.sim.can_latency_s", 0.05.into()),
+        Edit::Set("hal.sim.can_feedback_latency_s", 0.02.into()),
+        Edit::Set("hal.sim.elmo", serde_yaml::from_str("{max_acceleration_rad_s2: 8.0}").unwrap()),
+    ];
+    // Assumption: ki and kd as configured (20000, 80), so that kp alone differs.
+    let soft: serde_yaml::Value = serde_yaml::from_str("{kp: 1000.0, ki: 20000.0, kd: 80.0}").unwrap();
+    edits.extend(gains.iter().map(|g| Edit::Set(g, soft.clone())));
+    edits
+}
+
 #[test]
 fn a_loop_that_is_not_the_configs_is_named_and_the_replay_gets_better() {
     let (hidden, clean) = (arm_name("loop-hidden"), arm_name("loop-clean"));
     let config = clamped("loop-config", &arm_name("loop-config"), &[]);
-    let plant = clamped("loop-hidden", &hidden, &[
-        Edit::Set("hal.sim.can_latency_s", 0.05.into()),
-        Edit::Set("hal.sim.can_feedback_latency_s", 0.02.into()),
-        Edit::Set("hal.sim.elmo", serde_yaml::from_str("{max_acceleration_rad_s2: 8.0}").unwrap()),
-        // Assumption: ki and kd as configured (20000, 80), so that kp alone differs.
-        Edit::Set("hal.sim.drive_gains.elmo_q4", serde_yaml::from_str("{kp: 1000.0, ki: 20000.0, kd: 80.0}").unwrap()),
-    ]);
+    let plant = clamped("loop-hidden", &hidden, &hidden_loop(&["hal.sim.drive_gains.elmo_q4"]));
     let same = clamped("loop-clean", &clean, &[]);
     // Both sessions at once: they are real time.
     let (a, b) = (plant.clone(), same.clone());
@@ -123,15 +132,7 @@ fn a_loop_that_is_not_the_configs_is_named_and_the_replay_gets_better() {
 fn the_shoulders_loop_is_named_from_its_drives_torque_readings() {
     let (hidden, clean) = (arm_name("sloop-hidden"), arm_name("sloop-clean"));
     let config = sherpa_with("sloop-config", &arm_name("sloop-config"), &[]);
-    // Assumption: ki and kd as configured (20000, 80), so that kp alone differs.
-    let soft: serde_yaml::Value = serde_yaml::from_str("{kp: 1000.0, ki: 20000.0, kd: 80.0}").unwrap();
-    let plant = sherpa_with("sloop-hidden", &hidden, &[
-        Edit::Set("hal.sim.can_latency_s", 0.05.into()),
-        Edit::Set("hal.sim.can_feedback_latency_s", 0.02.into()),
-        Edit::Set("hal.sim.elmo", serde_yaml::from_str("{max_acceleration_rad_s2: 8.0}").unwrap()),
-        Edit::Set("hal.sim.drive_gains.elmo_shoulder_a", soft.clone()),
-        Edit::Set("hal.sim.drive_gains.elmo_shoulder_b", soft),
-    ]);
+    let plant = sherpa_with("sloop-hidden", &hidden, &hidden_loop(&["hal.sim.drive_gains.elmo_shoulder_a", "hal.sim.drive_gains.elmo_shoulder_b"]));
     let same = sherpa_with("sloop-clean", &clean, &[]);
     let (a, b) = (plant.clone(), same.clone());
     let hidden_session = std::thread::spawn(move || record_session("sloop-hidden", &a, &hidden, "q2"));

@@ -279,14 +279,12 @@ impl CanBus {
         if let Some(t) = co::decode_tpdo1(&f) {
             if let Some(d) = self.drives.iter_mut().find(|d| d.node == t.node) {
                 d.fresh = Some((t.position_counts, now_s));
+                d.torque_in_frame = t.torque_nm(d.rated_torque_nm);
                 // An operating drive never reports statusword 0: such a frame is appendix A's
-                // zeroed frame. Its torque is not one, even where its zero position passes as
-                // plausible (a drive resting at zero), and its state is not the drive's: taken
-                // as "not ready to switch on", the next cycle would send an enabled drive
-                // SHUTDOWN. (Before a drive operates, an unknown state is handled as that one.)
-                let zeroed = t.statusword == 0;
-                d.torque_in_frame = t.torque_permille.zip(d.rated_torque_nm).filter(|_| !zeroed).map(|(p, rated)| f64::from(p) / 1000.0 * rated);
-                if !zeroed {
+                // zeroed frame, and its state is not the drive's: taken as "not ready to switch
+                // on", the next cycle would send an enabled drive SHUTDOWN. (Before a drive
+                // operates, an unknown state is handled as that one.)
+                if t.statusword != 0 {
                     d.statusword = Some(t.statusword);
                     d.health.state = Some(co::state_of(t.statusword));
                 }

@@ -332,7 +332,9 @@ pub fn replay_drive(t_s: &[f64], d: &DriveTrace, elmo: ElmoConfig, command_laten
 /// What the loop gets wrong on one DOF's closed-loop recording, against `loaded`'s simulation.
 pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     let sim = &loaded.config.hal.sim;
-    let mut report = LoopReport { dof: rec.dof.clone(), configured_can_feedback_s: sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s), ..Default::default() };
+    // The configured age of the drives' readings (it defaults to the command latency).
+    let configured_age = sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s);
+    let mut report = LoopReport { dof: rec.dof.clone(), configured_can_feedback_s: configured_age, ..Default::default() };
     let split = split_time(&rec.t_s, 0.7);
     let t = &rec.t_s;
     let train = |i: usize| t[i] < split;
@@ -363,7 +365,6 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     };
     // The drives' readings (CAN).
     let moving: Vec<&DriveTrace> = rec.drives.iter().filter(|d| moves(&d.position_rad)).collect();
-    let configured_age = sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s);
     let mut can_feedback = configured_age;
     if moving.is_empty() {
         report.notes.push("the joint's drives did not move: no CAN latency or drive response to identify".into());
@@ -372,7 +373,7 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         match feedback_latency(rec, &group, split) {
             Some((l, residuals)) => {
                 can_feedback = l;
-                report.values.push(value("feedback_latency_can", "hal.sim.can_feedback_latency_s", l, sim.can_feedback_latency_s.unwrap_or(sim.can_latency_s), &residuals));
+                report.values.push(value("feedback_latency_can", "hal.sim.can_feedback_latency_s", l, configured_age, &residuals));
             }
             None => report.notes.push("the drives' readings explain none of the F/T torque's rate: no CAN latency identified".into()),
         }
@@ -417,10 +418,12 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
             load::AVERAGE_S * 1000.0
         ));
         let loads = load::with_unmeasured(t, &rec.drives, &rec.unmeasured_rows, can_feedback);
-        commanded.into_iter().map(|d| {
-            let i = rec.drives.iter().position(|x| x.name == d.name).unwrap_or(0);
-            DriveTrace { load_nm: loads[i].clone(), ..d.clone() }
-        }).collect()
+        rec.drives
+            .iter()
+            .zip(loads)
+            .filter(|(d, _)| commanded.iter().any(|c| c.name == d.name))
+            .map(|(d, load_nm)| DriveTrace { load_nm, ..d.clone() })
+            .collect()
     };
     // Each drive's state: its reading taken `can_feedback` later.
     let truth_aged = |age_s: f64| -> Vec<Vec<f64>> { commanded.iter().map(|d| t.iter().map(|&q| at(t, &d.position_rad, q + age_s)).collect()).collect() };
@@ -539,7 +542,6 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     // The position loop: one stiffness factor for the joint's drives, reported per drive (its
     // own gains, `hal.sim.drive_gains`, so that the arm's other drives keep theirs).
     let without_kp = squared(latency, &limit(a_used, v_used, 1.0));
-    let fit_with_kp = rms_where(&identified, train);
     // Told only when the fit is clearly worse with the configured kp and with half and twice the
     // factor found, each with its own best latency (they trade off): a flat profile, as a load
     // known from currents gives, would name a kp anywhere in it (the shoulder: 27000 Nm/rad
@@ -550,7 +552,7 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
         score(l, a_used, v_used, k)
     };
     let fits = [profile(1.0 / kp), profile(0.5), profile(2.0)];
-    let kp_told = fits.iter().all(|f| *f > (1.0 + LIMIT_EVIDENCE) * fit_with_kp);
+    let kp_told = fits.iter().all(|f| *f > (1.0 + LIMIT_EVIDENCE) * trained);
     if !kp_told {
         report.notes.push(format!(
             "the drives' position-loop stiffness is not told by this recording: the configured kp, or half or twice the best factor ({kp:.3}x) with \
@@ -560,7 +562,7 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
             fits[0],
             fits[1],
             fits[2],
-            fit_with_kp
+            trained
         ));
     }
     for d in &commanded {

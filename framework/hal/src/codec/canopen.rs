@@ -222,6 +222,26 @@ pub struct Tpdo1 {
     pub torque_permille: Option<i16>,
 }
 
+impl Tpdo1 {
+    /// The torque actual value [Nm] given its unit `rated_torque_nm` (0x6076 at the gearbox
+    /// output); `None` when the frame has none, no unit is given, or the frame is appendix A's
+    /// zeroed frame: an operating drive never reports statusword 0, and such a frame's torque
+    /// is not one, even where its zero position passes as plausible (a drive resting at zero).
+    ///
+    /// ```
+    /// use jointctl_hal::codec::canopen::*;
+    /// let t = decode_tpdo1(&tpdo1_with_torque(5, 0x0237, 100, -250)).unwrap();
+    /// assert_eq!(t.torque_nm(Some(40.0)), Some(-10.0));
+    /// assert_eq!(t.torque_nm(None), None);
+    /// let zeroed = decode_tpdo1(&tpdo1_with_torque(5, 0, 0, 0)).unwrap();
+    /// assert_eq!(zeroed.torque_nm(Some(40.0)), None);
+    /// ```
+    pub fn torque_nm(&self, rated_torque_nm: Option<f64>) -> Option<f64> {
+        let per_mille = self.torque_permille.filter(|_| self.statusword != 0)?;
+        rated_torque_nm.map(|rated| f64::from(per_mille) / 1000.0 * rated)
+    }
+}
+
 fn node_of(id: u16, base: u16) -> Option<u8> {
     let n = id.checked_sub(base)?;
     (1..=127).contains(&n).then_some(n as u8)

@@ -62,7 +62,7 @@ impl Hal for SimHal {
             // it is not a zeroed frame (statusword 0: its torque is not one even where its zero
             // position passes, a drive resting at zero), stale from the last
             // accepted one, invalid with an invalid position.
-            let in_frame = decoded.filter(|t| t.statusword != 0).and_then(|t| t.torque_permille).zip(rated).map(|(p, r)| f64::from(p) / 1000.0 * r);
+            let in_frame = decoded.and_then(|t| t.torque_nm(rated));
             let torque = match (in_frame, self.drive_torque_last[i]) {
                 _ if rated.is_none() => Reading::MISSING,
                 _ if reading.status == jointctl_api::ReadingStatus::INVALID => Reading::invalid(),
