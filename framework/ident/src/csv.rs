@@ -52,6 +52,9 @@ pub struct Data {
     pub reference_torque: Vec<f64>,
     /// Notes for the user (ignored columns).
     pub notes: Vec<String>,
+    /// Samples where a repetition whose time restarted begins (indices, ascending): its time
+    /// since the previous repetition is not known (see [`RESTART_GAP_S`]).
+    pub restarts: Vec<usize>,
 }
 
 impl Data {
@@ -186,6 +189,12 @@ impl Data {
             motor_position: pick(&self.motor_position),
             reference_torque: pick(&self.reference_torque),
             notes: self.notes.clone(),
+            // A restart at `r` begins where the first sample at or after it is taken.
+            restarts: {
+                let mut at: Vec<usize> = self.restarts.iter().filter_map(|r| idx.iter().position(|i| i >= r)).filter(|p| *p > 0).collect();
+                at.dedup();
+                at
+            },
         }
     }
 
@@ -342,6 +351,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
                 shift = prev + RESTART_GAP_S - raw;
                 at = raw + shift;
                 segment_start = data.t.len();
+                data.restarts.push(data.t.len());
                 data.notes.push(format!("time restarts at line {line} ({raw} after {prev_raw}): a new repetition, laid {RESTART_GAP_S} s after the previous one"));
             } else if at <= prev {
                 return Err(err(line, Some("t"), format!("time {raw} does not increase (previous {prev_raw})")));
@@ -420,6 +430,11 @@ mod tests {
         let d = parse_text("t,deflection,torque\n0,0,1\n0.5,0,1\n1.0,0,1\n0.0,0,1\n0.5,0,1\n").unwrap();
         assert_eq!(d.t, [0.0, 0.5, 1.0, 1.0 + RESTART_GAP_S, 1.5 + RESTART_GAP_S]);
         assert!(d.notes[0].starts_with("time restarts at line 5"), "{:?}", d.notes);
+        // The repetition is marked where it begins (its time since the last is not known), and
+        // a subset keeps the mark at the first sample it takes from it.
+        assert_eq!(d.restarts, [3]);
+        assert_eq!(d.subset(&[0, 2, 4]).restarts, [2]);
+        assert!(d.subset(&[3, 4]).restarts.is_empty());
         // A step back that is not a restart (near the end of a repetition) stays an error, as does a repeat.
         let e = parse_text("t,deflection,torque\n0,0,1\n0.5,0,1\n1.0,0,1\n0.9,0,1\n").unwrap_err();
         assert_eq!(e.to_string(), "x.csv:5: column `t`: time 0.9 does not increase (previous 1)");

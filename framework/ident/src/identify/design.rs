@@ -21,6 +21,8 @@ pub(crate) struct Part {
     pub v: Vec<f64>,
     pub tau: Vec<f64>,
     pub pivot: Vec<f64>,
+    /// Which repetition of the record each sample belongs to (see [`Samples::repetition`]).
+    pub rep: Vec<u32>,
     /// Sample period [s].
     pub dt: f64,
 }
@@ -33,14 +35,14 @@ impl Part {
     /// The first `n` samples (a contiguous stretch keeps the full rate at a fraction of the cost).
     pub fn first(&self, n: usize) -> Part {
         let n = n.min(self.len());
-        Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), dt: self.dt }
+        Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), rep: self.rep[..n].to_vec(), dt: self.dt }
     }
 
     /// Every `k`-th sample (for searches on long records).
     pub fn every(&self, k: usize) -> Part {
         let k = k.max(1);
         let pick = |v: &Vec<f64>| v.iter().step_by(k).copied().collect();
-        Part { warm: pick(&self.warm), t: pick(&self.t), d: pick(&self.d), v: pick(&self.v), tau: pick(&self.tau), pivot: pick(&self.pivot), dt: self.dt * k as f64 }
+        Part { warm: pick(&self.warm), t: pick(&self.t), d: pick(&self.d), v: pick(&self.v), tau: pick(&self.tau), pivot: pick(&self.pivot), rep: self.rep.iter().step_by(k).copied().collect(), dt: self.dt * k as f64 }
     }
 }
 
@@ -260,6 +262,7 @@ impl Model<'_> {
             velocity_rad_per_s: &inputs.velocity_rad_per_s,
             elastic_rad: &inputs.elastic_rad,
             pivot_mm: &p.pivot,
+            repetition: &p.rep,
             history_rad: &p.warm,
             model_nm: &fixed,
         };
@@ -321,6 +324,7 @@ impl Model<'_> {
             velocity_rad_per_s: &proj.inputs.velocity_rad_per_s,
             elastic_rad: &proj.inputs.elastic_rad,
             pivot_mm: &p.pivot,
+            repetition: &p.rep,
             history_rad: &p.warm,
             model_nm: &proj.model_nm,
         };

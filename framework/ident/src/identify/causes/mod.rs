@@ -203,6 +203,10 @@ pub struct Samples<'a> {
     pub elastic_rad: &'a [f64],
     /// Stiffness setting [mm] (0 when the data has none).
     pub pivot_mm: &'a [f64],
+    /// Which repetition each sample belongs to, counted from 0: a new one begins where the
+    /// record's time restarted (repetitions logged apart and concatenated), so its time since
+    /// the one before is not known and a steady vibration's phase does not carry over.
+    pub repetition: &'a [u32],
     /// Deflections before this part, oldest first: the history a stateful effect starts from.
     pub history_rad: &'a [f64],
     /// The configured characteristic's torque at `elastic_rad` [Nm]; zeros when the baseline is
@@ -312,6 +316,22 @@ pub trait CandidateCause: Send + Sync {
         let _ = context;
         0.0
     }
+}
+
+/// Where each repetition of `samples` begins (see [`Samples::repetition`]), the first sample
+/// included; `None` for a record of one repetition. A part inside a later repetition (the
+/// held-out part of a record of three) gets its one start too: whatever is fitted on each
+/// repetition apart in the training part is fitted anew there, not carried over.
+pub(crate) fn repetition_starts(samples: &Samples) -> Option<Vec<usize>> {
+    let r = samples.repetition;
+    let starts: Vec<usize> = std::iter::once(0).chain((1..r.len()).filter(|i| r[*i] != r[i - 1])).collect();
+    (starts.len() > 1 || r.first().is_some_and(|first| *first > 0)).then_some(starts)
+}
+
+/// The RMS amplitude of sine-cosine coefficient pairs (one pair per segment) [Nm].
+pub(crate) fn rms_amplitude(pairs: &[f64]) -> f64 {
+    let n = (pairs.len() / 2).max(1) as f64;
+    (pairs.chunks(2).map(|ab| ab[0] * ab[0] + ab.get(1).map_or(0.0, |b| b * b)).sum::<f64>() / n).sqrt()
 }
 
 /// A JSON object from pairs, for fragments.

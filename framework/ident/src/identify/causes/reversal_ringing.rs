@@ -76,9 +76,7 @@ impl CandidateCause for ReversalRinging {
     }
     fn report(&self, p: &[f64], _: &[String], c: &[f64]) -> std::collections::BTreeMap<String, f64> {
         // `c` holds every ring's pair: the typical (RMS) ring amplitude.
-        let rings = (c.len() / 2).max(1) as f64;
-        let rms = (c.chunks(2).map(|ab| ab[0] * ab[0] + ab.get(1).map_or(0.0, |b| b * b)).sum::<f64>() / rings).sqrt();
-        [("frequency_hz".to_string(), p[0]), ("damping_ratio".to_string(), p[1]), ("ring_amplitude_nm".to_string(), rms)].into_iter().collect()
+        [("frequency_hz".to_string(), p[0]), ("damping_ratio".to_string(), p[1]), ("ring_amplitude_nm".to_string(), super::rms_amplitude(c))].into_iter().collect()
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
         2.0 * spectrum::resolvable(c.full_rate.t_s, c.excitation.frequency_hz).ln()
@@ -118,7 +116,7 @@ mod tests {
         // One stroke: no reversal inside, so the whole of it is one ring.
         let d: Vec<f64> = t.iter().map(|x| 0.01 * x).collect();
         let (v, zeros) = (vec![0.01; n], vec![0.0; n]);
-        let s = Samples { t_s: &t, deflection_rad: &d, velocity_rad_per_s: &v, elastic_rad: &d, pivot_mm: &zeros, history_rad: &[], model_nm: &zeros };
+        let s = Samples { t_s: &t, deflection_rad: &d, velocity_rad_per_s: &v, elastic_rad: &d, pivot_mm: &zeros, repetition: &vec![0; n], history_rad: &[], model_nm: &zeros };
         ReversalRinging.columns(&[frequency_hz, damping], &s)
     }
 

@@ -1,7 +1,8 @@
 //! A vibration whose amplitude grows with speed: `|dphi/dt| (a sin(2 pi f t) + b cos(2 pi f t))`
-//! (gear meshing, a rubbing cable: the faster the joint moves, the harder it shakes).
+//! (gear meshing, a rubbing cable: the faster the joint moves, the harder it shakes). Its phase
+//! is fitted on each repetition apart, as the steady vibration's (see [`super::Vibration`]).
 
-use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext};
+use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
 use crate::identify::spectrum;
 
 /// `+ |dphi/dt| (a sin(2 pi f t) + b cos(2 pi f t))` [Nm].
@@ -33,8 +34,11 @@ impl CandidateCause for SpeedVibration {
             s.t_s.iter().zip(speed).map(|(t, v)| v.abs() * (w * t).cos()).collect(),
         ]
     }
+    fn segments(&self, _: &[f64], s: &Samples) -> Option<Vec<usize>> {
+        repetition_starts(s)
+    }
     fn report(&self, p: &[f64], _: &[String], c: &[f64]) -> std::collections::BTreeMap<String, f64> {
-        [("frequency_hz".to_string(), p[0]), ("amplitude_nms_per_rad".to_string(), c[0].hypot(c[1]))].into_iter().collect()
+        [("frequency_hz".to_string(), p[0]), ("amplitude_nms_per_rad".to_string(), rms_amplitude(c))].into_iter().collect()
     }
     fn remark(&self, p: &[f64], e: &Excitation, duration_s: f64) -> Option<String> {
         super::vibration::harmonic_remark(p[0], e, duration_s)

@@ -288,6 +288,22 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         if dropped == 0 { Cow::Borrowed(column) } else { Cow::Owned(column.iter().zip(&lost).filter(|(_, l)| !**l).map(|(x, _)| *x).collect()) }
     };
     let (d, tau, pivot) = (kept(&data.deflection), kept(&data.torque), kept(&data.pivot_mm));
+    // Each sample's repetition: the count of restarts at or before it.
+    let rep: Vec<u32> = {
+        let mut count = 0u32;
+        let mut next = data.restarts.iter().peekable();
+        (0..n_all)
+            .map(|i| {
+                while next.next_if(|r| **r <= i).is_some() {
+                    count += 1;
+                }
+                count
+            })
+            .zip(&lost)
+            .filter(|(_, l)| !**l)
+            .map(|(r, _)| r)
+            .collect()
+    };
     // Time counted from the first sample: Unix-epoch stamps (1.7e9 s) would leave a sine of the
     // time a few digits only.
     let t0 = data.t[0];
@@ -351,7 +367,8 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         v: v[r.clone()].to_vec(),
         tau: tau[r.clone()].to_vec(),
         // A pivot not given is none: the configured characteristic's own.
-        pivot: if pivot.is_empty() { vec![0.0; r.len()] } else { pivot[r].iter().map(|p| if p.is_finite() { *p } else { 0.0 }).collect() },
+        pivot: if pivot.is_empty() { vec![0.0; r.len()] } else { pivot[r.clone()].iter().map(|p| if p.is_finite() { *p } else { 0.0 }).collect() },
+        rep: rep[r].to_vec(),
         dt: spacing,
     };
     if split < 30 || t.len() - split < 20 {
