@@ -65,9 +65,12 @@ pub fn segment_starts(t_s: &[f64]) -> Vec<usize> {
 /// quantisation (an assumption: 16 levels resolve a cubic's bend to a few percent).
 pub const MIN_SPAN_LSB: f64 = 16.0;
 
-/// Velocity reversals needed: one full cycle and a half, so that both directions of a
-/// hysteresis loop and the held-out part see motion.
-pub const MIN_REVERSALS: usize = 3;
+/// Velocity reversals needed: one, a motion out and back, so that both directions are seen. A
+/// step-and-hold test (out, a long hold, back) has one; three were asked for (a cycle and a
+/// half) until such records of an independent generator were refused with their offset, cubic
+/// or hysteresis unnamed, where the held-out test names what the data shows and nothing on the
+/// clean ones (blind seeds 1-4: four records named more, no clean record with a cause).
+pub const MIN_REVERSALS: usize = 1;
 
 /// Why the data cannot be identified.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -82,7 +85,7 @@ pub enum PrepareError {
     },
     /// The deflection hardly moves: nothing can be told from its quantisation.
     #[error(
-        "too little excitation: the deflection spans {span_rad:.3e} rad ({lsb:.1} counts of the encoder's resolution, as its steps in the data show) with {reversals} reversals; identification needs at least {MIN_SPAN_LSB} counts and {MIN_REVERSALS} reversals (a sine of a few times the play, over one and a half cycles)"
+        "too little excitation: the deflection spans {span_rad:.3e} rad ({lsb:.1} counts of the encoder's resolution, as its steps in the data show) with {reversals} reversals; identification needs at least {MIN_SPAN_LSB} counts and {MIN_REVERSALS} reversal (a motion of a few times the play, out and back)"
     )]
     TooLittleExcitation {
         /// Range of the deflection [rad].
