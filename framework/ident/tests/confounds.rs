@@ -58,3 +58,43 @@ fn a_hysteresis_on_one_sine_is_reported_confounded_and_a_second_frequency_resolv
     assert!(named.contains(&"hysteresis") && !named.contains(&"time_delay"), "{named:?}");
     assert!(two.confounded.iter().all(|c| c.effect != "hysteresis" && c.alternative != "hysteresis"), "{:?}", two.confounded);
 }
+
+/// A fast small sine (0.0115 rad at 1.2 Hz: up to 0.087 rad/s) of a stiff spring (235 Nm/rad)
+/// with a viscous friction of `b` Nm s/rad beside a small eq. 3.5 friction `0.094 atan(33 v)`,
+/// through a 17-bit encoder, 0.045 Nm noise, 800 Hz for 22 s.
+fn viscous_record(b: f64) -> jointctl_ident::csv::Data {
+    use std::f64::consts::TAU;
+    let q = TAU / 131_072.0;
+    let mut rng = jointctl_test_support::XorShift64::new(0x6a09_e667_f3bc_c908);
+    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..17_600 {
+        let t = f64::from(i) / 800.0;
+        let (x, v) = (0.0115 * (TAU * 1.2 * t).sin(), 0.0115 * TAU * 1.2 * (TAU * 1.2 * t).cos());
+        t_s.push(t);
+        deflection.push((x / q).round() * q);
+        torque.push(235.0 * x + 0.094 * (33.0 * v).atan() + b * v + 0.045 * rng.normal());
+    }
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
+}
+
+/// Finding (issue 31, pattern 1, and issue 32's confounds): a viscous friction beside a small
+/// eq. 3.5 arctan, at rates where the baseline's arctan is fitted nearly straight, got no cause
+/// and no word: the arctan took the viscous torque as its own (the blind generator's 008 of
+/// seed 2: a viscous torque of 37 times the noise, the baseline's held-out error at the noise
+/// floor). The report now names the pair as confounded (eq. 3.5's friction in the baseline,
+/// `coulomb_friction`, or `viscous_friction`) and proposes no experiment for it (they part only
+/// beyond the recorded rates). The thesis' sharp arctan bends within the rates: no such entry.
+#[test]
+fn a_viscous_friction_taken_by_a_nearly_straight_arctan_is_reported_confounded() {
+    // 4 Nm s/rad: 0.35 Nm at the peak rate, 8 times the noise.
+    let report = identify(&viscous_record(4.0), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    let pair = report.confounded.iter().find(|c| c.effect == "coulomb_friction" && c.alternative == "viscous_friction");
+    assert!(!named.contains(&"viscous_friction"), "named {named:?}: the confound this test is about did not arise");
+    let pair = pair.unwrap_or_else(|| panic!("named {named:?}, confounded {:?}", report.confounded));
+    assert!(pair.evidence.contains("nearly straight") && pair.evidence.contains("no experiment"), "{}", pair.evidence);
+    assert!(report.experiment.is_none(), "{:?}", report.experiment);
+    // The thesis' baseline alone (0.3 atan(80 v) at up to 0.16 rad/s): the arctan bends.
+    let clean = identify(&record(0.1, false, |_, _| 0.0), &IdentifyOptions::default()).unwrap();
+    assert!(clean.confounded.iter().all(|c| c.effect != "coulomb_friction"), "{:?}", clean.confounded);
+}

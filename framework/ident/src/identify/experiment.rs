@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 /// the data cannot tell them apart, and the name given is one of the two.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Confound {
-    /// The named cause.
+    /// The named cause, or `coulomb_friction` for eq. 3.5's friction in the baseline (its
+    /// arctan nearly straight over the recorded rates, a viscous friction in its place).
     pub effect: String,
     /// The candidate that fits the training part about as well instead.
     pub alternative: String,

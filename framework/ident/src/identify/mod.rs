@@ -26,6 +26,7 @@ pub mod causes;
 mod design;
 pub(crate) mod least_squares;
 pub mod experiment;
+mod friction_confound;
 mod numeric;
 pub use numeric::format_value;
 pub mod prepare;
@@ -87,18 +88,24 @@ pub struct NegligibleCause {
 /// assert!(why.contains("99 % of") && !why.contains("below"), "{why}");
 /// ```
 pub fn confound_evidence(named: &str, other: &str, named_bic: f64, other_bic: f64, before_bic: f64) -> String {
-    let why = if (named_bic - other_bic).abs() < select::CONFOUND_BIC {
+    let why = confound_rule(named_bic, other_bic, before_bic, "the named cause");
+    format!("{other} in place of {named} explains the training part about as well ({why}); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart")
+}
+
+/// Which confound rule holds, in words (see [`confound_evidence`]); `named` says what the
+/// alternative stands in for.
+fn confound_rule(named_bic: f64, other_bic: f64, before_bic: f64, named: &str) -> String {
+    if (named_bic - other_bic).abs() < select::CONFOUND_BIC {
         format!("BIC {other_bic:.0} against {named_bic:.0}: a difference of {:.0}, below {:.0}, not very strong evidence for either", (named_bic - other_bic).abs(), select::CONFOUND_BIC)
     } else {
         format!(
-            "it improves the training BIC by {:.0}, {:.0} % of the {:.0} the named cause does (at least {:.0} % counts as about as well)",
+            "it improves the training BIC by {:.0}, {:.0} % of the {:.0} {named} does (at least {:.0} % counts as about as well)",
             before_bic - other_bic,
             100.0 * (before_bic - other_bic) / (before_bic - named_bic),
             before_bic - named_bic,
             100.0 * select::CONFOUND_SHARE
         )
-    };
-    format!("{other} in place of {named} explains the training part about as well ({why}); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart")
+    }
 }
 
 /// What the extended model leaves unexplained on the held-out part.
@@ -418,7 +425,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
     let held_out_reach = [ratio(rate_test, rate_train), ratio(range_test, range_train)];
     let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach);
-    let confounded: Vec<Confound> = selection
+    let mut confounded: Vec<Confound> = selection
         .confounded
         .iter()
         .map(|&(named, other, a, b, before)| Confound {
@@ -428,6 +435,22 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
             evidence: confound_evidence(&name(named), &name(other), a, b, before),
         })
         .collect();
+    let experiment = experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz);
+    // No experiment for this pair: within the recorded rates both stay straight lines; they part
+    // only where the arctan saturates, faster than the arm was driven.
+    if let Some(c) = friction_confound::baseline_friction_confound(&model, &spec, p) {
+        let [with, instead, before] = c.bic;
+        let why = confound_rule(with, instead, before, "the arctan");
+        let shape = format!(
+            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the recorded rates, so no experiment is proposed for them (the proposals stay within what the arm did)",
+            name(c.viscous),
+            format_value(c.k_b),
+            format_value(c.peak_rad_per_s),
+            100.0 * c.share,
+            format_value(3.0 / c.k_b)
+        );
+        confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
+    }
     // A record without a spring (the first column a joint position): a Dahl loop is the
     // friction's pre-sliding (Dahl's model is a friction model), not an elastic element's
     // hysteresis: it stays in the extended model and is reported with the friction. So does a
@@ -460,7 +483,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         rmse_after,
         causes: found,
         negligible,
-        experiment: experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz),
+        experiment,
         confounded,
         unexplained,
         no_spring,
