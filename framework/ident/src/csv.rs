@@ -189,11 +189,11 @@ impl Data {
             motor_position: pick(&self.motor_position),
             reference_torque: pick(&self.reference_torque),
             notes: self.notes.clone(),
-            // A restart at `r` begins where the first sample at or after it is taken.
+            // A repetition begins wherever two samples taken one after the other come from
+            // different repetitions of this data.
             restarts: {
-                let mut at: Vec<usize> = self.restarts.iter().filter_map(|r| idx.iter().position(|i| i >= r)).filter(|p| *p > 0).collect();
-                at.dedup();
-                at
+                let repetition = |i: usize| self.restarts.partition_point(|r| *r <= i);
+                (1..idx.len()).filter(|p| repetition(idx[*p]) != repetition(idx[p - 1])).collect()
             },
         }
     }

@@ -21,7 +21,8 @@ pub(crate) struct Part {
     pub v: Vec<f64>,
     pub tau: Vec<f64>,
     pub pivot: Vec<f64>,
-    /// Which repetition of the record each sample belongs to (see [`Samples::repetition`]).
+    /// Which repetition of the record each sample belongs to; empty for a record of one (see
+    /// [`Samples::repetition`]).
     pub rep: Vec<u32>,
     /// Sample period [s].
     pub dt: f64,
@@ -35,7 +36,7 @@ impl Part {
     /// The first `n` samples (a contiguous stretch keeps the full rate at a fraction of the cost).
     pub fn first(&self, n: usize) -> Part {
         let n = n.min(self.len());
-        Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), rep: self.rep[..n].to_vec(), dt: self.dt }
+        Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), rep: self.rep.iter().take(n).copied().collect(), dt: self.dt }
     }
 
     /// Every `k`-th sample (for searches on long records).

@@ -4,7 +4,9 @@
 //! `b dphi/dt` is one. The baseline's arctan then takes a viscous friction as its own (its
 //! held-out error sits at the noise floor, and `viscous_friction` adds nothing), and the data
 //! cannot say which of the two the joint has: the report says so, by the same rule as for two
-//! causes (see `docs/identify/significance.md`, "Confounds"), and proposes an experiment.
+//! causes (see `docs/identify/significance.md`, "Confounds"). It proposes no experiment for
+//! them: they part only where the arctan saturates, faster than the record went, and the
+//! proposals stay within what the arm did.
 
 use super::design::{Model, Spec, Term};
 use super::prepare::Prepared;
@@ -23,7 +25,7 @@ pub(crate) struct FrictionConfound {
     pub friction: usize,
     pub viscous: usize,
     pub bic: [f64; 3],
-    pub k_b: f64,
+    pub k_b_s_per_rad: f64,
     pub peak_rad_per_s: f64,
     pub share: f64,
 }
@@ -38,10 +40,12 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
         return None;
     }
     let at = spec.terms.iter().position(|t| t.baseline && t.cause == friction)?;
-    let k_b = *spec.terms[at].params.first()?;
+    let k_b_s_per_rad = *spec.terms[at].params.first()?;
+    // The peak of the training part at its full rate (the fits below run on the decimated one,
+    // as the confound rule's BICs do).
+    let peak_rad_per_s = p.train.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let part = &p.coarse;
-    let peak_rad_per_s = part.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let x = k_b * peak_rad_per_s;
+    let x = k_b_s_per_rad * peak_rad_per_s;
     let share = if x > 0.0 { x.atan() / x } else { 1.0 };
     if share < NEARLY_STRAIGHT {
         return None;
@@ -55,5 +59,5 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
         return None;
     }
     let about_as_well = (with - instead).abs() < CONFOUND_BIC || before - instead >= CONFOUND_SHARE * (before - with);
-    (about_as_well && before - with > 0.0).then_some(FrictionConfound { friction, viscous, bic: [with, instead, before], k_b, peak_rad_per_s, share })
+    (about_as_well && before - with > 0.0).then_some(FrictionConfound { friction, viscous, bic: [with, instead, before], k_b_s_per_rad, peak_rad_per_s, share })
 }

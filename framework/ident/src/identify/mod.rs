@@ -444,10 +444,10 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         let shape = format!(
             "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the recorded rates, so no experiment is proposed for them (the proposals stay within what the arm did)",
             name(c.viscous),
-            format_value(c.k_b),
+            format_value(c.k_b_s_per_rad),
             format_value(c.peak_rad_per_s),
             100.0 * c.share,
-            format_value(3.0 / c.k_b)
+            format_value(3.0 / c.k_b_s_per_rad)
         );
         confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
     }

@@ -205,7 +205,7 @@ fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, w
             };
             let better = match p.refine {
                 // Within the grid's range: a parameter outside it is outside what the cause
-                // claims to model (a ring damped beyond 0.3 is no ring).
+                // claims to model (a ring damped beyond three times critical is no ring).
                 Refine::Between if now > 0.0 => {
                     let (lo, hi) = (p.grid.iter().copied().fold(f64::INFINITY, f64::min), p.grid.iter().copied().fold(0.0, f64::max));
                     // The rest of the model fitted once; the term's columns projected on it

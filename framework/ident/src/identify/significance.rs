@@ -139,6 +139,8 @@ impl std::fmt::Display for Judgement {
         write!(f, "{}; held-out MSE gain {:.3e} Nm^2 (relevant from {:.3e})", self.test, self.gain_nm2, self.relevant_nm2)?;
         if self.consistent {
             write!(f, ", consistent over {CONSISTENCY_PARTS} parts of the held-out record")?;
+        } else if self.test.kind == TestKind::AddedCoefficients && self.structured {
+            write!(f, "; the model without it leaves a structured residual, where coefficients fitted on the held-out part also need a large gain consistent over {CONSISTENCY_PARTS} parts of it")?;
         }
         Ok(())
     }

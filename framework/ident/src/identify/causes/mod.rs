@@ -205,7 +205,8 @@ pub struct Samples<'a> {
     pub pivot_mm: &'a [f64],
     /// Which repetition each sample belongs to, counted from 0: a new one begins where the
     /// record's time restarted (repetitions logged apart and concatenated), so its time since
-    /// the one before is not known and a steady vibration's phase does not carry over.
+    /// the one before is not known and a steady vibration's phase does not carry over. Empty
+    /// for a record of one repetition, whatever part of it the samples are.
     pub repetition: &'a [u32],
     /// Deflections before this part, oldest first: the history a stateful effect starts from.
     pub history_rad: &'a [f64],
@@ -319,13 +320,16 @@ pub trait CandidateCause: Send + Sync {
 }
 
 /// Where each repetition of `samples` begins (see [`Samples::repetition`]), the first sample
-/// included; `None` for a record of one repetition. A part inside a later repetition (the
-/// held-out part of a record of three) gets its one start too: whatever is fitted on each
-/// repetition apart in the training part is fitted anew there, not carried over.
+/// included; `None` for a record of one repetition. Every part of a record of several gets
+/// its starts, a part inside one repetition (the held-out part of a record of three) its one:
+/// whatever is fitted on each repetition apart is so on every part, the held-out one anew, so
+/// that no part's coefficients are laid out differently from another's.
 pub(crate) fn repetition_starts(samples: &Samples) -> Option<Vec<usize>> {
     let r = samples.repetition;
-    let starts: Vec<usize> = std::iter::once(0).chain((1..r.len()).filter(|i| r[*i] != r[i - 1])).collect();
-    (starts.len() > 1 || r.first().is_some_and(|first| *first > 0)).then_some(starts)
+    if r.is_empty() {
+        return None;
+    }
+    Some(std::iter::once(0).chain((1..r.len()).filter(|i| r[*i] != r[i - 1])).collect())
 }
 
 /// The RMS amplitude of sine-cosine coefficient pairs (one pair per segment) [Nm].
@@ -338,3 +342,29 @@ pub(crate) fn rms_amplitude(pairs: &[f64]) -> f64 {
 pub(crate) fn object<const N: usize>(pairs: [(&str, Value); N]) -> Map<String, Value> {
     pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Review finding: whether a cause was fitted per repetition was decided by each part on
+    /// its own, so a part inside the first repetition of a restarted record (a training part
+    /// of its first 50 000 samples) fitted one set of coefficients and a part in a later one
+    /// (the held-out part) a per-repetition layout; a prediction from one part's fit on the
+    /// other zips coefficients with columns and would mix them up. Decided for the record now.
+    #[test]
+    fn every_part_of_a_restarted_record_is_fitted_per_repetition() {
+        let samples = |repetition: &[u32]| -> Option<Vec<usize>> {
+            let n = repetition.len();
+            let (t, zeros) = ((0..n).map(|i| i as f64).collect::<Vec<f64>>(), vec![0.0; n]);
+            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], model_nm: &zeros })
+        };
+        // Inside the first repetition, inside a later one, across two.
+        assert_eq!(samples(&[0, 0, 0]), Some(vec![0]));
+        assert_eq!(samples(&[2, 2]), Some(vec![0]));
+        assert_eq!(samples(&[0, 0, 1, 1, 2]), Some(vec![0, 2, 4]));
+        // A record of one repetition carries no column.
+        assert_eq!(samples(&[]), None);
+    }
+}
+

@@ -21,10 +21,10 @@ pub struct ReversalRinging;
 /// decaying exponentials that do not oscillate. A transient after each reversal that is no mode
 /// (a Stribeck friction's breakaway peak that eq. 3.5's arctan lacks, a torque sensor's filter
 /// on the friction's step) then finds its own shape among the rival fits, at a damping that
-/// [`RING_DAMPING`] rejects, instead of the most damped ring (an assumption: three times
-/// critical spans time constants from a sixth of the ring's period to ten times it; measured
-/// on the blind generator's Stribeck records, whose rings came out at 0.06-0.2 when the grid
-/// stopped at 0.3).
+/// [`RING_DAMPING`] rejects, instead of the most damped ring (an assumption: at three times
+/// critical the two time constants are a thirty-seventh of the ring's period and nearly a whole
+/// one, at critical damping both a sixth; measured on the blind generator's Stribeck records,
+/// whose rings came out at 0.06-0.2 when the grid stopped at 0.3 and at 0.5-3 now).
 const MOST_DAMPED: f64 = 3.0;
 
 /// ... and the largest a ring is named with: its envelope falls to 28 % within a period, and
@@ -116,7 +116,7 @@ mod tests {
         // One stroke: no reversal inside, so the whole of it is one ring.
         let d: Vec<f64> = t.iter().map(|x| 0.01 * x).collect();
         let (v, zeros) = (vec![0.01; n], vec![0.0; n]);
-        let s = Samples { t_s: &t, deflection_rad: &d, velocity_rad_per_s: &v, elastic_rad: &d, pivot_mm: &zeros, repetition: &vec![0; n], history_rad: &[], model_nm: &zeros };
+        let s = Samples { t_s: &t, deflection_rad: &d, velocity_rad_per_s: &v, elastic_rad: &d, pivot_mm: &zeros, repetition: &[], history_rad: &[], model_nm: &zeros };
         ReversalRinging.columns(&[frequency_hz, damping], &s)
     }
 

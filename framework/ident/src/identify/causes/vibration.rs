@@ -75,14 +75,14 @@ impl CandidateCause for Vibration {
 /// alone was off by a fifth of a resolution on records of repetitions whose time restarted (the
 /// phase jumps at each restart smear it): over a 24 s repetition a 24.6 Hz vibration drifted
 /// through a third of a cycle, and a ring after every reversal took the drift up.
-fn around(f: f64, c: &SearchContext) -> Vec<f64> {
+fn around(frequency_hz: f64, c: &SearchContext) -> Vec<f64> {
     let t = c.full_rate.t_s;
-    let duration = t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a);
-    if duration <= 0.0 {
-        return vec![f];
+    let duration_s = t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a);
+    if duration_s <= 0.0 {
+        return vec![frequency_hz];
     }
-    let step = 0.5 / duration;
-    (-2..=2).map(|k| f + k as f64 * step).filter(|x| *x > 0.0).collect()
+    let step_hz = 0.5 / duration_s;
+    (-2..=2).map(|k| frequency_hz + k as f64 * step_hz).filter(|x| *x > 0.0).collect()
 }
 
 /// A mode at a harmonic of the excitation (within the record's frequency resolution) cannot be
