@@ -1,0 +1,79 @@
+//! identify's memory on a long record: what it holds beside the record at its peak, on the
+//! thread that calls it (where the record is prepared: the rate, the parts).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use jointctl_ident::identify::{IdentifyOptions, identify};
+
+/// Forwards to the system allocator; counts this thread's live bytes and their peak.
+struct PeakAlloc;
+
+thread_local! {
+    static LIVE: Cell<i64> = const { Cell::new(0) };
+    static PEAK: Cell<i64> = const { Cell::new(0) };
+}
+
+fn add(bytes: i64) {
+    let _ = LIVE.try_with(|l| {
+        l.set(l.get() + bytes);
+        let _ = PEAK.try_with(|p| p.set(p.get().max(l.get())));
+    });
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator; counting touches only
+// `const`-initialised thread-local cells, which do not allocate.
+unsafe impl GlobalAlloc for PeakAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        add(layout.size() as i64);
+        // SAFETY: forwarded unchanged.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        add(-(layout.size() as i64));
+        // SAFETY: forwarded unchanged; `ptr` came from `System` through this allocator.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        add(layout.size() as i64);
+        // SAFETY: forwarded unchanged.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        add(new_size as i64 - layout.size() as i64);
+        // SAFETY: forwarded unchanged; `ptr` came from `System` through this allocator.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: PeakAlloc = PeakAlloc;
+
+/// Finding (benchmark of 2026-11-28): on the 2-million-row file `jointctl identify` peaked at
+/// 220 MB (issue 13's target 150 MB; 148 MB when it was set). The deflection rate's ladder
+/// collected every window of every rung (24 bytes a sample) and a half-width per sample for
+/// each rung, and held its intervals for the whole record; the noise floor's line copied the
+/// deflection and the rate into a design. Now the windows are handed over, not collected, the
+/// intervals kept for a block of samples at a time, and the line summed in one pass.
+#[test]
+fn identify_holds_little_beside_a_long_record() {
+    use std::f64::consts::TAU;
+    let n: usize = 400_000;
+    let q = TAU / 16384.0;
+    let mut data = jointctl_ident::csv::Data::default();
+    for i in 0..n {
+        let t = i as f64 / 1000.0;
+        let (x, v) = (0.1 * (TAU * 0.2 * t).sin(), 0.1 * TAU * 0.2 * (TAU * 0.2 * t).cos());
+        data.t.push(t);
+        data.deflection.push((x / q).round() * q);
+        data.torque.push(120.0 * x + 0.3 * (80.0 * v).atan() + 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5));
+    }
+    PEAK.with(|p| p.set(LIVE.with(Cell::get)));
+    let before = LIVE.with(Cell::get);
+    let report = identify(&data, &IdentifyOptions::default()).unwrap();
+    let per_sample = (PEAK.with(Cell::get) - before) as f64 / n as f64;
+    println!("peak beside the record: {per_sample:.1} bytes a sample; causes {:?}", report.causes.iter().map(|c| &c.effect).collect::<Vec<_>>());
+    // 90 bytes a sample before, 52 now: the time and rate columns (16), each sample's window
+    // half-width (8), the held-out part (120 000 samples of six columns: 14 a sample here).
+    assert!(per_sample < 65.0, "{per_sample:.1} bytes a sample");
+}
