@@ -191,11 +191,18 @@ impl Data {
             notes: self.notes.clone(),
             // A repetition begins wherever two samples taken one after the other come from
             // different repetitions of this data.
-            restarts: {
-                let repetition = |i: usize| self.restarts.partition_point(|r| *r <= i);
-                (1..idx.len()).filter(|p| repetition(idx[*p]) != repetition(idx[p - 1])).collect()
-            },
+            restarts: (1..idx.len()).filter(|p| self.repetition(idx[*p]) != self.repetition(idx[p - 1])).collect(),
         }
+    }
+
+    /// Which repetition sample `i` belongs to, counted from 0: the restarts at or before it.
+    ///
+    /// ```
+    /// let d = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1\n1,0,1\n0,0,1\n", "r.csv".as_ref()).unwrap();
+    /// assert_eq!((d.repetition(1), d.repetition(2)), (0, 1));
+    /// ```
+    pub fn repetition(&self, i: usize) -> u32 {
+        self.restarts.partition_point(|r| *r <= i) as u32
     }
 
     /// Samples.

@@ -296,23 +296,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
     // Each sample's repetition: the count of restarts at or before it; none for a record of one
     // repetition, so that every part of a record says the same (a part inside the first
     // repetition of a restarted record still fits per repetition what the others do).
-    let rep: Vec<u32> = if data.restarts.is_empty() {
-        Vec::new()
-    } else {
-        let mut count = 0u32;
-        let mut next = data.restarts.iter().peekable();
-        (0..n_all)
-            .map(|i| {
-                while next.next_if(|r| **r <= i).is_some() {
-                    count += 1;
-                }
-                count
-            })
-            .zip(&lost)
-            .filter(|(_, l)| !**l)
-            .map(|(r, _)| r)
-            .collect()
-    };
+    let rep: Vec<u32> = if data.restarts.is_empty() { Vec::new() } else { (0..n_all).filter(|i| !lost[*i]).map(|i| data.repetition(i)).collect() };
     // Time counted from the first sample: Unix-epoch stamps (1.7e9 s) would leave a sine of the
     // time a few digits only.
     let t0 = data.t[0];
@@ -396,9 +380,10 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
-/// about their means, in one pass: the design's columns are not copied (on a 2-million-row
-/// record they and a QR of them took 100 MB more at the peak than the record itself). `None`
-/// when the deflection and the rate are collinear or constant.
+/// about their means, in one pass: the design's columns are not copied (with them and the
+/// general QR of `least_squares`, a 2-million-row record's peak through `jointctl identify`
+/// was 173 MB, 159 MB without). `None` when the deflection and the rate are collinear or
+/// constant.
 fn line_in_deflection_and_rate(d: &[f64], v: &[f64], tau: &[f64]) -> Option<[f64; 3]> {
     let n = d.len().min(v.len()).min(tau.len());
     if n == 0 {
