@@ -25,6 +25,16 @@ fn clamped(test: &str, arm: &str, loop_edits: &[Edit]) -> PathBuf {
 }
 
 /// Runs the arm of `config` in real time and records 24 s of `dof` following sines and steps.
+/// Two sessions of `dof` recorded at once (they are real time), each (test, config, arm): the
+/// first's recording and the second's.
+fn both_sessions(first: (&str, &Path, &str), second: (&str, &Path, &str), dof: &str) -> (PathBuf, PathBuf) {
+    std::thread::scope(|s| {
+        let one = s.spawn(|| record_session(first.0, first.1, first.2, dof));
+        let two = record_session(second.0, second.1, second.2, dof);
+        (one.join().unwrap(), two)
+    })
+}
+
 fn record_session(test: &str, config: &Path, arm: &str, dof: &str) -> PathBuf {
     let mut run = Command::new(jointctl()).arg("run").arg(config).args(["--duration", "60"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
@@ -85,11 +95,7 @@ fn a_loop_that_is_not_the_configs_is_named_and_the_replay_gets_better() {
     let config = clamped("loop-config", &arm_name("loop-config"), &[]);
     let plant = clamped("loop-hidden", &hidden, &hidden_loop(&["hal.sim.drive_gains.elmo_q4"]));
     let same = clamped("loop-clean", &clean, &[]);
-    // Both sessions at once: they are real time.
-    let (a, b) = (plant.clone(), same.clone());
-    let hidden_session = std::thread::spawn(move || record_session("loop-hidden", &a, &hidden, "q4"));
-    let clean_session = record_session("loop-clean", &b, &clean, "q4");
-    let hidden_session = hidden_session.join().unwrap();
+    let (hidden_session, clean_session) = both_sessions(("loop-hidden", &plant, &hidden), ("loop-clean", &same, &clean), "q4");
 
     let out = scratch("loop-hidden-out");
     let v = identify(&hidden_session, &config, &out, "q4");
@@ -134,10 +140,7 @@ fn the_shoulders_loop_is_named_from_its_drives_torque_readings() {
     let config = sherpa_with("sloop-config", &arm_name("sloop-config"), &[]);
     let plant = sherpa_with("sloop-hidden", &hidden, &hidden_loop(&["hal.sim.drive_gains.elmo_shoulder_a", "hal.sim.drive_gains.elmo_shoulder_b"]));
     let same = sherpa_with("sloop-clean", &clean, &[]);
-    let (a, b) = (plant.clone(), same.clone());
-    let hidden_session = std::thread::spawn(move || record_session("sloop-hidden", &a, &hidden, "q2"));
-    let clean_session = record_session("sloop-clean", &b, &clean, "q2");
-    let hidden_session = hidden_session.join().unwrap();
+    let (hidden_session, clean_session) = both_sessions(("sloop-hidden", &plant, &hidden), ("sloop-clean", &same, &clean), "q2");
 
     let out = scratch("sloop-hidden-out");
     let v = identify(&hidden_session, &config, &out, "q2");

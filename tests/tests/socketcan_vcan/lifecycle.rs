@@ -10,13 +10,12 @@ use jointctl_hal_socketcan::HardwareHal;
 use socketcan::{CanFrame, CanSocket, EmbeddedFrame, Socket};
 
 use super::sim_node::SimNode;
-use super::{BUS, Rig, config, require_vcan};
+use super::{Rig, config, on_the_bus};
 
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn the_hal_enables_drives_follows_setpoints_and_resets_a_fault() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(5);
     let mut rig = Rig::new(5);
     // The first target is where the drive is (2000 counts = 2 rad), then enable step by step.
@@ -48,8 +47,7 @@ fn the_hal_enables_drives_follows_setpoints_and_resets_a_fault() {
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn the_stop_sequence_goes_to_the_drives_frame_by_frame() {
     use jointctl_config::StopStep;
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(15);
     let mut rig = Rig::new(15);
     rig.until(MotorSetpoint::HOLD, "enabled", |r| r.enabled == 1);
@@ -83,8 +81,7 @@ fn the_stop_sequence_goes_to_the_drives_frame_by_frame() {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn the_drives_limits_are_written_and_read_back_at_start_up() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let with_limits = |node: u8| {
         let mut cfg = config(node);
         let d = &mut cfg.buses.can[0].drives[0];

@@ -9,7 +9,7 @@ use jointctl_hal::codec::canopen::{self as co, DriveState};
 use socketcan::{CanFrame, CanSocket, Socket};
 
 use super::sim_node::SimNode;
-use super::{BUS, COUNTS_PER_RAD, Rig, config, config_in, require_vcan};
+use super::{COUNTS_PER_RAD, Rig, config, config_in, on_the_bus};
 
 /// Finding: a host that stalls or dies could leave a drive moving (in profile position mode a
 /// drive runs to its last target on its own). Pass: the HAL configures every drive to consume
@@ -19,8 +19,7 @@ use super::{BUS, COUNTS_PER_RAD, Rig, config, config_in, require_vcan};
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn a_drive_stops_on_its_own_when_the_host_falls_silent() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(12);
     let mut rig = Rig::with(config_in(12, "profile_position"));
     {
@@ -50,8 +49,7 @@ fn a_drive_stops_on_its_own_when_the_host_falls_silent() {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn a_drive_that_never_sends_a_heartbeat_is_silent_after_its_grace_time() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(14);
     node.heartbeats.store(false, Ordering::Relaxed);
     let started = Instant::now();
@@ -81,8 +79,7 @@ fn a_drive_that_never_sends_a_heartbeat_is_silent_after_its_grace_time() {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn bus_off_is_reported_and_no_reading_is_invented() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(13);
     let mut rig = Rig::new(13);
     rig.until(MotorSetpoint::HOLD, "enabled", |r| r.enabled == 1);
@@ -104,8 +101,7 @@ fn bus_off_is_reported_and_no_reading_is_invented() {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn lost_and_zeroed_tpdos_never_reach_the_readings() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     for (drop_pm, zero_pm) in [(0, 0), (50, 50), (100, 100), (200, 0), (0, 200)] {
         let node = SimNode::start(11);
         let mut rig = Rig::new(11);
@@ -156,8 +152,7 @@ fn lost_and_zeroed_tpdos_never_reach_the_readings() {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn a_drives_torque_reading_is_its_current_and_says_when_it_is_old() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(12);
     node.torque_permille.store(-250, Ordering::Relaxed);
     let mut with = config(12);
@@ -199,8 +194,7 @@ fn a_drives_torque_reading_is_its_current_and_says_when_it_is_old() {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn an_all_zero_frame_does_not_disable_the_drive() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let node = SimNode::start(13);
     let mut rig = Rig::new(13);
     rig.until(MotorSetpoint::HOLD, "enabled", |r| r.enabled == 1);

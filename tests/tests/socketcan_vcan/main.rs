@@ -34,6 +34,14 @@ fn require_vcan() {
     assert!(std::path::Path::new("/sys/class/net/vcan0").exists(), "no vcan0 on this machine: {NEEDS_VCAN}");
 }
 
+/// The bus for this test alone (a test that panicked left the lock poisoned, not the bus), once
+/// `vcan0` is known to be there.
+fn on_the_bus() -> std::sync::MutexGuard<'static, ()> {
+    let bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
+    require_vcan();
+    bus
+}
+
 const COUNTS_PER_RAD: f64 = 1000.0;
 
 fn config(node: u8) -> jointctl_config::ArmConfig {

@@ -9,7 +9,7 @@ use jointctl_hal::DeviceIndex;
 use jointctl_hal_socketcan::HardwareHal;
 
 use super::sim_node::SimNode;
-use super::{BUS, Rig, config, require_vcan};
+use super::{Rig, config, on_the_bus, require_vcan};
 
 fn wait_for_listeners(n: usize) {
     for _ in 0..200 {
@@ -24,8 +24,7 @@ fn wait_for_listeners(n: usize) {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn candump_decodes_the_frames_the_hal_sends() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     let _node = SimNode::start(7);
     let mut rig = Rig::new(7);
     rig.until(MotorSetpoint::HOLD, "operation enabled", |r| r.enabled == 1);
@@ -50,8 +49,7 @@ fn wait_listeners_count() -> usize {
 #[test]
 #[ignore = "needs vcan0: run inside the CAN VM with --include-ignored (CI does)"]
 fn frames_from_cansend_are_decoded() {
-    let _bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let _bus = on_the_bus();
     // A node answers the start-up SDOs, then goes away; cansend plays the drive.
     let node = SimNode::start(9);
     let mut rig = Rig::new(9);
@@ -90,8 +88,7 @@ fn frames_from_cansend_are_decoded() {
 /// The SocketCAN backend against the HAL contract every backend passes
 /// (`jointctl-hal-conformance`), with a simulated ELMO drive on `vcan0` as the peer.
 fn socketcan() -> jointctl_hal_conformance::Subject {
-    let bus = BUS.lock().unwrap_or_else(|p| p.into_inner());
-    require_vcan();
+    let bus = on_the_bus();
     let node = SimNode::start(7);
     let cfg = config(7);
     jointctl_hal_conformance::Subject {
