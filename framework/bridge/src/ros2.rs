@@ -19,6 +19,7 @@ use jointctl_ros2::msg::{self, Time};
 use ros2_client::qos::{Durability, History, WhenFull};
 use jointctl_ipc::CommandClient;
 use jointctl_record::messages;
+use ros2_client::dds::rustdds::{DomainParticipant, GUID};
 use ros2_client::{Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription};
 use serde_json::{Value, json};
 
@@ -163,13 +164,46 @@ fn request_json(r: &msg::CommandRequest) -> Value {
     v
 }
 
+/// The longest an answer waits for its requester's reader of `/jointctl/command_responses` to
+/// be discovered before it is sent anyway [s] (an assumption: discovery between two processes
+/// of one host takes well under a second, and a requester does not wait longer than a few).
+const ANSWER_HOLD_MAX: Duration = Duration::from_secs(5);
+
+/// How long a reader is known before an answer is written to it [s]. RustDDS records a reader
+/// in its discovery database first and matches it to the local writers just after, on another
+/// thread; an answer written in between is lost (volatile). 100 ms covers that hand-over, an
+/// assumption with a wide margin on a loaded machine.
+const READER_SETTLE: Duration = Duration::from_millis(100);
+
+/// An answer not sent yet: its requester's reader has not been seen long enough.
+struct PendingAnswer {
+    /// The requester's writer (its participant's GUID prefix is the requester's).
+    requester: GUID,
+    /// When the command came.
+    since: Instant,
+    response: msg::CommandResponse,
+}
+
 /// Commands from ROS 2: what the YAML allows, the runtime's client when it allows any, the rate
 /// limit, the answers, and the counts.
+///
+/// Discovery is not symmetric: the requester may have matched the bridge's writers and readers
+/// (and so sent its command) before the bridge has discovered the requester's reader of the
+/// answers. An answer written then is lost, as ROS 2's volatile topics lose it; so each answer
+/// waits, without blocking the bridge, until its requester's reader is known (at most
+/// [`ANSWER_HOLD_MAX`]).
 struct Commands {
     allowed: Result<(Vec<String>, CommandClient, crate::RateLimit), String>,
     trajectories: Subscription<msg::JointTrajectory>,
     requests: Subscription<msg::CommandRequest>,
     responses: Publisher<msg::CommandResponse>,
+    /// To look up the discovered readers of the answers.
+    participant: DomainParticipant,
+    /// The answers' DDS topic name (`rt/jointctl/command_responses`).
+    responses_topic: String,
+    pending: Vec<PendingAnswer>,
+    /// The answers' readers discovered, and when each was first seen.
+    readers_seen: Vec<(GUID, Instant)>,
     accepted: u64,
     refused: u64,
 }
@@ -177,17 +211,18 @@ struct Commands {
 impl Commands {
     /// Answers every command that has arrived.
     fn serve(&mut self, arm: &str, timeout_s: f64, clock: &WallClock) {
-        let mut incoming: Vec<Result<Value, String>> = Vec::new();
-        while let Ok(Some((t, _))) = self.trajectories.take() {
+        let mut incoming: Vec<(GUID, Result<Value, String>)> = Vec::new();
+        while let Ok(Some((t, info))) = self.trajectories.take() {
+            let from = GUID::from(info.publisher_gid());
             match trajectory_commands(&t) {
-                Ok(per_dof) => incoming.extend(per_dof.into_iter().map(Ok)),
-                Err(why) => incoming.push(Err(why)),
+                Ok(per_dof) => incoming.extend(per_dof.into_iter().map(|c| (from, Ok(c)))),
+                Err(why) => incoming.push((from, Err(why))),
             }
         }
-        while let Ok(Some((r, _))) = self.requests.take() {
-            incoming.push(Ok(request_json(&r)));
+        while let Ok(Some((r, info))) = self.requests.take() {
+            incoming.push((GUID::from(info.publisher_gid()), Ok(request_json(&r))));
         }
-        for command in incoming {
+        for (requester, command) in incoming {
             let (kind, joint) = match &command {
                 Ok(v) => (v["kind"].as_str().unwrap_or("").to_string(), v["joint"].as_str().unwrap_or("").to_string()),
                 Err(_) => ("trajectory".to_string(), String::new()),
@@ -202,7 +237,35 @@ impl Commands {
             }
             let stamp = Time::from_unix_ns(clock.unix_ns(jointctl_record::feed::monotonic_ns()));
             let response = msg::CommandResponse { header: msg::Header { stamp, frame_id: arm.to_string() }, kind, joint, accepted, message };
-            let _ = self.responses.publish(response);
+            self.pending.push(PendingAnswer { requester, since: Instant::now(), response });
+        }
+        self.answer_pending(arm);
+    }
+
+    /// Sends each pending answer whose requester's reader has been known for
+    /// [`READER_SETTLE`], or that has waited [`ANSWER_HOLD_MAX`].
+    fn answer_pending(&mut self, arm: &str) {
+        if self.pending.is_empty() {
+            return;
+        }
+        let now = Instant::now();
+        let discovered: Vec<GUID> =
+            self.participant.discovered_readers().into_iter().filter(|r| *r.subscription_topic_data.topic_name() == self.responses_topic).map(|r| r.reader_proxy.remote_reader_guid).collect();
+        self.readers_seen.retain(|(g, _)| discovered.contains(g));
+        for g in discovered {
+            if !self.readers_seen.iter().any(|(seen, _)| *seen == g) {
+                self.readers_seen.push((g, now));
+            }
+        }
+        let seen = &self.readers_seen;
+        let ready = |p: &PendingAnswer| seen.iter().any(|(g, at)| g.prefix == p.requester.prefix && now.duration_since(*at) >= READER_SETTLE);
+        let (send, wait): (Vec<PendingAnswer>, Vec<PendingAnswer>) = std::mem::take(&mut self.pending).into_iter().partition(|p| ready(p) || now.duration_since(p.since) >= ANSWER_HOLD_MAX);
+        self.pending = wait;
+        for p in send {
+            if !ready(&p) {
+                tracing::warn!(arm, kind = %p.response.kind, joint = %p.response.joint, "the requester's reader of {} was not discovered within {} s: its answer is sent and may be lost", jointctl_ros2::COMMAND_RESPONSES, ANSWER_HOLD_MAX.as_secs());
+            }
+            let _ = self.responses.publish(p.response);
         }
     }
 
@@ -283,6 +346,10 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
         trajectories: subscription(&mut node, jointctl_ros2::JOINT_TRAJECTORY, domain_id)?,
         requests: subscription(&mut node, jointctl_ros2::COMMAND, domain_id)?,
         responses: publisher(&mut node, jointctl_ros2::COMMAND_RESPONSES, domain_id)?,
+        participant: context.domain_participant(),
+        responses_topic: format!("rt{}", jointctl_ros2::COMMAND_RESPONSES),
+        pending: Vec::new(),
+        readers_seen: Vec::new(),
         allowed,
         accepted: 0,
         refused: 0,
@@ -333,6 +400,10 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
         },
         || commands.serve(arm, opts.command_timeout_s, &clock.get()),
     );
+    // Answers still waiting for their reader go out now: the bridge is leaving.
+    for p in std::mem::take(&mut commands.pending) {
+        let _ = commands.responses.publish(p.response);
+    }
     tracing::info!(arm, accepted = commands.accepted, refused = commands.refused, failed_writes, "commands from ROS 2, and writes that failed");
     Ok(result?)
 }
