@@ -7,7 +7,7 @@ use jointctl_ident::identify::significance::block_test;
 use serde_json::{Map, Value};
 
 use super::err;
-use super::gain::{Gain, Trace, held_out_mask, rmse, squared_errors, trace};
+use super::gain::{Gain, Split, Trace, held_out_mask, rmse, squared_errors, trace};
 use super::observer::{observer_torque_of, two_dof};
 use super::simulation::{merge_plant, simulated_torque, tidy};
 use crate::ExperimentError;
@@ -64,12 +64,12 @@ fn extended_joint<'a>(loaded: &'a LoadedConfig, dof: &str) -> Result<(usize, usi
 /// # Errors
 /// The DOF is not in the config or not simulated, or its joint has no single-DOF elastic
 /// observer model (the 2-DOF wrist), or a cause's terms are out of range.
-pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
+pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, split: Split) -> Result<Extension, ExperimentError> {
     let (j, i, entry) = extended_joint(loaded, dof)?;
     let mut notes = Vec::new();
     // The observer: every cause's observer terms together.
     let extension = observer_terms(found, &mut notes);
-    finish(loaded, dof, (j, i, entry), Value::Object(extension), found, data, (&held_out_mask(&data.t, train_fraction), &[(0..data.len()).collect()]), notes)
+    finish(loaded, dof, (j, i, entry), Value::Object(extension), found, data, (&held_out_mask(&data.t, &data.deflection, split), &[(0..data.len()).collect()]), notes)
 }
 
 /// The causes `identify` named at one pivot setting of a record.
@@ -98,13 +98,14 @@ fn observer_terms(found: &[Found], notes: &mut Vec<String>) -> Map<String, Value
 /// The extension of a DOF with pivot settings (the shoulder q2) from the causes `identify` named
 /// at each setting, in increasing pivot order: the observer's terms `by_pivot`, weighted at the
 /// joint's pivot online (issue 32), and its gain on what each setting's identification held out
-/// (its last `1 - train_fraction` of time). The simulated plant's effects are one set for every
+/// (its last `1 - train_fraction` of time, or the window `identify` held out instead; see
+/// [`jointctl_ident::identify::prepare::held_out_window`]). The simulated plant's effects are one set for every
 /// setting (`sim.effects` has no per-setting form): a cause named at half the settings or more is
 /// tried there with its plant terms averaged over them, and taken as [`extend`] takes a cause.
 ///
 /// # Errors
 /// As [`extend`]; also settings not in increasing order.
-pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFound], data: &Data, train_fraction: f64) -> Result<Extension, ExperimentError> {
+pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFound], data: &Data, split: Split) -> Result<Extension, ExperimentError> {
     let (j, i, entry) = extended_joint(loaded, dof)?;
     if let Some(w) = settings.windows(2).find(|w| !(w[1].pivot_mm > w[0].pivot_mm)) {
         return Err(err(format!("the settings must be in increasing pivot order, got {} mm after {} mm", w[1].pivot_mm, w[0].pivot_mm)));
@@ -114,9 +115,9 @@ pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFoun
     let mut held_out = vec![false; data.len()];
     for SettingFound { pivot_mm, samples, found } in settings {
         let t: Vec<f64> = samples.iter().map(|&i| data.t[i]).collect();
-        let split = jointctl_ident::identify::prepare::split_time(&t, train_fraction);
-        for (&i, &t) in samples.iter().zip(&t) {
-            held_out[i] = t >= split;
+        let d: Vec<f64> = samples.iter().map(|&i| data.deflection[i]).collect();
+        for (&i, held) in samples.iter().zip(held_out_mask(&t, &d, split)) {
+            held_out[i] = held;
         }
         let mut setting_notes = Vec::new();
         let terms = observer_terms(found, &mut setting_notes);

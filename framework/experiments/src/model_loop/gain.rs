@@ -2,6 +2,7 @@
 //! that part's torques for plots.
 
 use jointctl_ident::csv::Data;
+use jointctl_ident::identify::prepare::HeldOut;
 use serde::Serialize;
 
 /// Held-out torque RMSE before and after [Nm].
@@ -33,12 +34,36 @@ pub struct Trace {
     pub after_nm: Vec<f64>,
 }
 
+/// How `identify` split the record: the fraction of the time range fitted and which part was
+/// held out; the gains are measured on what it held out.
+///
+/// ```
+/// use jointctl_experiments::model_loop::Split;
+/// use jointctl_ident::identify::IdentifyOptions;
+/// assert_eq!(Split::of(&IdentifyOptions::default()).train_fraction, 0.7);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Split {
+    /// Fraction of the time range fitted.
+    pub train_fraction: f64,
+    /// Which part was held out.
+    pub held_out: HeldOut,
+}
+
+impl Split {
+    /// The split of `opts`.
+    pub fn of(opts: &jointctl_ident::identify::IdentifyOptions) -> Split {
+        Split { train_fraction: opts.train_fraction, held_out: opts.held_out }
+    }
+}
+
 /// Which samples are held out: those `identify` holds out (see
-/// [`jointctl_ident::identify::prepare::split_time`]), so that every gain is measured on data no
-/// fit has seen.
-pub(super) fn held_out_mask(t_s: &[f64], train_fraction: f64) -> Vec<bool> {
-    let split = jointctl_ident::identify::prepare::split_time(t_s, train_fraction);
-    t_s.iter().map(|t| *t >= split).collect()
+/// [`jointctl_ident::identify::prepare::held_out_window`]: the last part of the time range, or a
+/// window whose motion is more like the rest's), so that every gain is measured on data no fit
+/// has seen.
+pub(super) fn held_out_mask(t_s: &[f64], deflection_rad: &[f64], split: Split) -> Vec<bool> {
+    let window = jointctl_ident::identify::prepare::held_out_window(t_s, deflection_rad, split.train_fraction, split.held_out);
+    t_s.iter().map(|t| window.holds(t_s, *t)).collect()
 }
 
 /// Squared errors against the measurement on the samples `mask` selects (NaNs left out).
@@ -80,10 +105,10 @@ pub(super) fn trace(data: &Data, mask: &[bool], before: &[f64], after: &[f64]) -
 /// let x: Vec<f64> = t.iter().map(|t| 0.01 * (6.0 * t).sin()).collect();
 /// let tau = x.iter().map(|x| 20.0 * x + 0.5 * std::f64::consts::FRAC_1_SQRT_2).collect();
 /// let data = Data::from_columns(t, x, tau);
-/// let gain = jointctl_experiments::model_loop::observer_gain_along(&params, 45.0, &data, 0.7).unwrap().unwrap();
+/// let gain = jointctl_experiments::model_loop::observer_gain_along(&params, 45.0, &data, jointctl_experiments::model_loop::Split::of(&Default::default())).unwrap().unwrap();
 /// assert!(gain.rmse_after < 1e-9 && (gain.rmse_before - 0.5 * std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-9);
 /// ```
-pub fn observer_gain_along(params: &serde_json::Value, angle_deg: f64, data: &Data, train_fraction: f64) -> Result<Option<Gain>, crate::ExperimentError> {
+pub fn observer_gain_along(params: &serde_json::Value, angle_deg: f64, data: &Data, split: Split) -> Result<Option<Gain>, crate::ExperimentError> {
     if params.get("model_extension").is_none_or(|e| e.is_null()) {
         return Ok(None);
     }
@@ -94,7 +119,7 @@ pub fn observer_gain_along(params: &serde_json::Value, angle_deg: f64, data: &Da
     let after = super::observer_torque_along(params, angle_deg, &data.t, &data.deflection, &data.pivot_mm)?;
     let before = super::observer_torque_along(&table_alone, angle_deg, &data.t, &data.deflection, &data.pivot_mm)?;
     // One set of samples for both: where the measurement and both models are known.
-    let mask: Vec<bool> = held_out_mask(&data.t, train_fraction).iter().zip(before.iter().zip(&after)).map(|(k, (b, a))| *k && b.is_finite() && a.is_finite()).collect();
+    let mask: Vec<bool> = held_out_mask(&data.t, &data.deflection, split).iter().zip(before.iter().zip(&after)).map(|(k, (b, a))| *k && b.is_finite() && a.is_finite()).collect();
     let (rmse_before, rmse_after) = (rmse(&squared_errors(&data.torque, &before, &mask, true)), rmse(&squared_errors(&data.torque, &after, &mask, true)));
     Ok((rmse_before.is_finite() && rmse_after.is_finite()).then_some(Gain { rmse_before, rmse_after }))
 }

@@ -25,7 +25,7 @@ mod simulation;
 mod write;
 
 pub use self::extension::{Extension, Found, SettingFound, extend, extend_by_pivot};
-pub use self::gain::{Gain, Trace, observer_gain_along};
+pub use self::gain::{Gain, Split, Trace, observer_gain_along};
 pub use self::observer::{configured_torque, configured_torque_along, observer_torque, observer_torque_along, observer_torque_of};
 pub use self::simulation::{REPLAY_RATE_WINDOW_S, simulated_torque};
 pub use self::write::{Written, write};

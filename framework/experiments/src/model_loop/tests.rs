@@ -27,7 +27,8 @@ fn linear_plant_terms_add_and_the_others_replace() {
 #[test]
 fn the_held_out_part_is_identifys_last_thirty_per_cent_of_the_time_range() {
     let t: Vec<f64> = (0..=10).map(f64::from).collect();
-    let mask = held_out_mask(&t, 0.7);
+    let d: Vec<f64> = t.iter().map(|t| (1.3 * t).sin()).collect();
+    let mask = held_out_mask(&t, &d, super::Split::of(&jointctl_ident::identify::IdentifyOptions::default()));
     assert_eq!(mask.iter().filter(|m| **m).count(), 4);
     assert!(!mask[6] && mask[7]);
 }

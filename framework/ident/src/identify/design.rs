@@ -39,6 +39,18 @@ impl Part {
         Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), rep: self.rep.iter().take(n).copied().collect(), dt: self.dt }
     }
 
+    /// This part's samples followed by `next`'s (training samples either side of a held-out
+    /// window); the history before it is this part's.
+    pub fn then(&self, next: &Part) -> Part {
+        if next.len() == 0 {
+            return self.clone();
+        }
+        let join = |a: &Vec<f64>, b: &Vec<f64>| a.iter().chain(b).copied().collect();
+        // Repetitions are both parts' or none (a record of one repetition has none).
+        let rep = if self.rep.is_empty() || next.rep.is_empty() { Vec::new() } else { self.rep.iter().chain(&next.rep).copied().collect() };
+        Part { warm: self.warm.clone(), t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, dt: self.dt }
+    }
+
     /// Every `k`-th sample (for searches on long records).
     pub fn every(&self, k: usize) -> Part {
         let k = k.max(1);

@@ -212,6 +212,9 @@ pub struct Report {
     pub unexplained: Unexplained,
     /// Set when the record has no spring (see [`NoSpring`]).
     pub no_spring: Option<NoSpring>,
+    /// The part of the time range held out (fractions of it), and why it is not the last part
+    /// when it is not (see [`prepare::held_out_window`]).
+    pub held_out_window: prepare::HeldOutWindow,
     /// How a cause's held-out gain was judged.
     pub significance: Significance,
     /// Held-out part: (t, deflection, velocity, measured, baseline, extended) for plots.
@@ -232,6 +235,8 @@ pub struct IdentifyOptions {
     pub baseline_friction: bool,
     /// Fraction of the time range used for fitting (the rest is held out).
     pub train_fraction: f64,
+    /// Which part is held out (see [`prepare::held_out_window`]).
+    pub held_out: prepare::HeldOut,
     /// Most causes reported.
     pub max_causes: usize,
     /// Causes beyond the built-in vocabulary, tested with the same criteria.
@@ -241,7 +246,7 @@ pub struct IdentifyOptions {
 impl Default for IdentifyOptions {
     /// The thesis' structure: a linear characteristic through zero and eq. 3.5's friction.
     fn default() -> Self {
-        IdentifyOptions { baseline: BaselineModel::Polynomial(1), baseline_friction: true, train_fraction: 0.7, max_causes: 3, extra_candidates: Vec::new() }
+        IdentifyOptions { baseline: BaselineModel::Polynomial(1), baseline_friction: true, train_fraction: 0.7, held_out: prepare::HeldOut::Last, max_causes: 3, extra_candidates: Vec::new() }
     }
 }
 
@@ -337,7 +342,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
 /// assert!(report.rmse_after < 0.01 && report.rmse_before > 0.4);
 /// ```
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
-    let p = prepare::prepare(data, opts.train_fraction)?;
+    let p = prepare::prepare(data, opts.train_fraction, opts.held_out)?;
     let builtin = causes::builtin();
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
@@ -487,6 +492,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         confounded,
         unexplained,
         no_spring,
+        held_out_window: p.held_out.clone(),
         significance: Significance {
             test: format!(
                 "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; or forecast encompassing (the held-out residual regressed on the cause's correction, batch-means variance, the blocks' effective number as degrees of freedom) with a slope of at least {:.2} in each of {} parts of the held-out record where the correction acts; or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of those parts and betters most of those with something to explain; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
@@ -577,7 +583,7 @@ fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_cause: bool,
     };
     if held_out_reach[0] > BEYOND_TRAINING_RATE || held_out_reach[1] > BEYOND_TRAINING_RANGE {
         summary += &format!(
-            "; the held-out part moves {:.1} times as fast (RMS rate) and spans {:.1} times the deflection range of the training part: the causes are judged where the model was not fitted (an excitation that grows over the record; repeat it, or run it in both orders)",
+            "; the held-out part moves {:.1} times as fast (RMS rate) and spans {:.1} times the deflection range of the training part: the causes are judged where the model was not fitted (an excitation that grows over the record; repeat it, run it in both orders, or hold out a part like the rest: `--held-out like-the-rest`)",
             held_out_reach[0], held_out_reach[1]
         );
     }

@@ -37,11 +37,33 @@ pub struct IdentifyArgs {
     /// Print exactly one JSON object.
     #[arg(long)]
     json: bool,
+    /// Which part of the record is held out to judge the causes: `last` (its last 30 % of time)
+    /// or `like-the-rest` (the last 30 % unless its motion is 4 times faster or slower, or
+    /// wider or narrower, than the rest's: then the 30 % window most like the rest, for a sweep
+    /// that grows or a test that ends in a hold; the report says which and why).
+    #[arg(long, value_enum, default_value_t = HeldOutArg::Last)]
+    held_out: HeldOutArg,
     /// Write the extension into this folder (with --config): `observer.yaml` (the joint's
     /// complete params with the extended observer: `params: {include: observer.yaml}` alone
     /// configures it), `plant.yaml` (its `sim.effects`) and `extended.yaml` (the config with both).
     #[arg(long, requires = "config")]
     out: Option<PathBuf>,
+}
+
+/// `--held-out`'s values.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum HeldOutArg {
+    Last,
+    LikeTheRest,
+}
+
+impl From<HeldOutArg> for jointctl_ident::identify::prepare::HeldOut {
+    fn from(a: HeldOutArg) -> Self {
+        match a {
+            HeldOutArg::Last => Self::Last,
+            HeldOutArg::LikeTheRest => Self::LikeTheRest,
+        }
+    }
 }
 
 /// Measured data from a CSV file, or from a recording (.mcap) for one joint: its observed
@@ -212,7 +234,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         s.enable_steady_tick(std::time::Duration::from_millis(100));
         s
     });
-    let result = identify(&data, &IdentifyOptions { baseline, baseline_friction, ..IdentifyOptions::default() });
+    let result = identify(&data, &IdentifyOptions { baseline, baseline_friction, held_out: a.held_out.into(), ..IdentifyOptions::default() });
     if let Some(s) = spinner {
         s.finish_and_clear();
     }
@@ -247,12 +269,13 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). Baseline fitted on the first 70 % of the time range, scored on the last 30 %.\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
         report.segments,
         report.dropped_samples,
         report.resolution_rad,
+        split_sentence(&report.held_out_window),
         report.rmse_before,
         report.rmse_after,
         u.noise_floor_nm
@@ -260,7 +283,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     // The configured extension's gain along the diagonal; the causes stand without it (a bad
     // extension in the config is said, not fatal, as for the gains along an axis).
     let along_observer = match (diagonal, &configured, &a.config) {
-        (Some(angle), Some(cj), Some(config)) => match jointctl_experiments::model_loop::observer_gain_along(&cj.params, angle, &data, IdentifyOptions::default().train_fraction) {
+        (Some(angle), Some(cj), Some(config)) => match jointctl_experiments::model_loop::observer_gain_along(&cj.params, angle, &data, split(&a)) {
             Ok(g) => g,
             Err(e) => {
                 eprintln!("note: no observer gain along {angle} deg: {}: {e}", config.display());
@@ -438,7 +461,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
             Ok(b) => b,
             Err(e) => return crate::fail(e),
         };
-        let report = match identify(&data.subset(samples), &IdentifyOptions { baseline, baseline_friction: false, ..IdentifyOptions::default() }) {
+        let report = match identify(&data.subset(samples), &IdentifyOptions { baseline, baseline_friction: false, held_out: a.held_out.into(), ..IdentifyOptions::default() }) {
             Ok(r) => r,
             Err(e) => return crate::fail(format!("{} at pivot {pivot_mm:.2} mm: {e}", a.data.display())),
         };
@@ -470,7 +493,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
         Ok(l) => l,
         Err(e) => return crate::fail(e.to_string()),
     };
-    let ext = match jointctl_experiments::model_loop::extend_by_pivot(&loaded, joint, &found, data, IdentifyOptions::default().train_fraction) {
+    let ext = match jointctl_experiments::model_loop::extend_by_pivot(&loaded, joint, &found, data, split(a)) {
         Ok(e) => Some(e),
         Err(e) if a.out.is_some() => return crate::fail(format!("cannot write the extension: {}: {e}", config.display())),
         // The causes stand without it (a config with no simulated joint): said, not fatal.
@@ -512,4 +535,18 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
         out!("{md}");
     }
     ExitCode::SUCCESS
+}
+
+/// Which part of the record the baseline was fitted on and which part scored it.
+fn split_sentence(w: &jointctl_ident::identify::prepare::HeldOutWindow) -> String {
+    let percent = |f: f64| format!("{:.0}", 100.0 * f);
+    match &w.moved {
+        None => format!("Baseline fitted on the first {} % of the time range, scored on the last {} %.", percent(w.start), percent(w.end - w.start)),
+        Some(why) => format!("Baseline fitted on the time range but {}-{} %, scored on that window: {why}.", percent(w.start), percent(w.end)),
+    }
+}
+
+/// The split identify used: the model loop's gains are measured on what it held out.
+fn split(a: &IdentifyArgs) -> jointctl_experiments::model_loop::Split {
+    jointctl_experiments::model_loop::Split { held_out: a.held_out.into(), ..jointctl_experiments::model_loop::Split::of(&IdentifyOptions::default()) }
 }

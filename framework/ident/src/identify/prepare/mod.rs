@@ -5,8 +5,10 @@ use std::borrow::Cow;
 
 mod noise;
 mod rate;
+mod window;
 
 pub use noise::noise_floor;
+pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use noise::scatter_rms;
 use rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths};
 
@@ -151,6 +153,8 @@ pub(crate) struct Prepared {
     /// The share of the training part's torque variance a line in the deflection explains
     /// (see [`spring_share`]).
     pub spring_share: f64,
+    /// The part of the time range held out.
+    pub held_out: HeldOutWindow,
 }
 
 /// Grid searches run on at most this many samples, decimated to no fewer than 100 a cycle of
@@ -267,7 +271,7 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
     }
 }
 
-pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepared, PrepareError> {
+pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
         return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
@@ -332,8 +336,12 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         noise_floor(&residual, &starts)
     };
     let spacing = super::numeric::median_step(&t);
-    let t_split = split_time(&t, train_fraction);
-    let split = t.partition_point(|x| *x < t_split);
+    // The held-out window, chosen on the record as read (dropouts in), as the model loop's gains
+    // choose it from the same data.
+    let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
+    let (from, to) = held_out.times(&data.t);
+    let lo = t.partition_point(|x| *x < from - t0);
+    let hi = if held_out.end >= 1.0 { t.len() } else { t.partition_point(|x| *x < to - t0) };
     // A stateful effect's history: back over a travel of twice the amplitude, at least two
     // cycles (a Dahl state forgets within a travel far longer than its deflection scale, which
     // the search keeps below a third of the amplitude), not the whole record before it. Counted
@@ -362,21 +370,34 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64) -> Result<Prepare
         rep: if rep.is_empty() { Vec::new() } else { rep[r].to_vec() },
         dt: spacing,
     };
-    if split < 30 || t.len() - split < 20 {
-        return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: split, held_out: t.len() - split });
+    let trained = lo + (t.len() - hi);
+    if trained < 30 || hi - lo < 20 {
+        return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
     }
+    // The first `limit` training samples: those before the held-out window, then those after
+    // it. Where the two meet, a stateful effect (a Dahl state) carries over from the first to
+    // the second as if they were one motion: a transient until the next reversal.
+    let training = |limit: usize| {
+        let before = part(0..lo.min(limit));
+        let rest = t.len().min(hi + limit.saturating_sub(before.len()));
+        match (before.len(), rest > hi) {
+            (_, false) => before,
+            (0, true) => part(hi..rest),
+            (_, true) => before.then(&part(hi..rest)),
+        }
+    };
     // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
     // an alias of it): decimated up to that, then the first SEARCH_SAMPLES of them.
-    let k = split.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
-    let coarse = part(0..split.min(k * SEARCH_SAMPLES)).every(k);
-    // Final fits on at most FIT_SAMPLES contiguous training samples: parameters no longer move
-    // beyond (their standard errors shrink as 1/sqrt(n)), and a long record stays fast.
-    // The held-out part: its first HELD_OUT_SAMPLES after the split.
-    let (train, test) = (part(0..split.min(FIT_SAMPLES)), part(split..t.len().min(split + HELD_OUT_SAMPLES)));
+    let k = trained.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
+    let coarse = training(k * SEARCH_SAMPLES).every(k);
+    // Final fits on at most FIT_SAMPLES training samples: parameters no longer move beyond
+    // (their standard errors shrink as 1/sqrt(n)), and a long record stays fast. The held-out
+    // part: the window's first HELD_OUT_SAMPLES.
+    let (train, test) = (training(FIT_SAMPLES), part(lo..hi.min(lo + HELD_OUT_SAMPLES)));
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter };
     let stretch = train.first(STRETCH_SAMPLES);
     let spring_share = spring_share(&train);
-    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share })
+    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
@@ -436,7 +457,7 @@ mod tests {
         let t: Vec<f64> = (0..2000).map(|i| f64::from(i) * 0.01).collect();
         let deflection = t.iter().map(|t| 0.05 * (std::f64::consts::TAU * 0.5 * t).sin()).collect();
         let data = Data::from_columns(t, deflection, vec![1.5; 2000]);
-        let e = prepare(&data, 0.7).err().expect("refused");
+        let e = prepare(&data, 0.7, HeldOut::Last).err().expect("refused");
         assert!(matches!(e, PrepareError::ConstantTorque { value_nm } if value_nm == 1.5), "{e}");
         assert!(e.to_string().starts_with("the torque is 1.5 Nm in every sample"), "{e}");
     }
@@ -461,9 +482,9 @@ mod tests {
         let d: Vec<f64> = t.iter().map(|t| 0.05 * (std::f64::consts::TAU * 1.1 * t).sin()).collect();
         let tau = d.iter().map(|x| 80.0 * x).collect();
         let mut data = Data::from_columns(t, d, tau);
-        assert!(prepare(&data, 0.7).is_ok());
+        assert!(prepare(&data, 0.7, HeldOut::Last).is_ok());
         data.pivot_mm = vec![40.0; 10];
-        let e = prepare(&data, 0.7).err().unwrap();
+        let e = prepare(&data, 0.7, HeldOut::Last).err().unwrap();
         assert_eq!(e, PrepareError::UnevenColumn { column: "pivot_mm", len: 10, samples: 400 });
         assert_eq!(e.to_string(), "column `pivot_mm` has 10 values for 400 samples");
     }

@@ -258,7 +258,7 @@ mod tests {
             })
             .collect();
         let torque = deflection.iter().map(|d| 100.0 * d).collect();
-        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
+        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7, super::super::HeldOut::Last).expect("prepared");
         let truth = |t: f64| 0.1 * TAU * 0.25 * (TAU * 0.25 * t).cos();
         let worst = p.train.t.iter().zip(&p.train.v).skip(100).map(|(t, v)| (v - truth(*t)).abs()).fold(0.0, f64::max);
         assert!(worst < 0.05 * 0.1 * TAU * 0.25, "rate off by up to {worst} rad/s");
@@ -306,7 +306,7 @@ mod tests {
     /// left out) as a share of the rms of the true rate `truth(t)`.
     fn rate_error_share(t: Vec<f64>, deflection: Vec<f64>, truth: impl Fn(f64) -> f64) -> f64 {
         let torque = deflection.iter().map(|d| 60.0 * d).collect();
-        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7).expect("prepared");
+        let p = prepare(&Data::from_columns(t, deflection, torque), 0.7, super::super::HeldOut::Last).expect("prepared");
         let (mut error, mut signal) = (0.0, 0.0);
         for (t, v) in p.train.t.iter().zip(&p.train.v).skip(200) {
             error += (v - truth(*t)).powi(2);
