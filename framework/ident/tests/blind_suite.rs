@@ -14,6 +14,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use jointctl_blind_gen::{Case, device_variants, suite};
+use jointctl_ident::identify::prepare::HeldOut;
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
 /// What identify named in a case, with the parameters, or why it refused the file.
@@ -26,8 +27,17 @@ fn run(case: &Case) -> Outcome {
     jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
     let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
     let _ = std::fs::remove_file(&path);
-    let report = identify(&data?, &IdentifyOptions::default()).map_err(|e| e.to_string())?;
+    let report = identify(&data?, &IdentifyOptions { held_out: held_out(), ..IdentifyOptions::default() }).map_err(|e| e.to_string())?;
     Ok(report.causes.into_iter().filter(|c| c.effect != "dropout").map(|c| (c.effect, c.params)).collect())
+}
+
+/// The held-out part: the last 30 % (the default), or with `JOINTCTL_BLIND_HELD_OUT=like-the-rest`
+/// a window like the rest (`--held-out like-the-rest`), to measure that option on the suite.
+fn held_out() -> HeldOut {
+    match std::env::var("JOINTCTL_BLIND_HELD_OUT").as_deref() {
+        Ok("like-the-rest") => HeldOut::LikeTheRest,
+        _ => HeldOut::Last,
+    }
 }
 
 fn hidden(case: &Case) -> BTreeSet<String> {
