@@ -32,3 +32,23 @@ fn the_held_out_part_is_identifys_last_thirty_per_cent_of_the_time_range() {
     assert_eq!(mask.iter().filter(|m| **m).count(), 4);
     assert!(!mask[6] && mask[7]);
 }
+
+/// The gains are measured on the samples identify held out, also when it held out a window like
+/// the rest: a sine whose amplitude grows tenfold moves the window, and the mask selects exactly
+/// the held-out samples of identify's report.
+#[test]
+fn the_held_out_window_like_the_rest_is_identifys_held_out_part() {
+    use jointctl_ident::identify::{IdentifyOptions, identify, prepare::HeldOut};
+    let t: Vec<f64> = (0..20_000).map(|i| i as f64 * 0.005).collect();
+    let d: Vec<f64> = t.iter().map(|t| (0.005 + 0.0005 * t * t / 10.0) * (std::f64::consts::TAU * 0.5 * t).sin()).collect();
+    let tau: Vec<f64> = d.iter().enumerate().map(|(i, x)| 80.0 * x + 0.002 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5)).collect();
+    let data = jointctl_ident::csv::Data::from_columns(t.clone(), d.clone(), tau);
+    let opts = IdentifyOptions { held_out: HeldOut::LikeTheRest, ..IdentifyOptions::default() };
+    let report = identify(&data, &opts).unwrap();
+    assert!(report.held_out_window.moved.is_some(), "{:?}", report.held_out_window);
+    let mask = held_out_mask(&t, &d, super::Split::of(&opts));
+    let masked: Vec<f64> = t.iter().zip(&mask).filter(|(_, m)| **m).map(|(t, _)| *t).collect();
+    let held: Vec<f64> = report.held_out.iter().map(|row| row[0]).collect();
+    assert_eq!(masked.len(), held.len());
+    assert!(masked.iter().zip(&held).all(|(a, b)| (a - b).abs() < 1e-9));
+}

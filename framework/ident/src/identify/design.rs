@@ -33,17 +33,14 @@ impl Part {
         self.t.len()
     }
 
-    /// The first `n` samples (a contiguous stretch keeps the full rate at a fraction of the cost).
-    pub fn first(&self, n: usize) -> Part {
-        let n = n.min(self.len());
-        Part { warm: self.warm.clone(), t: self.t[..n].to_vec(), d: self.d[..n].to_vec(), v: self.v[..n].to_vec(), tau: self.tau[..n].to_vec(), pivot: self.pivot[..n].to_vec(), rep: self.rep.iter().take(n).copied().collect(), dt: self.dt }
-    }
-
     /// This part's samples followed by `next`'s (training samples either side of a held-out
     /// window); the history before it is this part's.
     pub fn then(&self, next: &Part) -> Part {
         if next.len() == 0 {
             return self.clone();
+        }
+        if self.len() == 0 {
+            return next.clone();
         }
         let join = |a: &Vec<f64>, b: &Vec<f64>| a.iter().chain(b).copied().collect();
         // Repetitions are both parts' or none (a record of one repetition has none).

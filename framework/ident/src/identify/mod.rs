@@ -3,7 +3,8 @@
 //! Four steps, one module each:
 //! 1. [`prepare`](self::prepare): readings that jumped to exactly zero (thesis appendix A's lost
 //!    CAN frames) out, the deflection rate, a check that the data excites the joint enough, and
-//!    the split: the first 70 % of the time range to fit, the last 30 % held out.
+//!    the split: the first 70 % of the time range to fit, the last 30 % held out (or, asked, a
+//!    window of 30 % like the rest when the last 30 % moves unlike it: [`prepare::held_out_window`]).
 //! 2. `design`: the baseline (the configured model and nothing more: eq. 3.5 friction only when
 //!    the model has it) plus terms, each a cause of the vocabulary in [`causes`] with its
 //!    non-linear parameters; least squares by QR.
@@ -382,7 +383,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let rmse_after = select::rmse(&after.errors);
 
     let standard_errors = model.standard_errors(&spec, fit, &p.train).unwrap_or_default();
-    let duration = p.train.t[p.train.len() - 1] - p.train.t[0] + p.test.t[p.test.len() - 1] - p.test.t[0];
+    let duration = p.train_duration_s + p.test.t[p.test.len() - 1] - p.test.t[0];
     let mut found = Vec::new();
     for chosen in &selection.chosen {
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
@@ -429,7 +430,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let ((rate_train, range_train), (rate_test, range_test)) = (reach(&p.train), reach(&p.test));
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
     let held_out_reach = [ratio(rate_test, rate_train), ratio(range_test, range_train)];
-    let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach);
+    let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach, opts.held_out);
     let mut confounded: Vec<Confound> = selection
         .confounded
         .iter()
@@ -539,7 +540,7 @@ fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: &[String], 
 
 /// What the extended model leaves on the held-out part (`rows` as in [`Report::held_out`],
 /// `errors` its squared errors) against the noise floor.
-fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_cause: bool, held_out_reach: [f64; 2]) -> Unexplained {
+fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_cause: bool, held_out_reach: [f64; 2], held_out: prepare::HeldOut) -> Unexplained {
     let n = rows.len().min(errors.len());
     let mse = errors[..n].iter().sum::<f64>() / n.max(1) as f64;
     let rmse = mse.sqrt();
@@ -583,8 +584,13 @@ fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_cause: bool,
     };
     if held_out_reach[0] > BEYOND_TRAINING_RATE || held_out_reach[1] > BEYOND_TRAINING_RANGE {
         summary += &format!(
-            "; the held-out part moves {:.1} times as fast (RMS rate) and spans {:.1} times the deflection range of the training part: the causes are judged where the model was not fitted (an excitation that grows over the record; repeat it, run it in both orders, or hold out a part like the rest: `--held-out like-the-rest`)",
-            held_out_reach[0], held_out_reach[1]
+            "; the held-out part moves {:.1} times as fast (RMS rate) and spans {:.1} times the deflection range of the training part: the causes are judged where the model was not fitted (an excitation that grows over the record; {})",
+            held_out_reach[0],
+            held_out_reach[1],
+            match held_out {
+                prepare::HeldOut::Last => "repeat it, run it in both orders, or hold out a part like the rest: `--held-out like-the-rest`",
+                prepare::HeldOut::LikeTheRest => "no window of the record moves like the rest: repeat it, or run it in both orders",
+            }
         );
     }
     Unexplained { noise_floor_nm: floor_nm, times_noise, excess_nm, share, by_deflection_nm, by_rate_nm, by_time_nm, held_out_reach, summary }

@@ -6,18 +6,14 @@ use std::path::Path;
 
 use jointctl_experiments::plot::{COLORS, Series, lines};
 use jointctl_experiments::model_loop::{Extension, Found};
-use jointctl_ident::identify::{IdentifyOptions, Report};
+use jointctl_ident::identify::Report;
 
 use super::IdentifyArgs;
-use jointctl_ident::identify::prepare::HeldOut;
 
 /// The extension of `joint` in `config` from the report's causes, with the config it extends.
-pub(super) fn extend(config: &Path, joint: &str, report: &Report, data: &jointctl_ident::csv::Data) -> Result<(Extension, jointctl_config::LoadedConfig), String> {
+pub(super) fn extend(config: &Path, joint: &str, report: &Report, data: &jointctl_ident::csv::Data, split: jointctl_experiments::model_loop::Split) -> Result<(Extension, jointctl_config::LoadedConfig), String> {
     let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
     let found: Vec<Found> = report.causes.iter().map(|c| Found { effect: c.effect.clone(), plant: c.fragments.plant.clone(), observer: c.fragments.observer.clone() }).collect();
-    // The gains on what the report held out: the window it chose, chosen again on the same data.
-    let held_out = if report.held_out_window.moved.is_some() { HeldOut::LikeTheRest } else { HeldOut::Last };
-    let split = jointctl_experiments::model_loop::Split { held_out, ..jointctl_experiments::model_loop::Split::of(&IdentifyOptions::default()) };
     let ext = jointctl_experiments::model_loop::extend(&loaded, joint, &found, data, split).map_err(|e| format!("{}: {e}", config.display()))?;
     Ok((ext, loaded))
 }

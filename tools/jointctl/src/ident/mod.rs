@@ -245,7 +245,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     // With a config: the extension written out for the observer and the simulation, and the
     // gain of each on the held-out part.
     let extension = match (&a.config, &a.joint) {
-        (Some(config), Some(joint)) if diagonal.is_none() => match extend(config, joint, &report, &data) {
+        (Some(config), Some(joint)) if diagonal.is_none() => match extend(config, joint, &report, &data, split(&a)) {
             Ok(e) => Some(e),
             Err(e) if a.out.is_some() => return crate::fail(format!("cannot write the extension: {e}")),
             // The causes stand without it (a config with no simulated joint): said, not fatal.
@@ -445,7 +445,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
     let mut md = format!(
         "# What the model misses, per pivot setting: {}
 
-{} samples at {} pivot settings, each identified apart (its first 70 % of time fitted, its last 30 % scored).
+{} samples at {} pivot settings, each identified apart (its first 70 % of time fitted, its last 30 % scored, or with `--held-out like-the-rest` a window like the rest: each setting's line says which).
 
 | pivot [mm] | samples | baseline [Nm] | extended [Nm] | noise floor [Nm] | causes |
 |---|---|---|---|---|---|
@@ -482,6 +482,9 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
             report.unexplained.noise_floor_nm,
             if causes.is_empty() { "none".into() } else { causes.join("; ") }
         );
+        if let Some(why) = &report.held_out_window.moved {
+            let _ = writeln!(md, "|  |  |  |  |  | at {pivot_mm:.2} mm {why} |");
+        }
         found.push(jointctl_experiments::model_loop::SettingFound {
             pivot_mm: *pivot_mm,
             samples: samples.clone(),

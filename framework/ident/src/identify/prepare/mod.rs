@@ -155,6 +155,8 @@ pub(crate) struct Prepared {
     pub spring_share: f64,
     /// The part of the time range held out.
     pub held_out: HeldOutWindow,
+    /// The time the training part spans [s] (without the held-out window inside it).
+    pub train_duration_s: f64,
 }
 
 /// Grid searches run on at most this many samples, decimated to no fewer than 100 a cycle of
@@ -336,8 +338,9 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
         noise_floor(&residual, &starts)
     };
     let spacing = super::numeric::median_step(&t);
-    // The held-out window, chosen on the record as read (dropouts in), as the model loop's gains
-    // choose it from the same data.
+    // The held-out window, chosen on the record as read (dropouts in: a lost reading's zero adds
+    // travel and range, accepted so that the model loop's gains, which see the same columns,
+    // choose the same window).
     let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
     let (from, to) = held_out.times(&data.t);
     let lo = t.partition_point(|x| *x < from - t0);
@@ -371,20 +374,19 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
         dt: spacing,
     };
     let trained = lo + (t.len() - hi);
-    if trained < 30 || hi - lo < 20 {
+    if trained < window::MIN_TRAINING || hi - lo < window::MIN_HELD_OUT {
         return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
     }
     // The first `limit` training samples: those before the held-out window, then those after
     // it. Where the two meet, a stateful effect (a Dahl state) carries over from the first to
     // the second as if they were one motion: a transient until the next reversal.
+    let pieces = |limit: usize| {
+        let before = 0..lo.min(limit);
+        (before.clone(), hi..t.len().min(hi + limit.saturating_sub(before.len())))
+    };
     let training = |limit: usize| {
-        let before = part(0..lo.min(limit));
-        let rest = t.len().min(hi + limit.saturating_sub(before.len()));
-        match (before.len(), rest > hi) {
-            (_, false) => before,
-            (0, true) => part(hi..rest),
-            (_, true) => before.then(&part(hi..rest)),
-        }
+        let (before, after) = pieces(limit);
+        if after.is_empty() { part(before) } else { part(before).then(&part(after)) }
     };
     // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
     // an alias of it): decimated up to that, then the first SEARCH_SAMPLES of them.
@@ -395,9 +397,16 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
     // part: the window's first HELD_OUT_SAMPLES.
     let (train, test) = (training(FIT_SAMPLES), part(lo..hi.min(lo + HELD_OUT_SAMPLES)));
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter };
-    let stretch = train.first(STRETCH_SAMPLES);
+    // The full-rate stretch is contiguous (a delay's samples, a periodogram): the piece before
+    // the held-out window, or the one after it when that is longer.
+    let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };
+    let train_duration_s = {
+        let (before, after) = pieces(FIT_SAMPLES);
+        let span = |r: std::ops::Range<usize>| if r.is_empty() { 0.0 } else { t[r.end - 1] - t[r.start] };
+        span(before) + span(after)
+    };
     let spring_share = spring_share(&train);
-    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out })
+    Ok(Prepared { train, test, coarse, stretch, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples

@@ -26,6 +26,10 @@ pub const REACH_TOLERANCE: f64 = 4.0;
 /// The candidate windows' starts, every this fraction of the time range [-].
 const WINDOW_STEP: f64 = 0.05;
 
+/// Samples a candidate window must hold, and leave to the training part (`prepare`'s limits).
+pub(crate) const MIN_HELD_OUT: usize = 20;
+pub(crate) const MIN_TRAINING: usize = 30;
+
 /// The rate is read on the deflection every this long at least [s] (an assumption: at 20 ms a
 /// 17-bit encoder's dither of a step adds little travel to a motion of 0.05 Hz and above).
 const RATE_STEP_S: f64 = 0.02;
@@ -168,11 +172,14 @@ pub fn held_out_window(t_s: &[f64], deflection_rad: &[f64], train_fraction: f64,
     let steps = (train_fraction / WINDOW_STEP + 1e-9).floor() as usize;
     let best = (0..=steps)
         .rev()
-        .map(|j| j as f64 * WINDOW_STEP)
+        // Whole percents (0.15, not 0.15000000000000002 in the JSON).
+        .map(|j| (j as f64 * WINDOW_STEP * 100.0).round() / 100.0)
         .filter(|s| *s < train_fraction - 1e-9)
-        .map(|s| {
+        .filter_map(|s| {
             let (lo, hi) = bounds(s);
-            (s, reach(t, d, k, lo, hi))
+            // As many samples on each side as `prepare` needs (a window in a gap of the log may
+            // hold a few samples only).
+            (hi - lo >= MIN_HELD_OUT && n - (hi - lo) >= MIN_TRAINING).then(|| (s, reach(t, d, k, lo, hi)))
         })
         .filter(|(_, r)| unlikeness(*r) < unlikeness(at_end))
         .fold(None::<(f64, (f64, f64))>, |best, c| match best {
