@@ -24,11 +24,6 @@ fn clamped(test: &str, arm: &str, loop_edits: &[Edit]) -> PathBuf {
     sherpa_with(test, arm, &edits)
 }
 
-/// Runs the arm of `config` in real time and records `dof` following sines and steps, about
-/// 24 s: the recording ends when the last command has had its time, not at a fixed length, so
-/// that a loaded machine (each `jointctl cmd` a process of its own, started late) still records
-/// every command and the held-out last 30 % holds all three kinds (a fixed 24 s once cut off the
-/// last step and the last fast sine, and the shoulder's latency went unnamed).
 /// Two sessions of `dof` recorded at once (they are real time), each (test, config, arm): the
 /// first's recording and the second's.
 fn both_sessions(first: (&str, &Path, &str), second: (&str, &Path, &str), dof: &str) -> (PathBuf, PathBuf) {
@@ -39,6 +34,11 @@ fn both_sessions(first: (&str, &Path, &str), second: (&str, &Path, &str), dof: &
     })
 }
 
+/// Runs the arm of `config` in real time and records `dof` following sines and steps, about
+/// 24 s: the recording ends when the last command has had its time, not at a fixed length, so
+/// that a loaded machine (each `jointctl cmd` a process of its own, started late) still records
+/// every command and the held-out last 30 % holds all three kinds (a fixed 24 s once cut off the
+/// last step and the last fast sine, and the shoulder's latency went unnamed).
 fn record_session(test: &str, config: &Path, arm: &str, dof: &str) -> PathBuf {
     let mut run = Command::new(jointctl()).arg("run").arg(config).args(["--duration", "120"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();

@@ -110,6 +110,8 @@ fn command_over_dds_with(test: &str, edits: &[jointctl_tests::Edit], commander_a
     // Every command is logged and counted, accepted or refused.
     let logged = bridge_log.matches("a command from ROS 2").count();
     assert_eq!(logged, 2, "{bridge_log}");
+    // Each answer waited for its requester's reader, not for the hold's limit.
+    assert!(!bridge_log.contains("was not discovered within"), "{bridge_log}");
     assert!(bridge_log.contains("accepted=") && bridge_log.contains("refused="), "{bridge_log}");
     (responses, q1)
 }

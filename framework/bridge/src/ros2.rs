@@ -175,6 +175,10 @@ const ANSWER_HOLD_MAX: Duration = Duration::from_secs(5);
 /// assumption with a wide margin on a loaded machine.
 const READER_SETTLE: Duration = Duration::from_millis(100);
 
+/// How often the discovered readers of the answers are looked up (RustDDS copies every
+/// discovered reader under a lock: 20 times a second, not after every poll of the arm).
+const READER_LOOKUP_PERIOD: Duration = Duration::from_millis(50);
+
 /// An answer not sent yet: its requester's reader has not been seen long enough.
 struct PendingAnswer {
     /// The requester's writer (its participant's GUID prefix is the requester's).
@@ -202,8 +206,13 @@ struct Commands {
     /// The answers' DDS topic name (`rt/jointctl/command_responses`).
     responses_topic: String,
     pending: Vec<PendingAnswer>,
-    /// The answers' readers discovered, and when each was first seen.
+    /// The answers' readers discovered, and when each was first seen (kept current while no
+    /// answer waits, so that a reader known for long is not new to the first answer).
     readers_seen: Vec<(GUID, Instant)>,
+    /// When the readers were last looked up.
+    last_lookup: Option<Instant>,
+    /// Requesters (by participant) whose answer went out unseen: warned once each.
+    warned: Vec<GUID>,
     accepted: u64,
     refused: u64,
 }
@@ -245,25 +254,29 @@ impl Commands {
     /// Sends each pending answer whose requester's reader has been known for
     /// [`READER_SETTLE`], or that has waited [`ANSWER_HOLD_MAX`].
     fn answer_pending(&mut self, arm: &str) {
+        let now = Instant::now();
+        if self.last_lookup.is_none_or(|at| now.duration_since(at) >= READER_LOOKUP_PERIOD) {
+            self.last_lookup = Some(now);
+            let discovered: Vec<GUID> =
+                self.participant.discovered_readers().into_iter().filter(|r| *r.subscription_topic_data.topic_name() == self.responses_topic).map(|r| r.reader_proxy.remote_reader_guid).collect();
+            self.readers_seen.retain(|(g, _)| discovered.contains(g));
+            for g in discovered {
+                if !self.readers_seen.iter().any(|(seen, _)| *seen == g) {
+                    self.readers_seen.push((g, now));
+                }
+            }
+        }
         if self.pending.is_empty() {
             return;
-        }
-        let now = Instant::now();
-        let discovered: Vec<GUID> =
-            self.participant.discovered_readers().into_iter().filter(|r| *r.subscription_topic_data.topic_name() == self.responses_topic).map(|r| r.reader_proxy.remote_reader_guid).collect();
-        self.readers_seen.retain(|(g, _)| discovered.contains(g));
-        for g in discovered {
-            if !self.readers_seen.iter().any(|(seen, _)| *seen == g) {
-                self.readers_seen.push((g, now));
-            }
         }
         let seen = &self.readers_seen;
         let ready = |p: &PendingAnswer| seen.iter().any(|(g, at)| g.prefix == p.requester.prefix && now.duration_since(*at) >= READER_SETTLE);
         let (send, wait): (Vec<PendingAnswer>, Vec<PendingAnswer>) = std::mem::take(&mut self.pending).into_iter().partition(|p| ready(p) || now.duration_since(p.since) >= ANSWER_HOLD_MAX);
         self.pending = wait;
         for p in send {
-            if !ready(&p) {
-                tracing::warn!(arm, kind = %p.response.kind, joint = %p.response.joint, "the requester's reader of {} was not discovered within {} s: its answer is sent and may be lost", jointctl_ros2::COMMAND_RESPONSES, ANSWER_HOLD_MAX.as_secs());
+            if !ready(&p) && !self.warned.iter().any(|g| g.prefix == p.requester.prefix) {
+                self.warned.push(p.requester);
+                tracing::warn!(arm, kind = %p.response.kind, joint = %p.response.joint, "the requester's reader of {} was not discovered within {} s: its answers are sent and may be lost (said once per requester)", jointctl_ros2::COMMAND_RESPONSES, ANSWER_HOLD_MAX.as_secs());
             }
             let _ = self.responses.publish(p.response);
         }
@@ -350,6 +363,8 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
         responses_topic: format!("rt{}", jointctl_ros2::COMMAND_RESPONSES),
         pending: Vec::new(),
         readers_seen: Vec::new(),
+        last_lookup: None,
+        warned: Vec::new(),
         allowed,
         accepted: 0,
         refused: 0,
