@@ -21,9 +21,8 @@ use jointctl_ident::identify::{IdentifyOptions, identify};
 type Outcome = Result<Vec<(String, BTreeMap<String, f64>)>, String>;
 
 fn run(case: &Case) -> Outcome {
-    let dir = std::env::temp_dir().join(format!("jointctl-blind-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    let path = dir.join(format!("{}.csv", case.name));
+    // One file a case, removed once read (a folder per process was left behind after every run).
+    let path = std::env::temp_dir().join(format!("jointctl-blind-{}-{}.csv", std::process::id(), case.name));
     jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
     let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
     let _ = std::fs::remove_file(&path);
