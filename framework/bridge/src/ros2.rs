@@ -19,7 +19,7 @@ use jointctl_ros2::msg::{self, Time};
 use ros2_client::qos::{Durability, History, WhenFull};
 use jointctl_ipc::CommandClient;
 use jointctl_record::messages;
-use ros2_client::dds::rustdds::{DomainParticipant, GUID};
+use ros2_client::dds::rustdds::{DomainParticipant, GUID, TopicDescription};
 use ros2_client::{Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription};
 use serde_json::{Value, json};
 
@@ -110,8 +110,14 @@ fn topic<M: msg::Message>(node: &Node, topic: &str, domain_id: u16, what: &str) 
 }
 
 fn publisher<M: msg::Message>(node: &mut Node, name: &str, domain_id: u16) -> Result<Publisher<M>, Ros2BridgeError> {
+    named_publisher(node, name, domain_id).map(|(p, _)| p)
+}
+
+/// [`publisher`] and its topic's DDS name (`/jointctl/raw` is `rt/jointctl/raw` on the wire).
+fn named_publisher<M: msg::Message>(node: &mut Node, name: &str, domain_id: u16) -> Result<(Publisher<M>, String), Ros2BridgeError> {
     let t = topic::<M>(node, name, domain_id, "publisher")?;
-    node.create_publisher::<M>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("publisher of {name}"), domain_id, reason: e.to_string() })
+    let publisher = node.create_publisher::<M>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("publisher of {name}"), domain_id, reason: e.to_string() })?;
+    Ok((publisher, t.name()))
 }
 
 fn subscription<M: msg::Message + 'static>(node: &mut Node, name: &str, domain_id: u16) -> Result<Subscription<M>, Ros2BridgeError> {
@@ -355,12 +361,13 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
         raw: publisher(&mut node, jointctl_ros2::RAW, domain_id)?,
         commands: publisher(&mut node, jointctl_ros2::COMMANDS, domain_id)?,
     };
+    let (responses, responses_topic) = named_publisher(&mut node, jointctl_ros2::COMMAND_RESPONSES, domain_id)?;
     let mut commands = Commands {
         trajectories: subscription(&mut node, jointctl_ros2::JOINT_TRAJECTORY, domain_id)?,
         requests: subscription(&mut node, jointctl_ros2::COMMAND, domain_id)?,
-        responses: publisher(&mut node, jointctl_ros2::COMMAND_RESPONSES, domain_id)?,
+        responses,
         participant: context.domain_participant(),
-        responses_topic: format!("rt{}", jointctl_ros2::COMMAND_RESPONSES),
+        responses_topic,
         pending: Vec::new(),
         readers_seen: Vec::new(),
         last_lookup: None,

@@ -96,8 +96,7 @@ impl Motion {
             return Motion::NONE;
         }
         let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
-        let picked: Vec<f64> = d.iter().step_by(k).copied().collect();
-        let travel = picked.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
+        let travel = d.iter().step_by(k).zip(d.iter().step_by(k).skip(1)).map(|(a, b)| (b - a).abs()).sum();
         Motion { travel, duration: t[t.len() - 1] - t[0], lo, hi }
     }
 
