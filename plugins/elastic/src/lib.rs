@@ -24,7 +24,7 @@ use jointctl_api::{
     Controller, JointCommand, JointFault, JointPlugin, JointState, MotorSetpoint,
     Observer, PluginError, RawJointView, export_joint_plugin, params,
 };
-use jointctl_control::{LinearTransmission, PiGains, PositionLoop, VelocityEstimator};
+use jointctl_control::{LinearTransmission, PiGains, PositionLoop, ReadingTrack, VelocityEstimator};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic};
 use jointctl_models::extension::{ExtensionSpec, ModelExtension};
 use serde::Deserialize;
@@ -62,6 +62,13 @@ struct Params {
     /// and the torque is unknown otherwise.
     #[serde(default)]
     max_deflection_age_s: f64,
+    /// Whether the motor side's reading is carried to the instant the output encoder was read
+    /// before the two are subtracted (default true): the drive's position comes over CAN and the
+    /// output encoder over SPI, with different latencies (section 2.3: about 30 and 15 ms), and
+    /// while the joint moves a difference of readings of different ages is not the deflection
+    /// (`jointctl_control::ReadingTrack`). `false`: subtracted as they are.
+    #[serde(default = "default_true")]
+    align_reading_ages: bool,
     /// Where the compliance is: `element` (an elastic element between motor and output, the
     /// default) or `drive_gain` (the drive's position loop, q5).
     #[serde(default)]
@@ -99,6 +106,10 @@ struct Zero {
     output_rad: f64,
 }
 
+fn default_true() -> bool {
+    true
+}
+
 fn default_settle_s() -> f64 {
     0.25
 }
@@ -119,6 +130,8 @@ pub struct ElasticJoint {
     curve: Option<PivotCharacteristic>,
     transmission: LinearTransmission,
     velocity: VelocityEstimator,
+    /// The motor side's readings, to carry them to the output encoder's instant.
+    input_track: ReadingTrack,
     position: PositionLoop,
     input_wired: bool,
     input_origin: f64,
@@ -203,6 +216,7 @@ impl JointPlugin for ElasticJoint {
             transmission: LinearTransmission::new(p.output_per_motor),
             velocity: VelocityEstimator::new(0.5),
             position,
+            input_track: ReadingTrack::new(),
             input_wired: false,
             input_origin: 0.0,
             output_origin: 0.0,
@@ -238,6 +252,7 @@ impl JointPlugin for ElasticJoint {
                         ));
                     }
                 }
+                self.input_track.reset();
                 // The drive holds where it is: its set-point is its position.
                 self.setpoint_rad = m;
                 self.since_change_s = self.params.settle_s;
@@ -258,12 +273,23 @@ impl Observer for ElasticJoint {
         let mut s = JointState::UNKNOWN;
         let q = raw.encoder(OUTPUT_ENCODER).usable(self.params.max_age_s);
         let age = self.params.max_deflection_age_s;
-        let input = if self.input_wired {
-            raw.encoder(INPUT_ENCODER).usable(age)
-        } else {
-            raw.drive(MOTOR).position_rad.usable(age)
+        let input_reading = if self.input_wired { *raw.encoder(INPUT_ENCODER) } else { raw.drive(MOTOR).position_rad };
+        let input = input_reading.usable(age);
+        let output_reading = raw.encoder(OUTPUT_ENCODER);
+        let q_for_deflection = output_reading.usable(age);
+        // The motor side at the instant the output encoder was read (readings of different ages
+        // are not one deflection while the joint moves).
+        let input = match input {
+            Some(i) if self.params.align_reading_ages => {
+                self.input_track.update(i, raw.stamp_s - input_reading.age_s);
+                self.input_track.at(raw.stamp_s - output_reading.age_s)
+            }
+            Some(i) => Some(i),
+            None => {
+                self.input_track.reset();
+                None
+            }
         };
-        let q_for_deflection = raw.encoder(OUTPUT_ENCODER).usable(age);
         if let Some(q) = q {
             s.set_position(q);
             s.set_stiffness(self.stiffness_nm_per_rad);
@@ -321,3 +347,44 @@ impl Controller for ElasticJoint {
 }
 
 export_joint_plugin!(name: elastic, plugin: ElasticJoint, dof: 1, encoders: "output,input?", drives: "motor", torque_dofs: 0b1);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jointctl_api::{DriveReading, Reading};
+
+    /// One cycle's readings: the motor's position `age_motor_s` old, the output's `age_out_s` old.
+    fn raw(stamp_s: f64, motor_rad: f64, age_motor_s: f64, output_rad: f64, age_out_s: f64) -> RawJointView {
+        let mut r = RawJointView { stamp_s, dt_s: 0.025, ..RawJointView::default() };
+        r.encoders[OUTPUT_ENCODER] = Reading::valid_aged(output_rad, age_out_s);
+        r.drives[MOTOR] = DriveReading::new(Reading::valid_aged(motor_rad, age_motor_s), Reading::MISSING, true, false);
+        r
+    }
+
+    fn joint(align: bool) -> ElasticJoint {
+        let params = format!(
+            r#"{{"stiffness_nm_per_rad": 100.0, "output_per_motor": 2.0, "position_pi": {{"kp": 0, "ki": 0}}, "align_reading_ages": {align}}}"#
+        );
+        ElasticJoint::create(&params).unwrap()
+    }
+
+    /// The motor starts to turn at 0.4 rad/s after activation (at rest), the output following at
+    /// zero deflection (output = 2 motor):
+    /// the drive's position is 30 ms old, the output encoder's 15 ms (section 2.3's buses). The
+    /// deflection is zero only when the motor's reading is carried to the encoder's instant.
+    #[test]
+    fn readings_of_different_ages_are_one_deflection_at_the_output_encoders_instant() {
+        let motor = |t: f64| 0.4 * (t - 1.0).max(0.0);
+        for (align, expected) in [(true, 0.0), (false, -2.0 * 0.4 * 0.015)] {
+            let mut j = joint(align);
+            let view = |t: f64| raw(t, motor(t - 0.030), 0.030, 2.0 * motor(t - 0.015), 0.015);
+            j.activate(&view(1.0)).unwrap();
+            let mut out = [JointState::UNKNOWN];
+            for k in 1..=4 {
+                j.observe(&view(1.0 + 0.025 * k as f64), &mut out).unwrap();
+            }
+            let d = out[0].deflection().unwrap();
+            assert!((d - expected).abs() < 1e-9, "align {align}: deflection {d}, expected {expected}");
+        }
+    }
+}
