@@ -47,6 +47,7 @@ pub enum PlotError {
 /// lines(&path, "q4, 113.78 Nm/rad, step", "t [s]", "torque [Nm]", &[s]).unwrap();
 /// let empty = Series { name: "none", points: vec![], color: COLORS[0] };
 /// assert!(matches!(lines(&path, "t", "x", "y", &[empty]), Err(PlotError::Empty { .. })));
+/// # std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn lines(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<(), PlotError> {
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);

@@ -178,6 +178,7 @@ pub fn read(path: &Path, kind: FileKind) -> Result<Vec<u8>, FileError> {
 /// let file = std::env::temp_dir().join(format!("jointctl-files-text-{}.yaml", std::process::id()));
 /// std::fs::write(&file, "arm: a\n").unwrap();
 /// assert_eq!(read_to_string(&file, FileKind::Config).unwrap(), "arm: a\n");
+/// # std::fs::remove_file(&file).unwrap();
 /// ```
 pub fn read_to_string(path: &Path, kind: FileKind) -> Result<String, FileError> {
     String::from_utf8(read(path, kind)?).map_err(|_| FileError::NotText { file: path.into(), kind })

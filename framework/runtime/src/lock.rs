@@ -84,6 +84,7 @@ fn take(file: &mut std::fs::File) -> std::io::Result<Taken> {
 /// assert!(jointctl_runtime::lock::ArmLock::acquire(&dir, "doc-arm").is_err());
 /// drop(lock);
 /// assert!(jointctl_runtime::lock::ArmLock::acquire(&dir, "doc-arm").is_ok());
+/// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 #[derive(Debug)]
 pub struct ArmLock {
@@ -150,6 +151,7 @@ fn open_machine_lock(dir: &Path, name: &str, label: &str) -> Result<(std::fs::Fi
 /// let arm = jointctl_runtime::lock::MachineLock::arm(&dir, "doc-arm").unwrap();
 /// assert!(jointctl_runtime::lock::MachineLock::arm(&dir, "doc-arm").is_err());
 /// drop((lock, arm));
+/// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 #[derive(Debug)]
 pub struct MachineLock {
@@ -188,6 +190,7 @@ impl MachineLock {
 /// // flock locks belong to the open file: a second open sees it held, even in this process.
 /// assert_eq!(jointctl_runtime::lock::holder(&dir, "doc-arm"), Some(std::process::id()));
 /// drop(lock);
+/// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn holder(dir: &Path, arm: &str) -> Option<u32> {
     let mut file = std::fs::File::open(dir.join(format!("{arm}.lock"))).ok()?;
