@@ -10,7 +10,7 @@ use std::sync::Arc;
 use super::causes::{FullRate, SearchContext};
 use super::design::{HeldOut, Model, Part, Spec};
 use super::prepare::Prepared;
-use super::search::{polish, profile_baseline, search};
+use super::search::{polish, profile_terms, search};
 use super::significance::{Judgement, added_coefficients_test, judge, predicted_cause_test};
 
 /// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
@@ -177,7 +177,7 @@ enum Candidate {
 /// Searches candidate `c`'s parameters with `spec` in place and checks the fit's physics.
 fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepared, warm: Option<&[f64]>) -> Candidate {
     let Some(term) = search(model, spec, c, ctx, &p.coarse, &p.stretch, warm) else { return Candidate::NoFit };
-    let s = profile_baseline(model, &spec.with(term), &p.coarse);
+    let s = profile_terms(model, &spec.with(term), &p.coarse);
     let Some(fit) = model.fit(&s, &p.coarse) else { return Candidate::NoFit };
     let last = s.terms.len() - 1;
     match model.causes[c].impossible(&s.terms[last].params, fit.of(last)) {
