@@ -47,3 +47,55 @@ fn a_friction_that_grows_with_the_rate_is_named_viscous_not_absorbed_by_the_arct
     let clean = identify(&record(0.0, 0.0), &IdentifyOptions::default()).unwrap();
     assert!(clean.causes.is_empty(), "{:?}", clean.causes);
 }
+
+/// A record whose last part moves faster than the rest: after a 3 s hold, a 0.2 Hz sine of
+/// 0.03 rad under a Hann envelope until 21 s (peak rate about 0.04 rad/s: the training part),
+/// then a 1.3 Hz sine of 0.027 rad under its own envelope until 30 s (about 0.2 rad/s, most of
+/// the held-out part); 400 Nm/rad, eq. 3.5 friction `k_a atan(40 v)`, a viscous friction `b`;
+/// 14-bit deflection, 0.2 Nm noise (drawn from `seed`), 1 kHz.
+fn faster_at_the_end(k_a: f64, b: f64, seed: u64) -> jointctl_ident::csv::Data {
+    use std::f64::consts::{PI, TAU};
+    let (rate, n, k) = (1000.0, 30_000, 400.0);
+    let q = TAU / 16384.0;
+    let hann = |t: f64, a: f64, b: f64| (PI * ((t - a) / (b - a)).clamp(0.0, 1.0)).sin().powi(2);
+    let x = |t: f64| if t < 21.0 { 0.03 * hann(t, 3.0, 21.0) * (TAU * 0.2 * (t - 3.0)).sin() } else { 0.027 * hann(t, 21.0, 30.0) * (TAU * 1.3 * (t - 21.0)).sin() };
+    let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d ^ seed);
+    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let t = i as f64 / rate;
+        let v = (x(t + 1e-6) - x(t - 1e-6)) / 2e-6;
+        t_s.push(t);
+        deflection.push((x(t) / q).round() * q);
+        torque.push(k * x(t) + k_a * (40.0 * v).atan() + b * v + 0.2 * rng.normal());
+    }
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
+}
+
+#[test]
+fn a_viscous_friction_the_training_part_cannot_tell_from_the_arctan_is_decided_on_the_held_out_part() {
+    // Found on the blind generator's seed 8 (000: 52 Nm s/rad beside an arctan of 0.71 Nm, the
+    // record's last part far faster than the rest): over the training part's rates eq. 3.5's
+    // arctan is nearly straight and takes the viscous friction as its own, BIC never proposes
+    // one, and the report said "no listed cause explains it" at 12 times the noise. The
+    // held-out part moves faster, where the arctan saturates and the damping does not: it
+    // decides, as for any proposal. Measured on these eight records (10 Nm s/rad, 2.9 times the
+    // noise): viscous friction named alone on 0 of them before, on 6 after (held-out RMSE
+    // 0.51-0.58 -> 0.22-0.25 Nm, noise 0.2); a time delay stands in for it on one, nothing on
+    // another.
+    let mut alone = 0;
+    for (k_a, seed) in [0.3, 0.7].into_iter().flat_map(|k_a| (1..=4).map(move |s| (k_a, s))) {
+        let report = identify(&faster_at_the_end(k_a, 10.0, seed), &IdentifyOptions::default()).unwrap();
+        let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+        println!("k_a {k_a}, seed {seed}: {named:?}, held-out {:.3} -> {:.3} Nm", report.rmse_before, report.rmse_after);
+        if named == ["viscous_friction"] {
+            alone += 1;
+            assert!(report.rmse_after < 1.5 * report.unexplained.noise_floor_nm, "{} Nm left, noise {}", report.rmse_after, report.unexplained.noise_floor_nm);
+        }
+    }
+    assert!(alone >= 6, "viscous friction named alone on {alone} of 8");
+    // Without the viscous friction: nothing to name.
+    for k_a in [0.3, 0.7] {
+        let clean = identify(&faster_at_the_end(k_a, 0.0, 1), &IdentifyOptions::default()).unwrap();
+        assert!(clean.causes.is_empty(), "k_a {k_a}: {:?}", clean.causes);
+    }
+}

@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use super::causes::{FullRate, SearchContext};
-use super::design::{HeldOut, Model, Part, Spec};
+use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
 use super::search::{polish, profile_terms, search};
 use super::significance::{Judgement, added_coefficients_test, judge, predicted_cause_test};
@@ -161,6 +161,33 @@ fn check(model: &Model, full: &Spec, reduced: &HeldOut, p: &Prepared, name: &(dy
     match compare_with(reduced, model, full, p) {
         Some(judgement) => Checked::Tested(full.clone(), judgement),
         None => Checked::NoFit,
+    }
+}
+
+/// `term` added to `spec` (the terms in the model searched again beside it, then polished),
+/// judged on the held-out part as every proposal is: the model with it and the judgement when it
+/// passes as a cause, `Err` with what is said of it otherwise. For an alternative the training
+/// part cannot tell from a term of the model (eq. 3.5's arctan nearly straight over the
+/// training part's rates, against a viscous friction), the held-out part may move faster and
+/// tell them apart.
+pub(crate) fn held_out_addition(model: &Model, spec: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Result<(Spec, Judgement), Option<String>> {
+    let reduced = held_out_errors(model, spec, p).ok_or(None)?;
+    let cause = term.cause;
+    let with = polish(model, &profile_terms(model, &spec.with(term), &p.coarse), &p.coarse, &p.stretch);
+    match check(model, &with, &reduced, p, name) {
+        Checked::Tested(s, judgement) if judgement.named() => {
+            // It must earn its place given the others as polished beside it, as every cause
+            // does at the end of the selection.
+            let full = held_out_errors(model, &s, p).ok_or(None)?;
+            let without = held_out_errors(model, &s.without(cause), p).ok_or(None)?;
+            match verdict(&without, &full, p) {
+                given if given.named() => Ok((s, judgement)),
+                given => Err(Some(format!("no evidence once the others were polished beside it: {given}"))),
+            }
+        }
+        Checked::Tested(_, judgement) => Err(Some(judgement.to_string())),
+        Checked::Impossible(why) => Err(Some(why)),
+        Checked::NoFit => Err(None),
     }
 }
 

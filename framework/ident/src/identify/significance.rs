@@ -46,7 +46,7 @@ pub const BLOCKS: usize = 20;
 pub const LEVEL: f64 = 0.001;
 
 /// The standard normal quantile at 1 - [`LEVEL`].
-const Z: f64 = 3.090_232_306_167_813;
+pub(crate) const Z: f64 = 3.090_232_306_167_813;
 
 /// The outcome of a test.
 #[derive(Clone, Copy, Debug, PartialEq)]
