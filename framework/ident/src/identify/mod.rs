@@ -375,39 +375,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     }
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
-    // Eq. 3.5's arctan nearly straight over the training part's rates takes a viscous friction
-    // for its own there, and BIC never proposes one; a held-out part that moves faster tells
-    // them apart (the arctan saturates, the damping does not), so the held-out part decides, as
-    // for any proposal. A record whose excitation grows (blind seed 8's 000: 52 Nm s/rad beside
-    // an arctan of 0.71 Nm) was otherwise left at 12 times the noise with no cause named.
-    let current = if selection.chosen.is_empty() { base.clone() } else { selection.spec.clone() };
-    if let Some(c) = friction_confound::baseline_friction_confound(&model, &current, p) {
-        let term = Term { cause: c.viscous, params: Vec::new(), grids: Vec::new(), baseline: false };
-        match select::held_out_addition(&model, &current, term, p, &name) {
-            Ok((with, judgement)) => {
-                // BIC did not propose it, so the training part must at least tell its damping
-                // from zero (the AR(1)-corrected standard error, one-sided 0.1 %): a held-out
-                // gain alone took 0.71 +- 0.62 Nm s/rad beside a LuGre loop's own damping
-                // (blind 098 of seeds 4, 6 and 8).
-                let i = with.terms.iter().position(|t| t.cause == c.viscous);
-                let damping = i.zip(select::held_out_errors(&model, &with, p)).and_then(|(i, h)| {
-                    let se = model.standard_errors(&with, &h.fit, &p.train)?;
-                    Some((h.fit.of(i).first().copied()?, se.get(h.fit.spans[i].start).copied()?))
-                });
-                match damping {
-                    Some((b, se)) if b > significance::Z * se => {
-                        let evidence = format!("the training part cannot tell it from eq. 3.5's nearly straight arctan (it reaches {:.0} % of its tangent at the training part's peak rate); {judgement}", 100.0 * c.share);
-                        selection.chosen.push(select::Chosen { cause: c.viscous, evidence });
-                        selection.spec = with;
-                    }
-                    Some((b, se)) => selection.rejected.push(format!("{} (in place of the confound with eq. 3.5's arctan: better on the held-out part, but its damping on the training part, {} +- {} Nm s/rad, is not told from zero)", name(c.viscous), format_value(b), format_value(se))),
-                    None => {}
-                }
-            }
-            Err(Some(why)) => selection.rejected.push(format!("{} (in place of the confound with eq. 3.5's arctan, no evidence on the held-out part: {why})", name(c.viscous))),
-            Err(None) => {}
-        }
-    }
+    friction_confound::decide_on_held_out(&model, &mut selection, &base, p, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
