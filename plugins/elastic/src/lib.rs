@@ -66,8 +66,11 @@ struct Params {
     /// before the two are subtracted (default true): the drive's position comes over CAN and the
     /// output encoder over SPI, with different latencies (section 2.3: about 30 and 15 ms), and
     /// while the joint moves a difference of readings of different ages is not the deflection
-    /// (`jointctl_control::ReadingTrack`). `false`: subtracted as they are.
-    #[serde(default = "default_true")]
+    /// (`jointctl_control::ReadingTrack`). It uses the ages the HAL reports: the simulated HAL
+    /// reports its configured latencies; the SocketCAN HAL stamps a frame when its cycle drains
+    /// it (age 0 that cycle), so on the real arm only a stale reading is carried. `false`:
+    /// subtracted as they are.
+    #[serde(default = "default_align_reading_ages")]
     align_reading_ages: bool,
     /// Where the compliance is: `element` (an elastic element between motor and output, the
     /// default) or `drive_gain` (the drive's position loop, q5).
@@ -106,7 +109,7 @@ struct Zero {
     output_rad: f64,
 }
 
-fn default_true() -> bool {
+fn default_align_reading_ages() -> bool {
     true
 }
 
@@ -280,15 +283,16 @@ impl Observer for ElasticJoint {
         // The motor side at the instant the output encoder was read (readings of different ages
         // are not one deflection while the joint moves).
         let input = match input {
-            Some(i) if self.params.align_reading_ages => {
+            // (An age that is not known, e.g. a reading replayed from a record without one:
+            // subtracted as it is.)
+            Some(i) if self.params.align_reading_ages && input_reading.age_s.is_finite() && output_reading.age_s.is_finite() => {
                 self.input_track.update(i, raw.stamp_s - input_reading.age_s);
                 self.input_track.at(raw.stamp_s - output_reading.age_s)
             }
-            Some(i) => Some(i),
-            None => {
-                self.input_track.reset();
-                None
-            }
+            // A lost frame is no reason to forget the motion: the track forms no rate across a
+            // gap longer than its span, and a reset here made the next reading's deflection jump
+            // by the whole misalignment for one cycle.
+            other => other,
         };
         if let Some(q) = q {
             s.set_position(q);
@@ -385,6 +389,29 @@ mod tests {
             }
             let d = out[0].deflection().unwrap();
             assert!((d - expected).abs() < 1e-9, "align {align}: deflection {d}, expected {expected}");
+        }
+    }
+
+    /// One drive frame lost in the middle of the motion: no deflection that cycle (a stale
+    /// reading is not combined), and the next one is aligned again at once, without a jump.
+    #[test]
+    fn a_lost_drive_frame_does_not_make_the_next_deflection_jump() {
+        let motor = |t: f64| 0.4 * (t - 1.0).max(0.0);
+        let view = |t: f64| raw(t, motor(t - 0.030), 0.030, 2.0 * motor(t - 0.015), 0.015);
+        let mut j = joint(true);
+        j.activate(&view(1.0)).unwrap();
+        let mut out = [JointState::UNKNOWN];
+        for k in 1..=8 {
+            let t = 1.0 + 0.025 * k as f64;
+            let mut v = view(t);
+            if k == 5 {
+                v.drives[MOTOR] = DriveReading::new(Reading::MISSING, Reading::MISSING, true, false);
+            }
+            j.observe(&v, &mut out).unwrap();
+            match out[0].deflection() {
+                None => assert_eq!(k, 5, "cycle {k}: no deflection"),
+                Some(d) => assert!(k != 5 && (k < 3 || d.abs() < 1e-9), "cycle {k}: deflection {d}"),
+            }
         }
     }
 }

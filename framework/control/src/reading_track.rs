@@ -4,14 +4,15 @@
 /// thesis' arm the drive's motor position crossed the CAN bus about 30 ms late and the output
 /// encoder the SPI bus about 15 ms late (section 2.3). While the joint moves, subtracting them as
 /// they are reads a deflection that is off by the motor's motion in between. On the simulated
-/// elbow that read the element 0.08 % stiffer at 0.25 Hz and 0.45 % at 1 Hz, which `jointctl
+/// elbow that read the element 0.08 % stiffer at 0.25 Hz and about 0.45 % at 1 Hz, which `jointctl
 /// identify` named as a `stiffness_error` (t = 5.5) on a plant that had none.
 ///
 /// The track keeps the last distinct reading with the instant it was taken (`stamp - age`) and
 /// the rate between the last two; [`Self::at`] extrapolates the newest reading linearly to
 /// another instant. A rate needs two readings at most [`Self::MAX_SPAN_S`] apart, and the
 /// reading is carried at most that far: beyond it (a gap, a stale bus) the reading is returned
-/// as it is, never a guess from old motion.
+/// as it is, never a guess from old motion. The instants come from the ages the HAL reports
+/// with each reading; a reading whose age is not known is not carried (see the elastic plugin).
 ///
 /// ```
 /// use jointctl_control::ReadingTrack;
@@ -33,8 +34,9 @@ pub struct ReadingTrack {
 
 impl ReadingTrack {
     /// Longest interval over which a rate is formed and a reading carried [s]. Assumption: 0.1 s,
-    /// four cycles of the thesis' 40 Hz loop (section 4.1): a reading older than that is stale,
-    /// and the plugins refuse to form a deflection from it anyway.
+    /// four cycles of the thesis' 40 Hz loop (section 4.1): motion older than that says little
+    /// of the motion now (and with its default `max_deflection_age_s` the elastic plugin forms
+    /// no deflection from a stale reading at all).
     pub const MAX_SPAN_S: f64 = 0.1;
 
     /// An empty track: [`Self::at`] gives nothing until a reading arrives.
