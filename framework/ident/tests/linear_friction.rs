@@ -89,10 +89,15 @@ fn a_viscous_friction_the_training_part_cannot_tell_from_the_arctan_is_decided_o
         println!("k_a {k_a}, seed {seed}: {named:?}, held-out {:.3} -> {:.3} Nm", report.rmse_before, report.rmse_after);
         if named == ["viscous_friction"] {
             alone += 1;
+            // Named by the held-out decision, not by BIC.
+            assert!(report.causes[0].evidence.contains("cannot tell it from eq. 3.5's nearly straight arctan"), "{}", report.causes[0].evidence);
             assert!(report.rmse_after < 1.5 * report.unexplained.noise_floor_nm, "{} Nm left, noise {}", report.rmse_after, report.unexplained.noise_floor_nm);
         }
     }
     assert!(alone >= 6, "viscous friction named alone on {alone} of 8");
+    // Not beyond the causes asked for.
+    let none = identify(&faster_at_the_end(0.3, 10.0, 1), &IdentifyOptions { max_causes: 0, ..IdentifyOptions::default() }).unwrap();
+    assert!(none.causes.is_empty(), "max_causes 0: {:?}", none.causes);
     // Without the viscous friction: nothing to name.
     for k_a in [0.3, 0.7] {
         let clean = identify(&faster_at_the_end(k_a, 0.0, 1), &IdentifyOptions::default()).unwrap();

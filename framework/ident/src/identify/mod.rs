@@ -375,7 +375,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     }
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
-    friction_confound::decide_on_held_out(&model, &mut selection, &base, p, &name);
+    friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
@@ -449,7 +449,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         let [with, instead, before] = c.bic;
         let why = confound_rule(with, instead, before, "the arctan");
         let shape = format!(
-            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the recorded rates, so no experiment is proposed for them (the proposals stay within what the arm did)",
+            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates, and the held-out part did not decide it (see the rejected causes); no experiment is proposed for them (the proposals stay within what the arm did)",
             name(c.viscous),
             format_value(c.k_b_s_per_rad),
             format_value(c.peak_rad_per_s),

@@ -24,6 +24,7 @@ pub const BIC_THRESHOLD: f64 = 10.0;
 /// residual (a delay's, a vibration's, a cubic's) that the right cause predicts.
 const TESTED_PER_STEP: usize = 4;
 
+#[derive(Clone)]
 pub(crate) struct Chosen {
     pub cause: usize,
     pub evidence: String,
@@ -164,30 +165,34 @@ fn check(model: &Model, full: &Spec, reduced: &HeldOut, p: &Prepared, name: &(dy
     }
 }
 
+/// What the held-out part says of a term added after the selection ([`held_out_addition`]).
+pub(crate) enum Addition {
+    /// It passes as a cause: the model with it, and the judgement.
+    Named(Spec, Judgement),
+    /// Evidence, but its gain is below the relevance threshold.
+    Negligible(Judgement),
+    /// No evidence on the held-out part.
+    NoEvidence(Judgement),
+    /// Its fit is physically impossible (why, the cause named).
+    Impossible(String),
+    /// No fit.
+    NoFit,
+}
+
 /// `term` added to `spec` (the terms in the model searched again beside it, then polished),
-/// judged on the held-out part as every proposal is: the model with it and the judgement when it
-/// passes as a cause, `Err` with what is said of it otherwise. For an alternative the training
-/// part cannot tell from a term of the model (eq. 3.5's arctan nearly straight over the
-/// training part's rates, against a viscous friction), the held-out part may move faster and
-/// tell them apart.
-pub(crate) fn held_out_addition(model: &Model, spec: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Result<(Spec, Judgement), Option<String>> {
-    let reduced = held_out_errors(model, spec, p).ok_or(None)?;
-    let cause = term.cause;
+/// judged on the held-out part as every proposal is. For an alternative the training part cannot
+/// tell from a term of the model (eq. 3.5's arctan nearly straight over the training part's
+/// rates, against a viscous friction), the held-out part may move faster and tell them apart.
+/// Whether it then earns its place given the others is [`prune`]'s to say.
+pub(crate) fn held_out_addition(model: &Model, spec: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Addition {
+    let Some(reduced) = held_out_errors(model, spec, p) else { return Addition::NoFit };
     let with = polish(model, &profile_terms(model, &spec.with(term), &p.coarse), &p.coarse, &p.stretch);
     match check(model, &with, &reduced, p, name) {
-        Checked::Tested(s, judgement) if judgement.named() => {
-            // It must earn its place given the others as polished beside it, as every cause
-            // does at the end of the selection.
-            let full = held_out_errors(model, &s, p).ok_or(None)?;
-            let without = held_out_errors(model, &s.without(cause), p).ok_or(None)?;
-            match verdict(&without, &full, p) {
-                given if given.named() => Ok((s, judgement)),
-                given => Err(Some(format!("no evidence once the others were polished beside it: {given}"))),
-            }
-        }
-        Checked::Tested(_, judgement) => Err(Some(judgement.to_string())),
-        Checked::Impossible(why) => Err(Some(why)),
-        Checked::NoFit => Err(None),
+        Checked::Tested(s, judgement) if judgement.named() => Addition::Named(s, judgement),
+        Checked::Tested(_, judgement) if judgement.negligible() => Addition::Negligible(judgement),
+        Checked::Tested(_, judgement) => Addition::NoEvidence(judgement),
+        Checked::Impossible(why) => Addition::Impossible(why),
+        Checked::NoFit => Addition::NoFit,
     }
 }
 
@@ -338,11 +343,22 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
             break;
         }
     }
-    // Every cause must still earn its place given the others.
-    while let Some(full) = held_out_errors(model, &spec, p) {
+    let mut selection = Selection { spec, chosen, rejected, negligible, confounded: Vec::new() };
+    prune(model, p, &mut selection, &name);
+    // Confounds: a named cause that is still in the model and an alternative that is not.
+    let spec = &selection.spec;
+    selection.confounded = about_as_well.into_iter().filter(|(c, other, ..)| spec.term(*c).is_some() && spec.term(*other).is_none()).collect();
+    selection
+}
+
+/// Every cause must still earn its place given the others: the weakest that is not named any
+/// more leaves the model, one at a time, until each is (at the end of the selection, and again
+/// when a cause joins after it).
+pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn Fn(usize) -> String + Sync)) {
+    while let Some(full) = held_out_errors(model, &s.spec, p) {
         // The models without one cause each, fitted side by side.
-        let margins = parallel_map(&chosen, |ch| {
-            held_out_errors(model, &spec.without(ch.cause), p).map(|r| verdict(&r, &full, p))
+        let margins = parallel_map(&s.chosen, |ch| {
+            held_out_errors(model, &s.spec.without(ch.cause), p).map(|r| verdict(&r, &full, p))
         });
         // The weakest that is not named any more goes first (its gain in units of its
         // relevance threshold).
@@ -352,18 +368,15 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         });
         match weakest {
             Some((i, judgement)) => {
-                let gone = chosen.remove(i);
+                let gone = s.chosen.remove(i);
                 match judgement {
-                    Some(j) if j.negligible() => negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
-                    Some(j) => rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
-                    None => rejected.push(format!("{} (no fit without it)", name(gone.cause))),
+                    Some(j) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
+                    Some(j) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
+                    None => s.rejected.push(format!("{} (no fit without it)", name(gone.cause))),
                 }
-                spec = spec.without(gone.cause);
+                s.spec = s.spec.without(gone.cause);
             }
             None => break,
         }
     }
-    // Confounds: a named cause that is still in the model and an alternative that is not.
-    let confounded = about_as_well.into_iter().filter(|(c, other, ..)| spec.term(*c).is_some() && spec.term(*other).is_none()).collect();
-    Selection { spec, chosen, rejected, negligible, confounded }
 }
