@@ -179,14 +179,14 @@ pub(crate) enum Addition {
     NoFit,
 }
 
-/// `term` added to `spec` (the terms in the model searched again beside it, then polished),
-/// judged on the held-out part as every proposal is. For an alternative the training part cannot
+/// `term` added to `spec` and polished with it (the polish's first round looks over every
+/// term's whole grid), judged on the held-out part as every proposal is. For an alternative the training part cannot
 /// tell from a term of the model (eq. 3.5's arctan nearly straight over the training part's
 /// rates, against a viscous friction), the held-out part may move faster and tell them apart.
 /// Whether it then earns its place given the others is [`prune`]'s to say.
 pub(crate) fn held_out_addition(model: &Model, spec: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Addition {
     let Some(reduced) = held_out_errors(model, spec, p) else { return Addition::NoFit };
-    let with = polish(model, &profile_terms(model, &spec.with(term), &p.coarse), &p.coarse, &p.stretch);
+    let with = polish(model, &spec.with(term), &p.coarse, &p.stretch);
     match check(model, &with, &reduced, p, name) {
         Checked::Tested(s, judgement) if judgement.named() => Addition::Named(s, judgement),
         Checked::Tested(_, judgement) if judgement.negligible() => Addition::Negligible(judgement),
