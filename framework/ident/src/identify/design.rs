@@ -47,13 +47,6 @@ impl Part {
         let rep = if self.rep.is_empty() || next.rep.is_empty() { Vec::new() } else { self.rep.iter().chain(&next.rep).copied().collect() };
         Part { warm: self.warm.clone(), t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, dt: self.dt }
     }
-
-    /// Every `k`-th sample (for searches on long records).
-    pub fn every(&self, k: usize) -> Part {
-        let k = k.max(1);
-        let pick = |v: &Vec<f64>| v.iter().step_by(k).copied().collect();
-        Part { warm: pick(&self.warm), t: pick(&self.t), d: pick(&self.d), v: pick(&self.v), tau: pick(&self.tau), pivot: pick(&self.pivot), rep: self.rep.iter().step_by(k).copied().collect(), dt: self.dt * k as f64 }
-    }
 }
 
 /// One extension of the model: a cause (index into the candidate list) and its parameters.

@@ -171,13 +171,13 @@ pub const SEARCH_SAMPLES: usize = 5000;
 /// assumption: 80 s at 200 Hz, 16 cycles of a 0.2 Hz excitation).
 pub const STRETCH_SAMPLES: usize = 16_000;
 
-/// Fits run on at most this many contiguous training samples (an assumption: 50 000 samples put
+/// Fits run on at most this many training samples, taken evenly over the training part (an assumption: 50 000 samples put
 /// a coefficient's standard error at 0.45 % of the noise-to-signal ratio, 1/sqrt(n); more only
 /// costs time, and every candidate the held-out part tests is fitted on them).
 pub const FIT_SAMPLES: usize = 50_000;
 
-/// The held-out part is at most this many samples after the split (an assumption: its test's
-/// power grows with them, and it is predicted, not fitted, so they cost less).
+/// The held-out part is at most this many samples, taken evenly over its window (an assumption:
+/// its test's power grows with them, and it is predicted, not fitted, so they cost less).
 pub const HELD_OUT_SAMPLES: usize = 200_000;
 
 /// Exact zeros that the signal cannot have reached: a run of zeros far from the line between the
@@ -362,17 +362,22 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
         }
         i
     };
-    let part = |r: std::ops::Range<usize>| Part {
-        warm: d[warm_start(r.start)..r.start].to_vec(),
-        t: t[r.clone()].to_vec(),
-        d: d[r.clone()].to_vec(),
-        v: v[r.clone()].to_vec(),
-        tau: tau[r.clone()].to_vec(),
-        // A pivot not given is none: the configured characteristic's own.
-        pivot: if pivot.is_empty() { vec![0.0; r.len()] } else { pivot[r.clone()].iter().map(|p| if p.is_finite() { *p } else { 0.0 }).collect() },
-        rep: if rep.is_empty() { Vec::new() } else { rep[r].to_vec() },
-        dt: spacing,
+    // Every `k`-th sample of the range `r` (its history too), picked without a full-rate copy.
+    let part_every = |r: std::ops::Range<usize>, k: usize| {
+        let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
+        Part {
+            warm: d[warm_start(r.start)..r.start].iter().step_by(k).copied().collect(),
+            t: pick(&t),
+            d: pick(&d),
+            v: pick(&v),
+            tau: pick(&tau),
+            // A pivot not given is none: the configured characteristic's own.
+            pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(&pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
+            rep: if rep.is_empty() { Vec::new() } else { rep[r].iter().step_by(k).copied().collect() },
+            dt: spacing * k as f64,
+        }
     };
+    let part = |r: std::ops::Range<usize>| part_every(r, 1);
     let trained = lo + (t.len() - hi);
     if trained < window::MIN_TRAINING || hi - lo < window::MIN_HELD_OUT {
         return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
@@ -384,24 +389,33 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
         let before = 0..lo.min(limit);
         (before.clone(), hi..t.len().min(hi + limit.saturating_sub(before.len())))
     };
-    let training = |limit: usize| {
+    // Every `k`-th of them, counted on across the held-out window.
+    let training = |limit: usize, k: usize| {
         let (before, after) = pieces(limit);
-        if after.is_empty() { part(before) } else { part(before).then(&part(after)) }
+        let skip = (k - before.len() % k) % k;
+        let after = (after.start + skip).min(after.end)..after.end;
+        if after.is_empty() { part_every(before, k) } else { part_every(before, k).then(&part_every(after, k)) }
     };
     // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
     // an alias of it): decimated up to that, then the first SEARCH_SAMPLES of them.
     let k = trained.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
-    let coarse = training(k * SEARCH_SAMPLES).every(k);
-    // Final fits on at most FIT_SAMPLES training samples: parameters no longer move beyond
-    // (their standard errors shrink as 1/sqrt(n)), and a long record stays fast. The held-out
-    // part: the window's first HELD_OUT_SAMPLES.
-    let (train, test) = (training(FIT_SAMPLES), part(lo..hi.min(lo + HELD_OUT_SAMPLES)));
+    let coarse = training(k * SEARCH_SAMPLES, k);
+    // Final fits on at most FIT_SAMPLES training samples, taken evenly over the whole training
+    // part: parameters no longer move beyond (their standard errors shrink as 1/sqrt(n)), and a
+    // long record stays fast. Its first FIT_SAMPLES instead left out what came later: a 46 s
+    // record at 2 kHz whose sweep speeds up after 27 s (blind seed 7's 000) was fitted on its
+    // first 25 s only, at a tenth of the rates it reached, and its viscous friction (13.6 Nm
+    // s/rad beside an arctan of 0.07 Nm) was taken for the arctan. The held-out part likewise:
+    // at most HELD_OUT_SAMPLES, evenly over the whole window.
+    let every_fit = trained.div_ceil(FIT_SAMPLES).max(1);
+    let every_test = (hi - lo).div_ceil(HELD_OUT_SAMPLES).max(1);
+    let (train, test) = (training(every_fit * FIT_SAMPLES, every_fit), part_every(lo..hi, every_test));
     let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter };
     // The full-rate stretch is contiguous (a delay's samples, a periodogram): the piece before
     // the held-out window, or the one after it when that is longer.
     let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };
     let train_duration_s = {
-        let (before, after) = pieces(FIT_SAMPLES);
+        let (before, after) = pieces(every_fit * FIT_SAMPLES);
         let span = |r: std::ops::Range<usize>| if r.is_empty() { 0.0 } else { t[r.end - 1] - t[r.start] };
         span(before) + span(after)
     };
@@ -539,5 +553,23 @@ mod tests {
         }
         let found: Vec<usize> = dropouts(&record, ENCODER_LSB_RAD).iter().enumerate().filter(|(_, d)| **d).map(|(k, _)| k).collect();
         assert_eq!(found, vec![40, 41, 43]);
+    }
+
+    #[test]
+    fn the_fitted_and_the_held_out_samples_span_their_whole_parts() {
+        // Finding (issue 31, blind seed 7's 000): the fits took the training part's first
+        // FIT_SAMPLES, and the held-out part was its window's first HELD_OUT_SAMPLES; what came
+        // later (a sweep that sped up) was never fitted. A million samples at 1 kHz, the last
+        // 30 % held out: both parts reach their ends, at most their budgets each.
+        let n = 1_000_000;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3).collect();
+        let d: Vec<f64> = t.iter().map(|t| 0.05 * (std::f64::consts::TAU * 0.5 * t).sin()).collect();
+        let tau = d.iter().enumerate().map(|(i, x)| 80.0 * x + 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5)).collect();
+        let p = prepare(&Data::from_columns(t, d, tau), 0.7, HeldOut::Last).unwrap();
+        assert!(p.train.len() <= FIT_SAMPLES && p.test.len() <= HELD_OUT_SAMPLES, "{} {}", p.train.len(), p.test.len());
+        let (train_end, test_start, test_end) = (p.train.t[p.train.len() - 1], p.test.t[0], p.test.t[p.test.len() - 1]);
+        assert!(train_end > 699.0 && test_start >= 699.9, "training to {train_end} s, held out from {test_start} s");
+        assert!(test_end > 999.0, "held out to {test_end} s");
+        assert!((p.train_duration_s - 700.0).abs() < 0.1, "{}", p.train_duration_s);
     }
 }
