@@ -99,9 +99,11 @@ fn a_steady_mode_in_repetitions_whose_time_restarted_is_named_alone() {
     assert!(missed.is_empty(), "{missed:#?}");
 }
 
-/// A training part inside the first repetition (the fits take its first 50 000 samples) and a
-/// held-out part in the second fit the vibration alike, per repetition (decided for the record,
-/// see `repetition_starts`): two repetitions of 55 s at 1 kHz, a 0.1 Nm offset besides.
+/// Parts of the record in different repetitions fit the vibration alike, per repetition
+/// (decided for the record, see `repetition_starts`): two repetitions of 55 s at 1 kHz, a 0.1 Nm
+/// offset besides. Found when the fits took the training part's first 50 000 samples, inside the
+/// first repetition; they now spread over both, and the searches' full-rate stretch (16 000
+/// samples) still lies inside the first while the held-out part is in the second.
 #[test]
 fn a_training_part_inside_the_first_repetition_fits_as_the_held_out_part_does() {
     let data = restarted(31.77, 9.1, 1000.0, 55_000, 2, 0.1);

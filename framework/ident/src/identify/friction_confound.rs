@@ -44,8 +44,8 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
     }
     let at = spec.terms.iter().position(|t| t.baseline && t.cause == friction)?;
     let k_b_s_per_rad = *spec.terms[at].params.first()?;
-    // The peak of the training part at its full rate (the fits below run on the decimated one,
-    // as the confound rule's BICs do).
+    // The peak of the training part the final fits see (every sample, or every k-th of a long
+    // record; the fits below run on the searches' decimated part, as the confound rule's BICs do).
     let peak_rad_per_s = p.train.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let part = &p.coarse;
     let x = k_b_s_per_rad * peak_rad_per_s;

@@ -390,7 +390,8 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
         let (cause, term) = (all[chosen.cause], &spec.terms[i]);
         let names: Vec<String> = term.grids.iter().map(|p| p.name.clone()).collect();
-        let gain = select::held_out_errors(&model, &spec.without(chosen.cause), p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
+        // Against the model without it and without what turns impossible then (as `prune` judges it).
+        let gain = select::held_out_errors(&model, &select::without_and_impossible(&model, &spec, chosen.cause, p).0, p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
         let mut evidence = chosen.evidence.clone();
         if let Some(remark) = cause.remark(&term.params, &p.excitation, duration) {
             evidence += &format!("; {remark}");

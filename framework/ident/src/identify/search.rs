@@ -1,7 +1,7 @@
 //! The search for a cause's non-linear parameters: its grid on the decimated training part,
 //! refined as the parameter asks, coordinate by coordinate.
 
-use super::causes::{Refine, SearchContext, delay_unit};
+use super::causes::{Refine, SearchContext, delay_unit, delay_units_in};
 use super::design::{Model, Part, Spec, Term};
 use super::numeric::refine_log;
 
@@ -67,7 +67,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
                     if at(x) < scores[i] { x } else { p.grid[i] }
                 }
                 Refine::Samples => {
-                    // Every full-rate sample period between the grid's neighbours of the best, on
+                    // Every delay step (see `delay_unit`) between the grid's neighbours of the best, on
                     // the whole decimated training part: the delay's transform interpolates, so
                     // the decimated part resolves a full-rate period; a stretch of the record's
                     // first seconds does not stand for the rest (on a record whose first 8 s
@@ -75,7 +75,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
                     // lead).
                     let reach = p.grid.iter().enumerate().filter(|(k, _)| *k != i).map(|(_, g)| (g - p.grid[i]).abs()).fold(f64::INFINITY, f64::min);
                     let unit = delay_unit(stretch.dt);
-                    let span = ((reach / unit).ceil() as i64).clamp(1, 200);
+                    let span = ((reach / unit).ceil() as i64).clamp(1, delay_units_in(200, stretch.dt));
                     let centre = (p.grid[i] / unit).round() as i64;
                     let at_unit = |k: i64| {
                         let mut q = best.clone();
@@ -239,11 +239,11 @@ fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, w
                     refine_log(at_coarse, a, b.max(a * (1.0 + 1e-9)), 10)
                 }
                 Refine::Samples => {
-                    // Three search steps either way, every full-rate sample, on the decimated
-                    // part (see `search`).
+                    // Three search steps either way, every delay step, on the decimated part
+                    // (see `search`).
                     let unit = delay_unit(stretch.dt);
                     let centre = (now / unit).round() as i64;
-                    let span = ((3.0 * coarse.dt / unit).ceil() as i64).clamp(1, 60);
+                    let span = ((3.0 * coarse.dt / unit).ceil() as i64).clamp(1, delay_units_in(60, stretch.dt));
                     integer_search(|k| at(k as f64 * unit, coarse), centre - span, centre + span).map_or(now, |k| k as f64 * unit)
                 }
                 _ => now,

@@ -96,7 +96,7 @@ fn impossible_term(model: &Model, spec: &Spec, p: &Prepared) -> Option<(usize, S
 /// at a time (those causes, and why). A term that took another's effect by going unphysical
 /// (a negative damping for a delay's lag) does not stand in for it: the model without the other
 /// is the model without either.
-fn without_and_impossible(model: &Model, spec: &Spec, cause: usize, p: &Prepared) -> (Spec, Vec<(usize, String)>) {
+pub(crate) fn without_and_impossible(model: &Model, spec: &Spec, cause: usize, p: &Prepared) -> (Spec, Vec<(usize, String)>) {
     let mut reduced = spec.without(cause);
     let mut dropped = Vec::new();
     while let Some((c, why)) = impossible_term(model, &reduced, p) {
@@ -374,7 +374,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
 /// more leaves the model, one at a time, until each is (at the end of the selection, and again
 /// when a cause joins after it). A cause's place is judged against the model without it and
 /// without the causes that turn physically impossible when it leaves, and those leave with it:
-/// blind seed 8's 052 (a 3.2 ms delay behind a 64 Hz filter, 20 Hz bins) named the delay and a
+/// blind seed 8's 052 (a 3.2 ms lag: a 64 Hz filter and a 0.7 ms delay, 20 Hz bins) named the delay and a
 /// viscous friction, the delay left as redundant, and the viscous friction stayed at -0.13 Nm
 /// s/rad, the delay's lag under another name.
 pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn Fn(usize) -> String + Sync)) {
@@ -467,6 +467,8 @@ mod tests {
         for (i, t) in s.spec.terms.iter().enumerate() {
             assert!(all[t.cause].impossible(&t.params, fit.of(i)).is_none(), "{} left at {:?}; rejected {:?}", all[t.cause].name(), fit.of(i), s.rejected);
         }
+        // The delay stays: without it, the model is the one without either.
+        assert!(s.spec.term(delay).is_some(), "{:?}", s.rejected);
         assert!(s.chosen.iter().all(|ch| s.spec.term(ch.cause).is_some()));
     }
 }

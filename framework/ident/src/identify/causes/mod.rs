@@ -32,7 +32,7 @@ pub use stribeck_friction::StribeckFriction;
 pub use stiffness_error::StiffnessError;
 pub use stiffness_nonlinearity::StiffnessNonlinearity;
 pub use time_delay::TimeDelay;
-pub(crate) use time_delay::delay_unit;
+pub(crate) use time_delay::{delay_unit, delay_units_in};
 pub use vibration::Vibration;
 pub use viscous_friction::ViscousFriction;
 
@@ -162,8 +162,8 @@ pub struct Parameter {
 pub enum Refine {
     /// Golden-section search between the best value's neighbours (a positive grid, log scale).
     Between,
-    /// A whole number of full-rate sample periods: every one within a grid step of the best is
-    /// tried on the full-rate training data.
+    /// A whole number of delay steps (full-rate sample periods; on a slow log, finer): the best
+    /// within a grid step of the best grid value, on the decimated training part.
     Samples,
     /// The grid value as it is (already refined by the cause).
     Not,
@@ -349,7 +349,7 @@ mod tests {
 
     /// Review finding: whether a cause was fitted per repetition was decided by each part on
     /// its own, so a part inside the first repetition of a restarted record (a training part
-    /// of its first 50 000 samples) fitted one set of coefficients and a part in a later one
+    /// of its first 50 000 samples, as the fits then took) fitted one set of coefficients and a part in a later one
     /// (the held-out part) a per-repetition layout; a prediction from one part's fit on the
     /// other zips coefficients with columns and would mix them up. Decided for the record now.
     #[test]

@@ -19,6 +19,20 @@ pub(crate) fn delay_unit(full_rate_dt: f64) -> f64 {
     if full_rate_dt <= SUB_SAMPLE_DELAYS_ABOVE_S { full_rate_dt } else { (0.02 * full_rate_dt).max(1e-3) }
 }
 
+/// The step in which delays count as told apart [s]: the full-rate sample period, or on records
+/// sampled slower than [`SUB_SAMPLE_DELAYS_ABOVE_S`] a tenth of it but at least a millisecond
+/// (an assumption, as before the finer [`delay_unit`]). The look-elsewhere charge counts the
+/// delays in these steps, and the refinement reaches as far in them as before: a finer step of
+/// refinement neither adds to how many delays the data can tell apart nor shortens the reach.
+pub(crate) fn delay_resolution(full_rate_dt: f64) -> f64 {
+    if full_rate_dt <= SUB_SAMPLE_DELAYS_ABOVE_S { full_rate_dt } else { (0.1 * full_rate_dt).max(1e-3) }
+}
+
+/// How many [`delay_unit`]s make `steps` of [`delay_resolution`] (the refinement's reach).
+pub(crate) fn delay_units_in(steps: i64, full_rate_dt: f64) -> i64 {
+    (steps as f64 * delay_resolution(full_rate_dt) / delay_unit(full_rate_dt)).round().max(1.0) as i64
+}
+
 /// The model of `phi(t - d)`: the inputs interpolated at the shifted time stamps (irregular
 /// logs too); `d` is refined in whole full-rate sample periods, or milliseconds when the samples
 /// are further apart.
@@ -93,8 +107,8 @@ impl CandidateCause for TimeDelay {
         // order, a damping (`phi(t - d) = phi - d dphi/dt`): without the charge it took the
         // place of a viscous friction on a tie.
         let span = 0.2 / c.excitation.frequency_hz.max(1e-3);
-        let unit = delay_unit(c.full_rate.t_s.windows(2).map(|w| w[1] - w[0]).fold(f64::INFINITY, f64::min).max(1e-6));
-        2.0 * (span / unit).max(1.0).ln()
+        let step = delay_resolution(c.full_rate.t_s.windows(2).map(|w| w[1] - w[0]).fold(f64::INFINITY, f64::min).max(1e-6));
+        2.0 * (span / step).max(1.0).ln()
     }
     fn transform(&self, p: &[f64], inputs: &mut Inputs) {
         let max_step = 10.0 * inputs.sample_period_s;
