@@ -97,6 +97,11 @@ pub(crate) struct CanBus {
     pub(crate) drives: Vec<Drive>,
     pub(crate) sync_counter: u8,
     pub(crate) sync_overflow: u8,
+    /// When the last SYNC went out [s since the HAL started]: a SYNC-triggered TPDO1
+    /// (transmission type 1) carries what its drive sampled then, so a frame that came after it
+    /// is dated there, not when the cycle drained it (section 2.3: a CAN reading is older than an
+    /// SPI one read in the same cycle, and the observer aligns the two by their ages).
+    pub(crate) last_sync_s: Option<f64>,
     pub(crate) health: BusHealth,
 }
 
@@ -277,8 +282,12 @@ impl CanBus {
         }
         let Some(f) = from_socketcan(frame) else { return };
         if let Some(t) = co::decode_tpdo1(&f) {
+            // Sampled at the last SYNC (a frame before any SYNC: when it was drained). One that
+            // came only after the next SYNC went out is dated a cycle late; that needs a bus
+            // loaded past its cycle, which the losses' counters show.
+            let sampled_s = self.last_sync_s.filter(|s| *s <= now_s).unwrap_or(now_s);
             if let Some(d) = self.drives.iter_mut().find(|d| d.node == t.node) {
-                d.fresh = Some((t.position_counts, now_s));
+                d.fresh = Some((t.position_counts, sampled_s));
                 d.torque_in_frame = t.torque_nm(d.rated_torque_nm);
                 // An operating drive never reports statusword 0: such a frame is appendix A's
                 // zeroed frame, and its state is not the drive's: taken as "not ready to switch

@@ -72,7 +72,7 @@ impl HardwareHal {
                     health: DriveHealth::default(),
                 })
                 .collect();
-            let mut can = CanBus { index: b, socket, interface: bus.interface.clone(), drives, sync_counter: 0, sync_overflow: co_cfg.sync_counter_overflow, health: BusHealth::default() };
+            let mut can = CanBus { index: b, socket, interface: bus.interface.clone(), drives, sync_counter: 0, sync_overflow: co_cfg.sync_counter_overflow, last_sync_s: None, health: BusHealth::default() };
             can.send(&co::nmt(co::NmtCommand::PreOperational, 0));
             for (i, d) in bus.drives.iter().enumerate() {
                 can.sdo_write(i, 0x6060, 0, &[co_cfg.mode.code()], timeout)?;
@@ -259,6 +259,7 @@ impl Hal for HardwareHal {
                 bus.sync_counter = if bus.sync_counter >= bus.sync_overflow { 1 } else { bus.sync_counter + 1 };
                 bus.sync_counter
             });
+            bus.last_sync_s = Some(self.t0.elapsed().as_secs_f64());
             bus.send(&co::sync(counter));
             base += bus.drives.len();
         }
@@ -353,6 +354,7 @@ impl HardwareHal {
                     bus.sync_counter = if bus.sync_counter >= bus.sync_overflow { 1 } else { bus.sync_counter + 1 };
                     bus.sync_counter
                 });
+                bus.last_sync_s = Some(self.t0.elapsed().as_secs_f64());
                 bus.send(&co::sync(counter));
             }
             bus.send(&co::heartbeat(self.host_node_id, co::nmt_state::OPERATIONAL));

@@ -67,9 +67,8 @@ struct Params {
     /// output encoder over SPI, with different latencies (section 2.3: about 30 and 15 ms), and
     /// while the joint moves a difference of readings of different ages is not the deflection
     /// (`jointctl_control::ReadingTrack`). It uses the ages the HAL reports: the simulated HAL
-    /// reports its configured latencies; the SocketCAN HAL stamps a frame when its cycle drains
-    /// it (age 0 that cycle), so on the real arm only a stale reading is carried. `false`:
-    /// subtracted as they are.
+    /// reports its configured latencies; the SocketCAN HAL dates a drive's position at the SYNC
+    /// that sampled it and an SPI reading as it is read. `false`: subtracted as they are.
     #[serde(default = "default_align_reading_ages")]
     align_reading_ages: bool,
     /// Where the compliance is: `element` (an elastic element between motor and output, the
