@@ -127,6 +127,17 @@ impl CanBus {
         }
     }
 
+    /// Sends a SYNC at `now_s` [s since the HAL started], with the next counter value when the
+    /// bus counts them (`sync_counter_overflow` above 1), and notes when it went out.
+    pub(crate) fn sync(&mut self, now_s: f64) {
+        let counter = (self.sync_overflow > 1).then(|| {
+            self.sync_counter = if self.sync_counter >= self.sync_overflow { 1 } else { self.sync_counter + 1 };
+            self.sync_counter
+        });
+        self.last_sync_s = Some(now_s);
+        self.send(&co::sync(counter));
+    }
+
     /// Blocking SDO write with a timeout (start-up only).
     pub(crate) fn sdo_write(&mut self, d: usize, index: u16, sub: u8, value: &[u8], timeout: Duration) -> Result<(), HalSetupError> {
         let req = co::sdo_write(self.drives[d].node, index, sub, value);

@@ -255,12 +255,7 @@ impl Hal for HardwareHal {
                 let target = d.target_counts.unwrap_or(0);
                 bus.send(&co::rpdo1(node, controlword, target));
             }
-            let counter = (bus.sync_overflow > 1).then(|| {
-                bus.sync_counter = if bus.sync_counter >= bus.sync_overflow { 1 } else { bus.sync_counter + 1 };
-                bus.sync_counter
-            });
-            bus.last_sync_s = Some(self.t0.elapsed().as_secs_f64());
-            bus.send(&co::sync(counter));
+            bus.sync(self.t0.elapsed().as_secs_f64());
             base += bus.drives.len();
         }
         Ok(())
@@ -350,12 +345,7 @@ impl HardwareHal {
                     let (node, target) = (bus.drives[i].node, bus.drives[i].target_counts.unwrap_or(0));
                     bus.send(&co::rpdo1(node, cw, target));
                 }
-                let counter = (bus.sync_overflow > 1).then(|| {
-                    bus.sync_counter = if bus.sync_counter >= bus.sync_overflow { 1 } else { bus.sync_counter + 1 };
-                    bus.sync_counter
-                });
-                bus.last_sync_s = Some(self.t0.elapsed().as_secs_f64());
-                bus.send(&co::sync(counter));
+                bus.sync(self.t0.elapsed().as_secs_f64());
             }
             bus.send(&co::heartbeat(self.host_node_id, co::nmt_state::OPERATIONAL));
         }
