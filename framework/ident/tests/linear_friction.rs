@@ -54,21 +54,30 @@ fn a_friction_that_grows_with_the_rate_is_named_viscous_not_absorbed_by_the_arct
 /// the held-out part); 400 Nm/rad, eq. 3.5 friction `k_a atan(40 v)`, a viscous friction `b`;
 /// 14-bit deflection, 0.2 Nm noise (drawn from `seed`), 1 kHz.
 fn faster_at_the_end(k_a: f64, b: f64, seed: u64) -> jointctl_ident::csv::Data {
-    use std::f64::consts::{PI, TAU};
-    let (rate, n, k) = (1000.0, 30_000, 400.0);
-    let q = TAU / 16384.0;
-    let hann = |t: f64, a: f64, b: f64| (PI * ((t - a) / (b - a)).clamp(0.0, 1.0)).sin().powi(2);
+    use std::f64::consts::TAU;
     let x = |t: f64| if t < 21.0 { 0.03 * hann(t, 3.0, 21.0) * (TAU * 0.2 * (t - 3.0)).sin() } else { 0.027 * hann(t, 21.0, 30.0) * (TAU * 1.3 * (t - 21.0)).sin() };
-    let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d ^ seed);
-    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
+    sampled(1000.0, 30_000, x, |x, v| 400.0 * x + k_a * (40.0 * v).atan() + b * v, 0.2, 0x2545_f491_4f6c_dd1d ^ seed)
+}
+
+/// `sin^2` of the share of `[a, b]` that `t` has covered: a Hann envelope over that span.
+fn hann(t: f64, a: f64, b: f64) -> f64 {
+    (std::f64::consts::PI * ((t - a) / (b - a)).clamp(0.0, 1.0)).sin().powi(2)
+}
+
+/// `n` samples at `rate` [Hz] of the deflection `x(t)` [rad] (14-bit) and the torque
+/// `torque(x, v)` [Nm] (`v` its rate) plus `noise` [Nm] of normal noise drawn from `seed`.
+fn sampled(rate: f64, n: usize, x: impl Fn(f64) -> f64, torque: impl Fn(f64, f64) -> f64, noise: f64, seed: u64) -> jointctl_ident::csv::Data {
+    let q = std::f64::consts::TAU / 16384.0;
+    let mut rng = jointctl_test_support::XorShift64::new(seed);
+    let (mut t_s, mut deflection, mut tau) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..n {
         let t = i as f64 / rate;
         let v = (x(t + 1e-6) - x(t - 1e-6)) / 2e-6;
         t_s.push(t);
         deflection.push((x(t) / q).round() * q);
-        torque.push(k * x(t) + k_a * (40.0 * v).atan() + b * v + 0.2 * rng.normal());
+        tau.push(torque(x(t), v) + noise * rng.normal());
     }
-    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, tau)
 }
 
 #[test]
@@ -108,24 +117,12 @@ fn a_viscous_friction_the_training_part_cannot_tell_from_the_arctan_is_decided_o
 /// A long record whose training part speeds up near its end: 2 kHz for 46 s (92 000 samples, the
 /// training part's 64 400 more than the fits' 50 000); a 0.2 Hz sine of 0.025 rad under a Hann
 /// envelope until 20 s (peak rate about 0.03 rad/s), then a 1 Hz sine of 0.025 rad under its own
-/// (about 0.16 rad/s at its widest, 33 s) from 20 s to the end; 90 Nm/rad, eq. 3.5 friction `0.07 atan(60 v)`, a
-/// viscous friction `b`; 14-bit deflection, 0.1 Nm noise (drawn from `seed`).
+/// (about 0.16 rad/s at its widest, 33 s) from 20 s to the end; 90 Nm/rad, eq. 3.5 friction
+/// `0.07 atan(60 v)`, a viscous friction `b`; 14-bit deflection, 0.1 Nm noise (drawn from `seed`).
 fn faster_late_in_a_long_record(b: f64, seed: u64) -> jointctl_ident::csv::Data {
-    use std::f64::consts::{PI, TAU};
-    let (rate, n, k) = (2000.0, 92_000, 90.0);
-    let q = TAU / 16384.0;
-    let hann = |t: f64, a: f64, b: f64| (PI * ((t - a) / (b - a)).clamp(0.0, 1.0)).sin().powi(2);
+    use std::f64::consts::TAU;
     let x = |t: f64| if t < 20.0 { 0.025 * hann(t, 0.0, 20.0) * (TAU * 0.2 * t).sin() } else { 0.025 * hann(t, 20.0, 46.0) * (TAU * 1.0 * (t - 20.0)).sin() };
-    let mut rng = jointctl_test_support::XorShift64::new(0x9e37_79b9_7f4a_7c15 ^ seed);
-    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
-    for i in 0..n {
-        let t = i as f64 / rate;
-        let v = (x(t + 1e-6) - x(t - 1e-6)) / 2e-6;
-        t_s.push(t);
-        deflection.push((x(t) / q).round() * q);
-        torque.push(k * x(t) + 0.07 * (60.0 * v).atan() + b * v + 0.1 * rng.normal());
-    }
-    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
+    sampled(2000.0, 92_000, x, |x, v| 90.0 * x + 0.07 * (60.0 * v).atan() + b * v, 0.1, 0x9e37_79b9_7f4a_7c15 ^ seed)
 }
 
 #[test]

@@ -188,8 +188,9 @@ struct ColumnEntries {
 }
 
 impl ColumnCache {
-    /// Assumption: 16 MiB, ten columns of a training part of 200 000 samples (the fits take at most 50 000); enough
-    /// for the baseline and the chosen causes of a search, small beside the data of a long record.
+    /// Assumption: 16 MiB, ten columns of a training part of 200 000 samples (the fits take at
+    /// most 50 000); enough for the baseline and the chosen causes of a search, small beside the
+    /// data of a long record.
     const BUDGET_BYTES: usize = 16 << 20;
 
     fn get_or(&self, key: ColumnKey, compute: impl FnOnce() -> Vec<Vec<f64>>) -> Columns {

@@ -199,9 +199,10 @@ pub(crate) enum Addition {
 }
 
 /// `term` added to `spec` and polished with it (the polish's first round looks over every
-/// term's whole grid), judged on the held-out part as every proposal is. For an alternative the training part cannot
-/// tell from a term of the model (eq. 3.5's arctan nearly straight over the training part's
-/// rates, against a viscous friction), the held-out part may move faster and tell them apart.
+/// term's whole grid), judged on the held-out part as every proposal is. For an alternative the
+/// training part cannot tell from a term of the model (eq. 3.5's arctan nearly straight over the
+/// training part's rates, against a viscous friction), the held-out part may move faster and
+/// tell them apart.
 /// Whether it then earns its place given the others is [`prune`]'s to say.
 pub(crate) fn held_out_addition(model: &Model, spec: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Addition {
     let Some(reduced) = held_out_errors(model, spec, p) else { return Addition::NoFit };
@@ -374,9 +375,9 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
 /// more leaves the model, one at a time, until each is (at the end of the selection, and again
 /// when a cause joins after it). A cause's place is judged against the model without it and
 /// without the causes that turn physically impossible when it leaves, and those leave with it:
-/// blind seed 8's 052 (a 3.2 ms lag: a 64 Hz filter and a 0.7 ms delay, 20 Hz bins) named the delay and a
-/// viscous friction, the delay left as redundant, and the viscous friction stayed at -0.13 Nm
-/// s/rad, the delay's lag under another name.
+/// blind seed 8's 052 (a 3.2 ms lag: a 64 Hz filter and a 0.7 ms delay, 20 Hz bins) named the
+/// delay and a viscous friction, the delay left as redundant, and the viscous friction stayed at
+/// -0.13 Nm s/rad, the delay's lag under another name.
 pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn Fn(usize) -> String + Sync)) {
     while let Some(full) = held_out_errors(model, &s.spec, p) {
         // The models without one cause each, fitted side by side.
