@@ -29,12 +29,17 @@ pub(crate) mod least_squares;
 pub mod experiment;
 mod friction_confound;
 mod numeric;
+mod parallel;
 pub use numeric::format_value;
 pub mod prepare;
 mod search;
 mod select;
 pub mod significance;
 mod spectrum;
+mod unexplained;
+
+pub use unexplained::{BEYOND_TRAINING_RANGE, BEYOND_TRAINING_RATE, FAR_ABOVE_NOISE, Unexplained};
+use unexplained::unexplained;
 
 pub use baseline::{BaselineModel, NO_SPRING_SHARE};
 use baseline::reads_as_friction;
@@ -108,48 +113,6 @@ fn confound_rule(named_bic: f64, other_bic: f64, before_bic: f64, named: &str) -
         )
     }
 }
-
-/// What the extended model leaves unexplained on the held-out part.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct Unexplained {
-    /// The torque's noise floor, measured on the data [Nm] (see [`prepare::noise_floor`]).
-    pub noise_floor_nm: f64,
-    /// Held-out RMSE of the extended model over the floor [-].
-    pub times_noise: f64,
-    /// The RMS of what is left above the floor, `sqrt(max(MSE - floor^2, 0))` [Nm].
-    pub excess_nm: f64,
-    /// Share of the held-out mean squared error above the floor [-].
-    pub share: f64,
-    /// Held-out RMSE of the extended model by thirds of |deflection| (small, middle, large) [Nm].
-    pub by_deflection_nm: [f64; 3],
-    /// ... by thirds of |deflection rate| (slow, middle, fast) [Nm].
-    pub by_rate_nm: [f64; 3],
-    /// ... by quarters of the held-out time [Nm].
-    pub by_time_nm: [f64; 4],
-    /// How far the held-out part reaches beyond the training part: its RMS deflection rate and
-    /// its deflection range, each over the training part's [-]. Above [`BEYOND_TRAINING_RATE`]
-    /// or [`BEYOND_TRAINING_RANGE`] the summary says that the model is judged where it was not
-    /// fitted.
-    pub held_out_reach: [f64; 2],
-    /// One sentence: what is left, and where.
-    pub summary: String,
-}
-
-/// The ratio of the held-out part's RMS rate to the training part's above which the report says
-/// that the causes are judged on an extrapolation (an assumption: random and multi-sine
-/// excitations differ between their parts by up to about three times; a sweep that ends far
-/// faster than it began does not fit a rate-driven effect where it shows: the blind generator's
-/// 052 held out 22 times the training's RMS rate, and its 13 ms delay, plain at that speed,
-/// left nothing to fit in training).
-pub const BEYOND_TRAINING_RATE: f64 = 5.0;
-
-/// ... and of the deflection ranges (an assumption: a curvature fitted over one range and
-/// judged over twice that range is an extrapolation of the spring's curve).
-pub const BEYOND_TRAINING_RANGE: f64 = 2.0;
-
-/// The held-out RMSE above which a report does not say the model explains the data: this many
-/// times the noise floor (issue 36's bound for "far above the noise").
-pub const FAR_ABOVE_NOISE: f64 = 10.0;
 
 /// A record without a spring: what the baseline's friction took on for it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -538,62 +501,4 @@ fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: &[String], 
         }
     }
     out
-}
-
-/// What the extended model leaves on the held-out part (`rows` as in [`Report::held_out`],
-/// `errors` its squared errors) against the noise floor.
-fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_cause: bool, held_out_reach: [f64; 2], held_out: prepare::HeldOut) -> Unexplained {
-    let n = rows.len().min(errors.len());
-    let mse = errors[..n].iter().sum::<f64>() / n.max(1) as f64;
-    let rmse = mse.sqrt();
-    let floor2 = floor_nm * floor_nm;
-    let excess_nm = (mse - floor2).max(0.0).sqrt();
-    let share = if mse > 0.0 { (mse - floor2).max(0.0) / mse } else { 0.0 };
-    let times_noise = if floor_nm > 0.0 { rmse / floor_nm } else { f64::INFINITY };
-    // RMSE by thirds of a quantity's magnitude.
-    let by = |key: &dyn Fn(&[f64; 6]) -> f64| -> [f64; 3] {
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|a, b| key(&rows[*a]).total_cmp(&key(&rows[*b])));
-        let mut out = [0.0; 3];
-        for (k, o) in out.iter_mut().enumerate() {
-            let part = &order[k * n / 3..(k + 1) * n / 3];
-            *o = (part.iter().map(|i| errors[*i]).sum::<f64>() / part.len().max(1) as f64).sqrt();
-        }
-        out
-    };
-    let by_deflection_nm = by(&|r| r[1].abs());
-    let by_rate_nm = by(&|r| r[2].abs());
-    let mut by_time_nm = [0.0; 4];
-    for (k, o) in by_time_nm.iter_mut().enumerate() {
-        let part = &errors[k * n / 4..(k + 1) * n / 4];
-        *o = (part.iter().sum::<f64>() / part.len().max(1) as f64).sqrt();
-    }
-    let largest = |v: &[f64], names: &[&str]| -> String {
-        let i = (0..v.len()).max_by(|a, b| v[*a].total_cmp(&v[*b])).unwrap_or(0);
-        names[i].to_string()
-    };
-    let mut summary = if times_noise <= FAR_ABOVE_NOISE {
-        format!("held-out RMSE {rmse:.4} Nm, {times_noise:.1} times the noise floor ({floor_nm:.4} Nm)")
-    } else {
-        format!(
-            "unexplained: {excess_nm:.4} Nm above the noise floor ({floor_nm:.4} Nm), {times_noise:.0} times the noise, {:.0} % of the held-out error; {}; largest at {} deflection, at {} rate and in the {} quarter of the held-out time",
-            100.0 * share,
-            if no_cause { "no listed cause explains it" } else { "the named causes do not explain it" },
-            largest(&by_deflection_nm, &["small", "middle", "large"]),
-            largest(&by_rate_nm, &["slow", "middle", "fast"]),
-            largest(&by_time_nm, &["first", "second", "third", "last"])
-        )
-    };
-    if held_out_reach[0] > BEYOND_TRAINING_RATE || held_out_reach[1] > BEYOND_TRAINING_RANGE {
-        summary += &format!(
-            "; the held-out part moves {:.1} times as fast (RMS rate) and spans {:.1} times the deflection range of the training part: the causes are judged where the model was not fitted (an excitation that grows over the record; {})",
-            held_out_reach[0],
-            held_out_reach[1],
-            match held_out {
-                prepare::HeldOut::Last => "repeat it, run it in both orders, or hold out a part like the rest: `--held-out like-the-rest`",
-                prepare::HeldOut::LikeTheRest => "no window of the record moves like the rest: repeat it, or run it in both orders",
-            }
-        );
-    }
-    Unexplained { noise_floor_nm: floor_nm, times_noise, excess_nm, share, by_deflection_nm, by_rate_nm, by_time_nm, held_out_reach, summary }
 }

@@ -7,6 +7,7 @@
 
 use std::sync::Arc;
 
+use super::parallel::{cores, parallel_map};
 use super::causes::{FullRate, SearchContext};
 use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
@@ -129,37 +130,6 @@ pub(crate) fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> Judgement {
         predicted_cause_test(&r.residual_nm, &f.residual_nm, &diff)
     };
     judge(&r.errors, &f.errors, test, p.noise_floor_nm * p.noise_floor_nm)
-}
-
-/// The cores this process may use.
-fn cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
-}
-
-/// `f` of every item, in the items' order, spread over the cores: each worker takes the next
-/// item left, so put the costly ones first. A panic in `f` (a registered cause's bug) is
-/// passed on, not swallowed: a candidate silently lost would make a wrong report.
-pub(crate) fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = cores().min(items.len()).max(1);
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let (f, next) = (&f, &next);
-    let mut done: Vec<(usize, R)> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(move || {
-                    let mut mine = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        let Some(item) = items.get(i) else { return mine };
-                        mine.push((i, f(item)));
-                    }
-                })
-            })
-            .collect();
-        workers.into_iter().flat_map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))).collect()
-    });
-    done.sort_by_key(|(i, _)| *i);
-    done.into_iter().map(|(_, r)| r).collect()
 }
 
 /// What a polished proposal came to on the held-out part.

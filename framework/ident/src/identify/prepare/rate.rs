@@ -1,6 +1,8 @@
 //! The deflection rate: a local least-squares slope whose window follows the motion and
 //! narrows where the deflection bends faster than its noise allows.
 
+use super::super::parallel::{cores, parallel_map};
+
 /// The half-width of the velocity's window is this fraction of the local period of the motion:
 /// a least-squares slope over +-P/50 reads a sine's rate 0.16 % low (its gain is
 /// `3 (sin x - x cos x) / x^3`, `x = 2 pi / 50`).
@@ -123,9 +125,12 @@ fn adaptive_velocity(t: &[f64], d: &[f64], noise: DeflectionNoise, widest: &[usi
     let n = d.len();
     let (mut lo, mut hi) = (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]);
     let mut out = vec![0.0; n];
+    // A rung no narrower than every sample's widest window would be passed over at each
+    // sample: it is not computed (on a slow sine sampled fast, 5 of the 13).
+    let widest_of_all = widest.iter().copied().max().unwrap_or(0);
     // The ladder's rungs narrower than the widest allowed (`None`), then the widest itself. A
     // sample's intervals only narrow: once they no longer meet (`lo > hi`) its rate is chosen.
-    for rung in RATE_HALF_WIDTHS.iter().map(|h| Some(*h)).chain(std::iter::once(None)) {
+    for rung in RATE_HALF_WIDTHS.iter().filter(|h| **h < widest_of_all).map(|h| Some(*h)).chain(std::iter::once(None)) {
         each_window(t, d, |i| rung.unwrap_or(widest[i]), |i, Window { slope, spread, samples }| {
             if lo[i] > hi[i] || rung.is_some_and(|h| h >= widest[i]) {
                 return;
@@ -203,32 +208,54 @@ pub(super) fn coarsest_tick_rad(d: &[f64], starts: &[usize], resolution_rad: f64
     ticks.select_nth_unstable_by(at, f64::total_cmp).1.max(resolution_rad)
 }
 
-/// Samples [`adaptive_velocity`] works on at once, beside the windows' reach either side (an
-/// assumption: its intervals then take 1.5 MB, not 24 bytes a sample of the whole record).
+/// Samples [`adaptive_velocity`] works on at once on all the cores together, beside the windows'
+/// reach either side (an assumption: its intervals then take 1.5 MB, not 24 bytes a sample of the
+/// whole record).
 const RATE_BLOCK: usize = 1 << 16;
 
 /// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a
-/// gap. A long segment goes in blocks of [`RATE_BLOCK`] samples, each with the samples its
-/// windows reach on either side (the widest window's half-width), so that every window is the
-/// one the whole segment would give it.
+/// gap. A long segment goes in blocks of at most a core's share of [`RATE_BLOCK`], each with the samples
+/// its windows reach on either side (the widest window's half-width), so that every window is
+/// the one the whole segment would give it; the blocks are spread over the cores (a tenth of
+/// identify's time on a 100 000-sample record was this rate, on one core).
 pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise: DeflectionNoise, half: &[usize]) -> Vec<f64> {
-    let mut v = Vec::with_capacity(d.len());
+    // Each block: its samples and the samples its windows read.
+    let mut blocks: Vec<(std::ops::Range<usize>, std::ops::Range<usize>)> = Vec::new();
+    let cores = cores();
     for (k, &a) in starts.iter().enumerate() {
         let b = starts.get(k + 1).copied().unwrap_or(d.len());
         if b - a < 2 {
-            v.extend(std::iter::repeat_n(0.0, b - a));
+            blocks.push((a..b, a..b));
             continue;
         }
         let reach = half[a..b].iter().copied().max().unwrap_or(0).max(RATE_HALF_WIDTHS[RATE_HALF_WIDTHS.len() - 1]);
+        // A core's share of the segment and of the samples worked on at once, far beyond the
+        // windows' reach either way (the blocks' overlap).
+        let size = (b - a).div_ceil(cores).min(RATE_BLOCK / cores).max(16 * reach);
         let mut from = a;
         while from < b {
-            let to = (from + RATE_BLOCK).min(b);
-            let (lo, hi) = (from.saturating_sub(reach).max(a), (to + reach).min(b));
-            let rates = adaptive_velocity(&t[lo..hi], &d[lo..hi], noise, &half[lo..hi]);
-            v.extend_from_slice(&rates[from - lo..to - lo]);
+            let to = (from + size).min(b);
+            blocks.push((from..to, from.saturating_sub(reach).max(a)..(to + reach).min(b)));
             from = to;
         }
     }
+    // Each block writes its own slice of the rate (no second copy of the column: a 2-million-row
+    // record's peak memory is held to issue 13's 150 MB).
+    let mut v = vec![0.0; d.len()];
+    let mut rest = v.as_mut_slice();
+    let mut work = Vec::with_capacity(blocks.len());
+    for (own, read) in blocks {
+        let (mine, others) = rest.split_at_mut(own.len());
+        rest = others;
+        work.push((own, read, std::sync::Mutex::new(mine)));
+    }
+    parallel_map(&work, |(own, read, out)| {
+        if own.len() >= 2 {
+            let rates = adaptive_velocity(&t[read.clone()], &d[read.clone()], noise, &half[read.clone()]);
+            // Each slice is its block's alone: the lock is never contended.
+            out.lock().unwrap_or_else(|e| e.into_inner()).copy_from_slice(&rates[own.start - read.start..own.end - read.start]);
+        }
+    });
     v
 }
 
@@ -356,6 +383,27 @@ mod tests {
         let reversals = [0, 1000, 2000, 2050, 2100, 2150];
         let half = velocity_half_widths(2300, &reversals, 1000.0);
         assert_eq!((half[500], half[1500], half[2020], half[2120], half[2200]), (20, 20, 2, 2, 20));
+    }
+
+    #[test]
+    fn segments_shared_out_over_the_cores_read_the_rate_each_whole_segment_gives() {
+        // Three segments (gaps between them): a long one that is split into a block per core,
+        // a short one, and one of a single sample (no rate).
+        let q = std::f64::consts::TAU / 16384.0;
+        let mut t: Vec<f64> = (0..40_000).map(|i| i as f64 * 1e-3).collect();
+        t.extend((0..3000).map(|i| 100.0 + i as f64 * 1e-3));
+        t.push(200.0);
+        let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.002 * (17.0 * t).sin()) / q).round() * q).collect();
+        let starts = [0, 40_000, 43_000];
+        let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0);
+        let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
+        let shared = velocity_by_segment(&t, &d, &starts, noise, &half);
+        let mut whole = adaptive_velocity(&t[..40_000], &d[..40_000], noise, &half[..40_000]);
+        whole.extend(adaptive_velocity(&t[40_000..43_000], &d[40_000..43_000], noise, &half[40_000..43_000]));
+        whole.push(0.0);
+        assert_eq!(shared.len(), whole.len());
+        let worst = whole.iter().zip(&shared).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-9, "{worst}");
     }
 
     #[test]
