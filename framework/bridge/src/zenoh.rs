@@ -152,7 +152,16 @@ fn listening_session(endpoints: &[String], users_file: Option<&Path>) -> Result<
     zenoh::open(config).wait().map_err(|e| session_error(e.to_string()))
 }
 
-/// Checks the users file as Zenoh will read it, and that only its owner may read it.
+/// The fewest characters a password of the users file may have. Zenoh's user/password handshake
+/// has no hook where failed logins could be slowed down or counted (Zenoh 1.x), so a peer may
+/// guess as fast as it can open links; the password must be too long to guess instead. Sixteen
+/// characters of base64 (`head -c 12 /dev/urandom | base64`) are 96 bits: at a million guesses
+/// a second, 10^15 years on average (an assumption on the guessing rate, far above the tens a
+/// second a `cmd` per guess reaches).
+pub const MIN_PASSWORD_CHARS: usize = 16;
+
+/// Checks the users file as Zenoh will read it, that only its owner may read it, and that no
+/// password is shorter than [`MIN_PASSWORD_CHARS`].
 fn check_users_file(file: &Path) -> Result<(), ZenohBridgeError> {
     use std::os::unix::fs::PermissionsExt;
     let bad = |reason: String| ZenohBridgeError::UsersFile { file: file.to_path_buf(), reason };
@@ -168,7 +177,17 @@ fn check_users_file(file: &Path) -> Result<(), ZenohBridgeError> {
             continue;
         }
         match line.split_once(':') {
-            Some((user, password)) if !user.is_empty() && !password.is_empty() => users += 1,
+            Some((user, password)) if !user.is_empty() && !password.is_empty() => {
+                // Its length, never the password itself: the error goes to logs and terminals.
+                let chars = password.chars().count();
+                if chars < MIN_PASSWORD_CHARS {
+                    return Err(bad(format!(
+                        "line {}: the password of `{user}` has {chars} characters, at least {MIN_PASSWORD_CHARS} are needed: Zenoh cannot slow down failed logins, so a password must be too long to guess (`head -c 12 /dev/urandom | base64` makes one)",
+                        i + 1
+                    )));
+                }
+                users += 1;
+            }
             _ => return Err(bad(format!("line {}: not `user:password`", i + 1))),
         }
     }

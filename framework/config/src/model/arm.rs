@@ -245,7 +245,8 @@ pub struct ZenohCommandsConfig {
     /// The Zenoh endpoint it listens on, e.g. `tcp/0.0.0.0:7448`.
     pub listen: String,
     /// Zenoh's user/password dictionary, relative to this file: one `user:password` per line.
-    /// Refused when users other than its owner may read it.
+    /// Refused when users other than its owner may read it, or when a password is shorter than
+    /// 16 characters (Zenoh cannot slow down failed logins: a password must be too long to guess).
     pub users_file: PathBuf,
     /// Commands a second the bridge forwards to the runtime, 0.1 to 1000; those beyond are
     /// refused with the reason, not forwarded (a token bucket holding at most a second's worth,
