@@ -163,12 +163,15 @@ fn commands_that_would_never_run_are_refused_and_negative_numbers_parse() {
         (&["torque", "q2", "--step", "1", "--delay", "-1"][..], 2, "must be in [0, 1e9] s, got -1"),
         (&["torque", "q2", "--sine", "5", "--freq", "-1"][..], 1, "frequency_hz must be >= 0, got -1"),
         (&["impedance", "q4", "--k", "-1", "--d", "1"][..], 1, "K and D must be >= 0, got K = -1"),
+        (&["impedance", "q4", "--k", "1", "--d", "-1"][..], 1, "K and D must be >= 0, got K = 1, D = -1"),
+        (&["stiffness", "q6", "-1"][..], 1, "the stiffness must be > 0 Nm/rad, got -1"),
         (&["--timeout", "-1", "hold", "q2"][..], 2, "must be in [0, 1e9] s, got -1"),
         // Issue 40, finding 7: a 1 GHz sine was accepted, a 1e308 Nm step refused with a
         // 309-digit number cut before the reason.
         (&["torque", "q2", "--sine", "5", "--freq", "1e9"][..], 1, "above the loop's Nyquist frequency"),
         (&["torque", "q2", "--step", "1e308"][..], 1, "the reference reaches 1.000e308 Nm, beyond q2's torque limit"),
         (&["torque", "q2", "--step", "1", "--delay", "1e5"][..], 1, "the start delay must be in [0, 86400] s, got 100000 s"),
+        (&["torque", "q2", "--step", "1", "--delay", "1e300"][..], 2, "must be in [0, 1e9] s, got 1.000e300"),
         (&["torque", "q2", "--step", "-5"][..], 0, "accepted: q2: torque"),
         (&["torque", "q2", "--sine", "-2", "--freq", "0.5", "--offset", "-1"][..], 0, "accepted"),
         (&["stiffness", "q6", "2.5"][..], 0, "accepted"),

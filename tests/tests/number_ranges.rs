@@ -14,6 +14,9 @@ fn durations_and_rates_far_out_of_range_are_refused_with_the_range_not_a_panic()
         (vec!["record", "--out", out, "--timeout", "1e300"], "must be in [0, 1e9] s, got 1.000e300"),
         (vec!["bridge", "foxglove", "--timeout", "1e300"], "must be in [0, 1e9] s, got 1.000e300"),
         (vec!["inspect", "echo", "--rate", "1e-300", "--timeout", "0.2"], "must be >= 1e-9 Hz, got 1.000e-300"),
+        // Issue 40, finding 10: `fit --smooth 1e9` wrote a characteristic of -23 Nm/rad.
+        (vec!["fit", "--smooth", "1000000000", "data.csv"], "1000000000 is not in 1..=1000"),
+        (vec!["fit", "--smooth", "0", "data.csv"], "0 is not in 1..=1000"),
     ] {
         let o = Command::new(jointctl()).args(&args).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);

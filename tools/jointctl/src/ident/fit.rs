@@ -17,10 +17,12 @@ pub struct FitArgs {
     /// The joint to take from a recording (.mcap): its deflection and F/T torque.
     #[arg(long)]
     joint: Option<String>,
-    /// Moving-average window [samples]; default the thesis': 8 for a shoulder characterisation
-    /// (by pivot), 5 for the wrist's (by pivot and direction), none otherwise.
-    #[arg(long)]
-    smooth: Option<usize>,
+    /// Moving-average window [samples], 1 to 1000; default the thesis': 8 for a shoulder
+    /// characterisation (by pivot), 5 for the wrist's (by pivot and direction), none otherwise.
+    /// (1000 is an assumption: a second of a 1 kHz log, far beyond the thesis' windows; a window
+    /// of 1e9 samples smoothed every setting to one value.)
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    smooth: Option<u64>,
     /// Polynomial order 1-6, or `auto` (the lowest whose curve runs through the middle of the
     /// hysteresis band and the dead zone as well as higher orders, section 3.3.2).
     #[arg(long, default_value = "auto")]
@@ -55,7 +57,7 @@ pub fn run_fit(a: FitArgs) -> ExitCode {
             Err(_) => return crate::fail(format!("--order must be 1-6 or `auto`, got `{s}`")),
         },
     };
-    let smoothing_window = a.smooth.unwrap_or_else(|| jointctl_ident::fit::thesis_smoothing(&data)).max(1);
+    let smoothing_window = a.smooth.map_or_else(|| jointctl_ident::fit::thesis_smoothing(&data), |w| w as usize).max(1);
     let opts = FitOptions { smoothing_window, order, branches: a.branches, through_zero: !a.no_through_zero };
     let result = match fit(&data, &opts) {
         Ok(r) => r,
