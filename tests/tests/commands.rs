@@ -199,6 +199,11 @@ fn a_faulted_joint_refuses_commands() {
     let (code, text) = cmd(&arm, &["position", "b", "0.1"]);
     assert_eq!(code, 1, "{text}");
     assert!(text.contains("joint `b` is faulted (code 42: reported by its plugin)"), "{text}");
+    // Issue 40, finding 17: `enable` on the faulted joint answered "accepted: b enabled" and
+    // the joint stayed faulted.
+    let (code, text) = cmd(&arm, &["enable", "b"]);
+    assert_eq!(code, 1, "{text}");
+    assert!(text.contains("faulted") && !text.contains("accepted"), "{text}");
     assert_eq!(cmd(&arm, &["position", "a", "0.1"]).0, 0);
     stop(&mut run);
 }
