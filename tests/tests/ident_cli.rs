@@ -408,3 +408,35 @@ fn data_with_too_little_excitation_is_an_error_that_says_so() {
     assert!(!out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
     assert!(err.contains("too little excitation"), "{err}");
 }
+
+/// Findings (issue 40, 9 and 10): `fit --out` on a constant deflection wrote a characteristic
+/// and exited 0; a constant torque gave a polynomial of order 6; `identify` gave another reason.
+/// Pass, through the command line: each refused with why, and no file written.
+#[test]
+fn a_record_that_cannot_determine_a_characteristic_writes_none_and_says_why() {
+    let dir = scratch("fit-constant");
+    let still = dir.join("still.csv");
+    let mut text = String::from("t,deflection,torque\n");
+    for i in 0..2000 {
+        text += &format!("{},0.01,{}\n", i as f64 * 0.01, 1.1378 + 0.001 * (i % 7) as f64);
+    }
+    std::fs::write(&still, text).unwrap();
+    let flat = dir.join("constant_torque.csv");
+    let mut text = String::from("t,deflection,torque\n");
+    for i in 0..2000 {
+        text += &format!("{},{},1.5\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.02).sin());
+    }
+    std::fs::write(&flat, text).unwrap();
+    for (csv, wants) in [(&still, "the deflection takes 1 distinct value(s)"), (&flat, "the torque takes 1 distinct value(s)")] {
+        let written = dir.join("characteristic.yaml");
+        let out = Command::new(jointctl()).arg("fit").arg(csv).arg("--out").arg(&written).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(wants), "{err}");
+        assert!(!written.exists(), "a characteristic was written from {}", csv.display());
+    }
+    let out = Command::new(jointctl()).arg("identify").arg("--data").arg(&flat).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("the torque is 1.5 Nm in every sample"), "{err}");
+}
