@@ -293,7 +293,8 @@ fn sim_replay_reports_what_the_simulation_gets_wrong_per_channel() {
 /// recovered 205 of ~260 cycles. Now every reader takes the file up to its last complete chunk
 /// and says once what was lost. Cut here twice: by killing the recorder (its moment set by the
 /// machine's load) and at random byte offsets of a complete recording (what a kill leaves: the
-/// recorder writes its file front to back).
+/// recorder writes its file front to back). `identify` on each cut uses the samples the reader
+/// gives, or exits 1 naming the file and why (too few samples, nothing before the first chunk).
 #[test]
 fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
     let arm = arm_name("record-killed");
@@ -309,6 +310,17 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
     record.kill().unwrap();
     record.wait().unwrap();
     stop(&mut run);
+    // `identify` reads it too, alone and with the arm description (which also reads the
+    // attachment the cut left): it says once that the file was cut and identifies on the rest.
+    let mut identified = Vec::new();
+    for with_config in [&[][..], &["--config".as_ref(), config.as_os_str()][..]] {
+        let out = Command::new(jointctl()).args(["identify", "--joint", "q2", "--json", "--data"]).arg(&killed).args(with_config).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "identify {with_config:?}: {err}");
+        assert_eq!(err.matches("the recording was cut short").count(), 1, "one warning: {err}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        identified.push(v["samples"].as_u64().unwrap() as usize);
+    }
     let replay = Command::new(jointctl()).arg("replay").arg(&killed).arg("--config").arg(&config).arg("--json").output().unwrap();
     let err = String::from_utf8_lossy(&replay.stderr);
     assert!(replay.status.success(), "{err}");
@@ -317,6 +329,8 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
     assert!(q2.t_s.len() >= 80, "at least two of the six seconds at 40 Hz are read: {}", q2.t_s.len());
     let fit = Command::new(jointctl()).arg("fit").arg(&killed).args(["--joint", "q2", "--order", "1"]).output().unwrap();
     assert!(fit.status.success(), "{}", String::from_utf8_lossy(&fit.stderr));
+    let measured = jointctl_record::reader::measured(&killed, "q2").unwrap().t_s.len();
+    assert!(measured >= 80 && identified.iter().all(|n| *n == measured), "identify used {identified:?} samples, the reader gives {measured}");
 
     let (file, _, _) = record_sine("record-cut");
     let bytes = std::fs::read(&file).unwrap();
@@ -326,10 +340,26 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
         let at = (bytes.len() as f64 * rng.range(0.3, 0.999)) as usize;
         let cut = scratch("record-cut-out").join(format!("cut{k}.mcap"));
         std::fs::write(&cut, &bytes[..at]).unwrap();
+        // `identify` on the same cut: the part the reader gives, or exit 1 naming the file and
+        // why (too few samples, nothing before the first complete chunk); never "not a readable
+        // MCAP file", never a panic, and always once that the file was cut.
+        let ident = Command::new(jointctl()).args(["identify", "--joint", "q2", "--json", "--data"]).arg(&cut).output().unwrap();
+        let ident_err = String::from_utf8_lossy(&ident.stderr);
+        assert!(matches!(ident.status.code(), Some(0 | 1)) && !ident_err.contains("not a readable MCAP"), "cut at byte {at}: {:?} {ident_err}", ident.status);
+        assert!(ident.status.success() || ident_err.contains(&format!("error: {}", cut.display())), "cut at byte {at}: {ident_err}");
+        assert_eq!(ident_err.matches("the recording was cut short").count(), 1, "cut at byte {at}: {ident_err}");
         match jointctl_record::reader::joint_series(&cut, "q2") {
             Ok(s) => assert!(s.t_s.len() <= whole && s.t_s.windows(2).all(|w| w[1] > w[0]), "cut at byte {at} of {}", bytes.len()),
             // Cut before the first chunk was complete: said so, not "not a readable MCAP file".
             Err(e) => assert!(e.to_string().contains("before its first complete chunk"), "cut at byte {at}: {e}"),
+        }
+        match jointctl_record::reader::measured(&cut, "q2") {
+            Ok(m) if ident.status.success() => {
+                let v: serde_json::Value = serde_json::from_slice(&ident.stdout).expect("one JSON object");
+                assert_eq!(v["samples"].as_u64(), Some(m.t_s.len() as u64), "cut at byte {at}");
+            }
+            Ok(_) => {}
+            Err(_) => assert!(!ident.status.success() && ident_err.contains("before its first complete chunk"), "cut at byte {at}: {ident_err}"),
         }
         let replay = Command::new(jointctl()).arg("replay").arg(&cut).arg("--json").output().unwrap();
         let err = String::from_utf8_lossy(&replay.stderr);

@@ -57,6 +57,32 @@ fn check_refuses_a_device_or_a_fifo_named_as_a_plugin_include_or_urdf_at_once() 
     std::fs::remove_file(&pipe).unwrap();
 }
 
+/// Finding (issue 40, 2): a FIFO named as a joint's `params.include`, a plugin's path or the
+/// URDF made `run` block for ever (the open waited for a writer that never came), and `run`
+/// ignored SIGINT meanwhile, so only SIGKILL ended it. `run` loads the same files as `check`,
+/// through the same refusal. Pass: `run --duration 2` on each exits non-zero within seconds, and
+/// its error names the FIFO and says it is not a regular file.
+#[test]
+fn run_refuses_a_fifo_named_as_a_plugin_include_or_urdf_at_once() {
+    let dir = scratch("user_files_run");
+    let pipe = dir.join("pipe");
+    fifo(&pipe);
+    let pipe_s = pipe.to_str().unwrap().to_string();
+    let cases: Vec<(&str, Edit)> = vec![
+        ("include FIFO", Edit::Set("joints[q4].params.include", pipe_s.clone().into())),
+        ("plugin FIFO", Edit::Set("joints[q1].plugin", serde_yaml::from_str(&format!("{{name: rigid, path: {pipe_s}}}")).unwrap())),
+        ("URDF FIFO", Edit::Set("kinematics.urdf", pipe_s.clone().into())),
+    ];
+    for (i, (label, edit)) in cases.into_iter().enumerate() {
+        let yaml = sherpa_with(&format!("user_files_run_{i}"), &format!("ufr{i}"), &[edit]);
+        let (ok, err, secs) = run_with_deadline(&["run".as_ref(), yaml.as_os_str(), "--duration".as_ref(), "2".as_ref()], 20);
+        assert!(!ok, "{label}: run did not fail: {err}");
+        assert!(err.contains(&pipe_s) && err.contains("FIFO, not a regular file"), "{label}: {err}");
+        assert!(secs < 10.0, "{label}: {secs} s");
+    }
+    std::fs::remove_file(&pipe).unwrap();
+}
+
 #[test]
 fn fit_and_identify_refuse_a_device_or_a_fifo_as_data_at_once() {
     let dir = scratch("user_files_data");

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use jointctl_tests::{jointctl, stop};
 
-use super::{spawn_run, write_rig};
+use super::{spawn_run, stderr_of, write_rig};
 
 /// Finding: with `hal: socketcan`, a second runtime built and activated the HAL (an NMT
 /// broadcast to every drive) before it found the arm already running. Pass: a second runtime of
@@ -93,5 +93,34 @@ fn a_second_runtime_of_the_same_arm_is_refused_whatever_its_domain() {
     assert!(err.contains(&format!("arm `{arm}` is already running on this machine (process {})", first.id())), "{err}");
     let alone = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
     jointctl_tests::forget_test_domain(&domain);
+    assert!(alone.status.success(), "{}", String::from_utf8_lossy(&alone.stderr));
+}
+
+/// Issue 40, finding 16 (the root half): the one-runtime lock held per domain and root, so the
+/// same arm with another `ipc.root` ran beside the first. Pass: while a runtime of the arm runs,
+/// a runtime of the same arm in the same domain but another, private `ipc.root` is refused,
+/// naming the arm and the holder, and the first runs on until it is stopped; once it has
+/// stopped, the second runs.
+#[test]
+fn a_second_runtime_of_the_same_arm_is_refused_whatever_its_ipc_root() {
+    use std::os::unix::fs::PermissionsExt as _;
+    let (arm, yaml) = write_rig("arm-root-lock", 100.0);
+    let mut first = spawn_run(&yaml, &["--duration", "20"]);
+    std::thread::sleep(Duration::from_millis(700));
+    let root = yaml.with_file_name("private-root");
+    std::fs::create_dir_all(&root).unwrap();
+    std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o700)).unwrap();
+    let other = yaml.with_file_name("other-root.yaml");
+    std::fs::write(&other, format!("{}\nipc:\n  root: {}\n", std::fs::read_to_string(&yaml).unwrap(), root.display())).unwrap();
+    let second = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
+    let first_ran_on = first.try_wait().unwrap().is_none();
+    stop(&mut first);
+    let log = stderr_of(&mut first);
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("arm `{arm}` is already running on this machine (process {})", first.id())), "{err}");
+    assert!(first_ran_on, "the first runtime ended when the second was refused: {log}");
+    assert!(log.contains("loop stopped, joints held") && log.contains("signal=SIGINT"), "{log}");
+    let alone = Command::new(jointctl()).arg("run").arg(&other).args(["--cycles", "3"]).output().unwrap();
     assert!(alone.status.success(), "{}", String::from_utf8_lossy(&alone.stderr));
 }

@@ -72,7 +72,7 @@ pub enum ReadError {
         source: mcap::McapError,
     },
     /// A recording cut short before its first chunk was complete: no message is left to read.
-    #[error("{}: the recording was cut short after {bytes} bytes, before its first complete chunk: no message can be read ({source})", .file.display())]
+    #[error("{}: the recording was cut short after {bytes} bytes, before its first complete chunk, so no message can be read: {source}", .file.display())]
     CutBeforeData {
         /// The file.
         file: PathBuf,
