@@ -358,7 +358,8 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
                 let v: serde_json::Value = serde_json::from_slice(&ident.stdout).expect("one JSON object");
                 assert_eq!(v["samples"].as_u64(), Some(m.t_s.len() as u64), "cut at byte {at}");
             }
-            Ok(_) => {}
+            // The reader gave samples and identify refused them: too few, or too little motion.
+            Ok(_) => assert!(ident_err.contains("too few to identify") || ident_err.contains("too little excitation"), "cut at byte {at}: {ident_err}"),
             Err(_) => assert!(!ident.status.success() && ident_err.contains("before its first complete chunk"), "cut at byte {at}: {ident_err}"),
         }
         let replay = Command::new(jointctl()).arg("replay").arg(&cut).arg("--json").output().unwrap();

@@ -462,3 +462,29 @@ pub fn send_command(session: &zenoh::Session, endpoint: &str, arm: &str, request
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| ZenohClientError::Zenoh(format!("the bridge's answer is not JSON: {e}")))?;
     Ok((v["accepted"].as_bool().unwrap_or(false), v["message"].as_str().unwrap_or("").to_string()))
 }
+
+#[cfg(test)]
+mod tests {
+    use std::os::unix::fs::PermissionsExt;
+
+    /// The users file with `line`, owner-only, checked.
+    fn check(name: &str, line: &str) -> Result<(), super::ZenohBridgeError> {
+        let file = std::env::temp_dir().join(format!("jointctl-users-{}-{name}.txt", std::process::id()));
+        std::fs::write(&file, format!("{line}\n")).unwrap();
+        std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o600)).unwrap();
+        let checked = super::check_users_file(&file);
+        std::fs::remove_file(&file).unwrap();
+        checked
+    }
+
+    #[test]
+    fn a_password_counts_characters_not_bytes_from_16() {
+        let fifteen = "a".repeat(15);
+        let e = check("fifteen", &format!("operator:{fifteen}")).unwrap_err().to_string();
+        assert!(e.contains("has 15 characters, at least 16") && !e.contains(&fifteen), "{e}");
+        assert!(check("sixteen", &format!("operator:{}", "a".repeat(16))).is_ok());
+        // Fifteen characters of two bytes each: 30 bytes, still too short.
+        assert!(check("multibyte", &format!("operator:{}", "é".repeat(15))).is_err());
+        assert!(check("multibyte16", &format!("operator:{}", "é".repeat(16))).is_ok());
+    }
+}

@@ -71,10 +71,10 @@ fn identify_holds_little_beside_a_long_record() {
     let per_sample = (PEAK.load(Ordering::Relaxed) - before) as f64 / n as f64;
     println!("peak beside the record: {per_sample:.1} bytes a sample; causes {:?}", report.causes.iter().map(|c| &c.effect).collect::<Vec<_>>());
     // Counted on the calling thread alone, 90 bytes a sample before the finding's fix and 52
-    // after; on every thread 92 (92-97 from run to run, as the workers' searches overlap), the
+    // after. On every thread 92 (92-97 from run to run, as the workers' searches overlap), the
     // same before and after the rate's blocks were shared out over the cores: the time and rate
-    // columns (16), each sample's window half-width
-    // (8), the held-out part (120 000 samples of six columns: 14 a sample here), the searches'
-    // models. The finding's ladder held at least 32 bytes a sample more.
+    // columns (16), each sample's window half-width (8), the held-out part (120 000 samples of
+    // six columns: 14 a sample here), the searches' models. The finding's ladder held at least
+    // 32 bytes a sample more.
     assert!(per_sample < 110.0, "{per_sample:.1} bytes a sample");
 }

@@ -106,7 +106,9 @@ fn a_second_runtime_of_the_same_arm_is_refused_whatever_its_ipc_root() {
     use std::os::unix::fs::PermissionsExt as _;
     let (arm, yaml) = write_rig("arm-root-lock", 100.0);
     let mut first = spawn_run(&yaml, &["--duration", "20"]);
-    std::thread::sleep(Duration::from_millis(700));
+    // Up: an inspector sees a sample (not a fixed wait, which a loaded machine outruns).
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the first runtime never came up: {}", String::from_utf8_lossy(&up.stderr));
     let root = yaml.with_file_name("private-root");
     std::fs::create_dir_all(&root).unwrap();
     std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o700)).unwrap();

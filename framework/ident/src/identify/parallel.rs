@@ -43,5 +43,8 @@ mod tests {
         let items: Vec<u64> = (0..1000).collect();
         assert_eq!(super::parallel_map(&items, |x| x * x), items.iter().map(|x| x * x).collect::<Vec<_>>());
         assert!(super::parallel_map(&[] as &[u64], |x| *x).is_empty());
+        // One item: mapped on the calling thread.
+        let caller = std::thread::current().id();
+        assert_eq!(super::parallel_map(&[7u64], |x| (x + 1, std::thread::current().id() == caller)), vec![(8, true)]);
     }
 }

@@ -12,9 +12,10 @@ fn uniform(t: &[f64]) -> bool {
     }
 }
 
-/// `(sum r sin(w t), sum r cos(w t))`. On uniformly spaced samples (`uniform`, see
-/// [`uniform`]) the phasor is rotated by a constant step (two multiplications a sample instead
-/// of a sine and a cosine), re-anchored every 1024 samples so that rounding cannot accumulate.
+/// `(sum r sin(w t), sum r cos(w t))`. When `uniform` is true (the caller asks [`uniform`] once
+/// for the time stamps; a wrong `true` gives a wrong sum) the phasor is rotated by a constant step
+/// (two multiplications a sample instead of a sine and a cosine), re-anchored every 1024 samples
+/// so that rounding cannot accumulate.
 pub(crate) fn projection(t: &[f64], r: &[f64], w: f64, uniform: bool) -> (f64, f64) {
     let n = t.len();
     let (mut s, mut c) = (0.0, 0.0);

@@ -62,7 +62,7 @@ pub(super) fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_c
     let by = |key: &dyn Fn(&[f64; 6]) -> f64| -> [f64; 3] {
         let mut order: Vec<usize> = (0..n).collect();
         let by_key = |a: &usize, b: &usize| key(&rows[*a]).total_cmp(&key(&rows[*b])).then(a.cmp(b));
-        if n >= 3 {
+        if n > 0 {
             order.select_nth_unstable_by(n / 3, by_key);
             order[n / 3..].select_nth_unstable_by(2 * n / 3 - n / 3, by_key);
         }

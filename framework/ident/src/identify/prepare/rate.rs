@@ -1,7 +1,7 @@
 //! The deflection rate: a local least-squares slope whose window follows the motion and
 //! narrows where the deflection bends faster than its noise allows.
 
-use super::super::parallel::{cores, parallel_map};
+use super::super::parallel::parallel_map;
 
 /// The half-width of the velocity's window is this fraction of the local period of the motion:
 /// a least-squares slope over +-P/50 reads a sine's rate 0.16 % low (its gain is
@@ -208,49 +208,53 @@ pub(super) fn coarsest_tick_rad(d: &[f64], starts: &[usize], resolution_rad: f64
     ticks.select_nth_unstable_by(at, f64::total_cmp).1.max(resolution_rad)
 }
 
-/// Samples [`adaptive_velocity`] works on at once on all the cores together, beside the windows'
-/// reach either side (an assumption: its intervals then take 1.5 MB, not 24 bytes a sample of the
-/// whole record).
-const RATE_BLOCK: usize = 1 << 16;
+/// Samples [`adaptive_velocity`] works on at once in one block, beside the windows' reach either
+/// side (an assumption: its intervals then take 0.2 MB a core, not 24 bytes a sample of the whole
+/// record; far beyond the widest reach, 100 samples, so that the blocks' overlap costs little).
+/// The same on every machine: where the blocks part moves the rates' last bits (each block sums
+/// its windows from its own start), so the blocks must not follow the number of cores.
+const RATE_BLOCK: usize = 1 << 13;
 
-/// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a
-/// gap. A long segment goes in blocks of at most a core's share of [`RATE_BLOCK`], each with the samples
-/// its windows reach on either side (the widest window's half-width), so that every window is
-/// the one the whole segment would give it; the blocks are spread over the cores (a tenth of
-/// identify's time on a 100 000-sample record was this rate, on one core).
-pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise: DeflectionNoise, half: &[usize]) -> Vec<f64> {
-    // Each block: its samples and the samples its windows read.
-    let mut blocks: Vec<(std::ops::Range<usize>, std::ops::Range<usize>)> = Vec::new();
-    let cores = cores();
+/// A block of [`velocity_by_segment`]: the samples it gives the rate of, and those its windows read.
+type RateBlock = (std::ops::Range<usize>, std::ops::Range<usize>);
+
+/// The blocks of [`velocity_by_segment`], in order: they tile `0..n`, none empty. A segment (from
+/// each of `starts` to the next) goes in blocks of [`RATE_BLOCK`] samples, each reading the samples
+/// its windows reach on either side within the segment (the widest half-width of `half`, at least
+/// the ladder's widest rung).
+fn rate_blocks(starts: &[usize], n: usize, half: &[usize]) -> Vec<RateBlock> {
+    let mut blocks = Vec::new();
     for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(d.len());
-        if b - a < 2 {
-            blocks.push((a..b, a..b));
-            continue;
-        }
+        let b = starts.get(k + 1).copied().unwrap_or(n);
         let reach = half[a..b].iter().copied().max().unwrap_or(0).max(RATE_HALF_WIDTHS[RATE_HALF_WIDTHS.len() - 1]);
-        // A core's share of the segment and of the samples worked on at once, far beyond the
-        // windows' reach either way (the blocks' overlap).
-        let size = (b - a).div_ceil(cores).min(RATE_BLOCK / cores).max(16 * reach);
         let mut from = a;
         while from < b {
-            let to = (from + size).min(b);
+            let to = (from + RATE_BLOCK).min(b);
             blocks.push((from..to, from.saturating_sub(reach).max(a)..(to + reach).min(b)));
             from = to;
         }
     }
+    blocks
+}
+
+/// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a
+/// gap. A long segment goes in blocks ([`rate_blocks`]), each with the samples its windows reach
+/// on either side, so that every window is the one the whole segment would give it; the blocks
+/// are spread over the cores (a tenth of identify's time on a 100 000-sample record was this
+/// rate, on one core). A segment of one sample has no rate (0).
+pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise: DeflectionNoise, half: &[usize]) -> Vec<f64> {
     // Each block writes its own slice of the rate (no second copy of the column: a 2-million-row
     // record's peak memory is held to issue 13's 150 MB).
     let mut v = vec![0.0; d.len()];
     let mut rest = v.as_mut_slice();
-    let mut work = Vec::with_capacity(blocks.len());
-    for (own, read) in blocks {
+    let mut work = Vec::new();
+    for (own, read) in rate_blocks(starts, d.len(), half) {
         let (mine, others) = rest.split_at_mut(own.len());
         rest = others;
         work.push((own, read, std::sync::Mutex::new(mine)));
     }
     parallel_map(&work, |(own, read, out)| {
-        if own.len() >= 2 {
+        if read.len() >= 2 {
             let rates = adaptive_velocity(&t[read.clone()], &d[read.clone()], noise, &half[read.clone()]);
             // Each slice is its block's alone: the lock is never contended.
             out.lock().unwrap_or_else(|e| e.into_inner()).copy_from_slice(&rates[own.start - read.start..own.end - read.start]);
@@ -386,20 +390,40 @@ mod tests {
     }
 
     #[test]
-    fn segments_shared_out_over_the_cores_read_the_rate_each_whole_segment_gives() {
-        // Three segments (gaps between them): a long one that is split into a block per core,
-        // a short one, and one of a single sample (no rate).
+    fn the_blocks_tile_every_segment_in_order_none_empty() {
+        for lengths in [vec![1], vec![2], vec![RATE_BLOCK], vec![RATE_BLOCK + 1], vec![3 * RATE_BLOCK + 1, 1, 5, RATE_BLOCK - 1], vec![1, 1, 1]] {
+            let n: usize = lengths.iter().sum();
+            let starts: Vec<usize> = lengths.iter().scan(0, |at, len| Some(std::mem::replace(at, *at + len))).collect();
+            let blocks = rate_blocks(&starts, n, &vec![20; n]);
+            let mut next = 0;
+            for (own, read) in &blocks {
+                assert!(own.start == next && !own.is_empty() && read.start <= own.start && read.end >= own.end, "{lengths:?}: {blocks:?}");
+                // Never read across a segment's start.
+                assert!(starts.iter().all(|s| !(read.start < *s && *s < read.end) || (own.start < *s && *s < own.end) || *s == own.start), "{lengths:?}: {blocks:?}");
+                next = own.end;
+            }
+            assert_eq!(next, n, "{lengths:?}");
+        }
+    }
+
+    #[test]
+    fn segments_in_blocks_read_the_rate_each_whole_segment_gives() {
+        // Three segments (gaps between them): a long one of several blocks and one sample more
+        // (a last block of one sample, which still has a rate), a short one, and one of a single
+        // sample (no rate).
         let q = std::f64::consts::TAU / 16384.0;
-        let mut t: Vec<f64> = (0..40_000).map(|i| i as f64 * 1e-3).collect();
+        let long = 3 * RATE_BLOCK + 1;
+        let mut t: Vec<f64> = (0..long).map(|i| i as f64 * 1e-3).collect();
         t.extend((0..3000).map(|i| 100.0 + i as f64 * 1e-3));
         t.push(200.0);
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.002 * (17.0 * t).sin()) / q).round() * q).collect();
-        let starts = [0, 40_000, 43_000];
+        let starts = [0, long, long + 3000];
         let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
         let shared = velocity_by_segment(&t, &d, &starts, noise, &half);
-        let mut whole = adaptive_velocity(&t[..40_000], &d[..40_000], noise, &half[..40_000]);
-        whole.extend(adaptive_velocity(&t[40_000..43_000], &d[40_000..43_000], noise, &half[40_000..43_000]));
+        let mut whole = adaptive_velocity(&t[..long], &d[..long], noise, &half[..long]);
+        assert!(whole[long - 1] != 0.0);
+        whole.extend(adaptive_velocity(&t[long..long + 3000], &d[long..long + 3000], noise, &half[long..long + 3000]));
         whole.push(0.0);
         assert_eq!(shared.len(), whole.len());
         let worst = whole.iter().zip(&shared).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -412,10 +436,12 @@ mod tests {
         let n = RATE_BLOCK * 5 / 2;
         let q = std::f64::consts::TAU / 16384.0;
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3).collect();
-        let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.01 * (40.0 * t).sin() * (-(t - 65.5).powi(2)).exp()) / q).round() * q).collect();
+        let edge = RATE_BLOCK as f64 * 1e-3;
+        let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.01 * (40.0 * t).sin() * (-(t - edge).powi(2)).exp()) / q).round() * q).collect();
         let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
         let (whole, blocks) = (adaptive_velocity(&t, &d, noise, &half), velocity_by_segment(&t, &d, &[0], noise, &half));
+        assert_eq!(whole.len(), blocks.len());
         let worst = whole.iter().zip(&blocks).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-9, "{worst}");
     }
