@@ -178,7 +178,9 @@ fn the_shoulders_loop_is_named_from_its_drives_torque_readings() {
     let loop_only = sherpa_with("sloop-loop-only", &arm_name("sloop-loop-only"), &edits);
     let (before, after) = (replay_ft_rmse(&hidden_session, &config, "q2"), replay_ft_rmse(&hidden_session, &loop_only, "q2"));
     println!("sim replay of the shoulder's hidden-loop session, q2 F/T torque RMSE: {before:.4} Nm (config) -> {after:.4} Nm (the loop's values)");
-    assert!(after < before, "replay F/T RMSE {before} -> {after} Nm");
+    // The values replayed in the message: one CI run of nine got 4.82 -> 5.78 Nm with a latency
+    // and a profile near the plant's (0.0455 s, 8.05 rad/s^2), the rest of hal_sim unseen.
+    assert!(after < before, "replay F/T RMSE {before} -> {after} Nm with {hal_sim:?}; the loop: {:#}", v["loop"]);
 
     let v = identify(&clean_session, &config, &scratch("sloop-clean-out"), "q2");
     let causes: Vec<&serde_json::Value> = v["loop"]["values"].as_array().unwrap().iter().filter(|x| x["cause"] == true).collect();
