@@ -240,21 +240,27 @@ fn without_the_yamls_consent_zenoh_commands_are_refused() {
     assert!(!out.status.success() && err.contains("does not allow commands over the network") && err.contains("network.zenoh.commands"), "{}", text(&out));
 }
 
+/// `jointctl bridge zenoh` beside a running arm whose YAML allows commands with a users file of
+/// `users` (mode `mode`): what it printed and how it ended.
+fn bridge_with_users_file(label: &str, users: &str, mode: u32) -> Output {
+    let (arm, yaml) = rig(label, &format!("network:\n  zenoh:\n    commands: {{listen: \"tcp/127.0.0.1:{}\", users_file: users.txt}}\n", free_port()));
+    let file = yaml.with_file_name("users.txt");
+    std::fs::write(&file, users).unwrap();
+    std::fs::set_permissions(&file, std::fs::Permissions::from_mode(mode)).unwrap();
+    let _arm = run_arm(&yaml);
+    Command::new(jointctl())
+        .args(["bridge", "zenoh", "--arm", &arm, "--listen", &format!("tcp/127.0.0.1:{}", free_port()), "--timeout", "10"])
+        .output()
+        .unwrap()
+}
+
 /// Finding (issue 40, 14): 100 wrong passwords in a row met no slow-down, and the users file
 /// took a password of any length. Zenoh's handshake has no hook to slow failed logins down, so
 /// the bridge refuses a password short enough to guess: it names the line, the user and the
 /// minimum, never the password.
 #[test]
 fn a_password_short_enough_to_guess_is_refused_before_anything_listens() {
-    let (arm, yaml) = rig("zenoh-short-password", &format!("network:\n  zenoh:\n    commands: {{listen: \"tcp/127.0.0.1:{}\", users_file: users.txt}}\n", free_port()));
-    let users = yaml.with_file_name("users.txt");
-    std::fs::write(&users, "operator:correct-horse-battery-staple\nguest:tr0ub4dor&3\n").unwrap();
-    std::fs::set_permissions(&users, std::fs::Permissions::from_mode(0o600)).unwrap();
-    let _arm = run_arm(&yaml);
-    let out = Command::new(jointctl())
-        .args(["bridge", "zenoh", "--arm", &arm, "--listen", &format!("tcp/127.0.0.1:{}", free_port()), "--timeout", "10"])
-        .output()
-        .unwrap();
+    let out = bridge_with_users_file("zenoh-short-password", "operator:correct-horse-battery-staple\nguest:tr0ub4dor&3\n", 0o600);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{}", text(&out));
     assert!(err.contains("users.txt") && err.contains("line 2") && err.contains("`guest`") && err.contains("11 characters") && err.contains("at least 16"), "{}", text(&out));
@@ -265,15 +271,7 @@ fn a_password_short_enough_to_guess_is_refused_before_anything_listens() {
 /// the YAML (by `check`, with its field).
 #[test]
 fn a_readable_users_file_or_a_bad_endpoint_is_refused() {
-    let (arm, yaml) = rig("zenoh-users-file", &format!("network:\n  zenoh:\n    commands: {{listen: \"tcp/127.0.0.1:{}\", users_file: users.txt}}\n", free_port()));
-    let users = yaml.with_file_name("users.txt");
-    std::fs::write(&users, "operator:pw\n").unwrap();
-    std::fs::set_permissions(&users, std::fs::Permissions::from_mode(0o644)).unwrap();
-    let _arm = run_arm(&yaml);
-    let out = Command::new(jointctl())
-        .args(["bridge", "zenoh", "--arm", &arm, "--listen", &format!("tcp/127.0.0.1:{}", free_port()), "--timeout", "10"])
-        .output()
-        .unwrap();
+    let out = bridge_with_users_file("zenoh-users-file", "operator:pw\n", 0o644);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("users.txt") && err.contains("chmod 600"), "{}", text(&out));
 

@@ -350,25 +350,27 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
 /// -0.13 Nm s/rad, the delay's lag under another name.
 pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn Fn(usize) -> String + Sync)) {
     while let Some(full) = held_out_errors(model, &s.spec, p) {
-        // The models without one cause each, fitted side by side.
-        let margins = parallel_map(&s.chosen, |ch| {
-            held_out_errors(model, &without_and_impossible(model, &s.spec, ch.cause, p).0, p).map(|r| verdict(&r, &full, p))
+        // The models without one cause each (and what turns impossible then), fitted side by
+        // side, with the verdict on each.
+        let mut margins = parallel_map(&s.chosen, |ch| {
+            let (reduced, dropped) = without_and_impossible(model, &s.spec, ch.cause, p);
+            (held_out_errors(model, &reduced, p).map(|r| verdict(&r, &full, p)), reduced, dropped)
         });
         // The weakest that is not named any more goes first (its gain in units of its
         // relevance threshold).
-        let weakest = margins.iter().enumerate().filter(|(_, j)| !j.is_some_and(|j| j.named())).min_by(|a, b| {
+        let weakest = margins.iter().enumerate().filter(|(_, m)| !m.0.is_some_and(|j| j.named())).min_by(|a, b| {
             let score = |j: &Option<Judgement>| j.map_or(f64::NEG_INFINITY, |j| j.gain_nm2 / j.relevant_nm2.max(1e-300));
-            score(a.1).total_cmp(&score(b.1))
+            score(&a.1.0).total_cmp(&score(&b.1.0))
         });
-        match weakest {
-            Some((i, judgement)) => {
+        match weakest.map(|(i, _)| i) {
+            Some(i) => {
                 let gone = s.chosen.remove(i);
+                let (judgement, reduced, dropped) = margins.swap_remove(i);
                 match judgement {
                     Some(j) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
                     Some(j) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
                     None => s.rejected.push(format!("{} (no fit without it)", name(gone.cause))),
                 }
-                let (reduced, dropped) = without_and_impossible(model, &s.spec, gone.cause, p);
                 for (cause, why) in dropped {
                     s.chosen.retain(|ch| ch.cause != cause);
                     s.rejected.push(format!("{} ({why} once {} left the model)", name(cause), name(gone.cause)));
