@@ -13,6 +13,11 @@ use jointctl_ident::identify::{IdentifyOptions, identify};
 /// jitter, now and then 10 ms, and two gaps of 0.2 s; the deflection read by a 2e-6 rad encoder
 /// with 1.2 counts of noise before the rounding, the torque with 0.05 Nm of noise.
 fn maxwell_slip_record(seed: u64) -> jointctl_ident::csv::Data {
+    maxwell_slip_record_after(0.0, 150.0, seed)
+}
+
+/// [`maxwell_slip_record`] of `duration_s`, the spring held at zero for its first `hold_s`.
+fn maxwell_slip_record_after(hold_s: f64, duration_s: f64, seed: u64) -> jointctl_ident::csv::Data {
     let (k, lsb, dt) = (2000.0, 2e-6, 2e-4);
     // Each element: break-away torque [Nm] and the deflection at which it slips [rad].
     let elements = [(0.4, 0.2e-3), (0.6, 0.5e-3), (0.8, 1.0e-3), (0.6, 2.0e-3)];
@@ -22,7 +27,7 @@ fn maxwell_slip_record(seed: u64) -> jointctl_ident::csv::Data {
     let (mut t, mut x) = (0.0f64, 0.0f64);
     let (mut target, mut rate) = (0.008, 2e-3);
     let mut next_log = 0.0;
-    while t < 150.0 {
+    while t < duration_s {
         if t >= next_log {
             t_s.push(t);
             read.push(((x + 1.2 * lsb * rng.normal()) / lsb).round() * lsb);
@@ -36,7 +41,7 @@ fn maxwell_slip_record(seed: u64) -> jointctl_ident::csv::Data {
             };
             next_log = t + gap;
         }
-        let step = (target - x).clamp(-rate * dt, rate * dt);
+        let step = if t < hold_s { 0.0 } else { (target - x).clamp(-rate * dt, rate * dt) };
         x += step;
         for (zi, (limit, slip)) in z.iter_mut().zip(elements) {
             *zi = (*zi + limit / slip * step).clamp(-limit, limit);
@@ -65,4 +70,18 @@ fn a_loop_read_through_a_flickering_fine_encoder_is_named_alone_and_explains_the
         }
     }
     assert!(wrong.is_empty(), "{wrong:#?}");
+}
+
+#[test]
+fn a_loop_read_through_a_flickering_encoder_after_a_hold_gets_the_band_the_whole_record_needs() {
+    // Found on the blind generator (seed 1's 013: a Dahl loop, a 2e-6 rad encoder that
+    // flickers, a hold at the start): the band in front of the loop was chosen on the training
+    // part's first 16 000 samples, the hold, where a band betters nothing; without it the
+    // flicker walked the loop's state and 0.30 Nm was left held out (0.155 with it, the noise).
+    // Here, before: no band, 6.7 times the noise left (0.337 Nm held out).
+    let report = identify(&maxwell_slip_record_after(30.0, 100.0, 1), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    let band = report.causes.iter().find(|c| c.effect == "hysteresis").and_then(|c| c.params.get("input_dead_band_rad").copied());
+    let left = report.unexplained.times_noise;
+    assert!(named == ["hysteresis"] && band.is_some() && left < 3.0, "named {named:?}, band {band:?} rad, left {left:.1} times the noise, rmse {:.4} -> {:.4} Nm", report.rmse_before, report.rmse_after);
 }

@@ -333,7 +333,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         let mut residuals = Default::default();
         let ctx = select::context(&model, &base, p, &mut residuals);
-        let term = search::search(&model, &base, friction, &ctx, &p.coarse, &p.stretch, None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
+        let term = search::search(&model, &base, friction, &ctx, &p.coarse, p.full_rate_training(), None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
         base.terms.push(Term { baseline: true, ..term });
     }
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;

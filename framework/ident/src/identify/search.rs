@@ -8,7 +8,8 @@ use super::numeric::refine_log;
 /// The term of `cause` with its best parameters, added to `spec`: `None` when no value gives a
 /// fit. With `warm` (the best of the previous step, before one more cause was added), each grid
 /// is narrowed to the five values nearest it: a cause added elsewhere moves a parameter a little,
-/// not across its grid.
+/// not across its grid. `stretch`: training samples at the full rate (see
+/// [`super::prepare::Prepared::full_rate_training`]).
 pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, stretch: &Part, warm: Option<&[f64]>) -> Option<Term> {
     if !model.causes[cause].applicable(ctx) {
         return None;

@@ -198,7 +198,7 @@ enum Candidate {
 
 /// Searches candidate `c`'s parameters with `spec` in place and checks the fit's physics.
 fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepared, warm: Option<&[f64]>) -> Candidate {
-    let Some(term) = search(model, spec, c, ctx, &p.coarse, &p.stretch, warm) else { return Candidate::NoFit };
+    let Some(term) = search(model, spec, c, ctx, &p.coarse, p.full_rate_training(), warm) else { return Candidate::NoFit };
     let s = profile_terms(model, &spec.with(term), &p.coarse);
     let Some(fit) = model.fit(&s, &p.coarse) else { return Candidate::NoFit };
     let last = s.terms.len() - 1;

@@ -168,8 +168,9 @@ pub enum Refine {
     /// The grid value as it is (already refined by the cause).
     Not,
     /// The grid's first value is the simpler model (a dead band of zero width); another value is
-    /// taken only when it betters the fit of the full-rate stretch of the training part (what
-    /// it acts on may not show on the decimated part) by more than BIC charges for one more
+    /// taken only when it betters the fit of the training part at the full rate (what it acts
+    /// on may not show on the decimated part; the whole training part when it is kept at the
+    /// full rate, a contiguous stretch of it otherwise) by more than BIC charges for one more
     /// parameter (`n ln(RSS_0 / RSS) > ln n`): a freedom the data does not need would bend the
     /// cause's shape towards what other causes leave.
     Nested,
