@@ -75,6 +75,17 @@ pub fn dead_band(d: &[f64], width_rad: f64) -> Vec<f64> {
 /// fraction of a count, which pass every count.
 const DEAD_BAND_IN_SCATTER: [f64; 5] = [0.0, 1.0, 2.0, 4.0, 8.0];
 
+/// The smallest deflection scale tried: a thousandth of the amplitude, and no less than one
+/// step of the deflection reading (at most a tenth of the largest scale, for a record a few
+/// steps wide). A loop whose state turns within one step turns at every step the reading
+/// reverses: a friction on the sign of the last step, which the data cannot tell from a loop.
+/// Searched freely, that took a 20 Hz record's filtered torque lag beside its time delay
+/// (the shared real-like l3-case018: a loop of 0.05 Nm at 0.3 of a step).
+fn smallest_scale(c: &SearchContext) -> f64 {
+    let a = c.excitation.amplitude_rad;
+    (a * 1e-3).max(c.excitation.resolution_rad.min(a / 30.0))
+}
+
 impl CandidateCause for Hysteresis {
     fn name(&self) -> &str {
         "hysteresis"
@@ -90,7 +101,7 @@ impl CandidateCause for Hysteresis {
         let scatter = c.excitation.deflection_scatter_rad;
         let band = if scatter > 0.0 && scatter.is_finite() { DEAD_BAND_IN_SCATTER.iter().map(|k| k * scatter).collect() } else { vec![0.0] };
         vec![
-            Parameter { name: "lambda_rad".into(), grid: log_grid(a * 1e-3, a / 3.0, 16), refine: Refine::Between },
+            Parameter { name: "lambda_rad".into(), grid: log_grid(smallest_scale(c), a / 3.0, 16), refine: Refine::Between },
             Parameter { name: "input_dead_band_rad".into(), grid: band, refine: Refine::Nested },
         ]
     }
@@ -124,5 +135,33 @@ impl CandidateCause for Hysteresis {
             observed["input_dead_band_rad"] = json!(band);
         }
         Fragments { plant: object([("hysteresis", h)]), observer: object([("hysteresis", observed)]) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Excitation, FullRate, SearchContext};
+    use super::{CandidateCause, Hysteresis};
+
+    fn scales(amplitude_rad: f64, resolution_rad: f64) -> Vec<f64> {
+        let excitation = Excitation { amplitude_rad, frequency_hz: 0.5, sample_period_s: 0.05, deflection_scatter_rad: 0.0, resolution_rad };
+        let full_rate = FullRate { t_s: &[], velocity_rad_per_s: &[], residual_nm: &[] };
+        let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, true, false);
+        Hysteresis.parameters(&ctx)[0].grid.clone()
+    }
+
+    #[test]
+    fn no_loop_narrower_than_one_step_of_the_reading_is_searched() {
+        // A 14-bit encoder on a 0.09 rad stroke: a thousandth of it is a quarter of a step.
+        let step = std::f64::consts::TAU / 16384.0;
+        let grid = scales(0.09, step);
+        assert!(grid.iter().all(|s| *s >= step * (1.0 - 1e-12)), "{grid:?}");
+        assert!((grid.iter().copied().fold(f64::INFINITY, f64::min) / step - 1.0).abs() < 1e-9);
+        // A fine encoder: a thousandth of the amplitude, as before.
+        let fine = scales(0.09, 2e-6);
+        assert!((fine.iter().copied().fold(f64::INFINITY, f64::min) / 9e-5 - 1.0).abs() < 1e-9, "{fine:?}");
+        // A stroke of a few steps still gets a grid: down to a tenth of its largest scale.
+        let narrow = scales(5.0 * step, step);
+        assert!(narrow.iter().all(|s| s.is_finite() && *s > 0.0) && narrow.len() == 16, "{narrow:?}");
     }
 }

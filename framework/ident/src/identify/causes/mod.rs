@@ -66,6 +66,8 @@ pub struct Excitation {
     /// The deflection reading's scatter from sample to sample beyond its quantisation [rad]
     /// (an encoder that flickers between counts), as the data shows it.
     pub deflection_scatter_rad: f64,
+    /// The deflection reading's resolution [rad]: its smallest common step.
+    pub resolution_rad: f64,
 }
 
 /// What a candidate sees when it chooses its parameter grid: the experiment's scales and the
