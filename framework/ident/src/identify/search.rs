@@ -72,9 +72,9 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
             let mut i = (0..p.grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
             // A grid narrowed around the previous step's best assumes the cause added since
             // moved it a little. A cause's scale (its first parameter, refined between grid
-            // values: a loop's, a play's, the arctan's) at the narrowed grid's edge says it moved
-            // further: a Dahl loop fitted before an offset was named took a scale that bent it
-            // into the offset (a slow friction record's pre-sliding, 41 mrad before the offset,
+            // values: a loop's, a dead zone's, the arctan's k_b, a Stribeck speed) at the
+            // narrowed grid's edge says it moved further: a Dahl loop fitted before an offset
+            // was named took a scale that bent it into the offset (a slow friction record's pre-sliding, 41 mrad before the offset,
             // 1.2 mrad after, with 0.24 -> 0.12 Nm held out); the whole grid then. Not its shape
             // parameters: a vibration's onset searched again over its whole grid took the ripple
             // a 20 Hz log's filtered torque leaves beside its delay (the blind device D), and the

@@ -76,8 +76,8 @@ pub fn dead_band(d: &[f64], width_rad: f64) -> Vec<f64> {
 const DEAD_BAND_IN_SCATTER: [f64; 5] = [0.0, 1.0, 2.0, 4.0, 8.0];
 
 /// The smallest deflection scale tried: a thousandth of the amplitude, and no less than one
-/// step of the deflection reading (at most a tenth of the largest scale, for a record a few
-/// steps wide). A loop whose state turns within one step turns at every step the reading
+/// step of the deflection reading (at most a tenth of the largest scale: below one step on a
+/// stroke of fewer than 30 steps). A loop whose state turns within one step turns at every step the reading
 /// reverses: a friction on the sign of the last step, which the data cannot tell from a loop.
 /// Searched freely, that took a 20 Hz record's filtered torque lag beside its time delay
 /// (the shared real-like l3-case018: a loop of 0.05 Nm at 0.3 of a step).
@@ -160,8 +160,10 @@ mod tests {
         // A fine encoder: a thousandth of the amplitude, as before.
         let fine = scales(0.09, 2e-6);
         assert!((fine.iter().copied().fold(f64::INFINITY, f64::min) / 9e-5 - 1.0).abs() < 1e-9, "{fine:?}");
-        // A stroke of a few steps still gets a grid: down to a tenth of its largest scale.
-        let narrow = scales(5.0 * step, step);
-        assert!(narrow.iter().all(|s| s.is_finite() && *s > 0.0) && narrow.len() == 16, "{narrow:?}");
+        // A stroke of 20 steps still gets a grid: down to a tenth of its largest scale (a third
+        // of the stroke), two thirds of a step.
+        let narrow = scales(20.0 * step, step);
+        let smallest = narrow.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(narrow.len() == 16 && (smallest / (20.0 * step / 30.0) - 1.0).abs() < 1e-9, "{narrow:?}");
     }
 }

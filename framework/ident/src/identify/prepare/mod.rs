@@ -164,10 +164,12 @@ pub(crate) struct Prepared {
 impl Prepared {
     /// The full-rate training samples a parameter that needs the full rate is chosen on (a
     /// dead band against an encoder's flicker, see [`super::Refine::Nested`]): the whole
-    /// training part when it is kept at the full rate, the contiguous stretch otherwise. The
-    /// stretch alone is the record's first seconds: on a record whose flicker shows later (the
-    /// blind generator's 2e-6 rad encoder, seed 1's 013), a band chosen there was none, and the
-    /// Dahl loop driven by the flicker left 0.30 Nm held out for 0.155 with the band (its noise).
+    /// training part when it is kept at the full rate (its two sides of the held-out window
+    /// joined: a loop's state carries over the join), the contiguous stretch otherwise. The
+    /// stretch alone is one piece of [`STRETCH_SAMPLES`]: on a record that holds in that piece
+    /// and flickers while it moves later (the blind generator's 2e-6 rad encoder, seed 1's
+    /// 013), a band chosen there was none, and the Dahl loop driven by the flicker left 0.30 Nm
+    /// held out for 0.155 with the band (its noise).
     pub fn full_rate_training(&self) -> &Part {
         if self.train_at_full_rate { &self.train } else { &self.stretch }
     }

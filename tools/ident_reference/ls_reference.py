@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""A plain least-squares reference for `jointctl identify` (issue 36's yardstick).
+
+The thesis baseline (a linear spring and eq. 3.5's arctan friction) plus a torque offset, a cubic
+stiffness and a unit Dahl state driven by the deflection's 25 ms moving average, fitted by linear
+least squares on the first 70 % of the time range; the arctan's k_b and the Dahl state's scale are
+taken from small grids by the training fit. Scored on the last 30 %, as identify's default
+held-out part. Prints, per record, identify's held-out RMSE before and after its causes beside
+the reference's, and flags records where identify is more than 1.25 times the reference.
+
+    .venv-interop/bin/python tools/ident_reference/ls_reference.py [--jointctl BIN] FILE.csv...
+
+Needs numpy. The reference names nothing: it says how far a generic fit gets, so that a record
+where identify stops far above it points at a cause the search missed.
+"""
+import argparse
+import json
+import os
+import subprocess
+
+import numpy as np
+
+# Time steps above this start a new segment (a gap in the log, a repetition) [s].
+GAP_S = 0.5
+# The moving average the Dahl state and the rate are computed from [s].
+AVERAGE_S = 0.025
+
+
+def segments(t):
+    cut = np.where((np.diff(t) <= 0) | (np.diff(t) > GAP_S))[0] + 1
+    return np.split(np.arange(len(t)), cut)
+
+
+def moving_average(t, x):
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    lo = np.searchsorted(t, t - AVERAGE_S / 2, 'left')
+    hi = np.searchsorted(t, t + AVERAGE_S / 2, 'right')
+    return (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
+
+
+def dahl(t, x, scale_rad):
+    """The unit Dahl state (limit 1) of `x`, exact per step, started afresh on each segment."""
+    z = np.zeros_like(x)
+    for seg in segments(t):
+        u, prev = 0.0, x[seg[0]]
+        for i in seg:
+            step = x[i] - prev
+            prev = x[i]
+            if step != 0.0:
+                target = 1.0 if step > 0 else -1.0
+                u = target + (u - target) * np.exp(-abs(step) / scale_rad)
+            z[i] = u
+    return z
+
+
+def read(path):
+    """Time, deflection and torque by their header names, as identify reads them."""
+    a = np.genfromtxt(path, delimiter=',', names=True, dtype=float)
+    if a.ndim == 0 or len(a) < 10:
+        raise ValueError('fewer than 10 rows')
+    missing = [c for c in ('t', 'deflection', 'torque') if c not in a.dtype.names]
+    if missing:
+        raise ValueError(f'no column {", ".join(missing)}')
+    return a['t'], a['deflection'], a['torque']
+
+
+def reference(path):
+    """(the reference's baseline alone, the whole reference): held-out RMSE [Nm]."""
+    t, d, y = read(path)
+    t = t - t[0]
+    dt = np.diff(t)
+    if np.any(dt == 0):
+        raise ValueError('a time stamp repeats')
+    if np.any(dt < 0):
+        # Time that restarts per repetition: laid one after the other, a second apart (as
+        # identify does).
+        dt[dt < 0] = 1.0
+        t = np.concatenate([[0.0], np.cumsum(dt)])
+    smooth = np.empty_like(d)
+    rate = np.zeros_like(d)
+    for s in segments(t):
+        smooth[s] = moving_average(t[s], d[s])
+        if len(s) > 2:
+            rate[s] = np.gradient(smooth[s], t[s])
+    train = t <= 0.7 * t[-1]
+    test = ~train
+    span = np.ptp(smooth) or 1.0
+    speed = np.percentile(np.abs(rate), 95) or 1.0
+    rms = lambda r: float(np.sqrt(np.mean(r ** 2)))
+    states = [dahl(t, smooth, span / share) for share in [3, 10, 30, 100, 300, 1000]]
+    best_base = best = None
+    for kb in [0.3, 1, 3, 10, 30, 100, 300, 1000]:
+        friction = np.arctan(kb / speed * rate)
+        base = np.column_stack([d, friction])
+        c, *_ = np.linalg.lstsq(base[train], y[train], rcond=None)
+        fit = np.sum((y[train] - base[train] @ c) ** 2)
+        if best_base is None or fit < best_base[0]:
+            best_base = (fit, rms(y[test] - base[test] @ c))
+        for state in states:
+            x = np.column_stack([d, friction, np.ones_like(d), d ** 3, state])
+            c, *_ = np.linalg.lstsq(x[train], y[train], rcond=None)
+            fit = np.sum((y[train] - x[train] @ c) ** 2)
+            if best is None or fit < best[0]:
+                best = (fit, rms(y[test] - x[test] @ c))
+    return best_base[1], best[1]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--jointctl', default='target/release/jointctl')
+    parser.add_argument('files', nargs='+')
+    args = parser.parse_args()
+    for path in args.files:
+        name = os.path.basename(path)
+        try:
+            base, ref = reference(path)
+        except (OSError, ValueError) as e:
+            print(f'{name:45s} no reference: {e}')
+            continue
+        out = subprocess.run([args.jointctl, 'identify', '--data', path, '--json'], capture_output=True, text=True)
+        if out.returncode != 0:
+            why = out.stderr.strip().splitlines()[-1] if out.stderr.strip() else f'exit {out.returncode}'
+            print(f'{name:45s} identify refused ({why}); reference {ref:.4f} Nm')
+            continue
+        report = json.loads(out.stdout)
+        causes = '+'.join(c['effect'] for c in report['causes']) or 'no cause'
+        ratio = report['rmse_after'] / ref if ref > 0 else float('nan')
+        flag = '  WORSE' if ratio > 1.25 else ''
+        print(f"{name:45s} held out [Nm]: identify {report['rmse_before']:.4f} -> {report['rmse_after']:.4f} ({causes}); "
+              f"reference {ref:.4f} (its baseline alone {base:.4f}); identify/reference {ratio:.2f}{flag}")
+
+if __name__ == '__main__':
+    main()
