@@ -35,7 +35,7 @@ mod feedback;
 mod load;
 mod search;
 use feedback::feedback_latency;
-use search::{nelder_mead, search};
+use search::{block_rms_where, nelder_mead, search};
 
 /// Latencies searched [s]: 0 to 100 ms, the range the configuration accepts (section 2.3's set-up
 /// had 15 and 30 ms).
@@ -445,7 +445,7 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     // configured position-loop stiffness; the search below adds it as a factor on the drives'
     // configured kp).
     let limit = |a: f64, v: f64, kp: f64| move |e: ElmoConfig| ElmoConfig { max_acceleration_rad_s2: a, max_velocity_rad_s: v, kp: e.kp * kp, ..e };
-    let score = |l: f64, a: f64, v: f64, kp: f64| rms_where(&squared(l.clamp(0.0, MAX_LATENCY_S), &limit(a, v, kp)), train);
+    let score = |l: f64, a: f64, v: f64, kp: f64| block_rms_where(&squared(l.clamp(0.0, MAX_LATENCY_S), &limit(a, v, kp)), train);
     let (a0, v0) = (sim.elmo.max_acceleration_rad_s2, sim.elmo.max_velocity_rad_s);
     let mut start = (f64::INFINITY, [sim.can_latency_s, a0.log10(), v0.log10(), 0.0]);
     for k in 0..=40 {
@@ -512,10 +512,10 @@ pub fn identify_loop(rec: &LoopRecording, loaded: &LoadedConfig) -> LoopReport {
     // clean shoulder session's command latency was named 21.5 ms for 30).
     let as_configured = squared_against(&truth_aged(configured_age), sim.can_latency_s, &limit(a0, v0, 1.0));
     let whole = compare(&as_configured, &identified);
-    let trained = rms_where(&identified, train);
+    let trained = block_rms_where(&identified, train);
     // `told`: the data determine this part at all (see the position loop's below).
     let mut part = |name: &str, key: &str, ident: f64, configured: f64, without: &[f64], told: bool| {
-        let needed = rms_where(without, train) > (1.0 + LIMIT_EVIDENCE) * trained;
+        let needed = block_rms_where(without, train) > (1.0 + LIMIT_EVIDENCE) * trained;
         report.values.push(LoopValue {
             name: name.into(),
             key: key.into(),
