@@ -125,6 +125,49 @@ fn subscription<M: msg::Message + 'static>(node: &mut Node, name: &str, domain_i
     node.create_subscription::<M>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("subscription of {name}"), domain_id, reason: e.to_string() })
 }
 
+/// Why a `trajectory_msgs/JointTrajectory` from ROS 2 is refused as a whole (the requester is
+/// answered with this text on `/jointctl/command_responses`).
+///
+/// ```
+/// use jointctl_bridge::ros2::{TrajectoryError, trajectory_commands};
+/// use jointctl_ros2::msg::{JointTrajectory, JointTrajectoryPoint};
+/// assert_eq!(trajectory_commands(&JointTrajectory::default()), Err(TrajectoryError::NoJoints));
+/// let short = JointTrajectory {
+///     joint_names: vec!["q1".into(), "q4".into()],
+///     points: vec![JointTrajectoryPoint { positions: vec![0.1], ..Default::default() }],
+///     ..Default::default()
+/// };
+/// let refused = trajectory_commands(&short).unwrap_err();
+/// assert_eq!(refused, TrajectoryError::Positions { point: 0, got: 1, joints: 2 });
+/// assert_eq!(refused.to_string(), "points[0] has 1 positions for 2 joints");
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TrajectoryError {
+    /// `joint_names` is empty.
+    #[error("the trajectory names no joint (joint_names is empty)")]
+    NoJoints,
+    /// A point's `positions` do not give one value per joint.
+    #[error("points[{point}] has {got} positions for {joints} joints")]
+    Positions {
+        /// The point's index in `points`.
+        point: usize,
+        /// Its number of positions.
+        got: usize,
+        /// The number of `joint_names`.
+        joints: usize,
+    },
+    /// A point's `velocities` are neither empty nor one per joint.
+    #[error("points[{point}] has {got} velocities for {joints} joints")]
+    Velocities {
+        /// The point's index in `points`.
+        point: usize,
+        /// Its number of velocities.
+        got: usize,
+        /// The number of `joint_names`.
+        joints: usize,
+    },
+}
+
 /// A JointTrajectory as one jointctl trajectory command per DOF, each in the JSON form a network
 /// command takes ([`messages::parse_request`] checks it). Points without velocities leave them
 /// unset; a point with fewer positions than DOFs makes the whole message refused.
@@ -139,16 +182,16 @@ fn subscription<M: msg::Message + 'static>(node: &mut Node, name: &str, domain_i
 /// let per_dof = jointctl_bridge::ros2::trajectory_commands(&t).unwrap();
 /// assert_eq!(per_dof[1], serde_json::json!({"kind": "trajectory", "joint": "q4", "points": [[1.0, 0.2, null]]}));
 /// ```
-pub fn trajectory_commands(t: &msg::JointTrajectory) -> Result<Vec<Value>, String> {
+pub fn trajectory_commands(t: &msg::JointTrajectory) -> Result<Vec<Value>, TrajectoryError> {
     if t.joint_names.is_empty() {
-        return Err("the trajectory names no joint (joint_names is empty)".into());
+        return Err(TrajectoryError::NoJoints);
     }
     for (i, p) in t.points.iter().enumerate() {
         if p.positions.len() != t.joint_names.len() {
-            return Err(format!("points[{i}] has {} positions for {} joints", p.positions.len(), t.joint_names.len()));
+            return Err(TrajectoryError::Positions { point: i, got: p.positions.len(), joints: t.joint_names.len() });
         }
         if !p.velocities.is_empty() && p.velocities.len() != t.joint_names.len() {
-            return Err(format!("points[{i}] has {} velocities for {} joints", p.velocities.len(), t.joint_names.len()));
+            return Err(TrajectoryError::Velocities { point: i, got: p.velocities.len(), joints: t.joint_names.len() });
         }
     }
     Ok(t.joint_names
@@ -231,7 +274,7 @@ impl Commands {
             let from = GUID::from(info.publisher_gid());
             match trajectory_commands(&t) {
                 Ok(per_dof) => incoming.extend(per_dof.into_iter().map(|c| (from, Ok(c)))),
-                Err(why) => incoming.push((from, Err(why))),
+                Err(why) => incoming.push((from, Err(why.to_string()))),
             }
         }
         while let Ok(Some((r, info))) = self.requests.take() {
