@@ -129,20 +129,20 @@ fn subscription<M: msg::Message + 'static>(node: &mut Node, name: &str, domain_i
 /// answered with this text on `/jointctl/command_responses`).
 ///
 /// ```
-/// use jointctl_bridge::ros2::{TrajectoryError, trajectory_commands};
+/// use jointctl_bridge::ros2::{JointTrajectoryError, trajectory_commands};
 /// use jointctl_ros2::msg::{JointTrajectory, JointTrajectoryPoint};
-/// assert_eq!(trajectory_commands(&JointTrajectory::default()), Err(TrajectoryError::NoJoints));
+/// assert_eq!(trajectory_commands(&JointTrajectory::default()), Err(JointTrajectoryError::NoJoints));
 /// let short = JointTrajectory {
 ///     joint_names: vec!["q1".into(), "q4".into()],
 ///     points: vec![JointTrajectoryPoint { positions: vec![0.1], ..Default::default() }],
 ///     ..Default::default()
 /// };
 /// let refused = trajectory_commands(&short).unwrap_err();
-/// assert_eq!(refused, TrajectoryError::Positions { point: 0, got: 1, joints: 2 });
+/// assert_eq!(refused, JointTrajectoryError::Positions { point: 0, got: 1, joints: 2 });
 /// assert_eq!(refused.to_string(), "points[0] has 1 positions for 2 joints");
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum TrajectoryError {
+pub enum JointTrajectoryError {
     /// `joint_names` is empty.
     #[error("the trajectory names no joint (joint_names is empty)")]
     NoJoints,
@@ -170,7 +170,8 @@ pub enum TrajectoryError {
 
 /// A JointTrajectory as one jointctl trajectory command per DOF, each in the JSON form a network
 /// command takes ([`messages::parse_request`] checks it). Points without velocities leave them
-/// unset; a point with fewer positions than DOFs makes the whole message refused.
+/// unset; a point whose positions (or velocities, when given) are not one per DOF makes the
+/// whole message refused ([`JointTrajectoryError`]).
 ///
 /// ```
 /// use jointctl_ros2::msg::{Duration, JointTrajectory, JointTrajectoryPoint};
@@ -182,16 +183,16 @@ pub enum TrajectoryError {
 /// let per_dof = jointctl_bridge::ros2::trajectory_commands(&t).unwrap();
 /// assert_eq!(per_dof[1], serde_json::json!({"kind": "trajectory", "joint": "q4", "points": [[1.0, 0.2, null]]}));
 /// ```
-pub fn trajectory_commands(t: &msg::JointTrajectory) -> Result<Vec<Value>, TrajectoryError> {
+pub fn trajectory_commands(t: &msg::JointTrajectory) -> Result<Vec<Value>, JointTrajectoryError> {
     if t.joint_names.is_empty() {
-        return Err(TrajectoryError::NoJoints);
+        return Err(JointTrajectoryError::NoJoints);
     }
     for (i, p) in t.points.iter().enumerate() {
         if p.positions.len() != t.joint_names.len() {
-            return Err(TrajectoryError::Positions { point: i, got: p.positions.len(), joints: t.joint_names.len() });
+            return Err(JointTrajectoryError::Positions { point: i, got: p.positions.len(), joints: t.joint_names.len() });
         }
         if !p.velocities.is_empty() && p.velocities.len() != t.joint_names.len() {
-            return Err(TrajectoryError::Velocities { point: i, got: p.velocities.len(), joints: t.joint_names.len() });
+            return Err(JointTrajectoryError::Velocities { point: i, got: p.velocities.len(), joints: t.joint_names.len() });
         }
     }
     Ok(t.joint_names

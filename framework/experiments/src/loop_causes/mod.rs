@@ -44,9 +44,11 @@ pub const MAX_LATENCY_S: f64 = 0.1;
 /// The drive replay's integration step [s] (the simulation's default `substep_s`).
 const REPLAY_STEP_S: f64 = 0.0005;
 
-/// A profile limit counts as reached when it explains the training part's drive motion this much
-/// better (relative RMSE) than no limit at all. Assumption: below it the limit is indistinct from
-/// the PID's own response.
+/// A profile limit counts as reached, and a part of the drive's response as needed, when it
+/// explains the training part's drive motion this much better than without it, in the fits'
+/// objective (the blocks' geometric mean RMS, [`block_rms_where`]: a part that acts in 2 of 20
+/// blocks must bring their error down 1.63 times). Assumption: below it the limit is indistinct
+/// from the PID's own response.
 const LIMIT_EVIDENCE: f64 = 0.05;
 
 /// The drives' position-loop stiffness is searched within this many decades of the configured

@@ -4,7 +4,7 @@
 use jointctl_ident::identify::significance::blocks_for;
 
 /// A replay's error over the samples `keep` selects: the geometric mean of the RMS of their
-/// blocks (the held-out test's blocks, [`blocks_for`]) [rad].
+/// blocks, cut as the held-out test cuts its own ([`blocks_for`]) [rad].
 ///
 /// The fits' objective. A replayed drive can part from the recorded one for a few hundred
 /// milliseconds: its profile lands on a set-point it crosses and stops there, and whether a
@@ -13,22 +13,29 @@ use jointctl_ident::identify::significance::blocks_for;
 /// else, and the values that happen to avoid it win: a shoulder session's command latency was
 /// fitted at 24 ms for 50 (a CI run). In the log of each block's error, a block holding such a
 /// stretch (35 samples, 15 of them 0.126 rad off) counts as much as halving the error in six
-/// others. The held-out test judges the same blocks' log ratios.
+/// others. The held-out test judges its blocks' log ratios the same way.
+///
+/// A block's mean square is floored at 1e-6 of the blocks' median: a block a thousand times
+/// closer (in RMS) than the typical one says nothing more, and a block of exactly zero error (a
+/// noise-free record at rest, where the replay is exact) would be minus infinity in the log.
 pub(super) fn block_rms_where(sq: &[f64], keep: impl Fn(usize) -> bool) -> f64 {
     let v: Vec<f64> = sq.iter().enumerate().filter(|(i, e)| keep(*i) && e.is_finite()).map(|(_, e)| *e).collect();
     if v.is_empty() {
         return f64::NAN;
     }
-    let blocks = blocks_for(v.len());
-    let mean_log = (0..blocks)
+    // (No more blocks than samples: a block is never empty.)
+    let blocks = blocks_for(v.len()).min(v.len());
+    let mut means: Vec<f64> = (0..blocks)
         .map(|b| {
             let part = &v[b * v.len() / blocks..(b + 1) * v.len() / blocks];
-            // (An exact zero would be minus infinity; a replay never matches to 1e-15 rad.)
-            (part.iter().sum::<f64>() / part.len().max(1) as f64).max(1e-30).ln()
+            part.iter().sum::<f64>() / part.len() as f64
         })
-        .sum::<f64>()
-        / blocks as f64;
-    (0.5 * mean_log).exp()
+        .collect();
+    let mut sorted = means.clone();
+    sorted.sort_by(f64::total_cmp);
+    let floor = (1e-6 * sorted[blocks / 2]).max(f64::MIN_POSITIVE);
+    means.iter_mut().for_each(|m| *m = m.max(floor));
+    (0.5 * means.iter().map(|m| m.ln()).sum::<f64>() / blocks as f64).exp()
 }
 
 /// The minimum of `f` over `[lo, hi]`: a grid of 41 points, then around the best at `step`.

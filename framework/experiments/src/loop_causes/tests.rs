@@ -1,4 +1,5 @@
-//! Tests of the loop's helpers: interpolation, rates, and what a report writes.
+//! Tests of the loop's helpers: interpolation, rates, the fits' objective, and what a report
+//! writes.
 
 use super::*;
 
@@ -93,4 +94,11 @@ fn one_stretch_where_the_replay_parts_does_not_outweigh_the_rest_of_the_session(
     gaps[10] = f64::NAN;
     assert!((block_rms_where(&gaps, all) - 3e-3).abs() < 1e-12);
     assert!(block_rms_where(&[f64::NAN; 5], all).is_nan());
+    // A block of exactly zero error (a noise-free record at rest) is floored, not minus infinity.
+    let mut exact = worse.clone();
+    exact[..35].fill(0.0);
+    let e = block_rms_where(&exact, all);
+    assert!(e.is_finite() && e > 0.0 && e < 3e-3, "{e}");
+    // As many blocks as samples at most: one sample is its own RMS.
+    assert!((block_rms_where(&[4e-6], all) - 2e-3).abs() < 1e-15);
 }
