@@ -24,6 +24,9 @@ pub(crate) struct Part {
     /// Which repetition of the record each sample belongs to; empty for a record of one (see
     /// [`Samples::repetition`]).
     pub rep: Vec<u32>,
+    /// For a record read as bin averages, each sample's rate at its interval's start and end
+    /// less its own [rad/s] (see `prepare::rate_edges`); empty for point samples.
+    pub rate_edges: Vec<[f64; 2]>,
     /// Sample period [s].
     pub dt: f64,
 }
@@ -45,7 +48,8 @@ impl Part {
         let join = |a: &Vec<f64>, b: &Vec<f64>| a.iter().chain(b).copied().collect();
         // Repetitions are both parts' or none (a record of one repetition has none).
         let rep = if self.rep.is_empty() || next.rep.is_empty() { Vec::new() } else { self.rep.iter().chain(&next.rep).copied().collect() };
-        Part { warm: self.warm.clone(), t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, dt: self.dt }
+        let rate_edges = if self.rate_edges.is_empty() || next.rate_edges.is_empty() { Vec::new() } else { self.rate_edges.iter().chain(&next.rate_edges).copied().collect() };
+        Part { warm: self.warm.clone(), t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, rate_edges, dt: self.dt }
     }
 }
 
@@ -164,9 +168,10 @@ pub(crate) struct Model<'a> {
     pub columns: ColumnCache,
 }
 
-/// Which columns: the part (its length, first and last time stamp, sample period), the input
+/// Which columns: the part (its length, first and last time stamp, sample period, whether it is
+/// read as bin averages), the input
 /// transforms in force (terms that shift or clip the deflection) and the term, bit for bit.
-type ColumnKey = ([u64; 4], SpecKey, (usize, Vec<u64>));
+type ColumnKey = ([u64; 5], SpecKey, (usize, Vec<u64>));
 
 /// The columns of terms already computed, kept up to [`ColumnCache::BUDGET_BYTES`] (least
 /// recently used go first). Every model of a search repeats the baseline's friction and the
@@ -269,11 +274,13 @@ impl Model<'_> {
             repetition: &p.rep,
             history_rad: &p.warm,
             model_nm: &fixed,
+            rate_edges_rad_per_s: &p.rate_edges,
         };
         let mut spans = Vec::new();
         let mut segmented = Vec::new();
         let mut nonlinear = 0;
-        let part = [n as u64, p.t.first().map_or(0, |t| t.to_bits()), p.t.last().map_or(0, |t| t.to_bits()), p.dt.to_bits()];
+        // A part read as bin averages has other columns than the same part read as points.
+        let part = [n as u64, p.t.first().map_or(0, |t| t.to_bits()), p.t.last().map_or(0, |t| t.to_bits()), p.dt.to_bits(), p.rate_edges.len() as u64];
         let transforms: SpecKey = Spec { terms: spec.terms.iter().filter(|t| self.causes[t.cause].transforms()).cloned().collect() }.key();
         for term in &spec.terms {
             let cause = self.causes[term.cause];
@@ -331,6 +338,7 @@ impl Model<'_> {
             repetition: &p.rep,
             history_rad: &p.warm,
             model_nm: &proj.model_nm,
+            rate_edges_rad_per_s: &p.rate_edges,
         };
         let cols = cause.columns(&term.params, &samples);
         let r = &proj.residual;
@@ -451,12 +459,12 @@ mod tests {
         let cache = ColumnCache::default();
         let column = 1 << 20; // 8 MiB per entry: two fit the 16 MiB budget, a third evicts
         for k in 0..3u64 {
-            let got = cache.get_or(([k, 0, 0, 0], Vec::new(), (0, Vec::new())), || vec![vec![k as f64; column]]);
+            let got = cache.get_or(([k, 0, 0, 0, 0], Vec::new(), (0, Vec::new())), || vec![vec![k as f64; column]]);
             assert_eq!(got[0][0], k as f64);
             assert!(cache.entries.lock().unwrap().bytes <= ColumnCache::BUDGET_BYTES);
         }
         // The most recent is kept (not computed again).
-        let again = cache.get_or(([2, 0, 0, 0], Vec::new(), (0, Vec::new())), || panic!("recomputed"));
+        let again = cache.get_or(([2, 0, 0, 0, 0], Vec::new(), (0, Vec::new())), || panic!("recomputed"));
         assert_eq!(again[0][0], 2.0);
     }
 }

@@ -23,6 +23,7 @@ use serde::Serialize;
 use crate::csv::Data;
 
 mod baseline;
+pub mod bin_reading;
 pub mod causes;
 mod design;
 pub(crate) mod least_squares;
@@ -48,7 +49,7 @@ pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parame
 pub use prepare::PrepareError;
 pub use select::BIC_THRESHOLD;
 
-use design::{Model, Spec, Term};
+use design::{Model, Spec};
 
 /// A cause found in the data.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -176,6 +177,8 @@ pub struct Report {
     pub unexplained: Unexplained,
     /// Set when the record has no spring (see [`NoSpring`]).
     pub no_spring: Option<NoSpring>,
+    /// Set when a slow log is read as bin averages (see [`bin_reading`]).
+    pub bin_averages: Option<bin_reading::BinAverages>,
     /// The part of the time range held out (fractions of it), and why it is not the last part
     /// when it is not (see [`prepare::held_out_window`]).
     pub held_out_window: prepare::HeldOutWindow,
@@ -270,7 +273,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
-        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, model_nm: &model_nm };
+        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges };
         let columns = c.columns(&values, &samples);
         let expected = c.coefficient_names().len();
         if columns.len() != expected || columns.iter().any(|col| col.len() != part.len()) {
@@ -327,15 +330,26 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let model = Model { baseline: &opts.baseline, centre_rad, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
-    // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
+    // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction;
+    // a slow log read as bin averages when that friction fits them better (see `bin_reading`).
     let mut base = Spec::default();
-    if opts.baseline_friction {
-        let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
-        let mut residuals = Default::default();
-        let ctx = select::context(&model, &base, p, &mut residuals);
-        let term = search::search(&model, &base, friction, &ctx, &p.coarse, p.full_rate_training(), None).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
-        base.terms.push(Term { baseline: true, ..term });
-    }
+    let points;
+    let mut bin_averages = None;
+    let p = if opts.baseline_friction && p.may_hold_bins() {
+        points = p.as_points();
+        let (bins, term, reading) = bin_reading::choose(&model, &all, p, &points)?;
+        base.terms.push(term);
+        bin_averages = reading;
+        if bins { p } else { &points }
+    } else if opts.baseline_friction {
+        base.terms.push(bin_reading::baseline_friction(&model, &all, p)?);
+        p
+    } else if p.may_hold_bins() {
+        points = p.as_points();
+        &points
+    } else {
+        p
+    };
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
     friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
@@ -458,6 +472,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         confounded,
         unexplained,
         no_spring,
+        bin_averages,
         held_out_window: p.held_out.clone(),
         significance: Significance {
             test: format!(

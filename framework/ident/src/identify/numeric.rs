@@ -1,6 +1,6 @@
-//! Numerical helpers of the search that know nothing of causes or models: a log-spaced grid and
-//! a golden-section minimum on a log scale, and how a report prints a value. A leaf: every other
-//! module of `identify` may use it.
+//! Numerical helpers of the search that know nothing of causes or models: a log-spaced grid,
+//! a golden-section minimum on a log scale, a mean over an interval, and how a report prints a
+//! value. A leaf: every other module of `identify` may use it.
 
 /// A log-spaced grid of `n` values from `lo` to `hi` (both > 0).
 pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
@@ -57,4 +57,24 @@ pub(crate) fn median_step(t: &[f64]) -> f64 {
 /// ```
 pub fn format_value(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-2 || v.abs() >= 1e6) { format!("{v:.4e}") } else { format!("{v:.5}") }
+}
+
+/// The mean of `f` over a sample's interval when the rate runs linearly from its start to the
+/// sample's own rate `v` and on to its end (`edges` from `prepare::rate_edges`); `integral` is an
+/// antiderivative of `f` in the rate. Halves shorter than `1e-9` rad/s take `f` at their middle.
+pub(crate) fn interval_mean(f: impl Fn(f64) -> f64, integral: impl Fn(f64) -> f64, v: f64, edges: [f64; 2]) -> f64 {
+    let half = |a: f64, b: f64| if (b - a).abs() < 1e-9 { f(0.5 * (a + b)) } else { (integral(b) - integral(a)) / (b - a) };
+    0.5 * (half(v + edges[0], v) + half(v, v + edges[1]))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_mean_over_an_interval_where_the_rate_turns_is_not_the_value_at_its_mean() {
+        // v^2 over a rate that runs -1 -> 0 -> 1: 1/3, not 0.
+        let m = super::interval_mean(|v| v * v, |v| v * v * v / 3.0, 0.0, [-1.0, 1.0]);
+        assert!((m - 1.0 / 3.0).abs() < 1e-12, "{m}");
+        // An interval of one rate: the value there.
+        assert_eq!(super::interval_mean(|v| v * v, |v| v * v * v / 3.0, 2.0, [0.0, 0.0]), 4.0);
+    }
 }

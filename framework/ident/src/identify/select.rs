@@ -72,7 +72,7 @@ pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Optio
     Some(computed)
 }
 
-fn compute_held_out(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut> {
+pub(crate) fn compute_held_out(model: &Model, spec: &Spec, p: &Prepared) -> Option<HeldOut> {
     let fit = model.fit(spec, &p.train)?;
     let pred = model.predict(spec, &fit, &p.test);
     let sigma2 = fit.rss / (p.train.len().saturating_sub(fit.parameters)).max(1) as f64;

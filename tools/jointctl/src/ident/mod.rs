@@ -269,13 +269,14 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
         report.segments,
         report.dropped_samples,
         report.resolution_rad,
         split_sentence(&report.held_out_window),
+        bins_sentence(report.bin_averages.as_ref()),
         report.rmse_before,
         report.rmse_after,
         u.noise_floor_nm
@@ -547,6 +548,17 @@ fn split_sentence(w: &jointctl_ident::identify::prepare::HeldOutWindow) -> Strin
         None => format!("Baseline fitted on the first {} % of the time range, scored on the last {} %.", percent(w.start), percent(w.end - w.start)),
         Some(why) => format!("Baseline fitted on the time range but {}-{} %, scored on that window: {why}.", percent(w.start), percent(w.end)),
     }
+}
+
+/// How a slow log was read, when as bin averages (point samples go unsaid: every record was
+/// read so before).
+fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::BinAverages>) -> String {
+    b.map_or(String::new(), |b| {
+        format!(
+            " Read as bin averages (each sample the mean over its interval, eq. 3.5's friction averaged as the rate turns within it): the baseline's training BIC {:.0} against {:.0} read as point samples (k_b {:.4} s/rad against {:.4}); {}.",
+            b.bic_bins, b.bic_points, b.k_b_bins_s_per_rad, b.k_b_points_s_per_rad, b.evidence
+        )
+    })
 }
 
 /// The split identify used: the model loop's gains are measured on what it held out.

@@ -4,6 +4,7 @@
 use serde_json::json;
 
 use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use crate::identify::numeric::interval_mean;
 
 /// `+ k_a atan(k_b dphi/dt)` [Nm], `k_a >= 0`.
 pub struct CoulombFriction;
@@ -27,7 +28,14 @@ impl CandidateCause for CoulombFriction {
         vec![Parameter { name: "friction_kb_s_per_rad".into(), grid: log_grid(1.0 / peak, 300.0 / peak, 11), refine: Refine::Between }]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
-        vec![s.velocity_rad_per_s.iter().map(|v| (p[0] * v).atan()).collect()]
+        let k = p[0];
+        if s.rate_edges_rad_per_s.len() != s.velocity_rad_per_s.len() || k <= 0.0 {
+            return vec![s.velocity_rad_per_s.iter().map(|v| (k * v).atan()).collect()];
+        }
+        // Read as bin averages: the arctan's mean over each interval, from its antiderivative
+        // `v atan(k v) - ln(1 + k^2 v^2) / 2k`.
+        let integral = |v: f64| v * (k * v).atan() - (k * v).powi(2).ln_1p() / (2.0 * k);
+        vec![s.velocity_rad_per_s.iter().zip(s.rate_edges_rad_per_s).map(|(v, e)| interval_mean(|x| (k * x).atan(), integral, *v, *e)).collect()]
     }
     fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
         (c[0] < 0.0).then(|| "negative friction".into())

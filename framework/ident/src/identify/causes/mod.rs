@@ -216,6 +216,10 @@ pub struct Samples<'a> {
     /// The configured characteristic's torque at `elastic_rad` [Nm]; zeros when the baseline is
     /// fitted on the data.
     pub model_nm: &'a [f64],
+    /// For a record read as bin averages, each sample's rate at its interval's start and end
+    /// less its own [rad/s]: a term that is not a straight line in the rate averages over the
+    /// interval (see `prepare::rate_edges`). Empty for point samples.
+    pub rate_edges_rad_per_s: &'a [[f64; 2]],
 }
 
 /// What a cause adds to the observer's and the simulation's configuration, in the keys they load
@@ -360,7 +364,7 @@ mod tests {
         let samples = |repetition: &[u32]| -> Option<Vec<usize>> {
             let n = repetition.len();
             let (t, zeros) = ((0..n).map(|i| i as f64).collect::<Vec<f64>>(), vec![0.0; n]);
-            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], model_nm: &zeros })
+            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], model_nm: &zeros, rate_edges_rad_per_s: &[] })
         };
         // Inside the first repetition, inside a later one, across two.
         assert_eq!(samples(&[0, 0, 0]), Some(vec![0]));

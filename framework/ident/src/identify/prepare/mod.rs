@@ -3,6 +3,7 @@
 
 use std::borrow::Cow;
 
+mod bins;
 mod noise;
 mod rate;
 mod window;
@@ -10,6 +11,7 @@ mod window;
 pub use noise::noise_floor;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use noise::scatter_rms;
+pub use bins::{BIN_READING_MIN_STEP_S, rate_edges};
 use rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals};
@@ -129,6 +131,7 @@ pub enum PrepareError {
 }
 
 /// The data ready for the search.
+#[derive(Clone)]
 pub(crate) struct Prepared {
     pub train: Part,
     pub test: Part,
@@ -358,6 +361,8 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
     // travel and range, accepted so that the model loop's gains, which see the same columns,
     // choose the same window).
     let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
+    // A slow log's rate at each interval's ends, should it hold bin averages (see `bins`).
+    let edges = if spacing >= BIN_READING_MIN_STEP_S { rate_edges(&v, &starts) } else { Vec::new() };
     let (from, to) = held_out.times(&data.t);
     let lo = t.partition_point(|x| *x < from - t0);
     let hi = if held_out.end >= 1.0 { t.len() } else { t.partition_point(|x| *x < to - t0) };
@@ -389,7 +394,8 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
             tau: pick(&tau),
             // A pivot not given is none: the configured characteristic's own.
             pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(&pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
-            rep: if rep.is_empty() { Vec::new() } else { rep[r].iter().step_by(k).copied().collect() },
+            rep: if rep.is_empty() { Vec::new() } else { rep[r.clone()].iter().step_by(k).copied().collect() },
+            rate_edges: if edges.is_empty() { Vec::new() } else { edges[r].iter().step_by(k).copied().collect() },
             dt: spacing * k as f64,
         }
     };
