@@ -30,12 +30,13 @@ fn run(case: &Case) -> Outcome {
     Ok(report.causes.into_iter().filter(|c| c.effect != "dropout").map(|c| (c.effect, c.params)).collect())
 }
 
-/// The held-out part: the last 30 % (the default), or with `JOINTCTL_BLIND_HELD_OUT=like-the-rest`
-/// a window like the rest (`--held-out like-the-rest`), to measure that option on the suite.
+/// The held-out part: identify's default (a window like the rest), or with
+/// `JOINTCTL_BLIND_HELD_OUT=last` always the last 30 % (`--held-out last`), to measure that
+/// option on the suite.
 fn held_out() -> HeldOut {
     match std::env::var("JOINTCTL_BLIND_HELD_OUT").as_deref() {
-        Ok("like-the-rest") => HeldOut::LikeTheRest,
-        _ => HeldOut::Last,
+        Ok("last") => HeldOut::Last,
+        _ => IdentifyOptions::default().held_out,
     }
 }
 

@@ -109,8 +109,9 @@ fn a_time_delay_seen_in_one_fast_stretch_of_the_held_out_part_is_confirmed() {
 #[test]
 fn a_held_out_part_beyond_the_trainings_reach_is_said_to_be() {
     // An excitation that grows over the record (0.03 rad at 0.2 Hz, then 0.1 rad at 1 Hz for
-    // the last 30 %): the causes are judged where the model was not fitted, and the report says
-    // so. The same record at one amplitude does not get the sentence.
+    // the last 30 %): held out as the last 30 % (`--held-out last`), the causes are judged where
+    // the model was not fitted, and the report says so. The same record at one amplitude does
+    // not get the sentence. By default the window held out moves to one like the rest.
     use std::f64::consts::TAU;
     let record = |grows: bool| {
         let q = TAU / 16384.0;
@@ -129,11 +130,15 @@ fn a_held_out_part_beyond_the_trainings_reach_is_said_to_be() {
         }
         data
     };
-    let grown = identify(&record(true), &IdentifyOptions::default()).unwrap();
+    let last = IdentifyOptions { held_out: jointctl_ident::identify::prepare::HeldOut::Last, ..IdentifyOptions::default() };
+    let grown = identify(&record(true), &last).unwrap();
     let [rate, range] = grown.unexplained.held_out_reach;
     assert!(rate > 10.0 && range > 2.5, "{rate} {range}");
     assert!(grown.unexplained.summary.contains("judged where the model was not fitted"), "{}", grown.unexplained.summary);
-    let steady = identify(&record(false), &IdentifyOptions::default()).unwrap();
+    let moved = identify(&record(true), &IdentifyOptions::default()).unwrap();
+    assert!(moved.held_out_window.moved.is_some(), "{:?}", moved.held_out_window);
+    assert!(!moved.unexplained.summary.contains("not fitted"), "{}", moved.unexplained.summary);
+    let steady = identify(&record(false), &last).unwrap();
     assert!(steady.unexplained.held_out_reach.iter().all(|r| (r - 1.0).abs() < 0.2), "{:?}", steady.unexplained.held_out_reach);
     assert!(!steady.unexplained.summary.contains("not fitted"), "{}", steady.unexplained.summary);
 }

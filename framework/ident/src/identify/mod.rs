@@ -213,7 +213,7 @@ pub struct IdentifyOptions {
 impl Default for IdentifyOptions {
     /// The thesis' structure: a linear characteristic through zero and eq. 3.5's friction.
     fn default() -> Self {
-        IdentifyOptions { baseline: BaselineModel::Polynomial(1), baseline_friction: true, train_fraction: 0.7, held_out: prepare::HeldOut::Last, max_causes: 3, extra_candidates: Vec::new() }
+        IdentifyOptions { baseline: BaselineModel::Polynomial(1), baseline_friction: true, train_fraction: 0.7, held_out: prepare::HeldOut::LikeTheRest, max_causes: 3, extra_candidates: Vec::new() }
     }
 }
 

@@ -37,11 +37,12 @@ pub struct IdentifyArgs {
     /// Print exactly one JSON object.
     #[arg(long)]
     json: bool,
-    /// Which part of the record is held out to judge the causes: `last` (its last 30 % of time)
-    /// or `like-the-rest` (the last 30 % unless its motion is 4 times faster or slower, or
-    /// wider or narrower, than the rest's: then the 30 % window most like the rest, for a sweep
-    /// that grows or a test that ends in a hold; the report says which and why).
-    #[arg(long, value_enum, default_value_t = HeldOutArg::Last)]
+    /// Which part of the record is held out to judge the causes: `like-the-rest` (the default:
+    /// the last 30 % unless its motion is 4 times faster or slower, or wider or narrower, than
+    /// the rest's: then the 30 % window most like the rest, for a sweep that grows or a test
+    /// that ends in a hold; the report says which and why) or `last` (always its last 30 % of
+    /// time).
+    #[arg(long, value_enum, default_value_t = HeldOutArg::LikeTheRest)]
     held_out: HeldOutArg,
     /// Write the extension into this folder (with --config): `observer.yaml` (the joint's
     /// complete params with the extended observer: `params: {include: observer.yaml}` alone
@@ -446,7 +447,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
     let mut md = format!(
         "# What the model misses, per pivot setting: {}
 
-{} samples at {} pivot settings, each identified apart (its first 70 % of time fitted, its last 30 % scored, or with `--held-out like-the-rest` a window like the rest: each setting's line says which).
+{} samples at {} pivot settings, each identified apart (its first 70 % of time fitted and its last 30 % scored, or, where that part moves unlike the rest, a window like the rest: each setting's line says which).
 
 | pivot [mm] | samples | baseline [Nm] | extended [Nm] | noise floor [Nm] | causes |
 |---|---|---|---|---|---|
