@@ -3,8 +3,8 @@
 //! Four steps, one module each:
 //! 1. [`prepare`](self::prepare): readings that jumped to exactly zero (thesis appendix A's lost
 //!    CAN frames) out, the deflection rate, a check that the data excites the joint enough, and
-//!    the split: the first 70 % of the time range to fit, the last 30 % held out (or, asked, a
-//!    window of 30 % like the rest when the last 30 % moves unlike it: [`prepare::held_out_window`]).
+//!    the split: the first 70 % of the time range to fit, the last 30 % held out (or a window of
+//!    30 % like the rest when the last 30 % moves unlike it: [`prepare::held_out_window`]).
 //! 2. `design`: the baseline (the configured model and nothing more: eq. 3.5 friction only when
 //!    the model has it) plus terms, each a cause of the vocabulary in [`causes`] with its
 //!    non-linear parameters; least squares by QR.
@@ -213,7 +213,7 @@ pub struct IdentifyOptions {
 impl Default for IdentifyOptions {
     /// The thesis' structure: a linear characteristic through zero and eq. 3.5's friction.
     fn default() -> Self {
-        IdentifyOptions { baseline: BaselineModel::Polynomial(1), baseline_friction: true, train_fraction: 0.7, held_out: prepare::HeldOut::LikeTheRest, max_causes: 3, extra_candidates: Vec::new() }
+        IdentifyOptions { baseline: BaselineModel::Polynomial(1), baseline_friction: true, train_fraction: 0.7, held_out: prepare::HeldOut::default(), max_causes: 3, extra_candidates: Vec::new() }
     }
 }
 

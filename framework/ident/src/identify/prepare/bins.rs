@@ -5,15 +5,29 @@
 //! too, and the arctan of the interval's mean rate is not the mean of the arctan: where the
 //! rate turns within an interval the average is flatter. Evaluated at the mean rate, the
 //! baseline left six times the noise on a clean 20 Hz record and took k_b at half its value
-//! (blind device B: 16.6 for 34.3 s/rad), and a Dahl loop stood in for the difference. This
+//! (blind device B: 16.3 for 34.3 s/rad), and a Dahl loop stood in for the difference. This
 //! module gives each sample the rate at its interval's start and end; whether a record is read
 //! so is the data's to say (see `identify::extend`).
 
-/// Logs with a median step at least this long [s] may be read as bin averages (an assumption:
-/// loggers average to lower the rate, and at 100 Hz and above the rate of the thesis' hand-driven
-/// characterisation (section 3.3.1, motions up to a few Hz) changes by little within one step;
-/// above it every record is read as point samples, as before).
+/// Logs at 100 Hz and slower, a median step of this or longer [s], may be read as bin averages
+/// (an assumption: loggers average to lower the rate, and faster than 100 Hz the rate of the
+/// thesis' hand-driven characterisation (section 3.3.1, motions up to a few Hz) changes by
+/// little within one step; faster logs are read as point samples, as before). See
+/// [`tried_as_bins`] for the rounding of the step.
 pub const BIN_READING_MIN_STEP_S: f64 = 0.01;
+
+/// Whether a log whose median step is `median_step_s` [s] is tried as bin averages: at
+/// [`BIN_READING_MIN_STEP_S`] or longer, within 5 % (a 100 Hz log's time stamps `i * 0.01` or
+/// rounded to 10 ms in text give a median step a few ulps either side of 0.01 s).
+///
+/// ```
+/// use jointctl_ident::identify::prepare::tried_as_bins;
+/// assert!(tried_as_bins(0.0099999999999998) && tried_as_bins(0.010000000000000009) && tried_as_bins(0.05));
+/// assert!(!tried_as_bins(0.005));
+/// ```
+pub fn tried_as_bins(median_step_s: f64) -> bool {
+    median_step_s >= 0.95 * BIN_READING_MIN_STEP_S
+}
 
 /// Per sample, the rate at the start and at the end of its interval less its own rate
 /// [rad/s]: each the mean of its rate and its neighbour's in the same segment of contiguous

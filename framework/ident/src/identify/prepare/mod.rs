@@ -11,7 +11,7 @@ mod window;
 pub use noise::noise_floor;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use noise::scatter_rms;
-pub use bins::{BIN_READING_MIN_STEP_S, rate_edges};
+pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 use rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals};
@@ -362,7 +362,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
     // choose the same window).
     let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
     // A slow log's rate at each interval's ends, should it hold bin averages (see `bins`).
-    let edges = if spacing >= BIN_READING_MIN_STEP_S { rate_edges(&v, &starts) } else { Vec::new() };
+    let edges = if tried_as_bins(spacing) { rate_edges(&v, &starts) } else { Vec::new() };
     let (from, to) = held_out.times(&data.t);
     let lo = t.partition_point(|x| *x < from - t0);
     let hi = if held_out.end >= 1.0 { t.len() } else { t.partition_point(|x| *x < to - t0) };
