@@ -114,3 +114,18 @@ fn a_point_sampled_log_whose_turns_are_corners_stays_point_samples() {
     let report = identify(&data, &IdentifyOptions::default()).unwrap();
     assert!(report.bin_averages.is_none(), "{:?}", report.bin_averages);
 }
+
+#[test]
+fn a_slow_logs_noise_floor_is_read_on_what_the_baseline_leaves() {
+    // Finding: at 20 Hz eq. 3.5's friction flips between neighbouring samples at each reversal,
+    // and the floor read on what a line in the deflection and its rate leaves took those flips
+    // for noise: 0.023 Nm on these bins for 0.005 (0.067-0.070 on the points for 0.05).
+    for seed in 1..=3 {
+        let bins = identify(&record(seed, 100, true), &IdentifyOptions::default()).unwrap();
+        let floor = bins.unexplained.noise_floor_nm;
+        assert!(floor < 1.5 * 0.005, "seed {seed}: the bins' floor {floor} Nm for 0.005");
+        let points = identify(&record(seed, 100, false), &IdentifyOptions::default()).unwrap();
+        let floor = points.unexplained.noise_floor_nm;
+        assert!((floor - 0.05).abs() < 0.25 * 0.05, "seed {seed}: the points' floor {floor} Nm for 0.05");
+    }
+}

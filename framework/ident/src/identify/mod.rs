@@ -332,6 +332,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction;
     // a slow log read as bin averages when that friction fits them better (see `bin_reading`).
+    let slow_log = p.may_hold_bins();
     let mut base = Spec::default();
     let points;
     let mut bin_averages = None;
@@ -349,6 +350,15 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         &points
     } else {
         p
+    };
+    // A slow log's noise floor on what the baseline leaves (see `bin_reading::slow_log_floor`).
+    let refloored;
+    let p = match slow_log.then(|| bin_reading::slow_log_floor(&model, &base, p)).flatten() {
+        Some(floor) => {
+            refloored = prepare::Prepared { noise_floor_nm: floor, ..p.clone() };
+            &refloored
+        }
+        None => p,
     };
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
