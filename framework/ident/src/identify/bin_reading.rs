@@ -64,8 +64,9 @@ pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared
     Ok((true, on_bins, Some(reading)))
 }
 
-/// A slow log's noise floor [Nm]: the pseudo-residuals (see [`super::prepare::noise_floor`]) of
-/// what the baseline, its friction fitted, leaves of the training part's torque, where that is
+/// A slow log's noise floor [Nm] when the baseline fits eq. 3.5's friction: the pseudo-residuals
+/// (see [`super::prepare::noise_floor`]) of what the baseline, its friction fitted, leaves of
+/// the training part's torque, where that is
 /// lower than the prepared floor (of what a line in the deflection and its rate leaves). At 20
 /// Hz eq. 3.5's friction flips between neighbouring samples at every reversal, and a line in
 /// the rate leaves those flips in: the blind device B's clean 20 Hz variant read 0.097 Nm for
