@@ -330,39 +330,34 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let model = Model { baseline: &opts.baseline, centre_rad, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
-    // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction;
-    // a slow log read as bin averages when that friction fits them better (see `bin_reading`).
-    // A slow log's floor is read again on the baseline's residual only where the baseline fits
-    // eq. 3.5's friction, whose flips the prepared floor takes for noise (a configured model
-    // without friction removes none: the 100 Hz elbow example's floor went from the line's to
-    // what its named causes leave, and their held-out error from 8 to 14 times it).
-    let slow_log = opts.baseline_friction && p.may_hold_bins();
+    // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
+    // A slow log with that friction is read as bin averages when they fit better (see
+    // `bin_reading`), and its noise floor read again on what the baseline leaves (the friction's
+    // flips are what the prepared floor took for noise; a configured model without friction
+    // removes none: the 100 Hz elbow example's named causes went from 8 to 14 times its floor).
+    // Without that friction a slow log is read as points.
     let mut base = Spec::default();
-    let points;
     let mut bin_averages = None;
+    let read;
     let p = if opts.baseline_friction && p.may_hold_bins() {
-        points = p.as_points();
+        let points = p.as_points();
         let (bins, term, reading) = bin_reading::choose(&model, &all, p, &points)?;
         base.terms.push(term);
         bin_averages = reading;
-        if bins { p } else { &points }
-    } else if opts.baseline_friction {
-        base.terms.push(bin_reading::baseline_friction(&model, &all, p)?);
-        p
-    } else if p.may_hold_bins() {
-        points = p.as_points();
-        &points
-    } else {
-        p
-    };
-    // A slow log's noise floor on what the baseline leaves (see `bin_reading::slow_log_floor`).
-    let refloored;
-    let p = match slow_log.then(|| bin_reading::slow_log_floor(&model, &base, p)).flatten() {
-        Some(floor) => {
-            refloored = prepare::Prepared { noise_floor_nm: floor, ..p.clone() };
-            &refloored
+        let mut chosen = if bins { p.clone() } else { points };
+        if let Some(floor) = bin_reading::slow_log_floor(&model, &base, &chosen) {
+            chosen.noise_floor_nm = floor;
         }
-        None => p,
+        read = chosen;
+        &read
+    } else if p.may_hold_bins() {
+        read = p.as_points();
+        &read
+    } else {
+        if opts.baseline_friction {
+            base.terms.push(bin_reading::baseline_friction(&model, &all, p)?);
+        }
+        p
     };
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
