@@ -179,6 +179,9 @@ pub struct Report {
     pub no_spring: Option<NoSpring>,
     /// Set when a slow log is read as bin averages (see [`bin_reading`]).
     pub bin_averages: Option<bin_reading::BinAverages>,
+    /// Set when a friction record's stops are left out (see [`prepare::AtRest`]): the held-out
+    /// figures above are then over the samples that slide.
+    pub at_rest: Option<prepare::AtRest>,
     /// The part of the time range held out (fractions of it), and why it is not the last part
     /// when it is not (see [`prepare::held_out_window`]).
     pub held_out_window: prepare::HeldOutWindow,
@@ -326,6 +329,18 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
 /// The search, the selection and the report on prepared data.
 fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
+    // A friction record's stops are left out of the fit and the judgement (see `prepare::rest`).
+    let whole = p;
+    let sliding;
+    let mut at_rest = None;
+    let p = match reads_as_friction(p.spring_share, &opts.baseline).then(|| p.sliding_only()).flatten() {
+        Some((s, rest)) => {
+            sliding = s;
+            at_rest = Some(rest);
+            &sliding
+        }
+        None => p,
+    };
     let centre_rad = if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
     let model = Model { baseline: &opts.baseline, centre_rad, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
@@ -368,6 +383,13 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
     let after = select::held_out_errors(&model, &spec, p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);
+    // Over every held-out sample as well, the stops included (not through the held-out cache:
+    // it knows a model by its terms, not by the samples it is scored on).
+    let at_rest = at_rest.map(|r| {
+        let every = prepare::scored_on_every_sample(p, whole);
+        let all = |s: &Spec| select::compute_held_out(&model, s, &every).map(|e| select::rmse(&e.errors));
+        prepare::AtRest { rmse_before_all_nm: all(&base), rmse_after_all_nm: all(&spec), ..r }
+    });
 
     let standard_errors = model.standard_errors(&spec, fit, &p.train).unwrap_or_default();
     let duration = p.train_duration_s + p.test.t[p.test.len() - 1] - p.test.t[0];
@@ -482,6 +504,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         unexplained,
         no_spring,
         bin_averages,
+        at_rest,
         held_out_window: p.held_out.clone(),
         significance: Significance {
             test: format!(

@@ -270,7 +270,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
         report.segments,
@@ -278,6 +278,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.resolution_rad,
         split_sentence(&report.held_out_window),
         bins_sentence(report.bin_averages.as_ref()),
+        rest_sentence(report.at_rest.as_ref()),
         report.rmse_before,
         report.rmse_after,
         u.noise_floor_nm
@@ -558,6 +559,25 @@ fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::BinAverages>)
         format!(
             " Read as bin averages (each sample the mean over its interval, eq. 3.5's friction averaged as the rate turns within it): the baseline's training BIC {:.0} against {:.0} read as point samples (k_b {:.4} s/rad against {:.4}); {}.",
             b.bic_bins, b.bic_points, b.k_b_bins_s_per_rad, b.k_b_points_s_per_rad, b.evidence
+        )
+    })
+}
+
+/// What a friction record's stops held and the error over every held-out sample, when they
+/// are left out.
+fn rest_sentence(r: Option<&jointctl_ident::identify::prepare::AtRest>) -> String {
+    r.map_or(String::new(), |r| {
+        let figure = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.4}"));
+        format!(
+            " Stops: {} samples ({:.1} s, {} of them held out) at rest (the rate below one count per {} s for at least as long), where the friction is static and held {:.3} to {:.3} Nm, set by what held the joint and not by its motion: left out of the fit and the judgement, and the figures below are over the samples that slide. Over every held-out sample, stops included: baseline {} Nm, extended {} Nm.",
+            r.samples,
+            r.seconds,
+            r.held_out_samples,
+            jointctl_ident::identify::prepare::REST_S,
+            r.torque_range_nm[0],
+            r.torque_range_nm[1],
+            figure(r.rmse_before_all_nm),
+            figure(r.rmse_after_all_nm)
         )
     })
 }

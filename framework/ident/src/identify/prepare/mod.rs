@@ -6,9 +6,12 @@ use std::borrow::Cow;
 mod bins;
 mod noise;
 mod rate;
+mod rest;
 mod window;
 
 pub use noise::noise_floor;
+pub use rest::{AtRest, REST_S};
+pub(crate) use rest::scored_on_every_sample;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};

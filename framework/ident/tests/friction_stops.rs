@@ -1,0 +1,102 @@
+//! A friction record with stops: the deflection column a joint position (no spring), the torque
+//! its friction. At rest the friction is static and holds whatever holds the joint; no sliding
+//! model predicts it (see `prepare::rest`). Found on the blind generator's friction-position
+//! records, where the torque held at each stop left the held-out part at 12 times the noise with
+//! the hidden offset unnamed. The records here are this file's own: strokes at 0.15-0.6 rad/s
+//! with stops of 0.5-2 s between them, a friction of `FC tanh(v / V_EPS)` (a sign that turns
+//! more sharply than eq. 3.5's arctan), and at each stop the drive pressing on to the breakaway
+//! for a while and then easing off to a level drawn anew, sampled at 1 kHz through a 14-bit
+//! encoder. With the stops in the fit and the judgement, the offset of the first test was not
+//! named on its first seed (held-out block t = 0.1).
+
+use jointctl_ident::identify::{IdentifyOptions, identify};
+
+/// Coulomb level [Nm] and the speed over which the sign turns [rad/s].
+const FC_NM: f64 = 1.5;
+const V_EPS_RAD_PER_S: f64 = 0.004;
+/// The torque sensor's noise [Nm].
+const NOISE_NM: f64 = 0.02;
+
+/// 60 s at 1 kHz: position [rad] and torque [Nm] with `offset_nm` on the torque.
+fn record(seed: u64, offset_nm: f64) -> jointctl_ident::csv::Data {
+    let mut rng = jointctl_test_support::XorShift64::new(0x9e37_79b9_7f4a_7c15 ^ seed);
+    let q = std::f64::consts::TAU / 16384.0;
+    let dt = 1e-3;
+    // (position, torque) at each sample, before quantisation, offset and noise.
+    let mut samples: Vec<(f64, f64)> = Vec::with_capacity(62_000);
+    let (mut x, mut side) = (0.0f64, 1.0f64);
+    while samples.len() < 60_000 {
+        // A stroke: to a target on alternate sides, at a speed drawn for it, its speed ramped up
+        // and down over 40 ms.
+        let target = side * (0.2 + 0.5 * rng.uniform());
+        let speed = 0.15 + 0.45 * rng.uniform();
+        let duration = (target - x).abs() / speed + 0.04;
+        let steps = (duration / dt) as usize;
+        let mut friction = 0.0;
+        for i in 0..steps {
+            let s = i as f64 * dt;
+            let ramp = (s / 0.04).min(1.0).min((duration - s) / 0.04).max(0.0);
+            let v = side * speed * ramp;
+            x += v * dt;
+            friction = FC_NM * (v / V_EPS_RAD_PER_S).tanh();
+            samples.push((x, friction));
+        }
+        // A stop: the drive presses on to the breakaway, 1.4 times the Coulomb level, for
+        // 0.2-0.8 s, then eases off to a level within +-1 Nm with a time constant of 0.1 s, for
+        // 0.5-2 s in all.
+        let stop = (0.5 + 1.5 * rng.uniform()) / dt;
+        let hold = (0.2 + 0.6 * rng.uniform()) / dt;
+        let level = 2.0 * rng.uniform() - 1.0;
+        friction *= 1.4;
+        for i in 0..stop as usize {
+            let after = (i as f64 - hold).max(0.0) * dt;
+            samples.push((x, level + (friction - level) * (-after / 0.1).exp()));
+        }
+        side = -side;
+    }
+    let t_s = (0..samples.len()).map(|i| i as f64 * dt).collect();
+    let position = samples.iter().map(|(x, _)| (x / q).round() * q).collect();
+    let torque = samples.iter().map(|(_, tau)| tau + offset_nm + NOISE_NM * rng.normal()).collect();
+    jointctl_ident::csv::Data::from_columns(t_s, position, torque)
+}
+
+#[test]
+fn a_friction_records_stops_are_left_out_and_its_offset_named() {
+    for seed in 1..=3 {
+        let report = identify(&record(seed, 0.25), &IdentifyOptions::default()).expect("identified");
+        let rest = report.at_rest.as_ref().unwrap_or_else(|| panic!("seed {seed}: no stops found"));
+        assert!(rest.samples > 5_000 && rest.held_out_samples > 0, "seed {seed}: {rest:?}");
+        // The stops' torque, held and let go, is what no sliding model predicts.
+        assert!(rest.torque_range_nm[0] < -1.0 && rest.torque_range_nm[1] > 1.0, "seed {seed}: {rest:?}");
+        let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+        let offset = report.causes.iter().find(|c| c.effect == "sensor_offset").unwrap_or_else(|| panic!("seed {seed}: offset not named: {named:?}, {:?}", report.rejected));
+        let value = offset.params["offset_nm"];
+        assert!((value - 0.25).abs() < 0.25 * 0.25, "seed {seed}: offset {value} Nm for 0.25");
+        assert_eq!(named, ["sensor_offset"], "seed {seed}");
+        // The stops are what the model does not predict: over every held-out sample the error
+        // is larger than over those that slide.
+        assert!(rest.rmse_after_all_nm.is_some_and(|x| x > report.rmse_after), "seed {seed}: {rest:?}");
+    }
+}
+
+#[test]
+fn a_clean_friction_record_with_stops_gets_no_cause() {
+    for seed in 4..=6 {
+        let report = identify(&record(seed, 0.0), &IdentifyOptions::default()).expect("identified");
+        assert!(report.at_rest.is_some(), "seed {seed}: no stops found");
+        let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+        assert!(named.is_empty(), "seed {seed}: named {named:?}");
+    }
+}
+
+#[test]
+fn a_spring_that_holds_is_no_stick_phase() {
+    // The same motion through a spring of 60 Nm/rad: at a stop the torque still follows the
+    // deflection, and nothing is left out.
+    let mut data = record(7, 0.0);
+    for (tau, x) in data.torque.iter_mut().zip(&data.deflection) {
+        *tau += 60.0 * x;
+    }
+    let report = identify(&data, &IdentifyOptions::default()).expect("identified");
+    assert!(report.at_rest.is_none(), "{:?}", report.at_rest);
+}
