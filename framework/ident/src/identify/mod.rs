@@ -179,6 +179,9 @@ pub struct Report {
     pub no_spring: Option<NoSpring>,
     /// Set when a slow log is read as bin averages (see [`bin_reading`]).
     pub bin_averages: Option<bin_reading::BinAverages>,
+    /// Set when a slow log's rate is read over a window as narrow as one sample either side
+    /// (see [`bin_reading::choose_rate_window`]).
+    pub narrow_rate: Option<bin_reading::NarrowRate>,
     /// Set when a friction record's stops are left out (see [`prepare::AtRest`]): the held-out
     /// figures above are then over the samples that slide.
     pub at_rest: Option<prepare::AtRest>,
@@ -313,12 +316,15 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
 /// ```
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let p = prepare::prepare(data, opts.train_fraction, opts.held_out)?;
+    // A slow log's rate over a window as narrow as one sample either side, should the data
+    // read better so (see `bin_reading::choose_rate_window`).
+    let narrow = if p.may_hold_bins() { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, 1).ok() } else { None };
     let builtin = causes::builtin();
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
     let checked_and_extended = || {
         check_registered(&builtin, &opts.extra_candidates, &p, &opts.baseline)?;
-        extend(&p, &builtin, opts)
+        extend(&p, narrow.as_ref(), &builtin, opts)
     };
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(checked_and_extended)).unwrap_or_else(|panic| {
         let message = panic.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| panic.downcast_ref::<String>().cloned()).unwrap_or_else(|| "no message".into());
@@ -327,8 +333,16 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
 }
 
 /// The search, the selection and the report on prepared data.
-fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
+fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
+    let centre = |p: &prepare::Prepared| if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
+    // A slow log's rate: over the usual window or as narrow as one sample either side, as the
+    // baseline's fit says (only with eq. 3.5's friction in the baseline, which the rate drives).
+    let narrow_rate = narrow.filter(|_| opts.baseline_friction).and_then(|n| bin_reading::choose_rate_window(&all, &opts.baseline, centre(p), p, n));
+    let p = match (narrow, &narrow_rate) {
+        (Some(n), Some(_)) => n,
+        _ => p,
+    };
     // A friction record's stops are left out of the fit and the judgement (see `prepare::rest`).
     let whole = p;
     let sliding;
@@ -341,7 +355,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         }
         None => p,
     };
-    let centre_rad = if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
+    let centre_rad = centre(p);
     let model = Model { baseline: &opts.baseline, centre_rad, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
@@ -504,6 +518,7 @@ fn extend(p: &prepare::Prepared, builtin: &[Box<dyn CandidateCause>], opts: &Ide
         unexplained,
         no_spring,
         bin_averages,
+        narrow_rate,
         at_rest,
         held_out_window: p.held_out.clone(),
         significance: Significance {

@@ -12,9 +12,11 @@ use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
 
 mod extension;
 mod fit;
+mod reading;
 
 pub use fit::{FitArgs, run_fit};
 use extension::{extend, extension_json, gains_table, loop_causes, loop_table, write_extension};
+use reading::{bins_sentence, narrow_rate_sentence, rest_sentence, split_sentence};
 
 #[derive(Args)]
 pub struct IdentifyArgs {
@@ -270,7 +272,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}{}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
         report.segments,
@@ -278,6 +280,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.resolution_rad,
         split_sentence(&report.held_out_window),
         bins_sentence(report.bin_averages.as_ref()),
+        narrow_rate_sentence(report.narrow_rate.as_ref()),
         rest_sentence(report.at_rest.as_ref()),
         report.rmse_before,
         report.rmse_after,
@@ -541,45 +544,6 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
         out!("{md}");
     }
     ExitCode::SUCCESS
-}
-
-/// Which part of the record the baseline was fitted on and which part scored it.
-fn split_sentence(w: &jointctl_ident::identify::prepare::HeldOutWindow) -> String {
-    let percent = |f: f64| format!("{:.0}", 100.0 * f);
-    match &w.moved {
-        None => format!("Baseline fitted on the first {} % of the time range, scored on the last {} %.", percent(w.start), percent(w.end - w.start)),
-        Some(why) => format!("Baseline fitted on the time range but {}-{} %, scored on that window: {why}.", percent(w.start), percent(w.end)),
-    }
-}
-
-/// How a slow log was read, when as bin averages (point samples go unsaid: every record was
-/// read so before).
-fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::BinAverages>) -> String {
-    b.map_or(String::new(), |b| {
-        format!(
-            " Read as bin averages (each sample the mean over its interval, eq. 3.5's friction averaged as the rate turns within it): the baseline's training BIC {:.0} against {:.0} read as point samples (k_b {:.4} s/rad against {:.4}); {}.",
-            b.bic_bins, b.bic_points, b.k_b_bins_s_per_rad, b.k_b_points_s_per_rad, b.evidence
-        )
-    })
-}
-
-/// What a friction record's stops held and the error over every held-out sample, when they
-/// are left out.
-fn rest_sentence(r: Option<&jointctl_ident::identify::prepare::AtRest>) -> String {
-    r.map_or(String::new(), |r| {
-        let figure = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.4}"));
-        format!(
-            " Stops: {} samples ({:.1} s, {} of them held out) at rest (the rate below one count per {} s for at least as long), where the friction is static and held {:.3} to {:.3} Nm, set by what held the joint and not by its motion: left out of the fit and the judgement, and the figures below are over the samples that slide. Over every held-out sample, stops included: baseline {} Nm, extended {} Nm.",
-            r.samples,
-            r.seconds,
-            r.held_out_samples,
-            jointctl_ident::identify::prepare::REST_S,
-            r.torque_range_nm[0],
-            r.torque_range_nm[1],
-            figure(r.rmse_before_all_nm),
-            figure(r.rmse_after_all_nm)
-        )
-    })
 }
 
 /// The split identify used: the model loop's gains are measured on what it held out.

@@ -4,6 +4,7 @@
 use std::borrow::Cow;
 
 mod bins;
+mod dropouts;
 mod noise;
 mod rate;
 mod rest;
@@ -13,8 +14,12 @@ pub use noise::noise_floor;
 pub use rest::{AtRest, REST_S};
 pub(crate) use rest::scored_on_every_sample;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
+use dropouts::dropouts_by_segment;
+#[cfg(test)]
+use dropouts::dropouts;
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
+pub use rate::NARROWEST_RATE_WINDOW;
 use rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals};
@@ -202,52 +207,6 @@ pub const FIT_SAMPLES: usize = 50_000;
 /// its test's power grows with them, and it is predicted, not fitted, so they cost less).
 pub const HELD_OUT_SAMPLES: usize = 200_000;
 
-/// Exact zeros that the signal cannot have reached: a run of zeros far from the line between the
-/// readings either side of it, farther than three times a reading's uncertainty (`uncertainty`:
-/// the encoder's resolution, the torque sensor's noise) plus twice the signal's own local step
-/// per sample of the run. (A signal that really crosses zero lies on that line: a fast
-/// stroke crossing zero between a reading above and one below is no dropout, however large its
-/// steps; thesis appendix A's lost CAN frames jump to zero from anywhere and back.)
-fn dropouts(series: &[f64], uncertainty: f64) -> Vec<bool> {
-    let n = series.len();
-    let mut dropped = vec![false; n];
-    let mut i = 1;
-    while i + 1 < n {
-        if series[i] != 0.0 {
-            i += 1;
-            continue;
-        }
-        let mut j = i;
-        while j < n && series[j] == 0.0 {
-            j += 1;
-        }
-        if j < n {
-            let (before, after) = (series[i - 1], series[j]);
-            // The signal's local step per sample: the change into the run's left neighbour and
-            // out of its right one, each from the nearest reading beyond it that is not zero (a
-            // dropout next to it is no step of the signal: two lost readings one sample apart
-            // made each other's steps the signal's full value, and both were kept).
-            let step_in = (0..i - 1).rev().find(|k| series[*k] != 0.0).map_or(0.0, |k| (series[i - 1] - series[k]).abs() / (i - 1 - k) as f64);
-            let step_out = (j + 1..n).find(|k| series[*k] != 0.0).map_or(0.0, |k| (series[k] - series[j]).abs() / (k - j) as f64);
-            let reach = 3.0 * uncertainty + 2.0 * step_in.max(step_out) * (j - i + 1) as f64;
-            let span = (j - i + 1) as f64;
-            let nearest = (1..=j - i).map(|k| (before + (after - before) * k as f64 / span).abs()).fold(f64::INFINITY, f64::min);
-            if nearest > reach && before.abs() > reach && after.abs() > reach {
-                dropped[i..j].iter_mut().for_each(|d| *d = true);
-            }
-        }
-        i = j;
-    }
-    dropped
-}
-
-/// [`dropouts`] in each segment of contiguous logging apart (`starts` from [`segment_starts`]):
-/// a record that starts from rest after a gap (a repetition, an experiment's next sine) reads
-/// exactly zero there, and the reading before the gap is no neighbour of it.
-fn dropouts_by_segment(series: &[f64], starts: &[usize], uncertainty: f64) -> Vec<bool> {
-    starts.iter().enumerate().flat_map(|(k, &a)| dropouts(&series[a..starts.get(k + 1).copied().unwrap_or(series.len())], uncertainty)).collect()
-}
-
 /// The excitation's fundamental [Hz]: the slope of the upward mean-crossing times (each
 /// interpolated between samples) against their count, a least-squares line. Exact to a small
 /// fraction of 1/duration even when the amplitude varies, which harmonics of it (periodic model
@@ -295,7 +254,13 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
     }
 }
 
-pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
+pub(crate) fn prepare(data: &Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
+    prepare_with_rate_window(data, train_fraction, how, NARROWEST_RATE_WINDOW)
+}
+
+/// [`prepare`] with the rate's widest window at least `narrowest` samples either side (see
+/// [`NARROWEST_RATE_WINDOW`]).
+pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, how: HeldOut, narrowest: usize) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
         return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
@@ -339,7 +304,7 @@ pub(crate) fn prepare<'a>(data: &'a Data, train_fraction: f64, how: HeldOut) -> 
     // The deflection's noise: its quantisation (at most half a step, see `DeflectionNoise`) and
     // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
-    let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples));
+    let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples, narrowest));
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = turning.len();

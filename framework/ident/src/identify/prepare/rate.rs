@@ -10,16 +10,17 @@ const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
 
 /// The widest the velocity window may be per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`]
 /// of the local period, twice the stroke between the reversals around the sample (debounced at
-/// a tenth of the range), never more than of the fundamental's `period_samples`; between 2 and
-/// 100 samples (an assumption: +-0.1 s at 1 kHz, where a hand's motion of a few hertz bends;
+/// a tenth of the range), never more than of the fundamental's `period_samples`; between
+/// `narrowest` ([`NARROWEST_RATE_WINDOW`], or one sample for a slow log that the data reads
+/// better so: see `bin_reading`) and 100 samples (an assumption: +-0.1 s at 1 kHz, where a hand's motion of a few hertz bends;
 /// the first version stopped at 25, which at 1 kHz left a 14-bit encoder's staircase in the rate
 /// of a slow stroke). A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
 /// in places than its fundamental says: a window sized on the fundamental reads those rates low,
 /// and every rate-driven torque (viscous friction most) comes out too large. Where the motion
 /// bends faster than its strokes tell (a corner between a hold and a ramp; every sample of a
 /// slow log), [`adaptive_velocity`] narrows the window further.
-pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64) -> Vec<usize> {
-    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(2, 100);
+pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64, narrowest: usize) -> Vec<usize> {
+    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(narrowest, 100);
     let mut out = vec![half(period_samples); n];
     for w in reversals.windows(2) {
         let h = half(2.0 * (w[1] - w[0]) as f64);
@@ -27,6 +28,11 @@ pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples
     }
     out
 }
+
+/// The narrowest the widest rate window may be, samples either side (an assumption: at +-1 a
+/// slope is a central difference, the quantisation's step over two sample periods; a slow log
+/// of a motion of about 1 Hz may read better so, which the data decides, see `bin_reading`).
+pub const NARROWEST_RATE_WINDOW: usize = 2;
 
 /// Deflection rate: the slope of a local least-squares line (a Savitzky-Golay derivative) over
 /// `+-half[i]` samples around sample `i`: no lag, and it averages out the quantisation. Running window sums
@@ -385,7 +391,7 @@ mod tests {
         // Strokes of 1000 samples (a period of 2000, capped by the fundamental's 1000: a
         // window of +-20), then of 50 (+-2); after the last reversal the fundamental's.
         let reversals = [0, 1000, 2000, 2050, 2100, 2150];
-        let half = velocity_half_widths(2300, &reversals, 1000.0);
+        let half = velocity_half_widths(2300, &reversals, 1000.0, NARROWEST_RATE_WINDOW);
         assert_eq!((half[500], half[1500], half[2020], half[2120], half[2200]), (20, 20, 2, 2, 20));
     }
 
@@ -418,7 +424,7 @@ mod tests {
         t.push(200.0);
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.002 * (17.0 * t).sin()) / q).round() * q).collect();
         let starts = [0, long, long + 3000];
-        let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0);
+        let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0, NARROWEST_RATE_WINDOW);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
         let shared = velocity_by_segment(&t, &d, &starts, noise, &half);
         let mut whole = adaptive_velocity(&t[..long], &d[..long], noise, &half[..long]);
@@ -438,7 +444,7 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3).collect();
         let edge = RATE_BLOCK as f64 * 1e-3;
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.01 * (40.0 * t).sin() * (-(t - edge).powi(2)).exp()) / q).round() * q).collect();
-        let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0);
+        let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0, NARROWEST_RATE_WINDOW);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
         let (whole, blocks) = (adaptive_velocity(&t, &d, noise, &half), velocity_by_segment(&t, &d, &[0], noise, &half));
         assert_eq!(whole.len(), blocks.len());

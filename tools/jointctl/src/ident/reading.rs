@@ -1,0 +1,54 @@
+//! How identify read the record, in the report's words: the held-out window, a slow log's bins
+//! and rate, a friction record's stops.
+
+/// Which part of the record the baseline was fitted on and which part scored it.
+pub(super) fn split_sentence(w: &jointctl_ident::identify::prepare::HeldOutWindow) -> String {
+    let percent = |f: f64| format!("{:.0}", 100.0 * f);
+    match &w.moved {
+        None => format!("Baseline fitted on the first {} % of the time range, scored on the last {} %.", percent(w.start), percent(w.end - w.start)),
+        Some(why) => format!("Baseline fitted on the time range but {}-{} %, scored on that window: {why}.", percent(w.start), percent(w.end)),
+    }
+}
+
+/// How a slow log was read, when as bin averages (point samples go unsaid: every record was
+/// read so before).
+pub(super) fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::BinAverages>) -> String {
+    b.map_or(String::new(), |b| {
+        format!(
+            " Read as bin averages (each sample the mean over its interval, eq. 3.5's friction averaged as the rate turns within it): the baseline's training BIC {:.0} against {:.0} read as point samples (k_b {:.4} s/rad against {:.4}); {}.",
+            b.bic_bins, b.bic_points, b.k_b_bins_s_per_rad, b.k_b_points_s_per_rad, b.evidence
+        )
+    })
+}
+
+/// A slow log's rate read over a window as narrow as one sample either side, when it is.
+pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_reading::NarrowRate>) -> String {
+    r.map_or(String::new(), |r| {
+        format!(
+            " The rate read over a window as narrow as one sample either side (the usual is at least {}): the baseline's training BIC {:.0} against {:.0} over the usual window; {}.",
+            jointctl_ident::identify::prepare::NARROWEST_RATE_WINDOW,
+            r.bic_narrow,
+            r.bic_usual,
+            r.evidence
+        )
+    })
+}
+
+/// What a friction record's stops held and the error over every held-out sample, when they
+/// are left out.
+pub(super) fn rest_sentence(r: Option<&jointctl_ident::identify::prepare::AtRest>) -> String {
+    r.map_or(String::new(), |r| {
+        let figure = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.4}"));
+        format!(
+            " Stops: {} samples ({:.1} s, {} of them held out) at rest (the rate below one count per {} s for at least as long), where the friction is static and held {:.3} to {:.3} Nm, set by what held the joint and not by its motion: left out of the fit and the judgement, and the figures below are over the samples that slide. Over every held-out sample, stops included: baseline {} Nm, extended {} Nm.",
+            r.samples,
+            r.seconds,
+            r.held_out_samples,
+            jointctl_ident::identify::prepare::REST_S,
+            r.torque_range_nm[0],
+            r.torque_range_nm[1],
+            figure(r.rmse_before_all_nm),
+            figure(r.rmse_after_all_nm)
+        )
+    })
+}
