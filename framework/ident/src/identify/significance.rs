@@ -12,8 +12,9 @@
 //!   blocks only; or, where the model without the cause leaves at least the noise's variance
 //!   again above the floor (a structured residual), a gain that is large
 //!   ([`LARGE_SHARE_OF_EXCESS`] of the excess) and consistent over [`CONSISTENCY_PARTS`]
-//!   contiguous parts of the held-out part: none made worse by a relevant amount; of those with
-//!   something to explain, at least two and more than half made better by one. On real records the residual is mostly structure that the listed causes
+//!   contiguous parts of the held-out part: none made worse by a relevant amount, or one only
+//!   when every other part is made better by one and the parts' median gain is relevant; of
+//!   those with something to explain, at least two and more than half made better by one. On real records the residual is mostly structure that the listed causes
 //!   explain only in part; the blocks' gains then scatter and the t statistic stays small while the
 //!   cause halves the error. Consistency in time is the evidence that holds there.
 //!
@@ -82,7 +83,11 @@ pub const RELEVANT_SHARE_OF_EXCESS: f64 = 0.05;
 pub const LARGE_SHARE_OF_EXCESS: f64 = 0.2;
 
 /// Contiguous parts of the held-out part a consistent gain is judged on: in none may the cause
-/// worsen the error by the relevance threshold; of the parts where the model without it leaves
+/// worsen the error by the relevance threshold, or in one only when it betters every other part
+/// by as much and the parts' median gain is relevant (the folds' median and signs of hv-block
+/// cross-validation; a Dahl loop fitted for a Bouc-Wen loop took 86 % of the excess off the
+/// blind seed 4's 009, 92-100 % of it in three parts, and was refused for the fourth, made worse
+/// by 0.063 Nm^2 where 0.040 is relevant); of the parts where the model without it leaves
 /// a relevant excess, at least two and more than half must be bettered by as much (chance gains
 /// of a relevant size in several parts do not occur on clean data: see the suites' clean
 /// records).
@@ -178,16 +183,23 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
             (r - noise_nm2, r - mean(&full[lo..hi]))
         })
         .collect();
-    // Consistent: no part made worse by a relevant amount, and of the parts that have something
-    // to explain (the reduced model leaves a relevant excess there), at least two and more than
-    // half made better by a relevant amount. An effect that shows only where the joint moves
-    // fast leaves the slow parts at the floor with either model: they count neither way.
-    let no_part_worse = per_part.iter().all(|(_, g)| *g >= -relevant_nm2);
+    // Consistent: no part made worse by a relevant amount (or one, against every other part
+    // made better by one and a relevant median gain: see CONSISTENCY_PARTS), and of the parts
+    // that have something to explain (the reduced model leaves a relevant excess there), at
+    // least two and more than half made better by a relevant amount. An effect that shows only
+    // where the joint moves fast leaves the slow parts at the floor with either model: they
+    // count neither way.
+    let worse = per_part.iter().filter(|(_, g)| *g < -relevant_nm2).count();
+    let bettered = per_part.iter().filter(|(_, g)| *g >= relevant_nm2).count();
+    let mut gains: Vec<f64> = per_part.iter().map(|(_, g)| *g).collect();
+    gains.sort_by(f64::total_cmp);
+    let median = if gains.is_empty() { 0.0 } else { 0.5 * (gains[(gains.len() - 1) / 2] + gains[gains.len() / 2]) };
+    let worse_allowed = worse == 0 || (worse == 1 && per_part.len() >= CONSISTENCY_PARTS && bettered + 1 == per_part.len() && median >= relevant_nm2);
     let informative: Vec<f64> = per_part.iter().filter(|(e, _)| *e >= relevant_nm2).map(|(_, g)| *g).collect();
     let better = informative.iter().filter(|g| **g >= relevant_nm2).count();
     let most_parts_better = better >= 2 && 2 * better > informative.len();
     let structured = excess >= noise_nm2;
-    let consistent = structured && no_part_worse && most_parts_better && gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
+    let consistent = structured && worse_allowed && most_parts_better && gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
     Judgement { test, gain_nm2: gain, relevant_nm2, consistent, structured }
 }
 
@@ -472,6 +484,34 @@ fn t_of_block_means(means: &[f64], kind: TestKind) -> BlockTest {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Per-sample squared errors of `n` samples a part, each part at its level.
+    fn parts(levels: &[f64], n: usize) -> Vec<f64> {
+        levels.iter().flat_map(|l| std::iter::repeat_n(*l, n)).collect()
+    }
+
+    #[test]
+    fn a_large_gain_with_one_part_made_worse_is_consistent_when_every_other_part_gains() {
+        // Finding (the blind generator's seed 4, 009: a Bouc-Wen loop, Dahl's fitted for it):
+        // the Dahl loop took 86 % of the excess over the noise off the held-out part, 92-100 %
+        // of it in three of the four parts, and made the third part worse by 0.063 Nm^2 (the
+        // relevance threshold 0.040): refused, and no cause was named at 2.5 times the noise.
+        // A cause that models an effect nearly right is worse somewhere; the parts' median and
+        // their signs decide (hv-block cross-validation's rule), one part against three.
+        let reduced = parts(&[3.0, 7.0, 1.5, 2.0], 1000);
+        let full = parts(&[1.0, 1.0, 1.8, 1.0], 1000);
+        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
+        let j = judge(&reduced, &full, block_test(&diff), 1.0);
+        assert!(j.consistent, "{j:?}");
+        // Two parts made worse: not consistent, however large the rest.
+        let full = parts(&[1.0, 1.0, 1.8, 2.3], 1000);
+        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
+        assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+        // One part worse and another without a relevant gain: not consistent either.
+        let full = parts(&[1.0, 1.0, 1.8, 1.95], 1000);
+        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
+        assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+    }
 
     #[test]
     fn the_critical_value_matches_the_table() {
