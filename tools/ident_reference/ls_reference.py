@@ -127,9 +127,12 @@ def main():
         # A friction record's stops are left out of identify's own figures; the reference is
         # scored on every held-out sample, so identify's are taken over every sample too.
         rest = report.get('at_rest') or {}
-        before = rest.get('rmse_before_all_nm') or report['rmse_before']
-        after = rest.get('rmse_after_all_nm') or report['rmse_after']
+        before = rest.get('rmse_before_all_nm') if rest else report['rmse_before']
+        after = rest.get('rmse_after_all_nm') if rest else report['rmse_after']
         stops = f", stops included ({rest['held_out_samples']} held-out samples at rest)" if rest else ''
+        if before is None or after is None:
+            print(f'{name:45s} identify gave no figure over every held-out sample (stops left out); reference {ref:.4f} Nm')
+            continue
         ratio = after / ref if ref > 0 else float('nan')
         flag = '  WORSE' if ratio > 1.25 else ''
         print(f"{name:45s} held out [Nm]: identify {before:.4f} -> {after:.4f} ({causes}{stops}); "

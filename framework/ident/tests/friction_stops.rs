@@ -100,3 +100,30 @@ fn a_spring_that_holds_is_no_stick_phase() {
     let report = identify(&data, &IdentifyOptions::default()).expect("identified");
     assert!(report.at_rest.is_none(), "{:?}", report.at_rest);
 }
+
+#[test]
+fn a_slow_sines_reversals_are_no_stops() {
+    // Finding (review): a slow sine comes to rest at each reversal as slowly as it leaves; read
+    // as stops, a friction characterisation's reversals (the pre-sliding itself) were left out:
+    // 2132 samples of a 0.05 Hz sine of 0.3 rad at 1 kHz. A stop is arrived at from motion.
+    use std::f64::consts::TAU;
+    let q = TAU / 16384.0;
+    let mut rng = jointctl_test_support::XorShift64::new(0x3c6e_f372_fe94_f82b);
+    for (amplitude, hz) in [(0.3, 0.05), (0.05, 0.2)] {
+        let t: Vec<f64> = (0..120_000).map(|i| i as f64 * 1e-3).collect();
+        let x: Vec<f64> = t.iter().map(|t| amplitude * (TAU * hz * t).sin()).collect();
+        let torque = t.iter().map(|t| FC_NM * (amplitude * TAU * hz * (TAU * hz * t).cos() / V_EPS_RAD_PER_S).tanh() + NOISE_NM * rng.normal()).collect();
+        let position = x.iter().map(|x| (x / q).round() * q).collect();
+        let report = identify(&jointctl_ident::csv::Data::from_columns(t, position, torque), &IdentifyOptions::default()).expect("identified");
+        assert!(report.at_rest.is_none(), "{amplitude} rad at {hz} Hz: {:?}", report.at_rest);
+    }
+}
+
+#[test]
+fn a_rate_that_is_not_a_number_is_no_stop() {
+    // Finding (review): a deflection that is not a number made the rate so, and the search for
+    // stops never moved past it (identify hung). It is no stop; identify answers.
+    let mut data = record(1, 0.25);
+    data.deflection[55_000] = f64::NAN;
+    let _ = identify(&data, &IdentifyOptions::default());
+}

@@ -318,7 +318,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let p = prepare::prepare(data, opts.train_fraction, opts.held_out)?;
     // A slow log's rate over a window as narrow as one sample either side, should the data
     // read better so (see `bin_reading::choose_rate_window`).
-    let narrow = if p.may_hold_bins() { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, 1).ok() } else { None };
+    let narrow = if p.may_hold_bins() && opts.baseline_friction { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, 1).ok() } else { None };
     let builtin = causes::builtin();
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
@@ -338,7 +338,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     let centre = |p: &prepare::Prepared| if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
     // A slow log's rate: over the usual window or as narrow as one sample either side, as the
     // baseline's fit says (only with eq. 3.5's friction in the baseline, which the rate drives).
-    let narrow_rate = narrow.filter(|_| opts.baseline_friction).and_then(|n| bin_reading::choose_rate_window(&all, &opts.baseline, centre(p), p, n));
+    let narrow_rate = narrow.and_then(|n| bin_reading::choose_rate_window(&all, &opts.baseline, centre(p), p, n));
     let p = match (narrow, &narrow_rate) {
         (Some(n), Some(_)) => n,
         _ => p,

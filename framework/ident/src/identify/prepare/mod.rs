@@ -170,6 +170,9 @@ pub(crate) struct Prepared {
     pub held_out: HeldOutWindow,
     /// The time the training part spans [s] (without the held-out window inside it).
     pub train_duration_s: f64,
+    /// Where the joint is at rest, `(start, end)` [s] from `t0` (see `rest`); left out of a
+    /// friction record's fit and judgement.
+    pub stops: Vec<(f64, f64)>,
 }
 
 impl Prepared {
@@ -410,7 +413,8 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         span(before) + span(after)
     };
     let spring_share = spring_share(&train);
-    Ok(Prepared { train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s })
+    let stops = rest::stops(&t, &v, spacing, resolution);
+    Ok(Prepared { train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples

@@ -25,7 +25,9 @@ pub const REST_S: f64 = 0.1;
 /// The samples at rest and what they held, over the whole record.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct AtRest {
-    /// Training and held-out samples at rest, left out of the fit and the judgement.
+    /// Samples at rest of the training and held-out parts as fitted and scored (each at most
+    /// 50 000 and 200 000 samples taken evenly over the record: a longer record's count is of
+    /// those), left out of the fit and the judgement.
     pub samples: usize,
     /// Of them, in the held-out part.
     pub held_out_samples: usize,
@@ -40,29 +42,58 @@ pub struct AtRest {
     pub rmse_after_all_nm: Option<f64>,
 }
 
-/// Which samples of `part` are at rest: runs whose rate stays below `rate_floor` [rad/s] for
-/// at least [`REST_S`] and over enough samples that leaving them out parts the record there
-/// (more than [`GAP_STEPS`] sample periods: the fit's states and delays restart after a stop, as
-/// after a logger's gap).
-fn at_rest(part: &Part, rate_floor: f64) -> Vec<bool> {
-    let n = part.len();
-    let mut rest = vec![false; n];
+/// A stop lasts at least this many times as long as a turn would stay under the rest's rate
+/// floor (an assumption, a margin for the rate's noise and for a turn's curvature). Decelerating
+/// at `a` into a run under the floor `f`, a turn (a slow sine's reversal) is back above it
+/// after `2 f / a`; a joint that stops holds for as long as it is held. Without it a friction
+/// characterisation's slow sines lost their reversals, the Dahl pre-sliding itself, as stops (a
+/// review's 0.05 Hz sine of 0.3 rad: 2132 samples); a rule that asked the joint to arrive from
+/// ten times the floor missed the stops of strokes that end smoothly (the blind seed 6's 064).
+const STOP_TURNS: f64 = 3.0;
+
+/// The time intervals `(start, end)` [s] at rest of a record with time stamps `t` [s], rate `v`
+/// [rad/s] and median step `spacing` [s]: runs whose rate stays below one count
+/// (`resolution_rad`) per [`REST_S`] for at least [`REST_S`] of logged time (a gap of more than
+/// [`GAP_STEPS`] median steps inside counts for nothing: a logger's pause, or the held-out window
+/// between two training pieces, is no time at rest; an irregular log's shorter gaps do not part
+/// a stop, its jitter reaches 8-10 steps), over enough samples that leaving
+/// them out parts the record there (more than [`GAP_STEPS`] sample periods: the fit's states and
+/// delays restart after a stop, as after a logger's gap), and longer than a turn would be (see
+/// [`STOP_TURNS`]). Found on the whole record, so that a part that begins inside a stop
+/// knows how the joint came to it. A rate that is not a number is no rest.
+pub(super) fn stops(t: &[f64], v: &[f64], spacing: f64, resolution_rad: f64) -> Vec<(f64, f64)> {
+    let n = t.len().min(v.len());
+    let floor = resolution_rad / REST_S;
+    let slow = |i: usize| v[i].abs() < floor;
+    // A step longer than a gap is time the joint was not watched: it does not count as rest.
+    let observed = |i: usize| if i > 0 && t[i] - t[i - 1] <= GAP_STEPS * spacing { t[i] - t[i - 1] } else { 0.0 };
+    let mut intervals = Vec::new();
     let mut i = 0;
     while i < n {
-        if part.v[i].abs() >= rate_floor {
+        if !slow(i) {
             i += 1;
             continue;
         }
-        let mut j = i;
-        while j < n && part.v[j].abs() < rate_floor {
+        let mut j = i + 1;
+        while j < n && slow(j) {
             j += 1;
         }
-        if part.t[j - 1] - part.t[i] >= REST_S && (j - i) as f64 >= GAP_STEPS + 2.0 {
-            rest[i..j].iter_mut().for_each(|r| *r = true);
+        // The deceleration into the run [rad/s^2], over the REST_S before it (none at the
+        // record's start: a record that begins at rest is no stop that can be told).
+        let deceleration = (0..i).rev().take_while(|k| t[i] - t[*k] <= REST_S).filter(|k| t[i] > t[*k]).map(|k| (v[k].abs() - floor) / (t[i] - t[k])).fold(0.0, f64::max);
+        let turn_s = if deceleration > 0.0 { 2.0 * floor / deceleration } else { f64::INFINITY };
+        let watched: f64 = (i + 1..j).map(observed).sum();
+        if watched >= REST_S.max(STOP_TURNS * turn_s) && (j - i) as f64 >= GAP_STEPS + 2.0 {
+            intervals.push((t[i], t[j - 1]));
         }
         i = j;
     }
-    rest
+    intervals
+}
+
+/// Which samples of `part` lie in one of `intervals`.
+fn within(part: &Part, intervals: &[(f64, f64)]) -> Vec<bool> {
+    part.t.iter().map(|t| intervals.iter().any(|(a, b)| *t >= *a && *t <= *b)).collect()
 }
 
 /// `part` without the samples flagged in `drop`.
@@ -89,10 +120,8 @@ impl Prepared {
     /// The record without its samples at rest (see the module), and what they were; `None` when
     /// it has none, or when too little would be left to judge on.
     pub(crate) fn sliding_only(&self) -> Option<(Prepared, AtRest)> {
-        // A rate below one count per REST_S: the encoder's count, the data's smallest step.
-        let floor = self.resolution_rad / REST_S;
-        let flags = |part: &Part| at_rest(part, floor);
-        let (train, test) = (flags(&self.train), flags(&self.test));
+        let stops = &self.stops;
+        let (train, test) = (within(&self.train, stops), within(&self.test, stops));
         let count = |f: &[bool]| f.iter().filter(|r| **r).count();
         let (rest_train, rest_test) = (count(&train), count(&test));
         if rest_train + rest_test == 0 || self.train.len() - rest_train < MIN_SLIDING || self.test.len() - rest_test < MIN_SLIDING {
@@ -101,10 +130,8 @@ impl Prepared {
         let mut p = self.clone();
         p.train = without(&self.train, &train);
         p.test = without(&self.test, &test);
-        let coarse = flags(&self.coarse);
-        p.coarse = without(&self.coarse, &coarse);
-        let stretch = flags(&self.stretch);
-        p.stretch = without(&self.stretch, &stretch);
+        p.coarse = without(&self.coarse, &within(&self.coarse, stops));
+        p.stretch = without(&self.stretch, &within(&self.stretch, stops));
         if p.coarse.len() < MIN_SLIDING || p.stretch.len() < MIN_SLIDING {
             return None;
         }
