@@ -91,9 +91,17 @@ pub(super) fn stops(t: &[f64], v: &[f64], spacing: f64, resolution_rad: f64) -> 
     intervals
 }
 
-/// Which samples of `part` lie in one of `intervals`.
+/// Which samples of `part` lie in one of `intervals` (in time order, apart: as [`stops`]
+/// finds them). A search per sample, not a scan of every interval: a long record with a stop
+/// at every stroke has thousands.
 fn within(part: &Part, intervals: &[(f64, f64)]) -> Vec<bool> {
-    part.t.iter().map(|t| intervals.iter().any(|(a, b)| *t >= *a && *t <= *b)).collect()
+    part.t
+        .iter()
+        .map(|t| {
+            let k = intervals.partition_point(|(a, _)| *a <= *t);
+            k > 0 && *t <= intervals[k - 1].1
+        })
+        .collect()
 }
 
 /// `part` without the samples flagged in `drop`.
