@@ -376,7 +376,7 @@ fn hysteresis_and_dead_zone_in_the_plant_come_without_a_delay_or_a_vibration() {
     let hysteresis = q4_recording(
         |e| {
             e.torque_noise_nm = 0.01;
-            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2 });
+            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2, shape: 1.0 });
         },
         100.0,
     );

@@ -149,6 +149,9 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
     }
     if let Some(h) = fx.hysteresis {
         values.extend([("hysteresis.sigma_nm_per_rad", h.sigma_nm_per_rad, true), ("hysteresis.limit_nm", h.limit_nm, true)]);
+        if !(h.shape >= 1.0 && h.shape <= jointctl_models::extension::MAX_LOOP_SHAPE) {
+            return Err(("hysteresis.shape".into(), format!("must be between 1 and {}, got {}", jointctl_models::extension::MAX_LOOP_SHAPE, h.shape)));
+        }
     }
     if let Some(m) = fx.vibration {
         values.extend([("vibration.frequency_hz", m.frequency_hz, true), ("vibration.damping_ratio", m.damping_ratio, true), ("vibration.gain", m.gain, false)]);
@@ -366,9 +369,11 @@ impl Unit {
                 t += f.k_a_nm * (f.k_b_s_per_rad * rate[i]).atan();
             }
             if let Some(h) = fx.hysteresis {
-                // Dahl: dz/dt = sigma (1 - z/fc sgn(v)) v.
+                // Dahl: dz/dt = sigma (1 - z/fc sgn(v)) v; with a shape n, (z/fc) |z/fc|^(n-1)
+                // in place of z/fc (Bouc-Wen with beta = 1, gamma = 0; the same at n = 1).
                 let v = rate[i];
-                st.dahl_z += h.sigma_nm_per_rad * (1.0 - st.dahl_z / h.limit_nm * v.signum()) * v * dt;
+                let r = st.dahl_z / h.limit_nm;
+                st.dahl_z += h.sigma_nm_per_rad * (1.0 - r * r.abs().powf(h.shape - 1.0) * v.signum()) * v * dt;
                 st.dahl_z = st.dahl_z.clamp(-h.limit_nm, h.limit_nm);
                 t += st.dahl_z;
             }

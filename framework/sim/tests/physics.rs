@@ -193,8 +193,12 @@ fn plant_effects_that_are_not_numbers_or_not_physical_are_refused_by_field() {
     let (field, message) = check_effects(&negative).unwrap_err();
     assert_eq!(field, "arctan_friction.k_a_nm");
     assert_eq!(message, "must be a finite number >= 0, got -0.1");
-    let zero_limit = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.0 }), ..EffectsConfig::default() };
+    let zero_limit = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.0, shape: 1.0 }), ..EffectsConfig::default() };
     assert_eq!(check_effects(&zero_limit).unwrap_err().0, "hysteresis.limit_nm");
+    for shape in [0.5, 9.0, f64::NAN] {
+        let loop_shape = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.5, shape }), ..EffectsConfig::default() };
+        assert_eq!(check_effects(&loop_shape).unwrap_err().0, "hysteresis.shape", "shape {shape}");
+    }
     let wide_ramp = EffectsConfig { dead_zone_rad: 0.002, dead_zone_ramp_rad: 0.003, ..EffectsConfig::default() };
     assert_eq!(check_effects(&wide_ramp).unwrap_err().0, "dead_zone_ramp_rad");
     assert!(check_effects(&EffectsConfig { dead_zone_rad: 0.002, dead_zone_ramp_rad: 0.002, ..EffectsConfig::default() }).is_ok());

@@ -304,7 +304,8 @@ pub struct EffectsConfig {
     /// (Coulomb-like beyond `1 / k_b` rad/s, the gear friction the thesis models).
     #[serde(default)]
     pub arctan_friction: Option<ArctanFrictionConfig>,
-    /// Dahl hysteresis: `dz/dt = sigma (1 - z/fc sgn(v)) v`, torque `z` [Nm].
+    /// Dahl hysteresis: `dz/dt = sigma (1 - z/fc sgn(v)) v`, torque `z` [Nm] (with a `shape`, see
+    /// [`DahlConfig`]).
     #[serde(default)]
     pub hysteresis: Option<DahlConfig>,
     /// Dead-zone (play) half-width around zero deflection [rad].
@@ -346,6 +347,11 @@ pub struct DahlConfig {
     pub sigma_nm_per_rad: f64,
     /// Limit torque fc [Nm].
     pub limit_nm: f64,
+    /// Shape exponent n (>= 1; 1, the default: Dahl's model): `z/fc` in the rate becomes
+    /// `(z/fc) |z/fc|^(n-1)`, a loop that turns sharper at its limit (Bouc-Wen with beta = 1,
+    /// gamma = 0; the observer's `model_extension.hysteresis.shape` is the same exponent).
+    #[serde(default = "one")]
+    pub shape: f64,
 }
 
 /// A structural vibration mode.

@@ -19,8 +19,8 @@ mod evaluator;
 mod pivot;
 mod spec;
 
-pub use self::evaluator::{ModelExtension, dead_band_step};
-pub use self::spec::{DahlSpec, ExtensionError, ExtensionSpec, FrictionSpec, PivotTerms, RATE_STEPS, Terms};
+pub use self::evaluator::{ModelExtension, dead_band_step, loop_step};
+pub use self::spec::{DahlSpec, ExtensionError, ExtensionSpec, FrictionSpec, MAX_LOOP_SHAPE, PivotTerms, RATE_STEPS, Terms};
 
 #[cfg(test)]
 mod tests;

@@ -13,6 +13,10 @@ pub struct FrictionSpec {
     pub kb_s_per_rad: f64,
 }
 
+/// The largest hysteresis shape exponent accepted: beyond it the loop is all but a corner (an
+/// assumption: published Bouc-Wen fits of joints and dampers lie between 1 and 3).
+pub const MAX_LOOP_SHAPE: f64 = 8.0;
+
 /// Dahl hysteresis.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -27,6 +31,11 @@ pub struct DahlSpec {
     /// (`identify` chooses the width from the reading's scatter).
     #[serde(default)]
     pub input_dead_band_rad: f64,
+    /// The loop's shape exponent `n` (>= 1; 1, the default: Dahl's model): the state follows
+    /// `du/dphi = (sgn(dphi) - u |u|^(n - 1)) / lambda` ([`super::loop_step`]), Bouc-Wen's form
+    /// with `beta = 1`, `gamma = 0`; a larger `n` turns sharper at the limit.
+    #[serde(default = "one")]
+    pub shape: f64,
 }
 
 /// The terms of the sum in the module docs, without the rate estimate's settings: what changes
@@ -111,6 +120,11 @@ impl Terms {
             && !(h.input_dead_band_rad >= 0.0 && h.input_dead_band_rad.is_finite())
         {
             return bad("hysteresis.input_dead_band_rad", format!("must be >= 0, got {}", h.input_dead_band_rad));
+        }
+        if let Some(h) = self.hysteresis
+            && !(h.shape >= 1.0 && h.shape <= MAX_LOOP_SHAPE)
+        {
+            return bad("hysteresis.shape", format!("must be between 1 and {MAX_LOOP_SHAPE}, got {}", h.shape));
         }
         Ok(())
     }

@@ -5,7 +5,10 @@
 use super::pivot::bracket;
 use super::spec::{ExtensionError, ExtensionSpec, Terms};
 
+mod hysteresis_loop;
 mod rate;
+
+pub use hysteresis_loop::loop_step;
 
 /// Samples the deflection-rate window holds (at most; fewer when the window is shorter).
 const RATE_CAPACITY: usize = 256;
@@ -116,8 +119,9 @@ impl ModelExtension {
         crate::play::elastic_deflection(phi, self.live.dead_zone_rad, self.live.dead_zone_ramp_rad)
     }
 
-    /// Dahl's model, exact per step: `u <- sgn(dphi) + (u - sgn(dphi)) exp(-|dphi| / lambda)`,
-    /// `phi` through the loop's input dead band first; returns `F_c u` [Nm] (0 without hysteresis).
+    /// The loop's unit state one step on ([`loop_step`]: Dahl's model, exact per step, or its
+    /// generalisation with a shape exponent), `phi` through the loop's input dead band first;
+    /// returns `F_c u` [Nm] (0 without hysteresis).
     pub fn dahl_torque(&mut self, phi: f64) -> f64 {
         let Some(h) = self.live.hysteresis else {
             // Kept up to date: terms weighed at a pivot can switch the loop on later.
@@ -128,11 +132,7 @@ impl ModelExtension {
         let (u, last) = self.dahl;
         let phi = dead_band_step(last, phi, h.input_dead_band_rad);
         let u = match last {
-            Some(prev) if phi != prev => {
-                let step = phi - prev;
-                let target = step.signum();
-                target + (u - target) * (-step.abs() / lambda).exp()
-            }
+            Some(prev) if phi != prev => loop_step(u, phi - prev, lambda, h.shape),
             _ => u,
         };
         self.dahl = (u, Some(phi));
