@@ -393,6 +393,29 @@ fn hysteresis_and_dead_zone_in_the_plant_come_without_a_delay_or_a_vibration() {
     assert_eq!(names, ["dead_zone"], "{:?}", dead.causes);
 }
 
+/// The simulator's loop with a shape (its own integration in time, not identify's step): the
+/// shape comes back from a recording, and the observer's extension takes what identify wrote.
+#[test]
+fn a_sharper_hysteresis_in_the_plant_is_named_with_its_shape() {
+    use jointctl_config::DahlConfig;
+    let report = q4_recording(
+        |e| {
+            e.torque_noise_nm = 0.01;
+            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2, shape: 3.0 });
+        },
+        100.0,
+    );
+    let names: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert_eq!(names, ["hysteresis"], "{:?}", report.causes);
+    let loop_ = &report.causes[0];
+    let shape = loop_.params.get("shape").copied().unwrap_or(1.0);
+    assert!(shape >= 2.0, "shape {shape}, the plant's 3");
+    assert!((loop_.params["limit_nm"] / 1.2 - 1.0).abs() < 0.1, "{:?}", loop_.params);
+    let observer = serde_json::Value::Object(loop_.fragments.observer.clone());
+    let spec: jointctl_models::extension::ExtensionSpec = serde_json::from_value(observer).unwrap();
+    assert_eq!(spec.hysteresis.map(|h| h.shape), Some(shape));
+}
+
 /// Finding: a constant signal gave `dead_zone` and `stiffness_nonlinearity` with gains of 1e-14.
 #[test]
 fn data_with_too_little_excitation_is_an_error_that_says_so() {

@@ -152,8 +152,9 @@ fn one_device_written_four_ways() {
     println!("devices whose variants all got the same causes: {same} of {}", answers.len());
     let (_, _, _) = score(&cases, "blind generator, device_variants(1)");
     // 2 of 5 devices when this was written (13 of 16 records named); 3 of 5 since the rate's
-    // window narrows where the deflection bends (14 of 16).
-    assert!(same >= 3, "{same} of {} devices got the same causes on every variant", answers.len());
+    // window narrows where the deflection bends (14 of 16); 4 of 5 since the hysteresis loop
+    // has a shape (device A's Bouc-Wen loop got a cubic beside it on the three-repetition record).
+    assert!(same >= 4, "{same} of {} devices got the same causes on every variant", answers.len());
 }
 
 /// Other seeds of the blind suite, for a change's check on records it was not looked at on:

@@ -286,7 +286,7 @@ impl Model<'_> {
             let cause = self.causes[term.cause];
             // A nested parameter left at its simpler value (a dead band of zero width) is no
             // freedom used: not charged.
-            nonlinear += term.params.iter().enumerate().filter(|(j, x)| !term.grids.get(*j).is_some_and(|g| matches!(g.refine, super::causes::Refine::Nested) && g.grid.first() == Some(*x))).count();
+            nonlinear += term.params.iter().enumerate().filter(|(j, x)| !term.grids.get(*j).is_some_and(|g| matches!(g.refine, super::causes::Refine::Nested | super::causes::Refine::NestedDecimated) && g.grid.first() == Some(*x))).count();
             let key = (part, transforms.clone(), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
             let c = (*self.columns.get_or(key, || cause.columns(&term.params, &samples))).clone();
             match cause.segments(&term.params, &samples) {

@@ -199,13 +199,38 @@ enum Candidate {
 /// Searches candidate `c`'s parameters with `spec` in place and checks the fit's physics.
 fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepared, warm: Option<&[f64]>) -> Candidate {
     let Some(term) = search(model, spec, c, ctx, &p.coarse, p.full_rate_training(), warm) else { return Candidate::NoFit };
-    let s = profile_terms(model, &spec.with(term), &p.coarse);
+    let mut s = profile_terms(model, &spec.with(term.clone()), &p.coarse);
+    // A choice of `Refine::NestedDecimated` kept only when the refit's BIC agrees.
+    if let Some(simpler) = at_simpler_decimated(&term) {
+        let simpler = profile_terms(model, &spec.with(simpler), &p.coarse);
+        let score = |s: &Spec| model.fit(s, &p.coarse).map_or(f64::INFINITY, |f| bic(f.rss, p.coarse.len(), f.parameters));
+        if score(&simpler) <= score(&s) {
+            s = simpler;
+        }
+    }
     let Some(fit) = model.fit(&s, &p.coarse) else { return Candidate::NoFit };
     let last = s.terms.len() - 1;
     match model.causes[c].impossible(&s.terms[last].params, fit.of(last)) {
         Some(why) => Candidate::Impossible(s.terms[last].params.clone(), why),
         None => Candidate::Proposed(s),
     }
+}
+
+/// `term` with its [`super::causes::Refine::NestedDecimated`] parameters at their first
+/// values, or none when they are there already.
+fn at_simpler_decimated(term: &Term) -> Option<Term> {
+    let mut simpler = term.clone();
+    let mut moved = false;
+    for (j, g) in term.grids.iter().enumerate() {
+        if g.refine == super::causes::Refine::NestedDecimated
+            && let (Some(first), Some(x)) = (g.grid.first(), simpler.params.get_mut(j))
+            && *x != *first
+        {
+            *x = *first;
+            moved = true;
+        }
+    }
+    moved.then_some(simpler)
 }
 
 /// The search context of `spec`: its fit on the decimated part, and its residuals there and on

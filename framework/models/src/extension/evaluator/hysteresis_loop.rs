@@ -1,7 +1,7 @@
 //! One step of the unit hysteresis state: Dahl's model, and its generalisation with a shape
-//! exponent (the Bouc-Wen form with `beta = 1`, `gamma = 0`), run by the online evaluator. At
-//! shape 1 it is the exact step `identify`'s Dahl loop is fitted with; `identify` does not search
-//! the shape yet (a shape set by hand in `model_extension` runs here).
+//! exponent (the Bouc-Wen form with `beta = 1`, `gamma = 0`), shared by `identify` (which fits
+//! it) and the online evaluator (which runs what was fitted), so that both compute the same
+//! state from the same readings.
 
 /// The largest number of sub-steps one reading's step is integrated in (a bound on the control
 /// cycle's work); a step longer than `MAX_SUBSTEPS * SUBSTEP_IN_SCALES` scales leaves the state
