@@ -32,7 +32,7 @@ pub struct DahlSpec {
     #[serde(default)]
     pub input_dead_band_rad: f64,
     /// The loop's shape exponent `n` (>= 1; 1, the default: Dahl's model): the state follows
-    /// `du/dphi = (sgn(dphi) - u |u|^(n - 1)) / lambda` ([`super::loop_step`]), Bouc-Wen's form
+    /// `du/dphi = (1 - sgn(dphi) u |u|^(n - 1)) / lambda` ([`super::loop_step`]), Bouc-Wen's form
     /// with `beta = 1`, `gamma = 0`; a larger `n` turns sharper at the limit.
     #[serde(default = "one")]
     pub shape: f64,

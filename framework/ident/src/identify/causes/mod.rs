@@ -179,8 +179,11 @@ pub enum Refine {
     /// weighed against it.
     Nested,
     /// As [`Refine::Nested`], chosen on the decimated training part, and kept only when the
-    /// proposal's BIC there (the selection's own score, a full refit) is better than with the
-    /// first value: for a choice that shows at the motion's scale (a loop's shape). The search
+    /// proposal's BIC there (the selection's own score: the linear coefficients fitted again,
+    /// the other terms' grids looked over) is better than the same proposal's with the first
+    /// value; the cause's own scale stays where the search put it for the chosen value, which
+    /// leans the comparison towards that value. For a choice that shows at the motion's scale
+    /// (a loop's shape). The search
     /// ranks values by projection on what the model leaves, which can prefer a value the refit
     /// does not (on one sine, a Dahl loop took shape 4, 43 BIC units worse than shape 1, and
     /// fell out of the confound it is in with a delay).
