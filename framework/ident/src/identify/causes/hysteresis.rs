@@ -15,24 +15,12 @@ pub struct Hysteresis;
 /// assert!(u[2] > 0.999);
 /// ```
 pub fn dahl_unit(d: &[f64], lambda: f64) -> Vec<f64> {
-    let mut u = 0.0;
-    let mut out = Vec::with_capacity(d.len());
-    let mut prev = d.first().copied().unwrap_or(0.0);
-    for &x in d {
-        let step = x - prev;
-        if step != 0.0 {
-            let target = step.signum();
-            u = target + (u - target) * (-step.abs() / lambda).exp();
-        }
-        out.push(u);
-        prev = x;
-    }
-    out
+    loop_unit(d, lambda, 1.0)
 }
 
 /// The unit loop's response (limit 1) to a deflection history with scale `lambda` and shape
-/// exponent `shape` ([`jointctl_models::extension::loop_step`], the step the observer runs):
-/// Dahl's ([`dahl_unit`]) at shape 1.
+/// exponent `shape`, one [`jointctl_models::extension::loop_step`] per reading (the step the
+/// observer runs; at shape 1 Dahl's exact step, [`dahl_unit`]).
 ///
 /// ```
 /// use jointctl_ident::identify::causes::{dahl_unit, loop_unit};
@@ -41,9 +29,6 @@ pub fn dahl_unit(d: &[f64], lambda: f64) -> Vec<f64> {
 /// assert!(loop_unit(&[0.0, 0.05], 0.1, 3.0)[1] > dahl_unit(&[0.0, 0.05], 0.1)[1]);
 /// ```
 pub fn loop_unit(d: &[f64], lambda: f64, shape: f64) -> Vec<f64> {
-    if shape == 1.0 {
-        return dahl_unit(d, lambda);
-    }
     let mut u = 0.0;
     let mut prev = d.first().copied().unwrap_or(0.0);
     d.iter()
