@@ -21,13 +21,18 @@ use jointctl_ident::identify::{IdentifyOptions, identify};
 type Outcome = Result<Vec<(String, BTreeMap<String, f64>)>, String>;
 
 fn run(case: &Case) -> Outcome {
+    Ok(run_causes(case)?.into_iter().map(|c| (c.effect, c.params)).collect())
+}
+
+/// The causes named on `case` (dropouts left out), with their uncertainty.
+fn run_causes(case: &Case) -> Result<Vec<jointctl_ident::identify::Cause>, String> {
     // One file a case, removed once read (a folder per process was left behind after every run).
     let path = std::env::temp_dir().join(format!("jointctl-blind-{}-{}.csv", std::process::id(), case.name));
     jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
     let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
     let _ = std::fs::remove_file(&path);
     let report = identify(&data?, &IdentifyOptions { held_out: held_out(), ..IdentifyOptions::default() }).map_err(|e| e.to_string())?;
-    Ok(report.causes.into_iter().filter(|c| c.effect != "dropout").map(|c| (c.effect, c.params)).collect())
+    Ok(report.causes.into_iter().filter(|c| c.effect != "dropout").collect())
 }
 
 /// The held-out part: identify's default (a window like the rest), or with
@@ -139,22 +144,51 @@ fn the_blind_generators_suite_is_identified_at_least_as_well_as_today() {
 fn one_device_written_four_ways() {
     let cases = device_variants(1);
     let mut answers: BTreeMap<String, Vec<(String, BTreeSet<String>)>> = BTreeMap::new();
+    let mut causes: BTreeMap<String, Vec<Vec<jointctl_ident::identify::Cause>>> = BTreeMap::new();
     for case in &cases {
-        let got = run(case).map(|c| c.into_iter().map(|x| x.0).collect()).unwrap_or_else(|e| BTreeSet::from([format!("refused: {e}")]));
-        answers.entry(case.answer.device.clone().unwrap_or_default()).or_default().push((case.answer.variant.clone(), got));
+        let found = run_causes(case);
+        let got = found.as_ref().map(|c| c.iter().map(|x| x.effect.clone()).collect()).unwrap_or_else(|e| BTreeSet::from([format!("refused: {e}")]));
+        let device = case.answer.device.clone().unwrap_or_default();
+        answers.entry(device.clone()).or_default().push((case.answer.variant.clone(), got));
+        causes.entry(device).or_default().push(found.unwrap_or_default());
     }
     let mut same = 0;
+    // Where the variants name the same causes, each parameter within two combined standard
+    // errors between every two variants (issue 36: "parameters inside their stated
+    // uncertainty").
+    let (mut parameters, mut disagree) = (0, Vec::new());
     for (device, variants) in &answers {
         let agree = variants.windows(2).all(|w| w[0].1 == w[1].1);
         same += agree as usize;
         println!("device {device}: {}", variants.iter().map(|(v, g)| format!("{v}: {}", g.iter().cloned().collect::<Vec<_>>().join("+"))).collect::<Vec<_>>().join("; "));
+        if !agree {
+            continue;
+        }
+        let found = &causes[device];
+        for (k, cause) in found[0].iter().enumerate() {
+            for name in cause.params.keys() {
+                let Some(each) = found.iter().map(|v| Some((*v[k].params.get(name)?, *v[k].uncertainty.get(name)?))).collect::<Option<Vec<_>>>() else { continue };
+                parameters += 1;
+                let apart = each.iter().enumerate().any(|(i, a)| each[i + 1..].iter().any(|b| (a.0 - b.0).abs() > 2.0 * (a.1 * a.1 + b.1 * b.1).sqrt()));
+                if apart {
+                    disagree.push(format!("{device} {} {name}: {each:?}", cause.effect));
+                }
+            }
+        }
     }
     println!("devices whose variants all got the same causes: {same} of {}", answers.len());
+    println!("their parameters within two combined standard errors on every variant: {} of {parameters}", parameters - disagree.len());
     let (_, _, _) = score(&cases, "blind generator, device_variants(1)");
     // 2 of 5 devices when this was written (13 of 16 records named); 3 of 5 since the rate's
     // window narrows where the deflection bends (14 of 16); 4 of 5 since the hysteresis loop
     // has a shape (device A's Bouc-Wen loop got a cubic beside it on the three-repetition record).
     assert!(same >= 4, "{same} of {} devices got the same causes on every variant", answers.len());
+    // Before, only the loop's limit and sigma of these 6 had an error (a dead zone's width and
+    // ramp and a delay none), and both disagreed: limits of 1.72-1.77 Nm with classical errors
+    // of 0.005-0.05 Nm. On seeds 1-8,
+    // 39 of 59 agree: the rest is the part of a misspecified model's parameter that follows
+    // its excitation (docs/identification.md, Parameter uncertainty).
+    assert!(parameters >= 6 && disagree.is_empty(), "{parameters} parameters compared; apart: {disagree:#?}");
 }
 
 /// Other seeds of the blind suite, for a change's check on records it was not looked at on:

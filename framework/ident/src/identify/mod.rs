@@ -37,6 +37,7 @@ mod search;
 mod select;
 pub mod significance;
 mod spectrum;
+mod uncertainty;
 mod unexplained;
 
 pub use unexplained::{BEYOND_TRAINING_RANGE, BEYOND_TRAINING_RATE, FAR_ABOVE_NOISE, Unexplained};
@@ -60,10 +61,12 @@ pub struct Cause {
     pub params: BTreeMap<String, f64>,
     /// How much the held-out torque RMSE drops because of this cause [Nm].
     pub rmse_gain: f64,
-    /// Standard errors of the estimated coefficients, under the coefficients' names (same units),
-    /// from the training fit with its residual's autocorrelation accounted for (see
-    /// `design::Model::standard_errors`); derived parameters carry their coefficient's relative
-    /// error.
+    /// Standard errors of the estimated parameters, under their names (same units), from the
+    /// training fit: the covariance of the cause's coefficients and non-linear parameters (a
+    /// scale, a delay, a shape, a frequency), the larger of the classical one (the residual's
+    /// autocorrelation charged) and the block sandwich (a residual that is structure), and each
+    /// reported value's error through it (see `uncertainty`). A ring's coefficients, fitted
+    /// segment by segment, have none.
     pub uncertainty: BTreeMap<String, f64>,
     /// Why it was selected: the training BIC and the held-out judgement.
     pub evidence: String,
@@ -405,7 +408,6 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         prepare::AtRest { rmse_before_all_nm: all(&base), rmse_after_all_nm: all(&spec), ..r }
     });
 
-    let standard_errors = model.standard_errors(&spec, fit, &p.train).unwrap_or_default();
     let duration = p.train_duration_s + p.test.t[p.test.len() - 1] - p.test.t[0];
     let mut found = Vec::new();
     for chosen in &selection.chosen {
@@ -419,7 +421,9 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
             evidence += &format!("; {remark}");
         }
         let params = cause.report(&term.params, &names, fit.of(i));
-        let uncertainty = uncertainty_of(cause, &term.params, &names, fit.of(i), &standard_errors, fit.spans[i].clone(), &params);
+        // `fit` is the training part's (see `select::compute_held_out`).
+        let covariance = uncertainty::term_covariance(&model, &spec, fit, &p.train, i);
+        let uncertainty = uncertainty::uncertainty_of(cause, &term.params, &names, fit.of(i), covariance.as_ref(), &params);
         found.push(Cause {
             effect: cause.name().into(),
             params,
@@ -539,28 +543,4 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         held_out,
         rejected,
     })
-}
-
-/// The standard errors of a cause's reported parameters: a coefficient's own; a derived
-/// parameter (a Dahl `sigma = limit / lambda`, an amplitude from a sine and a cosine) the
-/// relative error of the term's largest coefficient; a non-linear parameter none (it is searched
-/// on a grid, not estimated with an error).
-fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: &[String], coefs: &[f64], errors: &[f64], span: std::ops::Range<usize>, reported: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
-    let mut out = BTreeMap::new();
-    let se: Vec<f64> = span.clone().map(|j| errors.get(j).copied().unwrap_or(f64::NAN)).collect();
-    if se.is_empty() || se.len() != coefs.len() {
-        return out;
-    }
-    let coefficient_names = cause.coefficient_names();
-    // The largest coefficient's: the largest relative error of all would take a coefficient
-    // near zero (the cosine of a mode whose phase is near the sine's) as the amplitude's error.
-    let relative = coefs.iter().zip(&se).filter(|(c, _)| c.abs() > 0.0).max_by(|a, b| a.0.abs().total_cmp(&b.0.abs())).map_or(0.0, |(c, e)| e / c.abs());
-    for (name, value) in reported {
-        if let Some(k) = coefficient_names.iter().position(|n| n == name) {
-            out.insert(name.clone(), se[k]);
-        } else if !names.contains(name) || params.is_empty() {
-            out.insert(name.clone(), relative * value.abs());
-        }
-    }
-    out
 }

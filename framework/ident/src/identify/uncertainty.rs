@@ -1,0 +1,315 @@
+//! The uncertainty of a named cause's parameters: the covariance of its coefficients and its
+//! non-linear parameters (a loop's scale, a delay, a dead band, a frequency) from the training
+//! fit, and each reported parameter's standard error through it (the delta method).
+
+use std::collections::BTreeMap;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::causes::{CandidateCause, Refine};
+use super::design::{Fit, Model, Part, Spec};
+use super::least_squares::dot;
+use super::significance::blocks_for;
+
+/// The relative step of a numerical derivative: small against every parameter's scale (a
+/// frequency's phase over a long record turns with `t * df`), large against rounding.
+const STEP: f64 = 1e-6;
+
+/// The covariance of one term's coefficients and non-linear parameters.
+pub(crate) struct TermCovariance {
+    /// The term's coefficients, then its non-linear parameters (those estimated: a nested
+    /// parameter left at its simpler value is not).
+    at: Vec<f64>,
+    /// Which entries of `at` are non-linear parameters (their index in the term's `params`).
+    nonlinear: Vec<Option<usize>>,
+    /// Two covariances of `at`: the residual's variance with its lag-1 autocorrelation
+    /// (`s^2 (1 + rho) / (1 - rho) (J'J)^-1`), and the block sandwich.
+    classical: DMatrix<f64>,
+    blocks: DMatrix<f64>,
+    /// The Gauss-Newton step from `at` towards the training fit's optimum: how far the search,
+    /// which ranks values on the decimated training part and refines them to a resolution (a
+    /// delay in whole steps, a scale to a golden section's tolerance), stopped from it.
+    displacement: Vec<f64>,
+    /// Estimated non-linear parameters whose error the fit cannot give (the torque does not
+    /// move along them at their value, or they move it as the others do): a value that depends
+    /// on one has no error claimed.
+    unmeasured: Vec<usize>,
+}
+
+/// The covariance of term `i`'s coefficients and non-linear parameters in `spec`, fitted on
+/// `train` as `fit`; `None` when the term has no coefficients of its own and no estimated
+/// non-linear parameter, or the design is singular.
+///
+/// The non-linear parameters enter as the model's derivative along each (the Gauss-Newton
+/// linearisation, Bates and Watts, *Nonlinear Regression Analysis*, ch. 2) beside every ordinary
+/// column of the model, so that their errors are the joint ones, not conditional on the
+/// coefficients. Two covariances are kept, and a parameter's error is the larger:
+/// - the classical one, the residual taken as noise (its lag-1 autocorrelation charged as in
+///   `design::Model::standard_errors`);
+/// - the block sandwich `(J'J)^-1 (sum_b g_b g_b') (J'J)^-1 B / (B - 1)`, `g_b` the score
+///   `J' e` of one of `B` contiguous blocks of the training part (the cluster-robust covariance
+///   with blocks as clusters; White 1982 for a misspecified model). A residual that is structure
+///   (an effect that no cause models exactly, a LuGre loop where identify fits Dahl's) moves the
+///   parameters from one stretch of the record to another, and the classical error does not see
+///   it: on the blind devices, one device's variants (irregular, binned, one and three
+///   repetitions) differed by several classical errors.
+pub(crate) fn term_covariance(model: &Model, spec: &Spec, fit: &Fit, train: &Part, i: usize) -> Option<TermCovariance> {
+    let _term = spec.terms.get(i)?;
+    let (cols, residual) = model.columns_and_residual(spec, fit, train);
+    let span = fit.spans.get(i)?.clone();
+    // Segment-wise coefficients (a ring's) are fitted anew on every segment: not in `cols`.
+    let own: Vec<usize> = if fit.segment_coefs[i].is_empty() { span.collect() } else { Vec::new() };
+    let mut at: Vec<f64> = own.iter().map(|&k| fit.coefs[k]).collect();
+    let mut nonlinear: Vec<Option<usize>> = vec![None; own.len()];
+    let mut index: Vec<usize> = own.clone();
+    let mut unmeasured = Vec::new();
+    // The derivatives along this term's non-linear parameters, and along the other terms' (the
+    // baseline's arctan steepness trades off with a delay: held, the delay's error was a sixth
+    // of its spread over records that differed in their noise).
+    let (mut mine, mut others) = (Vec::new(), Vec::new());
+    for (t, other) in spec.terms.iter().enumerate() {
+        for (j, &x) in other.params.iter().enumerate() {
+            let grid = other.grids.get(j);
+            let simpler = grid.is_some_and(|g| matches!(g.refine, Refine::Nested | Refine::NestedDecimated) && g.grid.first() == Some(&x));
+            if simpler || !x.is_finite() {
+                continue;
+            }
+            // A parameter the torque does not move at its value (a dead zone's ramp of zero
+            // width) has no error the fit can give.
+            let column = derivative(model, spec, fit, train, t, j).filter(|c| c.iter().any(|v| *v != 0.0));
+            match (column, t == i) {
+                (Some(c), true) => mine.push((j, x, c)),
+                (None, true) => unmeasured.push(j),
+                (Some(c), false) => others.push(c),
+                (None, false) => {}
+            }
+        }
+    }
+    for (k, (j, x, _)) in mine.iter().enumerate() {
+        index.push(cols.len() + k);
+        at.push(*x);
+        nonlinear.push(Some(*j));
+    }
+    if index.is_empty() {
+        return None;
+    }
+    let all = |with_others: bool| -> Vec<Vec<f64>> { cols.iter().cloned().chain(mine.iter().map(|m| m.2.clone())).chain(others.iter().filter(|_| with_others).cloned()).collect() };
+    let entries = Entries { index, at, nonlinear, unmeasured };
+    let again = Entries { index: entries.index.clone(), at: entries.at.clone(), nonlinear: entries.nonlinear.clone(), unmeasured: entries.unmeasured.clone() };
+    // The errors are the joint ones, with the other terms' parameters; the search's distance from
+    // the optimum is this term's own Gauss-Newton step, the other terms held: with them, the
+    // step is a linearisation over a ridge (the arctan's steepness and a delay), and it stepped
+    // delays found at the lattice point nearest their truth a millisecond past it. Near-singular
+    // with its own parameters (they move the torque as the coefficients do): those unmeasured,
+    // the coefficients' still given.
+    let conditional = match covariance_of(&all(false), &residual, entries) {
+        Ok(covariance) => covariance,
+        Err(entries) => return retry_without_nonlinear(&cols, &residual, entries, own.len()),
+    };
+    if others.is_empty() {
+        return Some(conditional);
+    }
+    match covariance_of(&all(true), &residual, again) {
+        Ok(joint) => Some(TermCovariance { displacement: conditional.displacement, ..joint }),
+        Err(_) => Some(conditional),
+    }
+}
+
+/// The coefficients' covariance alone, the non-linear parameters marked unmeasured.
+fn retry_without_nonlinear(cols: &[Vec<f64>], residual: &[f64], entries: Entries, own: usize) -> Option<TermCovariance> {
+    if entries.index.len() == own {
+        return None;
+    }
+    let mut unmeasured = entries.unmeasured;
+    unmeasured.extend(entries.nonlinear.iter().flatten());
+    let only = Entries { index: entries.index[..own].to_vec(), at: entries.at[..own].to_vec(), nonlinear: vec![None; own], unmeasured };
+    covariance_of(cols, residual, only).ok()
+}
+
+/// Which columns a term's entries are, their values, and which are non-linear parameters.
+struct Entries {
+    index: Vec<usize>,
+    at: Vec<f64>,
+    nonlinear: Vec<Option<usize>>,
+    unmeasured: Vec<usize>,
+}
+
+/// The classical and the block covariance of `entries` in the fit of `cols` that leaves
+/// `residual` (see [`term_covariance`]); the entries back when the columns are (near) singular.
+fn covariance_of(cols: &[Vec<f64>], residual: &[f64], entries: Entries) -> Result<TermCovariance, Entries> {
+    let (n, k) = (residual.len(), cols.len());
+    // Columns scaled to unit norm: a frequency's derivative (Nm per Hz, times seconds) and an
+    // offset's column differ by orders of magnitude.
+    let scale: Vec<f64> = cols.iter().map(|c| dot(c, c).sqrt()).collect();
+    if n <= k + 1 || scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(entries);
+    }
+    let gram = DMatrix::from_fn(k, k, |a, b| dot(&cols[a], &cols[b]) / (scale[a] * scale[b]));
+    let Some(inverse) = invertible(gram) else { return Err(entries) };
+    let rss = dot(residual, residual);
+    let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / rss.max(1e-300)).clamp(0.0, 0.99);
+    let variance = rss / (n - k) as f64 * (1.0 + rho) / (1.0 - rho);
+    let blocks = blocks_for(n);
+    let mut meat = DMatrix::<f64>::zeros(k, k);
+    for b in 0..blocks {
+        let rows = b * n / blocks..(b + 1) * n / blocks;
+        let score: Vec<f64> = (0..k).map(|a| rows.clone().map(|r| cols[a][r] * residual[r]).sum::<f64>() / scale[a]).collect();
+        for a in 0..k {
+            for c in 0..k {
+                meat[(a, c)] += score[a] * score[c];
+            }
+        }
+    }
+    let sandwich = &inverse * &meat * &inverse * (blocks as f64 / (blocks - 1) as f64);
+    let gradient = DVector::from_fn(k, |a, _| dot(&cols[a], residual) / scale[a]);
+    let step = &inverse * gradient;
+    let index = &entries.index;
+    let pick = |m: &DMatrix<f64>, f: f64| DMatrix::from_fn(index.len(), index.len(), |a, b| f * m[(index[a], index[b])] / (scale[index[a]] * scale[index[b]]));
+    let (classical, blocks) = (pick(&inverse, variance), pick(&sandwich, 1.0));
+    let displacement = index.iter().map(|&a| step[a] / scale[a]).collect();
+    Ok(TermCovariance { at: entries.at, nonlinear: entries.nonlinear, classical, blocks, displacement, unmeasured: entries.unmeasured })
+}
+
+/// The inverse of a Gram matrix of unit-norm columns, or `None` when it is singular or so near
+/// it (a condition number above 1e12) that its inverse would be rounding: a band of the input
+/// of a loop that the encoder's steps hide moves the torque as the loop's scale does.
+fn invertible(gram: DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let values = gram.clone().symmetric_eigenvalues();
+    let (smallest, largest) = values.iter().fold((f64::INFINITY, 0.0f64), |(s, l), v| (s.min(*v), l.max(*v)));
+    if !(smallest > largest * 1e-12) {
+        return None;
+    }
+    gram.try_inverse()
+}
+
+/// The model's torque's derivative along term `i`'s parameter `j`, the coefficients held
+/// (a central difference; one-sided at the edge of the parameter's grid).
+fn derivative(model: &Model, spec: &Spec, fit: &Fit, train: &Part, i: usize, j: usize) -> Option<Vec<f64>> {
+    let x = spec.terms[i].params[j];
+    let grid = spec.terms[i].grids.get(j).map(|g| g.grid.as_slice()).unwrap_or(&[]);
+    let (lo, hi) = grid.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), g| (lo.min(*g), hi.max(*g)));
+    let h = STEP * if x != 0.0 { x.abs() } else if hi > lo { hi - lo } else { 1.0 };
+    let (a, b) = (if x - h < lo { x } else { x - h }, if x + h > hi && x - h >= lo { x } else { x + h });
+    let torque = |v: f64| {
+        let mut s = spec.clone();
+        s.terms[i].params[j] = v;
+        model.predict(&s, fit, train).torque_nm
+    };
+    let (low, high) = (torque(a), torque(b));
+    let column: Vec<f64> = high.iter().zip(&low).map(|(u, l)| (u - l) / (b - a)).collect();
+    column.iter().all(|v| v.is_finite()).then_some(column)
+}
+
+/// The standard errors of a cause's reported parameters, by the delta method through
+/// `covariance` (see [`term_covariance`]): each reported value's gradient along the term's
+/// coefficients and non-linear parameters, taken numerically through the cause's own `report`
+/// (a Dahl `sigma = limit / lambda` gets both errors, with their correlation): the larger of
+/// the classical and the block error, and the distance the search stopped from the training
+/// fit's optimum (the Gauss-Newton step), added in quadrature. A ring's parameters fitted
+/// segment by segment have no covariance here: only its non-linear parameters get an error.
+pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: &[String], coefs: &[f64], covariance: Option<&TermCovariance>, reported: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+    let mut out = BTreeMap::new();
+    let Some(cov) = covariance else { return out };
+    let own = cov.nonlinear.iter().filter(|j| j.is_none()).count();
+    let segment_wise = own == 0 && !coefs.is_empty();
+    // The reported values with entry `e` of `at` moved by `d`.
+    let moved = |e: usize, d: f64| {
+        let (mut c, mut p) = (coefs.to_vec(), params.to_vec());
+        match cov.nonlinear[e] {
+            None => c[e] += d,
+            Some(j) => p[j] += d,
+        }
+        cause.report(&p, names, &c)
+    };
+    // Each entry's step and the values reported a step either side.
+    type Reported = BTreeMap<String, f64>;
+    let steps: Vec<(f64, Reported, Reported)> = (0..cov.at.len())
+        .map(|e| {
+            let h = STEP * cov.at[e].abs().max(1e-12);
+            (h, moved(e, h), moved(e, -h))
+        })
+        .collect();
+    // Values that move with a parameter whose error is not measured.
+    let unmeasured: Vec<BTreeMap<String, f64>> = cov
+        .unmeasured
+        .iter()
+        .map(|&j| {
+            let mut p = params.to_vec();
+            p[j] += STEP * p[j].abs().max(1e-12);
+            cause.report(&p, names, coefs)
+        })
+        .collect();
+    for (name, value) in reported {
+        if unmeasured.iter().any(|m| m.get(name) != Some(value)) {
+            continue;
+        }
+        let gradient: Option<Vec<f64>> = steps.iter().map(|(h, up, down)| Some((up.get(name)? - down.get(name)?) / (2.0 * h))).collect();
+        let Some(g) = gradient else { continue };
+        // A value that moves with a segment's coefficients has more error than the covariance
+        // holds: none claimed.
+        let is_nonlinear = names.iter().any(|n| n == name);
+        if segment_wise && !is_nonlinear {
+            continue;
+        }
+        let along = |m: &DMatrix<f64>| (0..g.len()).flat_map(|a| (0..g.len()).map(move |b| (a, b))).map(|(a, b)| g[a] * m[(a, b)] * g[b]).sum::<f64>();
+        // The search's distance from the optimum adds to the statistical error (it is not
+        // charged twice: a coefficient's is zero, it is fitted at the optimum).
+        let off: f64 = g.iter().zip(&cov.displacement).map(|(a, b)| a * b).sum();
+        let variance = along(&cov.classical).max(along(&cov.blocks)) + off * off;
+        if variance.is_finite() && variance >= 0.0 {
+            out.insert(name.clone(), variance.sqrt());
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A straight line `y = 1 + 2 x` with noise of 0.1 on 400 samples: the classical error of the
+    /// slope is the textbook `s / sqrt(sum (x - mean)^2)` (no autocorrelation in the noise).
+    #[test]
+    fn the_classical_error_of_a_line_is_the_textbook_one() {
+        let mut rng = jointctl_test_support::XorShift64::new(7);
+        let x: Vec<f64> = (0..400).map(|i| i as f64 / 400.0).collect();
+        let noise: Vec<f64> = x.iter().map(|_| 0.1 * rng.normal()).collect();
+        let y: Vec<f64> = x.iter().zip(&noise).map(|(x, e)| 1.0 + 2.0 * x + e).collect();
+        let ones = vec![1.0; x.len()];
+        let fitted = super::super::least_squares::least_squares(&[ones.clone(), x.clone()], &y).unwrap();
+        let residual: Vec<f64> = (0..x.len()).map(|i| y[i] - fitted[0] - fitted[1] * x[i]).collect();
+        let entries = Entries { index: vec![1], at: vec![fitted[1]], nonlinear: vec![None], unmeasured: Vec::new() };
+        let Ok(c) = covariance_of(&[ones, x.clone()], &residual, entries) else { panic!("singular") };
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        let s = (dot(&residual, &residual) / (x.len() - 2) as f64).sqrt();
+        let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / dot(&residual, &residual)).clamp(0.0, 0.99);
+        let textbook = s / x.iter().map(|v| (v - mean).powi(2)).sum::<f64>().sqrt() * ((1.0 + rho) / (1.0 - rho)).sqrt();
+        assert!((c.classical[(0, 0)].sqrt() / textbook - 1.0).abs() < 1e-9, "{} vs {textbook}", c.classical[(0, 0)].sqrt());
+        // Fitted at the optimum: no step left.
+        assert!(c.displacement[0].abs() < 1e-9 * fitted[1].abs());
+    }
+
+    /// A residual that is structure (a term the model misses, of opposite sign in the record's
+    /// two halves): the block error of the column it follows is several times the classical one.
+    #[test]
+    fn a_residual_that_is_structure_widens_the_block_error() {
+        let n = 2000;
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 / n as f64 * 6.0 * std::f64::consts::TAU).sin()).collect();
+        let ones = vec![1.0; n];
+        // What a model leaves when it misses a term that moves with x in one half of the record
+        // and against it in the other, beside white noise as large (a lag-1 correlation the
+        // classical error charges, small).
+        let mut rng = jointctl_test_support::XorShift64::new(11);
+        let residual: Vec<f64> = (0..n).map(|i| if i < n / 2 { 0.3 } else { -0.3 } * x[i] + 0.3 * rng.normal()).collect();
+        let entries = Entries { index: vec![1], at: vec![0.0], nonlinear: vec![None], unmeasured: Vec::new() };
+        let Ok(c) = covariance_of(&[ones, x], &residual, entries) else { panic!("singular") };
+        assert!(c.blocks[(0, 0)].sqrt() > 3.0 * c.classical[(0, 0)].sqrt(), "blocks {} classical {}", c.blocks[(0, 0)].sqrt(), c.classical[(0, 0)].sqrt());
+    }
+
+    #[test]
+    fn a_nearly_singular_gram_is_refused() {
+        let gram = DMatrix::from_row_slice(2, 2, &[1.0, 1.0 - 1e-14, 1.0 - 1e-14, 1.0]);
+        assert!(invertible(gram).is_none());
+        assert!(invertible(DMatrix::identity(2, 2)).is_some());
+    }
+}
