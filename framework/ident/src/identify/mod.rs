@@ -409,6 +409,9 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     });
 
     let duration = p.train_duration_s + p.test.t[p.test.len() - 1] - p.test.t[0];
+    // `fit` is the training part's (see `select::compute_held_out`); the parameters' errors are
+    // read from its derivatives, computed once for every named cause.
+    let jacobian = (!selection.chosen.is_empty()).then(|| uncertainty::Jacobian::new(&model, &spec, fit, &p.train));
     let mut found = Vec::new();
     for chosen in &selection.chosen {
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
@@ -421,8 +424,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
             evidence += &format!("; {remark}");
         }
         let params = cause.report(&term.params, &names, fit.of(i));
-        // `fit` is the training part's (see `select::compute_held_out`).
-        let covariance = uncertainty::term_covariance(&model, &spec, fit, &p.train, i);
+        let covariance = jacobian.as_ref().and_then(|j| uncertainty::term_covariance(j, &spec, fit, i));
         let uncertainty = uncertainty::uncertainty_of(cause, &term.params, &names, fit.of(i), covariance.as_ref(), &params);
         found.push(Cause {
             effect: cause.name().into(),

@@ -9,6 +9,7 @@ use nalgebra::{DMatrix, DVector};
 use super::causes::{CandidateCause, Refine};
 use super::design::{Fit, Model, Part, Spec};
 use super::least_squares::dot;
+use super::parallel::parallel_map;
 use super::significance::blocks_for;
 
 /// The relative step of a numerical derivative: small against every parameter's scale (a
@@ -36,9 +37,69 @@ pub(crate) struct TermCovariance {
     unmeasured: Vec<usize>,
 }
 
-/// The covariance of term `i`'s coefficients and non-linear parameters in `spec`, fitted on
-/// `train` as `fit`; `None` when the term has no coefficients of its own and no estimated
-/// non-linear parameter, or the design is singular.
+/// The training fit's columns, its residual, and the model's derivative along every estimated
+/// non-linear parameter of every term: computed once for all the named causes.
+pub(crate) struct Jacobian {
+    cols: Vec<Vec<f64>>,
+    residual: Vec<f64>,
+    /// Per term, per parameter: its derivative column; `None` for a parameter not estimated (a
+    /// nested one left at its simpler value) or one the torque does not follow smoothly at its
+    /// value (see [`moves_smoothly`]: no error the fit can give).
+    derivatives: Vec<Vec<Option<Vec<f64>>>>,
+    /// Per term, per parameter: whether it was estimated (a value to account for).
+    estimated: Vec<Vec<bool>>,
+}
+
+impl Jacobian {
+    /// The columns of `spec` fitted on `train` as `fit`, its residual and its derivatives (a
+    /// forward difference from the fitted torque, backward at the top of a parameter's grid;
+    /// the parameters spread over the cores).
+    pub(crate) fn new(model: &Model, spec: &Spec, fit: &Fit, train: &Part) -> Jacobian {
+        let (cols, residual) = model.columns_and_residual(spec, fit, train);
+        let fitted: Vec<f64> = train.tau.iter().zip(&residual).map(|(y, e)| y - e).collect();
+        let estimated: Vec<Vec<bool>> = spec
+            .terms
+            .iter()
+            .map(|term| {
+                term.params
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &x)| {
+                        let simpler = term.grids.get(j).is_some_and(|g| matches!(g.refine, Refine::Nested | Refine::NestedDecimated) && g.grid.first() == Some(&x));
+                        x.is_finite() && !simpler
+                    })
+                    .collect()
+            })
+            .collect();
+        let jobs: Vec<(usize, usize)> = estimated.iter().enumerate().flat_map(|(t, e)| e.iter().enumerate().filter(|(_, e)| **e).map(move |(j, _)| (t, j))).collect();
+        let columns = parallel_map(&jobs, |&(t, j)| derivative(model, spec, fit, train, &fitted, t, j).filter(|c| moves_smoothly(c)));
+        let mut derivatives: Vec<Vec<Option<Vec<f64>>>> = spec.terms.iter().map(|t| vec![None; t.params.len()]).collect();
+        for ((t, j), column) in jobs.into_iter().zip(columns) {
+            derivatives[t][j] = column;
+        }
+        Jacobian { cols, residual, derivatives, estimated }
+    }
+}
+
+/// Whether a derivative column is one the Gauss-Newton linearisation can use: the torque moves
+/// at [`SMOOTH_SHARE`] of the samples at least. A parameter whose small step moves the torque at
+/// a few samples only is a step function there (a loop's input dead band on a quantised
+/// reading moves the loop only where a reading crosses its edge; a dead zone's ramp of zero
+/// width, stepped, covers a handful), and its linearised error came out absurd (a ramp's share
+/// of 0 +- 2e10).
+fn moves_smoothly(column: &[f64]) -> bool {
+    let moving = column.iter().filter(|v| **v != 0.0).count();
+    moving as f64 >= SMOOTH_SHARE * column.len() as f64 && moving > 0
+}
+
+/// The share of the samples a parameter's derivative must move (see [`moves_smoothly`]; an
+/// assumption: a hundredth, far above the few samples of a step function and far below what a
+/// scale, a delay or a shape moves, every sample in motion).
+const SMOOTH_SHARE: f64 = 0.01;
+
+/// The covariance of term `i`'s coefficients and non-linear parameters (see [`Jacobian`]);
+/// `None` when the term has no coefficients of its own and no estimated non-linear parameter,
+/// or the design is singular.
 ///
 /// The non-linear parameters enter as the model's derivative along each (the Gauss-Newton
 /// linearisation, Bates and Watts, *Nonlinear Regression Analysis*, ch. 2) beside every ordinary
@@ -53,31 +114,24 @@ pub(crate) struct TermCovariance {
 ///   parameters from one stretch of the record to another, and the classical error does not see
 ///   it: on the blind devices, one device's variants (irregular, binned, one and three
 ///   repetitions) differed by several classical errors.
-pub(crate) fn term_covariance(model: &Model, spec: &Spec, fit: &Fit, train: &Part, i: usize) -> Option<TermCovariance> {
-    let _term = spec.terms.get(i)?;
-    let (cols, residual) = model.columns_and_residual(spec, fit, train);
+pub(crate) fn term_covariance(jacobian: &Jacobian, spec: &Spec, fit: &Fit, i: usize) -> Option<TermCovariance> {
+    let (cols, residual) = (&jacobian.cols, &jacobian.residual);
     let span = fit.spans.get(i)?.clone();
     // Segment-wise coefficients (a ring's) are fitted anew on every segment: not in `cols`.
     let own: Vec<usize> = if fit.segment_coefs[i].is_empty() { span.collect() } else { Vec::new() };
-    let mut at: Vec<f64> = own.iter().map(|&k| fit.coefs[k]).collect();
-    let mut nonlinear: Vec<Option<usize>> = vec![None; own.len()];
-    let mut index: Vec<usize> = own.clone();
     let mut unmeasured = Vec::new();
     // The derivatives along this term's non-linear parameters, and along the other terms' (the
     // baseline's arctan steepness trades off with a delay: held, the delay's error was a sixth
     // of its spread over records that differed in their noise).
-    let (mut mine, mut others) = (Vec::new(), Vec::new());
-    for (t, other) in spec.terms.iter().enumerate() {
-        for (j, &x) in other.params.iter().enumerate() {
-            let grid = other.grids.get(j);
-            let simpler = grid.is_some_and(|g| matches!(g.refine, Refine::Nested | Refine::NestedDecimated) && g.grid.first() == Some(&x));
-            if simpler || !x.is_finite() {
+    // This term's (parameter index, value, derivative), and the other terms' derivatives.
+    let mut mine: Vec<(usize, f64, &Vec<f64>)> = Vec::new();
+    let mut others: Vec<&Vec<f64>> = Vec::new();
+    for (t, term) in spec.terms.iter().enumerate() {
+        for (j, &x) in term.params.iter().enumerate() {
+            if !jacobian.estimated[t][j] {
                 continue;
             }
-            // A parameter the torque does not move at its value (a dead zone's ramp of zero
-            // width) has no error the fit can give.
-            let column = derivative(model, spec, fit, train, t, j).filter(|c| c.iter().any(|v| *v != 0.0));
-            match (column, t == i) {
+            match (jacobian.derivatives[t][j].as_ref(), t == i) {
                 (Some(c), true) => mine.push((j, x, c)),
                 (None, true) => unmeasured.push(j),
                 (Some(c), false) => others.push(c),
@@ -85,6 +139,39 @@ pub(crate) fn term_covariance(model: &Model, spec: &Spec, fit: &Fit, train: &Par
             }
         }
     }
+    // A parameter whose error (the search's distance from the optimum included) is wider than
+    // the values its search looked over is not determined by the data, or not near enough to
+    // a parabola for the linearisation (a loop's input dead band a few fine encoder steps wide
+    // came out 9e-6 +- 8e3 rad, a loop's shape 2 +- 9.6): it is left unmeasured, and the
+    // others' errors are taken without it.
+    let spans: Vec<f64> = spec.terms[i].grids.iter().map(|g| g.grid.iter().copied().fold(f64::NEG_INFINITY, f64::max) - g.grid.iter().copied().fold(f64::INFINITY, f64::min)).collect();
+    loop {
+        let covariance = covariances(cols, residual, &own, fit, &mine, &others, unmeasured.clone())?;
+        // The widest against its span first, one at a time: with it gone, a parameter it
+        // traded off with may be determined.
+        let widest = covariance
+            .nonlinear
+            .iter()
+            .enumerate()
+            .filter_map(|(e, j)| {
+                let span = spans.get((*j)?).copied().filter(|s| s.is_finite() && *s > 0.0)?;
+                let error = (covariance.classical[(e, e)].max(covariance.blocks[(e, e)]) + covariance.displacement[e].powi(2)).sqrt();
+                (error > span).then_some(((*j)?, error / span))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((wide, _)) = widest else { return Some(covariance) };
+        mine.retain(|m| m.0 != wide);
+        unmeasured.push(wide);
+    }
+}
+
+/// This term's covariance with its own non-linear parameters `mine` (index, value, derivative)
+/// beside the ordinary columns `cols`, and the other terms' derivatives `others` (see
+/// [`term_covariance`]).
+fn covariances(cols: &[Vec<f64>], residual: &[f64], own: &[usize], fit: &Fit, mine: &[(usize, f64, &Vec<f64>)], others: &[&Vec<f64>], unmeasured: Vec<usize>) -> Option<TermCovariance> {
+    let mut at: Vec<f64> = own.iter().map(|&k| fit.coefs[k]).collect();
+    let mut nonlinear: Vec<Option<usize>> = vec![None; own.len()];
+    let mut index: Vec<usize> = own.to_vec();
     for (k, (j, x, _)) in mine.iter().enumerate() {
         index.push(cols.len() + k);
         at.push(*x);
@@ -93,7 +180,7 @@ pub(crate) fn term_covariance(model: &Model, spec: &Spec, fit: &Fit, train: &Par
     if index.is_empty() {
         return None;
     }
-    let all = |with_others: bool| -> Vec<Vec<f64>> { cols.iter().cloned().chain(mine.iter().map(|m| m.2.clone())).chain(others.iter().filter(|_| with_others).cloned()).collect() };
+    let all = |with_others: bool| -> Vec<&[f64]> { cols.iter().map(Vec::as_slice).chain(mine.iter().map(|m| m.2.as_slice())).chain(others.iter().filter(|_| with_others).map(|c| c.as_slice())).collect() };
     let entries = Entries { index, at, nonlinear, unmeasured };
     let again = Entries { index: entries.index.clone(), at: entries.at.clone(), nonlinear: entries.nonlinear.clone(), unmeasured: entries.unmeasured.clone() };
     // The errors are the joint ones, with the other terms' parameters; the search's distance from
@@ -102,21 +189,21 @@ pub(crate) fn term_covariance(model: &Model, spec: &Spec, fit: &Fit, train: &Par
     // delays found at the lattice point nearest their truth a millisecond past it. Near-singular
     // with its own parameters (they move the torque as the coefficients do): those unmeasured,
     // the coefficients' still given.
-    let conditional = match covariance_of(&all(false), &residual, entries) {
+    let conditional = match covariance_of(&all(false), residual, entries) {
         Ok(covariance) => covariance,
-        Err(entries) => return retry_without_nonlinear(&cols, &residual, entries, own.len()),
+        Err(entries) => return retry_without_nonlinear(&all(false)[..cols.len()], residual, entries, own.len()),
     };
     if others.is_empty() {
         return Some(conditional);
     }
-    match covariance_of(&all(true), &residual, again) {
+    match covariance_of(&all(true), residual, again) {
         Ok(joint) => Some(TermCovariance { displacement: conditional.displacement, ..joint }),
         Err(_) => Some(conditional),
     }
 }
 
 /// The coefficients' covariance alone, the non-linear parameters marked unmeasured.
-fn retry_without_nonlinear(cols: &[Vec<f64>], residual: &[f64], entries: Entries, own: usize) -> Option<TermCovariance> {
+fn retry_without_nonlinear(cols: &[&[f64]], residual: &[f64], entries: Entries, own: usize) -> Option<TermCovariance> {
     if entries.index.len() == own {
         return None;
     }
@@ -136,7 +223,7 @@ struct Entries {
 
 /// The classical and the block covariance of `entries` in the fit of `cols` that leaves
 /// `residual` (see [`term_covariance`]); the entries back when the columns are (near) singular.
-fn covariance_of(cols: &[Vec<f64>], residual: &[f64], entries: Entries) -> Result<TermCovariance, Entries> {
+fn covariance_of(cols: &[&[f64]], residual: &[f64], entries: Entries) -> Result<TermCovariance, Entries> {
     let (n, k) = (residual.len(), cols.len());
     // Columns scaled to unit norm: a frequency's derivative (Nm per Hz, times seconds) and an
     // offset's column differ by orders of magnitude.
@@ -144,7 +231,7 @@ fn covariance_of(cols: &[Vec<f64>], residual: &[f64], entries: Entries) -> Resul
     if n <= k + 1 || scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(entries);
     }
-    let gram = DMatrix::from_fn(k, k, |a, b| dot(&cols[a], &cols[b]) / (scale[a] * scale[b]));
+    let gram = DMatrix::from_fn(k, k, |a, b| dot(cols[a], cols[b]) / (scale[a] * scale[b]));
     let Some(inverse) = invertible(gram) else { return Err(entries) };
     let rss = dot(residual, residual);
     let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / rss.max(1e-300)).clamp(0.0, 0.99);
@@ -161,7 +248,7 @@ fn covariance_of(cols: &[Vec<f64>], residual: &[f64], entries: Entries) -> Resul
         }
     }
     let sandwich = &inverse * &meat * &inverse * (blocks as f64 / (blocks - 1) as f64);
-    let gradient = DVector::from_fn(k, |a, _| dot(&cols[a], residual) / scale[a]);
+    let gradient = DVector::from_fn(k, |a, _| dot(cols[a], residual) / scale[a]);
     let step = &inverse * gradient;
     let index = &entries.index;
     let pick = |m: &DMatrix<f64>, f: f64| DMatrix::from_fn(index.len(), index.len(), |a, b| f * m[(index[a], index[b])] / (scale[index[a]] * scale[index[b]]));
@@ -182,21 +269,19 @@ fn invertible(gram: DMatrix<f64>) -> Option<DMatrix<f64>> {
     gram.try_inverse()
 }
 
-/// The model's torque's derivative along term `i`'s parameter `j`, the coefficients held
-/// (a central difference; one-sided at the edge of the parameter's grid).
-fn derivative(model: &Model, spec: &Spec, fit: &Fit, train: &Part, i: usize, j: usize) -> Option<Vec<f64>> {
+/// The model's torque's derivative along term `i`'s parameter `j`, the coefficients held: a
+/// forward difference from the fitted torque `fitted`, backward at the top of the parameter's
+/// grid.
+fn derivative(model: &Model, spec: &Spec, fit: &Fit, train: &Part, fitted: &[f64], i: usize, j: usize) -> Option<Vec<f64>> {
     let x = spec.terms[i].params[j];
     let grid = spec.terms[i].grids.get(j).map(|g| g.grid.as_slice()).unwrap_or(&[]);
     let (lo, hi) = grid.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), g| (lo.min(*g), hi.max(*g)));
     let h = STEP * if x != 0.0 { x.abs() } else if hi > lo { hi - lo } else { 1.0 };
-    let (a, b) = (if x - h < lo { x } else { x - h }, if x + h > hi && x - h >= lo { x } else { x + h });
-    let torque = |v: f64| {
-        let mut s = spec.clone();
-        s.terms[i].params[j] = v;
-        model.predict(&s, fit, train).torque_nm
-    };
-    let (low, high) = (torque(a), torque(b));
-    let column: Vec<f64> = high.iter().zip(&low).map(|(u, l)| (u - l) / (b - a)).collect();
+    let h = if x + h > hi && x - h >= lo { -h } else { h };
+    let mut s = spec.clone();
+    s.terms[i].params[j] = x + h;
+    let moved = model.predict(&s, fit, train).torque_nm;
+    let column: Vec<f64> = moved.iter().zip(fitted).map(|(u, f)| (u - f) / h).collect();
     column.iter().all(|v| v.is_finite()).then_some(column)
 }
 
@@ -279,7 +364,7 @@ mod tests {
         let fitted = super::super::least_squares::least_squares(&[ones.clone(), x.clone()], &y).unwrap();
         let residual: Vec<f64> = (0..x.len()).map(|i| y[i] - fitted[0] - fitted[1] * x[i]).collect();
         let entries = Entries { index: vec![1], at: vec![fitted[1]], nonlinear: vec![None], unmeasured: Vec::new() };
-        let Ok(c) = covariance_of(&[ones, x.clone()], &residual, entries) else { panic!("singular") };
+        let Ok(c) = covariance_of(&[&ones, &x], &residual, entries) else { panic!("singular") };
         let mean = x.iter().sum::<f64>() / x.len() as f64;
         let s = (dot(&residual, &residual) / (x.len() - 2) as f64).sqrt();
         let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / dot(&residual, &residual)).clamp(0.0, 0.99);
@@ -302,7 +387,7 @@ mod tests {
         let mut rng = jointctl_test_support::XorShift64::new(11);
         let residual: Vec<f64> = (0..n).map(|i| if i < n / 2 { 0.3 } else { -0.3 } * x[i] + 0.3 * rng.normal()).collect();
         let entries = Entries { index: vec![1], at: vec![0.0], nonlinear: vec![None], unmeasured: Vec::new() };
-        let Ok(c) = covariance_of(&[ones, x], &residual, entries) else { panic!("singular") };
+        let Ok(c) = covariance_of(&[&ones, &x], &residual, entries) else { panic!("singular") };
         assert!(c.blocks[(0, 0)].sqrt() > 3.0 * c.classical[(0, 0)].sqrt(), "blocks {} classical {}", c.blocks[(0, 0)].sqrt(), c.classical[(0, 0)].sqrt());
     }
 
