@@ -64,15 +64,38 @@ pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared
     Ok((true, on_bins, Some(reading)))
 }
 
-/// A slow log's rate read over a window as narrow as one sample either side: the training BIC
-/// of the baseline's fit read so and read over the usual window (at least
-/// [`super::prepare::NARROWEST_RATE_WINDOW`] either side), both as point samples, and the
-/// held-out evidence.
+/// A slow log's rate read otherwise than over the usual window: how, the training BIC read so
+/// and read over the usual window (at least [`super::prepare::NARROWEST_RATE_WINDOW`] either
+/// side), and the held-out evidence. For a window as narrow as one sample either side, the
+/// BIC of the baseline's fit, both as point samples ([`choose_rate_window`]); for a local
+/// cubic, of the whole model identified on each reading (`identify`'s second pass).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NarrowRate {
+    pub window: RateWindow,
     pub bic_narrow: f64,
     pub bic_usual: f64,
     pub evidence: String,
+}
+
+/// A slow log's rate readings other than the usual window.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RateWindow {
+    /// A least-squares line over a window as narrow as one sample either side.
+    OneSampleEitherSide,
+    /// The slope of a local cubic through two samples either side: of bin means, their
+    /// interval's rate to fourth order (see `prepare::RateReading::Cubic`).
+    CubicTwoEitherSide,
+}
+
+impl RateWindow {
+    /// What the report says of it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            RateWindow::OneSampleEitherSide => "over a window as narrow as one sample either side",
+            RateWindow::CubicTwoEitherSide => "through a local cubic over two samples either side (of bin means: their interval's rate)",
+        }
+    }
 }
 
 /// Whether a slow log's rate is read over a window as narrow as one sample either side
@@ -98,7 +121,7 @@ pub(crate) fn choose_rate_window(all: &[&dyn CandidateCause], baseline: &super::
     }
     let held = |m: &Model, s: &Spec, p: &Prepared| select::compute_held_out(m, s, p).map(|e| select::rmse(&e.errors));
     let (held_usual, held_narrow) = (held(&model_usual, &on_usual, &usual)?, held(&model_narrow, &on_narrow, &narrow)?);
-    (held_narrow <= held_usual).then(|| NarrowRate { bic_narrow, bic_usual, evidence: format!("held-out RMSE {held_narrow:.4} Nm read so, {held_usual:.4} Nm over the usual window") })
+    (held_narrow <= held_usual).then(|| NarrowRate { window: RateWindow::OneSampleEitherSide, bic_narrow, bic_usual, evidence: format!("held-out RMSE {held_narrow:.4} Nm read so, {held_usual:.4} Nm over the usual window") })
 }
 
 /// A slow log's noise floor [Nm] when the baseline fits eq. 3.5's friction: the pseudo-residuals

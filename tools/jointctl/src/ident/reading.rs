@@ -21,11 +21,12 @@ pub(super) fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::Bi
     })
 }
 
-/// A slow log's rate read over a window as narrow as one sample either side, when it is.
+/// A slow log's rate read otherwise than over the usual window, when it is.
 pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_reading::NarrowRate>) -> String {
     r.map_or(String::new(), |r| {
         format!(
-            " The rate read over a window as narrow as one sample either side (the usual is at least {}): the baseline's training BIC {:.0} against {:.0} over the usual window; {}.",
+            " The rate read {} (the usual window is at least {} samples either side): the baseline's training BIC {:.0} against {:.0} over the usual window; {}.",
+            r.window.describe(),
             jointctl_ident::identify::prepare::NARROWEST_RATE_WINDOW,
             r.bic_narrow,
             r.bic_usual,

@@ -20,7 +20,7 @@ use dropouts::dropouts;
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::NARROWEST_RATE_WINDOW;
-use rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths};
+use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals};
 use super::design::Part;
@@ -258,12 +258,22 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
 }
 
 pub(crate) fn prepare(data: &Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
-    prepare_with_rate_window(data, train_fraction, how, NARROWEST_RATE_WINDOW)
+    prepare_with_rate_window(data, train_fraction, how, RateReading::Adaptive { narrowest: NARROWEST_RATE_WINDOW })
 }
 
-/// [`prepare`] with the rate's widest window at least `narrowest` samples either side (see
-/// [`NARROWEST_RATE_WINDOW`]).
-pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, how: HeldOut, narrowest: usize) -> Result<Prepared, PrepareError> {
+/// How the deflection's rate is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum RateReading {
+    /// A least-squares line over a window chosen at each sample, at least `narrowest` samples
+    /// either side (see [`NARROWEST_RATE_WINDOW`]).
+    Adaptive { narrowest: usize },
+    /// A slow log's: the slope of a local cubic through two samples either side (see
+    /// `rate::cubic_rate_by_segment`).
+    Cubic,
+}
+
+/// [`prepare`] with the rate read as `rate` says.
+pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
     let n_all = data.len();
     if n_all < 50 {
         return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
@@ -307,7 +317,10 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     // The deflection's noise: its quantisation (at most half a step, see `DeflectionNoise`) and
     // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
-    let v = velocity_by_segment(&t, &d, &starts, DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples, narrowest));
+    let v = match rate {
+        RateReading::Adaptive { narrowest } => velocity_by_segment(&t, &d, &starts, DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples, narrowest)),
+        RateReading::Cubic => cubic_rate_by_segment(&t, &d, &starts),
+    };
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let span = hi - lo;
     let turns = turning.len();
