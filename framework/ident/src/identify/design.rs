@@ -433,13 +433,14 @@ impl Model<'_> {
         Some((0..k).map(|j| (s2 * inflation * inverse[(j, j)].max(0.0)).sqrt() / scale[j]).collect())
     }
 
-    /// The ordinary columns of `spec` on `p` (in the order of `fit.coefs`) and what `fit` leaves
-    /// of the measured torque there [Nm], the segment-wise terms' fits taken off: what a
-    /// parameter's covariance is computed from (see `uncertainty::term_covariance`).
-    pub fn columns_and_residual(&self, spec: &Spec, fit: &Fit, p: &Part) -> (Vec<Vec<f64>>, Vec<f64>) {
+    /// The ordinary columns of `spec` on `p` (in the order of `fit.coefs`), the torque `fit`
+    /// predicts there and what it leaves of the measured torque [Nm], the segment-wise terms'
+    /// fits taken off: what a parameter's covariance is computed from (see
+    /// `uncertainty::term_covariance`).
+    pub fn columns_and_residual(&self, spec: &Spec, fit: &Fit, p: &Part) -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {
         let predicted = self.predict(spec, fit, p).torque_nm;
         let residual = p.tau.iter().zip(&predicted).map(|(y, m)| y - m).collect();
-        (self.design(spec, p).cols, residual)
+        (self.design(spec, p).cols, predicted, residual)
     }
 
     /// The model's torque on a part with coefficients from another; segment-wise coefficients

@@ -55,8 +55,9 @@ impl Jacobian {
     /// forward difference from the fitted torque, backward at the top of a parameter's grid;
     /// the parameters spread over the cores).
     pub(crate) fn new(model: &Model, spec: &Spec, fit: &Fit, train: &Part) -> Jacobian {
-        let (cols, residual) = model.columns_and_residual(spec, fit, train);
-        let fitted: Vec<f64> = train.tau.iter().zip(&residual).map(|(y, e)| y - e).collect();
+        // The prediction itself, not the torque less the residual: a parameter that moves no
+        // sample must give a column of exact zeros (see `moves_smoothly`).
+        let (cols, fitted, residual) = model.columns_and_residual(spec, fit, train);
         let estimated: Vec<Vec<bool>> = spec
             .terms
             .iter()
@@ -278,6 +279,9 @@ fn derivative(model: &Model, spec: &Spec, fit: &Fit, train: &Part, fitted: &[f64
     let (lo, hi) = grid.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), g| (lo.min(*g), hi.max(*g)));
     let h = STEP * if x != 0.0 { x.abs() } else if hi > lo { hi - lo } else { 1.0 };
     let h = if x + h > hi && x - h >= lo { -h } else { h };
+    // The step as the parameter takes it (x + h rounded), so the difference quotient divides
+    // by what was added.
+    let h = (x + h) - x;
     let mut s = spec.clone();
     s.terms[i].params[j] = x + h;
     let moved = model.predict(&s, fit, train).torque_nm;
@@ -308,9 +312,12 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
     };
     // Each entry's step and the values reported a step either side.
     type Reported = BTreeMap<String, f64>;
+    // The step relative to the entry, or for an entry at zero a thousandth of its own error (an
+    // absolute floor vanished in rounding beside terms of order one).
     let steps: Vec<(f64, Reported, Reported)> = (0..cov.at.len())
         .map(|e| {
-            let h = STEP * cov.at[e].abs().max(1e-12);
+            let error = cov.classical[(e, e)].max(cov.blocks[(e, e)]).sqrt();
+            let h = if cov.at[e] != 0.0 { STEP * cov.at[e].abs() } else { (1e-3 * error).max(f64::MIN_POSITIVE) };
             (h, moved(e, h), moved(e, -h))
         })
         .collect();
@@ -329,7 +336,9 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
             continue;
         }
         let gradient: Option<Vec<f64>> = steps.iter().map(|(h, up, down)| Some((up.get(name)? - down.get(name)?) / (2.0 * h))).collect();
-        let Some(g) = gradient else { continue };
+        // A value that moves with none of the entries is not estimated here (a registered
+        // cause's nested parameter at its simpler value): no error, rather than zero.
+        let Some(g) = gradient.filter(|g| g.iter().any(|v| *v != 0.0)) else { continue };
         // A value that moves with a segment's coefficients has more error than the covariance
         // holds: none claimed.
         let is_nonlinear = names.iter().any(|n| n == name);
@@ -337,8 +346,10 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
             continue;
         }
         let along = |m: &DMatrix<f64>| (0..g.len()).flat_map(|a| (0..g.len()).map(move |b| (a, b))).map(|(a, b)| g[a] * m[(a, b)] * g[b]).sum::<f64>();
-        // The search's distance from the optimum adds to the statistical error (it is not
-        // charged twice: a coefficient's is zero, it is fitted at the optimum).
+        // The search's distance from the optimum adds to the statistical error. The joint
+        // Gauss-Newton step moves the coefficients with the non-linear parameters (and a
+        // baseline term held at its bound, or a ring's backfit, leaves the residual not quite
+        // orthogonal to the columns): a coefficient's share of it is charged too, on purpose.
         let off: f64 = g.iter().zip(&cov.displacement).map(|(a, b)| a * b).sum();
         let variance = along(&cov.classical).max(along(&cov.blocks)) + off * off;
         if variance.is_finite() && variance >= 0.0 {

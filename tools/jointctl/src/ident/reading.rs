@@ -23,9 +23,16 @@ pub(super) fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::Bi
 
 /// A slow log's rate read otherwise than over the usual window, when it is.
 pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_reading::NarrowRate>) -> String {
+    use jointctl_ident::identify::bin_reading::RateWindow;
     r.map_or(String::new(), |r| {
+        // The narrow window is judged on the baseline's fit, the cubic on the whole model's
+        // against the first pass's reading.
+        let (judged, against) = match r.window {
+            RateWindow::OneSampleEitherSide => ("the baseline's training BIC", "over the usual window"),
+            RateWindow::CubicTwoEitherSide => ("the whole model's training BIC", "as identify read it first"),
+        };
         format!(
-            " The rate read {} (the usual window is at least {} samples either side): the baseline's training BIC {:.0} against {:.0} over the usual window; {}.",
+            " The rate read {} (the usual window is at least {} samples either side): {judged} {:.0} against {:.0} {against}; {}.",
             r.window.describe(),
             jointctl_ident::identify::prepare::NARROWEST_RATE_WINDOW,
             r.bic_narrow,
