@@ -341,55 +341,13 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // degenerate fit), the first result stands.
     let second = cubic.as_ref().and_then(|c| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(c, None, &builtin, opts).ok())).ok().flatten());
     Ok(match second {
-        Some(through_cubic) => through_cubic_if_better(first, through_cubic),
+        Some(through_cubic) => bin_reading::through_cubic_if_better(first, through_cubic),
         None => first.report,
     })
 }
 
-/// A report and the training BIC of the model it names (the baseline and its causes), on the
-/// training samples it counts.
-struct Extended {
-    report: Report,
-    training_bic: f64,
-    /// Which samples the training and held-out parts hold (their time stamps, hashed): a
-    /// friction record's stops are found from the rate, and two readings of it may leave out
-    /// different ones.
-    samples: u64,
-}
-
-/// A hash of the time stamps of a prepared record's training and held-out parts.
-fn samples_of(p: &prepare::Prepared) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    for t in p.train.t.iter().chain(&p.test.t) {
-        t.to_bits().hash(&mut h);
-    }
-    (p.train.len(), p.test.len()).hash(&mut h);
-    h.finish()
-}
-
-/// The report of a slow log whose rate was read through a local cubic (`cubic`) instead of as
-/// identify read it first (`first`), when the whole model it names is better by more than BIC's
-/// threshold on the same training samples (the same held out) and its held-out error is no
-/// larger: a least-squares
-/// line reads a motion of a few hertz at 20 Hz slow, and a viscous friction's damping makes up
-/// the difference (on the blind devices' 20 Hz means, 5-18 % above the full-rate variants' and
-/// the truth). Judged on the whole model, not on the baseline as the narrow window is: eq. 3.5's
-/// arctan saturates and hardly tells a rate read slow from one read right, and an offset the
-/// baseline lacks swamped the comparison (held out 0.82 Nm either way on seed 6's device E).
-fn through_cubic_if_better(first: Extended, cubic: Extended) -> Report {
-    let better = first.samples == cubic.samples && first.training_bic - cubic.training_bic > BIC_THRESHOLD && cubic.report.rmse_after <= first.report.rmse_after;
-    if !better {
-        return first.report;
-    }
-    let read = first.report.narrow_rate.as_ref().map_or("over the usual window", |r| r.window.describe());
-    let evidence = format!("held-out RMSE {:.4} Nm read so, {:.4} Nm read {read}", cubic.report.rmse_after, first.report.rmse_after);
-    let narrow_rate = bin_reading::NarrowRate { window: bin_reading::RateWindow::CubicTwoEitherSide, bic_narrow: cubic.training_bic, bic_usual: first.training_bic, evidence };
-    Report { narrow_rate: Some(narrow_rate), ..cubic.report }
-}
-
 /// The search, the selection and the report on prepared data.
-fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<Extended, IdentifyError> {
+fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions) -> Result<bin_reading::Extended, IdentifyError> {
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     let centre = |p: &prepare::Prepared| if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
     // A slow log's rate: over the usual window or as narrow as one sample either side, as the
@@ -599,5 +557,5 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         held_out,
         rejected,
     };
-    Ok(Extended { report, training_bic, samples: samples_of(p) })
+    Ok(bin_reading::Extended { report, training_bic, samples: bin_reading::samples_of(p) })
 }
