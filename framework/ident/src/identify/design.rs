@@ -6,7 +6,7 @@ use std::ops::Range;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::least_squares::{dot, dot_row, fit_segments, least_squares};
+use super::least_squares::{ar1_inflated_variance, dot, dot_row, fit_segments, least_squares};
 
 use super::baseline::BaselineModel;
 use super::causes::{CandidateCause, Inputs, Samples};
@@ -424,13 +424,11 @@ impl Model<'_> {
             return Some(vec![0.0; k]);
         }
         let residual: Vec<f64> = (0..n).map(|i| p.tau[i] - d.fixed[i] - dot_row(&d.cols, &fit.coefs, i)).collect();
-        let s2 = dot(&residual, &residual) / (n - k) as f64;
-        let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / dot(&residual, &residual).max(1e-300)).clamp(0.0, 0.99);
-        let inflation = (1.0 + rho) / (1.0 - rho);
+        let variance = ar1_inflated_variance(&residual, k);
         let scale: Vec<f64> = d.cols.iter().map(|c| dot(c, c).sqrt().max(1e-300)).collect();
         let gram = DMatrix::from_fn(k, k, |a, b| dot(&d.cols[a], &d.cols[b]) / (scale[a] * scale[b]));
         let inverse = gram.try_inverse()?;
-        Some((0..k).map(|j| (s2 * inflation * inverse[(j, j)].max(0.0)).sqrt() / scale[j]).collect())
+        Some((0..k).map(|j| (variance * inverse[(j, j)].max(0.0)).sqrt() / scale[j]).collect())
     }
 
     /// The ordinary columns of `spec` on `p` (in the order of `fit.coefs`), the torque `fit`

@@ -46,6 +46,17 @@ pub(crate) fn least_squares(cols: &[Vec<f64>], y: &[f64]) -> Option<Vec<f64>> {
     out.iter().all(|c| c.is_finite()).then_some(out)
 }
 
+/// The variance a fit's residual charges its parameters' errors with [Nm^2]: `s^2 = RSS / (n -
+/// k)` for `parameters` = k, inflated for the residual's lag-1 autocorrelation `rho` (clamped to
+/// 0..0.99) by `(1 + rho) / (1 - rho)`, the AR(1) variance factor of a mean. Shared by the
+/// coefficients' standard errors (`design::Model::standard_errors`) and the causes' parameter
+/// errors (`uncertainty`).
+pub(crate) fn ar1_inflated_variance(residual: &[f64], parameters: usize) -> f64 {
+    let rss = dot(residual, residual);
+    let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / rss.max(1e-300)).clamp(0.0, 0.99);
+    rss / residual.len().saturating_sub(parameters).max(1) as f64 * (1.0 + rho) / (1.0 - rho)
+}
+
 /// The dot product of two equally long slices, summed in four lanes (a single running sum
 /// waits on every addition; four let the processor pipeline and vectorise them).
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {

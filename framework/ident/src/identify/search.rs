@@ -44,7 +44,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
     // `Refine::Nested`): a loop's shape searched from the middle of its grid had the scale
     // fitted for a sharp loop first, and true Dahl loops compared at that scale took a sharper
     // shape (the blind seeds 1's and 2's 013, 6's 094: limits 29-59 % low).
-    let mut best: Vec<f64> = params.iter().map(|p| if matches!(p.refine, Refine::Nested | Refine::NestedDecimated) { p.grid[0] } else { p.grid[p.grid.len() / 2] }).collect();
+    let mut best: Vec<f64> = params.iter().map(|p| if p.refine.is_nested() { p.grid[0] } else { p.grid[p.grid.len() / 2] }).collect();
     // Two passes when two parameters are searched (they interact); one otherwise.
     let searched = params.iter().filter(|p| p.grid.len() > 1).count();
     for _ in 0..searched.clamp(1, 2) {

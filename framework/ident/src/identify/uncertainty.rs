@@ -6,9 +6,9 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::causes::{CandidateCause, Refine};
+use super::causes::CandidateCause;
 use super::design::{Fit, Model, Part, Spec};
-use super::least_squares::dot;
+use super::least_squares::{ar1_inflated_variance, dot};
 use super::parallel::parallel_map;
 use super::significance::blocks_for;
 
@@ -66,7 +66,7 @@ impl Jacobian {
                     .iter()
                     .enumerate()
                     .map(|(j, &x)| {
-                        let simpler = term.grids.get(j).is_some_and(|g| matches!(g.refine, Refine::Nested | Refine::NestedDecimated) && g.grid.first() == Some(&x));
+                        let simpler = term.grids.get(j).is_some_and(|g| g.refine.is_nested() && g.grid.first() == Some(&x));
                         x.is_finite() && !simpler
                     })
                     .collect()
@@ -234,9 +234,7 @@ fn covariance_of(cols: &[&[f64]], residual: &[f64], entries: Entries) -> Result<
     }
     let gram = DMatrix::from_fn(k, k, |a, b| dot(cols[a], cols[b]) / (scale[a] * scale[b]));
     let Some(inverse) = invertible(gram) else { return Err(entries) };
-    let rss = dot(residual, residual);
-    let rho = (residual.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / rss.max(1e-300)).clamp(0.0, 0.99);
-    let variance = rss / (n - k) as f64 * (1.0 + rho) / (1.0 - rho);
+    let variance = ar1_inflated_variance(residual, k);
     let blocks = blocks_for(n);
     let mut meat = DMatrix::<f64>::zeros(k, k);
     for b in 0..blocks {

@@ -190,6 +190,19 @@ pub enum Refine {
     NestedDecimated,
 }
 
+impl Refine {
+    /// Whether the grid's first value is the simpler model ([`Refine::Nested`],
+    /// [`Refine::NestedDecimated`]): searched from it, and at it not estimated.
+    ///
+    /// ```
+    /// use jointctl_ident::identify::Refine;
+    /// assert!(Refine::NestedDecimated.is_nested() && !Refine::Between.is_nested());
+    /// ```
+    pub fn is_nested(self) -> bool {
+        matches!(self, Refine::Nested | Refine::NestedDecimated)
+    }
+}
+
 /// The inputs of the model, as the torque channel sees them. A cause may transform them (a delay
 /// shifts the channel, a dead zone maps the deflection the spring sees) before columns are built.
 #[derive(Clone, Debug)]
