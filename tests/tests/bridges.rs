@@ -287,10 +287,11 @@ fn a_readable_users_file_or_a_bad_endpoint_is_refused() {
 
 /// Issue's done-when: a client speaking the Foxglove WebSocket protocol (written from the
 /// `foxglove.websocket.v1` specification) receives joint states from `jointctl bridge foxglove`,
-/// on the recording's channel name with its JSON schema, stamped on the wall clock. The official
-/// SDK negotiates the protocol under its newer name, `foxglove.sdk.v1`, and refuses a client
-/// that offers only the old one (as `foxglove_bridge` 3.x does): pinned here, so that a change
-/// in the SDK shows.
+/// on the recording's channel name with its JSON schema, stamped on the wall clock, whichever of
+/// the protocol's two names it offers (issue 33: one that offers only `foxglove.websocket.v1`,
+/// as Lichtblick does, got HTTP 400 from the SDK's server). With `--sdk-only` the SDK's server
+/// alone answers, and still refuses such a client (as `foxglove_bridge` 3.x does): pinned here,
+/// so that a change in the SDK shows.
 #[test]
 fn a_foxglove_protocol_client_receives_joint_states() {
     let (arm, yaml) = rig("foxglove", "");
@@ -312,6 +313,23 @@ fn a_foxglove_protocol_client_receives_joint_states() {
         assert!(m["message"]["joints"][0]["position_rad"].is_f64(), "the recording's form: {m}");
         assert!(unix_ns.abs_diff(m["log_time_ns"].as_u64().unwrap()) < 30_000_000_000, "log time on the wall clock: {m}");
     }
+    let old_only = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "5", "foxglove.websocket.v1"]).output().unwrap();
+    assert!(old_only.status.success(), "{}", text(&old_only));
+    let messages: Vec<serde_json::Value> = String::from_utf8_lossy(&old_only.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(messages.len(), 5, "{}", text(&old_only));
+    for m in &messages {
+        assert_eq!(m["subprotocol"], "foxglove.websocket.v1", "{m}");
+        let names: Vec<&str> = m["message"]["joints"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
+        assert_eq!(names, ["a", "b"], "{m}");
+        assert!(unix_ns.abs_diff(m["log_time_ns"].as_u64().unwrap()) < 30_000_000_000, "log time on the wall clock: {m}");
+    }
+    let other = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "1", "foxglove.websocket.v2"]).output().unwrap();
+    assert!(!other.status.success() && String::from_utf8_lossy(&other.stderr).contains("400"), "another protocol is refused: {}", text(&other));
+
+    let (_sdk_alone, ready, _log) = bridge(&["foxglove", "--arm", &arm, "--port", "0", "--timeout", "10", "--sdk-only"], "listening on ws://");
+    let url = ready.split_whitespace().find(|w| w.starts_with("ws://")).unwrap().to_string();
     let old_only = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "1", "foxglove.websocket.v1"]).output().unwrap();
     assert!(!old_only.status.success() && String::from_utf8_lossy(&old_only.stderr).contains("400"), "{}", text(&old_only));
+    let sdk = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "2", "foxglove.sdk.v1"]).output().unwrap();
+    assert!(sdk.status.success() && String::from_utf8_lossy(&sdk.stdout).lines().count() == 2, "{}", text(&sdk));
 }

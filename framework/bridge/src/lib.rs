@@ -4,8 +4,9 @@
 //! the arm like any inspector ([`jointctl_record::feed::ArmFeed`]): a slow or dead network never
 //! slows the control loop, whose publisher only ever drops samples for a slow reader.
 //!
-//! - [`foxglove`]: the official Foxglove SDK's WebSocket server (`foxglove.websocket.v1`), one
-//!   JSON-schema channel per recorded topic, so a layout made on a recording works live.
+//! - [`foxglove`]: the official Foxglove SDK's WebSocket server (`foxglove.sdk.v1`, and the
+//!   older `foxglove.websocket.v1` through a relay), one JSON-schema channel per recorded topic,
+//!   so a layout made on a recording works live.
 //! - [`zenoh`]: the same messages over Zenoh for other machines, and commands from them, only
 //!   when the arm's YAML allows them and only from peers that authenticate.
 //! - [`ros2`]: ROS 2 topics over DDS (`/joint_states`, `/diagnostics`, the jointctl topics),

@@ -15,7 +15,13 @@
 //! figures side by side, the share of joint states that reached the listener, and each helper
 //! process's CPU as a share of one core over its own lifetime.
 //!
-//! Environment: `BENCH_BRIDGE_S` (default 30) seconds per run; `BENCH_QUICK=1` for 5 s.
+//! Last, the Foxglove relay (clients of `foxglove.websocket.v1`) against the SDK's server alone:
+//! two `jointctl bridge foxglove` on one arm, one with the relay, one with `--sdk-only`, and a
+//! Rust client on each that keeps up with 1 kHz (the Python client does not): latency from the
+//! cycle's stamp to receipt, the share of cycles received, each bridge's CPU. Same run.
+//!
+//! Environment: `BENCH_BRIDGE_S` (default 30) seconds per run; `BENCH_QUICK=1` for 5 s;
+//! `BENCH_ONLY=foxglove` runs the relay's comparison alone.
 //! Needs `cargo build --release --workspace` first and `bash .ci/setup-python-venv`.
 
 use std::io::{BufRead, BufReader};
@@ -128,6 +134,84 @@ fn ros2_run(exe: &std::path::Path, python: &std::path::Path, seconds: f64, arm: 
     out
 }
 
+/// A Foxglove WebSocket client written from the protocol's specification (as the Python client
+/// of the tests is): subscribes to `joint_state` and returns each message's latency, receipt on
+/// the wall clock less its log time [us], until `until`.
+fn foxglove_latencies(url: &str, subprotocol: &str, until: std::time::Instant) -> Result<Vec<f64>, String> {
+    use tungstenite::client::IntoClientRequest;
+    let mut request = url.into_client_request().map_err(|e| e.to_string())?;
+    request.headers_mut().insert("sec-websocket-protocol", subprotocol.parse().map_err(|e| format!("{e}"))?);
+    let (mut ws, _) = tungstenite::connect(request).map_err(|e| format!("{url} offering {subprotocol}: {e}"))?;
+    if let tungstenite::stream::MaybeTlsStream::Plain(tcp) = ws.get_ref() {
+        tcp.set_read_timeout(Some(Duration::from_millis(200))).map_err(|e| e.to_string())?;
+    }
+    let mut latencies = Vec::new();
+    let mut subscribed = false;
+    while std::time::Instant::now() < until {
+        match ws.read() {
+            Ok(tungstenite::Message::Text(text)) if !subscribed => {
+                let op: serde_json::Value = serde_json::from_str(text.as_str()).unwrap_or_default();
+                let channel = op["channels"].as_array().and_then(|c| c.iter().find(|c| c["topic"] == "joint_state")).and_then(|c| c["id"].as_u64());
+                if let (Some("advertise"), Some(id)) = (op["op"].as_str(), channel) {
+                    ws.send(tungstenite::Message::text(serde_json::json!({"op": "subscribe", "subscriptions": [{"id": 1, "channelId": id}]}).to_string())).map_err(|e| e.to_string())?;
+                    subscribed = true;
+                }
+            }
+            // Message data: opcode 1, subscription id (u32), log time (u64 ns), payload.
+            Ok(tungstenite::Message::Binary(frame)) if frame.len() >= 13 && frame[0] == 1 => {
+                let log_time = u64::from_le_bytes(frame[5..13].try_into().unwrap_or_default());
+                latencies.push(unix_ns().saturating_sub(log_time) as f64 / 1e3);
+            }
+            Ok(_) => {}
+            Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+            Err(tungstenite::Error::ConnectionClosed | tungstenite::Error::AlreadyClosed) => break,
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+    Ok(latencies)
+}
+
+/// The relay against the SDK's server alone: both on one arm, a Rust client on each.
+fn foxglove_relay_run(exe: &std::path::Path, seconds: f64) {
+    let arm = "bench-br-fox";
+    let args = |extra: &[&str]| -> Vec<String> { ["foxglove", "--arm", arm, "--port", "0", "--timeout", "10"].iter().chain(extra).map(|s| s.to_string()).collect() };
+    let (relayed, relayed_ready) = bridge(exe, &args(&[]), "listening on ws://");
+    let (direct, direct_ready) = bridge(exe, &args(&["--sdk-only"]), "listening on ws://");
+    let looping = std::thread::spawn(move || jointctl_bench::run_sherpa_loop(seconds, arm));
+    let url = |ready: std::sync::mpsc::Receiver<String>| {
+        let line = ready.recv_timeout(Duration::from_secs(20)).expect("a Foxglove bridge never started");
+        line.split_whitespace().find(|w| w.starts_with("ws://")).unwrap().to_string()
+    };
+    let until = std::time::Instant::now() + Duration::from_secs_f64(seconds);
+    let clients = [(url(relayed_ready), "foxglove.websocket.v1"), (url(direct_ready), "foxglove.sdk.v1")].map(|(url, name)| std::thread::spawn(move || foxglove_latencies(&url, name, until)));
+    let run = looping.join().unwrap();
+    let [relayed_l, direct_l] = clients.map(|c| c.join().unwrap());
+    let cpu = [wait_cpu_share(relayed.0, relayed.1), wait_cpu_share(direct.0, direct.1)];
+    println!("## Foxglove: the relay for `foxglove.websocket.v1` clients against the SDK's server alone (same run, a Rust client on each)");
+    println!("| path | samples received | of cycles | min ms | p50 ms | p99 ms | max ms | bridge CPU, % of a core |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for ((name, l), cpu) in [("`bridge foxglove` (relay), client offering `foxglove.websocket.v1`", relayed_l), ("`bridge foxglove --sdk-only`, client offering `foxglove.sdk.v1`", direct_l)].into_iter().zip(cpu) {
+        match l {
+            Ok(mut l) => {
+                l.sort_by(f64::total_cmp);
+                println!(
+                    "| {name} | {} | {:.0} % | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} |",
+                    l.len(),
+                    100.0 * l.len() as f64 / run.cycles.max(1) as f64,
+                    l.first().copied().unwrap_or(f64::NAN) / 1e3,
+                    percentile(&l, 50.0) / 1e3,
+                    percentile(&l, 99.0) / 1e3,
+                    l.last().copied().unwrap_or(f64::NAN) / 1e3,
+                    100.0 * cpu
+                );
+            }
+            Err(e) => println!("| {name} | the client failed: {e} | | | | | | {:.0} |", 100.0 * cpu),
+        }
+    }
+    println!("(the loop: {} cycles, {} overruns)", run.cycles, run.overruns);
+    println!();
+}
+
 fn main() {
     let quick = std::env::var("BENCH_QUICK").is_ok();
     let seconds: f64 = std::env::var("BENCH_BRIDGE_S").ok().and_then(|v| v.parse().ok()).unwrap_or(if quick { 5.0 } else { 30.0 });
@@ -138,6 +222,10 @@ fn main() {
     println!("jointctl bridge benchmark ({} cores), full SHERPA arm at 1 kHz, {seconds} s per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
     println!();
 
+    if std::env::var("BENCH_ONLY").is_ok_and(|only| only == "foxglove") {
+        foxglove_relay_run(&exe, seconds);
+        return;
+    }
     let alone = jointctl_bench::run_sherpa_loop(seconds, "bench-br-alone");
 
     let arm = "bench-br-with";
@@ -243,4 +331,6 @@ fn main() {
     if !fox.status.success() {
         println!("\n(the Foxglove client: {})", String::from_utf8_lossy(&fox.stderr).lines().last().unwrap_or(""));
     }
+    println!();
+    foxglove_relay_run(&exe, seconds);
 }

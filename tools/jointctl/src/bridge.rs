@@ -13,7 +13,8 @@ use crate::arm_view::RunningArm;
 pub enum BridgeCommand {
     /// A live view in Foxglove: the official Foxglove SDK's WebSocket server with the recording's
     /// channels (joint_state, diagnostics, raw, commands), JSON with JSON schemas. Open
-    /// `ws://HOST:PORT` in Foxglove ("Open connection", Foxglove WebSocket).
+    /// `ws://HOST:PORT` in Foxglove or Lichtblick ("Open connection", Foxglove WebSocket):
+    /// clients of either protocol name (`foxglove.sdk.v1`, `foxglove.websocket.v1`) connect.
     Foxglove {
         #[command(flatten)]
         at: RunningArm,
@@ -26,6 +27,10 @@ pub enum BridgeCommand {
         /// Give up when the arm's services do not appear, or the arm is silent, for this long [s].
         #[arg(long, default_value_t = 5.0, value_parser = crate::seconds)]
         timeout: f64,
+        /// The SDK's server alone on the port, without the relay that lets in clients offering
+        /// only `foxglove.websocket.v1`: one hop less, current Foxglove apps only.
+        #[arg(long)]
+        sdk_only: bool,
     },
     /// ROS 2: the arm's topics over DDS (/joint_states, /diagnostics once a second,
     /// /jointctl/joint_details, /jointctl/raw, /jointctl/commands; ROS 2's default QoS), from a
@@ -78,8 +83,8 @@ pub fn run(command: BridgeCommand) -> ExitCode {
         Err(e) => return crate::fail(e),
     };
     match command {
-        BridgeCommand::Foxglove { at, host, port, timeout } => {
-            let opts = jointctl_bridge::foxglove::FoxgloveOptions { arm: at.arm.clone(), scope: at.scope(), host: host.clone(), port, timeout_s: timeout };
+        BridgeCommand::Foxglove { at, host, port, timeout, sdk_only } => {
+            let opts = jointctl_bridge::foxglove::FoxgloveOptions { arm: at.arm.clone(), scope: at.scope(), host: host.clone(), port, timeout_s: timeout, older_clients: !sdk_only };
             let served = jointctl_bridge::foxglove::serve(&opts, &stop, |port| {
                 tracing::info!(arm = %opts.arm, "Foxglove bridge listening on ws://{host}:{port}");
             });

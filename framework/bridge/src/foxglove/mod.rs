@@ -1,4 +1,7 @@
-//! A live view in Foxglove: the arm's recorded topics on the Foxglove SDK's WebSocket server.
+//! A live view in Foxglove: the arm's recorded topics on the Foxglove SDK's WebSocket server,
+//! behind a relay that also lets in clients of the protocol's older name ([`older_clients`]).
+
+pub mod older_clients;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -25,6 +28,10 @@ pub struct FoxgloveOptions {
     pub port: u16,
     /// How long to wait for the arm's services, and how long the arm may be silent [s].
     pub timeout_s: f64,
+    /// Let in clients that offer only `foxglove.websocket.v1` (Lichtblick, PlotJuggler): the
+    /// public port is then [`older_clients::Relay`]'s, and the SDK's server listens on a loopback
+    /// port behind it. False: the SDK's server on the public port, `foxglove.sdk.v1` only.
+    pub older_clients: bool,
 }
 
 /// Why the bridge stopped with an error.
@@ -41,6 +48,9 @@ pub enum FoxgloveBridgeError {
         /// The SDK's reason.
         source: foxglove::FoxgloveError,
     },
+    /// The relay for clients of the older name could not start.
+    #[error(transparent)]
+    Relay(#[from] older_clients::RelayError),
     /// The WebSocket server could not start (port taken, address not local).
     #[error("cannot start the Foxglove WebSocket server on {host}:{port}")]
     Server {
@@ -70,13 +80,13 @@ fn channels(ctx: &Arc<Context>) -> Result<BTreeMap<&'static str, Arc<RawChannel>
     Ok(out)
 }
 
-/// Serves the arm until `stop` is set or the arm stops or falls silent; `ready` learns the port
-/// once clients may connect. Message times are the cycles' stamps on the wall clock.
+/// Serves the arm until `stop` is set or the arm stops or falls silent; `ready` learns the public
+/// port once clients may connect. Message times are the cycles' stamps on the wall clock.
 ///
 /// ```no_run
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// use jointctl_bridge::foxglove::{FoxgloveOptions, serve};
-/// let opts = FoxgloveOptions { arm: "sherpa".into(), scope: Default::default(), host: "127.0.0.1".into(), port: 8765, timeout_s: 5.0 };
+/// let opts = FoxgloveOptions { arm: "sherpa".into(), scope: Default::default(), host: "127.0.0.1".into(), port: 8765, timeout_s: 5.0, older_clients: true };
 /// let summary = serve(&opts, &std::sync::atomic::AtomicBool::new(false), |port| eprintln!("ws://127.0.0.1:{port}"))?;
 /// println!("{:?}", summary.messages);
 /// # Ok(()) }
@@ -86,13 +96,25 @@ pub fn serve(opts: &FoxgloveOptions, stop: &AtomicBool, ready: impl FnOnce(u16))
     let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-bridge-foxglove-{}", std::process::id()))?;
     let ctx = Context::new();
     let channels = channels(&ctx)?;
+    // Behind the relay, the SDK's server is reachable from this machine only.
+    let (sdk_host, sdk_port) = if opts.older_clients { ("127.0.0.1".to_string(), 0) } else { (opts.host.clone(), opts.port) };
     let server = WebSocketServer::new()
         .name(format!("jointctl {}", opts.arm))
-        .bind(opts.host.clone(), opts.port)
+        .bind(sdk_host.clone(), sdk_port)
         .context(&ctx)
         .start_blocking()
-        .map_err(|source| FoxgloveBridgeError::Server { host: opts.host.clone(), port: opts.port, source })?;
-    ready(server.port());
+        .map_err(|source| FoxgloveBridgeError::Server { host: sdk_host, port: sdk_port, source })?;
+    let relay = match opts.older_clients {
+        true => match older_clients::Relay::start(&opts.host, opts.port, server.port()) {
+            Ok(relay) => Some(relay),
+            Err(e) => {
+                server.stop().wait_blocking();
+                return Err(e.into());
+            }
+        },
+        false => None,
+    };
+    ready(relay.as_ref().map_or(server.port(), older_clients::Relay::port));
     let result = crate::pump(
         &mut feed,
         stop,
@@ -106,6 +128,9 @@ pub fn serve(opts: &FoxgloveOptions, stop: &AtomicBool, ready: impl FnOnce(u16))
         },
         || {},
     );
+    if let Some(relay) = relay {
+        relay.stop();
+    }
     server.stop().wait_blocking();
     Ok(result?)
 }
