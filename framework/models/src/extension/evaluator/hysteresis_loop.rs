@@ -50,7 +50,17 @@ pub fn loop_step(u: f64, step_rad: f64, lambda_rad: f64, shape: f64) -> f64 {
     let integrated = xi.min(MAX_SUBSTEPS as f64 * SUBSTEP_IN_SCALES);
     let substeps = ((integrated / SUBSTEP_IN_SCALES).ceil() as usize).clamp(1, MAX_SUBSTEPS);
     let h = integrated / substeps as f64;
-    let f = |w: f64| 1.0 - w * w.abs().powf(shape - 1.0);
+    // `w |w|^(shape - 1)` by multiplication for the whole shapes identify searches (2, 3, 4):
+    // `powf` here was about a tenth of identify's CPU time on the 100 000-sample benchmark record.
+    let f = |w: f64| {
+        let odd_power = match shape {
+            2.0 => w * w.abs(),
+            3.0 => w * w * w,
+            4.0 => w * w * w * w.abs(),
+            _ => w * w.abs().powf(shape - 1.0),
+        };
+        1.0 - odd_power
+    };
     let mut w = s * u;
     for _ in 0..substeps {
         let k1 = f(w);
