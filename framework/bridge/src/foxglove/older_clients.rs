@@ -187,7 +187,7 @@ async fn relay_one(stream: TcpStream, upstream: SocketAddr) -> Result<(), WsErro
     let client = tokio_tungstenite::accept_hdr_async(stream, answer).await?;
     let mut request = format!("ws://{upstream}/").into_client_request()?;
     request.headers_mut().insert(SEC_WEBSOCKET_PROTOCOL, HeaderValue::from_static(SDK_NAME));
-    let sdk = TcpStream::connect(upstream).await?;
+    let sdk = TcpStream::connect(upstream).await.inspect_err(|e| tracing::warn!(?peer, "Foxglove relay: cannot reach the SDK's server on {upstream}: {e}"))?;
     sdk.set_nodelay(true)?;
     // The same socket under a second descriptor, to re-arm quick ACKs while the WebSocket owns it.
     let acks: OwnedFd = sdk.as_fd().try_clone_to_owned()?;
