@@ -91,3 +91,66 @@ fn a_bad_experiment_file_is_an_error_that_says_where() {
         assert!(!out.status.success() && err.contains(&*file.display().to_string()) && err.contains(expected), "{yaml}: {err}");
     }
 }
+
+/// The proposed experiment run on a running arm (issue 32, item 4: a file that `cmd` and
+/// `record` run on the arm, not only `sim record`): `cmd experiment` turns each segment into a
+/// torque sine of the joint's published stiffness times its deflection amplitude, for whole
+/// periods from rest, with a second at zero torque after each; on the simulated arm's clamped
+/// shoulder (q2) the recording holds those commands and the deflections they asked for.
+#[test]
+fn an_experiment_file_runs_on_the_running_arm_in_torque_control() {
+    use jointctl_tests::{arm_name, sherpa_with, stop};
+    use std::process::Stdio;
+    let test = "experiment-on-arm";
+    let arm = arm_name(test);
+    let config = sherpa_with(test, &arm, &[]);
+    let work = scratch(&format!("{test}-out"));
+    let file = work.join("experiment.yaml");
+    std::fs::write(&file, "segments:\n  - {amplitude_rad: 0.01, frequency_hz: 0.5, duration_s: 3.5}\n  - {amplitude_rad: 0.02, frequency_hz: 1.0, duration_s: 3.0}\n").unwrap();
+    let mut run = Command::new(jointctl()).arg("run").arg(&config).args(["--duration", "60"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
+    let experiment = |extra: &[&str]| Command::new(jointctl()).args(["cmd", "--arm", &arm, "experiment"]).args(extra).output().unwrap();
+    let refused = experiment(&["q9", file.to_str().unwrap()]);
+    assert!(!refused.status.success() && String::from_utf8_lossy(&refused.stderr).contains("has no joint `q9` (it has q1, q2"), "{}", String::from_utf8_lossy(&refused.stderr));
+    let plan = experiment(&["q2", file.to_str().unwrap(), "--dry-run", "--stiffness", "100"]);
+    assert!(plan.status.success() && String::from_utf8_lossy(&plan.stderr).contains("1: torque sine 1.0000 Nm at 0.5000 Hz for 4.00 s"), "whole periods: {}", String::from_utf8_lossy(&plan.stderr));
+
+    let recording = work.join("r.mcap");
+    let mut record = Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "13", "--out"]).arg(&recording).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    let ran = experiment(&["q2", file.to_str().unwrap()]);
+    assert!(ran.status.success(), "{}", String::from_utf8_lossy(&ran.stderr));
+    assert!(record.wait().unwrap().success());
+    stop(&mut run);
+
+    let commands = jointctl_record::reader::commands(&recording).unwrap();
+    let sent: Vec<(String, Vec<f64>)> = commands.iter().map(|c| (c.request.waveform.name().to_string(), c.request.values[..2].to_vec())).collect();
+    assert_eq!(sent.len(), 4, "{sent:?}");
+    let q2 = jointctl_record::reader::joint_series(&recording, "q2").unwrap();
+    let k = q2.stiffness_nm_per_rad[0];
+    let expected = [("sine", 0.01 * k, 0.5), ("step", 0.0, 0.0), ("sine", 0.02 * k, 1.0), ("step", 0.0, 0.0)];
+    for ((waveform, values), (w, a, f)) in sent.iter().zip(expected) {
+        assert_eq!(waveform, w, "{sent:?}");
+        assert!((values[0] - a).abs() < 1e-9 * k && values[1] == f, "{sent:?} for {k} Nm/rad");
+    }
+    // Each sine's run in the recording: its deflection's half range against the one asked for
+    // (the published stiffness is the slope at rest; the shoulder's play and lever make it read
+    // 1.2-1.3 times as much), and its length in whole periods.
+    let mut runs: Vec<(f64, f64, f64, f64)> = Vec::new(); // (start s, end s, min, max deflection)
+    for i in 0..q2.len() {
+        let (t, r, d) = (q2.t_s[i], q2.reference_torque_nm[i], q2.deflection_rad[i]);
+        if r.is_finite() && r != 0.0 {
+            match runs.last_mut() {
+                Some(run) if t - run.1 < 0.5 => *run = (run.0, t, run.2.min(d), run.3.max(d)),
+                _ => runs.push((t, t, d, d)),
+            }
+        }
+    }
+    assert_eq!(runs.len(), 2, "{runs:?}");
+    for ((start, end, lo, hi), (asked, seconds)) in runs.iter().zip([(0.01, 4.0), (0.02, 3.0)]) {
+        let half = (hi - lo) / 2.0;
+        assert!(half > 0.8 * asked && half < 1.6 * asked, "deflection half range {half} for {asked}: {runs:?}");
+        assert!((end - start - seconds).abs() < 0.2, "{} s for {seconds}: {runs:?}", end - start);
+    }
+}

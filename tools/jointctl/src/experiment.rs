@@ -349,7 +349,7 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
 
 /// An experiment file as `jointctl identify` writes it, each segment checked (a sine the
 /// simulator can run: finite, positive, at most a day long).
-fn read_experiment(file: &std::path::Path) -> Result<Experiment, String> {
+pub(crate) fn read_experiment(file: &std::path::Path) -> Result<Experiment, String> {
     let text = jointctl_files::read_to_string(file, jointctl_files::FileKind::Config).map_err(|e| e.to_string())?;
     let experiment: Experiment = serde_yaml::from_str(&text).map_err(|e| match e.location() {
         Some(at) => format!("{}:{}:{}: {e}", file.display(), at.line(), at.column()),

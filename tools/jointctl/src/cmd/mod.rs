@@ -2,6 +2,9 @@
 //! when the runtime accepted it; 1 with the runtime's reason when it refused it, or when no
 //! runtime serves the arm.
 
+mod experiment;
+
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Subcommand};
@@ -126,6 +129,24 @@ enum Command {
     },
     /// Stop the runtime: joints held, final state published.
     Stop,
+    /// Run an experiment file (`experiment.yaml`, as `jointctl identify` proposes it for a
+    /// confounded pair) on a joint whose output is fixed: each segment a torque sine of the
+    /// joint's stiffness times its deflection amplitude, at its frequency, from rest, for whole
+    /// periods, then a second at zero torque. Record it with `jointctl record` alongside, then
+    /// `jointctl identify --data` the recording. The joint is left at a zero torque reference.
+    Experiment {
+        /// Joint name.
+        joint: String,
+        /// The experiment file.
+        file: PathBuf,
+        /// Stiffness that turns deflections into torques [Nm/rad]; default: the joint's
+        /// stiffness as the runtime publishes it.
+        #[arg(long, value_name = "NM_PER_RAD", value_parser = finite)]
+        stiffness: Option<f64>,
+        /// Print the torque sines, send nothing.
+        #[arg(long)]
+        dry_run: bool,
+    },
 }
 
 fn parse_points(points: &[String]) -> Result<Vec<[f64; 3]>, String> {
@@ -172,10 +193,14 @@ fn request(command: &Command) -> Result<CommandRequest, String> {
         Command::Enable { joint } => CommandRequest::new(kind::ENABLE, joint, &[]),
         Command::Disable { joint } => CommandRequest::new(kind::DISABLE, joint, &[]),
         Command::Stop => CommandRequest::new(kind::STOP, "", &[]),
+        Command::Experiment { .. } => return Err("an experiment is a sequence of commands (cmd experiment), not one request".into()),
     })
 }
 
 pub fn run(args: CmdArgs) -> ExitCode {
+    if let Command::Experiment { joint, file, stiffness, dry_run } = &args.command {
+        return experiment::run(&args, joint, file, *stiffness, *dry_run);
+    }
     let mut req = match request(&args.command) {
         Ok(r) => r,
         Err(e) => return crate::fail(e),
