@@ -296,7 +296,7 @@ fn a_readable_users_file_or_a_bad_endpoint_is_refused() {
 fn a_foxglove_protocol_client_receives_joint_states() {
     let (arm, yaml) = rig("foxglove", "");
     let _arm = run_arm(&yaml);
-    let (_bridge, ready, _log) = bridge(&["foxglove", "--arm", &arm, "--port", "0", "--timeout", "10"], "listening on ws://");
+    let (mut relayed, ready, _log) = bridge(&["foxglove", "--arm", &arm, "--port", "0", "--timeout", "10"], "listening on ws://");
     let url = ready.split_whitespace().find(|w| w.starts_with("ws://")).unwrap().to_string();
     let client = root().join("tests/interop/foxglove_client.py");
     let out = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "5", "foxglove.websocket.v1,foxglove.sdk.v1"]).output().unwrap();
@@ -324,12 +324,22 @@ fn a_foxglove_protocol_client_receives_joint_states() {
         assert!(unix_ns.abs_diff(m["log_time_ns"].as_u64().unwrap()) < 30_000_000_000, "log time on the wall clock: {m}");
     }
     let other = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "1", "foxglove.websocket.v2"]).output().unwrap();
-    assert!(!other.status.success() && String::from_utf8_lossy(&other.stderr).contains("400"), "another protocol is refused: {}", text(&other));
+    assert!(!other.status.success() && String::from_utf8_lossy(&other.stderr).contains("HTTP 400"), "another protocol is refused: {}", text(&other));
+    // The bridge stopped with a client of the old name connected through the relay: it exits
+    // cleanly, and the client's connection closes (the client then prints what it had).
+    let staying = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "1000000", "foxglove.websocket.v1"]).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let stopped_at = Instant::now();
+    stop(&mut relayed.0);
+    assert!(relayed.0.wait().unwrap().success(), "the bridge exits cleanly with a relayed client connected");
+    let staying = staying.wait_with_output().unwrap();
+    assert!(staying.status.success() && !staying.stdout.is_empty(), "the client got messages, then its connection closed: {}", text(&staying));
+    assert!(stopped_at.elapsed() < std::time::Duration::from_secs(8), "stop and close took {:?}", stopped_at.elapsed());
 
     let (_sdk_alone, ready, _log) = bridge(&["foxglove", "--arm", &arm, "--port", "0", "--timeout", "10", "--sdk-only"], "listening on ws://");
     let url = ready.split_whitespace().find(|w| w.starts_with("ws://")).unwrap().to_string();
     let old_only = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "1", "foxglove.websocket.v1"]).output().unwrap();
-    assert!(!old_only.status.success() && String::from_utf8_lossy(&old_only.stderr).contains("400"), "{}", text(&old_only));
+    assert!(!old_only.status.success() && String::from_utf8_lossy(&old_only.stderr).contains("HTTP 400"), "{}", text(&old_only));
     let sdk = Command::new(interop_python()).arg(&client).args([&url, "joint_state", "2", "foxglove.sdk.v1"]).output().unwrap();
     assert!(sdk.status.success() && String::from_utf8_lossy(&sdk.stdout).lines().count() == 2, "{}", text(&sdk));
 }

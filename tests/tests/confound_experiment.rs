@@ -101,13 +101,20 @@ fn a_bad_experiment_file_is_an_error_that_says_where() {
 fn an_experiment_file_runs_on_the_running_arm_in_torque_control() {
     use jointctl_tests::{arm_name, sherpa_with, stop};
     use std::process::Stdio;
+    // Stopped on every way out of the test, a failed assertion included.
+    struct Running(std::process::Child);
+    impl Drop for Running {
+        fn drop(&mut self) {
+            stop(&mut self.0);
+        }
+    }
     let test = "experiment-on-arm";
     let arm = arm_name(test);
     let config = sherpa_with(test, &arm, &[]);
     let work = scratch(&format!("{test}-out"));
     let file = work.join("experiment.yaml");
     std::fs::write(&file, "segments:\n  - {amplitude_rad: 0.01, frequency_hz: 0.5, duration_s: 3.5}\n  - {amplitude_rad: 0.02, frequency_hz: 1.0, duration_s: 3.0}\n").unwrap();
-    let mut run = Command::new(jointctl()).arg("run").arg(&config).args(["--duration", "60"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let _run = Running(Command::new(jointctl()).arg("run").arg(&config).args(["--duration", "60"]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap());
     let up = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
     assert!(up.status.success(), "the runtime is up: {}", String::from_utf8_lossy(&up.stderr));
     let experiment = |extra: &[&str]| Command::new(jointctl()).args(["cmd", "--arm", &arm, "experiment"]).args(extra).output().unwrap();
@@ -117,12 +124,13 @@ fn an_experiment_file_runs_on_the_running_arm_in_torque_control() {
     assert!(plan.status.success() && String::from_utf8_lossy(&plan.stderr).contains("1: torque sine 1.0000 Nm at 0.5000 Hz for 4.00 s"), "whole periods: {}", String::from_utf8_lossy(&plan.stderr));
 
     let recording = work.join("r.mcap");
-    let mut record = Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "13", "--out"]).arg(&recording).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(800));
+    let mut record = Running(Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "15", "--out"]).arg(&recording).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap());
+    // The recorder subscribes before the first command (it says nothing when it has: a margin
+    // that a loaded machine has kept in the recording tests).
+    std::thread::sleep(std::time::Duration::from_millis(2000));
     let ran = experiment(&["q2", file.to_str().unwrap()]);
     assert!(ran.status.success(), "{}", String::from_utf8_lossy(&ran.stderr));
-    assert!(record.wait().unwrap().success());
-    stop(&mut run);
+    assert!(record.0.wait().unwrap().success());
 
     let commands = jointctl_record::reader::commands(&recording).unwrap();
     let sent: Vec<(String, Vec<f64>)> = commands.iter().map(|c| (c.request.waveform.name().to_string(), c.request.values[..2].to_vec())).collect();
@@ -151,6 +159,8 @@ fn an_experiment_file_runs_on_the_running_arm_in_torque_control() {
     for ((start, end, lo, hi), (asked, seconds)) in runs.iter().zip([(0.01, 4.0), (0.02, 3.0)]) {
         let half = (hi - lo) / 2.0;
         assert!(half > 0.8 * asked && half < 1.6 * asked, "deflection half range {half} for {asked}: {runs:?}");
-        assert!((end - start - seconds).abs() < 0.2, "{} s for {seconds}: {runs:?}", end - start);
+        // Whole periods (4 s, not the file's 3.5), give or take the loop's cycles (25 ms) and
+        // the command's scheduling on a loaded machine.
+        assert!((end - start - seconds).abs() < 0.35, "{} s for {seconds}: {runs:?}", end - start);
     }
 }

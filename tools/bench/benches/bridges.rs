@@ -165,6 +165,8 @@ fn foxglove_latencies(url: &str, subprotocol: &str, until: std::time::Instant) -
             Ok(_) => {}
             Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
             Err(tungstenite::Error::ConnectionClosed | tungstenite::Error::AlreadyClosed) => break,
+            // What arrived before an error is kept (the arm's stop can end the connection).
+            Err(_) if !latencies.is_empty() => break,
             Err(e) => return Err(e.to_string()),
         }
     }

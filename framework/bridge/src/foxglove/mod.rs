@@ -128,9 +128,10 @@ pub fn serve(opts: &FoxgloveOptions, stop: &AtomicBool, ready: impl FnOnce(u16))
         },
         || {},
     );
+    // The SDK's server first: its close to each client passes through the relay.
+    server.stop().wait_blocking();
     if let Some(relay) = relay {
         relay.stop();
     }
-    server.stop().wait_blocking();
     Ok(result?)
 }

@@ -6,20 +6,22 @@
 //! `foxglove.sdk.v1` support, PlotJuggler's Foxglove client and older Foxglove apps offer only
 //! the old name, so they could not connect.
 //!
-//! The relay owns the bridge's public port and accepts either name (answering with the one the
-//! client offered, the SDK's first). For each client it opens a WebSocket to the SDK's server on
-//! a loopback port, offering `foxglove.sdk.v1`, and carries every text, binary and close message
-//! both ways unchanged. It reads no Foxglove message: the protocol stays the SDK's, and the
-//! WebSocket framing is tungstenite's (the crate the SDK's server is built on).
+//! The relay owns the bridge's public port and accepts every name the SDK accepts and the older
+//! one. For each client it opens a WebSocket to the SDK's server on a loopback port, offering
+//! the name the client chose (`foxglove.sdk.v1` for a client of the older name), and carries
+//! every text, binary and close message both ways unchanged. It reads no Foxglove message: the
+//! protocol stays the SDK's, and the WebSocket framing is tungstenite's (the crate the SDK's
+//! server is built on).
 //!
-//! A slow client still loses messages the way the SDK decides: the relay writes each message to
-//! the client before it reads the next from the SDK, so the SDK's queue for that client fills
-//! and the SDK drops, as it does for a slow client connected directly.
+//! A slow client loses messages where the SDK decides: the relay writes each message to the
+//! client before it reads the next from the SDK, so the SDK's queue for that client fills and
+//! the SDK drops. The loopback connection's socket buffers are a queue of their own before that
+//! (a client that cannot keep up gets older messages than it would directly).
 //!
 //! Latency: the SDK's server leaves Nagle's algorithm on (0.30 sets no `TCP_NODELAY`), so after
 //! one small message it holds the next until the client acknowledges, and a Linux client
 //! acknowledges late (delayed ACK, up to 40 ms): at 1 kHz a client received each joint state
-//! 0-36 ms after its cycle, 17.5 ms at the median. The relay asks its kernel to acknowledge the
+//! 0.1-42 ms after its cycle, 17.4 ms at the median. The relay asks its kernel to acknowledge the
 //! SDK at once (`TCP_QUICKACK`, re-armed after every message, as Linux requires) and sends to its
 //! own client with Nagle off, so its clients get the messages about 1 ms after their cycle.
 
@@ -36,8 +38,11 @@ use tokio_tungstenite::tungstenite::handshake::server::{ErrorResponse, Request, 
 use tokio_tungstenite::tungstenite::http::{HeaderValue, StatusCode, header::SEC_WEBSOCKET_PROTOCOL};
 use tokio_tungstenite::tungstenite::{Error as WsError, Message};
 
-/// The protocol's name in the Foxglove SDK, the one the relay offers the SDK's server.
+/// The protocol's name in the Foxglove SDK, the one the relay offers the SDK's server for a
+/// client of the older name.
 pub const SDK_NAME: &str = "foxglove.sdk.v1";
+/// The SDK's newer name (schemas by reference), which the SDK prefers when offered.
+pub const SDK_NAME_V1_1: &str = "foxglove.sdk.v1.1";
 /// The protocol's older name (the `foxglove/ws-protocol` specification, Lichtblick).
 pub const OLDER_NAME: &str = "foxglove.websocket.v1";
 
@@ -59,19 +64,31 @@ pub enum RelayError {
     Start(#[source] std::io::Error),
 }
 
-/// The subprotocol to answer a client with: the SDK's name if it offers it, else the older one,
-/// else none (the client speaks something else).
+/// The subprotocol to answer a client with: the newest the SDK speaks that it offers, else the
+/// older name, else none (the client speaks something else).
 ///
 /// ```
 /// use jointctl_bridge::foxglove::older_clients::negotiate;
 /// assert_eq!(negotiate(["foxglove.websocket.v1"]), Some("foxglove.websocket.v1"));
 /// assert_eq!(negotiate(["foxglove.websocket.v1, foxglove.sdk.v1"]), Some("foxglove.sdk.v1"));
+/// assert_eq!(negotiate(["foxglove.sdk.v1", "foxglove.sdk.v1.1"]), Some("foxglove.sdk.v1.1"));
 /// assert_eq!(negotiate(["graphql-ws"]), None);
 /// ```
 pub fn negotiate<'a>(headers: impl IntoIterator<Item = &'a str>) -> Option<&'static str> {
     let offered: Vec<&str> = headers.into_iter().flat_map(|h| h.split(',')).map(str::trim).collect();
-    [SDK_NAME, OLDER_NAME].into_iter().find(|name| offered.contains(name))
+    [SDK_NAME_V1_1, SDK_NAME, OLDER_NAME].into_iter().find(|name| offered.contains(name))
 }
+
+/// The name to offer the SDK's server for a client that chose `name`.
+fn upstream_name(name: &'static str) -> &'static str {
+    if name == OLDER_NAME { SDK_NAME } else { name }
+}
+
+/// How long a client may take to finish its handshake, and how long the relay waits at stop
+/// for its connections to pass on the SDK's close (assumptions: a loopback or LAN handshake
+/// takes milliseconds; a close needs one write).
+const HANDSHAKE_S: u64 = 10;
+const CLOSE_GRACE_MS: u64 = 500;
 
 /// The running relay: its thread serves until [`Relay::stop`] or drop.
 pub struct Relay {
@@ -116,7 +133,9 @@ impl Relay {
         self.port
     }
 
-    /// Stops accepting, closes every relayed connection and waits for the thread.
+    /// Stops accepting, gives the relayed connections half a second to pass on a close (stop the
+    /// SDK's server first, and its close to each client goes through), closes what is left and
+    /// waits for the thread.
     pub fn stop(mut self) {
         self.stop_now();
     }
@@ -137,15 +156,19 @@ impl Drop for Relay {
     }
 }
 
-/// Accepts clients until told to stop; each is relayed in a task of its own. Leaving drops the
-/// runtime with the tasks, which closes their connections.
+/// Accepts clients until told to stop; each is relayed in a task of its own. At stop the
+/// connections get a moment to pass on the SDK's close (the bridge stops the SDK's server
+/// first); leaving drops the runtime with what is left, which closes those connections.
 async fn accept_until(listener: TcpListener, upstream: SocketAddr, mut stop: oneshot::Receiver<()>) {
+    let mut connections = tokio::task::JoinSet::new();
     loop {
         tokio::select! {
-            _ = &mut stop => return,
+            _ = &mut stop => break,
+            // Reap finished connections as they end, so the set holds the live ones only.
+            Some(_) = connections.join_next(), if !connections.is_empty() => {}
             accepted = listener.accept() => match accepted {
                 Ok((stream, peer)) => {
-                    tokio::spawn(async move {
+                    connections.spawn(async move {
                         if let Err(e) = relay_one(stream, upstream).await {
                             tracing::debug!(%peer, "Foxglove relay: connection ended: {e}");
                         }
@@ -159,40 +182,52 @@ async fn accept_until(listener: TcpListener, upstream: SocketAddr, mut stop: one
             },
         }
     }
+    let _ = tokio::time::timeout(Duration::from_millis(CLOSE_GRACE_MS), async { while connections.join_next().await.is_some() {} }).await;
 }
 
-/// One client: the handshake with either name, a connection to the SDK's server, then every
-/// message carried both ways until either side closes.
+/// One client: a connection to the SDK's server, the client's handshake (HTTP 502 when the SDK
+/// cannot be reached, 400 for another protocol), the SDK's handshake with the client's choice,
+/// then every message carried both ways until either side closes.
 async fn relay_one(stream: TcpStream, upstream: SocketAddr) -> Result<(), WsError> {
     let peer = stream.peer_addr().ok();
     let _ = stream.set_nodelay(true);
+    let sdk = TcpStream::connect(upstream).await.inspect_err(|e| tracing::warn!(?peer, "Foxglove relay: cannot reach the SDK's server on {upstream}: {e}"));
+    let mut chosen: Option<&'static str> = None;
     // The callback's type is tungstenite's (as the SDK's handshake has it).
     #[allow(clippy::result_large_err)]
     let answer = |request: &Request, mut response: Response| -> Result<Response, ErrorResponse> {
+        let refuse = |status: StatusCode, why: String| {
+            let mut refusal = ErrorResponse::new(Some(why));
+            *refusal.status_mut() = status;
+            Err(refusal)
+        };
+        if sdk.is_err() {
+            return refuse(StatusCode::BAD_GATEWAY, "The Foxglove SDK's server behind this relay cannot be reached".into());
+        }
         let offered = request.headers().get_all(SEC_WEBSOCKET_PROTOCOL);
         match negotiate(offered.iter().filter_map(|h| h.to_str().ok())) {
             Some(name) => {
-                tracing::info!(?peer, subprotocol = name, "Foxglove client connected");
+                chosen = Some(name);
                 response.headers_mut().insert(SEC_WEBSOCKET_PROTOCOL, HeaderValue::from_static(name));
                 Ok(response)
             }
             None => {
-                tracing::info!(?peer, "Foxglove client refused: it offers neither {SDK_NAME} nor {OLDER_NAME}");
-                let mut refusal = ErrorResponse::new(Some(format!("Offer the subprotocol {SDK_NAME} or {OLDER_NAME}")));
-                *refusal.status_mut() = StatusCode::BAD_REQUEST;
-                Err(refusal)
+                tracing::info!(?peer, "Foxglove client refused: it offers none of {SDK_NAME_V1_1}, {SDK_NAME}, {OLDER_NAME}");
+                refuse(StatusCode::BAD_REQUEST, format!("Offer the subprotocol {SDK_NAME_V1_1}, {SDK_NAME} or {OLDER_NAME}"))
             }
         }
     };
-    let client = tokio_tungstenite::accept_hdr_async(stream, answer).await?;
-    let mut request = format!("ws://{upstream}/").into_client_request()?;
-    request.headers_mut().insert(SEC_WEBSOCKET_PROTOCOL, HeaderValue::from_static(SDK_NAME));
-    let sdk = TcpStream::connect(upstream).await.inspect_err(|e| tracing::warn!(?peer, "Foxglove relay: cannot reach the SDK's server on {upstream}: {e}"))?;
+    let handshake = tokio::time::timeout(Duration::from_secs(HANDSHAKE_S), tokio_tungstenite::accept_hdr_async(stream, answer));
+    let client = handshake.await.map_err(|_| WsError::Io(std::io::ErrorKind::TimedOut.into()))??;
+    let (Ok(sdk), Some(name)) = (sdk, chosen) else { return Ok(()) };
     sdk.set_nodelay(true)?;
     // The same socket under a second descriptor, to re-arm quick ACKs while the WebSocket owns it.
     let acks: OwnedFd = sdk.as_fd().try_clone_to_owned()?;
     acknowledge_at_once(&acks);
-    let (server, _) = tokio_tungstenite::client_async(request, sdk).await?;
+    let mut request = format!("ws://{upstream}/").into_client_request()?;
+    request.headers_mut().insert(SEC_WEBSOCKET_PROTOCOL, HeaderValue::from_static(upstream_name(name)));
+    let (server, _) = tokio_tungstenite::client_async(request, sdk).await.inspect_err(|e| tracing::warn!(?peer, "Foxglove relay: the SDK's server refused the handshake: {e}"))?;
+    tracing::info!(?peer, subprotocol = name, "Foxglove client connected");
     let (mut to_client, mut from_client) = client.split();
     let (mut to_server, mut from_server) = server.split();
     let down = async {
@@ -212,11 +247,15 @@ async fn relay_one(stream: TcpStream, upstream: SocketAddr) -> Result<(), WsErro
         }
         Ok::<_, WsError>(())
     };
-    // Either side closing ends both: the other connection is dropped with this task.
-    tokio::select! {
+    // Either side closing ends both; each side's close (or the reply to one) is flushed.
+    let ended = tokio::select! {
         ended = down => ended,
         ended = up => ended,
-    }
+    };
+    let grace = Duration::from_millis(CLOSE_GRACE_MS);
+    let _ = tokio::time::timeout(grace, to_client.close()).await;
+    let _ = tokio::time::timeout(grace, to_server.close()).await;
+    ended
 }
 
 /// Asks the kernel to acknowledge what the SDK sends at once, not after the delayed-ACK timer:
@@ -252,6 +291,9 @@ mod tests {
 
     #[test]
     fn either_name_is_answered_and_the_sdks_is_preferred() {
+        assert_eq!(negotiate(["foxglove.sdk.v1.1"]), Some(SDK_NAME_V1_1));
+        assert_eq!(negotiate(["foxglove.sdk.v1.1, foxglove.websocket.v1"]), Some(SDK_NAME_V1_1));
+        assert_eq!((upstream_name(OLDER_NAME), upstream_name(SDK_NAME), upstream_name(SDK_NAME_V1_1)), (SDK_NAME, SDK_NAME, SDK_NAME_V1_1));
         assert_eq!(negotiate(["foxglove.websocket.v1"]), Some(OLDER_NAME));
         assert_eq!(negotiate(["foxglove.sdk.v1"]), Some(SDK_NAME));
         assert_eq!(negotiate(["foxglove.websocket.v1,foxglove.sdk.v1"]), Some(SDK_NAME));

@@ -29,8 +29,10 @@ pub struct TorqueSegment {
     pub amplitude_nm: f64,
     /// [Hz]
     pub frequency_hz: f64,
-    /// Whole periods, at least the segment's duration [s]: a sine stopped there is at zero, so
-    /// the step to the rest's zero torque is no jump.
+    /// Whole periods, at least the segment's duration [s]: a sine stopped there is near zero.
+    /// Not at it: the sine starts at the cycle after its command is accepted and the zero at the
+    /// cycle after its own, so the two can be up to one loop period apart (at 40 Hz and 1 Hz, a
+    /// step of up to 16 % of the amplitude).
     pub duration_s: f64,
 }
 
@@ -50,7 +52,10 @@ pub fn torque_segments(segments: &[Segment], stiffness_nm_per_rad: f64) -> Vec<T
 /// joint's published stiffness. `dry_run`: print the plan, send nothing.
 pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, dry_run: bool) -> ExitCode {
     if args.zenoh.is_some() {
-        return crate::fail("cmd experiment runs on the arm's machine (shared memory), not over --zenoh: a lost answer would leave a segment running");
+        return crate::fail("cmd experiment runs on the arm's machine (shared memory), not over --zenoh: a network lost mid-run would leave a segment running");
+    }
+    if args.stream {
+        return crate::fail("cmd experiment sends each segment once, not streamed (a renewed sine would start again): leave out --stream");
     }
     let experiment = match crate::experiment::read_experiment(file) {
         Ok(e) => e,
@@ -65,6 +70,9 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, dry
         },
     };
     let plan = torque_segments(&experiment.segments, k);
+    if let Some((i, s)) = plan.iter().enumerate().find(|(_, s)| !s.duration_s.is_finite() || s.duration_s > 86_400.0) {
+        return crate::fail(format!("{}: segments[{i}]: {:.3e} Hz needs {:.3e} s for one whole period, more than a day", file.display(), s.frequency_hz, s.duration_s));
+    }
     let total: f64 = plan.iter().map(|s| s.duration_s + REST_S).sum();
     eprintln!("{}: {} segments on {joint}, {k:.3} Nm/rad, {total:.0} s", file.display(), plan.len());
     for (i, s) in plan.iter().enumerate() {
@@ -91,7 +99,13 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, dry
             Err(e) => Err(e.to_string()),
         }
     };
-    let zero = || send(TorqueWaveform::STEP, 0.0, 0.0);
+    // Zero torque, or when even that is not answered, hold; the error says what the joint does.
+    let zero = || {
+        send(TorqueWaveform::STEP, 0.0, 0.0).map_err(|e| match client.send(CommandRequest::new(jointctl_ipc::CommandKind::HOLD, joint, &[]), args.timeout) {
+            Ok(r) if r.accepted != 0 => format!("{e}; {joint} was told to hold instead"),
+            _ => format!("{e}; hold not answered either: {joint} may still follow the sine, stop it with `jointctl cmd hold {joint}` or `jointctl cmd stop`"),
+        })
+    };
     let wait = |seconds: f64| -> bool {
         let until = Instant::now() + Duration::from_secs_f64(seconds);
         while Instant::now() < until {
@@ -105,8 +119,9 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, dry
     for (i, s) in plan.iter().enumerate() {
         eprintln!("segment {}/{}: {:.4} Nm at {:.4} Hz", i + 1, plan.len(), s.amplitude_nm, s.frequency_hz);
         if let Err(e) = send(TorqueWaveform::SINE, s.amplitude_nm, s.frequency_hz) {
-            let _ = zero();
-            return crate::fail(format!("segment {}: {e}", i + 1));
+            // Unanswered, it may have been applied: zero it either way.
+            let after = zero().err().map_or(format!("{joint} follows a zero torque reference"), |z| format!("the zero torque after it: {z}"));
+            return crate::fail(format!("segment {}: {e}; {after}", i + 1));
         }
         let finished = wait(s.duration_s);
         if let Err(e) = zero() {

@@ -134,6 +134,7 @@ enum Command {
     /// joint's stiffness times its deflection amplitude, at its frequency, from rest, for whole
     /// periods, then a second at zero torque. Record it with `jointctl record` alongside, then
     /// `jointctl identify --data` the recording. The joint is left at a zero torque reference.
+    /// On this machine only (not over --zenoh), not streamed.
     Experiment {
         /// Joint name.
         joint: String,

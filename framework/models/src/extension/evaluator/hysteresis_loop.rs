@@ -119,6 +119,21 @@ mod tests {
         }
     }
 
+    /// The whole shapes stepped by multiplication give what `powf` gives: against the next
+    /// representable shape (which takes `powf`), from states of either sign, both directions.
+    #[test]
+    fn whole_shapes_by_multiplication_agree_with_powf() {
+        for shape in [2.0f64, 3.0, 4.0] {
+            let beside = f64::from_bits(shape.to_bits() + 1);
+            for u in [-1.0, -0.73, -0.2, 0.0, 0.31, 0.9, 1.0] {
+                for step in [-0.05, -0.003, 1e-5, 0.002, 0.04] {
+                    let (a, b) = (loop_step(u, step, 0.01, shape), loop_step(u, step, 0.01, beside));
+                    assert!((a - b).abs() < 1e-12, "shape {shape}, u {u}, step {step}: {a} vs {b}");
+                }
+            }
+        }
+    }
+
     /// Shape 2 has closed forms: tanh on the way to the limit, tan from the other side of zero.
     #[test]
     fn shape_two_matches_its_closed_form() {
