@@ -103,7 +103,7 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, dry
     let zero = || {
         send(TorqueWaveform::STEP, 0.0, 0.0).map_err(|e| match client.send(CommandRequest::new(jointctl_ipc::CommandKind::HOLD, joint, &[]), args.timeout) {
             Ok(r) if r.accepted != 0 => format!("{e}; {joint} was told to hold instead"),
-            _ => format!("{e}; hold not answered either: {joint} may still follow the sine, stop it with `jointctl cmd hold {joint}` or `jointctl cmd stop`"),
+            _ => format!("{e}; hold refused or unanswered too: {joint} may still follow the sine, stop it with `jointctl cmd hold {joint}` or `jointctl cmd stop`"),
         })
     };
     let wait = |seconds: f64| -> bool {
