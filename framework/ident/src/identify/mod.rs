@@ -404,6 +404,18 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     };
     let before = select::held_out_errors(&model, &base, p).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
+    // The floor read again on what the named causes leave, and the selection made again when it
+    // falls clearly (see `bin_reading::FLOOR_FALL`): a steady vibration near the Nyquist
+    // frequency had counted as noise.
+    let refloored;
+    let p = match (!selection.chosen.is_empty()).then(|| bin_reading::floor_fallen(&model, &selection.spec, p)).flatten() {
+        Some(q) => {
+            refloored = q;
+            selection = select::select(&model, &refloored, base.clone(), opts.max_causes, name);
+            &refloored
+        }
+        None => p,
+    };
     friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
