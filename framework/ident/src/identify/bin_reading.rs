@@ -126,20 +126,15 @@ pub(crate) fn choose_rate_window(all: &[&dyn CandidateCause], baseline: &super::
     (held_narrow <= held_usual).then(|| NarrowRate { window: RateWindow::OneSampleEitherSide, bic_narrow, bic_usual, evidence: format!("held-out RMSE {held_narrow:.4} Nm read so, {held_usual:.4} Nm over the usual window") })
 }
 
-/// A slow log's noise floor [Nm] when the baseline fits eq. 3.5's friction: the pseudo-residuals
-/// (see [`super::prepare::noise_floor`]) of what the baseline, its friction fitted, leaves of
-/// the training part's torque, where that is
-/// lower than the prepared floor (of what a line in the deflection and its rate leaves). At 20
-/// Hz eq. 3.5's friction flips between neighbouring samples at every reversal, and a line in
-/// the rate leaves those flips in: the blind device B's clean 20 Hz variant read 0.097 Nm for
-/// the generator's 0.016 (its held-out error "0.6 times the noise floor" with no cause named),
-/// this project's own 20 Hz bins 0.023 for 0.005. `None` when the baseline does not fit.
-pub(crate) fn slow_log_floor(model: &Model, base: &Spec, p: &Prepared) -> Option<f64> {
-    floor_under(model, base, p)
-}
-
-/// The noise floor of the training part's residual under `spec`, no higher than the prepared one.
-fn floor_under(model: &Model, spec: &Spec, p: &Prepared) -> Option<f64> {
+/// The noise floor [Nm] of what `spec` leaves of the training part's torque (the
+/// pseudo-residuals of [`super::prepare::noise_floor`]), where that is lower than the prepared
+/// floor (of what a line in the deflection and its rate leaves); `None` when `spec` does not
+/// fit. Read under the baseline on a slow log whose baseline fits eq. 3.5's friction: at 20 Hz
+/// that friction flips between neighbouring samples at every reversal, and a line in the rate
+/// leaves those flips in (the blind device B's clean 20 Hz variant read 0.097 Nm for the
+/// generator's 0.016, its held-out error "0.6 times the noise floor" with no cause named; this
+/// project's own 20 Hz bins 0.023 for 0.005). Read under the named causes by [`floor_fallen`].
+pub(crate) fn floor_under(model: &Model, spec: &Spec, p: &Prepared) -> Option<f64> {
     let fit = model.fit(spec, &p.train)?;
     let predicted = model.predict(spec, &fit, &p.train);
     let residual: Vec<f64> = p.train.tau.iter().zip(&predicted.torque_nm).map(|(y, m)| y - m).collect();

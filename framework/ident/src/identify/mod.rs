@@ -388,7 +388,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         base.terms.push(term);
         bin_averages = reading;
         let mut chosen = if bins { p.clone() } else { points };
-        if let Some(floor) = bin_reading::slow_log_floor(&model, &base, &chosen) {
+        if let Some(floor) = bin_reading::floor_under(&model, &base, &chosen) {
             chosen.noise_floor_nm = floor;
         }
         read = chosen;
