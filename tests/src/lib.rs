@@ -47,6 +47,20 @@ pub fn scratch(name: &str) -> PathBuf {
     d
 }
 
+/// A child process ended by [`stop`] when the test ends, however it ends (a failed assertion
+/// included).
+///
+/// ```no_run
+/// let _arm = jointctl_tests::Running(std::process::Command::new("sleep").arg("60").spawn().unwrap());
+/// ```
+pub struct Running(pub std::process::Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        stop(&mut self.0);
+    }
+}
+
 /// Ends a child process the way a user does: SIGINT (a runtime holds its joints and removes its
 /// shared memory; an inspector or bridge closes), then up to 10 s to exit, then SIGKILL.
 /// Killing outright left every test's iceoryx2 files in /dev/shm: a test's domain or arm is its

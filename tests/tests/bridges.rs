@@ -6,22 +6,14 @@
 
 use std::io::{BufRead, BufReader};
 use std::os::unix::fs::PermissionsExt;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use jointctl_tests::{arm_name, interop_python, jointctl, rig_yaml, root, scratch, stop};
+use jointctl_tests::{Running, arm_name, interop_python, jointctl, rig_yaml, root, scratch, stop};
 
 const ELASTIC: &str = "  - name: b\n    plugin: elastic\n    encoders: {output: e1}\n    drives: {motor: m1}\n    params: {stiffness_nm_per_rad: 113.78, output_per_motor: 2.0, position_pi: {kp: 0.2, ki: 0.5}}\n";
 
-/// A process killed when the test ends, however it ends.
-struct Running(Child);
-
-impl Drop for Running {
-    fn drop(&mut self) {
-        stop(&mut self.0);
-    }
-}
 
 /// A TCP port nothing listens on now (the OS's pick).
 fn free_port() -> u16 {

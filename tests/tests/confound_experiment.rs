@@ -99,15 +99,8 @@ fn a_bad_experiment_file_is_an_error_that_says_where() {
 /// shoulder (q2) the recording holds those commands and the deflections they asked for.
 #[test]
 fn an_experiment_file_runs_on_the_running_arm_in_torque_control() {
-    use jointctl_tests::{arm_name, sherpa_with, stop};
+    use jointctl_tests::{Running, arm_name, sherpa_with};
     use std::process::Stdio;
-    // Stopped on every way out of the test, a failed assertion included.
-    struct Running(std::process::Child);
-    impl Drop for Running {
-        fn drop(&mut self) {
-            stop(&mut self.0);
-        }
-    }
     let test = "experiment-on-arm";
     let arm = arm_name(test);
     let config = sherpa_with(test, &arm, &[]);
