@@ -9,13 +9,16 @@ use nalgebra::{DMatrix, DVector};
 use super::least_squares::{ar1_inflated_variance, dot, dot_row, fit_segments, least_squares};
 
 use super::baseline::BaselineModel;
-use super::causes::{CandidateCause, Inputs, Samples};
+use super::causes::{CandidateCause, Inputs, Restart, Samples};
 
 /// Prepared samples of one part of the data (training or held out).
 #[derive(Clone, Debug)]
 pub(crate) struct Part {
     /// Deflections before this part (a stateful effect carries over).
     pub warm: Vec<f64>,
+    /// Pieces inside the part that do not follow on from the samples before them, each with
+    /// its own history (see [`Samples::restarts`]).
+    pub restarts: Vec<Restart>,
     pub t: Vec<f64>,
     pub d: Vec<f64>,
     pub v: Vec<f64>,
@@ -49,7 +52,9 @@ impl Part {
         // Repetitions are both parts' or none (a record of one repetition has none).
         let rep = if self.rep.is_empty() || next.rep.is_empty() { Vec::new() } else { self.rep.iter().chain(&next.rep).copied().collect() };
         let rate_edges = if self.rate_edges.is_empty() || next.rate_edges.is_empty() { Vec::new() } else { self.rate_edges.iter().chain(&next.rate_edges).copied().collect() };
-        Part { warm: self.warm.clone(), t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, rate_edges, dt: self.dt }
+        // `next` starts from its own history, not from where this part ended.
+        let restarts = self.restarts.iter().cloned().chain(std::iter::once(Restart { at: self.len(), history_rad: next.warm.clone() })).chain(next.restarts.iter().map(|r| Restart { at: r.at + self.len(), history_rad: r.history_rad.clone() })).collect();
+        Part { warm: self.warm.clone(), restarts, t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, rate_edges, dt: self.dt }
     }
 }
 
@@ -273,6 +278,7 @@ impl Model<'_> {
             pivot_mm: &p.pivot,
             repetition: &p.rep,
             history_rad: &p.warm,
+            restarts: &p.restarts,
             model_nm: &fixed,
             rate_edges_rad_per_s: &p.rate_edges,
         };
@@ -337,6 +343,7 @@ impl Model<'_> {
             pivot_mm: &p.pivot,
             repetition: &p.rep,
             history_rad: &p.warm,
+            restarts: &p.restarts,
             model_nm: &proj.model_nm,
             rate_edges_rad_per_s: &p.rate_edges,
         };
@@ -474,5 +481,36 @@ mod tests {
         // The most recent is kept (not computed again).
         let again = cache.get_or(([2, 0, 0, 0, 0], Vec::new(), (0, Vec::new())), || panic!("recomputed"));
         assert_eq!(again[0][0], 2.0);
+    }
+
+    fn part(t0: f64, d: &[f64], warm: &[f64]) -> Part {
+        let t: Vec<f64> = (0..d.len()).map(|i| t0 + 0.01 * i as f64).collect();
+        Part { warm: warm.to_vec(), restarts: Vec::new(), t, d: d.to_vec(), v: vec![0.0; d.len()], tau: vec![0.0; d.len()], pivot: vec![0.0; d.len()], rep: Vec::new(), rate_edges: Vec::new(), dt: 0.01 }
+    }
+
+    fn loop_column(p: &Part) -> Vec<f64> {
+        let zeros = vec![0.0; p.len()];
+        let s = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, elastic_rad: &p.d, pivot_mm: &p.pivot, repetition: &p.rep, history_rad: &p.warm, restarts: &p.restarts, model_nm: &zeros, rate_edges_rad_per_s: &p.rate_edges };
+        // A Dahl loop of 1 mrad, no dead band.
+        super::super::causes::Hysteresis.columns(&[1e-3, 0.0, 1.0], &s).remove(0)
+    }
+
+    #[test]
+    fn a_piece_joined_after_another_starts_its_loop_from_its_own_history() {
+        // Found on the blind generator: with the searches' samples taken in pieces over the
+        // training part (`prepare::pieces`), a Dahl state carried from one piece's end into the
+        // next piece as if the joint had jumped there, and five loops' limits moved outside 25 %.
+        let rising: Vec<f64> = (0..50).map(|i| 1e-4 * i as f64).collect();
+        let falling: Vec<f64> = (0..50).map(|i| 5e-3 - 1e-4 * i as f64).collect();
+        // Before the falling piece the joint rose to 5 mrad: its loop starts at the upper limit.
+        let before_falling: Vec<f64> = (0..60).map(|i| 1e-4 * i as f64 - 1e-3).collect();
+        let (a, b) = (part(0.0, &rising, &[]), part(10.0, &falling, &before_falling));
+        let joined = a.then(&b);
+        let column = loop_column(&joined);
+        let alone = loop_column(&b);
+        for (i, (x, y)) in column[rising.len()..].iter().zip(&alone).enumerate() {
+            assert!((x - y).abs() < 1e-12, "sample {i} of the second piece: {x} joined, {y} alone");
+        }
+        assert_eq!(&column[..rising.len()], &loop_column(&a)[..]);
     }
 }

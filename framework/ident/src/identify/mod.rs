@@ -46,7 +46,7 @@ use unexplained::unexplained;
 pub use baseline::{BaselineModel, NO_SPRING_SHARE};
 use baseline::reads_as_friction;
 pub use experiment::Confound;
-pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Samples, SearchContext};
+pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, Samples, SearchContext};
 pub use prepare::PrepareError;
 pub use select::BIC_THRESHOLD;
 
@@ -283,7 +283,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
-        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges };
+        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges };
         let columns = c.columns(&values, &samples);
         let expected = c.coefficient_names().len();
         if columns.len() != expected || columns.iter().any(|col| col.len() != part.len()) {

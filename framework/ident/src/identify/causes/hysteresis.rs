@@ -128,13 +128,21 @@ impl CandidateCause for Hysteresis {
         ]
     }
     fn columns(&self, p: &[f64], s: &Samples) -> Vec<Vec<f64>> {
-        let mut history = s.history_rad.to_vec();
-        history.extend_from_slice(s.deflection_rad);
         let band = p.get(1).copied().unwrap_or(0.0);
-        if band > 0.0 {
-            history = dead_band(&history, band);
+        let n = s.deflection_rad.len();
+        // Each piece's loop from its own history.
+        let starts = std::iter::once((0, s.history_rad)).chain(s.restarts.iter().map(|r| (r.at.min(n), r.history_rad.as_slice())));
+        let ends = s.restarts.iter().map(|r| r.at.min(n)).chain(std::iter::once(n));
+        let mut unit = Vec::with_capacity(n);
+        for ((a, before), b) in starts.zip(ends) {
+            let mut history = before.to_vec();
+            history.extend_from_slice(&s.deflection_rad[a..b.max(a)]);
+            if band > 0.0 {
+                history = dead_band(&history, band);
+            }
+            unit.extend_from_slice(&loop_unit(&history, p[0], shape(p))[before.len()..]);
         }
-        vec![loop_unit(&history, p[0], shape(p))[s.history_rad.len()..].to_vec()]
+        vec![unit]
     }
     fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
         (c[0] <= 0.0).then(|| "negative hysteresis width".into())

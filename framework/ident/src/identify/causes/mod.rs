@@ -238,6 +238,10 @@ pub struct Samples<'a> {
     pub repetition: &'a [u32],
     /// Deflections before this part, oldest first: the history a stateful effect starts from.
     pub history_rad: &'a [f64],
+    /// Where a piece of the part that does not follow on from the samples before it starts
+    /// (training samples either side of the held-out window, the searches' pieces), each with its
+    /// own history: a stateful effect starts again there.
+    pub restarts: &'a [Restart],
     /// The configured characteristic's torque at `elastic_rad` [Nm]; zeros when the baseline is
     /// fitted on the data.
     pub model_nm: &'a [f64],
@@ -245,6 +249,16 @@ pub struct Samples<'a> {
     /// less its own [rad/s]: a term that is not a straight line in the rate averages over the
     /// interval (see `prepare::rate_edges`). Empty for point samples.
     pub rate_edges_rad_per_s: &'a [[f64; 2]],
+}
+
+/// A piece of a part that does not follow on from the samples before it (see
+/// [`Samples::restarts`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Restart {
+    /// The piece's first sample in the part.
+    pub at: usize,
+    /// Deflections before the piece, oldest first [rad].
+    pub history_rad: Vec<f64>,
 }
 
 /// What a cause adds to the observer's and the simulation's configuration, in the keys they load
@@ -389,7 +403,7 @@ mod tests {
         let samples = |repetition: &[u32]| -> Option<Vec<usize>> {
             let n = repetition.len();
             let (t, zeros) = ((0..n).map(|i| i as f64).collect::<Vec<f64>>(), vec![0.0; n]);
-            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], model_nm: &zeros, rate_edges_rad_per_s: &[] })
+            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], restarts: &[], model_nm: &zeros, rate_edges_rad_per_s: &[] })
         };
         // Inside the first repetition, inside a later one, across two.
         assert_eq!(samples(&[0, 0, 0]), Some(vec![0]));

@@ -6,6 +6,7 @@ use std::borrow::Cow;
 mod bins;
 mod dropouts;
 mod noise;
+mod pieces;
 mod rate;
 mod rest;
 mod window;
@@ -143,7 +144,8 @@ pub enum PrepareError {
 pub(crate) struct Prepared {
     pub train: Part,
     pub test: Part,
-    /// The training part, decimated to at most [`SEARCH_SAMPLES`] samples, for grid searches.
+    /// The training part, decimated to at most [`SEARCH_SAMPLES`] samples in pieces spread over
+    /// it (see [`pieces::spread`]), for grid searches.
     pub coarse: Part,
     /// The first [`STRETCH_SAMPLES`] of the training part at the full rate: the searches that
     /// need it (a delay's samples, a mode above the decimated part's Nyquist frequency).
@@ -372,6 +374,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
         Part {
             warm: d[warm_start(r.start)..r.start].iter().step_by(k).copied().collect(),
+            restarts: Vec::new(),
             t: pick(&t),
             d: pick(&d),
             v: pick(&v),
@@ -403,9 +406,10 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         if after.is_empty() { part_every(before, k) } else { part_every(before, k).then(&part_every(after, k)) }
     };
     // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
-    // an alias of it): decimated up to that, then the first SEARCH_SAMPLES of them.
+    // an alias of it): decimated up to that, then SEARCH_SAMPLES of them in pieces of at least
+    // two histories (four cycles) spread over the whole training part.
     let k = trained.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
-    let coarse = training(k * SEARCH_SAMPLES, k);
+    let coarse = pieces::spread(lo, hi, t.len(), k * SEARCH_SAMPLES, 2 * cycles).into_iter().map(|r| part_every(r, k)).reduce(|a, b| a.then(&b)).unwrap_or_else(|| training(k * SEARCH_SAMPLES, k));
     // Final fits on at most FIT_SAMPLES training samples, taken evenly over the whole training
     // part: parameters no longer move beyond (their standard errors shrink as 1/sqrt(n)), and a
     // long record stays fast. Its first FIT_SAMPLES instead left out what came later: a 46 s

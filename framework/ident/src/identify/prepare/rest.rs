@@ -14,6 +14,7 @@
 //! (seed 6's 065: an offset of 0.22 Nm refused at t = -0.2).
 
 use super::{GAP_STEPS, Prepared};
+use crate::identify::causes::Restart;
 use crate::identify::design::Part;
 
 /// A joint is at rest where its rate stays below one count of its encoder per this time, for at
@@ -109,6 +110,8 @@ fn without(part: &Part, drop: &[bool]) -> Part {
     let keep = |x: &Vec<f64>| -> Vec<f64> { x.iter().zip(drop).filter(|(_, d)| !**d).map(|(x, _)| *x).collect() };
     Part {
         warm: part.warm.clone(),
+        // Each restart at the first sample kept from where it was.
+        restarts: part.restarts.iter().map(|r| Restart { at: drop[..r.at.min(drop.len())].iter().filter(|d| !**d).count(), history_rad: r.history_rad.clone() }).collect(),
         t: keep(&part.t),
         d: keep(&part.d),
         v: keep(&part.v),
