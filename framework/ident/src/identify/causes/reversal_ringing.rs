@@ -54,8 +54,12 @@ impl CandidateCause for ReversalRinging {
         ]
     }
     fn segments(&self, _: &[f64], s: &Samples) -> Option<Vec<usize>> {
+        // A ring starts again at each reversal, and where a piece of the part begins that does
+        // not follow on from the samples before it (its time since the last reversal unknown).
         let mut starts = reversals(s.deflection_rad);
-        starts.insert(0, 0);
+        starts.push(0);
+        starts.extend(s.restarts.iter().map(|r| r.at).filter(|a| *a < s.deflection_rad.len()));
+        starts.sort_unstable();
         starts.dedup();
         Some(starts)
     }

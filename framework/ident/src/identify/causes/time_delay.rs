@@ -41,7 +41,8 @@ pub struct TimeDelay;
 /// `x` at the times `t - delay`, interpolated between the samples around each: cubic Hermite
 /// with the rates `dx` at the two samples when they are given, linear otherwise; held at the
 /// first value before the record and never interpolated across a gap of more than `max_step`
-/// (the value after the gap is taken).
+/// (the value on the sample's own side of the gap is taken, extrapolated along its rate when the
+/// rates are given).
 ///
 /// A fraction of a sample on a slow log (20 Hz bins) is where it matters: a line between samples
 /// 50 ms apart misses a 1 Hz sine by a percent of its amplitude, an error of the delay's own
@@ -65,7 +66,15 @@ fn delayed(t: &[f64], x: &[f64], dx: Option<&[f64]>, delay: f64, max_step: f64) 
             let step = t[j + 1] - t[j];
             let s = (at - t[j]) / step;
             if step > max_step {
-                x[j + 1]
+                // Across a gap (a logging gap, the held-out window, a join of the searches'
+                // pieces) each sample keeps to its own side: extrapolated from the sample at its
+                // side's edge along its rate (held without one), over at most the delay. Taking
+                // the value after the gap for every sample gave a negative delay's last samples
+                // of each piece the next piece's first deflection, seconds away, and with the
+                // searches in pieces such delays went unnamed; held at the edge, they came out
+                // at two thirds of the truth.
+                let k = if ti <= t[j] { j } else { j + 1 };
+                dx.map_or(x[k], |dx| x[k] + dx[k] * (at - t[k]))
             } else if let Some(dx) = dx {
                 let (s2, s3) = (s * s, s * s * s);
                 (2.0 * s3 - 3.0 * s2 + 1.0) * x[j] + (s3 - 2.0 * s2 + s) * step * dx[j] + (3.0 * s2 - 2.0 * s3) * x[j + 1] + (s3 - s2) * step * dx[j + 1]
