@@ -40,7 +40,8 @@ impl Part {
     }
 
     /// This part's samples followed by `next`'s (training samples either side of a held-out
-    /// window); the history before it is this part's.
+    /// window, the searches' pieces); the history before it is this part's, and `next` starts
+    /// again from its own (a restart at its first sample).
     pub fn then(&self, next: &Part) -> Part {
         if next.len() == 0 {
             return self.clone();

@@ -41,8 +41,9 @@ pub(crate) fn projection(t: &[f64], r: &[f64], w: f64, uniform: bool) -> (f64, f
     (s, c)
 }
 
-/// The band a mode is looked for in [Hz]: above the excitation's eighth harmonic, or its fourth
-/// when that is above 5 Hz (and above 0.5 Hz), below 90 % of Nyquist (at most 200 Hz).
+/// The band a mode is looked for in [Hz]: above the excitation's eighth harmonic, lowered to
+/// 5 Hz or to its fourth harmonic, whichever is higher (and at least 0.5 Hz); below 90 % of
+/// Nyquist (at most 200 Hz).
 ///
 /// Below the band lie a model's periodic errors: its low harmonics, and between them the slow
 /// lines a misfit leaves under an excitation of several frequencies (on the blind generator a

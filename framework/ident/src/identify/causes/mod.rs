@@ -236,11 +236,14 @@ pub struct Samples<'a> {
     /// the one before is not known and a steady vibration's phase does not carry over. Empty
     /// for a record of one repetition, whatever part of it the samples are.
     pub repetition: &'a [u32],
-    /// Deflections before this part, oldest first: the history a stateful effect starts from.
+    /// Deflections before this part's first piece, oldest first: the history a stateful effect
+    /// starts from (later pieces take theirs from `restarts`).
     pub history_rad: &'a [f64],
     /// Where a piece of the part that does not follow on from the samples before it starts
     /// (training samples either side of the held-out window, the searches' pieces), each with its
-    /// own history: a stateful effect starts again there.
+    /// own history: a stateful effect starts again there. A cause whose columns carry a state
+    /// from sample to sample (a loop, a ring since the last reversal) must start it again at
+    /// each.
     pub restarts: &'a [Restart],
     /// The configured characteristic's torque at `elastic_rad` [Nm]; zeros when the baseline is
     /// fitted on the data.
@@ -253,7 +256,7 @@ pub struct Samples<'a> {
 
 /// A piece of a part that does not follow on from the samples before it (see
 /// [`Samples::restarts`]).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Restart {
     /// The piece's first sample in the part.
     pub at: usize,

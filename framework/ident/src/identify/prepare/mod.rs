@@ -181,7 +181,7 @@ impl Prepared {
     /// The full-rate training samples a parameter that needs the full rate is chosen on (a
     /// dead band against an encoder's flicker, see [`super::Refine::Nested`]): the whole
     /// training part when it is kept at the full rate (its two sides of the held-out window
-    /// joined: a loop's state carries over the join), the contiguous stretch otherwise. The
+    /// joined, a loop's state started again after the join), the contiguous stretch otherwise. The
     /// stretch alone is one piece of [`STRETCH_SAMPLES`]: on a record that holds in that piece
     /// and flickers while it moves later (the blind generator's 2e-6 rad encoder, seed 1's
     /// 013), a band chosen there was none, and the Dahl loop driven by the flicker left 0.30 Nm
@@ -392,15 +392,15 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
     }
     // The first `limit` training samples: those before the held-out window, then those after
-    // it. Where the two meet, a stateful effect (a Dahl state) carries over from the first to
-    // the second as if they were one motion: a transient until the next reversal.
-    let pieces = |limit: usize| {
+    // it. Where the two meet, a loop's state starts again from the history before the second
+    // (`Part::then`).
+    let first = |limit: usize| {
         let before = 0..lo.min(limit);
         (before.clone(), hi..t.len().min(hi + limit.saturating_sub(before.len())))
     };
     // Every `k`-th of them, counted on across the held-out window.
     let training = |limit: usize, k: usize| {
-        let (before, after) = pieces(limit);
+        let (before, after) = first(limit);
         let skip = (k - before.len() % k) % k;
         let after = (after.start + skip).min(after.end)..after.end;
         if after.is_empty() { part_every(before, k) } else { part_every(before, k).then(&part_every(after, k)) }
@@ -409,6 +409,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     // an alias of it): decimated up to that, then SEARCH_SAMPLES of them in pieces of at least
     // two histories (four cycles) spread over the whole training part.
     let k = trained.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
+    // (`spread` returns no range only for an empty training part, refused above.)
     let coarse = pieces::spread(lo, hi, t.len(), k * SEARCH_SAMPLES, 2 * cycles).into_iter().map(|r| part_every(r, k)).reduce(|a, b| a.then(&b)).unwrap_or_else(|| training(k * SEARCH_SAMPLES, k));
     // Final fits on at most FIT_SAMPLES training samples, taken evenly over the whole training
     // part: parameters no longer move beyond (their standard errors shrink as 1/sqrt(n)), and a
@@ -425,7 +426,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     // the held-out window, or the one after it when that is longer.
     let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };
     let train_duration_s = {
-        let (before, after) = pieces(every_fit * FIT_SAMPLES);
+        let (before, after) = first(every_fit * FIT_SAMPLES);
         let span = |r: std::ops::Range<usize>| if r.is_empty() { 0.0 } else { t[r.end - 1] - t[r.start] };
         span(before) + span(after)
     };

@@ -11,9 +11,9 @@ pub(crate) const SEARCH_PIECES: usize = 8;
 
 /// The full-rate index ranges the searches take their `limit` training samples from: the whole
 /// training part (`0..lo` and `hi..n`, the held-out window `lo..hi` left out) when it is no longer,
-/// otherwise up to [`SEARCH_PIECES`] contiguous pieces of at least `min_piece` samples, spread
-/// evenly over it (counted as one across the held-out window; a piece that straddles it comes
-/// as two ranges).
+/// otherwise up to [`SEARCH_PIECES`] contiguous pieces of at least `min_piece` samples (one of
+/// `limit` when `min_piece` is longer), spread evenly over it (counted as one across the
+/// held-out window; a piece that straddles it comes as two ranges, one of them possibly short).
 ///
 /// Why: the first `limit` samples are the record's first seconds, and a record's first seconds
 /// are often not what the rest is. The blind generator's seed 6, record 051 (a ramp, a 28 s

@@ -163,3 +163,32 @@ pub(crate) fn scored_on_every_sample(sliding: &Prepared, whole: &Prepared) -> Pr
     }
     Prepared { test, ..sliding.clone() }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_restart_moves_with_the_samples_kept_before_it() {
+        let n = 10;
+        let part = Part {
+            warm: vec![0.0],
+            restarts: vec![Restart { at: 4, history_rad: vec![1.0] }, Restart { at: 8, history_rad: vec![2.0] }],
+            t: (0..n).map(|i| i as f64).collect(),
+            d: vec![0.0; n],
+            v: vec![0.0; n],
+            tau: vec![0.0; n],
+            pivot: vec![0.0; n],
+            rep: Vec::new(),
+            rate_edges: Vec::new(),
+            dt: 1.0,
+        };
+        // Samples 1, 2 and 8 at rest: the restart at 4 comes after two fewer samples, the one
+        // at 8 (dropped itself) at the first sample kept after it, the one at t = 9, now index 6.
+        let drop: Vec<bool> = (0..n).map(|i| matches!(i, 1 | 2 | 8)).collect();
+        let kept = without(&part, &drop);
+        assert_eq!(kept.len(), 7);
+        assert_eq!(kept.restarts.iter().map(|r| (r.at, r.history_rad[0])).collect::<Vec<_>>(), vec![(2, 1.0), (6, 2.0)]);
+        assert_eq!(kept.t[6], 9.0);
+    }
+}
