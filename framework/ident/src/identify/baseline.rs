@@ -18,6 +18,11 @@ pub enum BaselineModel {
 /// and below (the highest l3-case036, whose offset follows the position a little).
 pub const NO_SPRING_SHARE: f64 = 0.2;
 
+/// The causes that, in a record read as a joint's friction ([`reads_as_friction`]), describe the
+/// friction itself and are reported with it, not named: a Dahl loop (its pre-sliding), a
+/// Stribeck dip, a lag (see `NoSpring`).
+pub(crate) const FRICTION_PARTS: [&str; 3] = ["hysteresis", "stribeck_friction", "time_delay"];
+
 /// Whether a record is read as a joint's friction (no spring): the baseline is fitted on the data
 /// (a configured joint has its spring) and a line in the deflection explains less than
 /// [`NO_SPRING_SHARE`] of the torque's variance. The one rule the search (which tries the

@@ -44,7 +44,7 @@ pub use unexplained::{BEYOND_TRAINING_RANGE, BEYOND_TRAINING_RATE, FAR_ABOVE_NOI
 use unexplained::unexplained;
 
 pub use baseline::{BaselineModel, NO_SPRING_SHARE};
-use baseline::reads_as_friction;
+use baseline::{FRICTION_PARTS, reads_as_friction};
 pub use experiment::Confound;
 pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, Samples, SearchContext};
 pub use prepare::PrepareError;
@@ -517,7 +517,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     // where the friction's own transition acts, and the two cannot be told apart there.
     let no_spring = reads_as_friction(p.spring_share, &opts.baseline).then(|| {
         let mut take = |effect: &str| found.iter().position(|c| c.effect == effect).map(|i| found.remove(i).params);
-        let (presliding, stribeck, lag) = (take("hysteresis"), take("stribeck_friction"), take("time_delay"));
+        let [presliding, stribeck, lag] = FRICTION_PARTS.map(&mut take);
         let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {}", format_value(*v))).collect::<Vec<_>>().join(", ");
         let note = format!(
             "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",

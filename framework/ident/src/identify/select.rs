@@ -8,11 +8,14 @@
 use std::sync::Arc;
 
 use super::parallel::{cores, parallel_map};
+use super::baseline::{FRICTION_PARTS, reads_as_friction};
 use super::causes::{FullRate, SearchContext};
 use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
+use super::numeric::format_value;
 use super::search::{polish, profile_terms, search};
-use super::significance::{Judgement, added_coefficients_test, judge, predicted_cause_test};
+use super::significance::{Judgement, Z, added_coefficients_test, judge, predicted_cause_test};
+use super::uncertainty::{Jacobian, term_covariance};
 
 /// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
 /// 1995: "very strong" evidence).
@@ -408,19 +411,22 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
         // side, with the verdict on each.
         let mut margins = parallel_map(&s.chosen, |ch| {
             let (reduced, dropped) = without_and_impossible(model, &s.spec, ch.cause, p);
-            (held_out_errors(model, &reduced, p).map(|r| verdict(&r, &full, p)), reduced, dropped)
+            let judgement = held_out_errors(model, &reduced, p).map(|r| verdict(&r, &full, p));
+            let untold = judgement.filter(|j| j.named() && !j.test.significant()).and_then(|_| untold_from_zero(model, &s.spec, &full, ch.cause, p));
+            (judgement, reduced, dropped, untold)
         });
         // The weakest that is not named any more goes first (its gain in units of its
         // relevance threshold).
-        let weakest = margins.iter().enumerate().filter(|(_, m)| !m.0.is_some_and(|j| j.named())).min_by(|a, b| {
+        let weakest = margins.iter().enumerate().filter(|(_, m)| !m.0.is_some_and(|j| j.named()) || m.3.is_some()).min_by(|a, b| {
             let score = |j: &Option<Judgement>| j.map_or(f64::NEG_INFINITY, |j| j.gain_nm2 / j.relevant_nm2.max(1e-300));
             score(&a.1.0).total_cmp(&score(&b.1.0))
         });
         match weakest.map(|(i, _)| i) {
             Some(i) => {
                 let gone = s.chosen.remove(i);
-                let (judgement, reduced, dropped) = margins.swap_remove(i);
+                let (judgement, reduced, dropped, untold) = margins.swap_remove(i);
                 match judgement {
+                    Some(j) if untold.is_some() => s.rejected.push(format!("{} (a large gain consistent over the held-out part, but no test passed, and on the training part {}: {j})", name(gone.cause), untold.unwrap_or_default())),
                     Some(j) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
                     Some(j) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
                     None => s.rejected.push(format!("{} (no fit without it)", name(gone.cause))),
@@ -434,6 +440,44 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
             None => break,
         }
     }
+}
+
+/// Why `cause`'s coefficients in `spec` (fitted on the training part: `full.fit`) are not told
+/// from zero there, if they are not: none lies [`Z`] of its standard errors from zero (one-sided
+/// at the tests' level), the errors joint with the term's non-linear parameters and the larger of
+/// the classical and the block one, as reported (see `uncertainty::term_covariance`). A cause
+/// whose held-out gain is large and consistent but passes no test (the weakest evidence the rule
+/// accepts, see `significance`) is named only so: a coefficient that moves from one stretch of
+/// the training part to the next by more than its size is taking up structure there, not
+/// measuring an effect. Found on the blind generator's seed 2, device D's 20 Hz bins (a delay
+/// behind a torque filter): a hysteresis loop of 0.015 Nm named beside the delay, its limit
+/// 0.014 +- 0.005 Nm. Of the 61 causes named so on the blind seeds 1-12 and devices 1-8, 7 were
+/// not hidden; this rule takes 5 of them out, and one of the 54 hidden (a viscous friction of
+/// 9.7 +- 10.2 Nm s/rad, truth 12.0). `None` also for a cause without ordinary coefficients (a
+/// play, a delay: a transform, nothing to tell from zero), with coefficients fitted on each
+/// segment (a ring: its own test), or that a friction record reports as part of its friction.
+fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, cause: usize, p: &Prepared) -> Option<String> {
+    // In a friction record a loop, a dip or a lag is part of the friction, not named (and its
+    // level trades off with the baseline's arctan there, which widens its error).
+    if reads_as_friction(p.spring_share, model.baseline) && FRICTION_PARTS.contains(&model.causes[cause].name()) {
+        return None;
+    }
+    let i = spec.terms.iter().position(|t| t.cause == cause)?;
+    let span = full.fit.spans.get(i)?.clone();
+    if span.is_empty() || !full.fit.segment_coefs[i].is_empty() {
+        return None;
+    }
+    let jacobian = Jacobian::new(model, spec, &full.fit, &p.train);
+    let Some(errors) = term_covariance(&jacobian, spec, &full.fit, i).map(|c| c.coefficient_errors()) else {
+        return Some("its coefficients are not told from the other terms' (a singular fit)".into());
+    };
+    let coefs = &full.fit.coefs[span];
+    let told = coefs.iter().zip(&errors).any(|(c, e)| c.abs() >= Z * e);
+    let names = model.causes[cause].coefficient_names();
+    (!told).then(|| {
+        let each: Vec<String> = coefs.iter().zip(&errors).enumerate().map(|(k, (c, e))| format!("{} = {} +- {}", names.get(k).map_or("coefficient", |n| n.as_str()), format_value(*c), format_value(*e))).collect();
+        format!("{} is not told from zero", each.join(", "))
+    })
 }
 
 #[cfg(test)]
@@ -466,6 +510,47 @@ mod tests {
             }
         }
         crate::csv::Data::from_columns(t_s, phi, tau)
+    }
+
+    /// 60 s at 200 Hz of a 100 Nm/rad spring moved by a 0.4 Hz sine of 0.05 rad (14-bit), 0.01 Nm
+    /// of noise, and `extra(t)` [Nm] added to the torque.
+    fn spring_with(extra: impl Fn(f64) -> f64) -> crate::csv::Data {
+        let mut rng = jointctl_test_support::XorShift64::new(0x5851_f42d_4c95_7f2d);
+        let q = std::f64::consts::TAU / 16384.0;
+        let (mut t_s, mut phi, mut tau) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..12_000 {
+            let t = i as f64 * 5e-3;
+            let x = 0.05 * (std::f64::consts::TAU * 0.4 * t).sin();
+            t_s.push(t);
+            phi.push((x / q).round() * q);
+            tau.push(100.0 * x + extra(t) + 0.01 * rng.normal());
+        }
+        crate::csv::Data::from_columns(t_s, phi, tau)
+    }
+
+    #[test]
+    fn a_coefficient_that_wanders_over_the_training_part_is_not_told_from_zero() {
+        // Finding (blind device D of seed 2, its 20 Hz bins: a delay behind a torque filter): a
+        // hysteresis loop of 0.015 Nm was named beside the delay on a large gain consistent over
+        // the held-out part, with no test passed; on the training part its limit was
+        // 0.014 +- 0.005 Nm, the loop taking what the filter left in one stretch and not in the
+        // next. Here an offset beside a torque that wanders (+-0.05 Nm over 6 s, no mean) is not
+        // told from zero; a steady offset of 0.1 Nm beside the same wander is.
+        let builtin = causes::builtin();
+        let all: Vec<&dyn CandidateCause> = builtin.iter().map(|c| c.as_ref()).collect();
+        let baseline = BaselineModel::Polynomial(1);
+        let offset = all.iter().position(|c| c.name() == "sensor_offset").unwrap();
+        let spec = Spec { terms: vec![Term { cause: offset, params: Vec::new(), grids: Vec::new(), baseline: false }] };
+        let wander = |t: f64| 0.05 * (std::f64::consts::TAU * t / 6.0).sin();
+        let untold = |extra: &dyn Fn(f64) -> f64| {
+            let p = prepare::prepare(&spring_with(extra), 0.7, Window::Last).unwrap();
+            let model = Model { baseline: &baseline, centre_rad: 0.0, causes: &all, held_out: Default::default(), columns: Default::default() };
+            let full = held_out_errors(&model, &spec, &p).unwrap();
+            untold_from_zero(&model, &spec, &full, offset, &p)
+        };
+        let why = untold(&wander).expect("a wandering torque's offset told from zero");
+        assert!(why.contains("offset_nm") && why.ends_with("is not told from zero"), "{why}");
+        assert_eq!(untold(&|t| 0.1 + wander(t)), None);
     }
 
     #[test]

@@ -17,6 +17,8 @@
 //!   those with something to explain, at least two and more than half made better by one. On real records the residual is mostly structure that the listed causes
 //!   explain only in part; the blocks' gains then scatter and the t statistic stays small while the
 //!   cause halves the error. Consistency in time is the evidence that holds there.
+//!   A cause named on consistency alone must also be told from zero on the training part (its
+//!   coefficients' errors as reported, see `select::prune`).
 //!
 //! The block t-test:
 //!

@@ -37,6 +37,14 @@ pub(crate) struct TermCovariance {
     unmeasured: Vec<usize>,
 }
 
+impl TermCovariance {
+    /// The standard errors of the term's own coefficients (in the order of the fit's), joint
+    /// with its non-linear parameters: the larger of the classical and the block error.
+    pub(crate) fn coefficient_errors(&self) -> Vec<f64> {
+        (0..self.at.len()).filter(|e| self.nonlinear[*e].is_none()).map(|e| self.classical[(e, e)].max(self.blocks[(e, e)]).sqrt()).collect()
+    }
+}
+
 /// The training fit's columns, its residual, and the model's derivative along every estimated
 /// non-linear parameter of every term: computed once for all the named causes.
 pub(crate) struct Jacobian {
