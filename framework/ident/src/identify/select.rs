@@ -425,11 +425,11 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
             Some(i) => {
                 let gone = s.chosen.remove(i);
                 let (judgement, reduced, dropped, untold) = margins.swap_remove(i);
-                match judgement {
-                    Some(j) if untold.is_some() => s.rejected.push(format!("{} (a large gain consistent over the held-out part, but no test passed, and on the training part {}: {j})", name(gone.cause), untold.unwrap_or_default())),
-                    Some(j) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
-                    Some(j) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
-                    None => s.rejected.push(format!("{} (no fit without it)", name(gone.cause))),
+                match (judgement, untold) {
+                    (Some(j), Some(why)) => s.rejected.push(format!("{} (a large gain consistent over the held-out part, but no test passed, and on the training part {why}: {j})", name(gone.cause))),
+                    (Some(j), None) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
+                    (Some(j), None) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
+                    (None, _) => s.rejected.push(format!("{} (no fit without it)", name(gone.cause))),
                 }
                 for (cause, why) in dropped {
                     s.chosen.retain(|ch| ch.cause != cause);
