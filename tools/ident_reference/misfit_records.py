@@ -10,8 +10,9 @@ by one to three sines of 0.1-1.2 Hz; the seed picks (seed mod 3) a Bouc-Wen loop
 the torque behind a first-order filter (2-20 Hz) and a transport delay (5-50 ms), or nothing
 more; and (seed div 3, mod 3) an irregular log, 20 Hz bin means or 1 kHz. Noise 0.5-3 % of the
 torque's range. Writes OUT_DIR/rSEED.csv (t, deflection, torque) and OUT_DIR/rSEED.json (what
-is in it: `kind` bw, filter or none; the hidden effect expected is hysteresis, time_delay or
-nothing). Needs numpy.
+is in it: `kind` bw, filter or none, for which the hidden effect expected is hysteresis,
+time_delay or nothing; the spring, the arctan, the sines, the loop's or the filter's values, the
+log and the noise). Needs numpy.
 """
 import argparse
 import json
@@ -32,8 +33,9 @@ def record(seed):
     v = np.gradient(x, dt)
     k = rng.uniform(30, 300)
     kind = ["bw", "filter", "none"][seed % 3]
-    tau = k * x + rng.uniform(0.02, 0.3) * np.arctan(rng.uniform(20, 150) * v)
-    info = {"kind": kind, "k_nm_per_rad": k}
+    k_a, k_b = rng.uniform(0.02, 0.3), rng.uniform(20, 150)
+    tau = k * x + k_a * np.arctan(k_b * v)
+    info = {"kind": kind, "k_nm_per_rad": k, "k_a_nm": k_a, "k_b_s_per_rad": k_b, "sines_hz": list(freqs), "amplitude_rad": amp}
     if kind == "bw":
         # Bouc-Wen: dz = dx/x_h (1 - (beta sgn(dx z) + gamma) |z|^n), torque F z.
         beta = rng.uniform(0.3, 0.7)
@@ -76,11 +78,12 @@ def record(seed):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out")
-    ap.add_argument("--seeds", default="1-48", help="first-last")
+    ap.add_argument("--seeds", default="1-48", help="first-last, or one seed")
     a = ap.parse_args()
-    first, last = (int(s) for s in a.seeds.split("-"))
+    first, _, last = a.seeds.partition("-")
+    first, last = int(first), int(last or first)
     os.makedirs(a.out, exist_ok=True)
     for seed in range(first, last + 1):
         rows, info = record(seed)

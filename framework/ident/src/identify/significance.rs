@@ -18,7 +18,7 @@
 //!   explain only in part; the blocks' gains then scatter and the t statistic stays small while the
 //!   cause halves the error. Consistency in time is the evidence that holds there.
 //!   A cause named on consistency alone must also be told from zero on the training part (its
-//!   coefficients' errors as reported, see `select::prune`).
+//!   coefficients against their errors there, see `select::prune`).
 //!
 //! The block t-test:
 //!
