@@ -465,12 +465,9 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
 /// search's distance from the optimum that the report adds. A cause whose held-out gain is large
 /// and consistent but passes no test (the weakest evidence the rule accepts, see
 /// `significance`) is named only so: a coefficient that moves from one stretch of the training
-/// part to the next by more than its size is taking up structure there, not measuring an
-/// effect. Found on the blind generator's seed 2, device D's 20 Hz bins (a delay behind a torque
-/// filter): a hysteresis loop of 0.015 Nm named beside the delay, its limit 0.014 +- 0.005 Nm. Of
-/// the 61 causes named so on the blind seeds 1-12 and devices 1-8, 7 were not hidden; this rule
-/// takes 5 of them out, and one of the 54 hidden (a viscous friction of 9.7 +- 10.2 Nm s/rad,
-/// truth 12.0). `None` also for a cause without ordinary coefficients (a play, a delay: a
+/// part to the next by more than its size is taking up structure there, not measuring an effect
+/// (the finding and the figures: `docs/identify/significance.md`, 2026-11-29). `None` also for
+/// a cause without ordinary coefficients (a play, a delay: a
 /// transform, nothing to tell from zero), with coefficients fitted on each segment (a ring: its
 /// own test), that a friction record reports as part of its friction, or whose covariance the fit
 /// cannot give (a singular design: the rule cannot be applied, and the cause stays).
