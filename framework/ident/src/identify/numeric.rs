@@ -40,11 +40,14 @@ pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: u
 /// count would read those as slower sampling). 1 s when there is no step.
 pub(crate) fn median_step(t: &[f64]) -> f64 {
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|s| *s > 0.0).collect();
-    if steps.is_empty() {
-        return 1.0;
-    }
-    let mid = steps.len() / 2;
-    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+    median(&mut steps).unwrap_or(1.0)
+}
+
+/// The median of `values` (the upper one of an even count), by a partition that reorders them;
+/// `None` when there are none.
+pub(crate) fn median(values: &mut [f64]) -> Option<f64> {
+    let mid = values.len() / 2;
+    (!values.is_empty()).then(|| *values.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// A parameter's value as the reports print it: below 0.01 (and from 1e6) in scientific notation

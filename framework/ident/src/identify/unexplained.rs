@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::prepare;
+use super::numeric::median;
 
 /// What the extended model leaves unexplained on the held-out part.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -100,21 +101,15 @@ pub(super) fn unexplained(rows: &[[f64; 6]], errors: &[f64], floor_nm: f64, no_c
     }
     // The largest errors' share and where they sit in the rate (a partition, not a sort).
     let (peak_share, peak_rate_rad_per_s) = {
-        let k = ((PEAK_SAMPLES * n as f64).ceil() as usize).clamp(1, n.max(1));
-        let mut order: Vec<usize> = (0..n).collect();
         let total = errors[..n].iter().sum::<f64>();
         if n == 0 || total <= 0.0 {
             (0.0, [0.0, 0.0])
         } else {
+            let k = ((PEAK_SAMPLES * n as f64).ceil() as usize).clamp(1, n);
+            let mut order: Vec<usize> = (0..n).collect();
             order.select_nth_unstable_by(k - 1, |a, b| errors[*b].total_cmp(&errors[*a]).then(a.cmp(b)));
-            let peak = &order[..k];
-            let median = |mut v: Vec<f64>| -> f64 {
-                let m = v.len() / 2;
-                v.select_nth_unstable_by(m, f64::total_cmp);
-                v[m]
-            };
-            let rates = |idx: &[usize]| median(idx.iter().map(|i| rows[*i][2].abs()).collect());
-            (peak.iter().map(|i| errors[*i]).sum::<f64>() / total, [rates(peak), rates(&order)])
+            let rates = |idx: &[usize]| median(&mut idx.iter().map(|i| rows[*i][2].abs()).collect::<Vec<f64>>()).unwrap_or(0.0);
+            (order[..k].iter().map(|i| errors[*i]).sum::<f64>() / total, [rates(&order[..k]), rates(&order)])
         }
     };
     let largest = |v: &[f64], names: &[&str]| -> String {
