@@ -12,6 +12,7 @@
 
 pub mod elmo;
 pub mod free_arm;
+pub mod pivot_effects;
 pub mod rng;
 pub mod unit;
 

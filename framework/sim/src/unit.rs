@@ -3,7 +3,7 @@
 //! output meets its environment. The element's torque acts back on the drives through `M^T`
 //! (virtual work).
 
-use jointctl_config::{EffectsConfig, ElementSimConfig, EnvironmentConfig};
+use jointctl_config::{EffectsConfig, ElementSimConfig, EnvironmentConfig, PivotEffectsConfig};
 use jointctl_models::characteristic::{CharacteristicSpec, PivotCharacteristic, WristCharacteristic};
 use jointctl_models::assumed::smooth_dead_zone;
 use jointctl_models::play::elastic_deflection;
@@ -175,6 +175,21 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
     Ok(())
 }
 
+/// Refuses a list of settings out of increasing `pivot_mm` order, or one whose effects
+/// [`check_effects`] refuses, naming the entry (`[2].pivot_mm`, `[0].effects.viscous_nms_per_rad`).
+pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig]) -> Result<(), UnitError> {
+    for (k, s) in settings.iter().enumerate() {
+        if !s.pivot_mm.is_finite() {
+            return Err((format!("[{k}].pivot_mm"), format!("must be a finite number, got {}", s.pivot_mm)));
+        }
+        if k > 0 && !(s.pivot_mm > settings[k - 1].pivot_mm) {
+            return Err((format!("[{k}].pivot_mm"), format!("must be above the setting before ({} mm): give the settings in increasing pivot order, got {} mm", settings[k - 1].pivot_mm, s.pivot_mm)));
+        }
+        check_effects(&s.effects).map_err(|(f, m)| (format!("[{k}].effects.{f}"), m))?;
+    }
+    Ok(())
+}
+
 /// Most DOFs of one unit.
 pub const MAX_UNIT_DOF: usize = 4;
 
@@ -200,6 +215,9 @@ pub struct Unit {
     environments: Vec<EnvironmentConfig>,
     /// Per DOF (the same set for every DOF unless [`Unit::set_effects`] says otherwise).
     effects: [EffectsConfig; MAX_UNIT_DOF],
+    /// Every DOF's effects by pivot setting (empty: `effects` as given), see
+    /// [`Unit::set_effects_by_pivot`].
+    effects_by_pivot: Vec<PivotEffectsConfig>,
     /// Output positions [rad].
     pub output: [f64; MAX_UNIT_DOF],
     output_velocity: [f64; MAX_UNIT_DOF],
@@ -236,6 +254,7 @@ impl Unit {
             pivot,
             environments,
             effects: [effects; MAX_UNIT_DOF],
+            effects_by_pivot: Vec::new(),
             output: [0.0; MAX_UNIT_DOF],
             output_velocity: [0.0; MAX_UNIT_DOF],
             theta: [0.0; MAX_UNIT_DOF],
@@ -293,6 +312,15 @@ impl Unit {
         }
         if let Some((d, mm_per_rad, offset)) = self.pivot {
             self.pivot_mm = offset + mm_per_rad * positions[d];
+            self.effects_at_pivot();
+        }
+    }
+
+    /// Every DOF's effects at the current pivot setting, when they are given by setting.
+    /// No allocation: the cycle calls it.
+    fn effects_at_pivot(&mut self) {
+        if !self.effects_by_pivot.is_empty() {
+            self.effects = [crate::pivot_effects::effects_at(&self.effects_by_pivot, self.pivot_mm); MAX_UNIT_DOF];
         }
     }
 
@@ -426,6 +454,7 @@ impl Unit {
             if let Some(p) = pivot_mm.get(k).filter(|p| p.is_finite()) {
                 self.pivot_mm = *p;
             }
+            self.effects_at_pivot();
             // The centred window [t - w/2, t + w/2], at least one neighbour each side.
             while lo < k && t_s[k] - t_s[lo] > rate_window_s / 2.0 && lo + 1 < k {
                 lo += 1;
@@ -452,6 +481,14 @@ impl Unit {
         if let Some(fx) = self.effects.get_mut(dof) {
             *fx = effects;
         }
+    }
+
+    /// Every DOF's effects by pivot setting (`sim.effects_by_pivot`, checked by
+    /// [`check_effects_by_pivot`]) in place of those [`Unit::new`] gave:
+    /// from the next step on, those at the unit's pivot.
+    pub fn set_effects_by_pivot(&mut self, settings: Vec<PivotEffectsConfig>) {
+        self.effects_by_pivot = settings;
+        self.effects_at_pivot();
     }
 
     /// DOF `i`'s output position [rad] and velocity [rad/s].

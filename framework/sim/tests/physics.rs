@@ -300,3 +300,47 @@ fn effects_per_dof_act_on_their_own_dof() {
     let err = jointctl_sim::SimHal::with_chain(&loaded.config, loaded.chain.as_ref()).map(|_| ()).unwrap_err().to_string();
     assert!(err.contains("effects") && err.contains("not both"), "{err}");
 }
+
+/// Plant effects by pivot setting (`sim.effects_by_pivot`): the unit's effects follow its pivot
+/// drive, linear between the settings, in the cycle and in a replay; a list on a joint without a
+/// pivot, beside `effects`, or out of order is an error at its field.
+#[test]
+fn effects_by_pivot_follow_the_pivot_drive() {
+    use jointctl_config::PivotEffectsConfig;
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let at = |pivot_mm, viscous_nms_per_rad| PivotEffectsConfig { pivot_mm, effects: EffectsConfig { viscous_nms_per_rad, ..Default::default() } };
+    // Drive 1 moves the pivot: 10 mm per rad from 0 mm.
+    let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(100.0)], Some((1, 10.0, 0.0)), vec![fixed], EffectsConfig::default());
+    unit.set_effects_by_pivot(vec![at(10.0, 2.0), at(30.0, 6.0)]);
+    for (pivot_rad, viscous) in [(0.5, 2.0), (1.5, 3.0), (2.5, 5.0), (4.0, 6.0)] {
+        unit.start(&[0.0, pivot_rad]);
+        let mut loads = [0.0; 2];
+        unit.step(&[0.0, pivot_rad], &[0.1, 0.0], &mut loads, 0.0005, &mut SplitMix64(1));
+        assert!((unit.torque[0] - viscous * 0.1).abs() < 1e-12, "pivot {} mm: {} Nm", 10.0 * pivot_rad, unit.torque[0]);
+    }
+    // A replay along a ramp of 0.1 rad/s at the recorded pivot settings.
+    let t: Vec<f64> = (0..5).map(|k| k as f64 * 0.01).collect();
+    let d: Vec<f64> = t.iter().map(|t| 0.1 * t).collect();
+    let read = unit.replay(0, &t, &d, &[15.0; 5], 0.02);
+    assert!((read[2] - (100.0 * d[2] + 3.0 * 0.1)).abs() < 1e-9, "{read:?}");
+
+    let mut loaded = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
+    let build = |loaded: &jointctl_config::LoadedConfig| jointctl_sim::SimHal::with_chain(&loaded.config, loaded.chain.as_ref()).map(|_| ()).unwrap_err().to_string();
+    let shoulder = loaded.config.joints.iter_mut().find(|j| j.name == "shoulder").unwrap().sim.as_mut().unwrap();
+    // The reference arm's shoulder has a set for every setting: by pivot in its place.
+    let every_setting = std::mem::take(&mut shoulder.effects);
+    shoulder.effects_by_pivot = vec![at(20.0, 2.0), at(10.0, 6.0)];
+    let err = build(&loaded);
+    assert!(err.contains("effects_by_pivot[1].pivot_mm") && err.contains("increasing pivot order"), "{err}");
+    let shoulder = loaded.config.joints.iter_mut().find(|j| j.name == "shoulder").unwrap().sim.as_mut().unwrap();
+    shoulder.effects_by_pivot = vec![at(10.0, 2.0), at(20.0, 6.0)];
+    shoulder.effects = every_setting;
+    let err = build(&loaded);
+    assert!(err.contains("effects_by_pivot") && err.contains("give one of"), "{err}");
+    let elbow = loaded.config.joints.iter_mut().find(|j| j.name == "q4").unwrap().sim.as_mut().unwrap();
+    elbow.effects_by_pivot = vec![at(10.0, 2.0)];
+    let shoulder = loaded.config.joints.iter_mut().find(|j| j.name == "shoulder").unwrap().sim.as_mut().unwrap();
+    shoulder.effects = EffectsConfig::default();
+    let err = build(&loaded);
+    assert!(err.contains("effects_by_pivot") && err.contains("no `pivot`"), "{err}");
+}

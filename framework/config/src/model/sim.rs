@@ -148,9 +148,29 @@ pub struct JointSimConfig {
     /// Plant effects the observer does not model, each off unless given...
     #[serde(default)]
     pub effects: EffectsConfig,
-    /// ... or one set per DOF (the wrist's q6 and q7 each their own), in place of `effects`.
+    /// ... or one set per DOF (the wrist's q6 and q7 each their own), in place of `effects`...
     #[serde(default)]
     pub effects_per_dof: Vec<EffectsConfig>,
+    /// ... or, for a joint with a `pivot`, one set per pivot setting in increasing `pivot_mm`
+    /// order, in place of `effects`: every DOF's effects at the current pivot are interpolated
+    /// linearly between the two settings around it (the nearest beyond the first or last), as
+    /// the characteristic's curves are. An effect at one setting and not the next fades out
+    /// between them (its size to zero: a loop's limit and rest stiffness, a friction's `k_a`, a
+    /// mode's gain). What `jointctl identify` writes for a cause whose size changes with the
+    /// setting.
+    #[serde(default)]
+    pub effects_by_pivot: Vec<PivotEffectsConfig>,
+}
+
+/// The plant effects at one pivot setting (`sim.effects_by_pivot`).
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PivotEffectsConfig {
+    /// The setting [mm].
+    pub pivot_mm: f64,
+    /// The effects there.
+    #[serde(default)]
+    pub effects: EffectsConfig,
 }
 
 /// The elastic element, e.g. `{kind: linear, stiffness_nm_per_rad: 113.78}` or `{kind: rigid}`.

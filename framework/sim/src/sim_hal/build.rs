@@ -102,9 +102,21 @@ impl SimHal {
                     unit::check_effects(fx).map_err(|(f, m)| setup(at(&format!("effects_per_dof[{i}].{f}")), m))?;
                 }
             }
+            if !s.effects_by_pivot.is_empty() {
+                if pivot.is_none() {
+                    return Err(setup(at("effects_by_pivot"), "the joint has no `pivot`: give `effects`".to_string()));
+                }
+                if serde_json::to_value(s.effects).ok() != serde_json::to_value(jointctl_config::EffectsConfig::default()).ok() || !s.effects_per_dof.is_empty() {
+                    return Err(setup(at("effects_by_pivot"), "give one of `effects` (every DOF), `effects_per_dof` or `effects_by_pivot`".to_string()));
+                }
+                unit::check_effects_by_pivot(&s.effects_by_pivot).map_err(|(f, m)| setup(at(&format!("effects_by_pivot{f}")), m))?;
+            }
             let mut unit = Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects);
             for (i, fx) in s.effects_per_dof.iter().enumerate() {
                 unit.set_effects(i, *fx);
+            }
+            if !s.effects_by_pivot.is_empty() {
+                unit.set_effects_by_pivot(s.effects_by_pivot.clone());
             }
             units.push(unit);
         }
