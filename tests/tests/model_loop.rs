@@ -281,14 +281,41 @@ fn a_record_of_several_pivot_settings_is_identified_per_setting_and_extended_by_
     run_ok(Command::new(jointctl()).arg("check").arg(out.join("extended.yaml")));
 }
 
-/// The shoulder's plant with a hidden effect recorded at three pivot settings (10, 20 and 35 mm,
-/// one record each, laid one after the other in one file), identified per setting and extended
-/// `by_pivot` (issue 32): the effect is named at every setting, the simulation and observer gains
-/// are at least 50 %, and at each setting chapter 5's tracking (observer vs F/T) is no worse with
-/// the extension than without. More seeds: `JOINTCTL_MODEL_LOOP_SEEDS`.
+/// A setting's gain is met when the extension halves its held-out error, or leaves no more than
+/// this times the noise floor `identify` estimated there: an effect near the noise (a small cubic
+/// at the stiffest setting, whose deflection is smallest) cannot be halved. The margin is an
+/// assumption for the floor's own spread.
+const NEAR_NOISE: f64 = 1.25;
+
+/// `hidden` (entries of `sim.effects`) with every size times `s`: a friction's `k_b` and a
+/// loop's shape stay.
+fn scaled(hidden: &str, s: f64) -> serde_json::Value {
+    fn scale(v: &mut serde_json::Value, s: f64) {
+        if let serde_json::Value::Object(m) = v {
+            for (_, x) in m.iter_mut().filter(|(k, _)| !matches!(k.as_str(), "k_b_s_per_rad" | "shape")) {
+                match x.as_f64() {
+                    Some(f) => *x = (f * s).into(),
+                    None => scale(x, s),
+                }
+            }
+        }
+    }
+    let mut v: serde_json::Value = serde_yaml::from_str(&format!("{{{hidden}}}")).unwrap();
+    scale(&mut v, s);
+    v
+}
+
+/// The shoulder's plant with a hidden effect whose size changes with the pivot setting (0.6, 1
+/// and 1.4 times the drawn size at 10, 20 and 35 mm: an assumption, a cause of the lever
+/// mechanism grows or shrinks with the lever), recorded at the three settings (one record each,
+/// laid one after the other in one file), identified per setting and extended `by_pivot` (issue
+/// 32): the effect is named at every setting, the simulation and observer gains are at least
+/// 50 % at each setting (or what remains is near the noise, [`NEAR_NOISE`]), and at each setting chapter 5's tracking (observer vs F/T) is no worse
+/// with the extension than without. More seeds: `JOINTCTL_MODEL_LOOP_SEEDS`.
 #[test]
 fn the_shoulder_with_a_hidden_effect_is_identified_and_extended_per_pivot_setting() {
     let pivots = [10.0, 20.0, 35.0];
+    let sizes = [0.6, 1.0, 1.4];
     // Seeds 1, 3, 6 and 15 draw a cubic, viscous friction, a dead zone and hysteresis, the
     // effects of issue 32's target; seeds 1-21 all passed when this was written.
     for seed in seeds(&[1, 3, 6, 15]) {
@@ -297,7 +324,21 @@ fn the_shoulder_with_a_hidden_effect_is_identified_and_extended_per_pivot_settin
         let name = format!("ml-q2-settings-{seed}");
         let arm = arm_name(&name);
         let config = sherpa_with(&format!("{name}-c"), &arm, &Joint::Q2(0.0).edits(""));
-        let plant = sherpa_with(&format!("{name}-p"), &arm, &Joint::Q2(0.0).edits(&hidden));
+        let by_pivot: Vec<serde_json::Value> = pivots
+            .iter()
+            .zip(sizes)
+            .map(|(p, s)| {
+                let mut effects = scaled(&hidden, s);
+                effects["torque_noise_nm"] = 0.01.into();
+                serde_json::json!({"pivot_mm": p, "effects": effects})
+            })
+            .collect();
+        let plant_edits = || {
+            let mut edits = Joint::Q2(0.0).edits("");
+            edits.extend([Edit::Remove("joints[shoulder].sim.effects"), Edit::Set("joints[shoulder].sim.effects_by_pivot", serde_yaml::to_value(&by_pivot).unwrap())]);
+            edits
+        };
+        let plant = sherpa_with(&format!("{name}-p"), &arm, &plant_edits());
         let work = scratch(&format!("{name}-w"));
         let table = {
             let loaded = jointctl_config::load(&config).unwrap();
@@ -323,19 +364,32 @@ fn the_shoulder_with_a_hidden_effect_is_identified_and_extended_per_pivot_settin
         ))
         .unwrap();
         run_ok(Command::new(jointctl()).arg("check").arg(out.join("extended.yaml")));
+        // The simulation's terms by setting, as the observer's.
+        assert_eq!(json["extension"]["plant"]["by_pivot"].as_array().map(Vec::len), Some(3), "{}", json["extension"]["plant"]);
         let settings = json["settings"].as_array().unwrap_or_else(|| panic!("{json}"));
         let named: Vec<Vec<String>> = settings.iter().map(|s| s["causes"].as_array().unwrap().iter().map(|c| c["effect"].as_str().unwrap().to_string()).collect()).collect();
         let (simulation, observer) = (gain(&json, "simulation"), gain(&json, "observer"));
+        let per_setting: Vec<(f64, f64)> = settings.iter().map(|s| (gain(s, "simulation"), gain(s, "observer"))).collect();
+        let rmse = |s: &serde_json::Value, side: &str| format!("{:.4} -> {:.4}", s["gains"][side]["rmse_before"].as_f64().unwrap(), s["gains"][side]["rmse_after"].as_f64().unwrap());
+        for s in settings {
+            println!("{name} at {:.1} mm: simulation {}, observer {} Nm; noise floor {:.4} Nm", s["pivot_mm"].as_f64().unwrap(), rmse(s, "simulation"), rmse(s, "observer"), s["unexplained"]["noise_floor_nm"].as_f64().unwrap());
+        }
         let include: Value = serde_yaml::from_str(&format!("{{include: {}}}", out.join("observer.yaml").display())).unwrap();
-        let mut extended = Joint::Q2(0.0).edits(&hidden);
+        let mut extended = plant_edits();
         extended.push(Edit::Set("joints[shoulder].params", include));
         let with_observer = sherpa_with(&format!("{name}-x"), &arm, &extended);
         let tracking: Vec<(f64, f64)> = pivots.iter().map(|p| (tracking(&plant, Joint::Q2(*p), table.stiffness(*p)), tracking(&with_observer, Joint::Q2(*p), table.stiffness(*p)))).collect();
-        println!("{name}: hidden {{{hidden}}}: named per setting {named:?}; gains simulation {simulation:.2}, observer {observer:.2}; tracking (before, after) per setting {tracking:?}\n  extension {}", json["extension"]);
+        println!("{name}: hidden {{{hidden}}}: named per setting {named:?}; gains simulation {simulation:.2}, observer {observer:.2}, per setting {per_setting:.2?}; tracking (before, after) per setting {tracking:?}\n  extension {}", json["extension"]);
         for (pivot, causes) in pivots.iter().zip(&named) {
             assert!(causes.iter().any(|c| c == cause), "{name}: `{cause}` not named at {pivot} mm: {named:?}");
         }
-        assert!(simulation >= 0.5 && observer >= 0.5, "{name}: gains simulation {simulation:.2}, observer {observer:.2}");
+        for s in settings {
+            for side in ["simulation", "observer"] {
+                let (before, after) = (s["gains"][side]["rmse_before"].as_f64().unwrap(), s["gains"][side]["rmse_after"].as_f64().unwrap());
+                let floor = s["unexplained"]["noise_floor_nm"].as_f64().unwrap();
+                assert!(after <= 0.5 * before || after <= NEAR_NOISE * floor, "{name}: {side} at {} mm {before:.4} -> {after:.4} Nm (noise floor {floor:.4})", s["pivot_mm"]);
+            }
+        }
         for (pivot, (before, after)) in pivots.iter().zip(&tracking) {
             assert!(after <= before, "{name}: tracking at {pivot} mm {before:.4} -> {after:.4}");
         }

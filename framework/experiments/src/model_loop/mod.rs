@@ -1,6 +1,7 @@
 //! The model loop's last step (section 6.2's first recommendation): what `jointctl identify`
 //! found in measured data, written as an extended observer (the joint's params with a
-//! `model_extension`) and an extended simulation (the joint's `sim.effects`), with the gain of
+//! `model_extension`) and an extended simulation (the joint's `sim.effects`, or
+//! `sim.effects_by_pivot` from a record of several pivot settings), with the gain of
 //! each measured on the data's held-out part.
 //!
 //! - **Observer**: the recorded deflections through the joint's observer model (its
@@ -19,15 +20,17 @@
 use crate::ExperimentError;
 
 mod extension;
+mod found;
 mod gain;
 mod observer;
 mod simulation;
 mod write;
 
-pub use self::extension::{Extension, Found, SettingFound, extend, extend_by_pivot};
+pub use self::extension::{Extension, SettingGain, extend, extend_by_pivot};
+pub use self::found::{Found, SettingFound};
 pub use self::gain::{Gain, Split, Trace, observer_gain_along};
 pub use self::observer::{configured_torque, configured_torque_along, observer_torque, observer_torque_along, observer_torque_of};
-pub use self::simulation::{REPLAY_RATE_WINDOW_S, simulated_torque};
+pub use self::simulation::{PlantEffects, REPLAY_RATE_WINDOW_S, simulated_torque};
 pub use self::write::{Written, write};
 
 fn err(m: impl Into<String>) -> ExperimentError {

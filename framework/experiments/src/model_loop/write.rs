@@ -15,7 +15,7 @@ use crate::ExperimentError;
 pub struct Written {
     /// The joint's complete params (`params: {include: ...}` alone configures it).
     pub observer: PathBuf,
-    /// The joint's `sim.effects`.
+    /// The joint's `sim.effects` (or `sim.effects_by_pivot`).
     pub plant: PathBuf,
     /// The config with both in place (and the loop's `hal.sim` values).
     pub extended: PathBuf,
@@ -54,7 +54,7 @@ fn absolute_paths(doc: &mut serde_yaml::Value, config: &Path) {
 }
 
 /// Writes `dir/observer.yaml`, `dir/plant.yaml` and `dir/extended.yaml` (the config with the
-/// joint's params `{include: observer.yaml}`, its `sim.effects` those of `plant.yaml` and the
+/// joint's params `{include: observer.yaml}`, its `sim.effects` (or `sim.effects_by_pivot`) those of `plant.yaml` and the
 /// `hal.sim` keys of `loop_sim`, the causes in the loop, also written to `dir/loop.yaml` when
 /// there are any), and checks that the last loads.
 ///
@@ -75,7 +75,8 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
         &written.observer,
         format!("# The complete params of `{}`'s joint in {}, with the observer's model extension {provenance}.\n# Use: params: {{include: observer.yaml}}\n{}", ext.dof, config.display(), yaml(&versioned(&ext.observer_params))?),
     )?;
-    put(&written.plant, format!("# `sim.effects` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&ext.plant_effects)?))?;
+    let (key, effects) = ext.plant_effects.config_entry();
+    put(&written.plant, format!("# `sim.{key}` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&effects)?))?;
     let text = jointctl_files::read_to_string(config, jointctl_files::FileKind::Config).map_err(|e| err(e.to_string()))?;
     let mut doc: serde_yaml::Value = serde_yaml::from_str(&text).map_err(|e| err(format!("{}: {e}", config.display())))?;
     absolute_paths(&mut doc, config);
@@ -87,17 +88,23 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     let mut params = serde_yaml::Mapping::new();
     params.insert("include".into(), "observer.yaml".into());
     joint["params"] = serde_yaml::Value::Mapping(params);
-    let effects: serde_yaml::Value = serde_yaml::to_value(&ext.plant_effects).map_err(|e| err(e.to_string()))?;
+    let effects: serde_yaml::Value = serde_yaml::to_value(&effects).map_err(|e| err(e.to_string()))?;
     let entry = &loaded.config.joints[ext.joint_index];
     let per_dof = entry.sim.as_ref().is_some_and(|s| !s.effects_per_dof.is_empty());
     let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
     match joint.get_mut("sim") {
         // A joint with a set of effects per DOF: this DOF's.
-        Some(sim) if per_dof => match sim.get_mut("effects_per_dof").and_then(|l| l.get_mut(i)) {
+        Some(sim) if per_dof && key == "effects" => match sim.get_mut("effects_per_dof").and_then(|l| l.get_mut(i)) {
             Some(slot) => *slot = effects,
             None => return Err(err(format!("{}: joints[{}].sim.effects_per_dof has no entry {i}", config.display(), ext.joint_index))),
         },
-        Some(sim) => sim["effects"] = effects,
+        // By pivot or one set: that key, the other form gone.
+        Some(sim) => {
+            if let Some(m) = sim.as_mapping_mut() {
+                m.remove(if key == "effects" { "effects_by_pivot" } else { "effects" });
+            }
+            sim[key] = effects;
+        }
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     }
     if let Some(path) = &written.loop_sim {

@@ -40,14 +40,14 @@ pub(super) fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> S
 /// The gains as a Markdown table, with what was left out and why.
 /// The extension in `--json`: the observer's terms, the plant's effects and the notes.
 pub(super) fn extension_json(ext: &Extension) -> serde_json::Value {
-    serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects, "plant_causes": ext.plant_causes, "notes": ext.notes})
+    serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects.to_json(), "plant_causes": ext.plant_causes, "notes": ext.notes})
 }
 
 /// The extension's files (`--out`) and gain plots (`--report`, else `--out`), each said in `md`.
 pub(super) fn write_extension(a: &IdentifyArgs, ext: &Extension, loaded: &jointctl_config::LoadedConfig, provenance: &str, loop_sim: &serde_json::Map<String, serde_json::Value>, md: &mut String) -> Result<(), String> {
     if let Some(dir) = &a.out {
         let w = jointctl_experiments::model_loop::write(ext, loaded, dir, provenance, loop_sim).map_err(|e| e.to_string())?;
-        let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its `sim.effects`), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
+        let _ = writeln!(md, "\nWritten: {} (the joint's params), {} (its simulated plant's effects), {} (the config with both).", w.observer.display(), w.plant.display(), w.extended.display());
         if let Some(l) = &w.loop_sim {
             let _ = writeln!(md, "The loop's `hal.sim` values: {} (also in the extended config).", l.display());
         }
@@ -64,6 +64,13 @@ pub(super) fn gains_table(ext: &Extension) -> String {
     let mut md = String::from("\n## Gains on the held-out part\n\n| | before [Nm] | after [Nm] | gain |\n|---|---|---|---|\n");
     for (name, g) in [("simulation (replayed along the recorded motion, vs F/T)", ext.simulation), ("observer (recorded deflections, vs F/T)", ext.observer)] {
         let _ = writeln!(md, "| {name} | {:.4} | {:.4} | {:.0} % |", g.rmse_before, g.rmse_after, 100.0 * g.relative());
+    }
+    if !ext.by_setting.is_empty() {
+        md += "\nAt each pivot setting, on what its identification held out:\n\n| pivot [mm] | simulation before [Nm] | after [Nm] | gain | observer before [Nm] | after [Nm] | gain |\n|---|---|---|---|---|---|---|\n";
+        for g in &ext.by_setting {
+            let (s, o) = (g.simulation, g.observer);
+            let _ = writeln!(md, "| {:.2} | {:.4} | {:.4} | {:.0} % | {:.4} | {:.4} | {:.0} % |", g.pivot_mm, s.rmse_before, s.rmse_after, 100.0 * s.relative(), o.rmse_before, o.rmse_after, 100.0 * o.relative());
+        }
     }
     let taken = if ext.plant_causes.is_empty() { "none".to_string() } else { ext.plant_causes.join(", ") };
     let _ = writeln!(md, "\nInto the simulation: {taken}.");

@@ -531,6 +531,10 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
             .map(|(pivot_mm, r)| {
                 let mut v = serde_json::to_value(r).unwrap_or_default();
                 v["pivot_mm"] = serde_json::json!(pivot_mm);
+                // The extension's gains on what this setting held out.
+                if let Some(g) = ext.as_ref().and_then(|e| e.by_setting.iter().find(|g| g.pivot_mm == *pivot_mm)) {
+                    v["gains"] = serde_json::json!({"simulation": g.simulation, "observer": g.observer});
+                }
                 v
             })
             .collect();
