@@ -445,6 +445,34 @@ fn the_wrist_with_a_hidden_hysteresis_in_one_dof_is_named_on_that_dof() {
         assert!(list[1 - index].is_null() && list[index]["hysteresis"].is_object(), "the extension is q7's alone: {list:?}");
         let extended = std::fs::read_to_string(out.join("extended.yaml")).unwrap();
         assert!(extended.contains("effects_per_dof"), "q7's plant terms go to its own effects");
+        // q7 at a second setting after the first, in one file: identified per setting, its
+        // plant terms by setting in q7's own sets, q6's as configured.
+        let other = work.join("q7-30.csv");
+        let mut record = Command::new(jointctl());
+        record.args(["sim", "record"]).arg(&plant).args(["--joint", "q7", "--angle-deg", "0", "--out"]).arg(&other);
+        record.args(["--amplitude", "0.1", "--frequency", "0.25", "--duration", "80", "--rate", "200", "--pivot-mm", "30"]);
+        run_ok(&mut record);
+        let both = work.join("q7-settings.csv");
+        std::fs::write(&both, std::fs::read_to_string(&csv).unwrap() + std::fs::read_to_string(&other).unwrap().split_once('\n').unwrap().1).unwrap();
+        let out = work.join("q7-settings-ext");
+        let json: serde_json::Value = serde_json::from_str(&run_ok(
+            Command::new(jointctl()).args(["identify", "--data"]).arg(&both).arg("--config").arg(&config).args(["--joint", "q7", "--json", "--out"]).arg(&out),
+        ))
+        .unwrap();
+        run_ok(Command::new(jointctl()).arg("check").arg(out.join("extended.yaml")));
+        let settings = json["settings"].as_array().unwrap_or_else(|| panic!("{json}"));
+        for s in settings {
+            let named: Vec<&str> = s["causes"].as_array().unwrap().iter().map(|c| c["effect"].as_str().unwrap()).collect();
+            assert!(named.contains(&"hysteresis"), "q7 at {} mm: {named:?}", s["pivot_mm"]);
+            assert!(gain(s, "simulation") >= 0.5 && gain(s, "observer") >= 0.5, "q7 at {} mm: gains {}", s["pivot_mm"], s["gains"]);
+        }
+        let plant_yaml: Value = serde_yaml::from_str(&std::fs::read_to_string(out.join("plant.yaml")).unwrap()).unwrap();
+        let entries = plant_yaml.as_sequence().unwrap_or_else(|| panic!("{plant_yaml:?}"));
+        assert_eq!(entries.len(), 2);
+        for e in entries {
+            let sets = e["effects_per_dof"].as_sequence().unwrap_or_else(|| panic!("{e:?}"));
+            assert!(sets[0].get("hysteresis").is_none() && sets[1]["hysteresis"].is_mapping(), "q7's loop in q7's set alone: {e:?}");
+        }
     }
 }
 

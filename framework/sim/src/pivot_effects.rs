@@ -4,31 +4,31 @@
 
 use jointctl_config::{EffectsConfig, PivotEffectsConfig};
 
-/// The effects at `pivot_mm` [mm]: linear between the two settings of `settings` (increasing
-/// `pivot_mm`) around it, the nearest one's beyond the first or last, none when `settings` is
-/// empty. An optional effect present at one of the two settings only fades out towards the
-/// other: its size (a loop's limit and rest stiffness, a friction's `k_a`, a mode's gain) goes
-/// to zero there while its shape stays.
+/// DOF `dof`'s effects at `pivot_mm` [mm]: linear between the two settings of `settings`
+/// (increasing `pivot_mm`) around it, the nearest one's beyond the first or last, none when
+/// `settings` is empty. An optional effect present at one of the two settings only fades out
+/// towards the other: its size (a loop's limit and rest stiffness, a friction's `k_a`, a mode's
+/// gain) goes to zero there while its shape stays.
 ///
 /// ```
 /// use jointctl_config::{EffectsConfig, PivotEffectsConfig};
-/// let at = |pivot_mm, viscous| PivotEffectsConfig { pivot_mm, effects: EffectsConfig { viscous_nms_per_rad: viscous, ..Default::default() } };
+/// let at = |pivot_mm, viscous| PivotEffectsConfig { pivot_mm, effects: EffectsConfig { viscous_nms_per_rad: viscous, ..Default::default() }, effects_per_dof: Vec::new() };
 /// let settings = [at(10.0, 2.0), at(30.0, 6.0)];
-/// assert_eq!(jointctl_sim::pivot_effects::effects_at(&settings, 15.0).viscous_nms_per_rad, 3.0);
-/// assert_eq!(jointctl_sim::pivot_effects::effects_at(&settings, 40.0).viscous_nms_per_rad, 6.0);
+/// assert_eq!(jointctl_sim::pivot_effects::effects_at(&settings, 15.0, 0).viscous_nms_per_rad, 3.0);
+/// assert_eq!(jointctl_sim::pivot_effects::effects_at(&settings, 40.0, 0).viscous_nms_per_rad, 6.0);
 /// ```
-pub fn effects_at(settings: &[PivotEffectsConfig], pivot_mm: f64) -> EffectsConfig {
+pub fn effects_at(settings: &[PivotEffectsConfig], pivot_mm: f64, dof: usize) -> EffectsConfig {
     let (Some(first), Some(last)) = (settings.first(), settings.last()) else { return EffectsConfig::default() };
     if !(pivot_mm > first.pivot_mm) {
-        return first.effects;
+        return first.of_dof(dof);
     }
     if pivot_mm >= last.pivot_mm {
-        return last.effects;
+        return last.of_dof(dof);
     }
     // The first setting above the pivot, and the one before it.
     let k = settings.iter().position(|s| s.pivot_mm > pivot_mm).unwrap_or(settings.len() - 1);
     let (a, b) = (&settings[k - 1], &settings[k]);
-    interpolate(&a.effects, &b.effects, (pivot_mm - a.pivot_mm) / (b.pivot_mm - a.pivot_mm))
+    interpolate(&a.of_dof(dof), &b.of_dof(dof), (pivot_mm - a.pivot_mm) / (b.pivot_mm - a.pivot_mm))
 }
 
 /// `a` at `w = 0`, `b` at `w = 1`, every number linear in between.
@@ -82,17 +82,17 @@ mod tests {
     use jointctl_config::DahlConfig;
 
     fn loop_at(pivot_mm: f64, limit_nm: f64) -> PivotEffectsConfig {
-        PivotEffectsConfig { pivot_mm, effects: EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 100.0 * limit_nm, limit_nm, shape: 1.0 }), ..Default::default() } }
+        PivotEffectsConfig { pivot_mm, effects: EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 100.0 * limit_nm, limit_nm, shape: 1.0 }), ..Default::default() }, effects_per_dof: Vec::new() }
     }
 
     #[test]
     fn a_loop_at_one_setting_only_fades_out_towards_the_next() {
-        let settings = [loop_at(10.0, 0.4), PivotEffectsConfig { pivot_mm: 20.0, effects: EffectsConfig::default() }];
-        let h = effects_at(&settings, 12.5).hysteresis.unwrap();
+        let settings = [loop_at(10.0, 0.4), PivotEffectsConfig { pivot_mm: 20.0, effects: EffectsConfig::default(), effects_per_dof: Vec::new() }];
+        let h = effects_at(&settings, 12.5, 0).hysteresis.unwrap();
         assert!((h.limit_nm - 0.3).abs() < 1e-12 && (h.sigma_nm_per_rad - 30.0).abs() < 1e-12, "{h:?}");
-        assert!(effects_at(&settings, 20.0).hysteresis.is_none());
-        assert!(effects_at(&settings, 25.0).hysteresis.is_none());
-        assert_eq!(effects_at(&settings, 0.0).hysteresis.unwrap().limit_nm, 0.4);
+        assert!(effects_at(&settings, 20.0, 0).hysteresis.is_none());
+        assert!(effects_at(&settings, 25.0, 0).hysteresis.is_none());
+        assert_eq!(effects_at(&settings, 0.0, 0).hysteresis.unwrap().limit_nm, 0.4);
     }
 
     #[test]

@@ -186,6 +186,12 @@ pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig]) -> Result<(), Uni
             return Err((format!("[{k}].pivot_mm"), format!("must be above the setting before ({} mm): give the settings in increasing pivot order, got {} mm", settings[k - 1].pivot_mm, s.pivot_mm)));
         }
         check_effects(&s.effects).map_err(|(f, m)| (format!("[{k}].effects.{f}"), m))?;
+        if !s.effects_per_dof.is_empty() && serde_json::to_value(s.effects).ok() != serde_json::to_value(EffectsConfig::default()).ok() {
+            return Err((format!("[{k}].effects"), "give `effects` (every DOF) or `effects_per_dof`, not both".into()));
+        }
+        for (i, fx) in s.effects_per_dof.iter().enumerate() {
+            check_effects(fx).map_err(|(f, m)| (format!("[{k}].effects_per_dof[{i}].{f}"), m))?;
+        }
     }
     Ok(())
 }
@@ -320,7 +326,9 @@ impl Unit {
     /// No allocation: the cycle calls it.
     fn effects_at_pivot(&mut self) {
         if !self.effects_by_pivot.is_empty() {
-            self.effects = [crate::pivot_effects::effects_at(&self.effects_by_pivot, self.pivot_mm); MAX_UNIT_DOF];
+            for (i, fx) in self.effects.iter_mut().enumerate() {
+                *fx = crate::pivot_effects::effects_at(&self.effects_by_pivot, self.pivot_mm, i);
+            }
         }
     }
 

@@ -302,15 +302,16 @@ fn effects_per_dof_act_on_their_own_dof() {
 }
 
 /// Plant effects by pivot setting (`sim.effects_by_pivot`): the unit's effects follow its pivot
-/// drive, linear between the settings, in the cycle and in a replay; a list on a joint without a
-/// pivot, beside `effects`, or out of order is an error at its field.
+/// drive, linear between the settings, in the cycle and in a replay, one set for every DOF or
+/// one per DOF; a list on a joint without a pivot, beside `effects`, out of order, or with a set
+/// per DOF of the wrong length is an error at its field.
 #[test]
 fn effects_by_pivot_follow_the_pivot_drive() {
     use jointctl_config::PivotEffectsConfig;
     let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
-    let at = |pivot_mm, viscous_nms_per_rad| PivotEffectsConfig { pivot_mm, effects: EffectsConfig { viscous_nms_per_rad, ..Default::default() } };
+    let at = |pivot_mm, viscous_nms_per_rad| PivotEffectsConfig { pivot_mm, effects: EffectsConfig { viscous_nms_per_rad, ..Default::default() }, effects_per_dof: Vec::new() };
     // Drive 1 moves the pivot: 10 mm per rad from 0 mm.
-    let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(100.0)], Some((1, 10.0, 0.0)), vec![fixed], EffectsConfig::default());
+    let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(100.0)], Some((1, 10.0, 0.0)), vec![fixed.clone()], EffectsConfig::default());
     unit.set_effects_by_pivot(vec![at(10.0, 2.0), at(30.0, 6.0)]);
     for (pivot_rad, viscous) in [(0.5, 2.0), (1.5, 3.0), (2.5, 5.0), (4.0, 6.0)] {
         unit.start(&[0.0, pivot_rad]);
@@ -323,6 +324,18 @@ fn effects_by_pivot_follow_the_pivot_drive() {
     let d: Vec<f64> = t.iter().map(|t| 0.1 * t).collect();
     let read = unit.replay(0, &t, &d, &[15.0; 5], 0.02);
     assert!((read[2] - (100.0 * d[2] + 3.0 * 0.1)).abs() < 1e-9, "{read:?}");
+
+    // One set per DOF at each setting (the wrist): each DOF follows its own.
+    let offsets = |pivot_mm, a: f64, b: f64| {
+        let off = |torque_offset_nm| EffectsConfig { torque_offset_nm, ..Default::default() };
+        PivotEffectsConfig { pivot_mm, effects: EffectsConfig::default(), effects_per_dof: vec![off(a), off(b)] }
+    };
+    let mut two = Unit::new(vec!["a".into(), "b".into()], vec![0, 1, 2], vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]], vec![Element::Linear(100.0), Element::Linear(100.0)], Some((2, 10.0, 0.0)), vec![fixed.clone(), fixed], EffectsConfig::default());
+    two.set_effects_by_pivot(vec![offsets(10.0, 0.5, 1.0), offsets(30.0, 0.5, 3.0)]);
+    two.start(&[0.0, 0.0, 2.0]);
+    let mut loads = [0.0; 3];
+    two.step(&[0.0, 0.0, 2.0], &[0.0; 3], &mut loads, 0.0005, &mut SplitMix64(1));
+    assert!((two.sensor_torque[0] - 0.5).abs() < 1e-12 && (two.sensor_torque[1] - 2.0).abs() < 1e-12, "at 20 mm: {:?}", two.sensor_torque);
 
     let mut loaded = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
     let build = |loaded: &jointctl_config::LoadedConfig| jointctl_sim::SimHal::with_chain(&loaded.config, loaded.chain.as_ref()).map(|_| ()).unwrap_err().to_string();
@@ -343,4 +356,11 @@ fn effects_by_pivot_follow_the_pivot_drive() {
     shoulder.effects = EffectsConfig::default();
     let err = build(&loaded);
     assert!(err.contains("effects_by_pivot") && err.contains("no `pivot`"), "{err}");
+    let elbow = loaded.config.joints.iter_mut().find(|j| j.name == "q4").unwrap().sim.as_mut().unwrap();
+    elbow.effects_by_pivot.clear();
+    let wrist = loaded.config.joints.iter_mut().find(|j| j.name == "wrist").unwrap().sim.as_mut().unwrap();
+    wrist.effects = EffectsConfig::default();
+    wrist.effects_by_pivot = vec![offsets(10.0, 0.5, 1.0), PivotEffectsConfig { effects_per_dof: vec![EffectsConfig::default()], ..offsets(30.0, 0.5, 3.0) }];
+    let err = build(&loaded);
+    assert!(err.contains("effects_by_pivot[1].effects_per_dof") && err.contains("one set per DOF (2), got 1"), "{err}");
 }

@@ -151,8 +151,8 @@ pub struct JointSimConfig {
     /// ... or one set per DOF (the wrist's q6 and q7 each their own), in place of `effects`...
     #[serde(default)]
     pub effects_per_dof: Vec<EffectsConfig>,
-    /// ... or, for a joint with a `pivot`, one set per pivot setting in increasing `pivot_mm`
-    /// order, in place of `effects`: every DOF's effects at the current pivot are interpolated
+    /// ... or, for a joint with a `pivot`, one set (or one set per DOF) per pivot setting in
+    /// increasing `pivot_mm` order, in place of both: every DOF's effects at the current pivot are interpolated
     /// linearly between the two settings around it (the nearest beyond the first or last), as
     /// the characteristic's curves are. An effect at one setting and not the next fades out
     /// between them (its size to zero: a loop's limit and rest stiffness, a friction's `k_a`, a
@@ -163,14 +163,24 @@ pub struct JointSimConfig {
 }
 
 /// The plant effects at one pivot setting (`sim.effects_by_pivot`).
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PivotEffectsConfig {
     /// The setting [mm].
     pub pivot_mm: f64,
-    /// The effects there.
+    /// The effects there, for every DOF...
     #[serde(default)]
     pub effects: EffectsConfig,
+    /// ... or one set per DOF there (the wrist's q6 and q7 each their own).
+    #[serde(default)]
+    pub effects_per_dof: Vec<EffectsConfig>,
+}
+
+impl PivotEffectsConfig {
+    /// DOF `dof`'s set at this setting.
+    pub fn of_dof(&self, dof: usize) -> EffectsConfig {
+        self.effects_per_dof.get(dof).copied().unwrap_or(self.effects)
+    }
 }
 
 /// The elastic element, e.g. `{kind: linear, stiffness_nm_per_rad: 113.78}` or `{kind: rigid}`.

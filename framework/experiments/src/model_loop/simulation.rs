@@ -1,7 +1,7 @@
 //! The simulated plant: the joint's element and effects replayed along a recorded motion, a
 //! cause's plant terms merged into its effects, and the causes whose terms the simulation takes.
 
-use jointctl_config::{EffectsConfig, JointConfig, LoadedConfig, PivotEffectsConfig};
+use jointctl_config::{EffectsConfig, JointConfig, JointSimConfig, LoadedConfig, PivotEffectsConfig};
 use jointctl_ident::csv::Data;
 use jointctl_ident::identify::significance::{BlockTest, block_test};
 use serde_json::{Map, Value};
@@ -51,13 +51,51 @@ impl PlantEffects {
         Value::Array(list.iter().map(|(p, v)| serde_json::json!({"pivot_mm": p, "effects": tidy(v)})).collect())
     }
 
-    /// The value of the joint's `sim` key it goes to: `effects` or `effects_by_pivot`.
-    pub(super) fn config_entry(&self) -> (&'static str, Value) {
-        match self {
+    /// The key of the joint's `sim` section DOF `i`'s effects go to (`effects`, or
+    /// `effects_by_pivot`: the other DOFs' own sets there as configured) and its value.
+    ///
+    /// # Errors
+    /// An effects object that is not `sim.effects`.
+    pub(super) fn config_entry(&self, sim: &JointSimConfig, i: usize) -> Result<(&'static str, Value), ExperimentError> {
+        let to_json = |fx: &EffectsConfig| serde_json::to_value(fx).map(|v| tidy(&v)).map_err(|e| err(e.to_string()));
+        Ok(match self {
             PlantEffects::One(v) => ("effects", tidy(v)),
-            PlantEffects::ByPivot(list) => ("effects_by_pivot", Self::list(list)),
-        }
+            PlantEffects::ByPivot(list) => {
+                let entries = joint_by_pivot(sim, i, list)?
+                    .iter()
+                    .map(|e| {
+                        Ok(if e.effects_per_dof.is_empty() {
+                            serde_json::json!({"pivot_mm": e.pivot_mm, "effects": to_json(&e.effects)?})
+                        } else {
+                            serde_json::json!({"pivot_mm": e.pivot_mm, "effects_per_dof": e.effects_per_dof.iter().map(to_json).collect::<Result<Vec<_>, ExperimentError>>()?})
+                        })
+                    })
+                    .collect::<Result<Vec<_>, ExperimentError>>()?;
+                ("effects_by_pivot", Value::Array(entries))
+            }
+        })
     }
+}
+
+/// The joint's `sim.effects_by_pivot` with DOF `i`'s set at each setting of `list` taken from
+/// it: one set for every DOF, or, when the joint's DOFs have their own (the wrist), the other
+/// DOFs' sets at those settings as configured.
+fn joint_by_pivot(sim: &JointSimConfig, i: usize, list: &[(f64, Value)]) -> Result<Vec<PivotEffectsConfig>, ExperimentError> {
+    let per_dof = !sim.effects_per_dof.is_empty() || sim.effects_by_pivot.iter().any(|e| !e.effects_per_dof.is_empty());
+    let configured = |d: usize, pivot_mm: f64| match sim.effects_by_pivot.is_empty() {
+        true => sim.effects_per_dof.get(d).copied().unwrap_or(sim.effects),
+        false => jointctl_sim::pivot_effects::effects_at(&sim.effects_by_pivot, pivot_mm, d),
+    };
+    list.iter()
+        .enumerate()
+        .map(|(k, (pivot_mm, v))| {
+            let own: EffectsConfig = serde_json::from_value(v.clone()).map_err(|e| err(format!("effects_by_pivot[{k}].effects: {e}")))?;
+            Ok(match per_dof {
+                false => PivotEffectsConfig { pivot_mm: *pivot_mm, effects: own, effects_per_dof: Vec::new() },
+                true => PivotEffectsConfig { pivot_mm: *pivot_mm, effects: EffectsConfig::default(), effects_per_dof: (0..sim.matrix.len()).map(|d| if d == i { own } else { configured(d, *pivot_mm) }).collect() },
+            })
+        })
+        .collect()
 }
 
 /// DOF `i`'s plant effects as the config gives them.
@@ -65,7 +103,7 @@ pub(super) fn configured_plant(entry: &JointConfig, i: usize) -> Result<PlantEff
     let to_value = |fx: &EffectsConfig| serde_json::to_value(fx).map_err(|e| err(e.to_string()));
     let Some(sim) = entry.sim.as_ref() else { return Ok(PlantEffects::One(Value::Object(Map::new()))) };
     if !sim.effects_by_pivot.is_empty() {
-        return Ok(PlantEffects::ByPivot(sim.effects_by_pivot.iter().map(|s| Ok((s.pivot_mm, to_value(&s.effects)?))).collect::<Result<_, ExperimentError>>()?));
+        return Ok(PlantEffects::ByPivot(sim.effects_by_pivot.iter().map(|s| Ok((s.pivot_mm, to_value(&s.of_dof(i))?))).collect::<Result<_, ExperimentError>>()?));
     }
     Ok(PlantEffects::One(to_value(sim.effects_per_dof.get(i).unwrap_or(&sim.effects))?))
 }
@@ -96,8 +134,9 @@ pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &PlantEffects
                 }
             }
             PlantEffects::ByPivot(list) => {
+                sim.effects_by_pivot = joint_by_pivot(sim, i, list).map_err(|e| err(format!("joints[{j}].sim.{e}")))?;
                 sim.effects = EffectsConfig::default();
-                sim.effects_by_pivot = list.iter().enumerate().map(|(k, (pivot_mm, v))| Ok(PivotEffectsConfig { pivot_mm: *pivot_mm, effects: parse(v, &format!("effects_by_pivot[{k}].effects"))? })).collect::<Result<_, ExperimentError>>()?;
+                sim.effects_per_dof.clear();
             }
         }
     }
@@ -202,8 +241,8 @@ pub(super) fn choose_plant_by_pivot(loaded: &LoadedConfig, dof: &str, base: Plan
         match &base {
             PlantEffects::One(v) => Ok(v.clone()),
             PlantEffects::ByPivot(list) => {
-                let parsed = list.iter().map(|(p, v)| Ok(PivotEffectsConfig { pivot_mm: *p, effects: serde_json::from_value(v.clone()).map_err(|e| err(e.to_string()))? })).collect::<Result<Vec<_>, ExperimentError>>()?;
-                serde_json::to_value(jointctl_sim::pivot_effects::effects_at(&parsed, pivot_mm)).map_err(|e| err(e.to_string()))
+                let parsed = list.iter().map(|(p, v)| Ok(PivotEffectsConfig { pivot_mm: *p, effects: serde_json::from_value(v.clone()).map_err(|e| err(e.to_string()))?, effects_per_dof: Vec::new() })).collect::<Result<Vec<_>, ExperimentError>>()?;
+                serde_json::to_value(jointctl_sim::pivot_effects::effects_at(&parsed, pivot_mm, 0)).map_err(|e| err(e.to_string()))
             }
         }
     };

@@ -75,7 +75,12 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
         &written.observer,
         format!("# The complete params of `{}`'s joint in {}, with the observer's model extension {provenance}.\n# Use: params: {{include: observer.yaml}}\n{}", ext.dof, config.display(), yaml(&versioned(&ext.observer_params))?),
     )?;
-    let (key, effects) = ext.plant_effects.config_entry();
+    let entry = &loaded.config.joints[ext.joint_index];
+    let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
+    let (key, effects) = match entry.sim.as_ref() {
+        Some(sim) => ext.plant_effects.config_entry(sim, i)?,
+        None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
+    };
     put(&written.plant, format!("# `sim.{key}` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&effects)?))?;
     let text = jointctl_files::read_to_string(config, jointctl_files::FileKind::Config).map_err(|e| err(e.to_string()))?;
     let mut doc: serde_yaml::Value = serde_yaml::from_str(&text).map_err(|e| err(format!("{}: {e}", config.display())))?;
@@ -89,19 +94,19 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     params.insert("include".into(), "observer.yaml".into());
     joint["params"] = serde_yaml::Value::Mapping(params);
     let effects: serde_yaml::Value = serde_yaml::to_value(&effects).map_err(|e| err(e.to_string()))?;
-    let entry = &loaded.config.joints[ext.joint_index];
     let per_dof = entry.sim.as_ref().is_some_and(|s| !s.effects_per_dof.is_empty());
-    let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
     match joint.get_mut("sim") {
         // A joint with a set of effects per DOF: this DOF's.
         Some(sim) if per_dof && key == "effects" => match sim.get_mut("effects_per_dof").and_then(|l| l.get_mut(i)) {
             Some(slot) => *slot = effects,
             None => return Err(err(format!("{}: joints[{}].sim.effects_per_dof has no entry {i}", config.display(), ext.joint_index))),
         },
-        // By pivot or one set: that key, the other form gone.
+        // By pivot or one set: that key, the other forms gone.
         Some(sim) => {
             if let Some(m) = sim.as_mapping_mut() {
-                m.remove(if key == "effects" { "effects_by_pivot" } else { "effects" });
+                for other in ["effects", "effects_per_dof", "effects_by_pivot"].into_iter().filter(|k| *k != key) {
+                    m.remove(other);
+                }
             }
             sim[key] = effects;
         }

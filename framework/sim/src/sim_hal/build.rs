@@ -110,6 +110,9 @@ impl SimHal {
                     return Err(setup(at("effects_by_pivot"), "give one of `effects` (every DOF), `effects_per_dof` or `effects_by_pivot`".to_string()));
                 }
                 unit::check_effects_by_pivot(&s.effects_by_pivot).map_err(|(f, m)| setup(at(&format!("effects_by_pivot{f}")), m))?;
+                if let Some(k) = s.effects_by_pivot.iter().position(|e| !e.effects_per_dof.is_empty() && e.effects_per_dof.len() != n) {
+                    return Err(setup(at(&format!("effects_by_pivot[{k}].effects_per_dof")), format!("give one set per DOF ({n}), got {}", s.effects_by_pivot[k].effects_per_dof.len())));
+                }
             }
             let mut unit = Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects);
             for (i, fx) in s.effects_per_dof.iter().enumerate() {
