@@ -104,7 +104,10 @@ fn changes() -> Vec<(&'static str, String, Change)> {
         "no hysteresis, friction, mode or noise".into(),
         Box::new(|c, j, _| {
             if let Some(sim) = c.config.joints[j].sim.as_mut() {
+                // Every form the effects take: one set, one per DOF, one per pivot setting.
                 sim.effects = Default::default();
+                sim.effects_per_dof.clear();
+                sim.effects_by_pivot.clear();
             }
         }),
     ));
@@ -210,5 +213,21 @@ mod tests {
         let got = cfg.config.joints[0].dofs[1].controller.as_ref().expect("the DOF got controller settings").torque_pi;
         assert_eq!((got.kp, got.ki), (2.0 * defaults.kp, 2.0 * defaults.ki));
         assert!(cfg.config.joints[0].dofs[0].controller.is_none(), "only the DOF asked for");
+    }
+
+    /// Finding: the row without plant effects cleared `sim.effects` alone, so a joint whose
+    /// effects are given per DOF (the wrist) or per pivot setting kept them. Pass: none is left.
+    #[test]
+    fn the_row_without_plant_effects_clears_every_form_of_them() {
+        let mut cfg = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
+        let j = cfg.config.joints.iter().position(|j| j.name == "wrist").unwrap();
+        let loop_set: jointctl_config::EffectsConfig = serde_json::from_value(serde_json::json!({"torque_offset_nm": 0.5})).unwrap();
+        let sim = cfg.config.joints[j].sim.as_mut().unwrap();
+        sim.effects_per_dof = vec![loop_set; 2];
+        sim.effects_by_pivot = vec![jointctl_config::PivotEffectsConfig { pivot_mm: 10.0, effects: loop_set, effects_per_dof: Vec::new() }];
+        let (_, _, clear) = changes().into_iter().find(|(f, _, _)| *f == "plant").unwrap();
+        clear(&mut cfg, j, 0);
+        let sim = cfg.config.joints[j].sim.as_ref().unwrap();
+        assert!(sim.effects_per_dof.is_empty() && sim.effects_by_pivot.is_empty() && sim.effects.torque_offset_nm == 0.0);
     }
 }
