@@ -97,10 +97,10 @@ mod tests {
 
     #[test]
     fn settings_out_of_order_or_not_physical_are_refused_by_entry() {
-        let e = check_effects_by_pivot(&[loop_at(20.0, 0.4), loop_at(10.0, 0.4)]).unwrap_err();
+        let e = check_effects_by_pivot(&[loop_at(20.0, 0.4), loop_at(10.0, 0.4)], 1).unwrap_err();
         assert_eq!(e.0, "[1].pivot_mm");
-        let e = check_effects_by_pivot(&[loop_at(10.0, 0.4), loop_at(20.0, -0.1)]).unwrap_err();
+        let e = check_effects_by_pivot(&[loop_at(10.0, 0.4), loop_at(20.0, -0.1)], 1).unwrap_err();
         assert_eq!(e.0, "[1].effects.hysteresis.sigma_nm_per_rad");
-        assert!(check_effects_by_pivot(&[loop_at(10.0, 0.4), loop_at(20.0, 0.1)]).is_ok());
+        assert!(check_effects_by_pivot(&[loop_at(10.0, 0.4), loop_at(20.0, 0.1)], 1).is_ok());
     }
 }

@@ -175,9 +175,10 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
     Ok(())
 }
 
-/// Refuses a list of settings out of increasing `pivot_mm` order, or one whose effects
-/// [`check_effects`] refuses, naming the entry (`[2].pivot_mm`, `[0].effects.viscous_nms_per_rad`).
-pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig]) -> Result<(), UnitError> {
+/// Refuses a list of settings out of increasing `pivot_mm` order, one whose effects
+/// [`check_effects`] refuses, or one with both forms or a set per DOF for other than `dofs`
+/// DOFs, naming the entry (`[2].pivot_mm`, `[0].effects.viscous_nms_per_rad`).
+pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig], dofs: usize) -> Result<(), UnitError> {
     for (k, s) in settings.iter().enumerate() {
         if !s.pivot_mm.is_finite() {
             return Err((format!("[{k}].pivot_mm"), format!("must be a finite number, got {}", s.pivot_mm)));
@@ -186,8 +187,11 @@ pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig]) -> Result<(), Uni
             return Err((format!("[{k}].pivot_mm"), format!("must be above the setting before ({} mm): give the settings in increasing pivot order, got {} mm", settings[k - 1].pivot_mm, s.pivot_mm)));
         }
         check_effects(&s.effects).map_err(|(f, m)| (format!("[{k}].effects.{f}"), m))?;
-        if !s.effects_per_dof.is_empty() && serde_json::to_value(s.effects).ok() != serde_json::to_value(EffectsConfig::default()).ok() {
+        if !s.effects_per_dof.is_empty() && s.effects != EffectsConfig::default() {
             return Err((format!("[{k}].effects"), "give `effects` (every DOF) or `effects_per_dof`, not both".into()));
+        }
+        if !s.effects_per_dof.is_empty() && s.effects_per_dof.len() != dofs {
+            return Err((format!("[{k}].effects_per_dof"), format!("give one set per DOF ({dofs}), got {}", s.effects_per_dof.len())));
         }
         for (i, fx) in s.effects_per_dof.iter().enumerate() {
             check_effects(fx).map_err(|(f, m)| (format!("[{k}].effects_per_dof[{i}].{f}"), m))?;
@@ -325,10 +329,19 @@ impl Unit {
     /// Every DOF's effects at the current pivot setting, when they are given by setting.
     /// No allocation: the cycle calls it.
     fn effects_at_pivot(&mut self) {
-        if !self.effects_by_pivot.is_empty() {
-            for (i, fx) in self.effects.iter_mut().enumerate() {
-                *fx = crate::pivot_effects::effects_at(&self.effects_by_pivot, self.pivot_mm, i);
+        if self.effects_by_pivot.is_empty() {
+            return;
+        }
+        for i in 0..self.dof() {
+            let now = crate::pivot_effects::effects_at(&self.effects_by_pivot, self.pivot_mm, i);
+            // A loop whose size changes with the setting keeps its state's share of its limit
+            // (the same loop scaled); one that fades out leaves no state behind.
+            let limit = |fx: &EffectsConfig| fx.hysteresis.map_or(0.0, |h| h.limit_nm);
+            let (was, is) = (limit(&self.effects[i]), limit(&now));
+            if was != is {
+                self.state[i].dahl_z = if was > 0.0 { self.state[i].dahl_z * is / was } else { 0.0 };
             }
+            self.effects[i] = now;
         }
     }
 
@@ -491,12 +504,16 @@ impl Unit {
         }
     }
 
-    /// Every DOF's effects by pivot setting (`sim.effects_by_pivot`, checked by
-    /// [`check_effects_by_pivot`]) in place of those [`Unit::new`] gave:
-    /// from the next step on, those at the unit's pivot.
-    pub fn set_effects_by_pivot(&mut self, settings: Vec<PivotEffectsConfig>) {
+    /// Every DOF's effects by pivot setting (`sim.effects_by_pivot`) in place of those
+    /// [`Unit::new`] gave: from now on, those at the unit's pivot.
+    ///
+    /// # Errors
+    /// What [`check_effects_by_pivot`] refuses (the unit is left as it was).
+    pub fn set_effects_by_pivot(&mut self, settings: Vec<PivotEffectsConfig>) -> Result<(), UnitError> {
+        check_effects_by_pivot(&settings, self.dof())?;
         self.effects_by_pivot = settings;
         self.effects_at_pivot();
+        Ok(())
     }
 
     /// DOF `i`'s output position [rad] and velocity [rad/s].

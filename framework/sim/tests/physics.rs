@@ -312,7 +312,7 @@ fn effects_by_pivot_follow_the_pivot_drive() {
     let at = |pivot_mm, viscous_nms_per_rad| PivotEffectsConfig { pivot_mm, effects: EffectsConfig { viscous_nms_per_rad, ..Default::default() }, effects_per_dof: Vec::new() };
     // Drive 1 moves the pivot: 10 mm per rad from 0 mm.
     let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(100.0)], Some((1, 10.0, 0.0)), vec![fixed.clone()], EffectsConfig::default());
-    unit.set_effects_by_pivot(vec![at(10.0, 2.0), at(30.0, 6.0)]);
+    unit.set_effects_by_pivot(vec![at(10.0, 2.0), at(30.0, 6.0)]).unwrap();
     for (pivot_rad, viscous) in [(0.5, 2.0), (1.5, 3.0), (2.5, 5.0), (4.0, 6.0)] {
         unit.start(&[0.0, pivot_rad]);
         let mut loads = [0.0; 2];
@@ -331,7 +331,7 @@ fn effects_by_pivot_follow_the_pivot_drive() {
         PivotEffectsConfig { pivot_mm, effects: EffectsConfig::default(), effects_per_dof: vec![off(a), off(b)] }
     };
     let mut two = Unit::new(vec!["a".into(), "b".into()], vec![0, 1, 2], vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]], vec![Element::Linear(100.0), Element::Linear(100.0)], Some((2, 10.0, 0.0)), vec![fixed.clone(), fixed], EffectsConfig::default());
-    two.set_effects_by_pivot(vec![offsets(10.0, 0.5, 1.0), offsets(30.0, 0.5, 3.0)]);
+    two.set_effects_by_pivot(vec![offsets(10.0, 0.5, 1.0), offsets(30.0, 0.5, 3.0)]).unwrap();
     two.start(&[0.0, 0.0, 2.0]);
     let mut loads = [0.0; 3];
     two.step(&[0.0, 0.0, 2.0], &[0.0; 3], &mut loads, 0.0005, &mut SplitMix64(1));
@@ -344,7 +344,8 @@ fn effects_by_pivot_follow_the_pivot_drive() {
     let every_setting = std::mem::take(&mut shoulder.effects);
     shoulder.effects_by_pivot = vec![at(20.0, 2.0), at(10.0, 6.0)];
     let err = build(&loaded);
-    assert!(err.contains("effects_by_pivot[1].pivot_mm") && err.contains("increasing pivot order"), "{err}");
+    let shoulder = loaded.config.joints.iter().position(|j| j.name == "shoulder").unwrap();
+    assert!(err.contains(&format!("joints[{shoulder}].sim.effects_by_pivot[1].pivot_mm")) && err.contains("increasing pivot order"), "{err}");
     let shoulder = loaded.config.joints.iter_mut().find(|j| j.name == "shoulder").unwrap().sim.as_mut().unwrap();
     shoulder.effects_by_pivot = vec![at(10.0, 2.0), at(20.0, 6.0)];
     shoulder.effects = every_setting;
@@ -363,4 +364,41 @@ fn effects_by_pivot_follow_the_pivot_drive() {
     wrist.effects_by_pivot = vec![offsets(10.0, 0.5, 1.0), PivotEffectsConfig { effects_per_dof: vec![EffectsConfig::default()], ..offsets(30.0, 0.5, 3.0) }];
     let err = build(&loaded);
     assert!(err.contains("effects_by_pivot[1].effects_per_dof") && err.contains("one set per DOF (2), got 1"), "{err}");
+}
+
+/// A Dahl loop by pivot setting, present at one setting and not the next, with the pivot
+/// moving across while the element deflects: the loop's state follows its limit down (the same
+/// loop scaled) and is gone where the loop is; never more than the limit, never NaN.
+#[test]
+fn a_loop_that_fades_out_with_the_pivot_scales_its_state_and_leaves_none() {
+    use jointctl_config::{DahlConfig, PivotEffectsConfig};
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let with_loop = EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 0.4, shape: 1.0 }), ..Default::default() };
+    let settings = vec![
+        PivotEffectsConfig { pivot_mm: 10.0, effects: with_loop, effects_per_dof: Vec::new() },
+        PivotEffectsConfig { pivot_mm: 20.0, effects: EffectsConfig::default(), effects_per_dof: Vec::new() },
+    ];
+    // Drive 1 moves the pivot: 10 mm per rad.
+    let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(0.0)], Some((1, 10.0, 0.0)), vec![fixed], EffectsConfig::default());
+    unit.set_effects_by_pivot(settings).unwrap();
+    unit.start(&[0.0, 1.0]);
+    let (dt, mut loads, mut rng) = (0.0005, [0.0; 2], SplitMix64(1));
+    // Deflect at 1 rad/s at 10 mm until the loop is at its limit.
+    for k in 1..=200 {
+        unit.step(&[k as f64 * 1e-3 * 0.5, 1.0], &[1.0, 0.0], &mut loads, dt, &mut rng);
+    }
+    assert!((unit.torque[0] - 0.4).abs() < 1e-3, "at its limit: {}", unit.torque[0]);
+    // The pivot to 15 mm (the loop at half its size) while holding: the state halves with it.
+    unit.step(&[0.1, 1.5], &[0.0, 0.0], &mut loads, dt, &mut rng);
+    assert!((unit.torque[0] - 0.2).abs() < 1e-3, "half the loop: {}", unit.torque[0]);
+    // At 20 mm the loop is gone, and back at 15 mm it starts from nothing.
+    unit.step(&[0.1, 2.0], &[0.0, 0.0], &mut loads, dt, &mut rng);
+    assert_eq!(unit.torque[0], 0.0);
+    unit.step(&[0.1, 1.5], &[0.0, 0.0], &mut loads, dt, &mut rng);
+    assert_eq!(unit.torque[0], 0.0);
+    // Moving again, bounded by the limit there and finite.
+    for k in 1..=400 {
+        unit.step(&[0.1 - k as f64 * 1e-3 * 0.5, 1.5], &[-1.0, 0.0], &mut loads, dt, &mut rng);
+        assert!(unit.torque[0].is_finite() && unit.torque[0].abs() <= 0.2 + 1e-12, "{}", unit.torque[0]);
+    }
 }

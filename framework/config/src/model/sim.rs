@@ -163,7 +163,7 @@ pub struct JointSimConfig {
 }
 
 /// The plant effects at one pivot setting (`sim.effects_by_pivot`).
-#[derive(Clone, Debug, Deserialize, JsonSchema, Serialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PivotEffectsConfig {
     /// The setting [mm].
@@ -324,7 +324,7 @@ pub enum EnvironmentConfig {
 }
 
 /// Plant effects the observer does not model (all off by default).
-#[derive(Clone, Copy, Debug, Default, Deserialize, JsonSchema, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, JsonSchema, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct EffectsConfig {
     /// Viscous friction in the element [Nms/rad].
@@ -360,7 +360,7 @@ pub struct EffectsConfig {
 }
 
 /// Eq. 3.5: `F = k_a atan(k_b w)`.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ArctanFrictionConfig {
     /// `k_a` [Nm] (the friction torque tends to `k_a pi / 2`).
@@ -370,7 +370,7 @@ pub struct ArctanFrictionConfig {
 }
 
 /// Dahl hysteresis parameters.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct DahlConfig {
     /// Rest stiffness sigma [Nm/rad].
@@ -385,7 +385,7 @@ pub struct DahlConfig {
 }
 
 /// A structural vibration mode.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct VibrationConfig {
     /// Mode frequency [Hz].

@@ -9,7 +9,8 @@ use super::err;
 use super::found::{Found, SettingFound};
 use super::gain::{Gain, Split, Trace, held_out_mask, rmse, squared_errors, trace};
 use super::observer::{observer_torque_of, two_dof};
-use super::simulation::{PlantChoice, PlantEffects, choose_plant, choose_plant_by_pivot, configured_plant};
+use super::plant_choice::{PlantChoice, choose_plant, choose_plant_by_pivot};
+use super::simulation::{PlantEffects, configured_plant};
 use crate::ExperimentError;
 
 /// The extension of one DOF, and its gains.
@@ -129,7 +130,6 @@ pub fn extend_by_pivot(loaded: &LoadedConfig, dof: &str, settings: &[SettingFoun
 /// The observer with `extension` (an empty object: none), the plant `chosen`, and both gains on
 /// the `held_out` samples (and on those of each of `groups`, sample indices at the pivot
 /// settings `pivots`, when given).
-#[allow(clippy::too_many_arguments)]
 fn finish(dof: &str, (j, i, entry): (usize, usize, &jointctl_config::JointConfig), extension: Value, chosen: PlantChoice, data: &Data, (held_out, groups, pivots): (&[bool], &[Vec<usize>], &[f64]), notes: Vec<String>) -> Result<Extension, ExperimentError> {
     let (t, d, p) = (&data.t, &data.deflection, &data.pivot_mm);
     let params_before = entry.params.0.clone();

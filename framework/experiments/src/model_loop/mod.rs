@@ -23,6 +23,7 @@ mod extension;
 mod found;
 mod gain;
 mod observer;
+mod plant_choice;
 mod simulation;
 mod write;
 

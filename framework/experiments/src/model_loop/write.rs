@@ -78,7 +78,7 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     let entry = &loaded.config.joints[ext.joint_index];
     let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
     let (key, effects) = match entry.sim.as_ref() {
-        Some(sim) => ext.plant_effects.config_entry(sim, i)?,
+        Some(sim) => ext.plant_effects.joint_effects(sim, i)?.yaml_entry()?,
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     };
     put(&written.plant, format!("# `sim.{key}` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&effects)?))?;
@@ -94,21 +94,14 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     params.insert("include".into(), "observer.yaml".into());
     joint["params"] = serde_yaml::Value::Mapping(params);
     let effects: serde_yaml::Value = serde_yaml::to_value(&effects).map_err(|e| err(e.to_string()))?;
-    let per_dof = entry.sim.as_ref().is_some_and(|s| !s.effects_per_dof.is_empty());
-    match joint.get_mut("sim") {
-        // A joint with a set of effects per DOF: this DOF's.
-        Some(sim) if per_dof && key == "effects" => match sim.get_mut("effects_per_dof").and_then(|l| l.get_mut(i)) {
-            Some(slot) => *slot = effects,
-            None => return Err(err(format!("{}: joints[{}].sim.effects_per_dof has no entry {i}", config.display(), ext.joint_index))),
-        },
-        // By pivot or one set: that key, the other forms gone.
+    match joint.get_mut("sim").and_then(|sim| sim.as_mapping_mut()) {
+        // The DOF's effects in the form they take (one set, one per DOF, or by setting), the
+        // other forms gone.
         Some(sim) => {
-            if let Some(m) = sim.as_mapping_mut() {
-                for other in ["effects", "effects_per_dof", "effects_by_pivot"].into_iter().filter(|k| *k != key) {
-                    m.remove(other);
-                }
+            for other in ["effects", "effects_per_dof", "effects_by_pivot"].into_iter().filter(|k| *k != key) {
+                sim.remove(other);
             }
-            sim[key] = effects;
+            sim.insert(key.into(), effects);
         }
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     }

@@ -95,7 +95,7 @@ impl SimHal {
                 if s.effects_per_dof.len() != n {
                     return Err(setup(at("effects_per_dof"), format!("give one set per DOF ({n}), got {}", s.effects_per_dof.len())));
                 }
-                if serde_json::to_value(s.effects).ok() != serde_json::to_value(jointctl_config::EffectsConfig::default()).ok() {
+                if s.effects != jointctl_config::EffectsConfig::default() {
                     return Err(setup(at("effects"), "give `effects` (every DOF) or `effects_per_dof`, not both".to_string()));
                 }
                 for (i, fx) in s.effects_per_dof.iter().enumerate() {
@@ -106,12 +106,8 @@ impl SimHal {
                 if pivot.is_none() {
                     return Err(setup(at("effects_by_pivot"), "the joint has no `pivot`: give `effects`".to_string()));
                 }
-                if serde_json::to_value(s.effects).ok() != serde_json::to_value(jointctl_config::EffectsConfig::default()).ok() || !s.effects_per_dof.is_empty() {
+                if s.effects != jointctl_config::EffectsConfig::default() || !s.effects_per_dof.is_empty() {
                     return Err(setup(at("effects_by_pivot"), "give one of `effects` (every DOF), `effects_per_dof` or `effects_by_pivot`".to_string()));
-                }
-                unit::check_effects_by_pivot(&s.effects_by_pivot).map_err(|(f, m)| setup(at(&format!("effects_by_pivot{f}")), m))?;
-                if let Some(k) = s.effects_by_pivot.iter().position(|e| !e.effects_per_dof.is_empty() && e.effects_per_dof.len() != n) {
-                    return Err(setup(at(&format!("effects_by_pivot[{k}].effects_per_dof")), format!("give one set per DOF ({n}), got {}", s.effects_by_pivot[k].effects_per_dof.len())));
                 }
             }
             let mut unit = Unit::new(dof_names, drive_ids, s.matrix.clone(), elements, pivot, environments, s.effects);
@@ -119,7 +115,7 @@ impl SimHal {
                 unit.set_effects(i, *fx);
             }
             if !s.effects_by_pivot.is_empty() {
-                unit.set_effects_by_pivot(s.effects_by_pivot.clone());
+                unit.set_effects_by_pivot(s.effects_by_pivot.clone()).map_err(|(f, m)| setup(at(&format!("effects_by_pivot{f}")), m))?;
             }
             units.push(unit);
         }

@@ -48,7 +48,8 @@ pub struct IdentifyArgs {
     held_out: HeldOutArg,
     /// Write the extension into this folder (with --config): `observer.yaml` (the joint's
     /// complete params with the extended observer: `params: {include: observer.yaml}` alone
-    /// configures it), `plant.yaml` (its `sim.effects`) and `extended.yaml` (the config with both).
+    /// configures it), `plant.yaml` (its simulated effects: `sim.effects`, `effects_per_dof` or
+    /// `effects_by_pivot`) and `extended.yaml` (the config with both).
     #[arg(long, requires = "config")]
     out: Option<PathBuf>,
 }
