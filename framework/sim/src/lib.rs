@@ -16,6 +16,7 @@ pub mod pivot_effects;
 pub mod rng;
 pub mod unit;
 
+mod effect_checks;
 mod latency;
 mod shared;
 mod sim_hal;

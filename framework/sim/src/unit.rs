@@ -11,6 +11,8 @@ use jointctl_models::lever_arm::LeverArm;
 
 use crate::rng::SplitMix64;
 
+pub use crate::effect_checks::{check_effects, check_effects_by_pivot};
+
 /// Section 3.1: the harmonic drive stiffness used for a "rigid" element [Nm/rad].
 pub const HARMONIC_DRIVE_STIFFNESS: f64 = 8.3e4;
 
@@ -133,73 +135,6 @@ fn lever_arm(kind: &str, [l, r, k, q]: [f64; 4], play_rad: f64, negative_scale: 
     Ok(LeverArm { lever_length_m: l, crank_radius_m: r, spring_n_per_m: k, pivot_offset_m: q })
 }
 
-/// Refuses plant effects that are not numbers or not physical (a negative friction, a noise of
-/// negative spread), naming the field: a NaN here would run as a plant that is silently wrong.
-pub fn check_effects(fx: &EffectsConfig) -> Result<(), UnitError> {
-    let mut values = vec![
-        ("viscous_nms_per_rad", fx.viscous_nms_per_rad, true),
-        ("dead_zone_rad", fx.dead_zone_rad, true),
-        ("dead_zone_ramp_rad", fx.dead_zone_ramp_rad, true),
-        ("cubic_nm_per_rad3", fx.cubic_nm_per_rad3, false),
-        ("torque_offset_nm", fx.torque_offset_nm, false),
-        ("torque_noise_nm", fx.torque_noise_nm, true),
-    ];
-    if let Some(f) = fx.arctan_friction {
-        values.extend([("arctan_friction.k_a_nm", f.k_a_nm, true), ("arctan_friction.k_b_s_per_rad", f.k_b_s_per_rad, true)]);
-    }
-    if let Some(h) = fx.hysteresis {
-        values.extend([("hysteresis.sigma_nm_per_rad", h.sigma_nm_per_rad, true), ("hysteresis.limit_nm", h.limit_nm, true)]);
-        if !(h.shape >= 1.0 && h.shape <= jointctl_models::extension::MAX_LOOP_SHAPE) {
-            return Err(("hysteresis.shape".into(), format!("must be between 1 and {}, got {}", jointctl_models::extension::MAX_LOOP_SHAPE, h.shape)));
-        }
-    }
-    if let Some(m) = fx.vibration {
-        values.extend([("vibration.frequency_hz", m.frequency_hz, true), ("vibration.damping_ratio", m.damping_ratio, true), ("vibration.gain", m.gain, false)]);
-        if let Some(k) = m.reference_stiffness_nm_per_rad
-            && !(k.is_finite() && k > 0.0)
-        {
-            return Err(("vibration.reference_stiffness_nm_per_rad".into(), format!("must be a finite number > 0, got {k}")));
-        }
-    }
-    for (name, v, non_negative) in values {
-        if !v.is_finite() || (non_negative && v < 0.0) {
-            return Err((name.into(), format!("must be a finite number{}, got {v}", if non_negative { " >= 0" } else { "" })));
-        }
-    }
-    if fx.dead_zone_ramp_rad > fx.dead_zone_rad {
-        return Err(("dead_zone_ramp_rad".into(), format!("must be at most dead_zone_rad ({}), got {}", fx.dead_zone_rad, fx.dead_zone_ramp_rad)));
-    }
-    if fx.hysteresis.is_some_and(|h| h.limit_nm == 0.0) {
-        return Err(("hysteresis.limit_nm".into(), "must be > 0 (the Dahl state is scaled by it)".into()));
-    }
-    Ok(())
-}
-
-/// Refuses a list of settings out of increasing `pivot_mm` order, one whose effects
-/// [`check_effects`] refuses, or one with both forms or a set per DOF for other than `dofs`
-/// DOFs, naming the entry (`[2].pivot_mm`, `[0].effects.viscous_nms_per_rad`).
-pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig], dofs: usize) -> Result<(), UnitError> {
-    for (k, s) in settings.iter().enumerate() {
-        if !s.pivot_mm.is_finite() {
-            return Err((format!("[{k}].pivot_mm"), format!("must be a finite number, got {}", s.pivot_mm)));
-        }
-        if k > 0 && !(s.pivot_mm > settings[k - 1].pivot_mm) {
-            return Err((format!("[{k}].pivot_mm"), format!("must be above the setting before ({} mm): give the settings in increasing pivot order, got {} mm", settings[k - 1].pivot_mm, s.pivot_mm)));
-        }
-        check_effects(&s.effects).map_err(|(f, m)| (format!("[{k}].effects.{f}"), m))?;
-        if !s.effects_per_dof.is_empty() && s.effects != EffectsConfig::default() {
-            return Err((format!("[{k}].effects"), "give `effects` (every DOF) or `effects_per_dof`, not both".into()));
-        }
-        if !s.effects_per_dof.is_empty() && s.effects_per_dof.len() != dofs {
-            return Err((format!("[{k}].effects_per_dof"), format!("give one set per DOF ({dofs}), got {}", s.effects_per_dof.len())));
-        }
-        for (i, fx) in s.effects_per_dof.iter().enumerate() {
-            check_effects(fx).map_err(|(f, m)| (format!("[{k}].effects_per_dof[{i}].{f}"), m))?;
-        }
-    }
-    Ok(())
-}
-
 /// Most DOFs of one unit.
 pub const MAX_UNIT_DOF: usize = 4;
 
@@ -207,6 +142,8 @@ pub const MAX_UNIT_DOF: usize = 4;
 #[derive(Clone, Copy, Debug, Default)]
 struct EffectState {
     dahl_z: f64,
+    /// The Dahl state's share of its limit while a loop given by setting is off.
+    dahl_share_off: f64,
     mode_y: f64,
     mode_v: f64,
     sensor_noise: f64,
@@ -335,11 +272,16 @@ impl Unit {
         for i in 0..self.dof() {
             let now = crate::pivot_effects::effects_at(&self.effects_by_pivot, self.pivot_mm, i);
             // A loop whose size changes with the setting keeps its state's share of its limit
-            // (the same loop scaled); one that fades out leaves no state behind.
+            // (the same loop scaled); one that fades out keeps that share for when it returns,
+            // as the observer's extension keeps its loop's unit state.
             let limit = |fx: &EffectsConfig| fx.hysteresis.map_or(0.0, |h| h.limit_nm);
             let (was, is) = (limit(&self.effects[i]), limit(&now));
-            if was != is {
-                self.state[i].dahl_z = if was > 0.0 { self.state[i].dahl_z * is / was } else { 0.0 };
+            let st = &mut self.state[i];
+            match (was > 0.0, is > 0.0) {
+                (true, true) => st.dahl_z *= is / was,
+                (true, false) => (st.dahl_share_off, st.dahl_z) = (st.dahl_z / was, 0.0),
+                (false, true) => st.dahl_z = st.dahl_share_off * is,
+                (false, false) => {}
             }
             self.effects[i] = now;
         }
@@ -505,13 +447,19 @@ impl Unit {
     }
 
     /// Every DOF's effects by pivot setting (`sim.effects_by_pivot`) in place of those
-    /// [`Unit::new`] gave: from now on, those at the unit's pivot.
+    /// [`Unit::new`] gave: from now on, those at the unit's pivot, the loops' states from rest.
     ///
     /// # Errors
-    /// What [`check_effects_by_pivot`] refuses (the unit is left as it was).
+    /// A unit without a pivot, or what [`check_effects_by_pivot`] refuses (the unit is left as
+    /// it was).
     pub fn set_effects_by_pivot(&mut self, settings: Vec<PivotEffectsConfig>) -> Result<(), UnitError> {
+        if self.pivot.is_none() {
+            return Err(("effects_by_pivot".into(), "the unit has no pivot: give its effects as one set".into()));
+        }
         check_effects_by_pivot(&settings, self.dof())?;
         self.effects_by_pivot = settings;
+        self.effects = [EffectsConfig::default(); MAX_UNIT_DOF];
+        self.state.iter_mut().for_each(|st| (st.dahl_z, st.dahl_share_off) = (0.0, 0.0));
         self.effects_at_pivot();
         Ok(())
     }

@@ -367,10 +367,11 @@ fn effects_by_pivot_follow_the_pivot_drive() {
 }
 
 /// A Dahl loop by pivot setting, present at one setting and not the next, with the pivot
-/// moving across while the element deflects: the loop's state follows its limit down (the same
-/// loop scaled) and is gone where the loop is; never more than the limit, never NaN.
+/// moving across while the element deflects: the loop's state follows its limit (the same loop
+/// scaled, up as well as down), keeps its share while the loop is off and resumes it (as the
+/// observer's extension does); never more than the limit, never NaN.
 #[test]
-fn a_loop_that_fades_out_with_the_pivot_scales_its_state_and_leaves_none() {
+fn a_loop_that_fades_with_the_pivot_scales_its_state() {
     use jointctl_config::{DahlConfig, PivotEffectsConfig};
     let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
     let with_loop = EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 0.4, shape: 1.0 }), ..Default::default() };
@@ -379,8 +380,8 @@ fn a_loop_that_fades_out_with_the_pivot_scales_its_state_and_leaves_none() {
         PivotEffectsConfig { pivot_mm: 20.0, effects: EffectsConfig::default(), effects_per_dof: Vec::new() },
     ];
     // Drive 1 moves the pivot: 10 mm per rad.
-    let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(0.0)], Some((1, 10.0, 0.0)), vec![fixed], EffectsConfig::default());
-    unit.set_effects_by_pivot(settings).unwrap();
+    let mut unit = Unit::new(vec!["q".into()], vec![0, 1], vec![vec![1.0, 0.0]], vec![Element::Linear(0.0)], Some((1, 10.0, 0.0)), vec![fixed.clone()], EffectsConfig::default());
+    unit.set_effects_by_pivot(settings.clone()).unwrap();
     unit.start(&[0.0, 1.0]);
     let (dt, mut loads, mut rng) = (0.0005, [0.0; 2], SplitMix64(1));
     // Deflect at 1 rad/s at 10 mm until the loop is at its limit.
@@ -388,17 +389,18 @@ fn a_loop_that_fades_out_with_the_pivot_scales_its_state_and_leaves_none() {
         unit.step(&[k as f64 * 1e-3 * 0.5, 1.0], &[1.0, 0.0], &mut loads, dt, &mut rng);
     }
     assert!((unit.torque[0] - 0.4).abs() < 1e-3, "at its limit: {}", unit.torque[0]);
-    // The pivot to 15 mm (the loop at half its size) while holding: the state halves with it.
-    unit.step(&[0.1, 1.5], &[0.0, 0.0], &mut loads, dt, &mut rng);
-    assert!((unit.torque[0] - 0.2).abs() < 1e-3, "half the loop: {}", unit.torque[0]);
-    // At 20 mm the loop is gone, and back at 15 mm it starts from nothing.
-    unit.step(&[0.1, 2.0], &[0.0, 0.0], &mut loads, dt, &mut rng);
-    assert_eq!(unit.torque[0], 0.0);
-    unit.step(&[0.1, 1.5], &[0.0, 0.0], &mut loads, dt, &mut rng);
-    assert_eq!(unit.torque[0], 0.0);
+    // Holding, the pivot to 15 mm (the loop at half its size), back to 10 mm (whole again: a
+    // clamp alone would leave half), to 20 mm (gone) and to 15 mm (its share resumed).
+    for (pivot_rad, expected) in [(1.5, 0.2), (1.0, 0.4), (2.0, 0.0), (1.5, 0.2)] {
+        unit.step(&[0.1, pivot_rad], &[0.0, 0.0], &mut loads, dt, &mut rng);
+        assert!((unit.torque[0] - expected).abs() < 1e-3, "at {} mm: {} Nm", 10.0 * pivot_rad, unit.torque[0]);
+    }
     // Moving again, bounded by the limit there and finite.
     for k in 1..=400 {
         unit.step(&[0.1 - k as f64 * 1e-3 * 0.5, 1.5], &[-1.0, 0.0], &mut loads, dt, &mut rng);
         assert!(unit.torque[0].is_finite() && unit.torque[0].abs() <= 0.2 + 1e-12, "{}", unit.torque[0]);
     }
+    // A unit without a pivot cannot take effects by setting.
+    let mut rigid = Unit::new(vec!["q".into()], vec![0], vec![vec![1.0]], vec![Element::Linear(0.0)], None, vec![fixed], EffectsConfig::default());
+    assert_eq!(rigid.set_effects_by_pivot(settings).unwrap_err().0, "effects_by_pivot");
 }

@@ -94,9 +94,9 @@ fn observer_terms(found: &[Found], notes: &mut Vec<String>) -> Map<String, Value
 /// joint's pivot online (issue 32), and its gain on what each setting's identification held out
 /// (its last `1 - train_fraction` of time, or the window `identify` held out instead; see
 /// [`jointctl_ident::identify::prepare::held_out_window`]). The simulated plant's effects are
-/// given by setting (`sim.effects_by_pivot` at the record's settings): a cause's plant terms
-/// are tried at each setting that named it, on that setting's training part, and taken there as
-/// [`extend`] takes a cause.
+/// given by setting (`sim.effects_by_pivot`, the configured settings and the record's): a
+/// cause's plant terms are tried at each setting that named it, on that setting's training
+/// part, and taken there as [`extend`] takes a cause.
 ///
 /// # Errors
 /// As [`extend`]; also settings not in increasing order.

@@ -4,7 +4,7 @@
 //! record of several.
 
 use jointctl_config::{LoadedConfig, PivotEffectsConfig};
-use jointctl_ident::csv::Data;
+use jointctl_ident::csv::{Data, SETTING_GAP_MM};
 use jointctl_ident::identify::significance::{BlockTest, block_test};
 use serde_json::Value;
 
@@ -92,8 +92,8 @@ pub(super) fn choose_plant(loaded: &LoadedConfig, dof: &str, base: PlantEffects,
 }
 
 /// One set of effects per pivot setting (`sim.effects_by_pivot`): the configured settings and
-/// the record's, each of the latter with the configured effects there (the same plant, so the
-/// replay starts where the configured one is). At each of the record's settings, each cause
+/// the record's ([`with_settings`]: the same plant, so the replay starts where the configured
+/// one is). At each of the record's settings (or the configured one it is), each cause
 /// named there is tried in turn with its plant terms at that setting, on that setting's training
 /// part. Each setting is its own experiment: blocks of different settings differ in gain, and
 /// one block test over all of them reads that spread as noise (three settings whose replays each
@@ -121,7 +121,7 @@ pub(super) fn choose_plant_by_pivot(loaded: &LoadedConfig, dof: &str, base: Plan
                 continue;
             }
             let PlantEffects::ByPivot(mut candidate) = current.0.clone() else { return Err(err("effects by setting expected")) };
-            if let Some(entry) = candidate.iter_mut().find(|(p, _)| *p == s.pivot_mm) {
+            if let Some(entry) = candidate.iter_mut().filter(|(p, _)| same_setting(*p, s.pivot_mm)).min_by(|a, b| (a.0 - s.pivot_mm).abs().total_cmp(&(b.0 - s.pivot_mm).abs())) {
                 entry.1 = merge_plant(&entry.1, &f.plant);
             }
             match trials.try_candidate(&mut current, PlantEffects::ByPivot(candidate), &training)? {
@@ -136,15 +136,22 @@ pub(super) fn choose_plant_by_pivot(loaded: &LoadedConfig, dof: &str, base: Plan
     Ok(PlantChoice { effects: current.0, causes, before, after: current.1 })
 }
 
-/// `base` by setting: its own settings (none for one set) and `pivots` [mm] beside them, each
-/// of the latter with `base`'s effects there, in increasing order: the same plant as `base`.
+/// Two pivot settings [mm] within [`SETTING_GAP_MM`] of each other are one (as the record's
+/// holds are): a record identified again on an extended config finds its settings a hair off.
+fn same_setting(a: f64, b: f64) -> bool {
+    (a - b).abs() <= SETTING_GAP_MM
+}
+
+/// `base` by setting: its own settings (none for one set) and those of `pivots` [mm] that are
+/// not one of them, each with `base`'s effects there, in increasing order: the same plant as
+/// `base`.
 pub(super) fn with_settings(base: &PlantEffects, pivots: &[f64]) -> Result<Vec<(f64, Value)>, ExperimentError> {
     let mut list = match base {
         PlantEffects::One(_) => Vec::new(),
         PlantEffects::ByPivot(list) => list.clone(),
     };
     for &pivot_mm in pivots {
-        if !list.iter().any(|(p, _)| *p == pivot_mm) {
+        if !list.iter().any(|(p, _)| same_setting(*p, pivot_mm)) {
             let there = match base {
                 PlantEffects::One(v) => v.clone(),
                 PlantEffects::ByPivot(configured) => at_setting(configured, pivot_mm)?,

@@ -51,11 +51,11 @@ impl PlantEffects {
     pub(super) fn joint_effects(&self, sim: &JointSimConfig, i: usize) -> Result<JointEffects, ExperimentError> {
         let parse = |v: &Value, at: &str| serde_json::from_value::<EffectsConfig>(v.clone()).map_err(|e| err(format!("{at}: {e}")));
         let n = sim.matrix.len();
-        let sets = |own: EffectsConfig, pivot_mm: Option<f64>| (0..n).map(|d| if d == i { own } else { configured(sim, d, pivot_mm) }).collect::<Vec<_>>();
+        let sets = |own: EffectsConfig, pivot_mm: Option<f64>| (0..n).map(|d| if d == i { Ok(own) } else { configured(sim, d, pivot_mm) }).collect::<Result<Vec<_>, ExperimentError>>();
         Ok(match self {
             PlantEffects::One(_) if !sim.effects_by_pivot.is_empty() => return Err(err("one set of effects for a DOF of a joint whose effects are by pivot setting")),
             PlantEffects::One(v) if n <= 1 => JointEffects::Every(parse(v, "effects")?),
-            PlantEffects::One(v) => JointEffects::PerDof(sets(parse(v, &format!("effects_per_dof[{i}]"))?, None)),
+            PlantEffects::One(v) => JointEffects::PerDof(sets(parse(v, &format!("effects_per_dof[{i}]"))?, None)?),
             PlantEffects::ByPivot(list) => JointEffects::ByPivot(
                 list.iter()
                     .enumerate()
@@ -63,7 +63,7 @@ impl PlantEffects {
                         let own = parse(v, &format!("effects_by_pivot[{k}]"))?;
                         Ok(match n <= 1 {
                             true => PivotEffectsConfig { pivot_mm: *pivot_mm, effects: own, effects_per_dof: Vec::new() },
-                            false => PivotEffectsConfig { pivot_mm: *pivot_mm, effects: EffectsConfig::default(), effects_per_dof: sets(own, Some(*pivot_mm)) },
+                            false => PivotEffectsConfig { pivot_mm: *pivot_mm, effects: EffectsConfig::default(), effects_per_dof: sets(own, Some(*pivot_mm))? },
                         })
                     })
                     .collect::<Result<_, ExperimentError>>()?,
@@ -120,12 +120,15 @@ impl JointEffects {
     }
 }
 
-/// DOF `d`'s configured effects (at `pivot_mm` when they are by setting; at the first setting
-/// without one).
-fn configured(sim: &JointSimConfig, d: usize, pivot_mm: Option<f64>) -> EffectsConfig {
-    match sim.effects_by_pivot.first() {
-        Some(first) => jointctl_sim::pivot_effects::effects_at(&sim.effects_by_pivot, pivot_mm.unwrap_or(first.pivot_mm), d),
-        None => sim.effects_per_dof.get(d).copied().unwrap_or(sim.effects),
+/// DOF `d`'s configured effects (at `pivot_mm` when they are by setting).
+///
+/// # Errors
+/// Effects by setting and no setting to take them at.
+fn configured(sim: &JointSimConfig, d: usize, pivot_mm: Option<f64>) -> Result<EffectsConfig, ExperimentError> {
+    match (sim.effects_by_pivot.is_empty(), pivot_mm) {
+        (true, _) => Ok(sim.effects_per_dof.get(d).copied().unwrap_or(sim.effects)),
+        (false, Some(p)) => Ok(jointctl_sim::pivot_effects::effects_at(&sim.effects_by_pivot, p, d)),
+        (false, None) => Err(err("the joint's effects are by pivot setting: give the setting")),
     }
 }
 
@@ -136,7 +139,7 @@ pub(super) fn configured_plant(entry: &JointConfig, i: usize) -> Result<PlantEff
     if !sim.effects_by_pivot.is_empty() {
         return Ok(PlantEffects::ByPivot(sim.effects_by_pivot.iter().map(|s| Ok((s.pivot_mm, to_value(&s.of_dof(i))?))).collect::<Result<_, ExperimentError>>()?));
     }
-    Ok(PlantEffects::One(to_value(&configured(sim, i, None))?))
+    Ok(PlantEffects::One(to_value(&configured(sim, i, None)?)?))
 }
 
 /// The simulated torque sensor's reading of `dof` replayed along the recorded motion, with the

@@ -55,8 +55,9 @@ fn the_held_out_window_like_the_rest_is_identifys_held_out_part() {
 
 /// A DOF's effects put back into its joint: on the wrist (two DOFs, one set for both in the
 /// reference arm) q7's go to q7's own set and q6 keeps the configured one, one set or by
-/// setting; what is written loads back and builds the simulated arm; a joint already by setting
-/// keeps its settings, and q6's set between them is the configured one there.
+/// setting; the list by setting builds the simulated arm; a joint already by setting gives q7's
+/// list as configured, and q6's set at a setting between two configured ones is interpolated
+/// there.
 #[test]
 fn a_dofs_effects_go_to_its_own_set_and_the_other_dofs_keep_theirs() {
     use super::simulation::{PlantEffects, configured_plant};
@@ -84,22 +85,27 @@ fn a_dofs_effects_go_to_its_own_set_and_the_other_dofs_keep_theirs() {
     let entry = &loaded.config.joints[j];
     let only = |torque_offset_nm| serde_json::to_value(EffectsConfig { torque_offset_nm, ..Default::default() }).unwrap();
     assert_eq!(configured_plant(entry, 1).unwrap(), PlantEffects::ByPivot(vec![(10.0, only(0.5)), (30.0, only(1.5))]));
-    let sim = loaded.config.joints[j].sim.as_ref().unwrap();
+    let sim = loaded.config.joints[j].sim.as_mut().unwrap();
+    sim.effects_by_pivot[1].effects_per_dof[0].torque_offset_nm = configured.torque_offset_nm + 1.0;
     let super::simulation::JointEffects::ByPivot(entries) = PlantEffects::ByPivot(vec![(20.0, offset(2.0))]).joint_effects(sim, 1).unwrap() else { panic!("by setting") };
-    assert_eq!(entries[0].effects_per_dof[0], configured);
+    assert_eq!(entries[0].effects_per_dof[0], EffectsConfig { torque_offset_nm: configured.torque_offset_nm + 0.5, ..configured });
     assert_eq!(entries[0].effects_per_dof[1].torque_offset_nm, 2.0);
+    // One set for a DOF of a joint by setting says what it lacks.
+    assert!(PlantEffects::One(offset(0.5)).joint_effects(sim, 1).is_err());
 }
 
 /// Finding: a record's settings replaced a joint's configured settings, so the settings it did
 /// not visit were lost, and the simulation's gain mixed that resampling with the causes. Pass:
-/// the configured settings stay, the record's are added with the configured effects there.
+/// the configured settings stay, the record's are added with the configured effects there, and
+/// one within 1 mm of a configured setting is that setting.
 #[test]
 fn a_records_settings_join_the_configured_ones() {
     use super::plant_choice::with_settings;
     use super::simulation::PlantEffects;
     let offset = |nm: f64| serde_json::json!({"torque_offset_nm": nm});
     let configured = PlantEffects::ByPivot(vec![(0.0, offset(0.0)), (40.0, offset(4.0))]);
-    let list = with_settings(&configured, &[10.0, 40.0]).unwrap();
+    // 40.4 mm is the configured 40 mm setting (a record's hold a hair off it).
+    let list = with_settings(&configured, &[10.0, 40.4]).unwrap();
     let got: Vec<(f64, f64)> = list.iter().map(|(p, v)| (*p, v["torque_offset_nm"].as_f64().unwrap())).collect();
     assert_eq!(got, vec![(0.0, 0.0), (10.0, 1.0), (40.0, 4.0)]);
     let one = with_settings(&PlantEffects::One(offset(0.5)), &[20.0, 10.0]).unwrap();

@@ -15,7 +15,7 @@ use crate::ExperimentError;
 pub struct Written {
     /// The joint's complete params (`params: {include: ...}` alone configures it).
     pub observer: PathBuf,
-    /// The joint's `sim.effects` (or `sim.effects_by_pivot`).
+    /// The joint's `sim.effects`, `sim.effects_per_dof` or `sim.effects_by_pivot`.
     pub plant: PathBuf,
     /// The config with both in place (and the loop's `hal.sim` values).
     pub extended: PathBuf,
@@ -54,7 +54,7 @@ fn absolute_paths(doc: &mut serde_yaml::Value, config: &Path) {
 }
 
 /// Writes `dir/observer.yaml`, `dir/plant.yaml` and `dir/extended.yaml` (the config with the
-/// joint's params `{include: observer.yaml}`, its `sim.effects` (or `sim.effects_by_pivot`) those of `plant.yaml` and the
+/// joint's params `{include: observer.yaml}`, its `sim.effects`, `effects_per_dof` or `effects_by_pivot` those of `plant.yaml` and the
 /// `hal.sim` keys of `loop_sim`, the causes in the loop, also written to `dir/loop.yaml` when
 /// there are any), and checks that the last loads.
 ///
