@@ -111,3 +111,33 @@ fn a_records_settings_join_the_configured_ones() {
     let one = with_settings(&PlantEffects::One(offset(0.5)), &[20.0, 10.0]).unwrap();
     assert_eq!(one, vec![(10.0, offset(0.5)), (20.0, offset(0.5))]);
 }
+
+/// Finding: on a joint whose simulated effects are by pivot setting, a record at one setting had
+/// a cause's plant terms tried at every configured setting alike. Pass: on the shoulder with
+/// effects at 0 and 45 mm, a record at 20 mm whose sensor reads 0.5 Nm high gets the offset at
+/// 20 mm alone, and the configured settings keep theirs.
+#[test]
+fn a_record_at_one_setting_extends_that_setting_alone() {
+    use super::found::Found;
+    use super::simulation::{PlantEffects, simulated_torque};
+    use jointctl_config::{EffectsConfig, PivotEffectsConfig};
+    let mut loaded = jointctl_config::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sherpa_arm.yaml")).unwrap();
+    let j = loaded.config.joints.iter().position(|j| j.name == "shoulder").unwrap();
+    let sim = loaded.config.joints[j].sim.as_mut().unwrap();
+    let at = |pivot_mm| PivotEffectsConfig { pivot_mm, effects: EffectsConfig::default(), effects_per_dof: Vec::new() };
+    (sim.effects, sim.effects_by_pivot) = (EffectsConfig::default(), vec![at(0.0), at(45.0)]);
+    let t: Vec<f64> = (0..4000).map(|k| k as f64 * 0.005).collect();
+    let d: Vec<f64> = t.iter().map(|t| 0.02 * (std::f64::consts::TAU * 0.25 * t).sin()).collect();
+    let pivot = vec![20.0; t.len()];
+    let high = PlantEffects::ByPivot(vec![(0.0, serde_json::json!({"torque_offset_nm": 0.5})), (45.0, serde_json::json!({"torque_offset_nm": 0.5}))]);
+    let read = simulated_torque(&loaded, "q2", &high, &t, &d, &pivot).unwrap();
+    let torque: Vec<f64> = read.iter().enumerate().map(|(k, tau)| tau + 0.01 * ((k * 7919 % 1000) as f64 / 500.0 - 1.0)).collect();
+    let mut data = jointctl_ident::csv::Data::from_columns(t, d, torque);
+    data.pivot_mm = pivot;
+    let found = [Found { effect: "sensor_offset".into(), plant: serde_json::from_value(serde_json::json!({"torque_offset_nm": 0.5})).unwrap(), observer: Map::new() }];
+    let ext = super::extend(&loaded, "q2", &found, &data, super::Split::of(&jointctl_ident::identify::IdentifyOptions::default())).unwrap();
+    let PlantEffects::ByPivot(list) = &ext.plant_effects else { panic!("{:?}", ext.plant_effects) };
+    let offsets: Vec<(f64, f64)> = list.iter().map(|(p, v)| (*p, v["torque_offset_nm"].as_f64().unwrap_or(0.0))).collect();
+    assert_eq!(offsets, vec![(0.0, 0.0), (20.0, 0.5), (45.0, 0.0)], "{:?}", ext.notes);
+    assert!(ext.simulation.relative() > 0.9, "{:?}", ext.simulation);
+}
