@@ -2,7 +2,7 @@
 //! the extended observer, the causes whose plant terms improve the simulation, and both gains.
 
 use jointctl_config::LoadedConfig;
-use jointctl_ident::csv::{Data, SETTING_GAP_MM};
+use jointctl_ident::csv::Data;
 use serde_json::{Map, Value};
 
 use super::err;
@@ -76,29 +76,18 @@ pub fn extend(loaded: &LoadedConfig, dof: &str, found: &[Found], data: &Data, sp
     let extension = observer_terms(found, &mut notes);
     let held_out = held_out_mask(&data.t, &data.deflection, split);
     let base = configured_plant(entry, i)?;
-    // A joint whose effects are by setting, and a record at one setting: the causes' terms go
-    // to that setting alone (the record says nothing of the others).
-    let one_setting = match base {
-        PlantEffects::ByPivot(_) => one_pivot_setting(&data.pivot_mm),
-        PlantEffects::One(_) => None,
-    };
-    let plant = match one_setting {
-        Some(pivot_mm) => {
-            let setting = SettingFound { pivot_mm, samples: (0..data.len()).collect(), found: found.to_vec() };
+    // A joint whose effects are by setting, and a record at one setting (a hold, as `identify`
+    // finds the settings of a record): the causes' terms go to that setting alone (the record
+    // says nothing of the others).
+    let settings = if matches!(base, PlantEffects::ByPivot(_)) { data.pivot_settings(1) } else { Vec::new() };
+    let plant = match settings.as_slice() {
+        [(pivot_mm, samples)] => {
+            let setting = SettingFound { pivot_mm: *pivot_mm, samples: samples.clone(), found: found.to_vec() };
             choose_plant_by_pivot(loaded, dof, base, std::slice::from_ref(&setting), data, &held_out, &mut notes)?
         }
-        None => choose_plant(loaded, dof, base, found, data, &held_out, &mut notes)?,
+        _ => choose_plant(loaded, dof, base, found, data, &held_out, &mut notes)?,
     };
     finish(dof, (j, i, entry), Value::Object(extension), plant, data, (&held_out, &[], &[]), notes)
-}
-
-/// The record's one pivot setting [mm]: the median of its readings when they all lie within
-/// [`SETTING_GAP_MM`] (none without readings).
-fn one_pivot_setting(pivot_mm: &[f64]) -> Option<f64> {
-    let mut p: Vec<f64> = pivot_mm.iter().copied().filter(|p| p.is_finite()).collect();
-    p.sort_by(f64::total_cmp);
-    let (first, last) = (*p.first()?, *p.last()?);
-    (last - first <= SETTING_GAP_MM).then(|| p[p.len() / 2])
 }
 
 /// Every cause's observer terms together (a note for each cause without one).

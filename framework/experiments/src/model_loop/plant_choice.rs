@@ -38,18 +38,13 @@ impl Trials<'_> {
         simulated_torque(self.loaded, self.dof, effects, &self.data.t, &self.data.deflection, &self.data.pivot_mm)
     }
 
-    /// `candidate` against `current` (the effects and their replay) on the samples of `mask`:
-    /// `current` becomes it when its replay is significantly better there, else the test says
-    /// why not.
-    fn try_candidate(&self, current: &mut (PlantEffects, Vec<f64>), candidate: PlantEffects, mask: &[bool]) -> Result<Option<BlockTest>, ExperimentError> {
-        let tried = self.replay(&candidate)?;
-        let (a, b) = (squared_errors(&self.data.torque, &current.1, mask, true), squared_errors(&self.data.torque, &tried, mask, true));
+    /// `candidate`'s replay against the `current` one on the samples of `mask`: the replay when
+    /// it is significantly better there, else the test that says why not.
+    fn try_candidate(&self, current: &[f64], candidate: &PlantEffects, mask: &[bool]) -> Result<Result<Vec<f64>, BlockTest>, ExperimentError> {
+        let tried = self.replay(candidate)?;
+        let (a, b) = (squared_errors(&self.data.torque, current, mask, true), squared_errors(&self.data.torque, &tried, mask, true));
         let test = block_test(&a.iter().zip(&b).map(|(a, b)| a - b).collect::<Vec<f64>>());
-        if test.significant() {
-            *current = (candidate, tried);
-            return Ok(None);
-        }
-        Ok(Some(test))
+        Ok(if test.significant() { Ok(tried) } else { Err(test) })
     }
 }
 
@@ -72,23 +67,26 @@ pub(super) fn choose_plant(loaded: &LoadedConfig, dof: &str, base: PlantEffects,
     let trials = Trials { loaded, dof, data };
     let before = trials.replay(&base)?;
     let training: Vec<bool> = held_out.iter().map(|h| !h).collect();
-    let mut current = (base, before.clone());
+    let (mut effects, mut replayed) = (base, before.clone());
     let mut causes = Vec::new();
     for f in found {
         if f.plant.is_empty() {
             notes.push(no_term(&f.effect, ""));
             continue;
         }
-        let candidate = match &current.0 {
+        let candidate = match &effects {
             PlantEffects::One(v) => PlantEffects::One(merge_plant(v, &f.plant)),
             PlantEffects::ByPivot(list) => PlantEffects::ByPivot(list.iter().map(|(pivot, v)| (*pivot, merge_plant(v, &f.plant))).collect()),
         };
-        match trials.try_candidate(&mut current, candidate, &training)? {
-            None => causes.push(f.effect.clone()),
-            Some(test) => notes.push(left_out(&f.effect, "", &test)),
+        match trials.try_candidate(&replayed, &candidate, &training)? {
+            Ok(tried) => {
+                (effects, replayed) = (candidate, tried);
+                causes.push(f.effect.clone());
+            }
+            Err(test) => notes.push(left_out(&f.effect, "", &test)),
         }
     }
-    Ok(PlantChoice { effects: current.0, causes, before, after: current.1 })
+    Ok(PlantChoice { effects, causes, before, after: replayed })
 }
 
 /// One set of effects per pivot setting (`sim.effects_by_pivot`): the configured settings and
@@ -108,8 +106,8 @@ pub(super) fn choose_plant_by_pivot(loaded: &LoadedConfig, dof: &str, base: Plan
         notes.push("the simulated joint has no `pivot`: its effects cannot follow a setting, and the simulation stays as configured".into());
         return Ok(PlantChoice { effects: base, causes: Vec::new(), after: before.clone(), before });
     }
-    let start = PlantEffects::ByPivot(with_settings(&base, &settings.iter().map(|s| s.pivot_mm).collect::<Vec<_>>())?);
-    let mut current = (start.clone(), trials.replay(&start)?);
+    let mut list = with_settings(&base, &settings.iter().map(|s| s.pivot_mm).collect::<Vec<_>>())?;
+    let mut replayed = trials.replay(&PlantEffects::ByPivot(list.clone()))?;
     let mut causes = Vec::new();
     for s in settings {
         let mut training = vec![false; data.len()];
@@ -120,20 +118,23 @@ pub(super) fn choose_plant_by_pivot(loaded: &LoadedConfig, dof: &str, base: Plan
                 notes.push(no_term(&f.effect, &at));
                 continue;
             }
-            let PlantEffects::ByPivot(mut candidate) = current.0.clone() else { return Err(err("effects by setting expected")) };
+            let mut candidate = list.clone();
             if let Some(entry) = candidate.iter_mut().filter(|(p, _)| same_setting(*p, s.pivot_mm)).min_by(|a, b| (a.0 - s.pivot_mm).abs().total_cmp(&(b.0 - s.pivot_mm).abs())) {
                 entry.1 = merge_plant(&entry.1, &f.plant);
             }
-            match trials.try_candidate(&mut current, PlantEffects::ByPivot(candidate), &training)? {
-                None => causes.push(format!("{}{at}", f.effect)),
-                Some(test) => notes.push(left_out(&f.effect, &at, &test)),
+            match trials.try_candidate(&replayed, &PlantEffects::ByPivot(candidate.clone()), &training)? {
+                Ok(tried) => {
+                    (list, replayed) = (candidate, tried);
+                    causes.push(format!("{}{at}", f.effect));
+                }
+                Err(test) => notes.push(left_out(&f.effect, &at, &test)),
             }
         }
     }
     if causes.is_empty() {
         return Ok(PlantChoice { effects: base, causes, after: before.clone(), before });
     }
-    Ok(PlantChoice { effects: current.0, causes, before, after: current.1 })
+    Ok(PlantChoice { effects: PlantEffects::ByPivot(list), causes, before, after: replayed })
 }
 
 /// Two pivot settings [mm] within [`SETTING_GAP_MM`] of each other are one (as the record's
