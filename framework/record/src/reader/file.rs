@@ -55,11 +55,20 @@ pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMu
             }
             Err(source) if is_cut(&bytes) && read > 0 => {
                 warn_cut(path, read, &source);
-                break;
+                return Ok(());
             }
             Err(source) if is_cut(&bytes) => return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source }),
             Err(source) => return Err(mcap_error(source)),
         }
+    }
+    // A cut that falls between two records ends the stream without an error: the file is still
+    // cut (no footer, no closing magic), and said so as any other cut.
+    if is_cut(&bytes) {
+        let source = mcap::McapError::BadFooter;
+        if read == 0 {
+            return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source });
+        }
+        warn_cut(path, read, &source);
     }
     Ok(())
 }
