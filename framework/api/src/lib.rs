@@ -8,6 +8,7 @@
 //! Units are SI throughout (rad, rad/s, Nm, Nm/rad, s) and stated in field names; the VSA pivot
 //! position is in mm, as the thesis gives it (`pivot_mm`).
 
+#![warn(missing_docs)]
 pub mod abi;
 mod command;
 #[cfg(feature = "params")]

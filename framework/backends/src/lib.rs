@@ -6,6 +6,7 @@
 //! the runtime does not link the simulator through it, and adding a backend touches this crate
 //! and the config's `HalBackend` only.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 use jointctl_config::{ConfigErrors, HalBackend, LoadedConfig};

@@ -15,6 +15,7 @@
 //! Foxglove and Zenoh send the recording's JSON ([`jointctl_record::messages`]): SI units in the field names,
 //! `null` for a value that is not known.
 
+#![warn(missing_docs)]
 #![deny(unsafe_code)]
 
 pub mod foxglove;

@@ -10,6 +10,7 @@
 //! assert_eq!(err.0[0].to_string(), "demo.yaml:4:54: joints[0].limits.position_rad: lower limit 1 must be below upper limit -1");
 //! ```
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod error;

@@ -7,6 +7,7 @@
 //! logic (hold, position, torque, impedance, ...) lives in `jointctl-modes`, so a plugin built on
 //! these blocks pulls in neither it nor a schema generator.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod reading_track;

@@ -13,6 +13,7 @@
 //! - [`tracking`]: torque tracking (chapter 5): references (step, sine, cosine, a frequency
 //!   sweep) at several stiffness settings, with NRMSE and phase lag, in two scenarios.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod characterise;

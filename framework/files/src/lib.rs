@@ -8,6 +8,7 @@
 //! reading a byte (the open itself does not block: `O_NONBLOCK`), and read at most the size
 //! stated for its [`FileKind`].
 
+#![warn(missing_docs)]
 use std::io::Read;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};

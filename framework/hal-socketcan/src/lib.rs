@@ -31,6 +31,7 @@
 //! [`Hal::reset_faults`]: jointctl_hal::Hal::reset_faults
 //! [`Hal::stop`]: jointctl_hal::Hal::stop
 
+#![warn(missing_docs)]
 mod can;
 mod encoder;
 mod hardware;

@@ -12,6 +12,7 @@
 //! buses (`jointctl-hal-socketcan`: SocketCAN + spidev); `jointctl-backends` picks the one a
 //! config asks for.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod budget;

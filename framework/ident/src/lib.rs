@@ -6,6 +6,7 @@
 //! - [`identify`]: given measured data, what the joint model gets wrong, which physical cause
 //!   explains it, the extended model, and the gain on held-out data.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod csv;

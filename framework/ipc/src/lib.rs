@@ -16,6 +16,7 @@
 //! one arm builds its iceoryx2 config with [`iceoryx2_config_in`] rather than looking for a config
 //! file relative to its working directory, so that all of them meet in one domain.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod access;

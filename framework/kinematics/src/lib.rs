@@ -32,6 +32,7 @@
 //! assert!((tau[0] + 2.0 * 9.81 * 0.5 * 0.5).abs() < 1e-12);
 //! ```
 
+#![warn(missing_docs)]
 pub mod appendix_c;
 mod chain;
 mod dynamics;

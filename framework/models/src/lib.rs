@@ -14,6 +14,7 @@
 //!
 //! Everything evaluated in a control cycle is allocation-free.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod assumed;

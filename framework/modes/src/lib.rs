@@ -6,6 +6,7 @@
 //! `controller:` settings ([`ControllerConfig`]). The runtime runs it; plugins never see it: they
 //! get a joint set-point and map it onto their motors with `jointctl-control`'s blocks.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod controller_config;

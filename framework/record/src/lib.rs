@@ -7,6 +7,7 @@
 //! is in the file's `jointctl` metadata; the arm's YAML (and the files it includes) are attached.
 //! Lost samples are found from the cycle and sequence numbers and reported, never hidden.
 
+#![warn(missing_docs)]
 #![deny(unsafe_code)]
 
 pub mod feed;

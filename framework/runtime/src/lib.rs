@@ -5,6 +5,7 @@
 //! fixed-rate observe → control → actuate loop ([`runner::run`]) with its state in iceoryx2
 //! shared memory. It knows the `Hal` trait only: no simulator, no bus driver.
 
+#![warn(missing_docs)]
 pub mod arm;
 pub mod commands;
 pub mod doctor;

@@ -8,6 +8,7 @@
 //! (section 2.3), all through the same conditioner as the robot. Seeded and stepped by the
 //! runtime, so a run is repeatable and can go faster than real time.
 
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod elmo;

@@ -1,3 +1,5 @@
+//! The simulator's random numbers: SplitMix64, seeded, so that a run repeats exactly.
+
 /// SplitMix64 with a Box-Muller normal: seeded, allocation-free.
 #[derive(Clone, Debug)]
 pub struct SplitMix64(pub u64);

@@ -25,10 +25,15 @@ use super::{IdentifyError, Report, search};
 /// point samples, eq. 3.5's `k_b` each way [s/rad], and the held-out evidence.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct BinAverages {
+    /// Training BIC of the baseline's fit with each sample read as its interval's average.
     pub bic_bins: f64,
+    /// Training BIC of the same fit with each sample read as a point sample.
     pub bic_points: f64,
+    /// Eq. 3.5's `k_b` fitted on the bin reading [s/rad].
     pub k_b_bins_s_per_rad: f64,
+    /// Eq. 3.5's `k_b` fitted on the point reading [s/rad].
     pub k_b_points_s_per_rad: f64,
+    /// The held-out evidence for the reading taken, in words.
     pub evidence: String,
 }
 
@@ -73,9 +78,13 @@ pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared
 /// cubic, of the whole model identified on each reading (`identify`'s second pass).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NarrowRate {
+    /// The window the rate was read over instead of the usual one.
     pub window: RateWindow,
+    /// Training BIC read over that window.
     pub bic_narrow: f64,
+    /// Training BIC read over the usual window.
     pub bic_usual: f64,
+    /// The held-out evidence for the reading taken, in words.
     pub evidence: String,
 }
 
