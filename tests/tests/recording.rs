@@ -340,8 +340,17 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
     // Finding: a cut between two records (the start of a chunk; a kill lands there when the
     // recorder has just written one) ended the reader's stream without an error, so the cut was
     // not said, and a cut right after the header read as a file without the joint.
-    let between_records = mcap_record_starts(&bytes).into_iter().filter(|&(_, opcode)| opcode == MCAP_CHUNK).map(|(at, _)| at);
-    for (k, at) in random.chain(between_records).enumerate() {
+    let records = mcap_record_starts(&bytes);
+    let chunks: Vec<usize> = records.iter().filter(|&&(_, opcode)| opcode == MCAP_CHUNK).map(|&(at, _)| at).collect();
+    assert!(chunks.len() >= 2, "a 3 s recording has several chunks: {records:?}");
+    // A cut after the data section's end (in the summary the recorder writes last) loses no
+    // message: each sample is read, and the cut is said without "the rest is lost".
+    let data_end = records.iter().position(|&(_, opcode)| opcode == MCAP_DATA_END).expect("a complete file has its DataEnd record");
+    let summary = &records[data_end + 1..];
+    assert!(!summary.is_empty(), "a summary follows the data: {records:?}");
+    // Its first record, one in its middle and the footer.
+    let in_summary: Vec<usize> = [0, summary.len() / 2, summary.len() - 1].iter().map(|&i| summary[i].0).collect();
+    for (k, at) in random.chain(chunks).chain(in_summary.iter().copied()).enumerate() {
         let cut = scratch("record-cut-out").join(format!("cut{k}.mcap"));
         std::fs::write(&cut, &bytes[..at]).unwrap();
         // `identify` on the same cut: the part the reader gives, or exit 1 naming the file and
@@ -352,6 +361,10 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
         assert!(matches!(ident.status.code(), Some(0 | 1)) && !ident_err.contains("not a readable MCAP"), "cut at byte {at}: {:?} {ident_err}", ident.status);
         assert!(ident.status.success() || ident_err.contains(&format!("error: {}", cut.display())), "cut at byte {at}: {ident_err}");
         assert_eq!(ident_err.matches("the recording was cut short").count(), 1, "cut at byte {at}: {ident_err}");
+        if in_summary.contains(&at) {
+            assert!(!ident_err.contains("the rest is lost"), "cut at byte {at}, after the data: {ident_err}");
+            assert_eq!(jointctl_record::reader::joint_series(&cut, "q2").map(|s| s.t_s.len()).ok(), Some(whole), "cut at byte {at}, after the data");
+        }
         match jointctl_record::reader::joint_series(&cut, "q2") {
             Ok(s) => assert!(s.t_s.len() <= whole && s.t_s.windows(2).all(|w| w[1] > w[0]), "cut at byte {at} of {}", bytes.len()),
             // Cut before the first chunk was complete: said so, not "not a readable MCAP file".
@@ -374,9 +387,12 @@ fn a_recording_cut_short_is_read_up_to_its_last_complete_chunk() {
 
 /// MCAP's chunk record (the specification's opcode 0x06).
 const MCAP_CHUNK: u8 = 0x06;
+/// MCAP's data-end record (0x0F): the data section ends, the summary follows.
+const MCAP_DATA_END: u8 = 0x0F;
 
-/// Where each top-level record of an MCAP file starts, and its opcode: after the 8-byte magic,
-/// each record is an opcode byte, a little-endian u64 length and that many bytes.
+/// Where each top-level record of a complete MCAP file starts, and its opcode: after the 8-byte
+/// magic, each record is an opcode byte, a little-endian u64 length and that many bytes, up to
+/// the closing 8-byte magic.
 fn mcap_record_starts(bytes: &[u8]) -> Vec<(usize, u8)> {
     let mut starts = Vec::new();
     let mut at = 8;
@@ -385,6 +401,7 @@ fn mcap_record_starts(bytes: &[u8]) -> Vec<(usize, u8)> {
         starts.push((at, bytes[at]));
         at += 9 + len;
     }
+    assert_eq!(at, bytes.len() - 8, "the records end at the closing magic: {starts:?}");
     starts
 }
 

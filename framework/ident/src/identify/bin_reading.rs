@@ -27,7 +27,7 @@ use super::{IdentifyError, Report, search};
 pub struct BinAverages {
     /// Training BIC of the baseline's fit with each sample read as its interval's average.
     pub bic_bins: f64,
-    /// Training BIC of the same fit with each sample read as a point sample.
+    /// Training BIC of the baseline's friction searched and fitted again on the point reading.
     pub bic_points: f64,
     /// Eq. 3.5's `k_b` fitted on the bin reading [s/rad].
     pub k_b_bins_s_per_rad: f64,

@@ -62,13 +62,16 @@ pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMu
         }
     }
     // A cut that falls between two records ends the stream without an error: the file is still
-    // cut (no footer, no closing magic), and said so as any other cut.
+    // cut (no footer, no closing magic), and said so as any other cut. One after the data
+    // section's end (in the summary, which the recorder writes last) lost no message.
     if is_cut(&bytes) {
-        let source = mcap::McapError::BadFooter;
-        if read == 0 {
-            return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source });
+        if data_section_complete(&bytes) {
+            warn_summary_cut(path, read);
+        } else if read == 0 {
+            return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source: mcap::McapError::BadFooter });
+        } else {
+            warn_cut(path, read, &mcap::McapError::BadFooter);
         }
-        warn_cut(path, read, &source);
     }
     Ok(())
 }
@@ -78,17 +81,46 @@ pub(super) fn is_cut(bytes: &[u8]) -> bool {
     bytes.len() < 2 * mcap::MAGIC.len() || !bytes.ends_with(mcap::MAGIC)
 }
 
-/// Says once per file that a recording was cut short and what is read of it.
-pub(super) fn warn_cut(path: &Path, messages: u64, source: &mcap::McapError) {
+/// Whether this is the first warning about `path` (each file's cut is said once).
+fn first_warning(path: &Path) -> bool {
     static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
     let mut warned = WARNED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    if !warned.iter().any(|p| p == path) {
+    let first = !warned.iter().any(|p| p == path);
+    if first {
         warned.push(path.to_path_buf());
+    }
+    first
+}
+
+/// Says once per file that a recording was cut short and what is read of it.
+pub(super) fn warn_cut(path: &Path, messages: u64, source: &mcap::McapError) {
+    if first_warning(path) {
         tracing::warn!(
             "{}: the recording was cut short (its writer was killed, the machine stopped or the disk filled: {source}); \
              reading the {messages} messages of its complete chunks, the rest is lost",
             path.display()
         );
+    }
+}
+
+/// Says once per file that a recording was cut short after its data: no message is lost, the
+/// summary that indexes them is.
+fn warn_summary_cut(path: &Path, messages: u64) {
+    if first_warning(path) {
+        tracing::warn!(
+            "{}: the recording was cut short after its data, in the summary written last (its writer was killed, the machine stopped or the disk filled); \
+             every message is read ({messages}), by a scan instead of the summary's index",
+            path.display()
+        );
+    }
+}
+
+/// Whether a cut file holds its data section's end (MCAP's DataEnd record): it was cut in the
+/// summary after it, with every message written.
+fn data_section_complete(bytes: &[u8]) -> bool {
+    match mcap::read::LinearReader::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into()) {
+        Ok(reader) => reader.map_while(Result::ok).any(|r| matches!(r, mcap::records::Record::DataEnd(_))),
+        Err(_) => false,
     }
 }
 

@@ -71,8 +71,8 @@ pub enum ReadError {
         /// The reason.
         source: mcap::McapError,
     },
-    /// A recording cut short before its first chunk was complete: no message is left to read.
-    #[error("{}: the recording was cut short after {bytes} bytes, before its first complete chunk, so no message can be read: {source}", .file.display())]
+    /// A recording cut short before its first chunk of messages was complete (the chunks before it hold the schemas and channels): no message is left to read.
+    #[error("{}: the recording was cut short after {bytes} bytes, before its first complete chunk of messages, so no message can be read: {source}", .file.display())]
     CutBeforeData {
         /// The file.
         file: PathBuf,
