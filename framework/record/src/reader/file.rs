@@ -40,6 +40,7 @@ pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMu
     // its last complete chunk.
     let stream = mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into()).map_err(mcap_error)?;
     let mut read = 0u64;
+    let mut stopped = None;
     for message in stream {
         match message {
             Ok(m) => {
@@ -53,25 +54,26 @@ pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMu
                     each(source, encoding, m.sequence, &m.data)?;
                 }
             }
-            Err(source) if is_cut(&bytes) && read > 0 => {
-                warn_cut(path, read, &source);
-                return Ok(());
+            Err(source) if is_cut(&bytes) => {
+                stopped = Some(source);
+                break;
             }
-            Err(source) if is_cut(&bytes) => return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source }),
             Err(source) => return Err(mcap_error(source)),
         }
     }
-    // A cut that falls between two records ends the stream without an error: the file is still
-    // cut (no footer, no closing magic), and said so as any other cut. One after the data
-    // section's end (in the summary, which the recorder writes last) lost no message.
+    // A cut file stops inside a record, or between two (the stream then ends without an error:
+    // no footer, no closing magic); either is said. One after the data section's end (in the
+    // summary, which the recorder writes last) lost no message.
     if is_cut(&bytes) {
-        if data_section_complete(&bytes) {
+        if stopped.is_none() && data_section_complete(&bytes) {
             warn_summary_cut(path, read);
-        } else if read == 0 {
-            return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source: mcap::McapError::BadFooter });
-        } else {
-            warn_cut(path, read, &mcap::McapError::BadFooter);
+            return Ok(());
         }
+        let source = stopped.unwrap_or(mcap::McapError::BadFooter);
+        if read == 0 {
+            return Err(ReadError::CutBeforeData { file: path.into(), bytes: bytes.len() as u64, source });
+        }
+        warn_cut(path, read, &source);
     }
     Ok(())
 }
