@@ -193,3 +193,20 @@ fn the_extended_observer_forgets_its_state_over_a_dropout_as_the_offline_scoring
     println!("online vs offline observed torque, worst over the record with a {gap}-cycle gap: {worst:.3e} Nm");
     assert!(worst < 1e-9, "online and offline observers disagree by {worst} Nm");
 }
+
+/// `jointctl check` names each joint's model effects, in the simulated plant and in the
+/// observer, by the one typed list `identify` reports under (`jointctl_models::effect`).
+#[test]
+fn check_names_the_model_effects_of_the_plant_and_the_observer() {
+    let ext = "{hysteresis: {sigma_nm_per_rad: 300.0, limit_nm: 1.2}, viscous_nms_per_rad: 2.0, torque_scale: 0.98}";
+    let config = sherpa_with("ext-check", &arm_name("ext-check"), &[
+        Edit::Set("joints[q4].sim.effects", serde_yaml::from_str("{dead_zone_rad: 0.002, torque_offset_nm: 0.3, torque_noise_nm: 0.01}").unwrap()),
+        Edit::Set("joints[q4].params.model_extension", serde_yaml::from_str(ext).unwrap()),
+    ]);
+    let out = std::process::Command::new(jointctl_tests::jointctl()).arg("check").arg(&config).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    let q4 = text.lines().skip_while(|l| !l.trim_start().starts_with("q4 ")).nth(1).unwrap_or_default();
+    assert_eq!(q4.trim(), "model effects in the simulated plant: sensor_offset, dead_zone; in the observer: viscous_friction, stiffness_error, hysteresis", "{text}");
+}
+

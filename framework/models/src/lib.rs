@@ -11,6 +11,8 @@
 //!   (eq. 3.8), and the arctan friction of eq. 3.5;
 //! - [`fit`]: least-squares polynomial fits, as the thesis' Matlab step.
 //! - [`play`]: the dead zone of an element, ideal or with a contact that stiffens over a band.
+//! - [`effect`]: the effects beyond the thesis' model, one typed list shared by `identify`, the
+//!   observer's extension and the simulated plant.
 //!
 //! Everything evaluated in a control cycle is allocation-free.
 
@@ -19,6 +21,7 @@
 
 pub mod assumed;
 pub mod characteristic;
+pub mod effect;
 pub mod extension;
 pub mod fit;
 pub mod lever_arm;

@@ -1,7 +1,38 @@
 //! Plant effects refused before they run: not numbers, not physical, or by pivot setting out of
-//! order, each error naming its field (`(field, message)`, as [`crate::unit::UnitError`]).
+//! order, each error naming its field (`(field, message)`, as [`crate::unit::UnitError`]); and
+//! which model effects a simulated joint carries ([`effects_in`], [`joint_effects`]).
 
-use jointctl_config::{EffectsConfig, PivotEffectsConfig};
+use jointctl_config::{EffectsConfig, JointSimConfig, PivotEffectsConfig};
+use jointctl_models::effect::Effect;
+
+/// The model effects `fx` carries, in [`Effect::ALL`]'s order: those with one of their
+/// [`Effect::plant_keys`] set (a number other than zero, a table). The keys are looked up by
+/// name in `sim.effects` as it is written, so an effect added to the typed list needs no code
+/// here.
+///
+/// ```
+/// use jointctl_config::EffectsConfig;
+/// use jointctl_models::effect::Effect;
+/// let fx = EffectsConfig { viscous_nms_per_rad: 0.2, torque_noise_nm: 0.01, ..Default::default() };
+/// assert_eq!(jointctl_sim::effect_checks::effects_in(&fx), [Effect::ViscousFriction]);
+/// ```
+pub fn effects_in(fx: &EffectsConfig) -> Vec<Effect> {
+    let Ok(serde_json::Value::Object(keys)) = serde_json::to_value(fx) else { return Vec::new() };
+    let set = |key: &&str| match keys.get(*key) {
+        Some(serde_json::Value::Number(n)) => n.as_f64() != Some(0.0),
+        Some(serde_json::Value::Object(_)) => true,
+        _ => false,
+    };
+    Effect::ALL.into_iter().filter(|e| e.plant_keys().iter().any(set)).collect()
+}
+
+/// The model effects a simulated joint carries anywhere: its `effects`, each DOF's, and each
+/// pivot setting's (in [`Effect::ALL`]'s order, each once).
+pub fn joint_effects(sim: &JointSimConfig) -> Vec<Effect> {
+    let by_pivot = sim.effects_by_pivot.iter().flat_map(|s| std::iter::once(&s.effects).chain(&s.effects_per_dof));
+    let all: Vec<Effect> = std::iter::once(&sim.effects).chain(&sim.effects_per_dof).chain(by_pivot).flat_map(effects_in).collect();
+    Effect::ALL.into_iter().filter(|e| all.contains(e)).collect()
+}
 
 /// Refuses plant effects that are not numbers or not physical (a negative friction, a noise of
 /// negative spread), naming the field: a NaN here would run as a plant that is silently wrong.
@@ -68,4 +99,30 @@ pub fn check_effects_by_pivot(settings: &[PivotEffectsConfig], dofs: usize) -> R
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every plant key of the typed list is a field of `sim.effects`: a key it does not have
+    /// would be refused when the model loop writes what `identify` found into the plant.
+    #[test]
+    fn every_plant_key_is_a_field_of_sim_effects() {
+        let serde_json::Value::Object(fields) = serde_json::to_value(EffectsConfig::default()).unwrap() else { panic!("sim.effects is a table") };
+        for e in Effect::ALL {
+            for key in e.plant_keys() {
+                assert!(fields.contains_key(*key), "{e}: `{key}` is not a field of sim.effects");
+            }
+        }
+    }
+
+    #[test]
+    fn a_joints_effects_are_gathered_from_every_form() {
+        let fx = |yaml: &str| -> EffectsConfig { serde_yaml::from_str(yaml).unwrap() };
+        let sim: JointSimConfig = serde_yaml::from_str("drives: [a]\nmatrix: [[1.0]]\neffects: {dead_zone_rad: 0.01}\neffects_by_pivot: [{pivot_mm: 10, effects: {hysteresis: {sigma_nm_per_rad: 100, limit_nm: 0.5}}}]").unwrap();
+        assert_eq!(joint_effects(&sim), [Effect::Hysteresis, Effect::DeadZone]);
+        assert_eq!(effects_in(&fx("{arctan_friction: {k_a_nm: 0.1, k_b_s_per_rad: 20}, torque_offset_nm: -0.3}")), [Effect::CoulombFriction, Effect::SensorOffset]);
+        assert!(effects_in(&fx("{torque_noise_nm: 0.01}")).is_empty());
+    }
 }

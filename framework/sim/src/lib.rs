@@ -11,13 +11,13 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod effect_checks;
 pub mod elmo;
 pub mod free_arm;
 pub mod pivot_effects;
 pub mod rng;
 pub mod unit;
 
-mod effect_checks;
 mod latency;
 mod shared;
 mod sim_hal;

@@ -21,6 +21,7 @@ mod experiment;
 mod gravity;
 mod ident;
 mod inspect;
+mod joint_effects;
 mod record;
 mod remote;
 mod replay;
@@ -282,6 +283,9 @@ fn main() -> ExitCode {
                     for slot in &arm.slots {
                         let dofs: Vec<_> = slot.dofs().map(|i| arm.dof_names[i].as_str()).collect();
                         outln!("  {:<10} plugin {:<14} DOF {}", slot.name, slot.plugin, dofs.join(", "));
+                        if let Some(line) = joint_effects::line(&loaded, &slot.name) {
+                            outln!("  {:<10} {line}", "");
+                        }
                     }
                     let budgets = jointctl_hal::budget::budgets(&loaded.config);
                     if !budgets.is_empty() {

@@ -2,6 +2,8 @@
 //! friction rather than a spring. Depends on nothing else of `identify`, so that the design, the
 //! search and the report can all use it.
 
+use jointctl_models::effect::Effect;
+
 /// The model the baseline starts from.
 pub enum BaselineModel {
     /// A polynomial through zero of this order, fitted on the data (the thesis' structure).
@@ -21,7 +23,7 @@ pub const NO_SPRING_SHARE: f64 = 0.2;
 /// The causes that, in a record read as a joint's friction ([`reads_as_friction`]), describe the
 /// friction itself and are reported with it, not named: a Dahl loop (its pre-sliding), a
 /// Stribeck dip, a lag (see `NoSpring`).
-pub(crate) const FRICTION_PARTS: [&str; 3] = ["hysteresis", "stribeck_friction", "time_delay"];
+pub(crate) const FRICTION_PARTS: [Effect; 3] = [Effect::Hysteresis, Effect::StribeckFriction, Effect::TimeDelay];
 
 /// Whether a record is read as a joint's friction (no spring): the baseline is fitted on the data
 /// (a configured joint has its spring) and a line in the deflection explains less than

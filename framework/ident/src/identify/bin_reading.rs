@@ -13,6 +13,7 @@
 //! sample either side ([`choose_rate_window`], on the baseline), or through a local cubic
 //! ([`through_cubic_if_better`], on the whole model of a second pass).
 
+use jointctl_models::effect::Effect;
 use serde::Serialize;
 
 use super::causes::CandidateCause;
@@ -39,7 +40,7 @@ pub struct BinAverages {
 
 /// The baseline's friction term searched on `p`.
 pub(crate) fn baseline_friction(model: &Model, all: &[&dyn CandidateCause], p: &Prepared) -> Result<Term, IdentifyError> {
-    let friction = all.iter().position(|c| c.name() == "coulomb_friction").ok_or(IdentifyError::Degenerate { model: "baseline" })?;
+    let friction = all.iter().position(|c| c.effect() == Some(Effect::CoulombFriction)).ok_or(IdentifyError::Degenerate { model: "baseline" })?;
     let base = Spec::default();
     let mut residuals = Default::default();
     let ctx = select::context(model, &base, p, &mut residuals);

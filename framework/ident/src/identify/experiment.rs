@@ -5,6 +5,7 @@
 //! (`jointctl sim record --experiment`, or the same references on the arm), never beyond the
 //! recorded amplitude or peak rate: what the arm already did is known to be safe.
 
+use jointctl_models::effect::Effect;
 use serde::{Deserialize, Serialize};
 
 /// A named cause and a candidate that explains the training part about as well in its place:
@@ -23,23 +24,10 @@ pub struct Confound {
     pub evidence: String,
 }
 
-/// What a cause's torque depends on, for choosing what to vary.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Dependence {
-    /// The deflection rate (viscous friction, eq. 3.5's arctan; a small delay acts as
-    /// `-k d dphi/dt`): a slower motion along the same path changes it.
-    Rate,
-    /// The deflection itself (a cubic, a play, a scale error, an offset): the same at any rate,
-    /// different at another amplitude.
-    Deflection,
-    /// The path since the last reversal (a Dahl hysteresis): its loop keeps its width at any
-    /// rate, and its shape against the deflection changes with the amplitude.
-    Stroke,
-    /// Time (a mode, a ring): stays at its frequency whatever the excitation's.
-    Time,
-}
+pub use jointctl_models::effect::Dependence;
 
-/// What `effect` (one of the vocabulary's names) depends on; `None` for a name not in it.
+/// What `effect` (one of the vocabulary's names) depends on ([`Effect::dependence`]); `None` for
+/// a name not in it (a user's own cause).
 ///
 /// ```
 /// use jointctl_ident::identify::experiment::{Dependence, dependence};
@@ -48,13 +36,7 @@ pub enum Dependence {
 /// assert_eq!(dependence("not_a_cause"), None);
 /// ```
 pub fn dependence(effect: &str) -> Option<Dependence> {
-    Some(match effect {
-        "viscous_friction" | "coulomb_friction" | "stribeck_friction" | "time_delay" => Dependence::Rate,
-        "dead_zone" | "stiffness_nonlinearity" | "stiffness_error" | "sensor_offset" => Dependence::Deflection,
-        "hysteresis" => Dependence::Stroke,
-        "vibration" | "speed_vibration" | "reversal_ringing" => Dependence::Time,
-        _ => return None,
-    })
+    Effect::from_name(effect).map(Effect::dependence)
 }
 
 /// One sine of the flow source, run from rest.

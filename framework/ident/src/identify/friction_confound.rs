@@ -9,6 +9,8 @@
 //! proposals stay within what the arm did. Where the held-out part went faster, it decides
 //! ([`decide_on_held_out`]).
 
+use jointctl_models::effect::Effect;
+
 use super::design::{Model, Spec, Term};
 use super::numeric::format_value;
 use super::prepare::Prepared;
@@ -37,8 +39,8 @@ pub(crate) struct FrictionConfound {
 /// viscous friction is in `spec`, and a viscous friction in the arctan's place explains the
 /// (decimated) training part about as well.
 pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepared) -> Option<FrictionConfound> {
-    let position = |name: &str| model.causes.iter().position(|c| c.name() == name);
-    let (friction, viscous) = (position("coulomb_friction")?, position("viscous_friction")?);
+    let position = |effect: Effect| model.causes.iter().position(|c| c.effect() == Some(effect));
+    let (friction, viscous) = (position(Effect::CoulombFriction)?, position(Effect::ViscousFriction)?);
     if spec.term(viscous).is_some() {
         return None;
     }

@@ -18,6 +18,7 @@
 
 use std::collections::BTreeMap;
 
+use jointctl_models::effect::Effect;
 use serde::Serialize;
 
 use crate::csv::Data;
@@ -516,7 +517,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     // time delay: the torque follows the motion through the friction's sign at the reversals,
     // where the friction's own transition acts, and the two cannot be told apart there.
     let no_spring = reads_as_friction(p.spring_share, &opts.baseline).then(|| {
-        let mut take = |effect: &str| found.iter().position(|c| c.effect == effect).map(|i| found.remove(i).params);
+        let mut take = |effect: Effect| found.iter().position(|c| c.effect == effect.name()).map(|i| found.remove(i).params);
         let [presliding, stribeck, lag] = FRICTION_PARTS.map(&mut take);
         let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {}", format_value(*v))).collect::<Vec<_>>().join(", ");
         let note = format!(

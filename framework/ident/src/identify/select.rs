@@ -474,7 +474,7 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
 fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, jacobian: &Jacobian, cause: usize, p: &Prepared) -> Option<String> {
     // In a friction record a loop, a dip or a lag is part of the friction, not named (and its
     // level trades off with the baseline's arctan there, which widens its error).
-    if reads_as_friction(p.spring_share, model.baseline) && FRICTION_PARTS.contains(&model.causes[cause].name()) {
+    if reads_as_friction(p.spring_share, model.baseline) && model.causes[cause].effect().is_some_and(|e| FRICTION_PARTS.contains(&e)) {
         return None;
     }
     let i = spec.terms.iter().position(|t| t.cause == cause)?;
@@ -496,6 +496,7 @@ fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, jacobian: &Jacob
 mod tests {
     use super::*;
     use crate::identify::baseline::BaselineModel;
+    use jointctl_models::effect::Effect;
     use crate::identify::causes::{self, CandidateCause};
     use crate::identify::prepare::{self, HeldOut as Window};
 
@@ -551,7 +552,7 @@ mod tests {
         let builtin = causes::builtin();
         let all: Vec<&dyn CandidateCause> = builtin.iter().map(|c| c.as_ref()).collect();
         let baseline = BaselineModel::Polynomial(1);
-        let offset = all.iter().position(|c| c.name() == "sensor_offset").unwrap();
+        let offset = all.iter().position(|c| c.effect() == Some(Effect::SensorOffset)).unwrap();
         let spec = Spec { terms: vec![Term { cause: offset, params: Vec::new(), grids: Vec::new(), baseline: false }] };
         let wander = |t: f64| 0.05 * (std::f64::consts::TAU * t / 6.0).sin();
         let untold = |extra: &dyn Fn(f64) -> f64| {
@@ -578,8 +579,8 @@ mod tests {
         let all: Vec<&dyn CandidateCause> = builtin.iter().map(|c| c.as_ref()).collect();
         let baseline = BaselineModel::Polynomial(1);
         let model = Model { baseline: &baseline, centre_rad: 0.0, causes: &all, held_out: Default::default(), columns: Default::default() };
-        let index = |name: &str| all.iter().position(|c| c.name() == name).unwrap();
-        let (viscous, delay) = (index("viscous_friction"), index("time_delay"));
+        let index = |effect: Effect| all.iter().position(|c| c.effect() == Some(effect)).unwrap();
+        let (viscous, delay) = (index(Effect::ViscousFriction), index(Effect::TimeDelay));
         let term = |cause: usize, params: Vec<f64>| Term { cause, params, grids: Vec::new(), baseline: false };
         let spec = Spec { terms: vec![term(viscous, Vec::new()), term(delay, vec![0.005])] };
         // Without the delay the damping is negative: the lag under another name.

@@ -1,10 +1,12 @@
 //! The extension's parameters: the terms (and their specs), the terms per pivot setting, a
 //! joint plugin's `model_extension` params with their defaults, and each term's range check.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
+
+use crate::effect::Effect;
 
 /// Eq. 3.5 friction `k_a atan(k_b w)`.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionSpec {
     /// `k_a` [Nm].
@@ -18,7 +20,7 @@ pub struct FrictionSpec {
 pub const MAX_LOOP_SHAPE: f64 = 8.0;
 
 /// Dahl hysteresis.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DahlSpec {
     /// Rest stiffness sigma [Nm/rad].
@@ -40,7 +42,7 @@ pub struct DahlSpec {
 
 /// The terms of the sum in the module docs, without the rate estimate's settings: what changes
 /// from one pivot setting to the next.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Terms {
     /// The characteristic's scale `s`.
@@ -85,6 +87,22 @@ impl Default for Terms {
 }
 
 impl Terms {
+    /// The model effects these terms carry, in [`Effect::ALL`]'s order: those with one of their
+    /// [`Effect::observer_keys`] off its default (a scale other than 1, a number other than 0, a
+    /// table). The keys are looked up by name, so an effect added to the typed list needs no code
+    /// here.
+    ///
+    /// ```
+    /// use jointctl_models::{effect::Effect, extension::Terms};
+    /// let t = Terms { torque_scale: 0.98, viscous_nms_per_rad: 0.3, ..Default::default() };
+    /// assert_eq!(t.effects(), [Effect::ViscousFriction, Effect::StiffnessError]);
+    /// assert!(Terms::default().effects().is_empty());
+    /// ```
+    pub fn effects(&self) -> Vec<Effect> {
+        let (Ok(serde_json::Value::Object(these)), Ok(serde_json::Value::Object(defaults))) = (serde_json::to_value(self), serde_json::to_value(Terms::default())) else { return Vec::new() };
+        Effect::ALL.into_iter().filter(|e| e.observer_keys().iter().any(|k| these.get(*k) != defaults.get(*k))).collect()
+    }
+
     /// Each parameter in its range, the error naming the field under `prefix`.
     pub(super) fn check(&self, prefix: &str) -> Result<(), ExtensionError> {
         let bad = |field: &str, message: String| Err(ExtensionError { field: format!("{prefix}{field}"), message });
@@ -131,7 +149,7 @@ impl Terms {
 }
 
 /// The terms identified at one characterised pivot setting.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PivotTerms {
     /// The setting [mm] (the characteristic's `pivot_mm`).
@@ -147,7 +165,7 @@ pub struct PivotTerms {
 /// let s: jointctl_models::extension::ExtensionSpec = serde_json::from_str(r#"{"hysteresis": {"sigma_nm_per_rad": 300, "limit_nm": 1.2}}"#).unwrap();
 /// assert_eq!(s.torque_scale, 1.0);
 /// ```
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExtensionSpec {
     /// The characteristic's scale `s` (`stiffness_error`: 1 + the relative error).
@@ -206,6 +224,13 @@ pub struct ExtensionSpec {
 }
 
 impl ExtensionSpec {
+    /// The model effects the observer models, at any pivot setting ([`Terms::effects`] of the
+    /// flat terms and of each setting's), in [`Effect::ALL`]'s order, each once.
+    pub fn effects(&self) -> Vec<Effect> {
+        let all: Vec<Effect> = std::iter::once(self.terms()).chain(self.by_pivot.iter().map(|s| s.terms)).flat_map(|t| t.effects()).collect();
+        Effect::ALL.into_iter().filter(|e| all.contains(e)).collect()
+    }
+
     /// The flat terms (those a joint without pivot settings uses).
     pub fn terms(&self) -> Terms {
         Terms {

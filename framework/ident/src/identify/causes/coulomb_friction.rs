@@ -5,13 +5,17 @@ use serde_json::json;
 
 use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
 use crate::identify::numeric::interval_mean;
+use jointctl_models::effect::Effect;
 
 /// `+ k_a atan(k_b dphi/dt)` [Nm], `k_a >= 0`.
 pub struct CoulombFriction;
 
 impl CandidateCause for CoulombFriction {
     fn name(&self) -> &str {
-        "coulomb_friction"
+        Effect::CoulombFriction.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::CoulombFriction)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["friction_ka_nm".into()]

@@ -6,6 +6,7 @@ use serde_json::json;
 use jointctl_models::play::elastic_deflection;
 
 use super::{CandidateCause, Fragments, Inputs, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use jointctl_models::effect::Effect;
 
 /// The elastic model of `dz(phi, w, r)`: `sgn(phi) max(|phi| - w, 0)` beyond `w + r`, nothing
 /// within `w - r`, the quadratic blend between ([`jointctl_models::play::elastic_deflection`]).
@@ -29,7 +30,10 @@ fn ramp_rad(p: &[f64]) -> f64 {
 
 impl CandidateCause for DeadZone {
     fn name(&self) -> &str {
-        "dead_zone"
+        Effect::DeadZone.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::DeadZone)
     }
     fn coefficient_names(&self) -> Vec<String> {
         Vec::new()

@@ -4,6 +4,7 @@
 use serde_json::json;
 
 use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use jointctl_models::effect::Effect;
 
 /// `+ F_c * u`, `u` the unit Dahl state; deflection scale `lambda = F_c / sigma` [rad].
 pub struct Hysteresis;
@@ -109,7 +110,10 @@ fn smallest_scale(c: &SearchContext) -> f64 {
 
 impl CandidateCause for Hysteresis {
     fn name(&self) -> &str {
-        "hysteresis"
+        Effect::Hysteresis.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::Hysteresis)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["limit_nm".into()]

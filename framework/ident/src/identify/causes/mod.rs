@@ -1,8 +1,10 @@
 //! The vocabulary of causes: one module per physical effect, each implementing
-//! [`CandidateCause`]. Adding a cause means adding one file here and one line in [`builtin`].
+//! [`CandidateCause`] for one [`Effect`]. Adding a cause means a variant of [`Effect`] (its name,
+//! keys and dependence), one file here and one arm in [`cause_of`].
 
 use std::collections::BTreeMap;
 
+use jointctl_models::effect::Effect;
 use serde_json::{Map, Value};
 
 pub use super::numeric::log_grid;
@@ -36,22 +38,35 @@ pub(crate) use time_delay::{delay_unit, delay_units_in};
 pub use vibration::Vibration;
 pub use viscous_friction::ViscousFriction;
 
-/// The built-in vocabulary, in the order candidates are tried (ties go to the earlier one).
+/// The built-in vocabulary: a cause for each model effect, in [`Effect::ALL`]'s order (the order
+/// candidates are tried; ties go to the earlier one).
 pub fn builtin() -> Vec<Box<dyn CandidateCause>> {
-    vec![
-        Box::new(ViscousFriction),
-        Box::new(CoulombFriction),
-        Box::new(StribeckFriction),
-        Box::new(SensorOffset),
-        Box::new(StiffnessError),
-        Box::new(StiffnessNonlinearity),
-        Box::new(Hysteresis),
-        Box::new(DeadZone),
-        Box::new(TimeDelay),
-        Box::new(Vibration),
-        Box::new(SpeedVibration),
-        Box::new(ReversalRinging),
-    ]
+    Effect::ALL.into_iter().map(cause_of).collect()
+}
+
+/// The built-in cause of `effect`: where a new effect's cause is registered (the compiler asks
+/// for an arm for every variant of [`Effect`]).
+///
+/// ```
+/// use jointctl_ident::identify::causes::cause_of;
+/// use jointctl_models::effect::Effect;
+/// assert_eq!(cause_of(Effect::DeadZone).effect(), Some(Effect::DeadZone));
+/// ```
+pub fn cause_of(effect: Effect) -> Box<dyn CandidateCause> {
+    match effect {
+        Effect::ViscousFriction => Box::new(ViscousFriction),
+        Effect::CoulombFriction => Box::new(CoulombFriction),
+        Effect::StribeckFriction => Box::new(StribeckFriction),
+        Effect::SensorOffset => Box::new(SensorOffset),
+        Effect::StiffnessError => Box::new(StiffnessError),
+        Effect::StiffnessNonlinearity => Box::new(StiffnessNonlinearity),
+        Effect::Hysteresis => Box::new(Hysteresis),
+        Effect::DeadZone => Box::new(DeadZone),
+        Effect::TimeDelay => Box::new(TimeDelay),
+        Effect::Vibration => Box::new(Vibration),
+        Effect::SpeedVibration => Box::new(SpeedVibration),
+        Effect::ReversalRinging => Box::new(ReversalRinging),
+    }
 }
 
 /// Scales of the experiment, for a candidate's parameter grid.
@@ -303,6 +318,12 @@ pub struct Fragments {
 pub trait CandidateCause: Send + Sync {
     /// The name reported in the `effect` field.
     fn name(&self) -> &str;
+    /// The model effect a built-in cause stands for (`None`, the default, for a user's own
+    /// cause): its keys in the observer's and the plant's configuration and its dependence
+    /// are the effect's, and [`CandidateCause::fragments`] writes those keys only.
+    fn effect(&self) -> Option<Effect> {
+        None
+    }
     /// Names of the linear coefficients, SI units in the names.
     fn coefficient_names(&self) -> Vec<String>;
     /// The non-linear parameters and their grids (none by default). A parameter with an empty
@@ -415,5 +436,23 @@ mod tests {
         // A record of one repetition carries no column.
         assert_eq!(samples(&[]), None);
     }
-}
 
+    /// Each built-in cause stands for its own effect, under the effect's name, and writes the
+    /// effect's keys only: the observer and the plant load those keys (the model loop merges
+    /// them into `model_extension` and `sim.effects`), and a key the effect does not list would
+    /// be a term no one has checked is there.
+    #[test]
+    fn every_cause_writes_its_effects_keys_only() {
+        for effect in Effect::ALL {
+            let cause = cause_of(effect);
+            assert_eq!((cause.effect(), cause.name()), (Some(effect), effect.name()));
+            let coefficients = vec![0.5; cause.coefficient_names().len()];
+            let fragments = cause.fragments(&[1e-3, 1e-3, 1.0, 1.0], &coefficients);
+            for (keys, allowed, whose) in [(&fragments.observer, effect.observer_keys(), "observer"), (&fragments.plant, effect.plant_keys(), "plant")] {
+                for key in keys.keys() {
+                    assert!(allowed.contains(&key.as_str()), "{effect} writes `{key}` for the {whose}, not among its keys {allowed:?}");
+                }
+            }
+        }
+    }
+}

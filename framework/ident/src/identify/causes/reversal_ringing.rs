@@ -10,6 +10,7 @@
 
 use super::{CandidateCause, Parameter, Refine, Samples, SearchContext, log_grid, reversals};
 use crate::identify::spectrum;
+use jointctl_models::effect::Effect;
 
 /// Rings after velocity reversals: frequency [Hz] and damping ratio [-] shared, amplitude and
 /// phase per ring. It writes no fragment yet: the simulation's mode (`sim.effects.vibration`) is
@@ -36,7 +37,10 @@ const RING_DAMPING: f64 = 0.2;
 
 impl CandidateCause for ReversalRinging {
     fn name(&self) -> &str {
-        "reversal_ringing"
+        Effect::ReversalRinging.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::ReversalRinging)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["sin_nm".into(), "cos_nm".into()]

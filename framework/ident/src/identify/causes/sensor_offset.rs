@@ -3,13 +3,17 @@
 use serde_json::json;
 
 use super::{CandidateCause, Fragments, Samples, object};
+use jointctl_models::effect::Effect;
 
 /// `+ c` [Nm].
 pub struct SensorOffset;
 
 impl CandidateCause for SensorOffset {
     fn name(&self) -> &str {
-        "sensor_offset"
+        Effect::SensorOffset.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::SensorOffset)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["offset_nm".into()]

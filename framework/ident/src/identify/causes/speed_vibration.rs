@@ -4,13 +4,17 @@
 
 use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
 use crate::identify::spectrum;
+use jointctl_models::effect::Effect;
 
 /// `+ |dphi/dt| (a sin(2 pi f t) + b cos(2 pi f t))` [Nm].
 pub struct SpeedVibration;
 
 impl CandidateCause for SpeedVibration {
     fn name(&self) -> &str {
-        "speed_vibration"
+        Effect::SpeedVibration.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::SpeedVibration)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["sin_nms_per_rad".into(), "cos_nms_per_rad".into()]

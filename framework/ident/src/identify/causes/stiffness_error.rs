@@ -6,13 +6,17 @@
 use serde_json::json;
 
 use super::{CandidateCause, Fragments, Samples, SearchContext, object};
+use jointctl_models::effect::Effect;
 
 /// `+ s * tau_model(phi_elastic)` [Nm], `s` the relative error of the configured curve.
 pub struct StiffnessError;
 
 impl CandidateCause for StiffnessError {
     fn name(&self) -> &str {
-        "stiffness_error"
+        Effect::StiffnessError.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::StiffnessError)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["relative_error".into()]

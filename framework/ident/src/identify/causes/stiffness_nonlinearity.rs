@@ -3,13 +3,17 @@
 use serde_json::json;
 
 use super::{CandidateCause, Fragments, Samples, object};
+use jointctl_models::effect::Effect;
 
 /// `+ k3 * phi_elastic^3` [Nm].
 pub struct StiffnessNonlinearity;
 
 impl CandidateCause for StiffnessNonlinearity {
     fn name(&self) -> &str {
-        "stiffness_nonlinearity"
+        Effect::StiffnessNonlinearity.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::StiffnessNonlinearity)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["k3_nm_per_rad3".into()]

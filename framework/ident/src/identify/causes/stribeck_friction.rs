@@ -5,13 +5,17 @@
 //! beside a spring the thesis' eq. 3.5 arctan stands for the whole friction.
 
 use super::{CandidateCause, Parameter, Refine, Samples, SearchContext, log_grid};
+use jointctl_models::effect::Effect;
 
 /// `+ s tanh(10 v / v_s) exp(-(v / v_s)^2)` [Nm], `s >= 0`.
 pub struct StribeckFriction;
 
 impl CandidateCause for StribeckFriction {
     fn name(&self) -> &str {
-        "stribeck_friction"
+        Effect::StribeckFriction.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::StribeckFriction)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["stribeck_nm".into()]

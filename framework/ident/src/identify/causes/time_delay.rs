@@ -2,6 +2,7 @@
 //! (`d > 0`) or early (`d < 0`, the encoder side lags).
 
 use super::{CandidateCause, Inputs, Parameter, Refine, Samples, SearchContext};
+use jointctl_models::effect::Effect;
 
 /// Sample periods above which a delay is refined in fractions of a sample [s] (an assumption:
 /// 20 Hz bins carry a sensor filter's delay of 15 ms, a third of a sample, and must resolve it;
@@ -89,7 +90,10 @@ fn delayed(t: &[f64], x: &[f64], dx: Option<&[f64]>, delay: f64, max_step: f64) 
 
 impl CandidateCause for TimeDelay {
     fn name(&self) -> &str {
-        "time_delay"
+        Effect::TimeDelay.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::TimeDelay)
     }
     fn coefficient_names(&self) -> Vec<String> {
         Vec::new()

@@ -8,6 +8,7 @@
 
 use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
 use crate::identify::spectrum;
+use jointctl_models::effect::Effect;
 
 /// `+ g(v) (a sin(2 pi f t) + b cos(2 pi f t))` [Nm], `g = 1` (steady, `onset_speed_rad_per_s` 0)
 /// or `tanh(|v| / onset_speed_rad_per_s)`.
@@ -27,7 +28,10 @@ fn envelope(onset_rad_per_s: f64, v: f64) -> f64 {
 
 impl CandidateCause for Vibration {
     fn name(&self) -> &str {
-        "vibration"
+        Effect::Vibration.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::Vibration)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["sin_nm".into(), "cos_nm".into()]

@@ -3,13 +3,17 @@
 use serde_json::json;
 
 use super::{CandidateCause, Fragments, Samples, object};
+use jointctl_models::effect::Effect;
 
 /// `+ b * dphi/dt` [Nm], `b >= 0`.
 pub struct ViscousFriction;
 
 impl CandidateCause for ViscousFriction {
     fn name(&self) -> &str {
-        "viscous_friction"
+        Effect::ViscousFriction.name()
+    }
+    fn effect(&self) -> Option<Effect> {
+        Some(Effect::ViscousFriction)
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["damping_nms_per_rad".into()]

@@ -1,0 +1,216 @@
+//! The model effects: one typed list that `jointctl identify` names causes from (each built-in
+//! cause is one [`Effect`]), and that says which keys of the observer's `model_extension`
+//! ([`crate::extension::ExtensionSpec`]) and of the simulated joint's `sim.effects` carry each
+//! one, and what a motion must vary to show it.
+//!
+//! Adding an effect is a variant here and its cause module in `jointctl-ident` (the module and
+//! one match arm in its list of causes). Every property below is an exhaustive `match`: the
+//! compiler points at each one a new variant must answer, and at identify's list of causes.
+//! `docs/identify/adding-a-cause.md` walks through one.
+
+/// One effect that the thesis' model of a joint leaves out, and `identify` can find in data.
+///
+/// ```
+/// use jointctl_models::effect::{Dependence, Effect};
+/// let e = Effect::from_name("viscous_friction").unwrap();
+/// assert_eq!(e, Effect::ViscousFriction);
+/// assert_eq!(e.observer_keys(), ["viscous_nms_per_rad"]);
+/// assert_eq!(e.dependence(), Dependence::Rate);
+/// assert!(Effect::from_name("backlash").is_none());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Effect {
+    /// Viscous friction in the element: `b dphi/dt`.
+    ViscousFriction,
+    /// Eq. 3.5's arctan friction, `k_a atan(k_b dphi/dt)` (Coulomb-like beyond `1 / k_b`).
+    CoulombFriction,
+    /// A Stribeck friction: a breakaway torque above the sliding one at low rates.
+    StribeckFriction,
+    /// An offset of the torque sensor.
+    SensorOffset,
+    /// The characteristic off by a scale: the element stiffer or softer than its table.
+    StiffnessError,
+    /// A cubic term of the stiffness: `k3 phi^3`.
+    StiffnessNonlinearity,
+    /// A hysteresis loop of the element (Dahl's model, or Bouc-Wen's with a shape exponent).
+    Hysteresis,
+    /// A play (dead zone) of the element, ideal or with a contact that stiffens over a band.
+    DeadZone,
+    /// A delay between the deflection's and the torque's readings.
+    TimeDelay,
+    /// A steady vibration seen by the torque sensor (a mode rung by something else).
+    Vibration,
+    /// A vibration whose size follows the deflection rate (a mode rung by the motion).
+    SpeedVibration,
+    /// A mode rung by each reversal of the motion, decaying until the next.
+    ReversalRinging,
+}
+
+/// What an effect's torque depends on, for choosing what an experiment varies to tell two
+/// effects apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dependence {
+    /// The deflection rate (viscous friction, eq. 3.5's arctan; a small delay acts as
+    /// `-k d dphi/dt`): a slower motion along the same path changes it.
+    Rate,
+    /// The deflection itself (a cubic, a play, a scale error, an offset): the same at any rate,
+    /// different at another amplitude.
+    Deflection,
+    /// The path since the last reversal (a Dahl hysteresis): its loop keeps its width at any
+    /// rate, and its shape against the deflection changes with the amplitude.
+    Stroke,
+    /// Time (a mode, a ring): stays at its frequency whatever the excitation's.
+    Time,
+}
+
+impl Effect {
+    /// Every effect, in the order `identify` tries their causes (ties go to the earlier one).
+    ///
+    /// ```
+    /// use jointctl_models::effect::Effect;
+    /// assert_eq!(Effect::ALL[0], Effect::ViscousFriction);
+    /// assert!(Effect::ALL.iter().all(|e| Effect::from_name(e.name()) == Some(*e)));
+    /// ```
+    pub const ALL: [Effect; 12] = [
+        Effect::ViscousFriction,
+        Effect::CoulombFriction,
+        Effect::StribeckFriction,
+        Effect::SensorOffset,
+        Effect::StiffnessError,
+        Effect::StiffnessNonlinearity,
+        Effect::Hysteresis,
+        Effect::DeadZone,
+        Effect::TimeDelay,
+        Effect::Vibration,
+        Effect::SpeedVibration,
+        Effect::ReversalRinging,
+    ];
+
+    /// The name `identify` reports (the `effect` field of its JSON and reports).
+    ///
+    /// ```
+    /// assert_eq!(jointctl_models::effect::Effect::DeadZone.name(), "dead_zone");
+    /// ```
+    pub const fn name(self) -> &'static str {
+        match self {
+            Effect::ViscousFriction => "viscous_friction",
+            Effect::CoulombFriction => "coulomb_friction",
+            Effect::StribeckFriction => "stribeck_friction",
+            Effect::SensorOffset => "sensor_offset",
+            Effect::StiffnessError => "stiffness_error",
+            Effect::StiffnessNonlinearity => "stiffness_nonlinearity",
+            Effect::Hysteresis => "hysteresis",
+            Effect::DeadZone => "dead_zone",
+            Effect::TimeDelay => "time_delay",
+            Effect::Vibration => "vibration",
+            Effect::SpeedVibration => "speed_vibration",
+            Effect::ReversalRinging => "reversal_ringing",
+        }
+    }
+
+    /// The effect of a reported name; `None` for a name that is not one (a user's own cause,
+    /// `dropout`).
+    ///
+    /// ```
+    /// use jointctl_models::effect::Effect;
+    /// assert_eq!(Effect::from_name("hysteresis"), Some(Effect::Hysteresis));
+    /// assert_eq!(Effect::from_name("dropout"), None);
+    /// ```
+    pub fn from_name(name: &str) -> Option<Effect> {
+        Effect::ALL.into_iter().find(|e| e.name() == name)
+    }
+
+    /// The keys of the observer's `model_extension` ([`crate::extension::ExtensionSpec`]) that
+    /// carry the effect as `identify` writes it; none when the observer has no term for it (it
+    /// models the element, not the sensor's structure or the loop's timing).
+    ///
+    /// ```
+    /// use jointctl_models::effect::Effect;
+    /// assert_eq!(Effect::StiffnessError.observer_keys(), ["torque_scale"]);
+    /// assert!(Effect::TimeDelay.observer_keys().is_empty());
+    /// ```
+    pub const fn observer_keys(self) -> &'static [&'static str] {
+        match self {
+            Effect::ViscousFriction => &["viscous_nms_per_rad"],
+            Effect::CoulombFriction => &["friction"],
+            Effect::SensorOffset => &["torque_offset_nm"],
+            Effect::StiffnessError => &["torque_scale"],
+            Effect::StiffnessNonlinearity => &["cubic_nm_per_rad3"],
+            Effect::Hysteresis => &["hysteresis"],
+            Effect::DeadZone => &["dead_zone_rad", "dead_zone_ramp_rad"],
+            Effect::StribeckFriction | Effect::TimeDelay | Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => &[],
+        }
+    }
+
+    /// The keys of the simulated joint's `sim.effects` that carry the effect as `identify`
+    /// writes it; none when the simulated plant has no term of that form (a stiffness error:
+    /// the plant has its own curve; a vibration: the plant's mode is rung by the element's
+    /// torque, not a steady sine).
+    ///
+    /// ```
+    /// use jointctl_models::effect::Effect;
+    /// assert_eq!(Effect::CoulombFriction.plant_keys(), ["arctan_friction"]);
+    /// assert!(Effect::StiffnessError.plant_keys().is_empty());
+    /// ```
+    pub const fn plant_keys(self) -> &'static [&'static str] {
+        match self {
+            Effect::ViscousFriction => &["viscous_nms_per_rad"],
+            Effect::CoulombFriction => &["arctan_friction"],
+            Effect::SensorOffset => &["torque_offset_nm"],
+            Effect::StiffnessNonlinearity => &["cubic_nm_per_rad3"],
+            Effect::Hysteresis => &["hysteresis"],
+            Effect::DeadZone => &["dead_zone_rad", "dead_zone_ramp_rad"],
+            Effect::StiffnessError | Effect::StribeckFriction | Effect::TimeDelay | Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => &[],
+        }
+    }
+
+    /// What the effect's torque depends on.
+    ///
+    /// ```
+    /// use jointctl_models::effect::{Dependence, Effect};
+    /// assert_eq!(Effect::Hysteresis.dependence(), Dependence::Stroke);
+    /// assert_eq!(Effect::TimeDelay.dependence(), Dependence::Rate);
+    /// ```
+    pub const fn dependence(self) -> Dependence {
+        match self {
+            Effect::ViscousFriction | Effect::CoulombFriction | Effect::StribeckFriction | Effect::TimeDelay => Dependence::Rate,
+            Effect::DeadZone | Effect::StiffnessNonlinearity | Effect::StiffnessError | Effect::SensorOffset => Dependence::Deflection,
+            Effect::Hysteresis => Dependence::Stroke,
+            Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => Dependence::Time,
+        }
+    }
+}
+
+impl std::fmt::Display for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Effect;
+    use crate::extension::ExtensionSpec;
+
+    /// Every observer key is a field of `model_extension`: a key the spec does not know would be
+    /// refused by the plugin when it loads what `identify` wrote.
+    #[test]
+    fn every_observer_key_is_a_field_of_the_extension() {
+        for e in Effect::ALL {
+            for key in e.observer_keys() {
+                // A field takes a number or a table; an unknown one is refused whatever it holds.
+                let tried = [serde_json::json!({ *key: 1.0 }), serde_json::json!({ *key: {} })];
+                let known = tried.iter().any(|v| serde_json::from_value::<ExtensionSpec>(v.clone()).map_or_else(|err| !err.to_string().contains("unknown field"), |_| true));
+                assert!(known, "{e}: `{key}` is not a field of model_extension");
+            }
+        }
+    }
+
+    #[test]
+    fn names_are_unique() {
+        let mut names: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), Effect::ALL.len());
+    }
+}
