@@ -154,26 +154,7 @@ fn main() {
     // 2-million-row one, each with a hidden Dahl hysteresis, 14-bit deflection, noisy torque
     // sensor; the fit step on the same file is the baseline measured in the same run.
     for n in if quick { vec![100_000] } else { vec![100_000, 2_000_000] } {
-        let q = std::f64::consts::TAU / 16384.0;
-        let (amp, f, k, fc, lambda) = (0.1, 0.2, 120.0, 1.0, 0.008);
-        let mut z: f64 = 0.0;
-        let mut prev = 0.0;
-        let mut rng = jointctl_test_support::XorShift64::new(0x1234_5678_9abc_def1);
-        let mut noise = || (rng.uniform() - 0.5) * 0.05;
-        let mut data = jointctl_ident::csv::Data::default();
-        for i in 0..n {
-            let t = i as f64 / 200.0;
-            let x = amp * (std::f64::consts::TAU * f * t).sin();
-            let step = x - prev;
-            if step != 0.0 {
-                let sgn = step.signum();
-                z = sgn + (z - sgn) * (-step.abs() / lambda).exp();
-            }
-            prev = x;
-            data.t.push(t);
-            data.deflection.push((x / q).round() * q);
-            data.torque.push(k * x + 0.3 * (80.0 * amp * std::f64::consts::TAU * f * (std::f64::consts::TAU * f * t).cos()).atan() + fc * z + noise());
-        }
+        let data = jointctl_bench::hysteresis_record(n);
         // Baseline measured in the same run: the thesis' fit step (auto order) on the same file.
         let (mut times, mut fit_times) = (Vec::new(), Vec::new());
         let mut found = String::new();

@@ -1,5 +1,6 @@
 //! What the benchmarks (`benches/runtime.rs`, `benches/latency.rs`, `benches/scale.rs`,
-//! `benches/soak.rs`, `benches/recording.rs`, `benches/bridges.rs`) share.
+//! `benches/soak.rs`, `benches/recording.rs`, `benches/bridges.rs`, `benches/identify_speed.rs`)
+//! share.
 
 use std::path::{Path, PathBuf};
 
@@ -267,4 +268,36 @@ impl Drop for Hogs {
             let _ = c.wait();
         }
     }
+}
+
+/// The identification benchmarks' record: `n` samples of a 200 Hz characterisation (a 0.2 Hz
+/// sine of 0.1 rad), a spring of 120 Nm/rad, eq. 3.5's friction and a hidden Dahl hysteresis
+/// (limit 1 Nm), a 14-bit deflection and a noisy torque sensor (uniform, 0.05 Nm wide).
+///
+/// ```
+/// let d = jointctl_bench::hysteresis_record(400);
+/// assert_eq!((d.t.len(), d.deflection.len(), d.torque.len()), (400, 400, 400));
+/// ```
+pub fn hysteresis_record(n: usize) -> jointctl_ident::csv::Data {
+    let q = std::f64::consts::TAU / 16384.0;
+    let (amp, f, k, fc, lambda) = (0.1, 0.2, 120.0, 1.0, 0.008);
+    let mut z: f64 = 0.0;
+    let mut prev = 0.0;
+    let mut rng = jointctl_test_support::XorShift64::new(0x1234_5678_9abc_def1);
+    let mut noise = || (rng.uniform() - 0.5) * 0.05;
+    let mut data = jointctl_ident::csv::Data::default();
+    for i in 0..n {
+        let t = i as f64 / 200.0;
+        let x = amp * (std::f64::consts::TAU * f * t).sin();
+        let step = x - prev;
+        if step != 0.0 {
+            let sgn = step.signum();
+            z = sgn + (z - sgn) * (-step.abs() / lambda).exp();
+        }
+        prev = x;
+        data.t.push(t);
+        data.deflection.push((x / q).round() * q);
+        data.torque.push(k * x + 0.3 * (80.0 * amp * std::f64::consts::TAU * f * (std::f64::consts::TAU * f * t).cos()).atan() + fc * z + noise());
+    }
+    data
 }
