@@ -150,3 +150,30 @@ fn a_registered_cause_that_panics_is_an_error_naming_it() {
     }
     assert!(err.to_string().contains("panicking_cause"), "{err}");
 }
+
+/// A cause that says it is a built-in effect.
+struct ClaimsAnEffect;
+
+impl CandidateCause for ClaimsAnEffect {
+    fn name(&self) -> &str {
+        "my_loop"
+    }
+    fn effect(&self) -> Option<jointctl_models::effect::Effect> {
+        Some(jointctl_models::effect::Effect::Hysteresis)
+    }
+    fn coefficient_names(&self) -> Vec<String> {
+        vec!["a_nm".into()]
+    }
+    fn columns(&self, _: &[f64], s: &Samples) -> Vec<Vec<f64>> {
+        vec![s.deflection_rad.to_vec()]
+    }
+}
+
+/// Review finding: a registered cause could return a built-in effect and be treated as that
+/// effect's cause (a friction's part on a friction record, a confound's experiment). Refused.
+#[test]
+fn a_registered_cause_that_claims_a_built_in_effect_is_an_error() {
+    let err = identify(&experiment(0.0, 150.0, 0.0), &with(vec![Box::new(ClaimsAnEffect)])).unwrap_err();
+    assert!(matches!(&err, IdentifyError::CauseClaimsEffect { name, effect: jointctl_models::effect::Effect::Hysteresis } if name == "my_loop"), "{err}");
+}
+

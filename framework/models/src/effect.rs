@@ -3,47 +3,82 @@
 //! ([`crate::extension::ExtensionSpec`]) and of the simulated joint's `sim.effects` carry each
 //! one, and what a motion must vary to show it.
 //!
-//! Adding an effect is a variant here and its cause module in `jointctl-ident` (the module and
-//! one match arm in its list of causes). Every property below is an exhaustive `match`: the
+//! Adding an effect is a line in the list below (`effects!`, which gives [`Effect`], its names and
+//! [`Effect::ALL`] from one list) and its cause module in `jointctl-ident` (the module and one
+//! match arm in its list of causes). Every other property below is an exhaustive `match`: the
 //! compiler points at each one a new variant must answer, and at identify's list of causes.
 //! `docs/identify/adding-a-cause.md` walks through one.
 
-/// One effect that the thesis' model of a joint leaves out, and `identify` can find in data.
-///
-/// ```
-/// use jointctl_models::effect::{Dependence, Effect};
-/// let e = Effect::from_name("viscous_friction").unwrap();
-/// assert_eq!(e, Effect::ViscousFriction);
-/// assert_eq!(e.observer_keys(), ["viscous_nms_per_rad"]);
-/// assert_eq!(e.dependence(), Dependence::Rate);
-/// assert!(Effect::from_name("backlash").is_none());
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Effect {
+/// Declares [`Effect`] with its variants' names, [`Effect::ALL`] and [`Effect::name`] from one
+/// list, so that a variant cannot be left out of either.
+macro_rules! effects {
+    ($( $(#[$doc:meta])* $variant:ident => $name:literal, )*) => {
+        /// One effect that the thesis' model of a joint leaves out, and `identify` can find in
+        /// data.
+        ///
+        /// ```
+        /// use jointctl_models::effect::{Dependence, Effect};
+        /// let e = Effect::from_name("viscous_friction").unwrap();
+        /// assert_eq!(e, Effect::ViscousFriction);
+        /// assert_eq!(e.observer_keys(), ["viscous_nms_per_rad"]);
+        /// assert_eq!(e.dependence(), Dependence::Rate);
+        /// assert!(Effect::from_name("backlash").is_none());
+        /// ```
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Effect {
+            $( $(#[$doc])* $variant, )*
+        }
+
+        impl Effect {
+            /// Every effect, in the order `identify` tries their causes (ties go to the earlier
+            /// one).
+            ///
+            /// ```
+            /// use jointctl_models::effect::Effect;
+            /// assert_eq!(Effect::ALL[0], Effect::ViscousFriction);
+            /// assert!(Effect::ALL.iter().all(|e| Effect::from_name(e.name()) == Some(*e)));
+            /// ```
+            pub const ALL: [Effect; [$( stringify!($variant) ),*].len()] = [$( Effect::$variant ),*];
+
+            /// The name `identify` reports (the `effect` field of its JSON and reports).
+            ///
+            /// ```
+            /// assert_eq!(jointctl_models::effect::Effect::DeadZone.name(), "dead_zone");
+            /// ```
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $( Effect::$variant => $name, )*
+                }
+            }
+        }
+    };
+}
+
+effects! {
     /// Viscous friction in the element: `b dphi/dt`.
-    ViscousFriction,
+    ViscousFriction => "viscous_friction",
     /// Eq. 3.5's arctan friction, `k_a atan(k_b dphi/dt)` (Coulomb-like beyond `1 / k_b`).
-    CoulombFriction,
+    CoulombFriction => "coulomb_friction",
     /// A Stribeck friction: a breakaway torque above the sliding one at low rates.
-    StribeckFriction,
+    StribeckFriction => "stribeck_friction",
     /// An offset of the torque sensor.
-    SensorOffset,
+    SensorOffset => "sensor_offset",
     /// The characteristic off by a scale: the element stiffer or softer than its table.
-    StiffnessError,
+    StiffnessError => "stiffness_error",
     /// A cubic term of the stiffness: `k3 phi^3`.
-    StiffnessNonlinearity,
+    StiffnessNonlinearity => "stiffness_nonlinearity",
     /// A hysteresis loop of the element (Dahl's model, or Bouc-Wen's with a shape exponent).
-    Hysteresis,
+    Hysteresis => "hysteresis",
     /// A play (dead zone) of the element, ideal or with a contact that stiffens over a band.
-    DeadZone,
+    DeadZone => "dead_zone",
     /// A delay between the deflection's and the torque's readings.
-    TimeDelay,
+    TimeDelay => "time_delay",
     /// A steady vibration seen by the torque sensor (a mode rung by something else).
-    Vibration,
+    Vibration => "vibration",
     /// A vibration whose size follows the deflection rate (a mode rung by the motion).
-    SpeedVibration,
+    SpeedVibration => "speed_vibration",
     /// A mode rung by each reversal of the motion, decaying until the next.
-    ReversalRinging,
+    ReversalRinging => "reversal_ringing",
 }
 
 /// What an effect's torque depends on, for choosing what an experiment varies to tell two
@@ -64,50 +99,6 @@ pub enum Dependence {
 }
 
 impl Effect {
-    /// Every effect, in the order `identify` tries their causes (ties go to the earlier one).
-    ///
-    /// ```
-    /// use jointctl_models::effect::Effect;
-    /// assert_eq!(Effect::ALL[0], Effect::ViscousFriction);
-    /// assert!(Effect::ALL.iter().all(|e| Effect::from_name(e.name()) == Some(*e)));
-    /// ```
-    pub const ALL: [Effect; 12] = [
-        Effect::ViscousFriction,
-        Effect::CoulombFriction,
-        Effect::StribeckFriction,
-        Effect::SensorOffset,
-        Effect::StiffnessError,
-        Effect::StiffnessNonlinearity,
-        Effect::Hysteresis,
-        Effect::DeadZone,
-        Effect::TimeDelay,
-        Effect::Vibration,
-        Effect::SpeedVibration,
-        Effect::ReversalRinging,
-    ];
-
-    /// The name `identify` reports (the `effect` field of its JSON and reports).
-    ///
-    /// ```
-    /// assert_eq!(jointctl_models::effect::Effect::DeadZone.name(), "dead_zone");
-    /// ```
-    pub const fn name(self) -> &'static str {
-        match self {
-            Effect::ViscousFriction => "viscous_friction",
-            Effect::CoulombFriction => "coulomb_friction",
-            Effect::StribeckFriction => "stribeck_friction",
-            Effect::SensorOffset => "sensor_offset",
-            Effect::StiffnessError => "stiffness_error",
-            Effect::StiffnessNonlinearity => "stiffness_nonlinearity",
-            Effect::Hysteresis => "hysteresis",
-            Effect::DeadZone => "dead_zone",
-            Effect::TimeDelay => "time_delay",
-            Effect::Vibration => "vibration",
-            Effect::SpeedVibration => "speed_vibration",
-            Effect::ReversalRinging => "reversal_ringing",
-        }
-    }
-
     /// The effect of a reported name; `None` for a name that is not one (a user's own cause,
     /// `dropout`).
     ///
@@ -121,8 +112,8 @@ impl Effect {
     }
 
     /// The keys of the observer's `model_extension` ([`crate::extension::ExtensionSpec`]) that
-    /// carry the effect as `identify` writes it; none when the observer has no term for it (it
-    /// models the element, not the sensor's structure or the loop's timing).
+    /// carry the effect as `identify` writes it; none when the observer has no term of the
+    /// cause's form (a Stribeck dip, a delay, a mode).
     ///
     /// ```
     /// use jointctl_models::effect::Effect;
@@ -142,10 +133,10 @@ impl Effect {
         }
     }
 
-    /// The keys of the simulated joint's `sim.effects` that carry the effect as `identify`
-    /// writes it; none when the simulated plant has no term of that form (a stiffness error:
-    /// the plant has its own curve; a vibration: the plant's mode is rung by the element's
-    /// torque, not a steady sine).
+    /// The keys of the simulated joint's `sim.effects` that carry the effect; none when the
+    /// simulated plant has no term for it (a stiffness error: the plant has its own curve). A
+    /// cause writes those of them its form fits: a vibration's plant mode is rung by the
+    /// element's torque, so `identify`'s steady sine writes none.
     ///
     /// ```
     /// use jointctl_models::effect::Effect;
@@ -160,7 +151,8 @@ impl Effect {
             Effect::StiffnessNonlinearity => &["cubic_nm_per_rad3"],
             Effect::Hysteresis => &["hysteresis"],
             Effect::DeadZone => &["dead_zone_rad", "dead_zone_ramp_rad"],
-            Effect::StiffnessError | Effect::StribeckFriction | Effect::TimeDelay | Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => &[],
+            Effect::Vibration => &["vibration"],
+            Effect::StiffnessError | Effect::StribeckFriction | Effect::TimeDelay | Effect::SpeedVibration | Effect::ReversalRinging => &[],
         }
     }
 
@@ -181,6 +173,28 @@ impl Effect {
     }
 }
 
+/// The effects a configuration carries, in [`Effect::ALL`]'s order: those with one of their
+/// `keys` (the observer's or the plant's) set in `config` against `defaults` (both as JSON
+/// tables, the configuration and its defaults serialised). A key is set by a table (the effect's
+/// parameters given) or by a finite number other than its default; a number that is not finite
+/// (NaN, serialised as null) sets nothing, as the configuration's own checks refuse it. The keys
+/// are looked up by name, so that a new effect on existing keys needs no code where this is used.
+///
+/// ```
+/// use jointctl_models::effect::{Effect, effects_set};
+/// let config = serde_json::json!({"viscous_nms_per_rad": 0.2, "torque_offset_nm": 0.0, "hysteresis": {"limit_nm": 1.0}});
+/// let defaults = serde_json::json!({"viscous_nms_per_rad": 0.0, "torque_offset_nm": 0.0, "hysteresis": null});
+/// assert_eq!(effects_set(Effect::plant_keys, &config, &defaults), [Effect::ViscousFriction, Effect::Hysteresis]);
+/// ```
+pub fn effects_set(keys: fn(Effect) -> &'static [&'static str], config: &serde_json::Value, defaults: &serde_json::Value) -> Vec<Effect> {
+    let set = |key: &&str| match config.get(*key) {
+        Some(serde_json::Value::Object(_)) => true,
+        Some(v @ serde_json::Value::Number(n)) => n.as_f64().is_some_and(f64::is_finite) && Some(v) != defaults.get(*key),
+        _ => false,
+    };
+    Effect::ALL.into_iter().filter(|e| keys(*e).iter().any(set)).collect()
+}
+
 impl std::fmt::Display for Effect {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
@@ -190,15 +204,18 @@ impl std::fmt::Display for Effect {
 #[cfg(test)]
 mod tests {
     use super::Effect;
-    use crate::extension::ExtensionSpec;
+    use crate::extension::{ExtensionSpec, Terms};
 
-    /// Every observer key is a field of `model_extension`: a key the spec does not know would be
-    /// refused by the plugin when it loads what `identify` wrote.
+    /// Every observer key is a field of the extension's terms ([`crate::extension::Terms`], what
+    /// [`crate::extension::Terms::effects`] reads, each one a field of `model_extension`): a
+    /// key they do not know would be refused by the plugin when it loads what `identify` wrote.
     #[test]
-    fn every_observer_key_is_a_field_of_the_extension() {
+    fn every_observer_key_is_a_field_of_the_extensions_terms() {
+        let serde_json::Value::Object(fields) = serde_json::to_value(Terms::default()).unwrap() else { panic!("the terms are a table") };
         for e in Effect::ALL {
             for key in e.observer_keys() {
-                // A field takes a number or a table; an unknown one is refused whatever it holds.
+                assert!(fields.contains_key(*key), "{e}: `{key}` is not a field of the extension's terms");
+                // ... and of `model_extension` itself.
                 let tried = [serde_json::json!({ *key: 1.0 }), serde_json::json!({ *key: {} })];
                 let known = tried.iter().any(|v| serde_json::from_value::<ExtensionSpec>(v.clone()).map_or_else(|err| !err.to_string().contains("unknown field"), |_| true));
                 assert!(known, "{e}: `{key}` is not a field of model_extension");

@@ -2,13 +2,13 @@
 //! order, each error naming its field (`(field, message)`, as [`crate::unit::UnitError`]); and
 //! which model effects a simulated joint carries ([`effects_in`], [`joint_effects`]).
 
-use jointctl_config::{EffectsConfig, JointSimConfig, PivotEffectsConfig};
+use jointctl_config::{EffectsConfig, ElementSimConfig, JointSimConfig, PivotEffectsConfig};
 use jointctl_models::effect::Effect;
 
 /// The model effects `fx` carries, in [`Effect::ALL`]'s order: those with one of their
-/// [`Effect::plant_keys`] set (a number other than zero, a table). The keys are looked up by
-/// name in `sim.effects` as it is written, so an effect added to the typed list needs no code
-/// here.
+/// [`Effect::plant_keys`] set ([`jointctl_models::effect::effects_set`]: a table, or a finite
+/// number other than zero). The keys are looked up by name in `sim.effects` as it is written,
+/// so an effect added to the typed list on existing keys needs no code here.
 ///
 /// ```
 /// use jointctl_config::EffectsConfig;
@@ -17,20 +17,20 @@ use jointctl_models::effect::Effect;
 /// assert_eq!(jointctl_sim::effect_checks::effects_in(&fx), [Effect::ViscousFriction]);
 /// ```
 pub fn effects_in(fx: &EffectsConfig) -> Vec<Effect> {
-    let Ok(serde_json::Value::Object(keys)) = serde_json::to_value(fx) else { return Vec::new() };
-    let set = |key: &&str| match keys.get(*key) {
-        Some(serde_json::Value::Number(n)) => n.as_f64() != Some(0.0),
-        Some(serde_json::Value::Object(_)) => true,
-        _ => false,
-    };
-    Effect::ALL.into_iter().filter(|e| e.plant_keys().iter().any(set)).collect()
+    let (Ok(these), Ok(defaults)) = (serde_json::to_value(fx), serde_json::to_value(EffectsConfig::default())) else { return Vec::new() };
+    jointctl_models::effect::effects_set(Effect::plant_keys, &these, &defaults)
 }
 
-/// The model effects a simulated joint carries anywhere: its `effects`, each DOF's, and each
-/// pivot setting's (in [`Effect::ALL`]'s order, each once).
+/// The model effects a simulated joint carries anywhere: its `effects`, each DOF's, each pivot
+/// setting's, and its element's own play (`dead_zone_rad` of a lever-arm element), in
+/// [`Effect::ALL`]'s order, each once.
 pub fn joint_effects(sim: &JointSimConfig) -> Vec<Effect> {
     let by_pivot = sim.effects_by_pivot.iter().flat_map(|s| std::iter::once(&s.effects).chain(&s.effects_per_dof));
-    let all: Vec<Effect> = std::iter::once(&sim.effects).chain(&sim.effects_per_dof).chain(by_pivot).flat_map(effects_in).collect();
+    let mut all: Vec<Effect> = std::iter::once(&sim.effects).chain(&sim.effects_per_dof).chain(by_pivot).flat_map(effects_in).collect();
+    let element_play = |e: &ElementSimConfig| matches!(e, ElementSimConfig::LeverArm { dead_zone_rad, .. } | ElementSimConfig::WristLeverArm { dead_zone_rad, .. } if *dead_zone_rad > 0.0);
+    if sim.element.iter().chain(&sim.elements).any(element_play) {
+        all.push(Effect::DeadZone);
+    }
     Effect::ALL.into_iter().filter(|e| all.contains(e)).collect()
 }
 
@@ -122,6 +122,11 @@ mod tests {
         let fx = |yaml: &str| -> EffectsConfig { serde_yaml::from_str(yaml).unwrap() };
         let sim: JointSimConfig = serde_yaml::from_str("drives: [a]\nmatrix: [[1.0]]\neffects: {dead_zone_rad: 0.01}\neffects_by_pivot: [{pivot_mm: 10, effects: {hysteresis: {sigma_nm_per_rad: 100, limit_nm: 0.5}}}]").unwrap();
         assert_eq!(joint_effects(&sim), [Effect::Hysteresis, Effect::DeadZone]);
+        // The element's own play, and a structural mode.
+        let sim: JointSimConfig = serde_yaml::from_str("drives: [a]\nmatrix: [[1.0]]\nelement: {kind: lever_arm, lever_length_m: 0.1, crank_radius_m: 0.02, spring_n_per_m: 5000, pivot_offset_m: 0.01, dead_zone_rad: 0.02}\neffects: {vibration: {frequency_hz: 18, damping_ratio: 0.05, gain: 0.1}}").unwrap();
+        assert_eq!(joint_effects(&sim), [Effect::DeadZone, Effect::Vibration]);
+        // A number that is not finite sets nothing (the checks refuse it).
+        assert!(effects_in(&EffectsConfig { viscous_nms_per_rad: f64::NAN, ..Default::default() }).is_empty());
         assert_eq!(effects_in(&fx("{arctan_friction: {k_a_nm: 0.1, k_b_s_per_rad: 20}, torque_offset_nm: -0.3}")), [Effect::CoulombFriction, Effect::SensorOffset]);
         assert!(effects_in(&fx("{torque_noise_nm: 0.01}")).is_empty());
     }

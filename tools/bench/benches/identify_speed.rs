@@ -10,7 +10,7 @@ use std::time::Instant;
 use jointctl_bench::{env_or, hysteresis_record, median};
 
 fn main() {
-    let rounds: usize = env_or("IDENT_ROUNDS", 15);
+    let rounds: usize = env_or("IDENT_ROUNDS", 15usize).max(1);
     let samples: usize = env_or("IDENT_SAMPLES", 100_000);
     let data = hysteresis_record(samples);
     // One of each first, unmeasured: page faults and lazily set-up state.

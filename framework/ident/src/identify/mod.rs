@@ -254,6 +254,16 @@ pub enum IdentifyError {
         /// The cause's name.
         name: String,
     },
+    /// A registered cause says it is one of the built-in model effects: each has its built-in
+    /// cause, and identify treats a cause by its effect (a friction's part on a friction record,
+    /// the experiment that separates a confound), which a user's cause must not borrow.
+    #[error("registered cause `{name}`: it says it is the built-in effect `{effect}`, which has its own cause; a registered cause's effect() must be None")]
+    CauseClaimsEffect {
+        /// The cause's name.
+        name: String,
+        /// The effect it claimed.
+        effect: jointctl_models::effect::Effect,
+    },
     /// A registered cause's `columns()` do not match its coefficient names or the samples.
     #[error("registered cause `{name}`: columns() gave {} column(s) of {lengths:?} values; expected {expected_columns} (one per coefficient name) of {samples} values (one per sample)", lengths.len())]
     CauseColumns {
@@ -279,6 +289,9 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         let name = c.name();
         if taken.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
             return Err(IdentifyError::CauseNameTaken { name: name.into() });
+        }
+        if let Some(effect) = c.effect() {
+            return Err(IdentifyError::CauseClaimsEffect { name: name.into(), effect });
         }
         let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
         let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));

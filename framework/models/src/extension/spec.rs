@@ -88,19 +88,19 @@ impl Default for Terms {
 
 impl Terms {
     /// The model effects these terms carry, in [`Effect::ALL`]'s order: those with one of their
-    /// [`Effect::observer_keys`] off its default (a scale other than 1, a number other than 0, a
-    /// table). The keys are looked up by name, so an effect added to the typed list needs no code
-    /// here.
+    /// [`Effect::observer_keys`] set ([`crate::effect::effects_set`]: a table, or a finite
+    /// number off its default, a scale other than 1).
     ///
     /// ```
     /// use jointctl_models::{effect::Effect, extension::Terms};
     /// let t = Terms { torque_scale: 0.98, viscous_nms_per_rad: 0.3, ..Default::default() };
     /// assert_eq!(t.effects(), [Effect::ViscousFriction, Effect::StiffnessError]);
     /// assert!(Terms::default().effects().is_empty());
+    /// assert!(Terms { viscous_nms_per_rad: f64::NAN, ..Default::default() }.effects().is_empty());
     /// ```
     pub fn effects(&self) -> Vec<Effect> {
-        let (Ok(serde_json::Value::Object(these)), Ok(serde_json::Value::Object(defaults))) = (serde_json::to_value(self), serde_json::to_value(Terms::default())) else { return Vec::new() };
-        Effect::ALL.into_iter().filter(|e| e.observer_keys().iter().any(|k| these.get(*k) != defaults.get(*k))).collect()
+        let (Ok(these), Ok(defaults)) = (serde_json::to_value(self), serde_json::to_value(Terms::default())) else { return Vec::new() };
+        crate::effect::effects_set(Effect::observer_keys, &these, &defaults)
     }
 
     /// Each parameter in its range, the error naming the field under `prefix`.
