@@ -195,6 +195,18 @@ pub fn effects_set(keys: fn(Effect) -> &'static [&'static str], config: &serde_j
     Effect::ALL.into_iter().filter(|e| keys(*e).iter().any(set)).collect()
 }
 
+/// `effects` in [`Effect::ALL`]'s order, each once: the union of the sets several parts of a
+/// configuration carry.
+///
+/// ```
+/// use jointctl_models::effect::{Effect, in_order};
+/// assert_eq!(in_order([Effect::DeadZone, Effect::ViscousFriction, Effect::DeadZone]), [Effect::ViscousFriction, Effect::DeadZone]);
+/// ```
+pub fn in_order(effects: impl IntoIterator<Item = Effect>) -> Vec<Effect> {
+    let all: Vec<Effect> = effects.into_iter().collect();
+    Effect::ALL.into_iter().filter(|e| all.contains(e)).collect()
+}
+
 impl std::fmt::Display for Effect {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())

@@ -26,12 +26,9 @@ pub fn effects_in(fx: &EffectsConfig) -> Vec<Effect> {
 /// [`Effect::ALL`]'s order, each once.
 pub fn joint_effects(sim: &JointSimConfig) -> Vec<Effect> {
     let by_pivot = sim.effects_by_pivot.iter().flat_map(|s| std::iter::once(&s.effects).chain(&s.effects_per_dof));
-    let mut all: Vec<Effect> = std::iter::once(&sim.effects).chain(&sim.effects_per_dof).chain(by_pivot).flat_map(effects_in).collect();
     let element_play = |e: &ElementSimConfig| matches!(e, ElementSimConfig::LeverArm { dead_zone_rad, .. } | ElementSimConfig::WristLeverArm { dead_zone_rad, .. } if *dead_zone_rad > 0.0);
-    if sim.element.iter().chain(&sim.elements).any(element_play) {
-        all.push(Effect::DeadZone);
-    }
-    Effect::ALL.into_iter().filter(|e| all.contains(e)).collect()
+    let play = sim.element.iter().chain(&sim.elements).any(element_play).then_some(Effect::DeadZone);
+    jointctl_models::effect::in_order(std::iter::once(&sim.effects).chain(&sim.effects_per_dof).chain(by_pivot).flat_map(effects_in).chain(play))
 }
 
 /// Refuses plant effects that are not numbers or not physical (a negative friction, a noise of

@@ -17,8 +17,7 @@ pub fn line(loaded: &LoadedConfig, joint: &str) -> Option<String> {
         Some(v) => serde_json::from_value(v.clone()).into_iter().collect(),
         None => Vec::new(),
     };
-    let observed: Vec<Effect> = specs.iter().flat_map(ExtensionSpec::effects).collect();
-    let observer: Vec<Effect> = Effect::ALL.into_iter().filter(|e| observed.contains(e)).collect();
+    let observer = jointctl_models::effect::in_order(specs.iter().flat_map(ExtensionSpec::effects));
     if plant.is_empty() && observer.is_empty() {
         return None;
     }

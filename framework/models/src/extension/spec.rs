@@ -227,8 +227,7 @@ impl ExtensionSpec {
     /// The model effects the observer models, at any pivot setting ([`Terms::effects`] of the
     /// flat terms and of each setting's), in [`Effect::ALL`]'s order, each once.
     pub fn effects(&self) -> Vec<Effect> {
-        let all: Vec<Effect> = std::iter::once(self.terms()).chain(self.by_pivot.iter().map(|s| s.terms)).flat_map(|t| t.effects()).collect();
-        Effect::ALL.into_iter().filter(|e| all.contains(e)).collect()
+        crate::effect::in_order(std::iter::once(self.terms()).chain(self.by_pivot.iter().map(|s| s.terms)).flat_map(|t| t.effects()))
     }
 
     /// The flat terms (those a joint without pivot settings uses).
