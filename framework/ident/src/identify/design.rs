@@ -166,6 +166,8 @@ pub(crate) struct Model<'a> {
     /// position, so that a constant torque is a sensor offset's and not the polynomial's linear
     /// term times the distance of the motion from that zero.
     pub centre_rad: f64,
+    /// The middle of the record's time span [s] (see [`Samples::record_middle_s`]).
+    pub middle_s: f64,
     pub causes: &'a [&'a dyn CandidateCause],
     /// Held-out errors of the models evaluated so far (selection, the final check and the report
     /// ask for the same models again).
@@ -282,6 +284,7 @@ impl Model<'_> {
             restarts: &p.restarts,
             model_nm: &fixed,
             rate_edges_rad_per_s: &p.rate_edges,
+            record_middle_s: self.middle_s,
         };
         let mut spans = Vec::new();
         let mut segmented = Vec::new();
@@ -347,6 +350,7 @@ impl Model<'_> {
             restarts: &p.restarts,
             model_nm: &proj.model_nm,
             rate_edges_rad_per_s: &p.rate_edges,
+            record_middle_s: self.middle_s,
         };
         let cols = cause.columns(&term.params, &samples);
         let r = &proj.residual;
@@ -491,7 +495,7 @@ mod tests {
 
     fn loop_column(p: &Part) -> Vec<f64> {
         let zeros = vec![0.0; p.len()];
-        let s = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, elastic_rad: &p.d, pivot_mm: &p.pivot, repetition: &p.rep, history_rad: &p.warm, restarts: &p.restarts, model_nm: &zeros, rate_edges_rad_per_s: &p.rate_edges };
+        let s = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, elastic_rad: &p.d, pivot_mm: &p.pivot, repetition: &p.rep, history_rad: &p.warm, restarts: &p.restarts, model_nm: &zeros, rate_edges_rad_per_s: &p.rate_edges, record_middle_s: 0.0 };
         // A Dahl loop of 1 mrad, no dead band.
         super::super::causes::Hysteresis.columns(&[1e-3, 0.0, 1.0], &s).remove(0)
     }

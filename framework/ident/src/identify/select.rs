@@ -8,14 +8,12 @@
 use std::sync::Arc;
 
 use super::parallel::{cores, parallel_map};
-use super::baseline::{FRICTION_PARTS, reads_as_friction};
 use super::causes::{FullRate, SearchContext};
 use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
-use super::numeric::format_value;
 use super::search::{polish, profile_terms, search};
-use super::significance::{Judgement, Z, added_coefficients_test, judge, predicted_cause_test};
-use super::uncertainty::{Jacobian, term_covariance};
+use super::significance::{Judgement, added_coefficients_test, judge, predicted_cause_test};
+use super::uncertainty::{Jacobian, untold_from_zero};
 
 /// BIC improvement that makes a candidate worth testing on the held-out part (Kass and Raftery
 /// 1995: "very strong" evidence).
@@ -414,13 +412,15 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
             (held_out_errors(model, &reduced, p).map(|r| verdict(&r, &full, p)), reduced, dropped)
         });
         // A cause named on consistency alone is held to its coefficients on the training part
-        // too (the model's derivatives computed once for all of them).
+        // too, and so is one that asks for it whatever the evidence (an offset's drift, see
+        // `CandidateCause::held_to_its_coefficients`); the model's derivatives computed once for all.
         let mut jacobian = None;
         let mut margins: Vec<_> = margins
             .into_iter()
             .zip(&s.chosen)
             .map(|((judgement, reduced, dropped), ch)| {
-                let untold = judgement.filter(|j| j.named() && !j.test.significant()).and_then(|_| {
+                let held = |j: &Judgement| !j.test.significant() || model.causes[ch.cause].held_to_its_coefficients();
+                let untold = judgement.filter(|j| j.named() && held(j)).and_then(|_| {
                     let jacobian = jacobian.get_or_insert_with(|| Jacobian::new(model, &s.spec, &full.fit, &p.train));
                     untold_from_zero(model, &s.spec, &full, jacobian, ch.cause, p)
                 });
@@ -438,6 +438,7 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
                 let gone = s.chosen.remove(i);
                 let (judgement, reduced, dropped, untold) = margins.swap_remove(i);
                 match (judgement, untold) {
+                    (Some(j), Some(why)) if j.test.significant() => s.rejected.push(format!("{} (better on the held-out part, but on the training part {why}: {j})", name(gone.cause))),
                     (Some(j), Some(why)) => s.rejected.push(format!("{} (a large gain consistent over the held-out part, but no test passed, and on the training part {why}: {j})", name(gone.cause))),
                     (Some(j), None) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
                     (Some(j), None) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
@@ -452,44 +453,6 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
             None => break,
         }
     }
-}
-
-/// Why `cause`'s coefficients in `spec` (fitted on the training part: `full.fit`, whose
-/// derivatives are `jacobian`) are not told from zero there, if they are not: their t values
-/// (each coefficient over its standard error), squared and summed, stay below [`Z`] squared. For
-/// one coefficient that is `|c| < Z se`, the tests' one-sided 0.1 % quantile taken either way
-/// (two-sided 0.2 %); for a pair (a vibration's sine and cosine) a length that does not depend
-/// on how the pair splits it. The errors are those of the covariance the reported uncertainty
-/// comes from (`uncertainty::term_covariance`): joint with the term's non-linear parameters
-/// where the fit gives them, the larger of the classical and the block error, without the
-/// search's distance from the optimum that the report adds. A cause whose held-out gain is large
-/// and consistent but passes no test (the weakest evidence the rule accepts, see
-/// `significance`) is named only so: a coefficient that moves from one stretch of the training
-/// part to the next by more than its size is taking up structure there, not measuring an effect
-/// (the finding and the figures: `docs/identify/significance.md`, 2026-11-29). `None` also for
-/// a cause without ordinary coefficients (a play, a delay: a
-/// transform, nothing to tell from zero), with coefficients fitted on each segment (a ring: its
-/// own test), that a friction record reports as part of its friction, or whose covariance the fit
-/// cannot give (a singular design: the rule cannot be applied, and the cause stays).
-fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, jacobian: &Jacobian, cause: usize, p: &Prepared) -> Option<String> {
-    // In a friction record a loop, a dip or a lag is part of the friction, not named (and its
-    // level trades off with the baseline's arctan there, which widens its error).
-    if reads_as_friction(p.spring_share, model.baseline) && model.causes[cause].effect().is_some_and(|e| FRICTION_PARTS.contains(&e)) {
-        return None;
-    }
-    let i = spec.terms.iter().position(|t| t.cause == cause)?;
-    let span = full.fit.spans.get(i)?.clone();
-    if span.is_empty() || !full.fit.segment_coefs[i].is_empty() {
-        return None;
-    }
-    let errors = term_covariance(jacobian, spec, &full.fit, i)?.coefficient_errors();
-    let coefs = &full.fit.coefs[span];
-    let length: f64 = coefs.iter().zip(&errors).map(|(c, e)| if *e > 0.0 { (c / e).powi(2) } else if *c != 0.0 { f64::INFINITY } else { 0.0 }).sum();
-    let names = model.causes[cause].coefficient_names();
-    (length < Z * Z).then(|| {
-        let each: Vec<String> = coefs.iter().zip(&errors).enumerate().map(|(k, (c, e))| format!("{} = {} +- {}", names.get(k).map_or("coefficient", |n| n.as_str()), format_value(*c), format_value(*e))).collect();
-        format!("{} is not told from zero", each.join(", "))
-    })
 }
 
 #[cfg(test)]
@@ -557,7 +520,7 @@ mod tests {
         let wander = |t: f64| 0.05 * (std::f64::consts::TAU * t / 6.0).sin();
         let untold = |extra: &dyn Fn(f64) -> f64| {
             let p = prepare::prepare(&spring_with(extra), 0.7, Window::Last).unwrap();
-            let model = Model { baseline: &baseline, centre_rad: 0.0, causes: &all, held_out: Default::default(), columns: Default::default() };
+            let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.middle_s(), causes: &all, held_out: Default::default(), columns: Default::default() };
             let full = held_out_errors(&model, &spec, &p).unwrap();
             let jacobian = Jacobian::new(&model, &spec, &full.fit, &p.train);
             untold_from_zero(&model, &spec, &full, &jacobian, offset, &p)
@@ -578,7 +541,7 @@ mod tests {
         let builtin = causes::builtin();
         let all: Vec<&dyn CandidateCause> = builtin.iter().map(|c| c.as_ref()).collect();
         let baseline = BaselineModel::Polynomial(1);
-        let model = Model { baseline: &baseline, centre_rad: 0.0, causes: &all, held_out: Default::default(), columns: Default::default() };
+        let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.middle_s(), causes: &all, held_out: Default::default(), columns: Default::default() };
         let index = |effect: Effect| all.iter().position(|c| c.effect() == Some(effect)).unwrap();
         let (viscous, delay) = (index(Effect::ViscousFriction), index(Effect::TimeDelay));
         let term = |cause: usize, params: Vec<f64>| Term { cause, params, grids: Vec::new(), baseline: false };

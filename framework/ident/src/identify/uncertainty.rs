@@ -6,11 +6,14 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
+use super::baseline::{FRICTION_PARTS, reads_as_friction};
 use super::causes::CandidateCause;
-use super::design::{Fit, Model, Part, Spec};
+use super::design::{Fit, HeldOut, Model, Part, Spec};
+use super::numeric::format_value;
+use super::prepare::Prepared;
 use super::least_squares::{ar1_inflated_variance, dot};
 use super::parallel::parallel_map;
-use super::significance::blocks_for;
+use super::significance::{Z, blocks_for};
 
 /// The relative step of a numerical derivative: small against every parameter's scale (a
 /// frequency's phase over a long record turns with `t * df`), large against rounding.
@@ -363,6 +366,44 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
         }
     }
     out
+}
+
+/// Why `cause`'s coefficients in `spec` (fitted on the training part: `full.fit`, whose
+/// derivatives are `jacobian`) are not told from zero there, if they are not: their t values
+/// (each coefficient over its standard error), squared and summed, stay below [`Z`] squared. For
+/// one coefficient that is `|c| < Z se`, the tests' one-sided 0.1 % quantile taken either way
+/// (two-sided 0.2 %); for a pair (a vibration's sine and cosine) a length that does not depend
+/// on how the pair splits it. The errors are those of the covariance the reported uncertainty
+/// comes from (`uncertainty::term_covariance`): joint with the term's non-linear parameters
+/// where the fit gives them, the larger of the classical and the block error, without the
+/// search's distance from the optimum that the report adds. A cause whose held-out gain is large
+/// and consistent but passes no test (the weakest evidence the rule accepts, see
+/// `significance`) is named only so: a coefficient that moves from one stretch of the training
+/// part to the next by more than its size is taking up structure there, not measuring an effect
+/// (the finding and the figures: `docs/identify/significance.md`, 2026-11-29). `None` also for
+/// a cause without ordinary coefficients (a play, a delay: a
+/// transform, nothing to tell from zero), with coefficients fitted on each segment (a ring: its
+/// own test), that a friction record reports as part of its friction, or whose covariance the fit
+/// cannot give (a singular design: the rule cannot be applied, and the cause stays).
+pub(crate) fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, jacobian: &Jacobian, cause: usize, p: &Prepared) -> Option<String> {
+    // In a friction record a loop, a dip or a lag is part of the friction, not named (and its
+    // level trades off with the baseline's arctan there, which widens its error).
+    if reads_as_friction(p.spring_share, model.baseline) && model.causes[cause].effect().is_some_and(|e| FRICTION_PARTS.contains(&e)) {
+        return None;
+    }
+    let i = spec.terms.iter().position(|t| t.cause == cause)?;
+    let span = full.fit.spans.get(i)?.clone();
+    if span.is_empty() || !full.fit.segment_coefs[i].is_empty() {
+        return None;
+    }
+    let errors = term_covariance(jacobian, spec, &full.fit, i)?.coefficient_errors();
+    let coefs = &full.fit.coefs[span];
+    let length: f64 = coefs.iter().zip(&errors).map(|(c, e)| if *e > 0.0 { (c / e).powi(2) } else if *c != 0.0 { f64::INFINITY } else { 0.0 }).sum();
+    let names = model.causes[cause].coefficient_names();
+    (length < Z * Z).then(|| {
+        let each: Vec<String> = coefs.iter().zip(&errors).enumerate().map(|(k, (c, e))| format!("{} = {} +- {}", names.get(k).map_or("coefficient", |n| n.as_str()), format_value(*c), format_value(*e))).collect();
+        format!("{} is not told from zero", each.join(", "))
+    })
 }
 
 #[cfg(test)]

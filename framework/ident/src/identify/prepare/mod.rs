@@ -189,6 +189,13 @@ impl Prepared {
     pub fn full_rate_training(&self) -> &Part {
         if self.train_at_full_rate { &self.train } else { &self.stretch }
     }
+
+    /// The middle of the record's time span [s] from its first sample (see
+    /// [`super::Samples::record_middle_s`]): the training and the held-out part together.
+    pub fn middle_s(&self) -> f64 {
+        let last = |t: &[f64]| t.last().copied().unwrap_or(0.0);
+        0.5 * last(&self.train.t).max(last(&self.test.t))
+    }
 }
 
 /// Grid searches run on at most this many samples, decimated to no fewer than 100 a cycle of
