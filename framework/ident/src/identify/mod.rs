@@ -485,8 +485,9 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     }
     // An offset's drift is reported as part of the offset.
     let index = |n: &str| all.iter().position(|c| c.name() == n);
-    causes::fold_drift_into_offset(&mut found, || {
-        let both = spec.without(index(causes::DRIFT_NAME)?).without(index(Effect::SensorOffset.name())?);
+    causes::fold_drift_into_offset(&mut found, !p.test.rep.is_empty() || !p.train.rep.is_empty(), || {
+        let without = |s: &design::Spec, n: &str| -> Option<design::Spec> { Some(select::without_and_impossible(&model, s, index(n)?, p).0) };
+        let both = without(&without(&spec, causes::DRIFT_NAME)?, Effect::SensorOffset.name())?;
         Some(select::rmse(&select::held_out_errors(&model, &both, p)?.errors) - rmse_after)
     });
     found.sort_by(|a, b| b.rmse_gain.total_cmp(&a.rmse_gain));

@@ -378,7 +378,8 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
 /// where the fit gives them, the larger of the classical and the block error, without the
 /// search's distance from the optimum that the report adds. A cause whose held-out gain is large
 /// and consistent but passes no test (the weakest evidence the rule accepts, see
-/// `significance`) is named only so: a coefficient that moves from one stretch of the training
+/// `significance`) is held to it, and so is one that asks for it whatever its evidence
+/// (`CandidateCause::held_to_its_coefficients`, an offset's drift): a coefficient that moves from one stretch of the training
 /// part to the next by more than its size is taking up structure there, not measuring an effect
 /// (the finding and the figures: `docs/identify/significance.md`, 2026-11-29). `None` also for
 /// a cause without ordinary coefficients (a play, a delay: a

@@ -28,7 +28,8 @@ pub use reversals::reversals;
 pub use dead_zone::DeadZone;
 pub use hysteresis::{Hysteresis, dahl_unit, dead_band, loop_unit};
 pub use reversal_ringing::ReversalRinging;
-pub use sensor_offset::{DRIFT_NAME, SensorOffset, SensorOffsetDrift, fold_drift_into_offset};
+pub use sensor_offset::SensorOffset;
+pub(crate) use sensor_offset::{DRIFT_NAME, SensorOffsetDrift, fold_drift_into_offset};
 pub use speed_vibration::SpeedVibration;
 pub use stribeck_friction::StribeckFriction;
 pub use stiffness_error::StiffnessError;
@@ -40,7 +41,7 @@ pub use viscous_friction::ViscousFriction;
 
 /// The built-in vocabulary: a cause for each model effect, in [`Effect::ALL`]'s order (the order
 /// candidates are tried; ties go to the earlier one), and last the sensor offset's drift, which
-/// is reported as part of the offset ([`SensorOffsetDrift`]).
+/// is reported as part of the offset (`sensor_offset.rs`).
 pub fn builtin() -> Vec<Box<dyn CandidateCause>> {
     Effect::ALL.into_iter().map(cause_of).chain([Box::new(SensorOffsetDrift) as Box<dyn CandidateCause>]).collect()
 }
@@ -269,8 +270,9 @@ pub struct Samples<'a> {
     /// interval (see `prepare::rate_edges`). Empty for point samples.
     pub rate_edges_rad_per_s: &'a [[f64; 2]],
     /// The middle of the whole record's time span, on `t_s`'s scale [s]: what a cause in time
-    /// is centred on, so that its level is the record's mean (an offset's drift: the offset
-    /// reported beside it is the record's mean offset). The same for every part of a record.
+    /// is centred on (an offset's drift: the offset reported beside it is the one at the middle
+    /// of the record's time, its mean for an evenly logged record). The same for every part of
+    /// a record.
     pub record_middle_s: f64,
 }
 

@@ -142,6 +142,10 @@ pub enum PrepareError {
 /// The data ready for the search.
 #[derive(Clone)]
 pub(crate) struct Prepared {
+    /// The middle of the record's time span [s] from its first sample (the dropouts left out),
+    /// set once for the record: every reading of it and every part agrees (see
+    /// [`super::Samples::record_middle_s`]).
+    pub record_middle_s: f64,
     pub train: Part,
     pub test: Part,
     /// The training part, decimated to at most [`SEARCH_SAMPLES`] samples in pieces spread over
@@ -190,11 +194,9 @@ impl Prepared {
         if self.train_at_full_rate { &self.train } else { &self.stretch }
     }
 
-    /// The middle of the record's time span [s] from its first sample (see
-    /// [`super::Samples::record_middle_s`]): the training and the held-out part together.
+    /// The middle of the record's time span [s] (see [`Prepared::record_middle_s`]).
     pub fn middle_s(&self) -> f64 {
-        let last = |t: &[f64]| t.last().copied().unwrap_or(0.0);
-        0.5 * last(&self.train.t).max(last(&self.test.t))
+        self.record_middle_s
     }
 }
 
@@ -439,7 +441,8 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     };
     let spring_share = spring_share(&train);
     let stops = rest::stops(&t, &v, spacing, resolution);
-    Ok(Prepared { train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
+    let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
+    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
