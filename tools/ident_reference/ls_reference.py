@@ -4,8 +4,9 @@
 The thesis baseline (a linear spring and eq. 3.5's arctan friction) plus a torque offset, a cubic
 stiffness and a unit Dahl state driven by the deflection's 25 ms moving average, fitted by linear
 least squares on the first 70 % of the time range; the arctan's k_b and the Dahl state's scale are
-taken from small grids by the training fit. Scored on the last 30 %, as identify's default
-held-out part. Prints, per record, identify's held-out RMSE before and after its causes beside
+taken from small grids by the training fit. Scored on the last 30 %, or on the window identify
+held out instead (its `held_out_window`: a record whose last 30 % moves unlike the rest is
+judged on the window most like it), trained on the rest: both judged on the same samples. Prints, per record, identify's held-out RMSE before and after its causes beside
 the reference's, and flags records where identify is more than 1.25 times the reference.
 
     .venv-interop/bin/python tools/ident_reference/ls_reference.py [--jointctl BIN] FILE.csv...
@@ -64,8 +65,9 @@ def read(path):
     return a['t'], a['deflection'], a['torque']
 
 
-def reference(path):
-    """(the reference's baseline alone, the whole reference): held-out RMSE [Nm]."""
+def reference(path, window=(0.7, 1.0)):
+    """(the reference's baseline alone, the whole reference): RMSE [Nm] on the held-out
+    `window` (fractions of the time range), fitted on the rest."""
     t, d, y = read(path)
     t = t - t[0]
     dt = np.diff(t)
@@ -82,8 +84,8 @@ def reference(path):
         smooth[s] = moving_average(t[s], d[s])
         if len(s) > 2:
             rate[s] = np.gradient(smooth[s], t[s])
-    train = t <= 0.7 * t[-1]
-    test = ~train
+    test = (t >= window[0] * t[-1]) & (t <= window[1] * t[-1])
+    train = ~test
     span = np.ptp(smooth) or 1.0
     speed = np.percentile(np.abs(rate), 95) or 1.0
     rms = lambda r: float(np.sqrt(np.mean(r ** 2)))
@@ -112,17 +114,19 @@ def main():
     args = parser.parse_args()
     for path in args.files:
         name = os.path.basename(path)
+        out = subprocess.run([args.jointctl, 'identify', '--data', path, '--json'], capture_output=True, text=True)
+        report = json.loads(out.stdout) if out.returncode == 0 else None
+        held = (report or {}).get('held_out_window') or {}
+        window = (held.get('start', 0.7), held.get('end', 1.0))
         try:
-            base, ref = reference(path)
+            base, ref = reference(path, window)
         except (OSError, ValueError) as e:
             print(f'{name:45s} no reference: {e}')
             continue
-        out = subprocess.run([args.jointctl, 'identify', '--data', path, '--json'], capture_output=True, text=True)
-        if out.returncode != 0:
+        if report is None:
             why = out.stderr.strip().splitlines()[-1] if out.stderr.strip() else f'exit {out.returncode}'
             print(f'{name:45s} identify refused ({why}); reference {ref:.4f} Nm')
             continue
-        report = json.loads(out.stdout)
         causes = '+'.join(c['effect'] for c in report['causes']) or 'no cause'
         # A friction record's stops are left out of identify's own figures; the reference is
         # scored on every held-out sample, so identify's are taken over every sample too.
@@ -130,6 +134,9 @@ def main():
         before = rest.get('rmse_before_all_nm') if rest else report['rmse_before']
         after = rest.get('rmse_after_all_nm') if rest else report['rmse_after']
         stops = f", stops included ({rest['held_out_samples']} held-out samples at rest)" if rest else ''
+        if window != (0.7, 1.0):
+            stops += f", held out {100 * window[0]:.0f}-{100 * window[1]:.0f} % as identify did"
+
         if before is None or after is None:
             print(f'{name:45s} identify gave no figure over every held-out sample (stops left out); reference {ref:.4f} Nm')
             continue
