@@ -28,8 +28,7 @@ impl CandidateCause for SensorOffset {
 }
 
 /// The sensor offset's drift: `+ r (t - t_m)` [Nm], `t_m` the middle of the record's time [s]
-/// (a torque sensor warming up). A candidate of its
-/// own, so that the held-out part decides it apart from the offset: a drift fitted on the
+/// (a torque sensor warming up). A candidate of its own, so that the held-out part decides it apart from the offset: a drift fitted on the
 /// training part carries on into the held-out part, which an offset that steps between
 /// repetitions does not (0.71, 1.00, 0.58 Nm: the line through the first two missed the third
 /// by 0.6 Nm, and the offset with it was refused). Reported as part of `sensor_offset`
@@ -38,7 +37,8 @@ impl CandidateCause for SensorOffset {
 /// has a term in time, so it writes no fragment.
 pub(crate) struct SensorOffsetDrift;
 
-/// The internal name of [`SensorOffsetDrift`] (in the rejected and negligible lists).
+/// The internal name of [`SensorOffsetDrift`] (where the report lists candidates: rejected,
+/// negligible, confounded).
 pub(crate) const DRIFT_NAME: &str = "sensor_offset_drift";
 
 impl CandidateCause for SensorOffsetDrift {
