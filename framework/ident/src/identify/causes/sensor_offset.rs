@@ -28,10 +28,10 @@ impl CandidateCause for SensorOffset {
 }
 
 /// The sensor offset's drift: `+ r (t - t_m)` [Nm], `t_m` the middle of the record's time [s]
-/// (a torque sensor warming up). A candidate of its own, so that the held-out part decides it apart from the offset: a drift fitted on the
-/// training part carries on into the held-out part, which an offset that steps between
-/// repetitions does not (0.71, 1.00, 0.58 Nm: the line through the first two missed the third
-/// by 0.6 Nm, and the offset with it was refused). Reported as part of `sensor_offset`
+/// (a torque sensor warming up). A candidate of its own, so that the held-out part decides it
+/// apart from the offset: a drift fitted on the training part carries on into the held-out
+/// part, which an offset that steps between repetitions does not (0.71, 1.00, 0.58 Nm: the
+/// line through the first two missed the third by 0.6 Nm, and the offset with it was refused). Reported as part of `sensor_offset`
 /// (`fold_drift_into_offset`). Held to its coefficient on the training part: a line in time
 /// takes up any slow misfit of the other causes. Neither the observer nor the simulated plant
 /// has a term in time, so it writes no fragment.
