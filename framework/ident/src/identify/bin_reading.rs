@@ -121,7 +121,7 @@ impl RateWindow {
 /// its held-out error is no larger. Each reading gets a model of its own: the columns' cache
 /// knows a part by its length and time stamps, not by its rate.
 pub(crate) fn choose_rate_window(all: &[&dyn CandidateCause], baseline: &super::BaselineModel, centre_rad: f64, usual: &Prepared, narrow: &Prepared) -> Option<NarrowRate> {
-    let model = || Model { baseline, centre_rad, middle_s: usual.middle_s(), causes: all, held_out: Default::default(), columns: Default::default() };
+    let model = || Model { baseline, centre_rad, middle_s: usual.record_middle_s, causes: all, held_out: Default::default(), columns: Default::default() };
     let (model_usual, model_narrow) = (model(), model());
     let (usual, narrow) = (usual.as_points(), narrow.as_points());
     let on_usual = Spec { terms: vec![baseline_friction(&model_usual, all, &usual).ok()?] };

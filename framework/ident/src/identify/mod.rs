@@ -297,7 +297,7 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
-        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges, record_middle_s: p.middle_s() };
+        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges, record_middle_s: p.record_middle_s };
         let columns = c.columns(&values, &samples);
         let expected = c.coefficient_names().len();
         if columns.len() != expected || columns.iter().any(|col| col.len() != part.len()) {
@@ -384,7 +384,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         None => p,
     };
     let centre_rad = centre(p);
-    let model = Model { baseline: &opts.baseline, centre_rad, middle_s: p.middle_s(), causes: &all, held_out: Default::default(), columns: Default::default() };
+    let model = Model { baseline: &opts.baseline, centre_rad, middle_s: p.record_middle_s, causes: &all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
@@ -485,7 +485,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     }
     // An offset's drift is reported as part of the offset.
     let index = |n: &str| all.iter().position(|c| c.name() == n);
-    causes::fold_drift_into_offset(&mut found, !p.test.rep.is_empty() || !p.train.rep.is_empty(), || {
+    causes::fold_drift_into_offset(&mut found, !p.train.rep.is_empty(), || {
         let without = |s: &design::Spec, n: &str| -> Option<design::Spec> { Some(select::without_and_impossible(&model, s, index(n)?, p).0) };
         let both = without(&without(&spec, causes::DRIFT_NAME)?, Effect::SensorOffset.name())?;
         Some(select::rmse(&select::held_out_errors(&model, &both, p)?.errors) - rmse_after)

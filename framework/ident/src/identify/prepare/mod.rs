@@ -193,11 +193,6 @@ impl Prepared {
     pub fn full_rate_training(&self) -> &Part {
         if self.train_at_full_rate { &self.train } else { &self.stretch }
     }
-
-    /// The middle of the record's time span [s] (see [`Prepared::record_middle_s`]).
-    pub fn middle_s(&self) -> f64 {
-        self.record_middle_s
-    }
 }
 
 /// Grid searches run on at most this many samples, decimated to no fewer than 100 a cycle of
