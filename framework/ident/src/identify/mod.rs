@@ -430,7 +430,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         }
         None => p,
     };
-    friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
+    let held_out_said = friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
@@ -522,12 +522,13 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         let [with, instead, before] = c.bic;
         let why = confound_rule(with, instead, before, "the arctan");
         let shape = format!(
-            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates, and the held-out part did not decide it (see the rejected causes); no experiment is proposed for them (the proposals stay within what the arm did)",
+            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates; {}; no experiment is proposed for them (the proposals stay within what the arm did)",
             name(c.viscous),
             format_value(c.k_b_s_per_rad),
             format_value(c.peak_rad_per_s),
             100.0 * c.share,
-            format_value(3.0 / c.k_b_s_per_rad)
+            format_value(3.0 / c.k_b_s_per_rad),
+            held_out_said.as_ref().map_or_else(|| "the held-out part was not asked".to_string(), ToString::to_string)
         );
         confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
     }
