@@ -136,6 +136,10 @@ pub(crate) struct Projector {
     inputs: Inputs,
     /// The given characteristic's torque on the inputs (zeros for a fitted baseline).
     model_nm: Vec<f64>,
+    /// The part and the input transforms of the model it was fitted for, as in [`ColumnKey`]:
+    /// a term's columns scored against it are the design's own, and shared with its cache.
+    part: [u64; 5],
+    transforms: SpecKey,
 }
 
 /// Predictions on a part, with the Cp charge of segment-wise coefficients fitted on it.
@@ -247,6 +251,13 @@ impl Spec {
 }
 
 impl Model<'_> {
+    /// The part's and the model's input transforms' share of a [`ColumnKey`].
+    fn column_key(&self, spec: &Spec, p: &Part) -> ([u64; 5], SpecKey) {
+        // A part read as bin averages has other columns than the same part read as points.
+        let part = [p.len() as u64, p.t.first().map_or(0, |t| t.to_bits()), p.t.last().map_or(0, |t| t.to_bits()), p.dt.to_bits(), p.rate_edges.len() as u64];
+        (part, Spec { terms: spec.terms.iter().filter(|t| self.causes[t.cause].transforms()).cloned().collect() }.key())
+    }
+
     fn design(&self, spec: &Spec, p: &Part) -> Design {
         let n = p.len();
         let mut inputs = Inputs { t_s: p.t.clone(), deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad: p.d.clone(), sample_period_s: p.dt };
@@ -289,9 +300,7 @@ impl Model<'_> {
         let mut spans = Vec::new();
         let mut segmented = Vec::new();
         let mut nonlinear = 0;
-        // A part read as bin averages has other columns than the same part read as points.
-        let part = [n as u64, p.t.first().map_or(0, |t| t.to_bits()), p.t.last().map_or(0, |t| t.to_bits()), p.dt.to_bits(), p.rate_edges.len() as u64];
-        let transforms: SpecKey = Spec { terms: spec.terms.iter().filter(|t| self.causes[t.cause].transforms()).cloned().collect() }.key();
+        let (part, transforms) = self.column_key(spec, p);
         for term in &spec.terms {
             let cause = self.causes[term.cause];
             // A nested parameter left at its simpler value (a dead band of zero width) is no
@@ -333,7 +342,8 @@ impl Model<'_> {
         let residual: Vec<f64> = (0..n).map(|i| y[i] - dot_row(&d.cols, &coefs, i)).collect();
         let live: Vec<&Vec<f64>> = d.cols.iter().filter(|c| c.iter().any(|x| *x != 0.0)).collect();
         let q = if live.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_fn(n, live.len(), |i, j| live[j][i]).qr().q() };
-        Some(Projector { q, residual, inputs: d.inputs, model_nm: d.fixed })
+        let (part, transforms) = self.column_key(spec, p);
+        Some(Projector { q, residual, inputs: d.inputs, model_nm: d.fixed, part, transforms })
     }
 
     /// The RSS of the projector's model with `term` added (a term without an input transform).
@@ -352,7 +362,11 @@ impl Model<'_> {
             rate_edges_rad_per_s: &p.rate_edges,
             record_middle_s: self.middle_s,
         };
-        let cols = cause.columns(&term.params, &samples);
+        // The term leaves the inputs alone (see `search`), so its columns are those a design
+        // with it would compute: from the cache, and into it (a profile scores the baseline
+        // friction's grid again for every candidate).
+        let key = (proj.part, proj.transforms.clone(), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
+        let cols = self.columns.get_or(key, || cause.columns(&term.params, &samples));
         let r = &proj.residual;
         if let Some(starts) = cause.segments(&term.params, &samples) {
             // Rings are short and near-orthogonal to the smooth design: fitted on the residual.
