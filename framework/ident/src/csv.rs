@@ -198,8 +198,10 @@ impl Data {
     /// Which repetition sample `i` belongs to, counted from 0: the restarts at or before it.
     ///
     /// ```
-    /// let d = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1\n1,0,1\n0,0,1\n", "r.csv".as_ref()).unwrap();
-    /// assert_eq!((d.repetition(1), d.repetition(2)), (0, 1));
+    /// // Two repetitions of 50 samples each (see [`MIN_REPETITION_SAMPLES`]), their time from 0.
+    /// let rows: String = (0..100).map(|i| format!("{},0,1\n", (i % 50) as f64 * 0.01)).collect();
+    /// let d = jointctl_ident::csv::parse(&format!("t,deflection,torque\n{rows}"), "r.csv".as_ref()).unwrap();
+    /// assert_eq!((d.repetition(49), d.repetition(50)), (0, 1));
     /// ```
     pub fn repetition(&self, i: usize) -> u32 {
         self.restarts.partition_point(|r| *r <= i) as u32
@@ -224,6 +226,12 @@ pub const SETTING_GAP_MM: f64 = 1.0;
 /// The gap [s] a repetition whose time restarts is laid after the previous one with (an
 /// assumption: far longer than any logger's step, so identification sees a new segment).
 pub const RESTART_GAP_S: f64 = 1.0;
+
+/// The fewest samples a repetition whose time restarts holds (an assumption: a repetition is a
+/// test of its own, and fewer samples than identify takes for a whole record, 50, are no test).
+/// A time that steps back sooner is an error, not a restart: a log whose time runs backwards, or
+/// back and forth, was read as thousands of one-sample repetitions and identified.
+pub const MIN_REPETITION_SAMPLES: usize = 50;
 
 const KNOWN: [&str; 7] = ["t", "deflection", "torque", "pivot_mm", "angle_deg", "motor_position", "reference_torque"];
 
@@ -342,7 +350,9 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
                 return Err(err(line, Some(KNOWN[k]), format!("`{cell}` is not a finite number")));
             }
             if v.abs() > PLAUSIBLE_ABS[k] {
-                return Err(err(line, Some(KNOWN[k]), format!("{cell} is implausible: this column holds values within +-{}", PLAUSIBLE_ABS[k])));
+                // Loggers that stamp nanoseconds (ROS, many DAQs) write 1.7e18 in 2024.
+                let hint = if k == 0 && (1e17..1e20).contains(&v.abs()) { " (it looks like nanoseconds since the Unix epoch: write seconds)" } else { "" };
+                return Err(err(line, Some(KNOWN[k]), format!("{cell} is implausible: this column holds values within +-{}{hint}", PLAUSIBLE_ABS[k])));
             }
             values[k] = v;
         }
@@ -354,6 +364,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         if let Some(&prev) = data.t.last() {
             let (start, prev_raw) = (data.t[segment_start] - shift, prev - shift);
             let restarts = raw < prev_raw && raw <= start + 0.1 * (prev_raw - start);
+            let held = data.t.len() - segment_start;
+            if restarts && held < MIN_REPETITION_SAMPLES {
+                return Err(err(
+                    line,
+                    Some("t"),
+                    format!("time {raw} goes back (previous {prev_raw}) {held} samples after the time began at {start}: a repetition whose time restarts holds at least {MIN_REPETITION_SAMPLES} samples; within one, time must increase"),
+                ));
+            }
             if restarts {
                 shift = prev + RESTART_GAP_S - raw;
                 at = raw + shift;
@@ -434,20 +452,40 @@ mod tests {
     /// at zero, were refused as "time does not increase"; Unix-epoch time stamps as "implausible".
     #[test]
     fn a_restarting_time_is_a_new_repetition_and_epoch_seconds_are_time() {
-        let d = parse_text("t,deflection,torque\n0,0,1\n0.5,0,1\n1.0,0,1\n0.0,0,1\n0.5,0,1\n").unwrap();
-        assert_eq!(d.t, [0.0, 0.5, 1.0, 1.0 + RESTART_GAP_S, 1.5 + RESTART_GAP_S]);
-        assert!(d.notes[0].starts_with("time restarts at line 5"), "{:?}", d.notes);
+        // Two repetitions of 50 samples, 0 to 0.98 s each.
+        let rows = |n: usize| (0..n).map(|i| format!("{},0,1\n", i as f64 * 0.02)).collect::<String>();
+        let d = parse_text(&format!("t,deflection,torque\n{}{}", rows(50), rows(2))).unwrap();
+        assert_eq!(d.t[49..], [0.98, 0.98 + RESTART_GAP_S, 1.0 + RESTART_GAP_S]);
+        assert!(d.notes[0].starts_with("time restarts at line 52"), "{:?}", d.notes);
         // The repetition is marked where it begins (its time since the last is not known), and
         // a subset keeps the mark at the first sample it takes from it.
-        assert_eq!(d.restarts, [3]);
-        assert_eq!(d.subset(&[0, 2, 4]).restarts, [2]);
-        assert!(d.subset(&[3, 4]).restarts.is_empty());
+        assert_eq!(d.restarts, [50]);
+        assert_eq!(d.subset(&[0, 2, 51]).restarts, [2]);
+        assert!(d.subset(&[50, 51]).restarts.is_empty());
         // A step back that is not a restart (near the end of a repetition) stays an error, as does a repeat.
-        let e = parse_text("t,deflection,torque\n0,0,1\n0.5,0,1\n1.0,0,1\n0.9,0,1\n").unwrap_err();
-        assert_eq!(e.to_string(), "x.csv:5: column `t`: time 0.9 does not increase (previous 1)");
+        let e = parse_text(&format!("t,deflection,torque\n{}0.9,0,1\n", rows(50))).unwrap_err();
+        assert_eq!(e.to_string(), "x.csv:52: column `t`: time 0.9 does not increase (previous 0.98)");
         assert!(parse_text("t,deflection,torque\n0,0,1\n0,0,1\n").is_err());
         let d = parse_text("t,deflection,torque\n1722285643.101,0,1\n1722285643.103,0,1\n").unwrap();
         assert_eq!(d.len(), 2);
+    }
+
+    /// Finding: a log whose time runs backwards at every row was read as 3999 repetitions of one
+    /// sample each (a note for each) and identified; one whose time steps back and forth, as
+    /// repetitions of two. A time that goes back before a repetition's worth of samples is an
+    /// error that says where.
+    #[test]
+    fn a_time_that_steps_back_before_a_repetitions_worth_is_an_error() {
+        let backwards: String = (0..100).map(|i| format!("{},0,1\n", -(i as f64) * 0.005)).collect();
+        let e = parse_text(&format!("t,deflection,torque\n{backwards}")).unwrap_err();
+        assert_eq!((e.line, e.column.as_deref()), (3, Some("t")), "{e}");
+        assert!(e.to_string().contains("goes back (previous 0) 1 samples after the time began at 0"), "{e}");
+        let back_and_forth: String = (0..100).map(|i| format!("{},0,1\n", if i % 2 == 1 { 1.0 } else { -1.0 } * i as f64 * 0.005)).collect();
+        let e = parse_text(&format!("t,deflection,torque\n{back_and_forth}")).unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        // Nanoseconds since the epoch are named as such.
+        let e = parse_text("t,deflection,torque\n1700000000000000000,0,1\n").unwrap_err();
+        assert!(e.to_string().ends_with("(it looks like nanoseconds since the Unix epoch: write seconds)"), "{e}");
     }
 
     #[test]
