@@ -161,6 +161,8 @@ pub struct Report {
     pub samples: usize,
     /// Samples excluded as dropouts.
     pub dropped_samples: usize,
+    /// Samples excluded at the torque sensor's limit (saturated; see `prepare`).
+    pub saturated_samples: usize,
     /// The deflection's resolution estimated from its own steps [rad].
     pub resolution_rad: f64,
     /// Segments of contiguous logging (split at gaps and where the time restarted).
@@ -559,6 +561,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     let report = Report {
         samples: p.samples,
         dropped_samples: p.dropped,
+        saturated_samples: p.saturated,
         resolution_rad: p.resolution_rad,
         segments: p.segments,
         rmse_before: select::rmse(&before.errors),

@@ -273,11 +273,12 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts; deflection resolution {:.3e} rad (from its steps). {}{}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts{}; deflection resolution {:.3e} rad (from its steps). {}{}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
         report.segments,
         report.dropped_samples,
+        if report.saturated_samples > 0 { format!(", {} at the torque sensor's limit (saturated: the sensor past its range) left out", report.saturated_samples) } else { String::new() },
         report.resolution_rad,
         split_sentence(&report.held_out_window),
         bins_sentence(report.bin_averages.as_ref()),

@@ -5,6 +5,7 @@ use std::borrow::Cow;
 
 mod bins;
 mod dropouts;
+mod saturation;
 mod noise;
 mod pieces;
 mod rate;
@@ -16,8 +17,6 @@ pub use rest::{AtRest, REST_S};
 pub(crate) use rest::scored_on_every_sample;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use dropouts::dropouts_by_segment;
-#[cfg(test)]
-use dropouts::dropouts;
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::NARROWEST_RATE_WINDOW;
@@ -90,6 +89,18 @@ pub const MIN_REVERSALS: usize = 1;
 /// Why the data cannot be identified.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PrepareError {
+    /// Too many samples at the torque sensor's limit: too few left.
+    #[error("the torque sits at its sensor's limit in {saturated} of {samples} samples (a sensor past its range): {left} left, too few to identify anything (at least {needed})")]
+    Saturated {
+        /// Samples at the limit.
+        saturated: usize,
+        /// Samples read.
+        samples: usize,
+        /// Samples left.
+        left: usize,
+        /// Samples needed.
+        needed: usize,
+    },
     /// Too few samples to identify anything.
     #[error("{samples} samples are too few to identify anything (at least {needed})")]
     TooFewSamples {
@@ -158,7 +169,10 @@ pub(crate) struct Prepared {
     pub train_at_full_rate: bool,
     pub excitation: Excitation,
     pub samples: usize,
+    /// Samples left out as dropouts (see `dropouts`).
     pub dropped: usize,
+    /// Samples left out at the torque sensor's limit, not already dropouts (see `saturation`).
+    pub saturated: usize,
     /// The deflection's resolution estimated from the data [rad].
     pub resolution_rad: f64,
     /// Segments of contiguous logging in the whole (kept) record.
@@ -298,7 +312,13 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     // with 0.03 Nm of noise did), measured on the raw series as the floor is.
     let torque_noise = noise_floor(&data.torque, &raw_starts);
     lost.iter_mut().zip(dropouts_by_segment(&data.torque, &raw_starts, torque_noise)).for_each(|(a, b)| *a |= b);
+    let dropouts = lost.iter().filter(|l| **l).count();
+    lost.iter_mut().zip(saturation::saturated(&data.torque)).for_each(|(a, b)| *a |= b);
     let dropped = lost.iter().filter(|l| **l).count();
+    let saturated = dropped - dropouts;
+    if n_all - dropped < 50 && saturated > 0 {
+        return Err(PrepareError::Saturated { saturated, samples: n_all, left: n_all - dropped, needed: 50 });
+    }
     // The columns without the dropouts: borrowed when there are none (a long record is not
     // copied whole).
     let kept = |column: &'a [f64]| -> Cow<'a, [f64]> {
@@ -437,7 +457,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let spring_share = spring_share(&train);
     let stops = rest::stops(&t, &v, spacing, resolution);
     let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
+    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, saturated, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
@@ -503,20 +523,6 @@ mod tests {
     }
 
     #[test]
-    fn a_segment_that_starts_from_rest_after_a_gap_is_not_a_dropout() {
-        // Finding (issue 32, an experiment's sines recorded one after the other, each from
-        // rest): the torque read exactly zero in the first samples after the 1 s gap (the
-        // simulator's sensor before it had read; a real logger may start so too), the reading
-        // before the gap (-0.143 Nm) was taken as their neighbour, and they were dropped as
-        // lost frames. Across a gap there is no neighbour to judge a zero by.
-        let torque = [-0.113, -0.138, -0.143, 0.0, 0.0, 0.0, 0.0, -0.0896, -0.0946, -0.0996];
-        let starts = [0, 3];
-        let whole = dropouts(&torque, 0.01);
-        assert!(whole[3..7].iter().all(|d| *d), "the finding: {whole:?}");
-        assert!(!dropouts_by_segment(&torque, &starts, 0.01).iter().any(|d| *d));
-    }
-
-    #[test]
     fn an_optional_column_of_another_length_is_an_error_and_an_absent_one_is_none() {
         let t: Vec<f64> = (0..400).map(|i| i as f64 * 0.01).collect();
         let d: Vec<f64> = t.iter().map(|t| 0.05 * (std::f64::consts::TAU * 1.1 * t).sin()).collect();
@@ -527,49 +533,6 @@ mod tests {
         let e = prepare(&data, 0.7, HeldOut::Last).err().unwrap();
         assert_eq!(e, PrepareError::UnevenColumn { column: "pivot_mm", len: 10, samples: 400 });
         assert_eq!(e.to_string(), "column `pivot_mm` has 10 values for 400 samples");
-    }
-
-    #[test]
-    fn a_zero_the_signal_passes_through_is_not_a_dropout_but_a_jump_to_zero_is() {
-        // A slow ramp through zero, sampled so that one reading is exactly zero.
-        let ramp: Vec<f64> = (-50..50).map(|i| i as f64 * ENCODER_LSB_RAD).collect();
-        assert!(!dropouts(&ramp, ENCODER_LSB_RAD).iter().any(|d| *d));
-        // Two counts either side of an exact zero: quantisation explains it.
-        let near = [0.1, 2.0 * ENCODER_LSB_RAD, 0.0, -2.0 * ENCODER_LSB_RAD, -0.1];
-        assert!(!dropouts(&near, ENCODER_LSB_RAD)[2]);
-        // A zero in the middle of 0.05 rad: a lost frame.
-        let mut lost = vec![0.05; 100];
-        lost[40] = 0.0;
-        assert_eq!(dropouts(&lost, ENCODER_LSB_RAD).iter().filter(|d| **d).count(), 1);
-        // Finding (issue 31): a fast stroke of five counts a sample that reads exactly zero as
-        // it crosses (between +5 and -5 counts) was taken for a lost frame, the record's slow
-        // parts having made the typical step zero.
-        let mut record = vec![0.0; 200];
-        for (k, x) in record.iter_mut().enumerate().skip(100) {
-            *x = (150.0 - k as f64) * 5.0 * ENCODER_LSB_RAD;
-        }
-        record[..100].iter_mut().enumerate().for_each(|(k, x)| *x = 0.1 + k as f64 * 1e-9);
-        assert_eq!(record[150], 0.0);
-        assert!(!dropouts(&record, ENCODER_LSB_RAD).iter().any(|d| *d));
-        // Finding (issue 36): a torque quantised to 1/640 Nm with 0.03 Nm of noise read exactly
-        // zero between -0.014 and -0.027 Nm, and was taken for a lost frame (uncertainty 0).
-        let torque = [-0.0125, -0.014062, 0.0, -0.026563, -0.029688];
-        assert!(dropouts(&torque, 0.0)[2]);
-        assert!(!dropouts(&torque, 0.03)[2]);
-    }
-
-    #[test]
-    fn lost_readings_next_to_each_other_are_all_found() {
-        // Finding (issue 36, the project's generator at 1.4 % lost frames): a run of two zeros
-        // and a single zero one reading after it, on a slow stroke at 0.09 rad. Each run's
-        // local step was taken across the other run (0.09 rad a sample), and neither was found:
-        // the rate read +-9 rad/s there.
-        let mut record: Vec<f64> = (0..100).map(|k| 0.095 - k as f64 * 2e-4).collect();
-        for k in [40, 41, 43] {
-            record[k] = 0.0;
-        }
-        let found: Vec<usize> = dropouts(&record, ENCODER_LSB_RAD).iter().enumerate().filter(|(_, d)| **d).map(|(k, _)| k).collect();
-        assert_eq!(found, vec![40, 41, 43]);
     }
 
     #[test]
