@@ -313,7 +313,8 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let torque_noise = noise_floor(&data.torque, &raw_starts);
     lost.iter_mut().zip(dropouts_by_segment(&data.torque, &raw_starts, torque_noise)).for_each(|(a, b)| *a |= b);
     let dropouts = lost.iter().filter(|l| **l).count();
-    lost.iter_mut().zip(saturation::saturated(&data.torque)).for_each(|(a, b)| *a |= b);
+    let at_limit = saturation::saturated(&data.torque, &data.deflection, &lost);
+    lost.iter_mut().zip(at_limit).for_each(|(a, b)| *a |= b);
     let dropped = lost.iter().filter(|l| **l).count();
     let saturated = dropped - dropouts;
     if n_all - dropped < 50 && saturated > 0 {
