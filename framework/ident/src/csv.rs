@@ -227,10 +227,11 @@ pub const SETTING_GAP_MM: f64 = 1.0;
 /// assumption: far longer than any logger's step, so identification sees a new segment).
 pub const RESTART_GAP_S: f64 = 1.0;
 
-/// The fewest samples a repetition whose time restarts holds (an assumption: a repetition is a
-/// test of its own, and fewer samples than identify takes for a whole record, 50, are no test).
-/// A time that steps back sooner is an error, not a restart: a log whose time runs backwards, or
-/// back and forth, was read as thousands of one-sample repetitions and identified.
+/// The fewest samples a repetition holds before the time may restart for the next (an
+/// assumption: a repetition is a test of its own, and fewer samples than identify takes for a
+/// whole record, 50, are no test; the last repetition is not held to it, nothing restarts after
+/// it). A time that steps back sooner is an error, not a restart: a log whose time runs
+/// backwards, or back and forth, was read as thousands of one-sample repetitions and identified.
 pub const MIN_REPETITION_SAMPLES: usize = 50;
 
 const KNOWN: [&str; 7] = ["t", "deflection", "torque", "pivot_mm", "angle_deg", "motor_position", "reference_torque"];

@@ -235,7 +235,11 @@ impl ColumnCache {
         }
         e.bytes += size;
         let now = e.clock;
-        e.map.insert(key, (cols.clone(), now));
+        // Two threads that missed the same key both computed it: the second replaces the first,
+        // whose bytes leave the count with it.
+        if let Some((before, _)) = e.map.insert(key, (cols.clone(), now)) {
+            e.bytes -= before.iter().map(|c| c.len() * 8).sum::<usize>();
+        }
         cols
     }
 }

@@ -100,7 +100,7 @@ pub(crate) fn decide_on_held_out(model: &Model, selection: &mut Selection, base:
             selection.rejected.push(why.clone());
             return Some(HeldOutSaid::Refused(why));
         }
-        Addition::NoFit => return Some(HeldOutSaid::Refused(format!("{} {beside}: no fit", name(c.viscous)))),
+        Addition::NoFit => return Some(HeldOutSaid::NotJudged("no fit with the viscous friction in the arctan's place".into())),
     };
     // BIC did not propose it, so the training part must at least tell its damping from zero
     // (the AR(1)-corrected standard error, one-sided 0.1 %; `k_b` taken as found): a held-out
@@ -118,7 +118,7 @@ pub(crate) fn decide_on_held_out(model: &Model, selection: &mut Selection, base:
             selection.rejected.push(format!("{} ({beside}: {why})", name(c.viscous)));
             return Some(HeldOutSaid::Refused(why));
         }
-        None => return Some(HeldOutSaid::Refused("its damping has no standard error on the training part".into())),
+        None => return Some(HeldOutSaid::NotJudged("its damping has no standard error on the training part".into())),
     }
     let evidence = format!("the training part cannot tell it from eq. 3.5's nearly straight arctan (it reaches {:.0} % of its tangent at the training part's peak rate); {judgement}", 100.0 * c.share);
     let mut chosen = selection.chosen.clone();
@@ -152,8 +152,11 @@ pub(crate) enum HeldOutSaid {
     /// Evidence for the viscous friction, but its gain below the relevance threshold (the
     /// judgement's sentence).
     Negligible(String),
-    /// Tried and refused for another reason (why).
+    /// Tried and refused for another reason (why: a negative damping beside the others, a
+    /// damping not told from zero on the training part, not kept given the others).
     Refused(String),
+    /// Not judged (why: no fit, no standard error).
+    NotJudged(String),
     /// Not tried: this many causes are named already.
     NotAsked(usize),
 }
@@ -166,7 +169,8 @@ impl std::fmt::Display for HeldOutSaid {
                 f,
                 "the held-out part tells them apart, in favour of the viscous friction, but by a negligible amount within the recorded rates ({j}): so far as these rates go the two are one model, and beyond them they part"
             ),
-            HeldOutSaid::Refused(why) => write!(f, "the held-out part did not decide it: the viscous friction in the arctan's place was refused ({why})"),
+            HeldOutSaid::Refused(why) => write!(f, "the viscous friction in the arctan's place was refused ({why})"),
+            HeldOutSaid::NotJudged(why) => write!(f, "the held-out part was not asked: {why}"),
             HeldOutSaid::NotAsked(n) => write!(f, "the held-out part was not asked ({n} causes are named already, the most asked for)"),
         }
     }
