@@ -463,3 +463,29 @@ fn a_record_that_cannot_determine_a_characteristic_writes_none_and_says_why() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("the torque is 1.5 Nm in every sample"), "{err}");
 }
+
+/// Finding: the example elbow record with its torque's sign turned (a sensor mounted the other
+/// way) got causes named for a negative stiffness and nothing said of the sign. The report, its
+/// JSON and the terminal now warn of it; the record as recorded gets no warning.
+#[test]
+fn identify_warns_of_a_torque_whose_sign_is_reversed() {
+    let text = std::fs::read_to_string(root().join("tests/data/q4_worn_elbow.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = header.iter().position(|h| *h == "torque").unwrap();
+    let turned: String = lines
+        .map(|l| l.split(',').enumerate().map(|(i, c)| if i == at { format!("{}", -c.parse::<f64>().unwrap()) } else { c.to_string() }).collect::<Vec<_>>().join(","))
+        .fold(header.join(",") + "\n", |acc, l| acc + &l + "\n");
+    let dir = scratch("ident-reversed-sign");
+    let file = dir.join("turned.csv");
+    std::fs::write(&file, turned).unwrap();
+    let run = |f: &std::path::Path| Command::new(jointctl()).args(["identify", "--data"]).arg(f).arg("--json").output().unwrap();
+    let out = run(&file);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["warning"].as_str().is_some_and(|w| w.starts_with("the torque falls as the deflection rises")), "{}", v["warning"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("warning: the torque falls"));
+    let v: serde_json::Value = serde_json::from_slice(&run(&root().join("tests/data/q4_worn_elbow.csv")).stdout).unwrap();
+    assert!(v.get("warning").is_none(), "{}", v["warning"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -180,6 +180,10 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     for n in &data.notes {
         eprintln!("note: {n}");
     }
+    let reversed = reading::reversed_sign(&data.deflection, &data.torque);
+    if let Some(w) = &reversed {
+        eprintln!("warning: {w}");
+    }
     // A configured joint's model has no eq. 3.5 friction (the joint plugins observe torque from
     // the characteristic alone): friction is then a cause to name, not part of the baseline.
     let baseline_friction = a.config.is_none();
@@ -288,6 +292,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.rmse_after,
         u.noise_floor_nm
     );
+    if let Some(w) = &reversed {
+        let _ = writeln!(md, "**Warning:** {w}.\n");
+    }
     // The configured extension's gain along the diagonal; the causes stand without it (a bad
     // extension in the config is said, not fatal, as for the gains along an axis).
     let along_observer = match (diagonal, &configured, &a.config) {
@@ -425,6 +432,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             json["extension"] = extension_json(ext);
         }
         json["gains"] = gains;
+        if let Some(w) = &reversed {
+            json["warning"] = serde_json::json!(w);
+        }
         if let Some(angle) = diagonal {
             json["direction"] = serde_json::json!({"angle_deg": angle, "note": diagonal_note(angle)});
             if let Some(g) = along_observer {
