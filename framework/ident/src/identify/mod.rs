@@ -103,8 +103,7 @@ pub fn confound_evidence(named: &str, other: &str, named_bic: f64, other_bic: f6
     format!("{other} in place of {named} explains the training part about as well ({why}); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart")
 }
 
-/// Which confound rule holds, in words (see [`confound_evidence`]); `named` says what the
-/// alternative stands in for.
+/// Which confound rule holds, in words (see [`confound_evidence`]); `named`: what it stands in for.
 fn confound_rule(named_bic: f64, other_bic: f64, before_bic: f64, named: &str) -> String {
     if (named_bic - other_bic).abs() < select::CONFOUND_BIC {
         format!("BIC {other_bic:.0} against {named_bic:.0}: a difference of {:.0}, below {:.0}, not very strong evidence for either", (named_bic - other_bic).abs(), select::CONFOUND_BIC)
@@ -122,8 +121,7 @@ fn confound_rule(named_bic: f64, other_bic: f64, before_bic: f64, named: &str) -
 /// A record without a spring: what the baseline's friction took on for it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NoSpring {
-    /// The share of the torque's variance a line in the deflection explains (below
-    /// [`NO_SPRING_SHARE`]) [-].
+    /// The torque's variance share a line in the deflection explains (< [`NO_SPRING_SHARE`]) [-].
     pub deflection_share: f64,
     /// The friction's Dahl pre-sliding, as the hysteresis cause reports it (in the extended
     /// model, not among the causes); empty when none was found.
@@ -163,6 +161,9 @@ pub struct Report {
     pub dropped_samples: usize,
     /// Samples excluded at the torque sensor's limit (saturated; see `prepare`).
     pub saturated_samples: usize,
+    /// A torque that falls as the deflection rises: one column's sign reversed, likely.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
     /// The deflection's resolution estimated from its own steps [rad].
     pub resolution_rad: f64,
     /// Segments of contiguous logging (split at gaps and where the time restarted).
@@ -562,6 +563,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         samples: p.samples,
         dropped_samples: p.dropped,
         saturated_samples: p.saturated,
+        warning: p.reversed_sign.clone(),
         resolution_rad: p.resolution_rad,
         segments: p.segments,
         rmse_before: select::rmse(&before.errors),

@@ -180,10 +180,6 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     for n in &data.notes {
         eprintln!("note: {n}");
     }
-    let reversed = reading::reversed_sign(&data.deflection, &data.torque);
-    if let Some(w) = &reversed {
-        eprintln!("warning: {w}");
-    }
     // A configured joint's model has no eq. 3.5 friction (the joint plugins observe torque from
     // the characteristic alone): friction is then a cause to name, not part of the baseline.
     let baseline_friction = a.config.is_none();
@@ -292,7 +288,8 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.rmse_after,
         u.noise_floor_nm
     );
-    if let Some(w) = &reversed {
+    if let Some(w) = &report.warning {
+        eprintln!("warning: {w}");
         let _ = writeln!(md, "**Warning:** {w}.\n");
     }
     // The configured extension's gain along the diagonal; the causes stand without it (a bad
@@ -432,9 +429,6 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
             json["extension"] = extension_json(ext);
         }
         json["gains"] = gains;
-        if let Some(w) = &reversed {
-            json["warning"] = serde_json::json!(w);
-        }
         if let Some(angle) = diagonal {
             json["direction"] = serde_json::json!({"angle_deg": angle, "note": diagonal_note(angle)});
             if let Some(g) = along_observer {

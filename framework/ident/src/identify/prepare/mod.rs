@@ -6,6 +6,7 @@ use std::borrow::Cow;
 mod bins;
 mod dropouts;
 mod saturation;
+mod sign;
 mod noise;
 mod pieces;
 mod rate;
@@ -173,6 +174,8 @@ pub(crate) struct Prepared {
     pub dropped: usize,
     /// Samples left out at the torque sensor's limit, not already dropouts (see `saturation`).
     pub saturated: usize,
+    /// A torque that falls as the deflection rises, said (see `sign`).
+    pub reversed_sign: Option<String>,
     /// The deflection's resolution estimated from the data [rad].
     pub resolution_rad: f64,
     /// Segments of contiguous logging in the whole (kept) record.
@@ -458,7 +461,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let spring_share = spring_share(&train);
     let stops = rest::stops(&t, &v, spacing, resolution);
     let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, saturated, resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
+    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
