@@ -181,8 +181,8 @@ pub(crate) struct Model<'a> {
 }
 
 /// Which columns: the part (its length, first and last time stamp, sample period, whether it is
-/// read as bin averages), the input
-/// transforms in force (terms that shift or clip the deflection) and the term, bit for bit.
+/// read as bin averages), the input transforms in force whose changes the term reads (terms that
+/// shift or clip the deflection; see [`super::causes::InputSet`]) and the term, bit for bit.
 type ColumnKey = ([u64; 5], SpecKey, (usize, Vec<u64>));
 
 /// The columns of terms already computed, kept up to [`ColumnCache::BUDGET_BYTES`] (least
@@ -255,11 +255,28 @@ impl Spec {
 }
 
 impl Model<'_> {
-    /// The part's and the model's input transforms' share of a [`ColumnKey`].
+    /// The part's and the model's input transforms' share of a [`ColumnKey`] (every transform:
+    /// [`Model::seen_by`] keeps a term's own).
     fn column_key(&self, spec: &Spec, p: &Part) -> ([u64; 5], SpecKey) {
         // A part read as bin averages has other columns than the same part read as points.
         let part = [p.len() as u64, p.t.first().map_or(0, |t| t.to_bits()), p.t.last().map_or(0, |t| t.to_bits()), p.dt.to_bits(), p.rate_edges.len() as u64];
         (part, Spec { terms: spec.terms.iter().filter(|t| self.causes[t.cause].transforms()).cloned().collect() }.key())
+    }
+
+    /// The transforms (in order) whose changes reach what `cause` reads: from the last back, a
+    /// transform that writes an input still needed is kept, and what it reads is needed too.
+    fn seen_by(&self, transforms: &SpecKey, cause: usize) -> SpecKey {
+        let mut needed = self.causes[cause].reads();
+        let mut kept: SpecKey = Vec::new();
+        for t in transforms.iter().rev() {
+            let transform = self.causes[t.0];
+            if transform.writes().meets(needed) {
+                needed = needed.union(transform.reads());
+                kept.push(t.clone());
+            }
+        }
+        kept.reverse();
+        kept
     }
 
     fn design(&self, spec: &Spec, p: &Part) -> Design {
@@ -310,7 +327,7 @@ impl Model<'_> {
             // A nested parameter left at its simpler value (a dead band of zero width) is no
             // freedom used: not charged.
             nonlinear += term.params.iter().enumerate().filter(|(j, x)| !term.grids.get(*j).is_some_and(|g| matches!(g.refine, super::causes::Refine::Nested | super::causes::Refine::NestedDecimated) && g.grid.first() == Some(*x))).count();
-            let key = (part, transforms.clone(), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
+            let key = (part, self.seen_by(&transforms, term.cause), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
             let c = (*self.columns.get_or(key, || cause.columns(&term.params, &samples))).clone();
             match cause.segments(&term.params, &samples) {
                 Some(starts) => {
@@ -369,7 +386,7 @@ impl Model<'_> {
         // The term leaves the inputs alone (see `search`), so its columns are those a design
         // with it would compute: from the cache, and into it (a profile scores the baseline
         // friction's grid again for every candidate).
-        let key = (proj.part, proj.transforms.clone(), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
+        let key = (proj.part, self.seen_by(&proj.transforms, term.cause), (term.cause, term.params.iter().map(|x| x.to_bits()).collect()));
         let cols = self.columns.get_or(key, || cause.columns(&term.params, &samples));
         let r = &proj.residual;
         if let Some(starts) = cause.segments(&term.params, &samples) {
@@ -504,6 +521,23 @@ mod tests {
         // The most recent is kept (not computed again).
         let again = cache.get_or(([2, 0, 0, 0, 0], Vec::new(), (0, Vec::new())), || panic!("recomputed"));
         assert_eq!(again[0][0], 2.0);
+    }
+
+    #[test]
+    fn a_term_keeps_its_columns_across_transforms_it_does_not_see() {
+        use super::super::causes::{CoulombFriction, DeadZone, Hysteresis, StiffnessNonlinearity, TimeDelay};
+        let causes: [&dyn CandidateCause; 5] = [&CoulombFriction, &DeadZone, &TimeDelay, &Hysteresis, &StiffnessNonlinearity];
+        let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, causes: &causes, held_out: Default::default(), columns: Default::default() };
+        let (dead_zone, delay) = ((1, vec![1e-3f64.to_bits()], false), (2, vec![0.01f64.to_bits()], false));
+        // A dead zone maps the spring's deflection: the arctan (the rate) and the loop (the
+        // deflection) do not see it, the spring's curve does.
+        assert_eq!(model.seen_by(&vec![dead_zone.clone()], 0), Vec::new());
+        assert_eq!(model.seen_by(&vec![dead_zone.clone()], 3), Vec::new());
+        assert_eq!(model.seen_by(&vec![dead_zone.clone()], 4), vec![dead_zone.clone()]);
+        // A delay shifts every input: everyone sees it, and the dead zone before it too, since
+        // the delay reads the spring's deflection the dead zone wrote.
+        assert_eq!(model.seen_by(&vec![dead_zone.clone(), delay.clone()], 0), vec![dead_zone.clone(), delay.clone()]);
+        assert_eq!(model.seen_by(&vec![delay.clone(), dead_zone.clone()], 0), vec![delay.clone()]);
     }
 
     fn part(t0: f64, d: &[f64], warm: &[f64]) -> Part {

@@ -3,7 +3,7 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use super::{CandidateCause, InputSet, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
 use crate::identify::numeric::interval_mean;
 use jointctl_models::effect::Effect;
 
@@ -13,6 +13,9 @@ pub struct CoulombFriction;
 impl CandidateCause for CoulombFriction {
     fn name(&self) -> &str {
         Effect::CoulombFriction.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::VELOCITY
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::CoulombFriction)

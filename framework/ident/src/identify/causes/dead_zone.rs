@@ -5,7 +5,7 @@ use serde_json::json;
 
 use jointctl_models::play::elastic_deflection;
 
-use super::{CandidateCause, Fragments, Inputs, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use super::{CandidateCause, InputSet, Fragments, Inputs, Parameter, Refine, Samples, SearchContext, log_grid, object};
 use jointctl_models::effect::Effect;
 
 /// The elastic model of `dz(phi, w, r)`: `sgn(phi) max(|phi| - w, 0)` beyond `w + r`, nothing
@@ -31,6 +31,12 @@ fn ramp_rad(p: &[f64]) -> f64 {
 impl CandidateCause for DeadZone {
     fn name(&self) -> &str {
         Effect::DeadZone.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::ELASTIC
+    }
+    fn writes(&self) -> InputSet {
+        InputSet::ELASTIC
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::DeadZone)

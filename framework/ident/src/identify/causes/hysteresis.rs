@@ -3,7 +3,7 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use super::{CandidateCause, InputSet, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
 use jointctl_models::effect::Effect;
 
 /// `+ F_c * u`, `u` the unit Dahl state; deflection scale `lambda = F_c / sigma` [rad].
@@ -111,6 +111,9 @@ fn smallest_scale(c: &SearchContext) -> f64 {
 impl CandidateCause for Hysteresis {
     fn name(&self) -> &str {
         Effect::Hysteresis.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::DEFLECTION
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::Hysteresis)

@@ -22,6 +22,7 @@ mod stiffness_nonlinearity;
 mod time_delay;
 mod vibration;
 mod viscous_friction;
+mod input_set;
 
 pub use coulomb_friction::CoulombFriction;
 pub use reversals::reversals;
@@ -38,6 +39,7 @@ pub use time_delay::TimeDelay;
 pub(crate) use time_delay::{delay_unit, delay_units_in};
 pub use vibration::Vibration;
 pub use viscous_friction::ViscousFriction;
+pub use input_set::InputSet;
 
 /// The built-in vocabulary: a cause for each model effect, in [`Effect::ALL`]'s order (the order
 /// candidates are tried; ties go to the earlier one), and last the sensor offset's drift, which
@@ -363,6 +365,18 @@ pub trait CandidateCause: Send + Sync {
     /// whole model for every value instead of projecting the cause's columns).
     fn transforms(&self) -> bool {
         false
+    }
+    /// The inputs its columns, segments and transform read (every one by default). A cause that
+    /// says fewer keeps its columns when a transform of others changes the model (a dead zone's
+    /// width leaves a friction's columns as they were); one that says too few is handed columns
+    /// computed on other inputs.
+    fn reads(&self) -> InputSet {
+        InputSet::ALL
+    }
+    /// The inputs its transform changes: every one by default for a cause that transforms, none
+    /// for one that does not.
+    fn writes(&self) -> InputSet {
+        if self.transforms() { InputSet::ALL } else { InputSet::NONE }
     }
     /// One column per coefficient, one value per sample.
     fn columns(&self, parameters: &[f64], samples: &Samples) -> Vec<Vec<f64>>;

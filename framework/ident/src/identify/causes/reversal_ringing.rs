@@ -8,7 +8,7 @@
 //! each ring's start is seen, less the Cp charge for the two coefficients of every ring: an honest
 //! measure of the mode, not a prediction of the rings.
 
-use super::{CandidateCause, Parameter, Refine, Samples, SearchContext, log_grid, reversals};
+use super::{CandidateCause, InputSet, Parameter, Refine, Samples, SearchContext, log_grid, reversals};
 use crate::identify::spectrum;
 use jointctl_models::effect::Effect;
 
@@ -38,6 +38,9 @@ const RING_DAMPING: f64 = 0.2;
 impl CandidateCause for ReversalRinging {
     fn name(&self) -> &str {
         Effect::ReversalRinging.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::DEFLECTION
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::ReversalRinging)

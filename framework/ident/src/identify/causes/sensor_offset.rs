@@ -2,7 +2,7 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, Fragments, Samples, object};
+use super::{CandidateCause, InputSet, Fragments, Samples, object};
 use crate::identify::Cause;
 use jointctl_models::effect::Effect;
 
@@ -12,6 +12,9 @@ pub struct SensorOffset;
 impl CandidateCause for SensorOffset {
     fn name(&self) -> &str {
         Effect::SensorOffset.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::NONE
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::SensorOffset)
@@ -44,6 +47,9 @@ pub(crate) const DRIFT_NAME: &str = "sensor_offset_drift";
 impl CandidateCause for SensorOffsetDrift {
     fn name(&self) -> &str {
         DRIFT_NAME
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::NONE
     }
     fn coefficient_names(&self) -> Vec<String> {
         vec!["drift_nm_per_s".into()]

@@ -2,7 +2,7 @@
 //! (gear meshing, a rubbing cable: the faster the joint moves, the harder it shakes). Its phase
 //! is fitted on each repetition apart, as the steady vibration's (see [`super::Vibration`]).
 
-use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
+use super::{CandidateCause, InputSet, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
 use crate::identify::spectrum;
 use jointctl_models::effect::Effect;
 
@@ -12,6 +12,9 @@ pub struct SpeedVibration;
 impl CandidateCause for SpeedVibration {
     fn name(&self) -> &str {
         Effect::SpeedVibration.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::VELOCITY
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::SpeedVibration)

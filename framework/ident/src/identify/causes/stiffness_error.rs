@@ -5,7 +5,7 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, Fragments, Samples, SearchContext, object};
+use super::{CandidateCause, InputSet, Fragments, Samples, SearchContext, object};
 use jointctl_models::effect::Effect;
 
 /// `+ s * tau_model(phi_elastic)` [Nm], `s` the relative error of the configured curve.
@@ -14,6 +14,9 @@ pub struct StiffnessError;
 impl CandidateCause for StiffnessError {
     fn name(&self) -> &str {
         Effect::StiffnessError.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::ELASTIC
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::StiffnessError)

@@ -2,7 +2,7 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, Fragments, Samples, object};
+use super::{CandidateCause, InputSet, Fragments, Samples, object};
 use jointctl_models::effect::Effect;
 
 /// `+ k3 * phi_elastic^3` [Nm].
@@ -11,6 +11,9 @@ pub struct StiffnessNonlinearity;
 impl CandidateCause for StiffnessNonlinearity {
     fn name(&self) -> &str {
         Effect::StiffnessNonlinearity.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::ELASTIC
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::StiffnessNonlinearity)

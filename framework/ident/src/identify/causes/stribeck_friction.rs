@@ -4,7 +4,7 @@
 //! column a joint position), where it is reported with the friction, not as a cause of its own:
 //! beside a spring the thesis' eq. 3.5 arctan stands for the whole friction.
 
-use super::{CandidateCause, Parameter, Refine, Samples, SearchContext, log_grid};
+use super::{CandidateCause, InputSet, Parameter, Refine, Samples, SearchContext, log_grid};
 use jointctl_models::effect::Effect;
 
 /// `+ s tanh(10 v / v_s) exp(-(v / v_s)^2)` [Nm], `s >= 0`.
@@ -13,6 +13,9 @@ pub struct StribeckFriction;
 impl CandidateCause for StribeckFriction {
     fn name(&self) -> &str {
         Effect::StribeckFriction.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::VELOCITY
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::StribeckFriction)

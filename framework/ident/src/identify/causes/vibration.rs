@@ -6,7 +6,7 @@
 //! between them is not known, so neither is the phase at each one's start: the amplitude and
 //! phase are fitted on each repetition apart (see [`CandidateCause::segments`]).
 
-use super::{CandidateCause, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
+use super::{CandidateCause, InputSet, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
 use crate::identify::spectrum;
 use jointctl_models::effect::Effect;
 
@@ -29,6 +29,9 @@ fn envelope(onset_rad_per_s: f64, v: f64) -> f64 {
 impl CandidateCause for Vibration {
     fn name(&self) -> &str {
         Effect::Vibration.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::VELOCITY
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::Vibration)

@@ -2,7 +2,7 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, Fragments, Samples, object};
+use super::{CandidateCause, InputSet, Fragments, Samples, object};
 use jointctl_models::effect::Effect;
 
 /// `+ b * dphi/dt` [Nm], `b >= 0`.
@@ -11,6 +11,9 @@ pub struct ViscousFriction;
 impl CandidateCause for ViscousFriction {
     fn name(&self) -> &str {
         Effect::ViscousFriction.name()
+    }
+    fn reads(&self) -> InputSet {
+        InputSet::VELOCITY
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::ViscousFriction)
