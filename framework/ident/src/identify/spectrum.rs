@@ -64,6 +64,17 @@ pub(crate) fn resolvable(t: &[f64], excitation_hz: f64) -> f64 {
     ((hi - lo) * duration).max(1.0)
 }
 
+/// The forward FFT of `size` points, planned once per size for the whole process: planning a
+/// 65 536-point transform (its twiddles) took longer than running it, and each search step asks
+/// for the same sizes again (the vibrations' scans: a tenth of identify's time on the speed
+/// benchmark's record, a third of it planning). The planner is locked only while it plans or
+/// looks a plan up; the plan runs outside the lock.
+fn forward_fft(size: usize) -> std::sync::Arc<dyn rustfft::Fft<f64>> {
+    static PLANNER: std::sync::OnceLock<std::sync::Mutex<rustfft::FftPlanner<f64>>> = std::sync::OnceLock::new();
+    let planner = PLANNER.get_or_init(|| std::sync::Mutex::new(rustfft::FftPlanner::new()));
+    planner.lock().unwrap_or_else(|e| e.into_inner()).plan_fft_forward(size)
+}
+
 /// The frequency of the strongest component of `r` in the band [Hz]: the peak of a periodogram
 /// (an FFT zero-padded to four times the record, bins a quarter of the resolution apart), refined
 /// by golden section on the exact projection within a bin either side. Samples off a uniform grid
@@ -93,7 +104,7 @@ pub(crate) fn dominant_frequency(t: &[f64], r: &[f64], excitation_hz: f64) -> Op
         for (slot, x) in slots.iter().zip(r) {
             buffer[*slot].re += *x;
         }
-        rustfft::FftPlanner::new().plan_fft_forward(size).process(&mut buffer);
+        forward_fft(size).process(&mut buffer);
         let bin_hz = 1.0 / (size as f64 * dt);
         let (first, last) = ((lo / bin_hz).ceil() as usize, ((hi / bin_hz).floor() as usize).min(size / 2));
         let peak = (first..=last.max(first)).max_by(|a, b| buffer[*a].norm_sqr().total_cmp(&buffer[*b].norm_sqr())).unwrap_or(first);
