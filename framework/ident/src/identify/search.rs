@@ -15,7 +15,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
     if !model.causes[cause].applicable(ctx) {
         return None;
     }
-    let mut params = model.causes[cause].parameters(ctx);
+    let mut params = ctx.grids_of(cause, model.causes[cause]);
     // The whole grids, for a narrowed one whose best lies at its edge.
     let whole: Vec<Vec<f64>> = params.iter().map(|p| p.grid.clone()).collect();
     if let Some(warm) = warm.filter(|w| w.len() == params.len()) {

@@ -386,14 +386,15 @@ fn search_times(model: &Model, candidates: &[usize], ctx: &SearchContext, took: 
     if candidates.iter().all(|c| took.contains_key(c)) {
         return candidates.iter().map(|&c| (c, took[&c])).collect();
     }
-    candidates
-        .iter()
-        .map(|&c| {
-            let cause = &model.causes[c];
-            let size: usize = cause.parameters(ctx).iter().map(|g| g.grid.len().max(1)).product();
-            (c, (size * if cause.transforms() { 2 } else { 1 }) as f64)
-        })
-        .collect()
+    // The grids on every core (a vibration's scan of the residual takes milliseconds); the
+    // searches take them from the context.
+    parallel_map(candidates, |&c| {
+        let cause = model.causes[c];
+        let size: usize = ctx.grids_of(c, cause).iter().map(|g| g.grid.len().max(1)).product();
+        (c, (size * if cause.transforms() { 2 } else { 1 }) as f64)
+    })
+    .into_iter()
+    .collect()
 }
 
 /// Every cause must still earn its place given the others: the weakest that is not named any

@@ -112,6 +112,10 @@ pub struct SearchContext<'a> {
     pub no_spring: bool,
     /// The residual's dominant frequency, once asked for (several vibration causes ask).
     dominant: std::sync::OnceLock<Option<f64>>,
+    /// Each candidate's grids by its index among the model's causes, once asked for: the
+    /// selection's first step asks every candidate for its grids to schedule the searches, and
+    /// each search asks again (a vibration's scan of the residual, twice).
+    grids: std::sync::Mutex<std::collections::HashMap<usize, Vec<Parameter>>>,
 }
 
 /// Series of a contiguous full-rate stretch of the training part (see
@@ -129,7 +133,20 @@ pub struct FullRate<'a> {
 impl<'a> SearchContext<'a> {
     /// The context of one search step: the decimated part's series and the full-rate stretch's.
     pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, baseline_fitted: bool, no_spring: bool) -> Self {
-        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new() }
+        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new(), grids: Default::default() }
+    }
+
+    /// The grids of the cause at `index` among the model's causes ([`CandidateCause::parameters`]
+    /// in this context), computed once. Computed outside the lock: two threads that ask at once
+    /// both compute them, alike.
+    pub(crate) fn grids_of(&self, index: usize, cause: &dyn CandidateCause) -> Vec<Parameter> {
+        let lock = || self.grids.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(grids) = lock().get(&index) {
+            return grids.clone();
+        }
+        let grids = cause.parameters(self);
+        lock().insert(index, grids.clone());
+        grids
     }
 
     /// The largest |deflection rate| of the decimated training part [rad/s] (0 for a record that
