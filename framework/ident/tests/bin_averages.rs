@@ -129,3 +129,21 @@ fn a_slow_logs_noise_floor_is_read_on_what_the_baseline_leaves() {
         assert!((floor - 0.05).abs() < 0.25 * 0.05, "seed {seed}: the points' floor {floor} Nm for 0.05");
     }
 }
+
+/// A loop that closes before a slow log's first sample after each turn is not named: on the
+/// blind generator's device E at 20 Hz (50 ms means of a viscous friction, a sensor offset and
+/// eq. 3.5's arctan of 0.40 Nm x 129 s/rad, no hysteresis), the arctan averaged over the bin at
+/// each turn took a Dahl loop of 0.056 Nm over 2e-4 rad, where the log's first step away from a
+/// turn is 8.8e-3 rad; its full-rate variants named none.
+#[test]
+fn a_loop_narrower_than_the_logs_first_step_after_a_turn_is_not_named() {
+    let case = jointctl_blind_gen::device_variants(8).into_iter().find(|c| c.name.starts_with("devE_2_bin20")).expect("device E's 20 Hz record");
+    let path = std::env::temp_dir().join(format!("jointctl-turn-step-{}.csv", std::process::id()));
+    jointctl_blind_gen::write_csv(&case, &path).unwrap();
+    let data = jointctl_ident::csv::read(&path);
+    let _ = std::fs::remove_file(&path);
+    let report = identify(&data.unwrap(), &IdentifyOptions::default()).unwrap();
+    let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+    assert!(named.contains(&"viscous_friction") && named.contains(&"sensor_offset"), "{named:?}");
+    assert!(!named.contains(&"hysteresis"), "{named:?}");
+}

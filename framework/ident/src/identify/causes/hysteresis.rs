@@ -98,15 +98,31 @@ pub fn dead_band(d: &[f64], width_rad: f64) -> Vec<f64> {
 const DEAD_BAND_IN_SCATTER: [f64; 5] = [0.0, 1.0, 2.0, 4.0, 8.0];
 
 /// The smallest deflection scale tried: a thousandth of the amplitude, and no less than one
-/// step of the deflection reading (at most a tenth of the largest scale: below one step on a
-/// stroke of fewer than 30 steps). A loop whose state turns within one step turns at every step the reading
-/// reverses: a friction on the sign of the last step, which the data cannot tell from a loop.
-/// Searched freely, that took a 20 Hz record's filtered torque lag beside its time delay
-/// (the shared real-like l3-case018: a loop of 0.05 Nm at 0.3 of a step).
+/// step of the deflection reading nor than the log's first step away from a turn
+/// ([`crate::identify::Excitation::turn_step_rad`]) (at most a tenth of the largest scale: below
+/// one step on a stroke of fewer than 30 steps). A loop whose state turns within one step turns
+/// at every step the reading reverses: a friction on the sign of the last step, which the data
+/// cannot tell from a loop. Searched freely, that took a 20 Hz record's filtered torque lag
+/// beside its time delay (the shared real-like l3-case018: a loop of 0.05 Nm at 0.3 of a step).
+/// Likewise a loop that has closed before a slow log's first sample after each turn: on 20 Hz
+/// bin means, eq. 3.5's friction averaged over the bin at the turn (a step in the rate's sign,
+/// smoothed by the bin) took loops of 0.06 Nm over a hundredth to a twentieth of that sample's
+/// step, on three of the blind devices' 20 Hz records of devices without hysteresis, whose
+/// full-rate variants named none. Loops named on hysteresis records span at least that step
+/// (1.0-1.1 of it on the closest), and a friction record's pre-sliding 0.6 of it (blind seed 2's
+/// 065, a LuGre friction at 200 Hz): the floor is [`TURN_STEP_IN_SCALES`] below the step. With
+/// it one of the three names none; on the other two the floor is beyond the cap (a/30) and a
+/// loop at the cap is named instead (not solved here).
 fn smallest_scale(c: &SearchContext) -> f64 {
     let a = c.excitation.amplitude_rad;
-    (a * 1e-3).max(c.excitation.resolution_rad.min(a / 30.0))
+    (a * 1e-3).max(c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(a / 30.0))
 }
+
+/// A Dahl state is within `exp(-4)`, 2 %, of its limit four deflection scales after a turn: a
+/// loop of a quarter of the log's first step after a turn has closed at that sample, a step in
+/// the sign of the motion to the data (an assumption on the closeness: the false loops lay at
+/// 0.01-0.06 of the step, the narrowest real ones at 0.6 and more).
+const TURN_STEP_IN_SCALES: f64 = 4.0;
 
 impl CandidateCause for Hysteresis {
     fn name(&self) -> &str {
@@ -192,7 +208,7 @@ mod tests {
     use super::{CandidateCause, Hysteresis};
 
     fn scales(amplitude_rad: f64, resolution_rad: f64) -> Vec<f64> {
-        let excitation = Excitation { amplitude_rad, frequency_hz: 0.5, sample_period_s: 0.05, deflection_scatter_rad: 0.0, resolution_rad };
+        let excitation = Excitation { amplitude_rad, frequency_hz: 0.5, sample_period_s: 0.05, deflection_scatter_rad: 0.0, resolution_rad, turn_step_rad: resolution_rad };
         let full_rate = FullRate { t_s: &[], velocity_rad_per_s: &[], residual_nm: &[] };
         let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, true, false);
         Hysteresis.parameters(&ctx)[0].grid.clone()

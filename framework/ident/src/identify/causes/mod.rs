@@ -40,6 +40,7 @@ pub(crate) use time_delay::{delay_unit, delay_units_in};
 pub use vibration::Vibration;
 pub use viscous_friction::ViscousFriction;
 pub use input_set::InputSet;
+pub use reversals::turn_step_rad;
 
 /// The built-in vocabulary: a cause for each model effect, in [`Effect::ALL`]'s order (the order
 /// candidates are tried; ties go to the earlier one), and last the sensor offset's drift, which
@@ -87,6 +88,8 @@ pub struct Excitation {
     pub deflection_scatter_rad: f64,
     /// The deflection reading's resolution [rad]: its smallest common step.
     pub resolution_rad: f64,
+    /// How finely the log shows the motion where it turns [rad] ([`turn_step_rad`]).
+    pub turn_step_rad: f64,
 }
 
 /// What a candidate sees when it chooses its parameter grid: the experiment's scales and the

@@ -23,7 +23,7 @@ pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::NARROWEST_RATE_WINDOW;
 use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
 
-use super::causes::{Excitation, reversals};
+use super::causes::{Excitation, reversals, turn_step_rad};
 use super::design::Part;
 use crate::csv::Data;
 
@@ -449,7 +449,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let every_fit = trained.div_ceil(FIT_SAMPLES).max(1);
     let every_test = (hi - lo).div_ceil(HELD_OUT_SAMPLES).max(1);
     let (train, test) = (training(every_fit * FIT_SAMPLES, every_fit), part_every(lo..hi, every_test));
-    let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter, resolution_rad: resolution };
+    let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter, resolution_rad: resolution, turn_step_rad: turn_step_rad(&d, &starts) };
     // The full-rate stretch is contiguous (a delay's samples, a periodogram): the piece before
     // the held-out window, or the one after it when that is longer.
     let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };
