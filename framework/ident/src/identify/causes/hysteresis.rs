@@ -98,7 +98,7 @@ pub fn dead_band(d: &[f64], width_rad: f64) -> Vec<f64> {
 const DEAD_BAND_IN_SCATTER: [f64; 5] = [0.0, 1.0, 2.0, 4.0, 8.0];
 
 /// The smallest deflection scale tried: a thousandth of the amplitude, and no less than one
-/// step of the deflection reading nor than the log's first step away from a turn
+/// step of the deflection reading nor than a quarter of the log's first step away from a turn
 /// ([`crate::identify::Excitation::turn_step_rad`]) (at most a tenth of the largest scale: below
 /// one step on a stroke of fewer than 30 steps). A loop whose state turns within one step turns
 /// at every step the reading reverses: a friction on the sign of the last step, which the data

@@ -40,8 +40,9 @@ pub fn reversals(deflection_rad: &[f64]) -> Vec<usize> {
 
 /// How finely the log shows the motion where it turns [rad]: the deflection's first step away
 /// from each turning point ([`reversals`]: to the first sample that differs from the extreme, in
-/// the same segment of contiguous logging, `starts`), the median over the record's turns; 0
-/// when it has none. A fast log turns by a count or less; a slow log of bin means jumps, its
+/// the same segment of contiguous logging, `starts`), the median over the record's turns (the
+/// upper of the middle two); 0 when no turn has a next sample in its segment. A step that is
+/// not finite is left out. A fast log turns by a count or less; a slow log of bin means jumps, its
 /// first bin after a turn already far from it (the blind devices' 20 Hz means: 4e-3 to 3.5e-2
 /// rad, eight to a hundred times the loops named on them).
 ///
@@ -58,7 +59,8 @@ pub fn turn_step_rad(deflection_rad: &[f64], starts: &[usize]) -> f64 {
         .filter_map(|r| {
             let next = (r + 1..d.len()).find(|j| d[*j] != d[r])?;
             // Not across a gap: the next segment's first sample is no step of this motion.
-            (!starts.iter().any(|s| *s > r && *s <= next)).then(|| (d[next] - d[r]).abs())
+            let step = (d[next] - d[r]).abs();
+            (step.is_finite() && !starts.iter().any(|s| *s > r && *s <= next)).then_some(step)
         })
         .collect();
     if steps.is_empty() {
@@ -66,4 +68,22 @@ pub fn turn_step_rad(deflection_rad: &[f64], starts: &[usize]) -> f64 {
     }
     let middle = steps.len() / 2;
     *steps.select_nth_unstable_by(middle, f64::total_cmp).1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::turn_step_rad;
+
+    #[test]
+    fn a_turn_steps_within_its_segment_only() {
+        // Out to 1 and back twice; the first turn's next sample opens a new segment (a gap).
+        let d = [0.0, 0.5, 1.0, 0.9, 0.0, 0.5, 1.0, 0.6, 0.0];
+        // Turns at 1.0 (sample 2), 0.0 (4) and 1.0 (6); their steps 0.1, 0.5 and 0.4.
+        assert!((turn_step_rad(&d, &[0]) - 0.4).abs() < 1e-12);
+        // The first turn's step crosses the gap: 0.5 and 0.4 left, the upper of the two taken.
+        assert!((turn_step_rad(&d, &[0, 3]) - 0.5).abs() < 1e-12);
+        // No turn with a next sample in its segment: 0.
+        assert_eq!(turn_step_rad(&[0.0, 1.0, 0.0], &[0, 2]), 0.0);
+        assert_eq!(turn_step_rad(&[0.0, 0.3, 0.6], &[0]), 0.0);
+    }
 }
