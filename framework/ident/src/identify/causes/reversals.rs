@@ -44,7 +44,7 @@ pub fn reversals(deflection_rad: &[f64]) -> Vec<usize> {
 /// upper of the middle two); 0 when no turn has a next sample in its segment. A step that is
 /// not finite is left out. A fast log turns by a count or less; a slow log of bin means jumps, its
 /// first bin after a turn already far from it (the blind devices' 20 Hz means: 4e-3 to 3.5e-2
-/// rad, eight to a hundred times the loops named on them).
+/// rad; 16 to 126 times the false loops named on three of them).
 ///
 /// ```
 /// use jointctl_ident::identify::causes::turn_step_rad;
