@@ -169,15 +169,16 @@ pub(crate) enum Addition {
     NoFit,
 }
 
-/// `term` added to `spec` and polished with it (the polish's first round looks over every
-/// term's whole grid), judged on the held-out part as every proposal is. For an alternative the
-/// training part cannot tell from a term of the model (eq. 3.5's arctan nearly straight over the
-/// training part's rates, against a viscous friction), the held-out part may move faster and
-/// tell them apart.
+/// `term` added to `start` and polished with it (the polish's first round looks over every
+/// term's whole grid), judged on the held-out part against `spec` as every proposal is. For an
+/// alternative the training part cannot tell from a term of the model (eq. 3.5's arctan nearly
+/// straight over the training part's rates, against a viscous friction), the held-out part may
+/// move faster and tell them apart; `start` is `spec` with that term held to the alternative's
+/// reading (eq. 3.5's arctan held to saturate within the recorded rates).
 /// Whether it then earns its place given the others is [`prune`]'s to say.
-pub(crate) fn held_out_addition(model: &Model, spec: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Addition {
+pub(crate) fn held_out_addition(model: &Model, spec: &Spec, start: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Addition {
     let Some(reduced) = held_out_errors(model, spec, p) else { return Addition::NoFit };
-    let with = polish(model, &spec.with(term), &p.coarse, &p.stretch);
+    let with = polish(model, &start.with(term), &p.coarse, &p.stretch);
     match check(model, &with, &reduced, p, name) {
         Checked::Tested(s, judgement) if judgement.named() => Addition::Named(s, judgement),
         Checked::Tested(_, judgement) if judgement.negligible() => Addition::Negligible(judgement),
