@@ -9,6 +9,8 @@
 
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
+mod through_the_reader;
+
 const K_NM_PER_RAD: f64 = 80.0;
 const KA_NM: f64 = 0.4;
 const KB_S_PER_RAD: f64 = 150.0;
@@ -138,11 +140,7 @@ fn a_slow_logs_noise_floor_is_read_on_what_the_baseline_leaves() {
 #[test]
 fn a_loop_narrower_than_the_logs_first_step_after_a_turn_is_not_named() {
     let case = jointctl_blind_gen::device_variants(8).into_iter().find(|c| c.name.starts_with("devE_2_bin20")).expect("device E's 20 Hz record");
-    let path = std::env::temp_dir().join(format!("jointctl-turn-step-{}.csv", std::process::id()));
-    jointctl_blind_gen::write_csv(&case, &path).unwrap();
-    let data = jointctl_ident::csv::read(&path);
-    let _ = std::fs::remove_file(&path);
-    let report = identify(&data.unwrap(), &IdentifyOptions::default()).unwrap();
+    let report = identify(&through_the_reader::blind_case(&case, "turn-step"), &IdentifyOptions::default()).unwrap();
     let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
     assert!(named.contains(&"viscous_friction") && named.contains(&"sensor_offset"), "{named:?}");
     assert!(!named.contains(&"hysteresis"), "{named:?}");

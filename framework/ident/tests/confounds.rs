@@ -3,6 +3,8 @@
 
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
+mod through_the_reader;
+
 /// A sine deflection of `amp` rad at 0.25 Hz (plus, when `second`, a fifth of it at 1.55 Hz) on
 /// the thesis' baseline (120 Nm/rad, eq. 3.5 friction `0.3 atan(80 v)`), 14-bit deflection,
 /// 0.02 Nm noise, 200 Hz for 80 s, plus `extra(deflection, velocity)` [Nm].
@@ -108,11 +110,7 @@ fn a_viscous_friction_taken_by_a_nearly_straight_arctan_is_reported_confounded()
 #[test]
 fn a_friction_confound_says_what_the_held_out_part_said() {
     let case = jointctl_blind_gen::device_variants(4).into_iter().find(|c| c.name.starts_with("devE_1_irregular")).expect("device E's irregular record");
-    let path = std::env::temp_dir().join(format!("jointctl-confound-{}.csv", std::process::id()));
-    jointctl_blind_gen::write_csv(&case, &path).unwrap();
-    let data = jointctl_ident::csv::read(&path);
-    let _ = std::fs::remove_file(&path);
-    let report = identify(&data.unwrap(), &IdentifyOptions::default()).unwrap();
+    let report = identify(&through_the_reader::blind_case(&case, "confound"), &IdentifyOptions::default()).unwrap();
     let confound = report.confounded.iter().find(|c| c.effect == "coulomb_friction" && c.alternative == "viscous_friction").expect("the arctan confounded with a viscous friction");
     let viscous_negligible = report.negligible.iter().any(|n| n.effect == "viscous_friction");
     assert!(viscous_negligible, "{:?}", report.negligible);

@@ -4,6 +4,8 @@
 use jointctl_ident::csv::Data;
 use jointctl_ident::identify::{Report, identify};
 
+mod through_the_reader;
+
 /// 60 s at 500 Hz of a 120 Nm/rad spring with eq. 3.5's friction `0.3 atan(50 v)`, moved by
 /// 0.31 and 0.73 Hz sines of 0.03 rad each (random phases), 14-bit deflection, 0.03 Nm of noise,
 /// and `extra(t, x, v)` [Nm] added (called once per sample, in order, with the unquantised
@@ -80,7 +82,7 @@ fn an_offset_that_steps_between_repetitions_is_no_drift() {
             text += &format!("{},{},{}\n", single.t[i], single.deflection[i], single.torque[i] + offset);
         }
     }
-    let data = through_a_file("steps", |path| std::fs::write(path, text).unwrap());
+    let data = through_the_reader::through_a_file("drift-steps", |path| std::fs::write(path, text).unwrap());
     assert_eq!(data.restarts.len(), 2, "three repetitions read");
     let report = identify(&data, &Default::default()).unwrap();
     let named = named(&report);
@@ -95,20 +97,11 @@ fn a_loop_alone_gets_no_offset_or_drift() {
     assert!(matches!(named.as_slice(), [("hysteresis", _)]), "{named:?}");
 }
 
-/// What `write` puts in a CSV file, read back by the CSV reader as a user's file is.
-fn through_a_file(tag: &str, write: impl FnOnce(&std::path::Path)) -> Data {
-    let path = std::env::temp_dir().join(format!("jointctl-drift-{}-{tag}.csv", std::process::id()));
-    write(&path);
-    let data = jointctl_ident::csv::read(&path);
-    let _ = std::fs::remove_file(&path);
-    data.unwrap()
-}
-
 /// The blind generator's record `name` of seed `seed`'s suite (that case alone generated),
 /// through the CSV reader.
 fn blind(seed: u64, name: &str) -> Data {
     let (case, _) = jointctl_blind_gen::suite_plan(seed).into_iter().find(|s| s.name == name).unwrap().generate().unwrap();
-    through_a_file(&format!("{seed}-{name}"), |path| jointctl_blind_gen::write_csv(&case, path).unwrap())
+    through_the_reader::blind_case(&case, &format!("drift-{seed}-{name}"))
 }
 
 /// Finding (the blind generator, seed 4's 037): an offset of 1.65 Nm drifting 0.032 Nm/s
