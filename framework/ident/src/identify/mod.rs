@@ -457,8 +457,8 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         let i = spec.terms.iter().position(|t| t.cause == chosen.cause).ok_or(IdentifyError::Degenerate { model: "extended" })?;
         let (cause, term) = (all[chosen.cause], &spec.terms[i]);
         let names: Vec<String> = term.grids.iter().map(|p| p.name.clone()).collect();
-        // Against the model without it and without what turns impossible then (as `prune` judges it).
-        let gain = select::held_out_errors(&model, &select::without_and_impossible(&model, &spec, chosen.cause, p).0, p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
+        // Against the model without it and what turns impossible then (as `prune` judges it), or the one it was judged against.
+        let gain = select::held_out_errors(&model, &chosen.against.clone().unwrap_or_else(|| select::without_and_impossible(&model, &spec, chosen.cause, p).0), p).map_or(0.0, |e| select::rmse(&e.errors) - rmse_after);
         let mut evidence = chosen.evidence.clone();
         if let Some(remark) = cause.remark(&term.params, &p.excitation, duration) {
             evidence += &format!("; {remark}");

@@ -30,6 +30,11 @@ const TESTED_PER_STEP: usize = 4;
 pub(crate) struct Chosen {
     pub cause: usize,
     pub evidence: String,
+    /// The model its held-out gain was judged against, where that is not the model without it:
+    /// a viscous friction named beside eq. 3.5's nearly straight arctan is judged against the
+    /// model as it was, whose arctan its fit then moved (see `friction_confound`); its reported
+    /// gain is against that model too.
+    pub against: Option<Spec>,
 }
 
 pub(crate) struct Selection {
@@ -173,8 +178,8 @@ pub(crate) enum Addition {
 /// term's whole grid), judged on the held-out part against `spec` as every proposal is. For an
 /// alternative the training part cannot tell from a term of the model (eq. 3.5's arctan nearly
 /// straight over the training part's rates, against a viscous friction), the held-out part may
-/// move faster and tell them apart; `start` is `spec` with that term held to the alternative's
-/// reading (eq. 3.5's arctan held to saturate within the recorded rates).
+/// move faster and tell them apart; `start` is `spec`, or `spec` with that term held to the
+/// alternative's reading (eq. 3.5's arctan held to saturate within the recorded rates).
 /// Whether it then earns its place given the others is [`prune`]'s to say.
 pub(crate) fn held_out_addition(model: &Model, spec: &Spec, start: &Spec, term: Term, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Addition {
     let Some(reduced) = held_out_errors(model, spec, p) else { return Addition::NoFit };
@@ -321,7 +326,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                         // held-out part told them apart; those after it were not tested.
                         let close = |bic: f64| (bic - b).abs() < CONFOUND_BIC || current - bic >= CONFOUND_SHARE * (current - b);
                         about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0)).map(|w| (*c, w.2, *b, w.0, current)));
-                        chosen.push(Chosen { cause: *c, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
+                        chosen.push(Chosen { cause: *c, against: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
                         current = score(&s, 0.0);
                         spec = s;
                         accepted = true;
@@ -353,7 +358,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                             let (a, c) = (top[i].2, top[j].2);
                             let b = score(&both, 0.0);
                             for k in [a, c] {
-                                chosen.push(Chosen { cause: k, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(a), name(c), test) });
+                                chosen.push(Chosen { cause: k, against: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(a), name(c), test) });
                             }
                             current = b;
                             spec = both;
@@ -551,7 +556,7 @@ mod tests {
         // Without the delay the damping is negative: the lag under another name.
         let alone = held_out_errors(&model, &spec.without(delay), &p).unwrap();
         assert!(alone.fit.of(0)[0] < 0.0, "{:?}", alone.fit.of(0));
-        let chosen = [viscous, delay].map(|cause| Chosen { cause, evidence: String::new() }).into();
+        let chosen = [viscous, delay].map(|cause| Chosen { cause, evidence: String::new(), against: None }).into();
         let mut s = Selection { spec, chosen, rejected: Vec::new(), negligible: Vec::new(), confounded: Vec::new() };
         prune(&model, &p, &mut s, &|c| all[c].name().to_string());
         let fit = held_out_errors(&model, &s.spec, &p).unwrap().fit.clone();
