@@ -17,6 +17,8 @@ use jointctl_blind_gen::{Case, device_variants, suite};
 use jointctl_ident::identify::prepare::HeldOut;
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
+mod through_the_reader;
+
 /// What identify named in a case, with the parameters, or why it refused the file.
 type Outcome = Result<Vec<(String, BTreeMap<String, f64>)>, String>;
 
@@ -27,11 +29,8 @@ fn run(case: &Case) -> Outcome {
 /// The causes named on `case` (dropouts left out), with their uncertainty.
 fn run_causes(case: &Case) -> Result<Vec<jointctl_ident::identify::Cause>, String> {
     // One file a case, removed once read (a folder per process was left behind after every run).
-    let path = std::env::temp_dir().join(format!("jointctl-blind-{}-{}.csv", std::process::id(), case.name));
-    jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
-    let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
-    let _ = std::fs::remove_file(&path);
-    let report = identify(&data?, &IdentifyOptions { held_out: held_out(), ..IdentifyOptions::default() }).map_err(|e| e.to_string())?;
+    let data = through_the_reader::try_blind_case(case, &case.name)?;
+    let report = identify(&data, &IdentifyOptions { held_out: held_out(), ..IdentifyOptions::default() }).map_err(|e| e.to_string())?;
     Ok(report.causes.into_iter().filter(|c| c.effect != "dropout").collect())
 }
 

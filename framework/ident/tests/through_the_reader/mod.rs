@@ -1,12 +1,24 @@
 //! A record written to a CSV file and read back by the project's CSV reader, as a user's file
 //! is: the tests that take the blind generator's records see them as identify's users would.
+// Each test that includes this module uses a part of it.
+#![allow(dead_code)]
+
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use jointctl_ident::csv::Data;
 
-/// `write` a file at a temporary path named by `tag` (unique among the tests that run at once),
-/// read it with the CSV reader, and remove it.
+/// A path of its own for every file of the process: tests run on several threads at once, and
+/// two of them may write a case of the same name (`suite(1)` and `suite(2)` both have a
+/// `000_viscous_plain`), one reading the other's file or finding it gone.
+fn temporary_path(tag: &str) -> std::path::PathBuf {
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    std::env::temp_dir().join(format!("jointctl-through-the-reader-{}-{n}-{tag}.csv", std::process::id()))
+}
+
+/// `write` a file at a temporary path named by `tag`, read it with the CSV reader, and remove it.
 pub fn through_a_file(tag: &str, write: impl FnOnce(&std::path::Path)) -> Data {
-    let path = std::env::temp_dir().join(format!("jointctl-through-the-reader-{}-{tag}.csv", std::process::id()));
+    let path = temporary_path(tag);
     write(&path);
     let data = jointctl_ident::csv::read(&path);
     let _ = std::fs::remove_file(&path);
@@ -16,4 +28,14 @@ pub fn through_a_file(tag: &str, write: impl FnOnce(&std::path::Path)) -> Data {
 /// The blind generator's `case`, written by the generator's own CSV writer and read back.
 pub fn blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Data {
     through_a_file(tag, |path| jointctl_blind_gen::write_csv(case, path).unwrap())
+}
+
+/// [`blind_case`], or why the file could not be written or read (the CSV reader's error, for a
+/// suite that counts refused records).
+pub fn try_blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Result<Data, String> {
+    let path = temporary_path(tag);
+    jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
+    let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
+    let _ = std::fs::remove_file(&path);
+    data
 }
