@@ -103,8 +103,9 @@ pub(crate) fn decide_on_held_out(model: &Model, selection: &mut Selection, base:
     // Refused as a negative damping: judged again beside an arctan that saturates; that
     // judgement is taken only when it names the viscous friction (otherwise the first refusal
     // stands, and what the report says of the pair with it).
-    if let (Addition::Impossible(why), Some(start)) = (&addition, saturating(&current, c.friction, c.peak_rad_per_s))
-        && why.starts_with(&name(c.viscous))
+    if let Addition::Impossible(cause, _) = &addition
+        && *cause == c.viscous
+        && let Some(start) = saturating(&current, c.friction, c.peak_rad_per_s)
         && let retried @ Addition::Named(..) = select::held_out_addition(model, &current, &start, term, p, name)
     {
         addition = retried;
@@ -119,7 +120,7 @@ pub(crate) fn decide_on_held_out(model: &Model, selection: &mut Selection, base:
             selection.rejected.push(format!("{} ({beside}, no evidence on the held-out part: {j})", name(c.viscous)));
             return Some(HeldOutSaid::Undecided(j.to_string()));
         }
-        Addition::Impossible(why) => {
+        Addition::Impossible(_, why) => {
             selection.rejected.push(why.clone());
             return Some(HeldOutSaid::Refused(why));
         }

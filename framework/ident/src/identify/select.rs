@@ -88,9 +88,10 @@ pub(crate) fn compute_held_out(model: &Model, spec: &Spec, p: &Prepared) -> Opti
     Some(HeldOut { errors, residual_nm, rss: raw.iter().sum(), fitted_here: pred.leverage.iter().sum::<f64>().round() as usize, fit })
 }
 
-/// Why a model's fit on the training part is physically impossible (a term's own rule), if it is.
-fn impossible(model: &Model, spec: &Spec, p: &Prepared, name: &dyn Fn(usize) -> String) -> Option<String> {
-    impossible_term(model, spec, p).map(|(cause, why)| format!("{} ({why} with the others in the model)", name(cause)))
+/// Which cause's fit on the training part is physically impossible (a term's own rule), if one
+/// is, and the sentence that says why.
+fn impossible(model: &Model, spec: &Spec, p: &Prepared, name: &dyn Fn(usize) -> String) -> Option<(usize, String)> {
+    impossible_term(model, spec, p).map(|(cause, why)| (cause, format!("{} ({why} with the others in the model)", name(cause))))
 }
 
 /// The first cause of `spec` whose fit on the training part is physically impossible, and why.
@@ -140,8 +141,8 @@ pub(crate) fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> Judgement {
 
 /// What a polished proposal came to on the held-out part.
 enum Checked {
-    /// Its fit on the training part is physically impossible (why).
-    Impossible(String),
+    /// A cause's fit on the training part is physically impossible (that cause, why).
+    Impossible(usize, String),
     /// The model, its judgement against the model without it.
     Tested(Spec, Judgement),
     /// No fit.
@@ -151,8 +152,8 @@ enum Checked {
 /// The physics check and the held-out test of `full` against the model whose held-out errors are
 /// `reduced`.
 fn check(model: &Model, full: &Spec, reduced: &HeldOut, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Checked {
-    if let Some(why) = impossible(model, full, p, name) {
-        return Checked::Impossible(why);
+    if let Some((cause, why)) = impossible(model, full, p, name) {
+        return Checked::Impossible(cause, why);
     }
     match compare_with(reduced, model, full, p) {
         Some(judgement) => Checked::Tested(full.clone(), judgement),
@@ -168,8 +169,8 @@ pub(crate) enum Addition {
     Negligible(Judgement),
     /// No evidence on the held-out part.
     NoEvidence(Judgement),
-    /// Its fit is physically impossible (why, the cause named).
-    Impossible(String),
+    /// A cause's fit is physically impossible (that cause; why, the cause named).
+    Impossible(usize, String),
     /// No fit.
     NoFit,
 }
@@ -188,7 +189,7 @@ pub(crate) fn held_out_addition(model: &Model, spec: &Spec, start: &Spec, term: 
         Checked::Tested(s, judgement) if judgement.named() => Addition::Named(s, judgement),
         Checked::Tested(_, judgement) if judgement.negligible() => Addition::Negligible(judgement),
         Checked::Tested(_, judgement) => Addition::NoEvidence(judgement),
-        Checked::Impossible(why) => Addition::Impossible(why),
+        Checked::Impossible(cause, why) => Addition::Impossible(cause, why),
         Checked::NoFit => Addition::NoFit,
     }
 }
@@ -320,7 +321,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
             let tested = parallel_map(chunk, |(_, s, _)| check(model, &polish(model, s, coarse, &p.stretch), &reduced, p, &name));
             for ((b, _, c), outcome) in chunk.iter().zip(tested) {
                 match outcome {
-                    Checked::Impossible(why) => rejected.push(why),
+                    Checked::Impossible(_, why) => rejected.push(why),
                     Checked::Tested(s, judgement) if judgement.named() => {
                         // Candidates with a better training BIC were tested before and the
                         // held-out part told them apart; those after it were not tested.
@@ -353,7 +354,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 });
                 for (&(i, j), outcome) in chunk.iter().zip(tested) {
                     match outcome {
-                        Some(Checked::Impossible(why)) => rejected.push(why),
+                        Some(Checked::Impossible(_, why)) => rejected.push(why),
                         Some(Checked::Tested(both, test)) if test.named() => {
                             let (a, c) = (top[i].2, top[j].2);
                             let b = score(&both, 0.0);
