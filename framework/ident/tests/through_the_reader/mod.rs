@@ -16,26 +16,33 @@ fn temporary_path(tag: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("jointctl-through-the-reader-{}-{n}-{tag}.csv", std::process::id()))
 }
 
-/// `write` a file at a temporary path named by `tag`, read it with the CSV reader, and remove it.
-pub fn through_a_file(tag: &str, write: impl FnOnce(&std::path::Path)) -> Data {
+/// `write` a file at a temporary path named by `tag`, read it with the CSV reader, and remove it:
+/// the data, or why the file could not be written or read (for a suite that counts refused
+/// records).
+pub fn try_through_a_file(tag: &str, write: impl FnOnce(&std::path::Path) -> Result<(), String>) -> Result<Data, String> {
     let path = temporary_path(tag);
-    write(&path);
-    let data = jointctl_ident::csv::read(&path);
-    let _ = std::fs::remove_file(&path);
-    data.unwrap()
-}
-
-/// The blind generator's `case`, written by the generator's own CSV writer and read back.
-pub fn blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Data {
-    through_a_file(tag, |path| jointctl_blind_gen::write_csv(case, path).unwrap())
-}
-
-/// [`blind_case`], or why the file could not be written or read (the CSV reader's error, for a
-/// suite that counts refused records).
-pub fn try_blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Result<Data, String> {
-    let path = temporary_path(tag);
-    jointctl_blind_gen::write_csv(case, &path).map_err(|e| e.to_string())?;
+    write(&path)?;
     let data = jointctl_ident::csv::read(&path).map_err(|e| e.to_string());
     let _ = std::fs::remove_file(&path);
     data
+}
+
+/// [`try_through_a_file`] for a file that must be read.
+pub fn through_a_file(tag: &str, write: impl FnOnce(&std::path::Path)) -> Data {
+    try_through_a_file(tag, |path| {
+        write(path);
+        Ok(())
+    })
+    .unwrap()
+}
+
+/// The blind generator's `case`, written by the generator's own CSV writer and read back, or why
+/// it could not be.
+pub fn try_blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Result<Data, String> {
+    try_through_a_file(tag, |path| jointctl_blind_gen::write_csv(case, path).map_err(|e| e.to_string()))
+}
+
+/// [`try_blind_case`] for a case that must be read.
+pub fn blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Data {
+    try_blind_case(case, tag).unwrap()
 }
