@@ -459,7 +459,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         span(before) + span(after)
     };
     let spring_share = spring_share(&train);
-    let stops = rest::stops(&t, &v, spacing, resolution);
+    let stops = rest::stops(&t, &d, &v, spacing, resolution);
     let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
     Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
 }
