@@ -31,6 +31,9 @@ pub struct ServiceNames {
     pub commands: String,
     /// [`JointsDescriptor`] publish-subscribe service (one sample, kept).
     pub joints: String,
+    /// The latest observed [`ArmState`], a blackboard the loop thread writes itself
+    /// ([`LatestStateWriter`]).
+    pub latest_state: String,
 }
 
 impl ServiceNames {
@@ -43,6 +46,7 @@ impl ServiceNames {
             raw_descriptor: format!("{arm}/raw_descriptor"),
             commands: format!("{arm}/commands"),
             joints: format!("{arm}/joints"),
+            latest_state: format!("{arm}/latest_state"),
         }
     }
 }
@@ -134,6 +138,16 @@ pub enum IpcSetupError {
         /// iceoryx2's reason.
         source: RequestResponseOpenError,
     },
+    /// The latest-state blackboard could not be created, opened or given its port or entry.
+    #[error("cannot {what} the latest-state blackboard `{service}`")]
+    LatestState {
+        /// Service name.
+        service: String,
+        /// What failed: "create", "open", "write to" or "read".
+        what: &'static str,
+        /// iceoryx2's reason.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
 }
 
 /// Where an arm's shared memory lives: its iceoryx2 domain (file prefix), the root folder of
@@ -209,6 +223,13 @@ pub fn create_node(domain: Option<&str>, name: &str) -> Result<Node<ipc::Service
 /// [`create_node`] in a whole scope. The root folder and the domain's management segment are
 /// checked and closed to other users around iceoryx2 (see [`access`]).
 pub fn create_node_in(scope: &IpcScope, name: &str) -> Result<Node<ipc::Service>, IpcSetupError> {
+    create_node_of::<ipc::Service>(scope, name)
+}
+
+/// [`create_node_in`] of the iceoryx2 service kind `S`: `ipc_threadsafe::Service` for handles
+/// that move between threads (the latest-state blackboard's writer, inside a runtime's
+/// `ArmPublisher`).
+pub fn create_node_of<S: iceoryx2::service::Service>(scope: &IpcScope, name: &str) -> Result<Node<S>, IpcSetupError> {
     // iceoryx2 warns that it found no config file, which is by design here (the config is built
     // in code); its own `IOX2_LOG_LEVEL` still overrides this.
     set_log_level_from_env_or(LogLevel::Error);
@@ -221,7 +242,7 @@ pub fn create_node_in(scope: &IpcScope, name: &str) -> Result<Node<ipc::Service>
         .name(&node_name)
         .config(&config)
         .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<ipc::Service>()
+        .create::<S>()
         .map_err(|source| {
             // iceoryx2 says "InternalError" or "UnableToGenerateUniqueNodeId" without a path; the
             // management segment is the file a failing node creation could not use.

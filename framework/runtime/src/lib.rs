@@ -17,6 +17,7 @@ pub mod publisher;
 mod run_error;
 pub mod runner;
 pub mod signals;
+mod state_fill;
 pub mod status;
 pub mod timing;
 

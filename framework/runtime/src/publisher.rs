@@ -8,13 +8,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
 use iceoryx2::port::update_connections::UpdateConnections;
-use jointctl_modes::Mode;
 use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDrive, RawFrame, RawReading};
-use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointMode, JointSample, JointsDescriptor, ServiceNames, decode_name, encode_name};
+use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointsDescriptor, ServiceNames, decode_name, encode_name};
 
 use crate::arm::Arm;
 use crate::commands::{ArmCommand, CommandValidator};
 use crate::run_error::{RunError, port_error};
+use crate::state_fill::fill_joints;
 use crate::timing::{LoopStats, monotonic_ns};
 
 /// One cycle's record, handed from the loop thread to the publisher thread.
@@ -62,17 +62,7 @@ const RING_CAPACITY: usize = 64;
 /// Capacity of the IPC → loop command ring.
 const COMMAND_CAPACITY: usize = 32;
 
-/// The mode published in [`JointSample::mode`].
-pub fn published_mode(mode: &Mode) -> JointMode {
-    match mode {
-        Mode::Hold => JointMode::HOLD,
-        Mode::Position { .. } => JointMode::POSITION,
-        Mode::Manual { .. } => JointMode::MANUAL,
-        Mode::Trajectory { .. } => JointMode::TRAJECTORY,
-        Mode::Torque { .. } => JointMode::TORQUE,
-        Mode::Impedance { .. } => JointMode::IMPEDANCE,
-    }
-}
+pub use crate::state_fill::published_mode;
 
 /// Answers command requests: validates them against the loop's published status, queues the
 /// valid ones for the loop, and waits for the loop to apply an enable or disable before it
@@ -339,6 +329,9 @@ pub struct ArmPublisher {
     log_hops: bool,
     hops: Vec<HopSample>,
     failures: u64,
+    /// The latest-state blackboard, written on the loop thread as soon as a cycle is observed.
+    latest: jointctl_ipc::LatestStateWriter,
+    latest_state: Box<ArmState>,
 }
 
 impl ArmPublisher {
@@ -368,6 +361,7 @@ impl ArmPublisher {
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<libc::pid_t, RunError>>();
         let arm_name = arm.name.clone();
+        let arm_scope = scope;
         let scope = scope.clone();
         let (encoders, drives) = arm.raw_devices();
         let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
@@ -414,7 +408,17 @@ impl ArmPublisher {
         }
         record.diagnostics.device_count = devices as u32;
         let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
-        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0 })
+        // Written by the loop thread itself (`post_observed`), not the publisher thread.
+        let latest = match jointctl_ipc::LatestStateWriter::create(arm_scope, &arm.name, limits.max_subscribers) {
+            Ok(latest) => latest,
+            Err(e) => {
+                stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                let _ = thread.join();
+                return Err(e.into());
+            }
+        };
+        let latest_state = Box::new(record.state);
+        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0, latest, latest_state })
     }
 
     /// Fills the state and raw parts of this cycle's record.
@@ -433,25 +437,22 @@ impl ArmPublisher {
         for slot in &arm.slots {
             for i in slot.dofs() {
                 self.status.set_dof(i, arm.enabled[i], slot.fault);
-                let st = &arm.states[i];
-                s.joints[i] = JointSample {
-                    name: s.joints[i].name,
-                    reference_torque_nm: arm.torque_references[i],
-                    sensor_torque_nm: arm.sensor_torque(i).unwrap_or(f64::NAN),
-                    gravity_nm: arm.gravity_torques[i],
-                    mode: published_mode(arm.controllers[i].mode()),
-                    enabled: arm.enabled[i] as u32,
-                    position_rad: st.position_rad,
-                    velocity_rad_s: st.velocity_rad_s,
-                    deflection_rad: st.deflection_rad,
-                    torque_nm: st.torque_nm,
-                    stiffness_nm_per_rad: st.stiffness_nm_per_rad,
-                    pivot_mm: st.pivot_mm,
-                    valid_mask: st.valid.0,
-                    fault_code: slot.fault,
-                };
             }
         }
+        fill_joints(s, arm);
+    }
+
+    /// Writes the state just observed to the latest-state blackboard
+    /// ([`jointctl_ipc::LatestStateWriter`]), on the loop thread: the readings and what the
+    /// observers made of them, and the mode and torque reference as the last cycle left them
+    /// (this cycle's control comes after). Lock-free and allocation-free; an inspector reading
+    /// it waits neither for the cycle's control nor for the publisher thread.
+    pub fn post_observed(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64) {
+        let s = &mut self.latest_state;
+        s.cycle = cycle;
+        s.stamp_ns = stamp_ns;
+        fill_joints(s, arm);
+        self.latest.write(s);
     }
 
     /// Applies the commands the desk accepted since the last cycle, in order. Allocation-free.

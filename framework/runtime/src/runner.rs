@@ -106,6 +106,7 @@ impl<'a> ControlLoop<'a> {
         let stamp_s = woke_ns.saturating_sub(self.start_ns) as f64 * 1e-9;
         self.arm.observe(stamp_s);
         if let Some(p) = self.publisher.as_deref_mut() {
+            p.post_observed(self.arm, self.cycle, woke_ns);
             p.apply_commands(self.arm);
         }
         self.arm.control();

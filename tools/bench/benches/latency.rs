@@ -4,8 +4,11 @@
 //!
 //! The runtime's publisher thread logs, per cycle, when the HAL read returned, when the cycle's
 //! work ended, when its record was handed over, taken and sent ([`jointctl_runtime::HopSample`]);
-//! a subscriber thread busy-polls and notes each sample's arrival. Each run on an idle machine,
-//! then with a busy loop on every core.
+//! a subscriber thread busy-polls and notes each sample's arrival. Each run twice: through the
+//! joint-state service (every cycle, sent by the publisher thread after control) and through the
+//! latest-state blackboard the loop writes before control (`jointctl_ipc::LatestStateWriter`),
+//! an inspector thread busy-polling it for each new cycle. Each on an idle machine, then with a
+//! busy loop on every core.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -18,9 +21,19 @@ use jointctl_runtime::{ArmPublisher, HopSample, RunOptions};
 /// What a subscriber saw of one sample: its cycle, its `stamp_ns` and when it arrived [ns].
 type Arrival = (u64, u64, u64);
 
-/// A busy-polling inspector thread on `arm`'s joint-state service, pinned to `cpu` when given:
-/// collects, until the flag is set, every sample's cycle, stamp and arrival time.
-fn latency_subscriber(arm: &str, cpu: Option<usize>) -> (Arc<AtomicBool>, std::thread::JoinHandle<Vec<Arrival>>) {
+/// Where an inspector reads the arm's state.
+#[derive(Clone, Copy, PartialEq)]
+enum Via {
+    /// The joint-state publish-subscribe service: every cycle, sent by the publisher thread.
+    Subscriber,
+    /// The latest-state blackboard the loop thread writes before control.
+    Blackboard,
+}
+
+/// A busy-polling inspector thread on `arm`'s joint-state service (or its latest-state
+/// blackboard), pinned to `cpu` when given: collects, until the flag is set, every sample's
+/// cycle, stamp and arrival time (of the blackboard, each new cycle it sees).
+fn latency_subscriber(arm: &str, cpu: Option<usize>, via: Via) -> (Arc<AtomicBool>, std::thread::JoinHandle<Vec<Arrival>>) {
     let stop = Arc::new(AtomicBool::new(false));
     let sub_stop = stop.clone();
     let arm = arm.to_string();
@@ -28,10 +41,24 @@ fn latency_subscriber(arm: &str, cpu: Option<usize>) -> (Arc<AtomicBool>, std::t
         if let Some(cpu) = cpu {
             let _ = jointctl_runtime::timing::pin_to_cpu(cpu);
         }
+        let mut seen = Vec::with_capacity(10_000);
+        if via == Via::Blackboard {
+            let reader = jointctl_ipc::LatestStateReader::open(&jointctl_ipc::IpcScope::domain(None), &arm).unwrap();
+            let mut last = u64::MAX;
+            while !sub_stop.load(Ordering::Relaxed) {
+                let s = reader.latest();
+                if s.stamp_ns != 0 && s.cycle != last {
+                    last = s.cycle;
+                    seen.push((s.cycle, s.stamp_ns, monotonic_ns()));
+                } else {
+                    std::hint::spin_loop();
+                }
+            }
+            return seen;
+        }
         let node = jointctl_ipc::create_node(None, &format!("{arm}-inspector")).unwrap();
         let names = jointctl_ipc::ServiceNames::for_arm(&arm);
         let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
-        let mut seen = Vec::with_capacity(10_000);
         while !sub_stop.load(Ordering::Relaxed) {
             if let Some(s) = sub.receive().unwrap() {
                 seen.push((s.cycle, s.stamp_ns, monotonic_ns()));
@@ -70,7 +97,7 @@ struct Hops {
 /// The 7-DOF SHERPA arm at 1 kHz for `cycles`, with the loop (and its publisher thread) on the
 /// last CPU at SCHED_FIFO 80 when `realtime`, the subscriber on CPU 0 then; on a thread of its
 /// own, since scheduling settings are per thread.
-fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool) -> Hops {
+fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool, via: Via) -> Hops {
     let name = name.to_string();
     std::thread::spawn(move || {
         let last_cpu = std::thread::available_parallelism().map_or(1, |n| n.get()) - 1;
@@ -81,7 +108,7 @@ fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool) -> Hops {
         });
         let scope = jointctl_ipc::IpcScope::domain(None);
         let mut publisher = ArmPublisher::with_hop_log(&arm, &scope, Default::default(), cycles as usize).unwrap();
-        let (stop, subscriber) = latency_subscriber(&name, realtime.then_some(0));
+        let (stop, subscriber) = latency_subscriber(&name, realtime.then_some(0), via);
         std::thread::sleep(Duration::from_millis(200));
         let opts = RunOptions { cycles: Some(cycles), duration_s: None, timing_samples: 0, stop: None };
         jointctl_runtime::run(&mut arm, &loaded.config.timing, Some(&mut publisher), &opts).unwrap();
@@ -93,6 +120,13 @@ fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool) -> Hops {
         let hops = publisher.hops();
         let hop = |f: fn(&HopSample) -> u64| hops.iter().map(f).collect::<Vec<u64>>();
         let after_send: Vec<(u64, u64)> = hops.iter().filter_map(|h| arrived.get(&h.cycle).map(|&at| (at.saturating_sub(h.sent_ns), at.saturating_sub(h.readings_ns)))).collect();
+        if via == Via::Blackboard {
+            let rows = vec![
+                ("cycle began (wake-up) → HAL read returned", hop(|h| h.readings_ns - h.read_ns)),
+                ("HAL read returned → read from the blackboard by the inspector (observers, the blackboard's write, the inspector's poll)", after_send.iter().map(|p| p.1).collect()),
+            ];
+            return Hops { rows, total: latencies(&seen), from_readings: after_send.iter().map(|p| p.1).collect() };
+        }
         let rows = vec![
             ("cycle began (wake-up) → HAL read returned", hop(|h| h.readings_ns - h.read_ns)),
             ("HAL read returned → control done (observe, control, write HAL; the simulated physics steps in the write)", hop(|h| h.done_ns - h.readings_ns)),
@@ -113,7 +147,7 @@ fn handoff_alone(samples: u64) -> Vec<u64> {
     let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
     let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
     let publisher = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, Default::default()).unwrap().publisher_builder().create().unwrap();
-    let (stop, subscriber) = latency_subscriber("bench-ipc", None);
+    let (stop, subscriber) = latency_subscriber("bench-ipc", None, Via::Subscriber);
     std::thread::sleep(Duration::from_millis(200));
     let mut state = jointctl_ipc::ArmState::EMPTY;
     for cycle in 0..samples {
@@ -137,11 +171,16 @@ fn main() {
     let fifo = "loop and publisher thread SCHED_FIFO 80/79 on the last CPU, subscriber on CPU 0";
     let runs = [("default timing", false, false), (fifo, true, false), ("loaded (a busy loop per core), default timing", false, true), ("loaded (a busy loop per core), the same SCHED_FIFO and CPUs", true, true)];
     let mut summary = Vec::new();
-    for (i, (what, realtime, loaded)) in runs.into_iter().enumerate() {
+    for (i, (what, realtime, loaded), via) in runs.into_iter().enumerate().flat_map(|(i, r)| [(i, r, Via::Subscriber), (i, r, Via::Blackboard)]) {
         let hogs = loaded.then(jointctl_bench::Hogs::start);
-        let mut h = sensor_to_inspector(&format!("bench-latency-{i}"), cycles, realtime);
+        let suffix = if via == Via::Blackboard { "-latest" } else { "" };
+        let mut h = sensor_to_inspector(&format!("bench-latency-{i}{suffix}"), cycles, realtime, via);
         drop(hogs);
-        println!("## Sensor read → subscriber receive, hop by hop, {what} ({} samples received)", h.total.len());
+        let (path, what) = match via {
+            Via::Subscriber => ("subscriber receive", what.to_string()),
+            Via::Blackboard => ("inspector read from the latest-state blackboard", format!("{what}, the latest-state blackboard")),
+        };
+        println!("## Sensor read → {path}, hop by hop, {what} ({} samples received)", h.total.len());
         println!("| hop | p50 us | p99 us | max us |");
         println!("|---|---|---|---|");
         for (name, v) in &mut h.rows {
