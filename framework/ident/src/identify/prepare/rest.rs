@@ -90,40 +90,52 @@ pub(super) fn stops(t: &[f64], d: &[f64], v: &[f64], spacing: f64, resolution_ra
         }
         i = j;
     }
+    if intervals.is_empty() {
+        return Vec::new();
+    }
     // Each stop widened over the samples either side where the reading dithers within a count.
     let dither = dithers(t, d, resolution_rad);
-    let mut widened: Vec<(f64, f64)> = Vec::with_capacity(intervals.len());
     // The readings of a dithering edge (its first or last REST_S / 2): the dither's window
     // reaches that far past the sample it is told at, so the samples between the motion and
     // that sample that read the same counts are at rest as well.
-    let band = |from: usize, to: usize| d[from..to].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
-    let reads = |(lo, hi): (f64, f64), k: usize| d[k] >= lo && d[k] <= hi;
-    for (mut i, mut j) in intervals {
-        let (first, last) = (i, j);
-        while i > 0 && dither[i - 1] && observed(i) > 0.0 {
-            i -= 1;
-        }
-        if i < first {
-            let edge = band(i, (i..n).find(|k| t[*k] > t[i] + 0.5 * REST_S).unwrap_or(n));
-            while i > 0 && reads(edge, i - 1) && observed(i) > 0.0 {
+    let band = |from: usize, to: usize| d[from..to].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(least, most), x| (least.min(*x), most.max(*x)));
+    let reads = |(least, most): (f64, f64), k: usize| d[k] >= least && d[k] <= most;
+    let mut widened: Vec<(usize, usize)> = intervals
+        .into_iter()
+        .map(|(start, end)| {
+            let (mut i, mut j) = (start, end);
+            while i > 0 && dither[i - 1] && observed(i) > 0.0 {
                 i -= 1;
             }
-        }
-        while j < n && dither[j] && observed(j) > 0.0 {
-            j += 1;
-        }
-        if j > last {
-            let edge = band((0..j).rev().find(|k| t[*k] < t[j - 1] - 0.5 * REST_S).map_or(0, |k| k + 1), j);
-            while j < n && reads(edge, j) && observed(j) > 0.0 {
+            if i < start {
+                let edge = band(i, (i..n).find(|k| t[*k] > t[i] + 0.5 * REST_S).unwrap_or(n));
+                while i > 0 && reads(edge, i - 1) && observed(i) > 0.0 {
+                    i -= 1;
+                }
+            }
+            while j < n && dither[j] && observed(j) > 0.0 {
                 j += 1;
             }
-        }
-        match widened.last_mut() {
-            Some(last) if last.1 >= t[i] => last.1 = t[j - 1],
-            _ => widened.push((t[i], t[j - 1])),
+            if j > end {
+                let edge = band((0..j).rev().find(|k| t[*k] < t[j - 1] - 0.5 * REST_S).map_or(0, |k| k + 1), j);
+                while j < n && reads(edge, j) && observed(j) > 0.0 {
+                    j += 1;
+                }
+            }
+            (i, j)
+        })
+        .collect();
+    // A stop widened may reach over the next one, or back over the one before (a joint hunting
+    // between two counts): merged as index ranges, in order, each keeping its widest end.
+    widened.sort_unstable();
+    let mut merged: Vec<(usize, usize)> = Vec::with_capacity(widened.len());
+    for (i, j) in widened {
+        match merged.last_mut() {
+            Some(last) if i <= last.1 => last.1 = last.1.max(j),
+            _ => merged.push((i, j)),
         }
     }
-    widened
+    merged.into_iter().map(|(i, j)| (t[i], t[j - 1])).collect()
 }
 
 /// Whether the reading dithers over the [`REST_S`] centred on each sample: it stays within one
@@ -142,8 +154,10 @@ pub(super) fn stops(t: &[f64], d: &[f64], v: &[f64], spacing: f64, resolution_ra
 /// 1.105 Nm), so it is not taken. What prompted the rule, seed 12's 063 (a joint settling for
 /// 0.13 s between two counts while its friction, `tanh(v / 0.001 rad/s)`, flipped between
 /// +-2.29 Nm; 55 % of the held-out error, 11 times the noise), ticks twice in 0.135 s: slower
-/// than the window, and not caught. One pass, the window's least and greatest readings kept
-/// in monotone queues.
+/// than the window, and not caught. The count is the data's smallest common step
+/// (`resolution_rad`), which the reader bounds at a 14-bit encoder's: on a coarser encoder one
+/// count is several of those, and no dither is found (the stops stay as the rate finds them).
+/// One pass, the window's least and greatest readings kept in monotone queues.
 fn dithers(t: &[f64], d: &[f64], resolution_rad: f64) -> Vec<bool> {
     let n = t.len().min(d.len());
     let (mut lows, mut highs) = (std::collections::VecDeque::new(), std::collections::VecDeque::new());
@@ -285,6 +299,35 @@ mod tests {
         let last_tick = (1..d.len()).rev().find(|i| d[*i] != d[i - 1]).unwrap();
         assert!(t[last_tick] > 0.4, "the ring ticks until {}", t[last_tick]);
         assert!(found[0].0 < 0.36, "the stop begins at {} s", found[0].0);
+    }
+
+    #[test]
+    fn stops_widened_over_one_another_keep_every_sample_of_each() {
+        // A joint hunting between two counts: arriving at count 0, at rest there for 0.3 s, a
+        // quick tick pair to count 1 and back (a dither), 0.3 s on count 0 again, then off on a
+        // slow start that reads count 0 for another 0.1 s before it leaves. The first stop,
+        // widened over the dither and on over the samples that read its counts, reaches over
+        // the second stop to where the reading leaves them; merged, the second stop's own end
+        // must not cut that back (it did: the last merged end was taken, not the widest).
+        let q = 1e-3;
+        let dt = 1e-3;
+        let mut d: Vec<f64> = (0..100).map(|k| -(100 - k) as f64 * q).collect();
+        d.extend(vec![0.0; 300]);
+        d.extend([q; 20]);
+        d.extend(vec![0.0; 400]);
+        d.extend((1..200).map(|k| (2 + k) as f64 * q));
+        let t: Vec<f64> = (0..d.len()).map(|i| i as f64 * dt).collect();
+        // The rate: above the rest's floor while moving, near each tick (as the narrowest
+        // windows read it) and from the slow start on (sample 720).
+        let v: Vec<f64> = (0..d.len()).map(|i| if !(100..720).contains(&i) || (i.saturating_sub(2)..(i + 3).min(d.len())).any(|k| k > 100 && d[k] != d[k - 1]) { 1.0 } else { 0.0 }).collect();
+        let found = stops(&t, &d, &v, dt, q);
+        assert!(found.windows(2).all(|w| w[0].1 < w[1].0), "in order and apart: {found:?}");
+        // Every sample that reads count 0 or 1 after the first stop began is in a stop.
+        let began = found.first().map_or(f64::INFINITY, |s| s.0);
+        assert!(began < 0.11, "the first stop begins on arrival: {found:?}");
+        for i in (0..d.len()).filter(|i| t[*i] >= began && (0.0..=q).contains(&d[*i])) {
+            assert!(found.iter().any(|(a, b)| *a <= t[i] && t[i] <= *b), "sample {i} ({} s) reads the dither's counts but is in no stop: {found:?}", t[i]);
+        }
     }
 
     #[test]
