@@ -111,33 +111,48 @@ fn each_sample_carries_the_mode_and_reference_used_in_its_own_cycle() {
 /// Issue 34: an inspector's sample waited for the cycle's control and for the publisher thread's
 /// wake-up (`docs/benchmarks.md`). The loop now writes what it observed to the arm's latest-state
 /// blackboard before control: an inspector reads each cycle's readings as soon as they are
-/// observed, with the mode and reference of the cycle before (this cycle's control comes after).
+/// observed, with the mode and reference of the cycle before (this cycle's control comes after);
+/// before the first cycle it holds the named joints, after the last the final state. A second
+/// run of the arm writes it again though an inspector of the first still holds it open.
 #[test]
 fn an_inspector_reads_each_cycles_observed_state_from_the_latest_state_blackboard() {
     let arm_id = arm_name("latest-state");
     let yaml = rig_yaml(&arm_id, 500.0, ELASTIC);
     let loaded = jointctl_config::parse_str(&yaml, "rig.yaml").unwrap();
-    let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
-    arm.activate().unwrap();
-    let mut publisher = ArmPublisher::new(&arm, None).unwrap();
-    let reader = jointctl_ipc::LatestStateReader::open(&jointctl_ipc::IpcScope::domain(None), &arm_id).unwrap();
-    arm.set_mode(0, position(0.3));
-    let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
-    for cycle in 0..50u64 {
-        let t = monotonic_ns();
-        let reference_before = lp.arm.torque_references[0];
-        lp.step(t, t, None);
-        let latest = reader.latest();
-        assert_eq!((latest.cycle, latest.stamp_ns, latest.joint_count), (cycle, t, 2), "cycle {cycle}");
-        for i in 0..2 {
-            let (seen, observed) = (latest.joints[i], lp.arm.states[i]);
-            assert_eq!(jointctl_ipc::decode_name(&seen.name), lp.arm.dof_names[i]);
-            assert_eq!((seen.position_rad.to_bits(), seen.torque_nm.to_bits()), (observed.position_rad.to_bits(), observed.torque_nm.to_bits()), "cycle {cycle}, joint {i}");
+    let scope = jointctl_ipc::IpcScope::domain(None);
+    let reference = jointctl_modes::Reference { waveform: jointctl_modes::Waveform::Sine, amplitude: 2.0, frequency_hz: 20.0, offset: 0.5, start_s: 0.0 };
+    let mut reader = None;
+    for run in 0..2 {
+        let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
+        arm.activate().unwrap();
+        let mut publisher = ArmPublisher::new(&arm, None).unwrap_or_else(|e| panic!("run {run}: {e}"));
+        let reader = reader.get_or_insert_with(|| jointctl_ipc::LatestStateReader::open(&scope, &arm_id).unwrap());
+        let before = reader.latest();
+        assert_eq!((before.stamp_ns, before.final_sample, before.joint_count), (0, 0, 2), "run {run}: before the first cycle");
+        assert_eq!(jointctl_ipc::decode_name(&before.joints[1].name), arm.dof_names[1]);
+        arm.set_mode(0, position(0.3));
+        arm.set_mode(1, Mode::Torque { reference });
+        let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
+        for cycle in 0..50u64 {
+            let t = monotonic_ns() + run;
+            let reference_before = lp.arm.torque_references[1];
+            lp.step(t, t, None);
+            let latest = reader.latest();
+            assert_eq!((latest.cycle, latest.stamp_ns, latest.joint_count), (cycle, t, 2), "run {run}, cycle {cycle}");
+            for i in 0..2 {
+                let (seen, observed) = (latest.joints[i], lp.arm.states[i]);
+                assert_eq!((seen.position_rad.to_bits(), seen.torque_nm.to_bits()), (observed.position_rad.to_bits(), observed.torque_nm.to_bits()), "run {run}, cycle {cycle}, joint {i}");
+            }
+            // Written before control: the torque reference the cycle before left, not this
+            // cycle's (a 20 Hz sine at 500 Hz: a new value every cycle).
+            let (seen, now) = (latest.joints[1].reference_torque_nm, lp.arm.torque_references[1]);
+            assert!(now.is_finite() && seen.to_bits() == reference_before.to_bits() && seen != now, "run {run}, cycle {cycle}: blackboard {seen}, before {reference_before}, after {now}");
         }
-        // Written before control: the reference the cycle before left.
-        assert_eq!(latest.joints[0].reference_torque_nm.to_bits(), reference_before.to_bits(), "cycle {cycle}");
+        assert!(lp.arm.states[0].position_rad > 0.01, "the joint moved: {:?}", lp.arm.states[0]);
+        lp.finish();
+        let last = reader.latest();
+        assert_eq!((last.final_sample, last.cycle), (1, 50), "run {run}: the final state");
     }
-    assert!(lp.arm.states[0].position_rad > 0.01, "the joint moved: {:?}", lp.arm.states[0]);
 }
 
 #[test]

@@ -15,11 +15,11 @@ use iceoryx2::port::writer::EntryHandleMut;
 use iceoryx2::prelude::*;
 
 use crate::services::{IpcScope, IpcSetupError, create_node_of, service_name};
+use crate::state::ArmState;
 
 /// The service kind: handles that may move between threads (a runtime's `ArmPublisher` is
 /// `Send`); its write is the same lock-free store.
 type Kind = ipc_threadsafe::Service;
-use crate::state::ArmState;
 
 /// The blackboard's one key.
 const KEY: u32 = 0;
@@ -31,12 +31,12 @@ fn error(service: &str, what: &'static str, source: impl std::error::Error + Sen
 /// The loop's side: creates the arm's latest-state blackboard and writes it.
 ///
 /// ```
-/// let scope = jointctl_ipc::IpcScope::domain(Some("jointctl-doc-latest-w"));
-/// let writer = jointctl_ipc::LatestStateWriter::create(&scope, "doc-arm", 2).unwrap();
+/// let scope = jointctl_ipc::IpcScope::domain(None);
+/// let writer = jointctl_ipc::LatestStateWriter::create(&scope, "doc-latest-arm", 2, &jointctl_ipc::ArmState::EMPTY).unwrap();
 /// let mut state = jointctl_ipc::ArmState::EMPTY;
 /// state.cycle = 7;
 /// writer.write(&state);
-/// let reader = jointctl_ipc::LatestStateReader::open(&scope, "doc-arm").unwrap();
+/// let reader = jointctl_ipc::LatestStateReader::open(&scope, "doc-latest-arm").unwrap();
 /// assert_eq!(reader.latest().cycle, 7);
 /// ```
 pub struct LatestStateWriter {
@@ -48,13 +48,27 @@ pub struct LatestStateWriter {
 
 impl LatestStateWriter {
     /// Creates the blackboard `{arm}/latest_state` in `scope`, admitting `max_readers` readers,
-    /// and its writer. A second runtime of the arm is refused (the service exists).
-    pub fn create(scope: &IpcScope, arm: &str, max_readers: usize) -> Result<Self, IpcSetupError> {
+    /// and its writer; `first` is its value until the loop's first write. A blackboard that
+    /// outlived its runtime (an inspector still holds it open: iceoryx2 keeps a service while
+    /// any port of it lives) is opened and written again; one that another runtime still writes
+    /// is refused.
+    pub fn create(scope: &IpcScope, arm: &str, max_readers: usize, first: &ArmState) -> Result<Self, IpcSetupError> {
         let name = crate::ServiceNames::for_arm(arm).latest_state;
         let node = create_node_of::<Kind>(scope, &format!("{arm}-latest-writer"))?;
-        let service = node.service_builder(&service_name(&name)?).blackboard_creator::<u32>().add::<ArmState>(KEY, ArmState::EMPTY).max_readers(max_readers.max(1)).create().map_err(|e| error(&name, "create", e))?;
-        let writer = service.writer_builder().create().map_err(|e| error(&name, "write to", e))?;
+        let builder = || service_name(&name).map(|n| node.service_builder(&n));
+        let service = match builder()?.blackboard_creator::<u32>().add::<ArmState>(KEY, *first).max_readers(max_readers.max(1)).create() {
+            Ok(service) => service,
+            Err(iceoryx2::service::builder::blackboard::BlackboardCreateError::AlreadyExists) => builder()?.blackboard_opener::<u32>().open().map_err(|e| error(&name, "open", e))?,
+            Err(e) => return Err(error(&name, "create", e)),
+        };
+        let writer = service.writer_builder().create().map_err(|e| match e {
+            iceoryx2::port::writer::WriterCreateError::ExceedsMaxSupportedWriters => error(&name, "write to (another runtime of the arm writes it)", e),
+            e => error(&name, "write to", e),
+        })?;
         let entry = writer.entry::<ArmState>(&KEY).map_err(|e| error(&name, "write to", e))?;
+        // Written once here as well: a reopened blackboard shows the last run's final state
+        // until then, and the first write touches the entry's cells before the loop does.
+        entry.update_with_copy(*first);
         Ok(LatestStateWriter { entry, _writer: writer, _service: service, _node: node })
     }
 
@@ -83,7 +97,9 @@ impl LatestStateReader {
         Ok(LatestStateReader { entry, _reader: reader, _service: service, _node: node })
     }
 
-    /// The latest state written (a copy).
+    /// The latest state written (a copy): before the loop's first cycle, the runtime's first
+    /// value (its joints named, `stamp_ns` 0); after its last, the final state
+    /// (`final_sample` 1).
     pub fn latest(&self) -> ArmState {
         *self.entry.get()
     }

@@ -143,7 +143,7 @@ pub enum IpcSetupError {
     LatestState {
         /// Service name.
         service: String,
-        /// What failed: "create", "open", "write to" or "read".
+        /// What failed: "create", "open", "write to" (and why, where known) or "read".
         what: &'static str,
         /// iceoryx2's reason.
         source: Box<dyn std::error::Error + Send + Sync>,

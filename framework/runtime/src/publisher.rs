@@ -359,9 +359,16 @@ impl ArmPublisher {
         let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
         let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)).with_loop_rate(1.0 / arm.dt_s), arm.dt_s);
         let stop = Arc::new(AtomicBool::new(false));
+        // The latest-state blackboard before the publisher thread opens the other services, so
+        // that a client that finds those finds it too. Written by the loop thread itself
+        // (`post_observed`), not the publisher thread; until then it holds the named joints.
+        let mut latest_state = Box::new(ArmState { joint_count: arm.dof_names.len() as u32, ..ArmState::EMPTY });
+        for (sample, name) in latest_state.joints.iter_mut().zip(&arm.dof_names) {
+            sample.name = encode_name(name);
+        }
+        let latest = jointctl_ipc::LatestStateWriter::create(scope, &arm.name, limits.max_subscribers, &latest_state)?;
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<libc::pid_t, RunError>>();
         let arm_name = arm.name.clone();
-        let arm_scope = scope;
         let scope = scope.clone();
         let (encoders, drives) = arm.raw_devices();
         let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
@@ -408,16 +415,6 @@ impl ArmPublisher {
         }
         record.diagnostics.device_count = devices as u32;
         let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
-        // Written by the loop thread itself (`post_observed`), not the publisher thread.
-        let latest = match jointctl_ipc::LatestStateWriter::create(arm_scope, &arm.name, limits.max_subscribers) {
-            Ok(latest) => latest,
-            Err(e) => {
-                stop.store(true, std::sync::atomic::Ordering::Relaxed);
-                let _ = thread.join();
-                return Err(e.into());
-            }
-        };
-        let latest_state = Box::new(record.state);
         Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0, latest, latest_state })
     }
 
@@ -434,6 +431,13 @@ impl ArmPublisher {
         if final_sample || arm.stop_requested {
             self.status.set_stopping();
         }
+        if final_sample {
+            // The blackboard's last word as well: readers see that the loop has ended.
+            let last = &mut self.latest_state;
+            (last.cycle, last.stamp_ns, last.final_sample) = (cycle, stamp_ns, 1);
+            fill_joints(last, arm);
+            self.latest.write(last);
+        }
         for slot in &arm.slots {
             for i in slot.dofs() {
                 self.status.set_dof(i, arm.enabled[i], slot.fault);
@@ -444,8 +448,8 @@ impl ArmPublisher {
 
     /// Writes the state just observed to the latest-state blackboard
     /// ([`jointctl_ipc::LatestStateWriter`]), on the loop thread: the readings and what the
-    /// observers made of them, and the mode and torque reference as the last cycle left them
-    /// (this cycle's control comes after). Lock-free and allocation-free; an inspector reading
+    /// observers made of them; the mode, the torque reference, `enabled` and the gravity torque
+    /// as the last cycle left them (this cycle's control, which sets them, comes after). Lock-free and allocation-free; an inspector reading
     /// it waits neither for the cycle's control nor for the publisher thread.
     pub fn post_observed(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64) {
         let s = &mut self.latest_state;

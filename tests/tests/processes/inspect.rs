@@ -51,6 +51,32 @@ fn an_inspector_process_prints_the_live_states_as_json() {
     }
 }
 
+/// `inspect echo --latest`: the arm's latest-state blackboard, each new cycle the inspector sees
+/// (the newest only: cycles may be skipped, never repeated), the same JSON as the stream; and
+/// an error that names the blackboard when no arm runs.
+#[test]
+fn inspect_echo_latest_reads_the_latest_state_blackboard() {
+    let (arm, yaml) = write_rig("echo-latest", 100.0);
+    let mut run = spawn_run(&yaml, &["--duration", "20"]);
+    let out = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--latest", "--json", "--count", "5", "--timeout", "10"]).output().unwrap();
+    stop(&mut run);
+    assert!(out.status.success(), "inspect failed: {}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let cycles: Vec<u64> = text.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["cycle"].as_u64().unwrap()).collect();
+    assert_eq!(cycles.len(), 5, "{text}");
+    assert!(cycles.windows(2).all(|w| w[1] > w[0]), "new cycles only: {cycles:?}");
+    let first: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    assert_eq!((first["joints"][0]["name"].as_str(), first["joints"][1]["name"].as_str()), (Some("a"), Some("b")));
+    assert!(first["wall_ns"].as_u64().is_some(), "{first}");
+    // --latest reads this machine's shared memory; with --zenoh it is refused by the parser.
+    let out = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--latest", "--zenoh", "tcp/127.0.0.1:1"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    // No arm running: the error names the blackboard.
+    let out = Command::new(jointctl()).args(["inspect", "echo", "--arm", "no-such-arm-latest", "--latest", "--timeout", "0.2"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(1) && err.contains("no-such-arm-latest/latest_state"), "{err}");
+}
+
 /// Findings: `inspect echo` had no rate limit and no joint filter, its JSON lacked the mode,
 /// the torque reference and the pivot and carried only a monotonic stamp, and it panicked on a
 /// closed pipe (`| head`). Pass: `--rate` and `--joint` filter, the fields and a wall-clock stamp

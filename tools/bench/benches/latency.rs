@@ -124,6 +124,7 @@ fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool, via: Via) -> Hop
             let rows = vec![
                 ("cycle began (wake-up) → HAL read returned", hop(|h| h.readings_ns - h.read_ns)),
                 ("HAL read returned → read from the blackboard by the inspector (observers, the blackboard's write, the inspector's poll)", after_send.iter().map(|p| p.1).collect()),
+                ("HAL read returned → control done (observe, the blackboard's write, control, write HAL)", hop(|h| h.done_ns - h.readings_ns)),
             ];
             return Hops { rows, total: latencies(&seen), from_readings: after_send.iter().map(|p| p.1).collect() };
         }
@@ -161,6 +162,29 @@ fn handoff_alone(samples: u64) -> Vec<u64> {
     latencies(&subscriber.join().unwrap())
 }
 
+/// What one write of the latest-state blackboard costs the loop [ns]: an `ArmState` written
+/// `samples` times at 1 kHz while an inspector thread busy-polls it (its reads contend for the
+/// entry's cache lines), each write timed alone.
+fn blackboard_write(samples: u64) -> Vec<u64> {
+    let scope = jointctl_ipc::IpcScope::domain(None);
+    let writer = jointctl_ipc::LatestStateWriter::create(&scope, "bench-latest-write", 2, &jointctl_ipc::ArmState::EMPTY).unwrap();
+    let (stop, poller) = latency_subscriber("bench-latest-write", None, Via::Blackboard);
+    std::thread::sleep(Duration::from_millis(200));
+    let mut state = jointctl_ipc::ArmState::EMPTY;
+    let mut took = Vec::with_capacity(samples as usize);
+    for cycle in 0..samples {
+        state.cycle = cycle;
+        state.stamp_ns = monotonic_ns();
+        let start = monotonic_ns();
+        writer.write(&state);
+        took.push(monotonic_ns() - start);
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    stop.store(true, Ordering::Relaxed);
+    let _ = poller.join();
+    took
+}
+
 fn main() {
     let quick = std::env::var("BENCH_QUICK").is_ok();
     let cycles = if quick { 1_000 } else { 10_000 };
@@ -191,6 +215,12 @@ fn main() {
         println!();
         summary.push((what, percentile(&mut h.total, 99.0), percentile(&mut h.from_readings, 99.0)));
     }
+    let mut write = blackboard_write(cycles);
+    println!("## One write of the latest-state blackboard (arm-state payload, an inspector busy-polling it), 1 kHz, {} samples", write.len());
+    println!("| p50 us | p99 us | max us |");
+    println!("|---|---|---|");
+    println!("| {} |", cells(&mut write));
+    println!();
     println!("## Publish → inspector receive (iceoryx2 alone, arm-state payload), 1 kHz, {} samples", alone.len());
     println!("| p50 us | p99 us | max us |");
     println!("|---|---|---|");

@@ -44,6 +44,12 @@ pub enum InspectCommand {
         /// Only these joints (DOF names, comma-separated or repeated).
         #[arg(long, value_delimiter = ',')]
         joint: Vec<String>,
+        /// Read the arm's latest-state blackboard instead of its joint-state stream: each cycle's
+        /// state as soon as the loop has observed it (before control: with the mode and torque
+        /// reference of the cycle before), the newest only (cycles between two reads are not
+        /// printed).
+        #[arg(long, conflicts_with = "zenoh")]
+        latest: bool,
         /// Read from another machine: the Zenoh endpoint of its `jointctl bridge zenoh` (e.g.
         /// `tcp/192.168.1.10:7447`) instead of this machine's shared memory.
         #[arg(long, value_name = "ENDPOINT")]
@@ -137,12 +143,15 @@ pub fn run(command: InspectCommand) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        InspectCommand::Echo { at: RunningArm { arm, domain, ipc_root }, json, count, timeout, rate, joint, zenoh, credentials } => {
+        InspectCommand::Echo { at: RunningArm { arm, domain, ipc_root }, json, count, timeout, rate, joint, latest, zenoh, credentials } => {
             let opts = EchoOptions { json, count, rate, joint };
             if let Some(endpoint) = zenoh {
                 return crate::remote::echo(&endpoint, &arm, &credentials, timeout, &opts);
             }
             let hint = domain_hint(&domain);
+            if latest {
+                return echo_latest(&arm, jointctl_ipc::IpcScope { domain, root: ipc_root, group: None }, timeout, &hint, &opts);
+            }
             let (_node, subscriber) = match subscribe(&arm, domain, ipc_root, timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service) {
                 Ok(s) => s,
                 Err(e) => return crate::fail(e),
@@ -191,3 +200,28 @@ pub fn run(command: InspectCommand) -> ExitCode {
     }
 }
 
+/// `inspect echo --latest`: the arm's latest-state blackboard, each new cycle it shows; waits up
+/// to `timeout_s` for the blackboard to exist and between two new cycles.
+fn echo_latest(arm: &str, scope: jointctl_ipc::IpcScope, timeout_s: f64, hint: &str, opts: &EchoOptions) -> ExitCode {
+    let name = ServiceNames::for_arm(arm).latest_state;
+    let opened = Instant::now();
+    let reader = loop {
+        match jointctl_ipc::LatestStateReader::open(&scope, arm) {
+            Ok(reader) => break reader,
+            Err(_) if opened.elapsed() < Duration::from_secs_f64(timeout_s) => std::thread::sleep(Duration::from_millis(20)),
+            Err(e) => return crate::fail(format!("no latest-state blackboard `{name}` after {timeout_s} s: is `jointctl run` running with arm `{arm}`?{hint} ({})", crate::chain(&e))),
+        }
+    };
+    let (mut shown, mut last) = (None, Instant::now());
+    echo(opts, || {
+        let s = reader.latest();
+        if s.stamp_ns != 0 && shown != Some(s.cycle) {
+            (shown, last) = (Some(s.cycle), Instant::now());
+            return Ok(Some((s, jointctl_record::feed::wall_clock_ns(s.stamp_ns))));
+        }
+        if last.elapsed() > Duration::from_secs_f64(timeout_s) {
+            return Err(format!("no new cycle on `{name}` for {timeout_s} s: has the arm's loop stopped?"));
+        }
+        Ok(None)
+    })
+}
