@@ -77,6 +77,33 @@ fn the_python_inspector_reads_the_same_states_as_the_rust_one() {
     assert!(rust_sample["cycle"].as_u64() < py_samples[0]["cycle"].as_u64());
 }
 
+/// The latest-state blackboard from Python (`--latest`): the Rust runtime writes it on iceoryx2's
+/// thread-safe service kind, the PyPI client opens it as an ordinary `ipc` blackboard with a
+/// `u32` key, and reads the same `ArmState` layout, a line per new cycle.
+#[test]
+fn the_python_inspector_reads_the_latest_state_blackboard() {
+    let arm = arm_name("py-latest");
+    let yaml = scratch("py-latest").join("rig.yaml");
+    std::fs::write(&yaml, rig_yaml(&arm, 100.0, ELASTIC)).unwrap();
+    let mut run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--duration", "20"]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let rust = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--latest", "--json", "--count", "1", "--timeout", "10"]).output().unwrap();
+    let py = Command::new(python()).arg(root().join("tools/inspect_py/jointctl_inspect.py")).args([&arm, "--latest", "--count", "5", "--timeout", "10"]).output().unwrap();
+    stop(&mut run);
+    assert!(rust.status.success(), "rust inspector: {}", String::from_utf8_lossy(&rust.stderr));
+    assert!(py.status.success(), "python inspector: {}", String::from_utf8_lossy(&py.stderr));
+    let rust_sample: serde_json::Value = serde_json::from_str(String::from_utf8(rust.stdout).unwrap().lines().next().unwrap()).unwrap();
+    let py_samples: Vec<serde_json::Value> = String::from_utf8(py.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(py_samples.len(), 5);
+    let keys = |v: &serde_json::Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    for s in &py_samples {
+        assert_eq!(keys(s), keys(&rust_sample));
+        assert_eq!((s["joints"][0]["name"].as_str(), s["joints"][1]["name"].as_str()), (Some("a"), Some("b")));
+        assert_eq!(s["joints"][1]["stiffness"], rust_sample["joints"][1]["stiffness"]);
+    }
+    assert!(py_samples.windows(2).all(|w| w[1]["cycle"].as_u64() > w[0]["cycle"].as_u64()), "new cycles only");
+    assert!(rust_sample["cycle"].as_u64() < py_samples[0]["cycle"].as_u64());
+}
+
 /// Finding: the Python client could not follow `ipc.domain` and had no diagnostics. Pass: an
 /// arm in its own domain is found with `--domain` (and not without it, with a hint), and
 /// `--diag` prints the diagnostics in `jointctl inspect diag --json`'s shape, key for key,

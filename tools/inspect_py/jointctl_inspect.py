@@ -11,10 +11,12 @@ object per sample in the shape of `jointctl inspect echo --json`:
     (SI units; null for what is not observed)
 
 With `--diag` it prints the newest diagnostics once, in the shape of `jointctl inspect diag
---json` (the recording's `diagnostics` channel). `--domain D` and `--ipc-root DIR` find an arm
+--json` (the recording's `diagnostics` channel). With `--latest` it reads the arm's latest-state
+blackboard instead of the joint-state stream (as `jointctl inspect echo --latest`): each cycle as
+soon as the loop observed it, the newest only, a line per new cycle. `--domain D` and `--ipc-root DIR` find an arm
 whose YAML sets `ipc.domain` / `ipc.root`, as the Rust tools' options do.
 
-Usage: python jointctl_inspect.py ARM [--domain D] [--ipc-root DIR] [--count N] [--timeout S] [--diag]
+Usage: python jointctl_inspect.py ARM [--domain D] [--ipc-root DIR] [--count N] [--timeout S] [--diag | --latest]
 """
 
 import argparse
@@ -218,6 +220,33 @@ def node_in(domain, ipc_root):
     return iox2.NodeBuilder.new().config(config).create(iox2.ServiceType.Ipc)
 
 
+def latest(node, args, hint) -> int:
+    """`--latest`: the arm's latest-state blackboard (`<arm>/latest_state`, key 0 of type u32,
+    one `ArmState`), a line per new cycle it shows (not before the loop's first)."""
+    service_name = f"{args.arm}/latest_state"
+    try:
+        service = node.service_builder(iox2.ServiceName.new(service_name)).blackboard_opener(ctypes.c_uint32).open()
+        entry = service.reader_builder().create().entry(ctypes.c_uint32(0), ArmState)
+    except Exception as e:  # the arm is not running, or the layouts differ
+        print(f"error: cannot open `{service_name}`: {e!r} (is `jointctl run` running with arm `{args.arm}`?){hint}", file=sys.stderr)
+        return 1
+    received, shown, last = 0, None, time.monotonic()
+    while args.count is None or received < args.count:
+        state = entry.get().decode_as(ArmState)
+        if state.stamp_ns == 0 or state.cycle == shown:
+            if time.monotonic() - last > args.timeout:
+                print(f"error: no new cycle on `{service_name}` for {args.timeout} s", file=sys.stderr)
+                return 1
+            time.sleep(0.0005)
+            continue
+        shown, last = state.cycle, time.monotonic()
+        received += 1
+        print(json.dumps(as_json(state)), flush=True)
+        if state.final_sample and args.count is None:
+            break
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("arm", help="the arm's name (`arm:` in its YAML)")
@@ -225,12 +254,16 @@ def main() -> int:
     parser.add_argument("--ipc-root", default=None, help="shared-memory root of the arm (its YAML `ipc.root`)")
     parser.add_argument("--count", type=int, default=None, help="stop after N samples")
     parser.add_argument("--timeout", type=float, default=5.0, help="give up after S seconds without a sample")
-    parser.add_argument("--diag", action="store_true", help="print the newest diagnostics once (`inspect diag --json`)")
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument("--diag", action="store_true", help="print the newest diagnostics once (`inspect diag --json`)")
+    which.add_argument("--latest", action="store_true", help="read the latest-state blackboard (`inspect echo --latest`)")
     args = parser.parse_args()
 
     iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
     node = node_in(args.domain, args.ipc_root)
     hint = f" in domain `{args.domain}`" if args.domain else " (an arm whose YAML sets `ipc.domain` is found with --domain D)"
+    if args.latest:
+        return latest(node, args, hint)
     topic, payload = ("diagnostics", Diagnostics) if args.diag else ("joint_state", ArmState)
     service_name = f"{args.arm}/{topic}"
     try:
