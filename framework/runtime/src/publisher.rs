@@ -431,26 +431,25 @@ impl ArmPublisher {
         if final_sample || arm.stop_requested {
             self.status.set_stopping();
         }
-        if final_sample {
-            // The blackboard's last word as well: readers see that the loop has ended.
-            let last = &mut self.latest_state;
-            (last.cycle, last.stamp_ns, last.final_sample) = (cycle, stamp_ns, 1);
-            fill_joints(last, arm);
-            self.latest.write(last);
-        }
         for slot in &arm.slots {
             for i in slot.dofs() {
                 self.status.set_dof(i, arm.enabled[i], slot.fault);
             }
         }
         fill_joints(s, arm);
+        if final_sample {
+            // The blackboard's last word as well: readers see that the loop has ended.
+            self.latest_state.final_sample = 1;
+            self.post_observed(arm, cycle, stamp_ns);
+        }
     }
 
     /// Writes the state just observed to the latest-state blackboard
     /// ([`jointctl_ipc::LatestStateWriter`]), on the loop thread: the readings and what the
     /// observers made of them; the mode, the torque reference, `enabled` and the gravity torque
-    /// as the last cycle left them (this cycle's control, which sets them, comes after). Lock-free and allocation-free; an inspector reading
-    /// it waits neither for the cycle's control nor for the publisher thread.
+    /// as the last cycle left them (this cycle's control, which sets them, comes after).
+    /// Lock-free and allocation-free; an inspector reading it waits neither for the cycle's
+    /// control nor for the publisher thread.
     pub fn post_observed(&mut self, arm: &Arm, cycle: u64, stamp_ns: u64) {
         let s = &mut self.latest_state;
         s.cycle = cycle;
