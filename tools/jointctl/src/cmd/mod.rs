@@ -134,7 +134,11 @@ enum Command {
     /// joint's stiffness times its deflection amplitude, at its frequency, from rest, for whole
     /// periods, then a second at zero torque. Record it with `jointctl record` alongside, then
     /// `jointctl identify --data` the recording. The joint is left at a zero torque reference.
-    /// On this machine only (not over --zenoh), not streamed.
+    /// With `--position`, for a set-up that deflects the element by this joint's position (a
+    /// rig moving the output): each segment a position sine about where the joint stands, as
+    /// trajectories of at most 64 points cut at the sine's peaks, for whole periods and back to
+    /// the start in half a period, then a second held. On this machine only (not over --zenoh),
+    /// not streamed.
     Experiment {
         /// Joint name.
         joint: String,
@@ -142,9 +146,12 @@ enum Command {
         file: PathBuf,
         /// Stiffness that turns deflections into torques [Nm/rad]; default: the joint's
         /// stiffness as the runtime publishes it.
-        #[arg(long, value_name = "NM_PER_RAD", value_parser = finite)]
+        #[arg(long, value_name = "NM_PER_RAD", value_parser = finite, conflicts_with = "position")]
         stiffness: Option<f64>,
-        /// Print the torque sines, send nothing.
+        /// Run each segment as a position sine of the joint (trajectories), not a torque sine.
+        #[arg(long)]
+        position: bool,
+        /// Print the sines, send nothing.
         #[arg(long)]
         dry_run: bool,
     },
@@ -199,8 +206,8 @@ fn request(command: &Command) -> Result<CommandRequest, String> {
 }
 
 pub fn run(args: CmdArgs) -> ExitCode {
-    if let Command::Experiment { joint, file, stiffness, dry_run } = &args.command {
-        return experiment::run(&args, joint, file, *stiffness, *dry_run);
+    if let Command::Experiment { joint, file, stiffness, position, dry_run } = &args.command {
+        return experiment::run(&args, joint, file, *stiffness, *position, *dry_run);
     }
     let mut req = match request(&args.command) {
         Ok(r) => r,
