@@ -79,7 +79,8 @@ fn a_bad_experiment_file_is_an_error_that_says_where() {
     let work = scratch("confound-experiment-bad");
     let cases = [
         ("segments:\n  - {amplitude_rad: 0.1, frequency_hz: 0.25}\n", "segments[0]: missing field `duration_s`"),
-        ("segments:\n  - {amplitude_rad: 0.1, frequency_hz: -1, duration_s: 20}\n", "segments[0].frequency_hz: -1 must be in (0, 100] Hz"),
+        ("segments:\n  - {amplitude_rad: 0.1, frequency_hz: -1, duration_s: 20}\n", "segments[0].frequency_hz: -1 must be in [0.001, 100] Hz"),
+        ("segments:\n  - {amplitude_rad: 0.1, frequency_hz: 0.0001, duration_s: 20}\n", "segments[0].frequency_hz: 0.0001 must be in [0.001, 100] Hz"),
         ("segments: []\n", "segments: none to run"),
         ("segments:\n  - {amplitude_rad: .nan, frequency_hz: 1, duration_s: 20}\n", "segments[0].amplitude_rad: NaN must be in (0, pi] rad"),
     ];
@@ -172,7 +173,12 @@ fn an_experiment_file_runs_on_the_running_arm_by_position() {
     let file = work.join("experiment.yaml");
     std::fs::write(&file, "segments:\n  - {amplitude_rad: 0.02, frequency_hz: 0.5, duration_s: 3.5}\n  - {amplitude_rad: 0.01, frequency_hz: 1.0, duration_s: 3.0}\n").unwrap();
     let plan = Command::new(jointctl()).args(["cmd", "--arm", &arm, "experiment", "q4"]).arg(&file).args(["--position", "--dry-run"]).output().unwrap();
-    assert!(plan.status.success() && String::from_utf8_lossy(&plan.stderr).contains("1: position sine 0.02000 rad at 0.5000 Hz for 2 periods, back in 1.00 s (5.50 s, 1 trajectories)"), "{}", String::from_utf8_lossy(&plan.stderr));
+    assert!(plan.status.success() && String::from_utf8_lossy(&plan.stderr).contains("1: position sine 0.02000 rad at 0.5000 Hz for 2 periods and a quarter, back in 1.00 s (5.50 s, 1 trajectory; peak rate 0.063 rad/s)"), "{}", String::from_utf8_lossy(&plan.stderr));
+    // A day at 100 Hz would hold 69 million points: refused, with the segment and the bound.
+    let long = work.join("long.yaml");
+    std::fs::write(&long, "segments:\n  - {amplitude_rad: 0.01, frequency_hz: 1.0, duration_s: 20}\n  - {amplitude_rad: 0.01, frequency_hz: 100.0, duration_s: 86400}\n").unwrap();
+    let refused = Command::new(jointctl()).args(["cmd", "--arm", &arm, "experiment", "q4"]).arg(&long).args(["--position", "--dry-run"]).output().unwrap();
+    assert!(!refused.status.success() && String::from_utf8_lossy(&refused.stderr).contains("segments[1]: 8640000 periods; the position form runs at most 100000 a segment"), "{}", String::from_utf8_lossy(&refused.stderr));
     let both = Command::new(jointctl()).args(["cmd", "--arm", &arm, "experiment", "q4"]).arg(&file).args(["--position", "--stiffness", "100", "--dry-run"]).output().unwrap();
     assert!(!both.status.success() && String::from_utf8_lossy(&both.stderr).contains("cannot be used with"), "{}", String::from_utf8_lossy(&both.stderr));
 

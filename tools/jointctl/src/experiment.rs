@@ -363,8 +363,10 @@ pub(crate) fn read_experiment(file: &std::path::Path) -> Result<Experiment, Stri
         if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
             return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
         }
-        if !(s.frequency_hz.is_finite() && s.frequency_hz > 0.0 && s.frequency_hz <= 100.0) {
-            return bad("frequency_hz", s.frequency_hz, "in (0, 100] Hz");
+        // At least a thousandth of a hertz: a period of 1000 s, and a slower sine's whole period
+        // overflows what a wait can hold.
+        if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= 100.0) {
+            return bad("frequency_hz", s.frequency_hz, "in [0.001, 100] Hz");
         }
         if !(s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= 86_400.0) {
             return bad("duration_s", s.duration_s, "in (0, 86400] s");

@@ -8,10 +8,11 @@
 //! `k_b` at 738 s/rad for 60, and did worse on the held-out part. Point samples otherwise, as
 //! every record was read before. The module `prepare::bins` says why it matters. The reading is
 //! chosen on the baseline alone, before any cause: a torque channel 10 ms late on 20 Hz bins
-//! tips the comparison to the points (a review's measurement), and the delay is then fitted on
-//! points. A slow log's rate is read likewise as the data says: over the usual window or one
-//! sample either side ([`choose_rate_window`], on the baseline), or through a local cubic
-//! ([`through_cubic_if_better`], on the whole model of a second pass).
+//! tips the comparison to the points (a review's measurement), so where the causes include a
+//! delay the bins are judged again on the whole model ([`best_reading`]). A slow log's rate is
+//! read likewise as the data says: over the usual window or one sample either side
+//! ([`choose_rate_window`], on the baseline), or through a local cubic ([`best_reading`], on the
+//! whole model of a second pass).
 
 use jointctl_models::effect::Effect;
 use serde::Serialize;
@@ -50,21 +51,21 @@ pub(crate) fn baseline_friction(model: &Model, all: &[&dyn CandidateCause], p: &
 
 /// The reading of the data the evidence supports and the baseline's friction on it: `bins` (a
 /// slow log with its intervals' rates) against `points` (the same without them). Whether the
-/// bins are kept, the baseline's term, and the reading when they are. `forced`: read as bins
-/// whatever the baseline says, for [`as_bins_if_better`] to judge on the whole model.
-pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared, points: &Prepared, forced: bool) -> Result<(bool, Term, Option<BinAverages>), IdentifyError> {
+/// bins are kept, the baseline's term, and the reading when they are. `force_bins`: read as
+/// bins whatever the baseline says, for [`best_reading`] to judge on the whole model.
+pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared, points: &Prepared, force_bins: bool) -> Result<(bool, Term, Option<BinAverages>), IdentifyError> {
     let on_points = baseline_friction(model, all, points)?;
     let Ok(on_bins) = baseline_friction(model, all, bins) else { return Ok((false, on_points, None)) };
     let (spec_bins, spec_points) = (Spec { terms: vec![on_bins.clone()] }, Spec { terms: vec![on_points.clone()] });
     let score = |s: &Spec, p: &Prepared| model.fit(s, &p.coarse).map(|f| bic(f.rss, p.coarse.len(), f.parameters));
     let (Some(b), Some(q)) = (score(&spec_bins, bins), score(&spec_points, points)) else { return Ok((false, on_points, None)) };
-    if q - b <= BIC_THRESHOLD && !forced {
+    if q - b <= BIC_THRESHOLD && !force_bins {
         return Ok((false, on_points, None));
     }
     // Not through the held-out cache: it knows a model by its terms, not by the reading.
     let (Some(r), Some(f)) = (select::compute_held_out(model, &spec_points, points), select::compute_held_out(model, &spec_bins, bins)) else { return Ok((false, on_points, None)) };
     let (held_bins, held_points) = (select::rmse(&f.errors), select::rmse(&r.errors));
-    if held_bins > held_points && !forced {
+    if held_bins > held_points && !force_bins {
         return Ok((false, on_points, None));
     }
     let evidence = format!("held-out RMSE {held_bins:.4} Nm read so, {held_points:.4} Nm read as points");
@@ -201,8 +202,8 @@ fn better_than(first: &Extended, other: &Extended) -> bool {
 }
 
 /// The report of a slow log read otherwise than identify read it first (`first`), when
-/// another reading's whole model is better ([`better_than`]; of two such, the lower training
-/// BIC). The readings:
+/// another reading's whole model is better ([`better_than`]; of two such, the lower held-out
+/// error, the cubic's on a tie). The readings:
 /// - `cubic`: the rate through a local cubic. A least-squares line reads a motion of a few
 ///   hertz at 20 Hz slow, and a viscous friction's damping makes up the difference (on the
 ///   blind devices' 20 Hz means, 5-18 % above the full-rate variants' and the truth). Judged on
@@ -220,8 +221,9 @@ fn better_than(first: &Extended, other: &Extended) -> bool {
 /// Each is compared with `first`, not with one another: the first reading is the one every
 /// other record gets.
 pub(crate) fn best_reading(first: Extended, as_bins: Option<Extended>, cubic: Option<Extended>) -> Report {
-    let held_out = |e: &Option<Extended>| e.as_ref().filter(|e| better_than(&first, e)).map_or(f64::INFINITY, |e| e.report.rmse_after);
-    let (bins_held, cubic_held) = (held_out(&as_bins), held_out(&cubic));
+    // A reading's held-out error where it qualifies, infinite where it does not.
+    let qualifying_rmse = |e: &Option<Extended>| e.as_ref().filter(|e| better_than(&first, e)).map_or(f64::INFINITY, |e| e.report.rmse_after);
+    let (bins_held, cubic_held) = (qualifying_rmse(&as_bins), qualifying_rmse(&cubic));
     match (as_bins, cubic) {
         (Some(mut bins), _) if bins_held < cubic_held => {
             if let Some(reading) = bins.report.bin_averages.as_mut() {

@@ -356,14 +356,15 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     })?;
     // Each further reading apart: whatever befalls it (a registered cause that panics on it, a
     // degenerate fit), the first result stands. Read as bins on the whole model: see `bin_reading::best_reading`.
-    let again = |q: &prepare::Prepared, narrow: Option<&prepare::Prepared>, bins: bool| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(q, narrow, &builtin, opts, bins).ok())).ok().flatten();
+    let again = |q: &prepare::Prepared, narrow: Option<&prepare::Prepared>, force_bins: bool| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(q, narrow, &builtin, opts, force_bins).ok())).ok().flatten();
+    // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());
     let as_bins = (slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, narrow.as_ref(), true)).flatten();
     Ok(bin_reading::best_reading(first, as_bins, cubic.as_ref().and_then(|c| again(c, None, false))))
 }
 
 /// The search, the selection and the report on prepared data.
-fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions, as_bins: bool) -> Result<bin_reading::Extended, IdentifyError> {
+fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions, force_bins: bool) -> Result<bin_reading::Extended, IdentifyError> {
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     let centre = |p: &prepare::Prepared| if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
     // A slow log's rate: over the usual window or as narrow as one sample either side, as the
@@ -400,7 +401,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     let read;
     let p = if opts.baseline_friction && p.may_hold_bins() {
         let points = p.as_points();
-        let (bins, term, reading) = bin_reading::choose(&model, &all, p, &points, as_bins)?;
+        let (bins, term, reading) = bin_reading::choose(&model, &all, p, &points, force_bins)?;
         base.terms.push(term);
         bin_averages = reading;
         let mut chosen = if bins { p.clone() } else { points };

@@ -1,5 +1,6 @@
 //! `jointctl cmd experiment`: an experiment file (`experiment.yaml`, as `jointctl identify`
-//! proposes it for a confounded pair) run on a running arm, in torque control.
+//! proposes it for a confounded pair) run on a running arm, in torque control or, with
+//! `--position`, by position.
 //!
 //! The thesis characterises a joint by deflecting it while the drives hold (section 3.3.1), and
 //! controls its torque with the output fixed (chapter 4). On an arm whose output is fixed the
@@ -53,11 +54,18 @@ pub fn torque_segments(segments: &[Segment], stiffness_nm_per_rad: f64) -> Vec<T
         .collect()
 }
 
+/// Most periods one segment runs in the position form: its points are held while it runs
+/// (24 bytes each, eight a period: 19 MB at this bound), and an experiment `identify` proposes
+/// runs minutes, not days.
+pub const MAX_POSITION_PERIODS: usize = 100_000;
+
 /// Sine points per period in the position form: every eighth of a period, with the sine's own
 /// velocity. The cubic Hermite the trajectory mode draws between them stays within 0.1 % of the
 /// sine's amplitude (its error bound, `h^4 max|f''''| / 384` with `h` an eighth of the period,
 /// is `(2 pi / 8)^4 / 384 = 9.9e-4` of the amplitude).
 pub const POINTS_PER_PERIOD: usize = 8;
+// The peaks fall on points only when a period holds a multiple of 4 of them.
+const _: () = assert!(POINTS_PER_PERIOD.is_multiple_of(4));
 
 /// One segment in the position form: the trajectories to send one after the other, each of at
 /// most `max_points` (time from its own start [s], position [rad], velocity [rad/s]) and each
@@ -66,7 +74,7 @@ pub const POINTS_PER_PERIOD: usize = 8;
 #[derive(Clone, Debug, PartialEq)]
 pub struct PositionSegment {
     /// The trajectories, in order.
-    pub chunks: Vec<Vec<[f64; 3]>>,
+    pub trajectories: Vec<Vec<[f64; 3]>>,
     /// Whole periods of the sine (the segment's duration rounded up, at least one).
     pub periods: usize,
     /// From the first point to the last [s].
@@ -98,16 +106,16 @@ pub fn position_plan(segment: &Segment, center_rad: f64, max_points: usize) -> P
     let end_s = points[last][0] + 0.5 / f;
     points.push([end_s, center_rad, 0.0]);
     let max_points = max_points.max(half + 1);
-    let mut chunks = Vec::new();
+    let mut trajectories = Vec::new();
     let mut start = 0;
     while start < points.len() - 1 {
         // The farthest point this trajectory may end at: a peak, or the last point.
         let end = (start + 1..points.len()).filter(|&i| i - start < max_points && (is_peak(i) || i == points.len() - 1)).max().unwrap_or(points.len() - 1);
         let t0 = points[start][0];
-        chunks.push(points[start..=end].iter().map(|p| [p[0] - t0, p[1], p[2]]).collect());
+        trajectories.push(points[start..=end].iter().map(|p| [p[0] - t0, p[1], p[2]]).collect());
         start = end;
     }
-    PositionSegment { chunks, periods, duration_s: end_s }
+    PositionSegment { trajectories, periods, duration_s: end_s }
 }
 
 /// Runs `file` on `joint`; `stiffness`: the one to turn deflections into torques, else the
@@ -178,21 +186,27 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, pos
 /// The position form ([`position_plan`]): each segment's trajectories sent one after the other,
 /// each when the one before has run, about the position the joint stands at when it starts.
 fn run_position(args: &CmdArgs, joint: &str, file: &Path, segments: &[Segment], dry_run: bool) -> ExitCode {
-    let plans: Vec<PositionSegment> = segments.iter().map(|s| position_plan(s, 0.0, MAX_COMMAND_POINTS)).collect();
-    let total: f64 = plans.iter().map(|p| p.duration_s + REST_S).sum();
-    eprintln!("{}: {} segments on {joint} by position, about where it stands, {total:.0} s", file.display(), plans.len());
-    for (i, (s, p)) in segments.iter().zip(&plans).enumerate() {
+    if let Some((i, s)) = segments.iter().enumerate().find(|(_, s)| (s.duration_s * s.frequency_hz).ceil() > MAX_POSITION_PERIODS as f64) {
+        return crate::fail(format!("{}: segments[{i}]: {:.0} periods; the position form runs at most {MAX_POSITION_PERIODS} a segment: shorten or split it", file.display(), (s.duration_s * s.frequency_hz).ceil()));
+    }
+    let total: f64 = segments.iter().map(|s| ((s.duration_s * s.frequency_hz - 1e-9).ceil().max(1.0) + 0.75) / s.frequency_hz + REST_S).sum();
+    eprintln!("{}: {} segments on {joint} by position, about where it stands, {total:.0} s", file.display(), segments.len());
+    for (i, s) in segments.iter().enumerate() {
+        let p = position_plan(s, 0.0, MAX_COMMAND_POINTS);
+        let count = p.trajectories.len();
         eprintln!(
-            "  {}: position sine {:.5} rad at {:.4} Hz for {} periods, back in {:.2} s ({:.2} s, {} trajectories), then {REST_S} s held",
+            "  {}: position sine {:.5} rad at {:.4} Hz for {} periods and a quarter, back in {:.2} s ({:.2} s, {count} {}; peak rate {:.3} rad/s), then {REST_S} s held",
             i + 1,
             s.amplitude_rad,
             s.frequency_hz,
             p.periods,
             0.5 / s.frequency_hz,
             p.duration_s,
-            p.chunks.len()
+            if count == 1 { "trajectory" } else { "trajectories" },
+            s.amplitude_rad * 2.0 * std::f64::consts::PI * s.frequency_hz,
         );
     }
+    eprintln!("(a sine faster than the joint's set-point rate limit, controller.max_setpoint_rate_rad_s or its velocity limit, is clipped by the runtime and counted as rate_limited)");
     if dry_run {
         return ExitCode::SUCCESS;
     }
@@ -209,7 +223,7 @@ fn run_position(args: &CmdArgs, joint: &str, file: &Path, segments: &[Segment], 
     for (i, s) in segments.iter().enumerate() {
         let plan = position_plan(s, center_rad, MAX_COMMAND_POINTS);
         eprintln!("segment {}/{}: {:.5} rad at {:.4} Hz", i + 1, segments.len(), s.amplitude_rad, s.frequency_hz);
-        for chunk in &plan.chunks {
+        for chunk in &plan.trajectories {
             let mut request = CommandRequest::new(CommandKind::TRAJECTORY, joint, &[]);
             request.point_count = chunk.len() as u32;
             request.points[..chunk.len()].copy_from_slice(chunk);
@@ -329,11 +343,11 @@ mod tests {
             let (center, omega) = (0.3, 2.0 * std::f64::consts::PI * f);
             let plan = position_plan(&Segment { amplitude_rad: a, frequency_hz: f, duration_s: seconds }, center, MAX_COMMAND_POINTS);
             assert_eq!(plan.periods, (seconds * f).round() as usize);
-            assert_eq!(plan.chunks.len(), chunks, "{a} rad at {f} Hz");
+            assert_eq!(plan.trajectories.len(), chunks, "{a} rad at {f} Hz");
             let sine_end = (plan.periods as f64 + 0.25) / f;
             assert!((plan.duration_s - sine_end - 0.5 / f).abs() < 1e-9);
             let (mut t0, mut worst, mut last_q) = (0.0, 0.0_f64, center);
-            for chunk in &plan.chunks {
+            for chunk in &plan.trajectories {
                 assert!(chunk.len() <= MAX_COMMAND_POINTS && chunk[0][0] == 0.0, "{chunk:?}");
                 // Each begins where the one before ended, and ends at rest.
                 assert!((chunk[0][1] - last_q).abs() < 1e-12 && chunk[chunk.len() - 1][2] == 0.0);

@@ -136,8 +136,8 @@ enum Command {
     /// `jointctl identify --data` the recording. The joint is left at a zero torque reference.
     /// With `--position`, for a set-up that deflects the element by this joint's position (a
     /// rig moving the output): each segment a position sine about where the joint stands, as
-    /// trajectories of at most 64 points cut at the sine's peaks, for whole periods and back to
-    /// the start in half a period, then a second held. On this machine only (not over --zenoh),
+    /// trajectories of at most 64 points cut at the sine's peaks, for whole periods and a
+    /// quarter to the peak, back to the start in half a period, then a second held. On this machine only (not over --zenoh),
     /// not streamed.
     Experiment {
         /// Joint name.
