@@ -363,8 +363,8 @@ pub(crate) fn read_experiment(file: &std::path::Path) -> Result<Experiment, Stri
         if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
             return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
         }
-        // At least a thousandth of a hertz: a period of 1000 s, and a slower sine's whole period
-        // overflows what a wait can hold.
+        // At least a thousandth of a hertz (a period of 1000 s): slower is no characterisation,
+        // and far slower (below about 4e-18 Hz) a whole period overflows what a wait can hold.
         if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= 100.0) {
             return bad("frequency_hz", s.frequency_hz, "in [0.001, 100] Hz");
         }
