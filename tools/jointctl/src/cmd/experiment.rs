@@ -10,8 +10,9 @@
 //!
 //! `--position` runs the same file on a set-up that deflects the element by position instead
 //! (section 3.3.1's characterisation, the joint deflected while its drives hold the motors at
-//! zero, with a rig's joint in place of the hand): each segment a position sine of the named joint about where it stands, sent as
-//! trajectories (`cmd trajectory`'s command, at most 64 points each; [`position_plan`]).
+//! zero, with a rig's joint in place of the hand): each segment a position sine of the named
+//! joint about where it stands, sent as trajectories (`cmd trajectory`'s command, at most 64
+//! points each; [`position_plan`]).
 
 use std::path::Path;
 use std::process::ExitCode;
