@@ -535,3 +535,45 @@ fn a_friction_record_without_causes_says_whose_held_out_error_it_gives() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A triangle at three speeds (0.2, 0.5 and 1 Hz in turn, 0.08 rad), 150 Nm/rad, eq. 3.5's
+/// friction `0.5 atan(30 v)` and 40 Nm s/rad of viscous friction; 14-bit, 0.05 Nm noise, 1 kHz.
+fn write_triangle_record(file: &std::path::Path) {
+    let mut rng = jointctl_test_support::XorShift64::new(0x2545_f491_4f6c_dd1d);
+    let q = std::f64::consts::TAU / 16384.0;
+    let (mut start, mut period, mut text) = (0.0, 0usize, String::from("t,deflection,torque\n"));
+    for i in 0..40_000 {
+        let t = i as f64 / 1000.0;
+        if t >= start + 1.0 / [0.2, 0.5, 1.0][period % 3] {
+            (start, period) = (start + 1.0 / [0.2, 0.5, 1.0][period % 3], period + 1);
+        }
+        let frequency = [0.2, 0.5, 1.0][period % 3];
+        let (phase, rate) = ((t - start) * frequency, 0.32 * frequency);
+        let (x, v) = if phase < 0.5 { (-0.08 + rate * phase / frequency, rate) } else { (0.08 - rate * (phase - 0.5) / frequency, -rate) };
+        let torque = 150.0 * x + 0.5 * (30.0 * v).atan() + 40.0 * v + 0.05 * rng.normal();
+        text += &format!("{t:.3},{:.12e},{torque:.6}\n", (x / q).round() * q);
+    }
+    std::fs::write(file, text).unwrap();
+}
+
+/// The rate read with sharper intervals is said in the text with what judged it: the whole
+/// model's training BIC against the first reading's, and both held-out errors; the JSON's
+/// `narrow_rate` gives the same figures.
+#[test]
+fn a_rate_read_sharper_is_said_with_the_whole_models_evidence() {
+    let dir = scratch("ident-sharper-rate");
+    let file = dir.join("triangle.csv");
+    write_triangle_record(&file);
+    let run = |json: bool| Command::new(jointctl()).args(["identify", "--data"]).arg(&file).args(json.then_some("--json")).output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&run(true).stdout).unwrap();
+    let rate = &v["narrow_rate"];
+    let scale = rate["window"]["sharper"]["reach_scale"].as_f64().unwrap_or_else(|| panic!("{rate}"));
+    let (narrow, usual) = (rate["bic_narrow"].as_f64().unwrap(), rate["bic_usual"].as_f64().unwrap());
+    assert!(narrow < usual - 10.0, "{rate}");
+    let text = String::from_utf8_lossy(&run(false).stdout).to_string();
+    let said = format!("The rate read over windows whose slopes must agree to within {scale} of the usual reach (sharper where the rate turns)");
+    assert!(text.contains(&said), "{said:?} not in\n{text}");
+    let judged = format!("the whole model's training BIC {narrow:.0} against {usual:.0} as identify read it first; held-out RMSE {:.4} Nm read so", v["rmse_after"].as_f64().unwrap());
+    assert!(text.contains(&judged), "{judged:?} not in\n{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -9,10 +9,10 @@
 //! every record was read before. The module `prepare::bins` says why it matters. The reading is
 //! chosen on the baseline alone, before any cause: a torque channel 10 ms late on 20 Hz bins
 //! tips the comparison to the points (a review's measurement), so where the causes include a
-//! delay the bins are judged again on the whole model ([`best_reading`]). A slow log's rate is
-//! read likewise as the data says: over the usual window or one sample either side
-//! ([`choose_rate_window`], on the baseline), or through a local cubic ([`best_reading`], on the
-//! whole model of a second pass).
+//! delay the bins are judged again on the whole model ([`best_reading`]). The rate is read
+//! likewise as the data says: over the usual windows, with sharper intervals, or (a slow log)
+//! one sample either side ([`choose_rate_reading`], on the baseline), or through a local cubic
+//! ([`best_reading`], on the whole model of a second pass).
 
 use jointctl_models::effect::Effect;
 use serde::Serialize;
@@ -74,11 +74,12 @@ pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared
     Ok((true, on_bins, Some(reading)))
 }
 
-/// A slow log's rate read otherwise than over the usual window: how, the training BIC read so
-/// and read over the usual window (at least [`super::prepare::NARROWEST_RATE_WINDOW`] either
-/// side), and the held-out evidence. For a window as narrow as one sample either side, the
-/// BIC of the baseline's fit, both as point samples ([`choose_rate_window`]); for a local
-/// cubic, of the whole model identified on each reading (`identify`'s second pass).
+/// A rate read otherwise than over the usual window: how, the training BIC read so and read
+/// over the usual window (at least [`super::prepare::NARROWEST_RATE_WINDOW`] either side,
+/// intervals of the full reach), and the held-out evidence. For a window as narrow as one
+/// sample either side or sharper intervals, the BIC of the baseline's fit, both as point
+/// samples ([`choose_rate_reading`]); for a local cubic, of the whole model identified on each
+/// reading (`identify`'s second pass).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NarrowRate {
     /// The window the rate was read over instead of the usual one.
@@ -91,51 +92,101 @@ pub struct NarrowRate {
     pub evidence: String,
 }
 
-/// A slow log's rate readings other than the usual window.
-#[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
+/// The rate's readings other than the usual window.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(rename_all = "snake_case")]
 pub enum RateWindow {
-    /// A least-squares line over a window as narrow as one sample either side.
+    /// A slow log's: a least-squares line over a window as narrow as one sample either side.
     OneSampleEitherSide,
-    /// The slope of a local cubic through two samples either side: of bin means, their
-    /// interval's rate to fourth order (see `prepare::RateReading::Cubic`).
+    /// A slow log's: the slope of a local cubic through two samples either side: of bin means,
+    /// their interval's rate to fourth order (see `prepare::RateReading::Cubic`).
     CubicTwoEitherSide,
+    /// Any record's: the usual windows, each kept only while its slope's interval, this share
+    /// of the usual reach, meets every narrower one's (see
+    /// [`super::prepare::SHARPER_REACH_SCALES`]): sharper where the rate turns.
+    Sharper {
+        /// The share of the usual reach.
+        reach_scale: f64,
+    },
 }
 
 impl RateWindow {
     /// What the report says of it.
-    pub fn describe(self) -> &'static str {
+    pub fn describe(self) -> String {
         match self {
-            RateWindow::OneSampleEitherSide => "over a window as narrow as one sample either side",
-            RateWindow::CubicTwoEitherSide => "through a local cubic over two samples either side (of bin means: their interval's rate)",
+            RateWindow::OneSampleEitherSide => "over a window as narrow as one sample either side".into(),
+            RateWindow::CubicTwoEitherSide => "through a local cubic over two samples either side (of bin means: their interval's rate)".into(),
+            RateWindow::Sharper { reach_scale } => format!("over windows whose slopes must agree to within {reach_scale} of the usual reach (sharper where the rate turns)"),
         }
     }
 }
 
-/// Whether a slow log's rate is read over a window as narrow as one sample either side
-/// (`narrow`, prepared so) instead of the usual (`usual`): at 20 Hz the usual +-2 samples are
-/// +-0.1 s, and at a reversal of a motion of about 1 Hz the rate read so turned eq. 3.5's
-/// friction late or early (the blind generator's 20 Hz softening springs: seed 1's 033 left
-/// 0.50 Nm held out for 0.07 of noise, 0.32 read over +-1, and the softening was not named),
-/// while a delay of a third of a sample period (the shared l3-case018) reads as well either
-/// way. Decided as the bins are: the baseline's friction fitted on both, as point samples; the
-/// narrow window is kept when the training BIC prefers it by more than BIC's threshold and
-/// its held-out error is no larger. Each reading gets a model of its own: the columns' cache
-/// knows a part by its length and time stamps, not by its rate.
-pub(crate) fn choose_rate_window(all: &[&dyn CandidateCause], baseline: &super::BaselineModel, centre_rad: f64, usual: &Prepared, narrow: &Prepared) -> Option<NarrowRate> {
-    let model = || Model { baseline, centre_rad, middle_s: usual.record_middle_s, causes: all, held_out: Default::default(), columns: Default::default() };
-    let (model_usual, model_narrow) = (model(), model());
-    let (usual, narrow) = (usual.as_points(), narrow.as_points());
-    let on_usual = Spec { terms: vec![baseline_friction(&model_usual, all, &usual).ok()?] };
-    let on_narrow = Spec { terms: vec![baseline_friction(&model_narrow, all, &narrow).ok()?] };
-    let score = |m: &Model, s: &Spec, p: &Prepared| m.fit(s, &p.coarse).map(|f| bic(f.rss, p.coarse.len(), f.parameters));
-    let (bic_usual, bic_narrow) = (score(&model_usual, &on_usual, &usual)?, score(&model_narrow, &on_narrow, &narrow)?);
-    if bic_usual - bic_narrow <= BIC_THRESHOLD {
+/// The readings of the rate [`choose_rate_reading`] chooses from on a record prepared as
+/// `usual`: `Narrow`, a slow log's window as narrow as one sample either side; `Sharper`, any
+/// record's sharper intervals ([`super::prepare::SHARPER_REACH_SCALES`]) about its usual
+/// narrowest window (`narrowest`).
+pub(crate) enum RateReadings {
+    Narrow,
+    Sharper { narrowest: usize },
+}
+
+/// A reading of the rate the baseline's fit prefers to `usual`'s: the baseline's friction
+/// fitted on each of `readings`, as point samples; a reading qualifies when the training BIC
+/// prefers it to the usual one by more than BIC's threshold and its held-out error is no
+/// larger; of several, the lowest BIC. Only with eq. 3.5's friction in the baseline, which the
+/// rate drives. Each reading is prepared in turn and dropped unless it is the best so far (a
+/// long record's reading is most of identify's memory), and gets a model of its own (the
+/// columns' cache knows a part by its length and time stamps, not by its rate); a reading that
+/// holds out other samples (the held-out window follows the rate) is not compared.
+///
+/// - `Narrow` is taken as it is: at 20 Hz the usual +-2 samples are +-0.1 s, and at a reversal
+///   of a motion of about 1 Hz the rate read so turned eq. 3.5's friction late or early (the
+///   blind generator's 20 Hz softening springs: seed 1's 033 left 0.50 Nm held out for 0.07 of
+///   noise, 0.32 read over +-1, and the softening was not named), while a delay of a third of a
+///   sample period (the shared l3-case018) reads as well either way.
+/// - `Sharper` is a candidate that the whole model must confirm ([`best_reading`]): a rate
+///   sharper at the corners suits the baseline's arctan and can suit the causes worse (the
+///   blind generator's seed-6 cubic spring with a delay read so named a Dahl hysteresis beside
+///   them, its held-out error 0.079 Nm for 0.063, the baseline's alike either way).
+pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::IdentifyOptions, all: &[&dyn CandidateCause], centre_rad: f64, usual: std::borrow::Cow<'_, Prepared>, readings: RateReadings) -> Option<(NarrowRate, Prepared)> {
+    use super::prepare::{RateReading, SHARPER_REACH_SCALES, prepare_with_rate_window};
+    fn as_points(p: &Prepared) -> std::borrow::Cow<'_, Prepared> {
+        if p.may_hold_bins() { std::borrow::Cow::Owned(p.as_points()) } else { std::borrow::Cow::Borrowed(p) }
+    }
+    if !opts.baseline_friction {
         return None;
     }
+    let readings: Vec<(RateWindow, RateReading)> = match readings {
+        RateReadings::Narrow => vec![(RateWindow::OneSampleEitherSide, RateReading::Adaptive { narrowest: 1, reach_scale: 1.0 })],
+        RateReadings::Sharper { narrowest } => SHARPER_REACH_SCALES.iter().map(|&reach_scale| (RateWindow::Sharper { reach_scale }, RateReading::Adaptive { narrowest, reach_scale })).collect(),
+    };
+    let middle_s = usual.record_middle_s;
+    let model = || Model { baseline: &opts.baseline, centre_rad, middle_s, causes: all, held_out: Default::default(), columns: Default::default() };
+    let score = |m: &Model, s: &Spec, p: &Prepared| m.fit(s, &p.coarse).map(|f| bic(f.rss, p.coarse.len(), f.parameters));
     let held = |m: &Model, s: &Spec, p: &Prepared| select::compute_held_out(m, s, p).map(|e| select::rmse(&e.errors));
-    let (held_usual, held_narrow) = (held(&model_usual, &on_usual, &usual)?, held(&model_narrow, &on_narrow, &narrow)?);
-    (held_narrow <= held_usual).then(|| NarrowRate { window: RateWindow::OneSampleEitherSide, bic_narrow, bic_usual, evidence: format!("held-out RMSE {held_narrow:.4} Nm read so, {held_usual:.4} Nm over the usual window") })
+    let on = |m: &Model, p: &Prepared| baseline_friction(m, all, p).ok().map(|term| Spec { terms: vec![term] });
+    let samples = samples_of(&usual);
+    let (bic_usual, held_usual) = {
+        let (m, read) = (model(), as_points(&usual));
+        let spec = on(&m, &read)?;
+        (score(&m, &spec, &read)?, held(&m, &spec, &read)?)
+    };
+    // What is left of the usual reading, when it is given, is not needed any more.
+    drop(usual);
+    let mut best: Option<(NarrowRate, Prepared)> = None;
+    for (window, how) in readings {
+        let Some(p) = prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok().filter(|p| samples_of(p) == samples) else { continue };
+        let (m, read) = (model(), as_points(&p));
+        let Some((spec, bic_narrow)) = on(&m, &read).and_then(|s| score(&m, &s, &read).map(|b| (s, b))) else { continue };
+        if bic_usual - bic_narrow <= BIC_THRESHOLD || best.as_ref().is_some_and(|(r, _)| r.bic_narrow <= bic_narrow) {
+            continue;
+        }
+        let Some(error) = held(&m, &spec, &read).filter(|e| *e <= held_usual) else { continue };
+        let evidence = format!("held-out RMSE {error:.4} Nm read so, {held_usual:.4} Nm over the usual window");
+        drop(read);
+        best = Some((NarrowRate { window, bic_narrow, bic_usual, evidence }, p));
+    }
+    best
 }
 
 /// The noise floor [Nm] of what `spec` leaves of the training part's torque (the
@@ -201,31 +252,44 @@ fn better_than(first: &Extended, other: &Extended) -> bool {
     first.samples == other.samples && first.training_bic - other.training_bic > BIC_THRESHOLD && other.report.rmse_after <= first.report.rmse_after
 }
 
-/// The report of a slow log read otherwise than identify read it first (`first`), when
-/// another reading's whole model is better ([`better_than`]; of two such, the lower held-out
-/// error, the cubic's on a tie). The readings:
-/// - `cubic`: the rate through a local cubic. A least-squares line reads a motion of a few
-///   hertz at 20 Hz slow, and a viscous friction's damping makes up the difference (on the
-///   blind devices' 20 Hz means, 5-18 % above the full-rate variants' and the truth). Judged on
-///   the whole model, not on the baseline as the narrow window is: eq. 3.5's arctan saturates
-///   and hardly tells a rate read slow from one read right, and an offset the baseline lacks
-///   swamped the comparison (held out 0.82 Nm either way on seed 6's device E).
-/// - `as_bins`: bin averages, where the baseline alone chose the points. The baseline decides
-///   the reading before any cause is in it, and a cause it lacks can tip it: a torque channel
-///   9 ms late on 20 Hz means of a record that reverses (the blind device D of seed 3) read
-///   better as points under the baseline, and then eq. 3.5's friction, averaged over each
+/// Another reading of the record than identify's first, identified on the whole model.
+pub(crate) enum Reading {
+    /// A slow log read as bin averages where the baseline alone chose the points.
+    AsBins,
+    /// A slow log's rate through a local cubic.
+    Cubic,
+    /// The rate with sharper intervals (its [`NarrowRate`] in the report).
+    Sharper,
+}
+
+/// The report of the record read otherwise than identify read it first (`first`), when
+/// another reading's whole model is better ([`better_than`]; of several such, the lowest
+/// held-out error, the first of `others` on a tie). The readings:
+/// - [`Reading::Cubic`]: a slow log's rate through a local cubic. A least-squares line reads a
+///   motion of a few hertz at 20 Hz slow, and a viscous friction's damping makes up the
+///   difference (on the blind devices' 20 Hz means, 5-18 % above the full-rate variants' and
+///   the truth). Judged on the whole model, not on the baseline as the narrow window is: eq.
+///   3.5's arctan saturates and hardly tells a rate read slow from one read right, and an
+///   offset the baseline lacks swamped the comparison (held out 0.82 Nm either way on seed 6's
+///   device E).
+/// - [`Reading::AsBins`]: bin averages, where the baseline alone chose the points. The baseline
+///   decides the reading before any cause is in it, and a cause it lacks can tip it: a torque
+///   channel 9 ms late on 20 Hz means of a record that reverses (the blind device D of seed 3)
+///   read better as points under the baseline, and then eq. 3.5's friction, averaged over each
 ///   interval where the rate turns, was smoothed at every reversal into a small loop that a
 ///   Dahl hysteresis took up beside the delay (0.055 Nm, 11 Nm/rad; not named on the device's
 ///   full-rate variants).
+/// - [`Reading::Sharper`]: the rate with sharper intervals, which the baseline's fit preferred
+///   ([`choose_rate_reading`]).
 ///
 /// Each is compared with `first`, not with one another: the first reading is the one every
 /// other record gets.
-pub(crate) fn best_reading(first: Extended, as_bins: Option<Extended>, cubic: Option<Extended>) -> Report {
-    // A reading's held-out error where it qualifies, infinite where it does not.
-    let qualifying_rmse = |e: &Option<Extended>| e.as_ref().filter(|e| better_than(&first, e)).map_or(f64::INFINITY, |e| e.report.rmse_after);
-    let (bins_held, cubic_held) = (qualifying_rmse(&as_bins), qualifying_rmse(&cubic));
-    match (as_bins, cubic) {
-        (Some(mut bins), _) if bins_held < cubic_held => {
+pub(crate) fn best_reading(first: Extended, others: Vec<(Reading, Extended)>) -> Report {
+    let best = others.into_iter().filter(|(_, e)| better_than(&first, e)).min_by(|a, b| a.1.report.rmse_after.total_cmp(&b.1.report.rmse_after));
+    let read = first.report.narrow_rate.as_ref().map_or("over the usual window".into(), |r| r.window.describe());
+    let evidence = |e: &Extended| format!("held-out RMSE {:.4} Nm read so, {:.4} Nm read {read}", e.report.rmse_after, first.report.rmse_after);
+    match best {
+        Some((Reading::AsBins, mut bins)) => {
             if let Some(reading) = bins.report.bin_averages.as_mut() {
                 reading.evidence = format!(
                     "the baseline alone read better as points, the whole model read so is better: training BIC {:.1} against {:.1} as points, held-out RMSE {:.4} Nm against {:.4}",
@@ -234,12 +298,15 @@ pub(crate) fn best_reading(first: Extended, as_bins: Option<Extended>, cubic: Op
             }
             bins.report
         }
-        (_, Some(cubic)) if cubic_held.is_finite() => {
-            let read = first.report.narrow_rate.as_ref().map_or("over the usual window", |r| r.window.describe());
-            let evidence = format!("held-out RMSE {:.4} Nm read so, {:.4} Nm read {read}", cubic.report.rmse_after, first.report.rmse_after);
-            let narrow_rate = NarrowRate { window: RateWindow::CubicTwoEitherSide, bic_narrow: cubic.training_bic, bic_usual: first.training_bic, evidence };
+        Some((Reading::Cubic, cubic)) => {
+            let narrow_rate = NarrowRate { window: RateWindow::CubicTwoEitherSide, bic_narrow: cubic.training_bic, bic_usual: first.training_bic, evidence: evidence(&cubic) };
             Report { narrow_rate: Some(narrow_rate), ..cubic.report }
         }
-        _ => first.report,
+        Some((Reading::Sharper, sharper)) => {
+            let window = sharper.report.narrow_rate.as_ref().map_or(RateWindow::Sharper { reach_scale: f64::NAN }, |r| r.window);
+            let narrow_rate = NarrowRate { window, bic_narrow: sharper.training_bic, bic_usual: first.training_bic, evidence: evidence(&sharper) };
+            Report { narrow_rate: Some(narrow_rate), ..sharper.report }
+        }
+        None => first.report,
     }
 }

@@ -32,6 +32,7 @@ pub mod experiment;
 mod friction_confound;
 mod numeric;
 mod parallel;
+mod registered;
 pub use numeric::format_value;
 pub mod prepare;
 mod search;
@@ -186,9 +187,9 @@ pub struct Report {
     pub no_spring: Option<NoSpring>,
     /// Set when a slow log is read as bin averages (see [`bin_reading`]).
     pub bin_averages: Option<bin_reading::BinAverages>,
-    /// Set when a slow log's rate is read otherwise than over the usual window: as narrow as
-    /// one sample either side, or through a local cubic (see
-    /// [`bin_reading::choose_rate_window`]).
+    /// Set when the rate is read otherwise than over the usual window: with sharper intervals,
+    /// or a slow log's as narrow as one sample either side or through a local cubic (see
+    /// [`bin_reading::choose_rate_reading`]).
     pub narrow_rate: Option<bin_reading::NarrowRate>,
     /// Set when a friction record's stops are left out (see [`prepare::AtRest`]): the held-out
     /// figures above are then over the samples that slide.
@@ -281,36 +282,6 @@ pub enum IdentifyError {
     },
 }
 
-/// A registered cause must not reuse a name and must give one column per coefficient, one value
-/// per sample: checked once, up front, so that a mistake is an error rather than a cause that
-/// silently contributes nothing.
-fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn CandidateCause>], p: &prepare::Prepared, baseline: &BaselineModel) -> Result<(), IdentifyError> {
-    let baseline_fitted = matches!(baseline, BaselineModel::Polynomial(_));
-    let taken: Vec<&str> = builtin.iter().map(|c| c.name()).chain(["dropout"]).collect();
-    let part = &p.coarse;
-    for (i, c) in registered.iter().enumerate() {
-        let name = c.name();
-        if taken.contains(&name) || registered[..i].iter().any(|o| o.name() == name) {
-            return Err(IdentifyError::CauseNameTaken { name: name.into() });
-        }
-        if let Some(effect) = c.effect() {
-            return Err(IdentifyError::CauseClaimsEffect { name: name.into(), effect });
-        }
-        let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
-        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));
-        let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
-        let model_nm = vec![0.0; part.len()];
-        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges, record_middle_s: p.record_middle_s };
-        let columns = c.columns(&values, &samples);
-        let expected = c.coefficient_names().len();
-        if columns.len() != expected || columns.iter().any(|col| col.len() != part.len()) {
-            let lengths: Vec<usize> = columns.iter().map(Vec::len).collect();
-            return Err(IdentifyError::CauseColumns { name: name.into(), lengths, expected_columns: expected, samples: part.len() });
-        }
-    }
-    Ok(())
-}
-
 /// Identifies what `data`'s model misses.
 ///
 /// ```
@@ -337,43 +308,52 @@ fn check_registered(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
 /// ```
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     let p = prepare::prepare(data, opts.train_fraction, opts.held_out)?;
-    // A slow log's rate over a window as narrow as one sample either side, should the data
-    // read better so (see `bin_reading::choose_rate_window`), or through a local cubic.
-    let slow = p.may_hold_bins() && opts.baseline_friction;
-    let reading = |r: prepare::RateReading| if slow { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, r).ok() } else { None };
-    let narrow = reading(prepare::RateReading::Adaptive { narrowest: 1 });
-    let cubic = reading(prepare::RateReading::Cubic);
     let builtin = causes::builtin();
+    let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
+    // A slow log's rate as narrow as one sample either side, should the baseline read better
+    // so, and sharper intervals for the whole model to confirm (see `bin_reading`); should a
+    // registered cause panic there, the usual reading, and the check below says so.
+    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(data, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
+    let slow = p.may_hold_bins() && opts.baseline_friction;
+    let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow)).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
+    let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
+    // Screened on the first reading handed over, before any report holds its held-out series,
+    // and the first prepared again: on 2 million samples the peak was 14 MB higher screened
+    // after the first pass, 8 MB beside the first reading, 0 so (and 0.3 s longer, of 2 s).
+    let sharper = reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest });
+    let p = prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?;
+    // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
+    let cubic = if slow { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok() } else { None };
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
     let checked_and_extended = || {
-        check_registered(&builtin, &opts.extra_candidates, &p, &opts.baseline)?;
-        extend(&p, narrow.as_ref(), &builtin, opts, false)
+        registered::check(&builtin, &opts.extra_candidates, &p, &opts.baseline)?;
+        extend(&p, rate.as_ref(), &all, opts, false)
     };
     let first = std::panic::catch_unwind(std::panic::AssertUnwindSafe(checked_and_extended)).unwrap_or_else(|panic| {
         let message = panic.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| panic.downcast_ref::<String>().cloned()).unwrap_or_else(|| "no message".into());
         Err(IdentifyError::CausePanicked { message, registered: opts.extra_candidates.iter().map(|c| c.name().to_string()).collect() })
     })?;
     // Each further reading apart: whatever befalls it (a registered cause that panics on it, a
-    // degenerate fit), the first result stands. Read as bins on the whole model: see `bin_reading::best_reading`.
-    let again = |q: &prepare::Prepared, narrow: Option<&prepare::Prepared>, force_bins: bool| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(q, narrow, &builtin, opts, force_bins).ok())).ok().flatten();
+    // degenerate fit), the first result stands (see `bin_reading::best_reading`).
+    let again = |q: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, force_bins: bool| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(q, rate, &all, opts, force_bins).ok())).ok().flatten();
+    let mut others = Vec::new();
+    others.extend(cubic.as_ref().and_then(|c| again(c, None, false)).map(|e| (bin_reading::Reading::Cubic, e)));
     // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());
-    let as_bins = (slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, narrow.as_ref(), true)).flatten();
-    Ok(bin_reading::best_reading(first, as_bins, cubic.as_ref().and_then(|c| again(c, None, false))))
+    others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
+    others.extend(sharper.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Sharper, e)));
+    Ok(bin_reading::best_reading(first, others))
+}
+
+/// The deflection the baseline is centred on [rad]: a friction record's training mean (its
+/// `deflection` is a position), 0 for a spring's deflection.
+fn centre(p: &prepare::Prepared, baseline: &BaselineModel) -> f64 {
+    if reads_as_friction(p.spring_share, baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 }
 }
 
 /// The search, the selection and the report on prepared data.
-fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[Box<dyn CandidateCause>], opts: &IdentifyOptions, force_bins: bool) -> Result<bin_reading::Extended, IdentifyError> {
-    let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
-    let centre = |p: &prepare::Prepared| if reads_as_friction(p.spring_share, &opts.baseline) { p.train.d.iter().sum::<f64>() / p.train.len().max(1) as f64 } else { 0.0 };
-    // A slow log's rate: over the usual window or as narrow as one sample either side, as the
-    // baseline's fit says (only with eq. 3.5's friction in the baseline, which the rate drives).
-    let narrow_rate = narrow.and_then(|n| bin_reading::choose_rate_window(&all, &opts.baseline, centre(p), p, n));
-    let p = match (narrow, &narrow_rate) {
-        (Some(n), Some(_)) => n,
-        _ => p,
-    };
+fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[&dyn CandidateCause], opts: &IdentifyOptions, force_bins: bool) -> Result<bin_reading::Extended, IdentifyError> {
     // A friction record's stops are left out of the fit and the judgement (see `prepare::rest`).
     let whole = p;
     let sliding;
@@ -386,8 +366,8 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         }
         None => p,
     };
-    let centre_rad = centre(p);
-    let model = Model { baseline: &opts.baseline, centre_rad, middle_s: p.record_middle_s, causes: &all, held_out: Default::default(), columns: Default::default() };
+    let centre_rad = centre(p, &opts.baseline);
+    let model = Model { baseline: &opts.baseline, centre_rad, middle_s: p.record_middle_s, causes: all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.
@@ -401,7 +381,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
     let read;
     let p = if opts.baseline_friction && p.may_hold_bins() {
         let points = p.as_points();
-        let (bins, term, reading) = bin_reading::choose(&model, &all, p, &points, force_bins)?;
+        let (bins, term, reading) = bin_reading::choose(&model, all, p, &points, force_bins)?;
         base.terms.push(term);
         bin_averages = reading;
         let mut chosen = if bins { p.clone() } else { points };
@@ -415,7 +395,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         &read
     } else {
         if opts.baseline_friction {
-            base.terms.push(bin_reading::baseline_friction(&model, &all, p)?);
+            base.terms.push(bin_reading::baseline_friction(&model, all, p)?);
         }
         p
     };
@@ -575,7 +555,7 @@ fn extend(p: &prepare::Prepared, narrow: Option<&prepare::Prepared>, builtin: &[
         unexplained,
         no_spring,
         bin_averages,
-        narrow_rate,
+        narrow_rate: rate.cloned(),
         at_rest,
         held_out_window: p.held_out.clone(),
         significance: Significance {

@@ -20,7 +20,7 @@ pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use dropouts::dropouts_by_segment;
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
-pub use rate::NARROWEST_RATE_WINDOW;
+pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES};
 use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals, turn_step_rad};
@@ -281,15 +281,16 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
 }
 
 pub(crate) fn prepare(data: &Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
-    prepare_with_rate_window(data, train_fraction, how, RateReading::Adaptive { narrowest: NARROWEST_RATE_WINDOW })
+    prepare_with_rate_window(data, train_fraction, how, RateReading::Adaptive { narrowest: NARROWEST_RATE_WINDOW, reach_scale: 1.0 })
 }
 
 /// How the deflection's rate is read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum RateReading {
     /// A least-squares line over a window chosen at each sample, at least `narrowest` samples
-    /// either side (see [`NARROWEST_RATE_WINDOW`]).
-    Adaptive { narrowest: usize },
+    /// either side (see [`NARROWEST_RATE_WINDOW`]), each window's interval `reach_scale` of its
+    /// reach (1 as derived, less for a sharper reading: see [`SHARPER_REACH_SCALES`]).
+    Adaptive { narrowest: usize, reach_scale: f64 },
     /// A slow log's: the slope of a local cubic through two samples either side (see
     /// `rate::cubic_rate_by_segment`).
     Cubic,
@@ -348,7 +349,10 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
     let v = match rate {
-        RateReading::Adaptive { narrowest } => velocity_by_segment(&t, &d, &starts, DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter }, &velocity_half_widths(d.len(), &turning, period_samples, narrowest)),
+        RateReading::Adaptive { narrowest, reach_scale } => {
+            let noise = DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter, reach_scale };
+            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, narrowest))
+        }
         RateReading::Cubic => cubic_rate_by_segment(&t, &d, &starts),
     };
     let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
