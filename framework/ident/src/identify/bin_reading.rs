@@ -74,19 +74,20 @@ pub(crate) fn choose(model: &Model, all: &[&dyn CandidateCause], bins: &Prepared
     Ok((true, on_bins, Some(reading)))
 }
 
-/// A rate read otherwise than over the usual window: how, the training BIC read so and read
-/// over the usual window (at least [`super::prepare::NARROWEST_RATE_WINDOW`] either side,
-/// intervals of the full reach), and the held-out evidence. For a window as narrow as one
-/// sample either side or sharper intervals, the BIC of the baseline's fit, both as point
-/// samples ([`choose_rate_reading`]); for a local cubic, of the whole model identified on each
-/// reading (`identify`'s second pass).
+/// A rate read otherwise than identify read it first: how, the training BIC read so and read
+/// first (over the usual window, at least [`super::prepare::NARROWEST_RATE_WINDOW`] either
+/// side with intervals of the full reach, or a slow log's one sample either side), and the
+/// held-out evidence. For a window as narrow as one sample either side, the BIC of the
+/// baseline's fit, both as point samples ([`choose_rate_reading`]); for a local cubic or
+/// sharper intervals, of the whole model identified on each reading (`identify`'s second pass:
+/// the sharper intervals are proposed by the baseline's fit first).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NarrowRate {
     /// The window the rate was read over instead of the usual one.
     pub window: RateWindow,
     /// Training BIC read over that window.
     pub bic_narrow: f64,
-    /// Training BIC read over the usual window.
+    /// Training BIC read as identify read it first.
     pub bic_usual: f64,
     /// The held-out evidence for the reading taken, in words.
     pub evidence: String,
@@ -136,8 +137,7 @@ pub(crate) enum RateReadings {
 /// larger; of several, the lowest BIC. Only with eq. 3.5's friction in the baseline, which the
 /// rate drives. Each reading is prepared in turn and dropped unless it is the best so far (a
 /// long record's reading is most of identify's memory), and gets a model of its own (the
-/// columns' cache knows a part by its length and time stamps, not by its rate); a reading that
-/// holds out other samples (the held-out window follows the rate) is not compared.
+/// columns' cache knows a part by its length and time stamps, not by its rate).
 ///
 /// - `Narrow` is taken as it is: at 20 Hz the usual +-2 samples are +-0.1 s, and at a reversal
 ///   of a motion of about 1 Hz the rate read so turned eq. 3.5's friction late or early (the
@@ -165,7 +165,6 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
     let score = |m: &Model, s: &Spec, p: &Prepared| m.fit(s, &p.coarse).map(|f| bic(f.rss, p.coarse.len(), f.parameters));
     let held = |m: &Model, s: &Spec, p: &Prepared| select::compute_held_out(m, s, p).map(|e| select::rmse(&e.errors));
     let on = |m: &Model, p: &Prepared| baseline_friction(m, all, p).ok().map(|term| Spec { terms: vec![term] });
-    let samples = samples_of(&usual);
     let (bic_usual, held_usual) = {
         let (m, read) = (model(), as_points(&usual));
         let spec = on(&m, &read)?;
@@ -175,7 +174,7 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
     drop(usual);
     let mut best: Option<(NarrowRate, Prepared)> = None;
     for (window, how) in readings {
-        let Some(p) = prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok().filter(|p| samples_of(p) == samples) else { continue };
+        let Some(p) = prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok() else { continue };
         let (m, read) = (model(), as_points(&p));
         let Some((spec, bic_narrow)) = on(&m, &read).and_then(|s| score(&m, &s, &read).map(|b| (s, b))) else { continue };
         if bic_usual - bic_narrow <= BIC_THRESHOLD || best.as_ref().is_some_and(|(r, _)| r.bic_narrow <= bic_narrow) {

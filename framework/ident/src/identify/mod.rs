@@ -311,17 +311,21 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let builtin = causes::builtin();
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     // A slow log's rate as narrow as one sample either side, should the baseline read better
-    // so, and sharper intervals for the whole model to confirm (see `bin_reading`); should a
-    // registered cause panic there, the usual reading, and the check below says so.
+    // so, and sharper intervals for the whole model to confirm (see `bin_reading`); should the
+    // screening fail (it fits the built-in friction only), the usual reading.
     let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(data, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
     let slow = p.may_hold_bins() && opts.baseline_friction;
     let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow)).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
     let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
-    // Screened on the first reading handed over, before any report holds its held-out series,
-    // and the first prepared again: on 2 million samples the peak was 14 MB higher screened
-    // after the first pass, 8 MB beside the first reading, 0 so (and 0.3 s longer, of 2 s).
-    let sharper = reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest });
-    let p = prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?;
+    // Screened before any report holds its held-out series, on the first reading handed over
+    // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
+    // the first pass, 8 MB beside the first reading, unchanged so (0.3 s longer, of 2 s). Where
+    // a sharper reading is taken, its whole model is identified beside the first's report (as
+    // a slow log's cubic reading is): on a 2-million-sample triangle, 158-160 MB for 145.
+    let (sharper, p) = match opts.baseline_friction {
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?),
+        false => (None, p),
+    };
     // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
     let cubic = if slow { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok() } else { None };
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and

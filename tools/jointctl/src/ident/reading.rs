@@ -35,7 +35,7 @@ pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_read
             RateWindow::Sharper { .. } => "a window is kept while its slope agrees with every narrower one's to within three standard errors of the deflection's scatter and the most its quantisation can tilt it".to_string(),
             _ => format!("at least {} samples either side", jointctl_ident::identify::prepare::NARROWEST_RATE_WINDOW),
         };
-        format!(" The rate read {} (usually {usual}): {judged} {:.0} against {:.0} {against}; {}.", r.window.describe(), r.bic_narrow, r.bic_usual, r.evidence)
+        format!(" The rate read {}; usually {usual}. Judged by {judged} {:.0} against {:.0} {against}; {}.", r.window.describe(), r.bic_narrow, r.bic_usual, r.evidence)
     })
 }
 

@@ -172,8 +172,8 @@ pub(super) struct DeflectionNoise {
 
 impl DeflectionNoise {
     /// How far a window's least-squares slope may lie from the motion's rate [rad/s], for a
-    /// window of `m` samples whose time stamps spread `spread` [s^2] about their mean:
-    /// [`RATE_WINDOW_SIGMAS`] standard errors of the scatter, plus the most that quantisation
+    /// window of `m` samples whose time stamps spread `spread` [s^2] about their mean, times
+    /// `reach_scale`: [`RATE_WINDOW_SIGMAS`] standard errors of the scatter, plus the most that quantisation
     /// can tilt it. Quantisation is no white noise on a slow motion: its error is a sawtooth that
     /// keeps its sign for many samples, bounded by half a step, so its tilt is bounded by
     /// `q/2 sum|t - mean t| / spread <= q/2 sqrt(m / spread)` (Cauchy-Schwarz). Taken as white
