@@ -321,7 +321,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.3 s longer, of 2 s). Where
     // a sharper reading is taken, its whole model is identified beside the first's report (as
-    // a slow log's cubic reading is): on a 2-million-sample triangle, 158-160 MB for 145.
+    // a slow log's cubic reading is): on a 2-million-sample triangle, 159 MB for 143.
     let (sharper, p) = match opts.baseline_friction {
         true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?),
         false => (None, p),
