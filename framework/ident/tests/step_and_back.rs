@@ -1,7 +1,7 @@
 //! A step test: out, held, and back. Held out as its last 30 %, the way back is all that turns,
-//! and the fit sees one stroke: a loop, which shows only where the motion turns, cannot be
-//! fitted, and the held-out part judges a baseline that never saw the return. The held-out
-//! window then leaves the fit both ways (`prepare::held_out_window`).
+//! and the fit sees one stroke: a loop, which shows where the motion turns, is fitted on the
+//! way out alone, and the held-out part judges a baseline that never saw the return. The
+//! held-out window then leaves the fit both ways (`prepare::held_out_window`).
 
 use jointctl_ident::identify::{IdentifyOptions, identify};
 
@@ -42,7 +42,7 @@ fn a_loop_in_a_step_out_and_back_is_named_with_the_return_in_the_fit() {
     eprintln!("held out {:?}: {:.4} -> {:.4} Nm", report.held_out_window, report.rmse_before, report.rmse_after);
     let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
     assert_eq!(named, ["hysteresis"], "rejected {:?}", report.rejected);
-    assert!(report.held_out_window.moved.as_deref().is_some_and(|m| m.contains("one way only")), "{:?}", report.held_out_window);
+    assert!(report.held_out_window.moved.as_deref().is_some_and(|m| m.contains("does not move both ways")), "{:?}", report.held_out_window);
     let limit = report.causes[0].params["limit_nm"];
     assert!((limit - 0.4).abs() < 0.25 * 0.4, "limit {limit} Nm for 0.4");
 }

@@ -47,8 +47,9 @@ const RATE_STEP_S: f64 = 0.02;
 pub enum HeldOut {
     /// The last `1 - train_fraction` of the time range.
     Last,
-    /// The last part while its motion is within [`REACH_TOLERANCE`] of the rest's; otherwise
-    /// the window of the same length most like the rest.
+    /// The last part while its motion is within [`REACH_TOLERANCE`] of the rest's and the rest
+    /// moves both ways where the record does; otherwise the window of the same length most
+    /// like the rest (see [`held_out_window`]).
     #[default]
     LikeTheRest,
 }
@@ -134,7 +135,9 @@ fn reach(t: &[f64], d: &[f64], k: usize, lo: usize, hi: usize) -> (f64, f64) {
 const STROKE_SHARE: f64 = 0.1;
 
 /// Whether the rest of the record, all but samples `lo..hi`, moves both ways: a stroke up and
-/// a stroke down, each over [`STROKE_SHARE`] of `range`, within a contiguous piece of it.
+/// a stroke down, each over [`STROKE_SHARE`] of `range` and each within a contiguous piece of
+/// it (the fit starts each piece warm, from the deflection before it). `d` is read through a
+/// median of three (see [`median_of_three`]).
 fn rest_moves_both_ways(d: &[f64], lo: usize, hi: usize, range: f64) -> bool {
     let stroke = STROKE_SHARE * range;
     let (mut up, mut down) = (false, false);
@@ -149,6 +152,18 @@ fn rest_moves_both_ways(d: &[f64], lo: usize, hi: usize, range: f64) -> bool {
     up && down
 }
 
+/// `d` with each sample the median of it and its neighbours: a reading lost to a zero (thesis
+/// appendix A) is in the record the window is chosen on, and one sample at zero and back would
+/// count as a stroke each way.
+fn median_of_three(d: &[f64]) -> Vec<f64> {
+    (0..d.len())
+        .map(|i| {
+            let (a, b, c) = (d[i.saturating_sub(1)], d[i], d[(i + 1).min(d.len() - 1)]);
+            a.max(b).min(a.min(b).max(c))
+        })
+        .collect()
+}
+
 /// How unlike the rest a window is: the larger of its rate's and its range's factor, either way.
 fn unlikeness((rate, range): (f64, f64)) -> f64 {
     let factor = |r: f64| if r > 0.0 && r.is_finite() { r.max(1.0 / r) } else { f64::INFINITY };
@@ -159,7 +174,9 @@ fn unlikeness((rate, range): (f64, f64)) -> f64 {
 /// the last `1 - train_fraction` of the time range; with [`HeldOut::LikeTheRest`], while its
 /// motion is within [`REACH_TOLERANCE`] of the rest's, and otherwise the window of that length
 /// (starting on a multiple of 5 % of the range) whose motion is most like the rest's, if it is
-/// more like it.
+/// more like it. Where the record moves both ways and the training part does not (a step out,
+/// held, and back at the end), the window most like the rest among those within the tolerance
+/// that leave the fit both ways; where there is none, as before.
 ///
 /// ```
 /// use jointctl_ident::identify::prepare::{HeldOut, held_out_window};
@@ -195,15 +212,16 @@ pub fn held_out_window(t_s: &[f64], deflection_rad: &[f64], train_fraction: f64,
     // A training part that moves one way only, where the record moves both (a step out, held,
     // and back in its last part), cannot fit what turns with the motion (a loop, the friction's
     // sign): a window that leaves it both ways is looked for, whatever the reach.
-    let deflection_span = d.iter().fold(f64::NEG_INFINITY, |h, x| h.max(*x)) - d.iter().fold(f64::INFINITY, |l, x| l.min(*x));
-    let both_ways = |(lo, hi): (usize, usize)| rest_moves_both_ways(d, lo, hi, deflection_span);
-    let one_way = both_ways((n, n)) && !both_ways(bounds(train_fraction));
-    if unlikeness(at_end) <= REACH_TOLERANCE && !one_way {
+    let steady = median_of_three(d);
+    let deflection_span = steady.iter().fold(f64::NEG_INFINITY, |h, x| h.max(*x)) - steady.iter().fold(f64::INFINITY, |l, x| l.min(*x));
+    let both_ways = |(lo, hi): (usize, usize)| rest_moves_both_ways(&steady, lo, hi, deflection_span);
+    let turns_late = both_ways((n, n)) && !both_ways(bounds(train_fraction));
+    if unlikeness(at_end) <= REACH_TOLERANCE && !turns_late {
         return last;
     }
     // Latest first: on a tie the later window stays.
     let steps = (train_fraction / WINDOW_STEP + 1e-9).floor() as usize;
-    let best = (0..=steps)
+    let choose = |one_way: bool| (0..=steps)
         .rev()
         // Whole percents (0.15, not 0.15000000000000002 in the JSON).
         .map(|j| (j as f64 * WINDOW_STEP * 100.0).round() / 100.0)
@@ -214,16 +232,23 @@ pub fn held_out_window(t_s: &[f64], deflection_rad: &[f64], train_fraction: f64,
             // hold a few samples only).
             (hi - lo >= MIN_HELD_OUT && n - (hi - lo) >= MIN_TRAINING && (!one_way || both_ways((lo, hi)))).then(|| (s, reach(t, d, k, lo, hi)))
         })
-        .filter(|(_, r)| one_way || unlikeness(*r) < unlikeness(at_end))
+        // One that leaves the fit both ways must still move like the rest (a window in the
+        // hold between the strokes cannot confirm what turns with the motion).
+        .filter(|(_, r)| if one_way { unlikeness(*r) <= REACH_TOLERANCE } else { unlikeness(*r) < unlikeness(at_end) })
         .fold(None::<(f64, (f64, f64))>, |best, c| match best {
             Some(b) if unlikeness(b.1) <= unlikeness(c.1) => Some(b),
             _ => Some(c),
         });
+    let (one_way, best) = match turns_late.then(|| choose(true)).flatten() {
+        Some(b) => (true, Some(b)),
+        None if unlikeness(at_end) > REACH_TOLERANCE => (false, choose(false)),
+        None => (false, None),
+    };
     match best {
         Some((start, (rate, range))) => {
             let percent = |f: f64| format!("{:.0}", 100.0 * f);
             let why = if one_way {
-                format!("the first {} % of the time range moves one way only (the record turns back in its last part), and a fit on it cannot tell what turns with the motion", percent(train_fraction))
+                format!("the first {} % of the time range does not move both ways (the record turns back in its last part), and a fit on it cannot tell what turns with the motion", percent(train_fraction))
             } else {
                 format!("the last {} % of the time range moved {:.2}x the rest's rate over {:.2}x its deflection range (beyond {}x either way)", percent(length), at_end.0, at_end.1, REACH_TOLERANCE)
             };
@@ -258,12 +283,25 @@ mod tests {
         let t: Vec<f64> = (0..14_500).map(|i| i as f64 * 0.002).collect();
         let d: Vec<f64> = t.iter().map(|t| -3.4e-3 * ((t - 3.0) / 2.0).clamp(0.0, 1.0) * (1.0 - ((t - 24.0) / 1.5).clamp(0.0, 1.0))).collect();
         let w = held_out_window(&t, &d, 0.7, HeldOut::LikeTheRest);
-        assert!(w.start < 0.7 && w.moved.as_deref().is_some_and(|m| m.contains("one way only")), "{w:?}");
+        assert!(w.start < 0.7 && w.moved.as_deref().is_some_and(|m| m.contains("does not move both ways")), "{w:?}");
         let (lo, hi) = (t.partition_point(|x| *x < w.start * t[t.len() - 1]), t.partition_point(|x| *x < w.end * t[t.len() - 1]));
         assert!(rest_moves_both_ways(&d, lo, hi, 3.4e-3), "{w:?}");
-        // A record that moves one way only keeps the last part: no window can do better.
-        let out: Vec<f64> = t.iter().map(|t| -3.4e-3 * (t / 29.0)).collect();
+        // A record that moves one way only keeps the last part: no window can do better; nor
+        // does one reading lost to a zero make it move both ways.
+        let mut out: Vec<f64> = t.iter().map(|t| 1e-3 + 4e-3 * (t / 29.0)).collect();
         assert_eq!(held_out_window(&t, &out, 0.7, HeldOut::LikeTheRest).start, 0.7);
+        out[13_000] = 0.0;
+        assert_eq!(held_out_window(&t, &out, 0.7, HeldOut::LikeTheRest).start, 0.7);
+    }
+
+    #[test]
+    fn a_window_that_leaves_both_strokes_but_does_not_move_is_not_taken() {
+        // Out over the first 5 %, held, back over 75-80 %, held: every window that leaves both
+        // strokes in the fit lies in a hold; the last 30 %, which moves like the rest, stays.
+        let t: Vec<f64> = (0..10_000).map(|i| i as f64 * 0.01).collect();
+        let d: Vec<f64> = t.iter().map(|t| 2e-3 * ((t / 5.0).clamp(0.0, 1.0) - ((t - 75.0) / 5.0).clamp(0.0, 1.0))).collect();
+        let w = held_out_window(&t, &d, 0.7, HeldOut::LikeTheRest);
+        assert!(w.start == 0.7 && w.moved.is_none(), "{w:?}");
     }
 
     #[test]
