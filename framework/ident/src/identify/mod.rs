@@ -319,9 +319,9 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
     // Screened before any report holds its held-out series, on the first reading handed over
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
-    // the first pass, 8 MB beside the first reading, unchanged so (0.3 s longer, of 2 s). Where
+    // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s). Where
     // a sharper reading is taken, its whole model is identified beside the first's report (as
-    // a slow log's cubic reading is): on a 2-million-sample triangle, 159 MB for 143.
+    // a slow log's cubic reading is): on a 2-million-sample triangle, 158 MB for 143.
     let (sharper, p) = match opts.baseline_friction {
         true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?),
         false => (None, p),
