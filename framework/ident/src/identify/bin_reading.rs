@@ -182,7 +182,6 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
         }
         let Some(error) = held(&m, &spec, &read).filter(|e| *e <= held_usual) else { continue };
         let evidence = format!("held-out RMSE {error:.4} Nm read so, {held_usual:.4} Nm over the usual window");
-        drop(read);
         best = Some((NarrowRate { window, bic_narrow, bic_usual, evidence }, p));
     }
     best
@@ -301,10 +300,13 @@ pub(crate) fn best_reading(first: Extended, others: Vec<(Reading, Extended)>) ->
             let narrow_rate = NarrowRate { window: RateWindow::CubicTwoEitherSide, bic_narrow: cubic.training_bic, bic_usual: first.training_bic, evidence: evidence(&cubic) };
             Report { narrow_rate: Some(narrow_rate), ..cubic.report }
         }
-        Some((Reading::Sharper, sharper)) => {
-            let window = sharper.report.narrow_rate.as_ref().map_or(RateWindow::Sharper { reach_scale: f64::NAN }, |r| r.window);
-            let narrow_rate = NarrowRate { window, bic_narrow: sharper.training_bic, bic_usual: first.training_bic, evidence: evidence(&sharper) };
-            Report { narrow_rate: Some(narrow_rate), ..sharper.report }
+        Some((Reading::Sharper, mut sharper)) => {
+            // Its reading, as `identify` handed it to this pass, judged now on the whole model.
+            let judged = (sharper.training_bic, evidence(&sharper));
+            if let Some(r) = sharper.report.narrow_rate.as_mut() {
+                (r.bic_narrow, r.bic_usual, r.evidence) = (judged.0, first.training_bic, judged.1);
+            }
+            sharper.report
         }
         None => first.report,
     }

@@ -5,9 +5,9 @@
 //! part judges causes the training part never saw (a delay on a slow start); one that moves 10
 //! times slower cannot show what the training part found (a cubic at large deflections).
 //!
-//! A training part that moves one way only where the record moves both (a step out, held, and
-//! back in the last part) gets, whatever the reach, the window most like the rest among those
-//! that leave it both ways: a loop or the friction's sign cannot be fitted on one stroke (the
+//! A training part that does not move both ways where the record does (a step out, held, and
+//! back in the last part) gets the window most like the rest, within [`REACH_TOLERANCE`], among
+//! those that leave it both ways: a loop or the friction's sign cannot be fitted on one stroke (the
 //! blind generator's seed-12 step on a 2e-6 rad encoder: no cause, 0.37 Nm held out for a
 //! noise floor of 0.055; held out 55-85 %, its Dahl loop named, 0.062).
 //!
@@ -209,11 +209,12 @@ pub fn held_out_window(t_s: &[f64], deflection_rad: &[f64], train_fraction: f64,
         let (lo, hi) = bounds(train_fraction);
         reach(t, d, k, lo, hi)
     };
-    // A training part that moves one way only, where the record moves both (a step out, held,
+    // A training part that does not move both ways, where the record does (a step out, held,
     // and back in its last part), cannot fit what turns with the motion (a loop, the friction's
-    // sign): a window that leaves it both ways is looked for, whatever the reach.
+    // sign): a window that leaves it both ways is looked for, even where the last part moves
+    // like the rest.
     let steady = median_of_three(d);
-    let deflection_span = steady.iter().fold(f64::NEG_INFINITY, |h, x| h.max(*x)) - steady.iter().fold(f64::INFINITY, |l, x| l.min(*x));
+    let deflection_span = Motion::of(t, &steady, k).range();
     let both_ways = |(lo, hi): (usize, usize)| rest_moves_both_ways(&steady, lo, hi, deflection_span);
     let turns_late = both_ways((n, n)) && !both_ways(bounds(train_fraction));
     if unlikeness(at_end) <= REACH_TOLERANCE && !turns_late {
