@@ -135,9 +135,10 @@ pub(crate) enum RateReadings {
 /// fitted on each of `readings`, as point samples; a reading qualifies when the training BIC
 /// prefers it to the usual one by more than BIC's threshold and its held-out error is no
 /// larger; of several, the lowest BIC. Only with eq. 3.5's friction in the baseline, which the
-/// rate drives. Each reading is prepared in turn and dropped unless it is the best so far (a
-/// long record's reading is most of identify's memory), and gets a model of its own (the
-/// columns' cache knows a part by its length and time stamps, not by its rate).
+/// rate drives. Each reading is prepared in turn, and the best so far is let go before the next
+/// is prepared (a long record's preparation beside a prepared reading was the peak of a
+/// 2-million-sample triangle) and prepared again when it stays best. Each gets a model of its
+/// own (the columns' cache knows a part by its length and time stamps, not by its rate).
 ///
 /// - `Narrow` is taken as it is: at 20 Hz the usual +-2 samples are +-0.1 s, and at a reversal
 ///   of a motion of about 1 Hz the rate read so turned eq. 3.5's friction late or early (the
@@ -172,19 +173,27 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
     };
     // What is left of the usual reading, when it is given, is not needed any more.
     drop(usual);
-    let mut best: Option<(NarrowRate, Prepared)> = None;
+    let mut best: Option<(NarrowRate, RateReading, Option<Prepared>)> = None;
     for (window, how) in readings {
+        if let Some((_, _, prepared)) = best.as_mut() {
+            *prepared = None;
+        }
         let Some(p) = prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok() else { continue };
         let (m, read) = (model(), as_points(&p));
         let Some((spec, bic_narrow)) = on(&m, &read).and_then(|s| score(&m, &s, &read).map(|b| (s, b))) else { continue };
-        if bic_usual - bic_narrow <= BIC_THRESHOLD || best.as_ref().is_some_and(|(r, _)| r.bic_narrow <= bic_narrow) {
+        if bic_usual - bic_narrow <= BIC_THRESHOLD || best.as_ref().is_some_and(|(r, _, _)| r.bic_narrow <= bic_narrow) {
             continue;
         }
         let Some(error) = held(&m, &spec, &read).filter(|e| *e <= held_usual) else { continue };
         let evidence = format!("held-out RMSE {error:.4} Nm read so, {held_usual:.4} Nm over the usual window");
-        best = Some((NarrowRate { window, bic_narrow, bic_usual, evidence }, p));
+        best = Some((NarrowRate { window, bic_narrow, bic_usual, evidence }, how, Some(p)));
     }
-    best
+    let (rate, how, prepared) = best?;
+    let p = match prepared {
+        Some(p) => p,
+        None => prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok()?,
+    };
+    Some((rate, p))
 }
 
 /// The noise floor [Nm] of what `spec` leaves of the training part's torque (the

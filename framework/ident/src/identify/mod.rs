@@ -319,15 +319,11 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
     // Screened before any report holds its held-out series, on the first reading handed over
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
-    // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s). Where
-    // a sharper reading is taken, its whole model is identified beside the first's report (as
-    // a slow log's cubic reading is): on a 2-million-sample triangle, 158 MB for 143.
+    // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (sharper, p) = match opts.baseline_friction {
         true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?),
         false => (None, p),
     };
-    // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
-    let cubic = if slow { prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok() } else { None };
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
     let checked_and_extended = || {
@@ -341,11 +337,18 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // Each further reading apart: whatever befalls it (a registered cause that panics on it, a
     // degenerate fit), the first result stands (see `bin_reading::best_reading`).
     let again = |q: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, force_bins: bool| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(q, rate, &all, opts, force_bins).ok())).ok().flatten();
+    // Each further reading is prepared where its model is identified and dropped after it, and
+    // the first reading once no other needs it: a sharper reading's model is identified beside
+    // the first's report alone (on a 2-million-sample triangle whose sharper reading is taken,
+    // 158 MB with the first reading still held, over issue 13's 150; 148 now).
     let mut others = Vec::new();
-    others.extend(cubic.as_ref().and_then(|c| again(c, None, false)).map(|e| (bin_reading::Reading::Cubic, e)));
+    // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
+    let cubic = slow.then(|| prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok()).flatten();
+    others.extend(cubic.and_then(|c| again(&c, None, false)).map(|e| (bin_reading::Reading::Cubic, e)));
     // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());
     others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
+    drop(p);
     others.extend(sharper.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Sharper, e)));
     Ok(bin_reading::best_reading(first, others))
 }

@@ -366,14 +366,13 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     if tau.iter().all(|x| *x == tau[0]) {
         return Err(PrepareError::ConstantTorque { value_nm: tau[0] });
     }
-    // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
-    let noise_floor_nm = {
-        let residual: Vec<f64> = match line_in_deflection_and_rate(&d, &v, &tau) {
-            Some([a, b, c]) => (0..tau.len()).map(|i| tau[i] - a * d[i] - b * v[i] - c).collect(),
-            None => tau.to_vec(),
-        };
-        noise_floor(&residual, &starts)
+    // The torque's floor under a line in the deflection and its rate, each residual computed
+    // where it is needed (a long record's residual is not held: see `noise_floor_of`).
+    let noise_floor_nm = match line_in_deflection_and_rate(&d, &v, &tau) {
+        Some([a, b, c]) => noise::noise_floor_of(tau.len(), |i| tau[i] - a * d[i] - b * v[i] - c, &starts),
+        None => noise_floor(&tau, &starts),
     };
+    // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
     let spacing = super::numeric::median_step(&t);
     // The held-out window, chosen on the record as read (dropouts in: a lost reading's zero adds
     // travel and range, accepted so that the model loop's gains, which see the same columns,

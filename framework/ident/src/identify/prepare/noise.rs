@@ -4,11 +4,18 @@
 /// The squared pseudo-residuals `(y[i-1] + y[i+1]) / 2 - y[i]` within each segment, scaled to
 /// unit variance for white noise (a factor 2/3 on their mean square).
 pub(super) fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
-    let mut squares = Vec::with_capacity(y.len());
+    pseudo_residual_squares_of(y.len(), |i| y[i], starts)
+}
+
+/// [`pseudo_residual_squares`] of the series `y(i)` of `n` samples, each sample computed where
+/// it is needed: a long record's residual is not held beside its squares (16 MB on 2 million
+/// samples).
+fn pseudo_residual_squares_of(n: usize, y: impl Fn(usize) -> f64, starts: &[usize]) -> Vec<f64> {
+    let mut squares = Vec::with_capacity(n);
     for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(y.len());
+        let b = starts.get(k + 1).copied().unwrap_or(n);
         for i in a + 1..b.saturating_sub(1) {
-            let e = 0.5 * (y[i - 1] + y[i + 1]) - y[i];
+            let e = 0.5 * (y(i - 1) + y(i + 1)) - y(i);
             squares.push(e * e / 1.5);
         }
     }
@@ -35,7 +42,13 @@ pub(super) fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
 /// assert!((floor / (0.1 * (2.0f64 / 12.0).sqrt()) - 1.0).abs() < 0.1, "{floor}");
 /// ```
 pub fn noise_floor(y: &[f64], starts: &[usize]) -> f64 {
-    let mut squares = pseudo_residual_squares(y, starts);
+    noise_floor_of(y.len(), |i| y[i], starts)
+}
+
+/// [`noise_floor`] of the series `y(i)` of `n` samples, each computed where it is needed (see
+/// [`pseudo_residual_squares_of`]).
+pub(super) fn noise_floor_of(n: usize, y: impl Fn(usize) -> f64, starts: &[usize]) -> f64 {
+    let mut squares = pseudo_residual_squares_of(n, y, starts);
     if squares.is_empty() {
         return 0.0;
     }
