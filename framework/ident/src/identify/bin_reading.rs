@@ -189,6 +189,8 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
         best = Some((NarrowRate { window, bic_narrow, bic_usual, evidence }, how, Some(p)));
     }
     let (rate, how, prepared) = best?;
+    // Let go when a later reading was prepared and did not do better: prepared again (the same
+    // data and reading prepare alike).
     let p = match prepared {
         Some(p) => p,
         None => prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok()?,

@@ -337,10 +337,11 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // Each further reading apart: whatever befalls it (a registered cause that panics on it, a
     // degenerate fit), the first result stands (see `bin_reading::best_reading`).
     let again = |q: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, force_bins: bool| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| extend(q, rate, &all, opts, force_bins).ok())).ok().flatten();
-    // Each further reading is prepared where its model is identified and dropped after it, and
-    // the first reading once no other needs it: a sharper reading's model is identified beside
-    // the first's report alone (on a 2-million-sample triangle whose sharper reading is taken,
-    // 158 MB with the first reading still held, over issue 13's 150; 148 now).
+    // Each reading's preparation is let go once its model is identified, the first's once no
+    // other reading needs it (the bins reuse it), the cubic's prepared only then: a sharper
+    // reading's model is identified beside the first's report alone (on a 2-million-sample
+    // triangle whose sharper reading is taken, 158 MB with the first reading still held, over
+    // issue 13's 150; 148 now).
     let mut others = Vec::new();
     // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
     let cubic = slow.then(|| prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok()).flatten();
@@ -567,9 +568,10 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         held_out_window: p.held_out.clone(),
         significance: Significance {
             test: format!(
-                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; or forecast encompassing (the held-out residual regressed on the cause's correction, batch-means variance, the blocks' effective number as degrees of freedom) with a slope of at least {:.2} in each of {} parts of the held-out record where the correction acts; or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of those parts and betters most of those with something to explain; for coefficients fitted on each ring, a chi-square test of the held-out error drop",
+                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; or forecast encompassing (the held-out residual regressed on the cause's correction, batch-means variance, the blocks' effective number as degrees of freedom) with a slope of at least {:.2} in each of {} parts of the held-out record where the correction acts; or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of those parts and betters most of those with something to explain; for coefficients fitted on each ring, a gain of at least {:.0} % of the excess (consistent over those parts where the residual is structure) and a chi-square test of the held-out error drop",
                 significance::CONFIRMED_SLOPE,
                 significance::CONSISTENCY_PARTS,
+                100.0 * significance::LARGE_SHARE_OF_EXCESS,
                 100.0 * significance::LARGE_SHARE_OF_EXCESS
             ),
             level: significance::LEVEL,

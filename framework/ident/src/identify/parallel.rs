@@ -51,4 +51,48 @@ mod tests {
         let caller = std::thread::current().id();
         assert_eq!(super::parallel_map(&[7u64], |x| (x + 1, std::thread::current().id() == caller)), vec![(8, true)]);
     }
+
+    #[test]
+    fn the_calling_thread_works_and_a_panic_on_any_worker_is_passed_on() {
+        if super::cores() < 2 {
+            return;
+        }
+        // Each item waits until some item ran on another thread: the calling thread and a
+        // worker both take items (the first of them cannot finish alone).
+        let caller = std::thread::current().id();
+        let elsewhere = std::sync::atomic::AtomicBool::new(false);
+        let on_caller: Vec<bool> = super::parallel_map(&[0u64; 8], |_| {
+            let here = std::thread::current().id() == caller;
+            if !here {
+                elsewhere.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+            let start = std::time::Instant::now();
+            while !elsewhere.load(std::sync::atomic::Ordering::Relaxed) && start.elapsed() < std::time::Duration::from_secs(5) {
+                std::thread::yield_now();
+            }
+            here
+        });
+        assert!(on_caller.contains(&true) && on_caller.contains(&false), "{on_caller:?}");
+        // A panic is passed on whichever thread it happens on (the other waits for a worker
+        // to have taken an item, so that the worker does).
+        for on_the_caller in [true, false] {
+            let elsewhere = std::sync::atomic::AtomicBool::new(false);
+            let panicked = std::panic::catch_unwind(|| {
+                super::parallel_map(&[0u64; 8], |_| {
+                    let here = std::thread::current().id() == caller;
+                    if !here {
+                        elsewhere.store(true, std::sync::atomic::Ordering::Relaxed);
+                    }
+                    if here == on_the_caller {
+                        panic!("a cause's bug");
+                    }
+                    let start = std::time::Instant::now();
+                    while !elsewhere.load(std::sync::atomic::Ordering::Relaxed) && start.elapsed() < std::time::Duration::from_secs(5) {
+                        std::thread::yield_now();
+                    }
+                })
+            });
+            assert!(panicked.is_err(), "on the caller: {on_the_caller}");
+        }
+    }
 }

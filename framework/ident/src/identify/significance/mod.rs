@@ -40,7 +40,13 @@
 //! take part of any structure that recurs there (a Stribeck friction's breakaway after every
 //! reversal, the rate estimate's error at every turn), and the drop is significant whatever the
 //! cause. There the gain must also be large and consistent over the held-out record's parts,
-//! the evidence a predicted cause may use instead of its test.
+//! the evidence a predicted cause may use instead of its test; elsewhere it must still be large
+//! ([`LARGE_SHARE_OF_EXCESS`] of the excess): the rest of a residual a little above the floor
+//! recurs at every reversal too (a ring named so took 9 % of it on the blind generator's seed
+//! 9, 003, whose only effect was a viscous friction). That bar adds to the relevance rule only
+//! where the model without the cause leaves between a quarter of the noise's variance and the
+//! variance itself above the floor (an RMSE of 1.1 to 1.4 times the floor): below, a relevant gain
+//! is large; above, the consistency rule applies.
 
 /// Blocks the held-out part is cut into.
 pub const BLOCKS: usize = 20;
@@ -79,9 +85,10 @@ pub const RELEVANT_SHARE_OF_NOISE: f64 = 0.05;
 /// significant and negligible).
 pub const RELEVANT_SHARE_OF_EXCESS: f64 = 0.05;
 
-/// A gain accepted on consistency instead of the t-test must remove at least this share of the
-/// excess (an assumption: a cause that removes a fifth of what is wrong, in most parts of the
-/// held-out record and worsening none, is a finding, whatever the scatter of the rest).
+/// A gain accepted on consistency instead of the t-test, or of coefficients fitted on the
+/// held-out part, must remove at least this share of the excess (an assumption: a cause that
+/// removes a fifth of what is wrong, in most parts of the held-out record and worsening none, is
+/// a finding, whatever the scatter of the rest).
 pub const LARGE_SHARE_OF_EXCESS: f64 = 0.2;
 
 /// Contiguous parts of the held-out part a consistent gain is judged on: in none may the cause
@@ -115,6 +122,9 @@ pub struct Judgement {
     pub consistent: bool,
     /// The model without the cause leaves at least the noise's variance again above the floor.
     pub structured: bool,
+    /// The gain is at least [`LARGE_SHARE_OF_EXCESS`] of what the model without the cause
+    /// leaves above the floor.
+    pub large: bool,
 }
 
 impl Judgement {
@@ -123,11 +133,11 @@ impl Judgement {
         self.gain_nm2 >= self.relevant_nm2
     }
     /// There is evidence for the gain: significant, or large and consistent; coefficients
-    /// fitted on the held-out part against a structured residual, both (see the module's
-    /// description).
+    /// fitted on the held-out part, significant and large, and against a structured residual
+    /// consistent too (see the module's description).
     pub fn evidence(&self) -> bool {
-        if self.test.kind == TestKind::AddedCoefficients && self.structured {
-            return self.test.significant() && self.consistent;
+        if self.test.kind == TestKind::AddedCoefficients {
+            return self.test.significant() && self.large && (!self.structured || self.consistent);
         }
         self.test.significant() || self.consistent
     }
@@ -135,7 +145,8 @@ impl Judgement {
     pub fn named(&self) -> bool {
         self.relevant() && self.evidence()
     }
-    /// Significant but below the relevance threshold.
+    /// With evidence but below the relevance threshold (for coefficients fitted on the held-out
+    /// part a large gain is part of the evidence, so they are negligible only near the floor).
     pub fn negligible(&self) -> bool {
         self.evidence() && !self.relevant()
     }
@@ -148,6 +159,8 @@ impl std::fmt::Display for Judgement {
             write!(f, ", consistent over {CONSISTENCY_PARTS} parts of the held-out record")?;
         } else if self.test.kind == TestKind::AddedCoefficients && self.structured {
             write!(f, "; the model without it leaves a structured residual, where coefficients fitted on the held-out part also need a large gain consistent over {CONSISTENCY_PARTS} parts of it")?;
+        } else if self.test.kind == TestKind::AddedCoefficients && !self.large {
+            write!(f, "; coefficients fitted on the held-out part also need a gain of at least {:.0} % of what the model without them leaves above the noise floor", 100.0 * LARGE_SHARE_OF_EXCESS)?;
         }
         Ok(())
     }
@@ -202,8 +215,9 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
     let better = informative.iter().filter(|g| **g >= relevant_nm2).count();
     let most_parts_better = better >= 2 && 2 * better > informative.len();
     let structured = excess >= noise_nm2;
-    let consistent = structured && worse_allowed && most_parts_better && gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
-    Judgement { test, gain_nm2: gain, relevant_nm2, consistent, structured }
+    let large = gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
+    let consistent = structured && worse_allowed && most_parts_better && large;
+    Judgement { test, gain_nm2: gain, relevant_nm2, consistent, structured, large }
 }
 
 /// The two tests.
@@ -485,97 +499,4 @@ fn t_of_block_means(means: &[f64], kind: TestKind) -> BlockTest {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Per-sample squared errors of `n` samples a part, each part at its level.
-    fn parts(levels: &[f64], n: usize) -> Vec<f64> {
-        levels.iter().flat_map(|l| std::iter::repeat_n(*l, n)).collect()
-    }
-
-    #[test]
-    fn a_large_gain_with_one_part_made_worse_is_consistent_when_every_other_part_gains() {
-        // Finding (the blind generator's seed 4, 009: a Bouc-Wen loop, Dahl's fitted for it):
-        // the Dahl loop took 86 % of the excess over the noise off the held-out part, 92-100 %
-        // of it in three of the four parts, and made the third part worse by 0.063 Nm^2 (the
-        // relevance threshold 0.040): refused, and no cause was named at 2.5 times the noise.
-        // A cause that models an effect nearly right is worse somewhere; the parts' median and
-        // their signs decide (hv-block cross-validation's rule), one part against three.
-        let reduced = parts(&[3.0, 7.0, 1.5, 2.0], 1000);
-        let full = parts(&[1.0, 1.0, 1.8, 1.0], 1000);
-        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-        let j = judge(&reduced, &full, block_test(&diff), 1.0);
-        assert!(j.consistent, "{j:?}");
-        // Two parts made worse: not consistent, however large the rest.
-        let full = parts(&[1.0, 1.0, 1.8, 2.3], 1000);
-        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-        assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
-        // One part worse and another without a relevant gain: not consistent either.
-        let full = parts(&[1.0, 1.0, 1.8, 1.95], 1000);
-        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-        assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
-        // One part worse by more than the parts' median gain (gains 2, 6, -3.5 and 1: median
-        // 1.5): not consistent.
-        let full = parts(&[1.0, 1.0, 5.0, 1.0], 1000);
-        let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-        assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
-    }
-
-    #[test]
-    fn the_critical_value_matches_the_table() {
-        // Student's t, one-sided 0.001: df 19 -> 3.579, df 9 -> 4.297 (standard tables).
-        assert!((student_t(19.0) - 3.579).abs() < 0.02, "{}", student_t(19.0));
-        assert!((student_t(9.0) - 4.297).abs() < 0.05, "{}", student_t(9.0));
-    }
-
-    #[test]
-    fn the_chi_square_quantile_matches_the_table() {
-        // Chi-square, upper 0.001: k 2 -> 13.82, k 10 -> 29.59, k 40 -> 73.40 (standard tables).
-        for (k, table, within) in [(2.0, 13.82, 0.025), (10.0, 29.59, 0.01), (40.0, 73.40, 0.005)] {
-            assert!((chi_square(k) - table).abs() / table < within, "{k}: {}", chi_square(k));
-        }
-    }
-
-    #[test]
-    fn noise_is_not_significant_and_a_steady_gain_is() {
-        let mut rng = jointctl_test_support::XorShift64::new(7);
-        let mut false_alarms = 0;
-        for _ in 0..200 {
-            let noise: Vec<f64> = (0..2000).map(|_| rng.normal()).collect();
-            false_alarms += block_test(&noise).significant() as usize;
-        }
-        assert!(false_alarms <= 2, "{false_alarms} of 200");
-        let gain: Vec<f64> = (0..2000).map(|_| 0.3 + rng.normal()).collect();
-        assert!(block_test(&gain).significant());
-    }
-
-    #[test]
-    fn a_slow_wave_in_the_gains_does_not_pass_for_significance() {
-        // Gains that swing with a period of 8 blocks and average zero: correlated blocks.
-        let wave: Vec<f64> = (0..2000).map(|i| (i as f64 / 800.0 * std::f64::consts::TAU).sin() + 0.02).collect();
-        assert!(!block_test(&wave).significant(), "{:?}", block_test(&wave));
-    }
-
-    /// Finding (issue 31): a ring was named beside a clean record's Stribeck friction (a gain of
-    /// 9 % of the excess, the held-out chi-square 1160 against 42) where the model without it
-    /// left four times the noise's variance above the floor: coefficients fitted on the
-    /// held-out part take part of any structure, so the chi-square alone is no evidence there.
-    #[test]
-    fn coefficients_fitted_on_a_structured_residual_need_a_consistent_gain() {
-        // The reduced model leaves 5 times the noise's variance; the full one, with 16
-        // coefficients fitted on the held-out part, takes 10 % of the excess in its first part.
-        let (noise, n) = (1.0, 4000);
-        let reduced = vec![5.0; n];
-        let full: Vec<f64> = (0..n).map(|i| if i < n / 4 { 3.4 } else { 5.0 }).collect();
-        let (rss_reduced, rss_full) = (reduced.iter().sum::<f64>(), full.iter().sum::<f64>());
-        let test = added_coefficients_test(rss_reduced, rss_full, rss_full / (n - 16) as f64, 16);
-        assert!(test.significant(), "{test}");
-        let j = judge(&reduced, &full, test, noise);
-        assert!(j.relevant() && j.structured && !j.consistent, "{j:?}");
-        assert!(!j.named(), "{j}");
-        // The same gain on a residual at the floor is named on the chi-square test.
-        let (at_floor, less) = (vec![1.2; n], (0..n).map(|i| if i < n / 4 { 0.84 } else { 1.2 }).collect::<Vec<f64>>());
-        let test = added_coefficients_test(at_floor.iter().sum(), less.iter().sum(), less.iter().sum::<f64>() / (n - 16) as f64, 16);
-        assert!(judge(&at_floor, &less, test, noise).named());
-    }
-}
+mod tests;
