@@ -14,7 +14,8 @@ use jointctl_models::effect::Effect;
 use super::design::{Model, Spec, Term};
 use super::numeric::format_value;
 use super::prepare::Prepared;
-use super::select::{self, Addition, CONFOUND_BIC, CONFOUND_SHARE, Chosen, Selection, bic};
+use super::confounded::{CONFOUND_BIC, CONFOUND_SHARE};
+use super::select::{self, Addition, Chosen, Selection, bic};
 use super::significance;
 
 /// The arctan is "nearly straight" over the record when at the peak rate it still reaches this

@@ -24,6 +24,7 @@ use serde::Serialize;
 use crate::csv::Data;
 
 mod baseline;
+mod confounded;
 pub mod bin_reading;
 pub mod causes;
 mod design;
@@ -46,6 +47,8 @@ pub use unexplained::{BEYOND_TRAINING_RANGE, BEYOND_TRAINING_RATE, FAR_ABOVE_NOI
 use unexplained::unexplained;
 
 pub use baseline::{BaselineModel, NO_SPRING_SHARE};
+pub use confounded::confound_evidence;
+use confounded::confound_rule;
 use baseline::{FRICTION_PARTS, reads_as_friction};
 pub use experiment::Confound;
 pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, Samples, SearchContext};
@@ -84,39 +87,6 @@ pub struct NegligibleCause {
     pub effect: String,
     /// The judgement (gain and the relevance threshold it missed).
     pub evidence: String,
-}
-
-/// Why a named cause and an alternative are confounded, by the rule that found them (training
-/// BICs within 10, or the alternative's improvement at least 90 % of the named cause's; see
-/// `docs/identify/significance.md`, "Confounds"): training BICs of the model with the
-/// named cause `named_bic`, with the alternative in its place `other_bic`, and before either
-/// `before_bic`.
-///
-/// ```
-/// use jointctl_ident::identify::confound_evidence;
-/// assert!(confound_evidence("dead_zone", "stiffness_error", -100.0, -95.0, 0.0).contains("a difference of 5, below 10"));
-/// // The share rule: 143 apart, but the alternative improves the BIC by 99 % of the named cause's.
-/// let why = confound_evidence("dead_zone", "stiffness_error", -19903.0, -19760.0, 0.0);
-/// assert!(why.contains("99 % of") && !why.contains("below"), "{why}");
-/// ```
-pub fn confound_evidence(named: &str, other: &str, named_bic: f64, other_bic: f64, before_bic: f64) -> String {
-    let why = confound_rule(named_bic, other_bic, before_bic, "the named cause");
-    format!("{other} in place of {named} explains the training part about as well ({why}); the name given is one of the two, and an experiment that excites them differently (other amplitudes, frequencies, holds) would tell them apart")
-}
-
-/// Which confound rule holds, in words (see [`confound_evidence`]); `named`: what it stands in for.
-fn confound_rule(named_bic: f64, other_bic: f64, before_bic: f64, named: &str) -> String {
-    if (named_bic - other_bic).abs() < select::CONFOUND_BIC {
-        format!("BIC {other_bic:.0} against {named_bic:.0}: a difference of {:.0}, below {:.0}, not very strong evidence for either", (named_bic - other_bic).abs(), select::CONFOUND_BIC)
-    } else {
-        format!(
-            "it improves the training BIC by {:.0}, {:.0} % of the {:.0} {named} does (at least {:.0} % counts as about as well)",
-            before_bic - other_bic,
-            100.0 * (before_bic - other_bic) / (before_bic - named_bic),
-            before_bic - named_bic,
-            100.0 * select::CONFOUND_SHARE
-        )
-    }
 }
 
 /// A record without a spring: what the baseline's friction took on for it.
@@ -496,14 +466,18 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
     let held_out_reach = [ratio(rate_test, rate_train), ratio(range_test, range_train)];
     let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach, opts.held_out);
+    // A friction record's loop, dip and lag are its friction's parts (see `no_spring` below),
+    // not causes: two of them are not a pair of causes.
+    let friction_part = |c: usize| reads_as_friction(p.spring_share, &opts.baseline) && all[c].effect().is_some_and(|e| FRICTION_PARTS.contains(&e));
     let mut confounded: Vec<Confound> = selection
         .confounded
         .iter()
-        .map(|&(named, other, a, b, before)| Confound {
-            effect: name(named),
-            alternative: name(other),
-            bic: [a, b],
-            evidence: confound_evidence(&name(named), &name(other), a, b, before),
+        .filter(|c| !(friction_part(c.named) && friction_part(c.alternative)))
+        .map(|c| Confound {
+            effect: name(c.named),
+            alternative: name(c.alternative),
+            bic: [c.bic[0], c.bic[1]],
+            evidence: c.held_out_said(&name(c.named), &name(c.alternative)).unwrap_or_else(|| confound_evidence(&name(c.named), &name(c.alternative), c.bic[0], c.bic[1], c.bic[2])),
         })
         .collect();
     let experiment = experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz);

@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use super::parallel::{cores, parallel_map};
 use super::causes::{FullRate, SearchContext};
+use super::confounded::{CONFOUND_BIC, CONFOUND_SHARE, Confounded};
 use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
 use super::search::{polish, profile_terms, search};
@@ -44,22 +45,10 @@ pub(crate) struct Selection {
     /// Causes with evidence whose gain is below the relevance threshold: (cause, evidence).
     pub negligible: Vec<(usize, String)>,
     /// Named causes and a candidate left out that explains the training part about as well in
-    /// its place: (named, alternative, training BIC of the named, of the alternative, of the
-    /// model before either).
-    pub confounded: Vec<(usize, usize, f64, f64, f64)>,
+    /// its place.
+    pub confounded: Vec<Confounded>,
 }
 
-/// A candidate whose training BIC, in the step a cause was named, lies within this much of the
-/// named cause's explains the training part about as well: BIC differences below 10 are not
-/// "very strong" evidence for either model (Kass and Raftery 1995, the scale of
-/// [`BIC_THRESHOLD`]) ...
-pub const CONFOUND_BIC: f64 = 10.0;
-
-/// ... and so does one whose training BIC improvement is at least this share of the named
-/// cause's (an assumption: on one sine, a Dahl hysteresis's loop is fitted to 95 % as well by a
-/// 5 ms time delay and a cubic, and the two are not told apart by the data; with a second
-/// frequency the delay's improvement falls to a third of the hysteresis').
-pub const CONFOUND_SHARE: f64 = 0.9;
 
 pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
     n as f64 * (rss / n as f64).max(1e-300).ln() + parameters as f64 * (n as f64).ln()
@@ -262,8 +251,8 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     let mut rejected = Vec::new();
     let mut negligible = Vec::new();
     // Named causes and the candidates that explained the training part about as well, in the
-    // step each was named: (named, alternative, BIC of each).
-    let mut about_as_well: Vec<(usize, usize, f64, f64, f64)> = Vec::new();
+    // step each was named.
+    let mut about_as_well: Vec<Confounded> = Vec::new();
     let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
     let mut current = score(&spec, 0.0);
     // Each candidate's best parameters of the previous step: the next search starts there.
@@ -313,6 +302,10 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         }).collect();
         let top: Vec<(f64, Spec, usize)> = worth.iter().filter(|w| !w.3).take(TESTED_PER_STEP).chain(worth.iter().filter(|w| w.3).take(TESTED_PER_STEP)).map(|(b, s, c, _)| (*b, s.clone(), *c)).collect();
         let mut accepted = false;
+        // Proposals refused in this step for want of evidence, with their held-out gains: one
+        // with a better training BIC that gained about as much as the cause named after it is
+        // confounded with it (the held-out part did not tell them apart either).
+        let mut unconfirmed: Vec<(usize, f64, f64)> = Vec::new();
         let Some(reduced) = held_out_errors(model, &spec, p) else { break };
         // The proposals polished, checked and tested as many at once as there are cores, in
         // order; the outcomes are read in order, so the choice is the one a test after the
@@ -323,10 +316,13 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 match outcome {
                     Checked::Impossible(_, why) => rejected.push(why),
                     Checked::Tested(s, judgement) if judgement.named() => {
-                        // Candidates with a better training BIC were tested before and the
-                        // held-out part told them apart; those after it were not tested.
+                        // Candidates with a better training BIC were tested before: the held-out
+                        // part told them apart, unless one was refused for want of evidence
+                        // with about the same gain (`unconfirmed`); those after it were not
+                        // tested.
                         let close = |bic: f64| (bic - b).abs() < CONFOUND_BIC || current - bic >= CONFOUND_SHARE * (current - b);
-                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0)).map(|w| (*c, w.2, *b, w.0, current)));
+                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0)).map(|w| Confounded { named: *c, alternative: w.2, bic: [*b, w.0, current], held_out_gains_nm2: None }));
+                        about_as_well.extend(Confounded::on_held_out(*c, [*b, current], judgement.gain_nm2, &unconfirmed));
                         chosen.push(Chosen { cause: *c, against: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
                         current = score(&s, 0.0);
                         spec = s;
@@ -336,7 +332,12 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                     Checked::Tested(_, judgement) if judgement.negligible() => {
                         negligible.push((*c, format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}")));
                     }
-                    Checked::Tested(_, judgement) => rejected.push(format!("{} (proposed by BIC, no evidence on the held-out part: {judgement})", name(*c))),
+                    Checked::Tested(_, judgement) => {
+                        if judgement.relevant() {
+                            unconfirmed.push((*c, *b, judgement.gain_nm2));
+                        }
+                        rejected.push(format!("{} (proposed by BIC, no evidence on the held-out part: {judgement})", name(*c)));
+                    }
                     Checked::NoFit => {}
                 }
             }
@@ -379,7 +380,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     prune(model, p, &mut selection, &name);
     // Confounds: a named cause that is still in the model and an alternative that is not.
     let spec = &selection.spec;
-    selection.confounded = about_as_well.into_iter().filter(|(c, other, ..)| spec.term(*c).is_some() && spec.term(*other).is_none()).collect();
+    selection.confounded = about_as_well.into_iter().filter(|c| spec.term(c.named).is_some() && spec.term(c.alternative).is_none()).collect();
     selection
 }
 
