@@ -181,8 +181,10 @@ fn deadline_overruns_are_detected_and_counted() {
     let period_ns = 2_000_000;
     let expected = s.cycle_samples().filter(|(late, compute)| late + compute > period_ns).count() as u64;
     assert_eq!(s.overruns, expected, "{s:?}");
-    // The stalled cycle is among them.
-    assert_eq!(s.cycle_samples().filter(|(_, compute)| *compute >= 6_000_000).count(), 1);
+    // The stalled cycle is among them (others may take as long on a loaded machine: counted
+    // as at least one, and the stall's joint faulted so that it stalls once).
+    assert!(s.cycle_samples().any(|(_, compute)| compute >= 6_000_000), "{s:?}");
+    assert!(arm.slots.iter().any(|slot| slot.name == "b" && slot.fault != 0), "joint b faulted after its stall");
     assert!(s.overruns >= 1, "{s:?}");
     // A 6 ms stall in a 2 ms period ends past at least 2 deadlines.
     assert!(s.missed_deadlines >= 2, "{s:?}");
