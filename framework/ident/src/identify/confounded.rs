@@ -33,10 +33,11 @@ impl Confounded {
     /// The candidates refused in the step `named` was named, for want of evidence on the
     /// held-out part, `(cause, training BIC, held-out gain [Nm^2])`, that gained at least
     /// [`CONFOUND_SHARE`] of the named cause's `named_gain_nm2` there: proposed before it (a
-    /// better training BIC) and not told apart from it by the held-out part either. `bic`: the
-    /// named cause's training BIC and the model's before it.
+    /// better training BIC, required: a ring is tested after the ordinary causes whatever its
+    /// BIC) and not told apart from it by the held-out part either. `bic`: the named cause's
+    /// training BIC and the model's before it.
     pub(crate) fn on_held_out(named: usize, [named_bic, before]: [f64; 2], named_gain_nm2: f64, refused: &[(usize, f64, f64)]) -> impl Iterator<Item = Confounded> + '_ {
-        refused.iter().filter(move |r| r.2 >= CONFOUND_SHARE * named_gain_nm2).map(move |&(alternative, bic, gain)| Confounded { named, alternative, bic: [named_bic, bic, before], held_out_gains_nm2: Some([named_gain_nm2, gain]) })
+        refused.iter().filter(move |r| r.1 < named_bic && named_gain_nm2 > 0.0 && r.2 >= CONFOUND_SHARE * named_gain_nm2).map(move |&(alternative, bic, gain)| Confounded { named, alternative, bic: [named_bic, bic, before], held_out_gains_nm2: Some([named_gain_nm2, gain]) })
     }
 
     /// Why, in words, when the held-out part was asked: `None` for the training part's rule
@@ -96,8 +97,10 @@ mod tests {
     /// rule took every refusal on the held-out part for the data telling the two apart.
     #[test]
     fn a_candidate_refused_for_want_of_evidence_with_about_the_named_gain_is_confounded() {
-        // Refused before the named cause (gain 7.2e-4): one at 97 % of its gain, one at 50 %.
-        let refused = [(3, -25815.0, 6.99e-4), (5, -25300.0, 3.6e-4)];
+        // Refused before the named cause (gain 7.2e-4): one at 97 % of its gain, one at 50 %,
+        // and one at 97 % with a worse training BIC (tested first as an ordinary cause before a
+        // ring): not a better fit of the training part.
+        let refused = [(3, -25815.0, 6.99e-4), (5, -25300.0, 3.6e-4), (6, -25000.0, 6.99e-4)];
         let pairs: Vec<Confounded> = Confounded::on_held_out(1, [-25144.0, -24311.0], 7.2e-4, &refused).collect();
         assert_eq!(pairs.len(), 1, "{pairs:?}");
         assert_eq!((pairs[0].named, pairs[0].alternative), (1, 3));

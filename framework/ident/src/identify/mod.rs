@@ -468,7 +468,8 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach, opts.held_out);
     // A friction record's loop, dip and lag are its friction's parts (see `no_spring` below),
     // not causes: two of them are not a pair of causes.
-    let friction_part = |c: usize| reads_as_friction(p.spring_share, &opts.baseline) && all[c].effect().is_some_and(|e| FRICTION_PARTS.contains(&e));
+    let friction_record = reads_as_friction(p.spring_share, &opts.baseline);
+    let friction_part = |c: usize| friction_record && all[c].effect().is_some_and(|e| FRICTION_PARTS.contains(&e));
     let mut confounded: Vec<Confound> = selection
         .confounded
         .iter()

@@ -44,8 +44,8 @@ pub(crate) struct Selection {
     pub rejected: Vec<String>,
     /// Causes with evidence whose gain is below the relevance threshold: (cause, evidence).
     pub negligible: Vec<(usize, String)>,
-    /// Named causes and a candidate left out that explains the training part about as well in
-    /// its place.
+    /// Named causes and a candidate left out that explains the data about as well in its place
+    /// (see [`Confounded`]).
     pub confounded: Vec<Confounded>,
 }
 
@@ -250,8 +250,8 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     let mut chosen: Vec<Chosen> = Vec::new();
     let mut rejected = Vec::new();
     let mut negligible = Vec::new();
-    // Named causes and the candidates that explained the training part about as well, in the
-    // step each was named.
+    // Named causes and the candidates that explained the data about as well, in the step each
+    // was named (see `Confounded`).
     let mut about_as_well: Vec<Confounded> = Vec::new();
     let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
     let mut current = score(&spec, 0.0);
@@ -316,13 +316,15 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 match outcome {
                     Checked::Impossible(_, why) => rejected.push(why),
                     Checked::Tested(s, judgement) if judgement.named() => {
-                        // Candidates with a better training BIC were tested before: the held-out
-                        // part told them apart, unless one was refused for want of evidence
-                        // with about the same gain (`unconfirmed`); those after it were not
-                        // tested.
+                        // Candidates not tested on the held-out part (after it in BIC order, or
+                        // a ring's after the ordinary causes) are judged by the training part's
+                        // rule; those tested before it and refused for want of evidence, with
+                        // a better training BIC and about its gain, by the held-out part's.
                         let close = |bic: f64| (bic - b).abs() < CONFOUND_BIC || current - bic >= CONFOUND_SHARE * (current - b);
-                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0)).map(|w| Confounded { named: *c, alternative: w.2, bic: [*b, w.0, current], held_out_gains_nm2: None }));
-                        about_as_well.extend(Confounded::on_held_out(*c, [*b, current], judgement.gain_nm2, &unconfirmed));
+                        let held_out = Confounded::on_held_out(*c, [*b, current], judgement.gain_nm2, &unconfirmed);
+                        let tested = |other: usize| unconfirmed.iter().any(|u| u.0 == other);
+                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0) && !tested(w.2)).map(|w| Confounded { named: *c, alternative: w.2, bic: [*b, w.0, current], held_out_gains_nm2: None }));
+                        about_as_well.extend(held_out);
                         chosen.push(Chosen { cause: *c, against: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
                         current = score(&s, 0.0);
                         spec = s;

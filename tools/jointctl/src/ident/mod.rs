@@ -341,7 +341,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     );
     if !report.confounded.is_empty() {
         let list: Vec<String> = report.confounded.iter().map(|c| format!("{} or {}: {}", c.effect, c.alternative, c.evidence)).collect();
-        let _ = writeln!(md, "\nConfounded (for each pair, by which rule the data explain them about as well, and what the held-out part said): {}.", list.join("; "));
+        let _ = writeln!(md, "\nConfounded (for each pair, by which rule the data explain them about as well, and, where it was asked, what the held-out part said): {}.", list.join("; "));
     }
     if let Some(experiment) = &report.experiment {
         let _ = writeln!(md, "\nAn experiment that tells them apart: {}.", experiment.purpose.join("; "));
