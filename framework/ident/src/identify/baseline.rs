@@ -33,3 +33,9 @@ pub(crate) const FRICTION_PARTS: [Effect; 3] = [Effect::Hysteresis, Effect::Stri
 pub(crate) fn reads_as_friction(spring_share: f64, baseline: &BaselineModel) -> bool {
     matches!(baseline, BaselineModel::Polynomial(_)) && spring_share < NO_SPRING_SHARE
 }
+
+/// Whether `cause` is one of the [`FRICTION_PARTS`] of a record read as a joint's friction
+/// (reported with its friction, not named).
+pub(crate) fn is_friction_part(spring_share: f64, baseline: &BaselineModel, cause: &dyn super::CandidateCause) -> bool {
+    reads_as_friction(spring_share, baseline) && cause.effect().is_some_and(|e| FRICTION_PARTS.contains(&e))
+}

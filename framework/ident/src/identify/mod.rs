@@ -49,7 +49,7 @@ use unexplained::unexplained;
 pub use baseline::{BaselineModel, NO_SPRING_SHARE};
 pub use confounded::confound_evidence;
 use confounded::confound_rule;
-use baseline::{FRICTION_PARTS, reads_as_friction};
+use baseline::{FRICTION_PARTS, is_friction_part, reads_as_friction};
 pub use experiment::Confound;
 pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, Samples, SearchContext};
 pub use prepare::PrepareError;
@@ -468,8 +468,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach, opts.held_out);
     // A friction record's loop, dip and lag are its friction's parts (see `no_spring` below),
     // not causes: two of them are not a pair of causes.
-    let friction_record = reads_as_friction(p.spring_share, &opts.baseline);
-    let friction_part = |c: usize| friction_record && all[c].effect().is_some_and(|e| FRICTION_PARTS.contains(&e));
+    let friction_part = |c: usize| is_friction_part(p.spring_share, &opts.baseline, all[c]);
     let mut confounded: Vec<Confound> = selection
         .confounded
         .iter()

@@ -49,7 +49,6 @@ pub(crate) struct Selection {
     pub confounded: Vec<Confounded>,
 }
 
-
 pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
     n as f64 * (rss / n as f64).max(1e-300).ln() + parameters as f64 * (n as f64).ln()
 }

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::baseline::{FRICTION_PARTS, reads_as_friction};
+use super::baseline::is_friction_part;
 use super::causes::CandidateCause;
 use super::design::{Fit, HeldOut, Model, Part, Spec};
 use super::numeric::format_value;
@@ -389,7 +389,7 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
 pub(crate) fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, jacobian: &Jacobian, cause: usize, p: &Prepared) -> Option<String> {
     // In a friction record a loop, a dip or a lag is part of the friction, not named (and its
     // level trades off with the baseline's arctan there, which widens its error).
-    if reads_as_friction(p.spring_share, model.baseline) && model.causes[cause].effect().is_some_and(|e| FRICTION_PARTS.contains(&e)) {
+    if is_friction_part(p.spring_share, model.baseline, model.causes[cause]) {
         return None;
     }
     let i = spec.terms.iter().position(|t| t.cause == cause)?;
