@@ -276,6 +276,14 @@ fn sim_replay_reports_what_the_simulation_gets_wrong_per_channel() {
     let ft = rmse(&same, "q2", "ft_torque");
     assert!(ft < 0.03, "q2 F/T torque {ft} Nm");
     assert!(rmse(&same, "q2", "deflection") < 1e-3);
+    // The report: a plot per joint with a torque, a line for a rigid joint without one (q1
+    // has neither F/T sensor nor observer; its empty plot once failed the whole report).
+    let dir = scratch("sim-replay-report");
+    let r = Command::new(jointctl()).args(["sim", "replay"]).arg(&file).arg("--config").arg(&config).arg("--report").arg(&dir).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(dir.join("q2-torque.svg").exists() && md.contains("![q2](q2-torque.svg)"), "{md}");
+    assert!(md.contains("q1: no torque recorded or replayed"), "{md}");
     // A plant with twice the shoulder's hysteresis band: the replay says where it shows.
     let wider = sherpa_with("sim-replay-wider", &arm, &[jointctl_tests::Edit::Set("joints[shoulder].sim.effects.hysteresis.limit_nm", 1.5.into())]);
     let changed = channels(&Command::new(jointctl()).args(["sim", "replay"]).arg(&file).arg("--config").arg(&wider).arg("--json").output().unwrap());

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args;
-use jointctl_experiments::plot::{COLORS, Series, lines};
+use jointctl_experiments::plot::{COLORS, PlotError, Series, lines};
 use jointctl_experiments::replay::ReplayReport;
 
 #[derive(Args)]
@@ -55,8 +55,17 @@ fn write_report(dir: &Path, r: &ReplayReport, title: &str, names: [&str; 3]) -> 
             Series { name: names[1], points: pick(|p| p.2), color: COLORS[1] },
             Series { name: names[2], points: pick(|p| p.3), color: COLORS[2] },
         ];
-        lines(&dir.join(&file), &format!("{joint} torque, {title}"), "t [s]", "torque [Nm]", &series).map_err(|e| e.to_string())?;
-        let _ = writeln!(md, "\n![{joint}]({file})");
+        // A rigid joint without an F/T sensor has no finite torque to draw: said, not a failure
+        // of the whole report.
+        match lines(&dir.join(&file), &format!("{joint} torque, {title}"), "t [s]", "torque [Nm]", &series) {
+            Ok(()) => {
+                let _ = writeln!(md, "\n![{joint}]({file})");
+            }
+            Err(PlotError::Empty { .. }) => {
+                let _ = writeln!(md, "\n{joint}: no torque recorded or replayed (no F/T sensor, no observer), nothing to plot.");
+            }
+            Err(e) => return Err(e.to_string()),
+        }
     }
     std::fs::write(dir.join("report.md"), md).map_err(|e| format!("cannot write {}: {e}", dir.join("report.md").display()))
 }
