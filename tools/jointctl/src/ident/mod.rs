@@ -10,6 +10,7 @@ use jointctl_experiments::plot::{COLORS, Series, lines};
 use jointctl_experiments::model_loop::{Found, Gain};
 use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
 
+mod diagonals;
 mod extension;
 mod fit;
 mod reading;
@@ -98,6 +99,8 @@ fn load_data(path: &Path, joint: Option<&str>) -> Result<jointctl_ident::csv::Da
 struct ConfiguredJoint {
     params: serde_json::Value,
     dof: usize,
+    /// The joint's DOF names, in its order (the wrist: q6, then q7).
+    dof_names: Vec<String>,
     spec: Option<jointctl_models::characteristic::CharacteristicSpec>,
 }
 
@@ -107,7 +110,8 @@ fn configured_joint(config: &Path, joint: &str) -> Result<ConfiguredJoint, Strin
     let entry = loaded.config.joints.iter().find(|j| j.dof_names().contains(&joint)).ok_or_else(|| format!("no joint `{joint}` in {}", config.display()))?;
     let params = entry.params.0.clone();
     let spec = params.get("characteristic").map(|s| serde_json::from_value(s.clone()).map_err(|e| format!("{}: params.characteristic: {e}", entry.name))).transpose()?;
-    Ok(ConfiguredJoint { dof: entry.dof_names().iter().position(|n| *n == joint).unwrap_or(0), params, spec })
+    let dof_names: Vec<String> = entry.dof_names().iter().map(|n| n.to_string()).collect();
+    Ok(ConfiguredJoint { dof: dof_names.iter().position(|n| n == joint).unwrap_or(0), dof_names, params, spec })
 }
 
 impl ConfiguredJoint {
@@ -202,6 +206,10 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     if let (Some(cj), Some(config), Some(joint)) = (&configured, &a.config, &a.joint) {
         let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
+        // Along both diagonals in one record: each apart, and the torque offset per DOF.
+        if let (Some(parts), [first, second]) = (diagonals::pair(cj, &data), cj.dof_names.as_slice()) {
+            return diagonals::identify_both(&a, cj, &data, parts, [first, second]);
+        }
         diagonal = match cj.diagonal(joint, &data, &a.data) {
             Ok(d) => d,
             Err(e) => return crate::fail(e),

@@ -1,0 +1,175 @@
+//! A wrist record along both of section 3.5.2's diagonals, 45 and 135 deg, in one file: each
+//! direction identified against the wrist table's torque along it, and the one part of what
+//! they find that belongs to a single DOF, a torque offset, split between the two.
+//!
+//! Along direction `a` the first DOF (q6) deflects by `sin a`, the second (q7) by `cos a` of the
+//! deflection, and the torque along it is `sin a tau6 + cos a tau7`. A stiffness error, a cubic,
+//! a play, a loop and every friction are odd in the deflection: both diagonals see the sum of the
+//! two DOFs' alike, so only records along the axes tell them apart. An offset is even: `o6`, `o7`
+//! read `(o6 + o7) / sqrt 2` at 45 deg and `(o6 - o7) / sqrt 2` at 135 deg, so the two diagonals
+//! give `o6 = (r45 + r135) / sqrt 2` and `o7 = (r45 - r135) / sqrt 2`.
+
+use std::fmt::Write as _;
+use std::process::ExitCode;
+
+use jointctl_ident::csv::Data;
+use jointctl_ident::identify::{BaselineModel, IdentifyOptions, Report, identify};
+
+use super::{ConfiguredJoint, IdentifyArgs};
+
+/// The diagonals whose offsets split, in degrees (section 3.5.2's 45 and 135 deg).
+const DIAGONALS_DEG: [f64; 2] = [45.0, 135.0];
+
+/// How far a sample's direction may be from a diagonal and still be on it [deg] (as for one
+/// direction's record, `ConfiguredJoint::diagonal`).
+const ANGLE_TOLERANCE_DEG: f64 = 0.5;
+
+/// The samples along 45 and along 135 deg of a two-DOF joint's record, when it holds those two
+/// directions and no other (every sample with a direction); `None` for any other record, which
+/// the one-direction path takes (and refuses when it holds several).
+pub(super) fn pair(joint: &ConfiguredJoint, data: &Data) -> Option<[Vec<usize>; 2]> {
+    if !joint.spec.as_ref().is_some_and(|s| s.is_two_dof()) || data.angle_deg.len() != data.len() {
+        return None;
+    }
+    let mut parts: [Vec<usize>; 2] = Default::default();
+    for (i, a) in data.angle_deg.iter().enumerate() {
+        let k = DIAGONALS_DEG.iter().position(|d| (a - d).abs() <= ANGLE_TOLERANCE_DEG)?;
+        parts[k].push(i);
+    }
+    parts.iter().all(|p| !p.is_empty()).then_some(parts)
+}
+
+/// The torque offsets of the two DOFs [Nm] with their standard errors, from the offsets named
+/// along 45 and 135 deg (`offset_nm` and its standard error each).
+fn split_offsets(along_45: (f64, f64), along_135: (f64, f64)) -> [(f64, f64); 2] {
+    let r = std::f64::consts::FRAC_1_SQRT_2;
+    let se = r * along_45.1.hypot(along_135.1);
+    [(r * (along_45.0 + along_135.0), se), (r * (along_45.0 - along_135.0), se)]
+}
+
+/// The offset named in a report and its standard error, if one was named.
+fn named_offset(report: &Report) -> Option<(f64, f64)> {
+    let c = report.causes.iter().find(|c| c.effect == "sensor_offset")?;
+    Some((*c.params.get("offset_nm")?, c.uncertainty.get("offset_nm").copied().unwrap_or(f64::NAN)))
+}
+
+/// Identifies each diagonal's samples against the table's torque along it, reports both, and
+/// splits a torque offset named along both between the two DOFs (`dof_names`: the first DOF,
+/// deflected by `sin`, then the second).
+pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Data, parts: [Vec<usize>; 2], dof_names: [&str; 2]) -> ExitCode {
+    if a.out.is_some() {
+        return crate::fail(format!(
+            "{}: --out is refused: a record along both diagonals gives each DOF's torque offset (reported), and the rest of what it finds belongs to the pair; the extension is per DOF and is written from records along 90 deg ({}) and 0 deg ({})",
+            a.data.display(),
+            dof_names[0],
+            dof_names[1]
+        ));
+    }
+    let mut reports = Vec::new();
+    for (angle, idx) in DIAGONALS_DEG.iter().zip(&parts) {
+        let settings = data.subset(idx).pivot_settings(super::MIN_SETTING_SAMPLES);
+        if settings.len() >= 2 {
+            let listed: Vec<String> = settings.iter().map(|(p, _)| format!("{p:.2}")).collect();
+            return crate::fail(format!("{}: {} pivot settings along {angle} deg ({} mm): identify one setting's record at a time along the diagonals", a.data.display(), settings.len(), listed.join(", ")));
+        }
+        let baseline = match jointctl_experiments::model_loop::configured_torque_along(&joint.params, *angle) {
+            Ok(torque) => BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))),
+            Err(e) => return crate::fail(e.to_string()),
+        };
+        match identify(&data.subset(idx), &IdentifyOptions { baseline, baseline_friction: false, held_out: a.held_out.into(), ..IdentifyOptions::default() }) {
+            Ok(r) => reports.push(r),
+            Err(e) => return crate::fail(format!("{} along {angle} deg: {e}", a.data.display())),
+        }
+    }
+    let offsets = match (named_offset(&reports[0]), named_offset(&reports[1])) {
+        (Some(r45), Some(r135)) => Ok(split_offsets(r45, r135)),
+        (r45, _) => Err(format!(
+            "no torque offset per DOF: an offset is split where both diagonals name one, and along {} deg none was named",
+            if r45.is_none() { DIAGONALS_DEG[0] } else { DIAGONALS_DEG[1] }
+        )),
+    };
+    let md = markdown(a, &reports, &parts, &offsets, dof_names);
+    if let Some(dir) = &a.report
+        && let Err(e) = std::fs::create_dir_all(dir).and_then(|_| std::fs::write(dir.join("report.md"), &md))
+    {
+        return crate::fail(format!("cannot write the report: {e}"));
+    }
+    if a.json {
+        let directions: Vec<serde_json::Value> = DIAGONALS_DEG
+            .iter()
+            .zip(&reports)
+            .map(|(angle, r)| {
+                let mut v = serde_json::to_value(r).unwrap_or_default();
+                v["angle_deg"] = serde_json::json!(angle);
+                v
+            })
+            .collect();
+        let offsets = match &offsets {
+            Ok(o) => serde_json::json!({
+                dof_names[0]: {"offset_nm": o[0].0, "standard_error_nm": o[0].1},
+                dof_names[1]: {"offset_nm": o[1].0, "standard_error_nm": o[1].1},
+            }),
+            Err(why) => serde_json::json!({"note": why}),
+        };
+        outln!("{}", serde_json::json!({"directions": directions, "offsets_per_dof": offsets}));
+    } else {
+        out!("{md}");
+    }
+    ExitCode::SUCCESS
+}
+
+/// The report: each direction's line and the offsets per DOF, or why there are none.
+fn markdown(a: &IdentifyArgs, reports: &[Report], parts: &[Vec<usize>; 2], offsets: &Result<[(f64, f64); 2], String>, dof_names: [&str; 2]) -> String {
+    let mut md = format!(
+        "# What the model misses, along both wrist diagonals: {}\n\n{} samples along {} and {} deg, each direction identified apart against the wrist table's torque along it ({} deflected by sin, {} by cos of the direction). What is odd in the deflection (a stiffness error, a cubic, a play, a loop, friction) reads alike along both and belongs to the pair; records along the axes tell the DOFs apart. A torque offset is even and is split.\n\n| direction [deg] | samples | baseline [Nm] | extended [Nm] | noise floor [Nm] | causes |\n|---|---|---|---|---|---|\n",
+        a.data.display(),
+        parts[0].len() + parts[1].len(),
+        DIAGONALS_DEG[0],
+        DIAGONALS_DEG[1],
+        dof_names[0],
+        dof_names[1]
+    );
+    for ((angle, r), idx) in DIAGONALS_DEG.iter().zip(reports).zip(parts) {
+        let causes: Vec<String> = r
+            .causes
+            .iter()
+            .map(|c| {
+                let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
+                format!("{} ({})", c.effect, params.join(", "))
+            })
+            .collect();
+        let named = if causes.is_empty() { "none".into() } else { causes.join("; ") };
+        let _ = writeln!(md, "| {angle} | {} | {:.4} | {:.4} | {:.4} | {named} |", idx.len(), r.rmse_before, r.rmse_after, r.unexplained.noise_floor_nm);
+        if let Some(why) = &r.held_out_window.moved {
+            let _ = writeln!(md, "|  |  |  |  |  | along {angle} deg {why} |");
+        }
+    }
+    match offsets {
+        Ok(o) => {
+            let _ = writeln!(
+                md,
+                "\nTorque offsets per DOF (an offset reads (o6 + o7) / sqrt 2 along 45 deg and (o6 - o7) / sqrt 2 along 135 deg): {} {:.4} Nm ± {:.2e}, {} {:.4} Nm ± {:.2e} (standard errors).",
+                dof_names[0], o[0].0, o[0].1, dof_names[1], o[1].0, o[1].1
+            );
+        }
+        Err(why) => {
+            let _ = writeln!(md, "\n{}{}.", why[..1].to_uppercase(), &why[1..]);
+        }
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offsets_of_each_dof_come_back_from_their_sums_along_the_diagonals() {
+        // q6 0.3 Nm and q7 -0.2 Nm read (0.3 - 0.2) / sqrt 2 along 45 deg and (0.3 + 0.2) / sqrt 2
+        // along 135 deg.
+        let r = std::f64::consts::FRAC_1_SQRT_2;
+        let [o6, o7] = split_offsets((0.1 * r, 0.003), (0.5 * r, 0.004));
+        assert!((o6.0 - 0.3).abs() < 1e-12 && (o7.0 + 0.2).abs() < 1e-12, "{o6:?} {o7:?}");
+        assert!((o6.1 - 0.005 * r).abs() < 1e-12 && o6.1 == o7.1, "{o6:?} {o7:?}");
+    }
+}
