@@ -93,6 +93,38 @@ fn a_bad_experiment_file_is_an_error_that_says_where() {
     }
 }
 
+/// `sim record`'s own options, checked as an experiment file's segments are: a duration of
+/// `inf` or 1e300 panicked (a capacity overflow), a rate of NaN panicked in the drives' profile,
+/// 1e9 aborted on a 960 GB allocation, 0 never ended; a zero duration, a NaN direction or an
+/// amplitude beyond the joint's travel wrote a header and no sample with exit 0, a pivot beyond
+/// the shoulder's travel recorded where the travel ends (47.7 mm for 1000), a 1 MHz sine at
+/// 100 Hz its alias. Each is now an error naming the option, and no file is written.
+#[test]
+fn sim_record_refuses_options_it_cannot_record() {
+    let work = scratch("sim-record-options");
+    let cases: [(&[&str], &str); 10] = [
+        (&["--duration", "inf"], "--duration"),
+        (&["--duration", "1e300"], "--duration: 1.000e300 must be in (0, 86400] s"),
+        (&["--duration", "0"], "--duration: 0 must be in (0, 86400] s"),
+        (&["--rate", "nan"], "--rate"),
+        (&["--rate", "1e9"], "--rate: 1.000e9 must be in [1, 10000] Hz"),
+        (&["--rate", "0"], "--rate: 0 must be in [1, 10000] Hz"),
+        (&["--angle-deg", "nan"], "--angle-deg"),
+        (&["--amplitude", "100"], "--amplitude: 100 must be in (0, pi] rad"),
+        (&["--frequency", "60"], "--frequency: 60 Hz is not below half the sample rate (--rate 100 Hz)"),
+        (&["--joint", "q2", "--pivot-mm", "1000", "--duration", "1"], "--pivot-mm 1000: the pivot settled at"),
+    ];
+    for (i, (args, expected)) in cases.iter().enumerate() {
+        let out_file = work.join(format!("x{i}.csv"));
+        let joint = if args.contains(&"--joint") { &[][..] } else { &["--joint", "q4"][..] };
+        let out = Command::new(jointctl()).args(["sim", "record"]).arg(config()).args(joint).args(*args).arg("--out").arg(&out_file).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(if expected.contains(':') { 1 } else { 2 }), "{args:?}: {err}");
+        assert!(err.contains(expected) && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(!out_file.exists(), "{args:?}: a file was written");
+    }
+}
+
 /// The proposed experiment run on a running arm (issue 32, item 4: a file that `cmd` and
 /// `record` run on the arm, not only `sim record`): `cmd experiment` turns each segment into a
 /// torque sine of the joint's published stiffness times its deflection amplitude, for whole

@@ -88,23 +88,23 @@ pub enum SimCommand {
         /// Output CSV file.
         #[arg(long)]
         out: PathBuf,
-        /// Flow-source amplitude [rad].
-        #[arg(long, default_value_t = 0.1)]
+        /// Flow-source amplitude [rad], in (0, pi].
+        #[arg(long, default_value_t = 0.1, value_parser = crate::finite)]
         amplitude: f64,
-        /// Flow-source frequency [Hz].
-        #[arg(long, default_value_t = 0.2)]
+        /// Flow-source frequency [Hz], in [0.001, 100] and below half the sample rate.
+        #[arg(long, default_value_t = 0.2, value_parser = crate::finite)]
         frequency: f64,
-        /// Duration [s].
-        #[arg(long, default_value_t = 20.0)]
+        /// Duration [s], in (0, 86400].
+        #[arg(long, default_value_t = 20.0, value_parser = crate::finite)]
         duration: f64,
         /// Pivot setting to hold [mm] (VSA joints).
-        #[arg(long)]
+        #[arg(long, value_parser = crate::finite)]
         pivot_mm: Option<f64>,
         /// Deflection direction [deg] (wrist: 0 = q7 only, 90 = q6 only).
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, value_parser = crate::finite)]
         angle_deg: f64,
-        /// Sample rate [Hz].
-        #[arg(long, default_value_t = 100.0)]
+        /// Sample rate [Hz], in [1, 10000] (a config's loop rate); the loop runs at it.
+        #[arg(long, default_value_t = 100.0, value_parser = crate::finite)]
         rate: f64,
         /// Run an experiment file instead of one sine (`experiment.yaml` as `jointctl identify`
         /// proposes it for a confounded pair: sines run one after the other, each from rest,
@@ -359,21 +359,58 @@ pub(crate) fn read_experiment(file: &std::path::Path) -> Result<Experiment, Stri
         return Err(format!("{}: segments: none to run", file.display()));
     }
     for (i, s) in experiment.segments.iter().enumerate() {
-        let bad = |field: &str, value: f64, rule: &str| Err(format!("{}: segments[{i}].{field}: {value} must be {rule}", file.display()));
-        if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
-            return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
-        }
-        // At least a thousandth of a hertz (a period of 1000 s): slower is no characterisation,
-        // and far slower (below about 4e-18 Hz) a whole period overflows what a wait can hold.
-        if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= 100.0) {
-            return bad("frequency_hz", s.frequency_hz, "in [0.001, 100] Hz");
-        }
-        if !(s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= 86_400.0) {
-            return bad("duration_s", s.duration_s, "in (0, 86400] s");
-        }
+        check_segment(s, |field| format!("{}: segments[{i}].{field}", file.display()))?;
     }
     Ok(experiment)
 }
+
+/// Whether a sine of the flow source is one the simulator can run: its amplitude in (0, pi]
+/// rad, its frequency in [0.001, 100] Hz (at least a thousandth of a hertz, a period of 1000 s:
+/// slower is no characterisation, and far slower, below about 4e-18 Hz, a whole period
+/// overflows what a wait can hold), its duration in (0, 86400] s; `field` names a field where
+/// the error says which.
+fn check_segment(s: &Segment, field: impl Fn(&str) -> String) -> Result<(), String> {
+    let bad = |name: &str, value: f64, rule: &str| Err(format!("{}: {} must be {rule}", field(name), shown(value)));
+    if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
+        return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
+    }
+    if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= 100.0) {
+        return bad("frequency_hz", s.frequency_hz, "in [0.001, 100] Hz");
+    }
+    if !(s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= 86_400.0) {
+        return bad("duration_s", s.duration_s, "in (0, 86400] s");
+    }
+    Ok(())
+}
+
+/// A number as an error shows it: as written, but for a million and more in exponent form (1e300
+/// written out is 301 digits).
+fn shown(x: f64) -> String {
+    if x.abs() >= 1e6 { format!("{x:.3e}") } else { format!("{x}") }
+}
+
+/// The checks of `sim record`'s options beyond each segment's: the sample rate a config's loop
+/// may run at ([1, 10000] Hz, `rate_hz`'s rule), every sine below half of it (at or above, the
+/// record holds its alias, not the sine), and a direction that is a number.
+fn check_record_options(segments: &[Segment], rate_hz: f64, cli: bool) -> Result<(), String> {
+    if !(1.0..=10_000.0).contains(&rate_hz) {
+        return Err(format!("--rate: {} must be in [1, 10000] Hz (a config's loop rate)", shown(rate_hz)));
+    }
+    for (i, s) in segments.iter().enumerate() {
+        if cli {
+            check_segment(s, |f| format!("--{}", f.split('_').next().unwrap_or(f)))?;
+        }
+        if s.frequency_hz >= rate_hz / 2.0 {
+            let which = if cli { "--frequency".to_string() } else { format!("segments[{i}].frequency_hz") };
+            return Err(format!("{which}: {} Hz is not below half the sample rate (--rate {rate_hz} Hz): the record would hold its alias, not the sine", s.frequency_hz));
+        }
+    }
+    Ok(())
+}
+
+/// How far the pivot may settle from the setting `sim record` asked for [mm] (an assumption:
+/// the simulated pivot drive settles within a few hundredths of a millimetre in its 3 s).
+const PIVOT_TOLERANCE_MM: f64 = 0.5;
 
 pub fn sim(cmd: SimCommand) -> ExitCode {
     match cmd {
@@ -386,6 +423,9 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                 },
                 None => vec![Segment { amplitude_rad: amplitude, frequency_hz: frequency, duration_s: duration }],
             };
+            if let Err(e) = check_record_options(&segments, rate, experiment.is_none()) {
+                return crate::fail(e);
+            }
             let loaded = match jointctl_config::load(&config) {
                 Ok(l) => l,
                 Err(e) => return crate::fail_err(e),
@@ -405,6 +445,18 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                     Ok(more) => samples.extend(more.into_iter().map(|s| jointctl_experiments::record::Sample { t: s.t + offset, ..s })),
                     Err(e) => return crate::fail_err(e),
                 }
+            }
+            // Nothing recorded is no record: a deflection the observer never formed (beyond the
+            // joint's travel, a fault), said instead of an empty file.
+            if samples.is_empty() {
+                return crate::fail(format!("no sample recorded of `{}`: the observer formed no deflection in any cycle (an amplitude beyond the joint's travel, or a fault); nothing written to {}", opts.joint, out.display()));
+            }
+            // A pivot asked for beyond the joint's travel settles where the travel ends: said,
+            // not recorded as if it were the setting asked for.
+            if let (Some(asked), Some(held)) = (pivot_mm, samples.first().map(|s| s.pivot_mm).filter(|p| p.is_finite()))
+                && (held - asked).abs() > PIVOT_TOLERANCE_MM
+            {
+                return crate::fail(format!("--pivot-mm {asked}: the pivot settled at {held:.2} mm (beyond the joint's travel?); nothing written to {}", out.display()));
             }
             let file = match std::fs::File::create(&out) {
                 Ok(f) => f,
