@@ -262,6 +262,8 @@ pub fn read(path: &Path) -> Result<Data, DataError> {
 /// assert_eq!(d.notes, ["column `extra` is not used"]);
 /// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,zero\n", "a.csv".as_ref()).unwrap_err();
 /// assert_eq!(e.to_string(), "a.csv:2: column `torque`: `zero` is not a number");
+/// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1\n0.01,0.15,0.001,0.2\n", "a.csv".as_ref()).unwrap_err();
+/// assert_eq!(e.to_string(), "a.csv:3: 4 values where the header names 3 columns (the first beyond them, `0.2`, in column 4): a row shifted or run together");
 /// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1e308\n", "a.csv".as_ref()).unwrap_err();
 /// assert_eq!(e.to_string(), "a.csv:2: column `torque`: 1e308 is implausible: this column holds values within +-10000");
 /// ```
@@ -336,6 +338,12 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
             continue;
         }
         let line = line_of(record.position());
+        // A value beyond the header's columns (a row shifted by an inserted value, two rows run
+        // together) leaves every named column's cell in doubt: read as it stood, one shifted row
+        // moved identify's held-out error by a fifth and the fit's largest error six times.
+        if let Some(extra) = record.iter().skip(names.len()).position(|f| !f.is_empty()) {
+            return Err(err(line, None, format!("{} values where the header names {} columns (the first beyond them, `{}`, in column {}): a row shifted or run together", record.iter().filter(|f| !f.is_empty()).count(), names.len(), &record[names.len() + extra], names.len() + extra + 1)));
+        }
         let mut values = [f64::NAN; 7];
         for (k, c) in idx.iter().enumerate() {
             let Some(c) = c else { continue };
