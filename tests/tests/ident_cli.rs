@@ -194,40 +194,6 @@ fn bad_data_files_are_errors_with_file_line_and_column() {
 }
 
 #[test]
-fn bad_identify_arguments_are_errors_not_silently_changed() {
-    let data = root().join("tests/data/q4_worn_elbow.csv");
-    for (args, expected) in [
-        (vec!["--baseline-order", "9"], "--baseline-order must be 1-6, got 9"),
-        (vec!["--config", "configs/sherpa_arm.yaml", "--joint", "q9"], "no joint `q9`"),
-    ] {
-        let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&data).args(&args).output().unwrap();
-        assert_eq!(out.status.code(), Some(1), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(expected), "expected `{expected}` in: {err}");
-    }
-    // A wrist DOF against the wrist's table: a record along the other DOF's axis names the DOF to
-    // identify from it, an axis reversed (its torque and deflection negated) the axes, and a record of several directions the sample where the direction changes
-    // (a diagonal's record alone is identified against the table along it: tests/model_loop.rs).
-    let dir = scratch("identify-wrist-directions");
-    let write = |name: &str, angle: &dyn Fn(usize) -> f64| {
-        let path = dir.join(name);
-        let rows: String = (0..400).map(|i| format!("{},{},{},20,{}\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.05).sin(), 1.0 * (i as f64 * 0.05).sin(), angle(i))).collect();
-        std::fs::write(&path, format!("t,deflection,torque,pivot_mm,angle_deg\n{rows}")).unwrap();
-        path
-    };
-    for (file, expected) in [
-        (write("q7-axis.csv", &|_| 0.0), "deflection direction 0 deg is the other wrist DOF's axis: identify `q7` from this record (`q6` from one along 90 deg)"),
-        (write("q6-axis-reversed.csv", &|_| 270.0), "deflection direction 270 deg is a wrist axis reversed: record q7 along 0 deg and q6 along 90 deg"),
-        (write("two-directions.csv", &|i| if i < 200 { 45.0 } else { 135.0 }), "sample 201: deflection direction 135 deg after 45 deg: identify one direction's record at a time"),
-    ] {
-        let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&file).args(["--config", "configs/sherpa_arm.yaml", "--joint", "q6"]).output().unwrap();
-        assert_eq!(out.status.code(), Some(1));
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(expected), "expected `{expected}` in: {err}");
-    }
-}
-
-#[test]
 fn fit_groups_a_wrist_characterisation_by_pivot_and_direction_into_the_wrist_table() {
     // Section 3.5.2: the wrist deflected along 0/45/90/135 deg at each pivot setting; one fit
     // call for all of them (smoothing 5, continuous 4th order through zero, as the thesis did).

@@ -14,6 +14,7 @@ mod diagonals;
 mod extension;
 mod fit;
 mod reading;
+mod settings;
 
 pub use fit::{FitArgs, run_fit};
 use extension::{extend, extension_json, gains_table, loop_causes, loop_table, write_extension};
@@ -204,6 +205,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         _ if (1..=6).contains(&a.baseline_order) => BaselineModel::Polynomial(a.baseline_order),
         _ => return crate::fail(format!("--baseline-order must be 1-6, got {}", a.baseline_order)),
     };
+    if let Err(e) = settings::fit_the_baseline(&a, configured.as_ref(), &data) {
+        return crate::fail(e);
+    }
     if let (Some(cj), Some(config), Some(joint)) = (&configured, &a.config, &a.joint) {
         let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
         // Along both diagonals in one record: each apart, and the torque offset per DOF.
