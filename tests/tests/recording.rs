@@ -300,6 +300,25 @@ fn sim_replay_reports_what_the_simulation_gets_wrong_per_channel() {
     assert!(String::from_utf8_lossy(&r.stderr).contains("recorded at 40.0 Hz, the config runs at 100 Hz"), "{}", String::from_utf8_lossy(&r.stderr));
 }
 
+/// A file named `.mcap` that is no recording (a CSV renamed, random bytes) was said to be "cut
+/// short after N bytes ... Bad magic number" by identify, fit, replay and sim replay: a recording
+/// to mend, where there is none. It is now said not to be MCAP, with what it begins with.
+#[test]
+fn a_file_that_is_not_mcap_is_said_to_be_none() {
+    let dir = scratch("not-mcap");
+    let csv = dir.join("data.mcap");
+    std::fs::write(&csv, "t,deflection,torque\n0,0,0\n0.01,0.001,0.1\n").unwrap();
+    let noise = dir.join("noise.mcap");
+    std::fs::write(&noise, [0x96u8, 0xca, 0xfd, 0x80, 0xcb, 0xcb, 0xe3, 0x11, 0x00, 0x01]).unwrap();
+    for (file, expected) in [(&csv, "not an MCAP file: it does not begin with MCAP's magic bytes but with text, `t,deflection,torque"), (&noise, "but with the bytes 96 ca fd 80 cb cb e3 11")] {
+        for args in [&["identify", "--joint", "q2", "--data"][..], &["fit", "--joint", "q2"][..]] {
+            let out = Command::new(jointctl()).args(args).arg(file).output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.code() == Some(1) && err.contains(expected) && !err.contains("cut short"), "{args:?} {}: {err}", file.display());
+        }
+    }
+}
+
 /// Issue 40, finding 11: `record` killed with SIGKILL left a file that `fit`, `identify` and
 /// `replay` called "not a readable MCAP file" and recovered nothing of, where a streaming reader
 /// recovered 205 of ~260 cycles. Now every reader takes the file up to its last complete chunk

@@ -34,7 +34,7 @@ pub(super) fn source_of(topic: &str, message_encoding: &str) -> Option<(&'static
 /// channels `topics`, in file order (the file is read and decompressed once), whichever form
 /// the file has.
 pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMut(&str, Encoding, u32, &[u8]) -> Result<(), ReadError>) -> Result<(), ReadError> {
-    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
+    let bytes = read_recording(path)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
     // A file without its end (the recorder killed, the machine off, the disk full) is read up to
     // its last complete chunk.
@@ -76,6 +76,23 @@ pub(super) fn for_each_message(path: &Path, topics: &[&str], mut each: impl FnMu
         warn_cut(path, read, &source);
     }
     Ok(())
+}
+
+/// The bytes of a recording, refused when they do not begin as MCAP's (a cut file keeps its
+/// beginning, so a file that begins otherwise is no recording, and is said to be none).
+pub(super) fn read_recording(path: &Path) -> Result<Vec<u8>, ReadError> {
+    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
+    let head = &bytes[..bytes.len().min(mcap::MAGIC.len())];
+    if mcap::MAGIC.starts_with(head) {
+        return Ok(bytes);
+    }
+    let start = &bytes[..bytes.len().min(24)];
+    let begins = if start.iter().all(|b| b.is_ascii_graphic() || *b == b' ' || *b == b'\n' || *b == b'\r' || *b == b'\t') {
+        format!("text, `{}` (a CSV file? data files are read by their .csv name)", String::from_utf8_lossy(start).escape_debug())
+    } else {
+        format!("the bytes {}", start.iter().take(8).map(|b| format!("{b:02x}")).collect::<Vec<_>>().join(" "))
+    };
+    Err(ReadError::NotMcap { file: path.into(), begins })
 }
 
 /// A file that does not end with MCAP's closing magic was cut short while it was written.

@@ -71,6 +71,15 @@ pub enum ReadError {
         /// The reason.
         source: mcap::McapError,
     },
+    /// A file named as a recording that does not begin as MCAP does: not a recording at all (a
+    /// CSV given a `.mcap` name), not one cut short.
+    #[error("{}: not an MCAP file: it does not begin with MCAP's magic bytes but with {begins}", .file.display())]
+    NotMcap {
+        /// The file.
+        file: PathBuf,
+        /// What it begins with instead.
+        begins: String,
+    },
     /// A recording cut short before its first chunk of messages was complete (the chunks before it hold the schemas and channels): no message is left to read.
     #[error("{}: the recording was cut short after {bytes} bytes, before its first complete chunk of messages, so no message can be read: {source}", .file.display())]
     CutBeforeData {
@@ -113,7 +122,7 @@ mod measured;
 pub use measured::{Measured, measured};
 
 use decode::{JointStates, RawJson, parse_command, parse_raw};
-use file::{for_each_message, is_cut, records_before_cut};
+use file::{for_each_message, is_cut, read_recording, records_before_cut};
 
 /// A whole recording, read in one pass: what a replay needs.
 #[derive(Clone, Debug, Default)]
@@ -224,7 +233,7 @@ pub fn raw_samples(path: &Path) -> Result<Vec<RawSample>, ReadError> {
 /// The readings the recorded arm's joints were activated with (the `activation` metadata), if
 /// the recording has them.
 pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
-    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
+    let bytes = read_recording(path)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
     let metadata: Vec<mcap::records::Metadata> = if is_cut(&bytes) {
         records_before_cut(&bytes).into_iter().filter_map(|r| if let mcap::records::Record::Metadata(m) = r { Some(m) } else { None }).collect()
@@ -244,7 +253,7 @@ pub fn activation(path: &Path) -> Result<Option<RawSample>, ReadError> {
 /// The arm description attached to the recording (the first attachment, the file `jointctl
 /// run` was given): its name and text.
 pub fn config_attachment(path: &Path) -> Result<Option<(String, String)>, ReadError> {
-    let bytes = jointctl_files::read(path, jointctl_files::FileKind::Recording)?;
+    let bytes = read_recording(path)?;
     let mcap_error = |source| ReadError::Mcap { file: path.into(), source };
     if is_cut(&bytes) {
         return Ok(records_before_cut(&bytes).into_iter().find_map(|r| match r {
