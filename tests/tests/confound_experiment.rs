@@ -91,6 +91,11 @@ fn a_bad_experiment_file_is_an_error_that_says_where() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.contains(&*file.display().to_string()) && err.contains(expected), "{yaml}: {err}");
     }
+    // A 2.5 MB CSV given by mistake: serde_yaml quoted all of it, and so did the error.
+    let csv = work.join("not-an-experiment.csv");
+    std::fs::write(&csv, format!("t,deflection,torque\n{}", "0.001000,0.0000000,0.06019\n".repeat(100_000))).unwrap();
+    let out = Command::new(jointctl()).args(["sim", "record"]).arg(config()).args(["--joint", "q4", "--out"]).arg(work.join("x.csv")).arg("--experiment").arg(&csv).output().unwrap();
+    assert!(out.status.code() == Some(1) && out.stderr.len() < 3000, "{} bytes of error", out.stderr.len());
 }
 
 /// `sim record`'s own options, checked as an experiment file's segments are: a duration of

@@ -351,9 +351,14 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
 /// simulator can run: finite, positive, at most a day long).
 pub(crate) fn read_experiment(file: &std::path::Path) -> Result<Experiment, String> {
     let text = jointctl_files::read_to_string(file, jointctl_files::FileKind::Config).map_err(|e| e.to_string())?;
-    let experiment: Experiment = serde_yaml::from_str(&text).map_err(|e| match e.location() {
-        Some(at) => format!("{}:{}:{}: {e}", file.display(), at.line(), at.column()),
-        None => format!("{}: {e}", file.display()),
+    // serde_yaml quotes what it could not read, which for a file that is no YAML (a CSV given
+    // by mistake) is the whole file: 2.5 MB of error. Bounded as a config's errors are.
+    let experiment: Experiment = serde_yaml::from_str(&text).map_err(|e| {
+        let why = jointctl_config::bounded_message(&e.to_string());
+        match e.location() {
+            Some(at) => format!("{}:{}:{}: {why}", file.display(), at.line(), at.column()),
+            None => format!("{}: {why}", file.display()),
+        }
     })?;
     if experiment.segments.is_empty() {
         return Err(format!("{}: segments: none to run", file.display()));
