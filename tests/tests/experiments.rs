@@ -280,3 +280,28 @@ fn an_experiment_in_simulated_time_does_not_fault_a_joint_on_wall_clock_budgets(
     let rows = run(&loaded, &PluginLoader::new([]), "q2", Scenario::Modern, &plan, |_, _| {}).unwrap();
     assert!(rows[0].nrmse_sensor < 0.5, "the step was not followed (joint faulted?): sensor NRMSE {}", rows[0].nrmse_sensor);
 }
+
+/// `experiment torque-tracking` asked for what it cannot measure: a stiffness of 0 or NaN ran
+/// at the default pivot, 5000 Nm/rad (q2 is configured for 25-320) at the stiffest end, with the
+/// request nowhere in the output; q3, without an F/T sensor, printed NRMSE -0.000 and gain 0.00.
+/// Each is now an error that says why, before anything runs.
+#[test]
+fn torque_tracking_refuses_settings_the_joint_cannot_take() {
+    let config = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let report = scratch("tracking-refused");
+    for (joint, stiffness, expected) in [
+        ("q2", Some("0"), "--stiffness 0: a stiffness must be positive"),
+        ("q2", Some("nan"), "must be a finite number"),
+        ("q2", Some("5000"), "--stiffness 5000: `q2` is configured for 25-320 Nm/rad"),
+        ("q3", None, "`q3` has no F/T sensor"),
+    ] {
+        let mut cmd = std::process::Command::new(jointctl());
+        cmd.args(["experiment", "torque-tracking"]).arg(&config).args(["--joint", joint, "--quick", "--report"]).arg(&report);
+        if let Some(k) = stiffness {
+            cmd.arg(format!("--stiffness={k}"));
+        }
+        let out = cmd.output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(expected), "{joint} {stiffness:?}: {err}");
+    }
+}

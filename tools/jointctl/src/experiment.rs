@@ -10,6 +10,8 @@ use jointctl_experiments::record::{RecordOptions, record, write_csv};
 use jointctl_experiments::tracking::{Plan, Row, Scenario, bandwidth_hz, run};
 use jointctl_ident::identify::experiment::{Experiment, Segment};
 
+use crate::experiment_checks::{PIVOT_TOLERANCE_MM, check_record_options, check_segment, tracking_request_is_measurable};
+
 #[derive(Subcommand)]
 pub enum ExperimentCommand {
     /// Chapter 5: torque tracking of one joint, output clamped, at several stiffness settings.
@@ -24,7 +26,7 @@ pub enum ExperimentCommand {
         scenario: String,
         /// Stiffness settings to request [Nm/rad], comma-separated; default: low, middle and
         /// high of the joint's stiffness limits (VSA joints), or as configured.
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', value_parser = crate::finite)]
         stiffness: Vec<f64>,
         /// Print one JSON object `{"rows": [...]}` instead of the table.
         #[arg(long)]
@@ -274,6 +276,9 @@ pub fn experiment(cmd: ExperimentCommand) -> ExitCode {
             // A joint entry of several DOFs (the wrist) runs them together; its first DOF's
             // stiffness limits choose the settings.
             let entry = loaded.config.joints.iter().find(|j| j.name == joint && j.dof_names().len() > 1);
+            if let Err(e) = tracking_request_is_measurable(&loaded, &joint, entry.is_some(), &stiffness) {
+                return crate::fail(e);
+            }
             let defaults = stiffness.is_empty();
             let settings = if defaults {
                 let limits = match entry {
@@ -368,54 +373,6 @@ pub(crate) fn read_experiment(file: &std::path::Path) -> Result<Experiment, Stri
     }
     Ok(experiment)
 }
-
-/// Whether a sine of the flow source is one the simulator can run: its amplitude in (0, pi]
-/// rad, its frequency in [0.001, 100] Hz (at least a thousandth of a hertz, a period of 1000 s:
-/// slower is no characterisation, and far slower, below about 4e-18 Hz, a whole period
-/// overflows what a wait can hold), its duration in (0, 86400] s; `field` names a field where
-/// the error says which.
-fn check_segment(s: &Segment, field: impl Fn(&str) -> String) -> Result<(), String> {
-    let bad = |name: &str, value: f64, rule: &str| Err(format!("{}: {} must be {rule}", field(name), shown(value)));
-    if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
-        return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
-    }
-    if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= 100.0) {
-        return bad("frequency_hz", s.frequency_hz, "in [0.001, 100] Hz");
-    }
-    if !(s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= 86_400.0) {
-        return bad("duration_s", s.duration_s, "in (0, 86400] s");
-    }
-    Ok(())
-}
-
-/// A number as an error shows it: as written, but for a million and more in exponent form (1e300
-/// written out is 301 digits).
-fn shown(x: f64) -> String {
-    if x.abs() >= 1e6 { format!("{x:.3e}") } else { format!("{x}") }
-}
-
-/// The checks of `sim record`'s options beyond each segment's: the sample rate a config's loop
-/// may run at ([1, 10000] Hz, `rate_hz`'s rule), every sine below half of it (at or above, the
-/// record holds its alias, not the sine), and a direction that is a number.
-fn check_record_options(segments: &[Segment], rate_hz: f64, cli: bool) -> Result<(), String> {
-    if !(1.0..=10_000.0).contains(&rate_hz) {
-        return Err(format!("--rate: {} must be in [1, 10000] Hz (a config's loop rate)", shown(rate_hz)));
-    }
-    for (i, s) in segments.iter().enumerate() {
-        if cli {
-            check_segment(s, |f| format!("--{}", f.split('_').next().unwrap_or(f)))?;
-        }
-        if s.frequency_hz >= rate_hz / 2.0 {
-            let which = if cli { "--frequency".to_string() } else { format!("segments[{i}].frequency_hz") };
-            return Err(format!("{which}: {} Hz is not below half the sample rate (--rate {rate_hz} Hz): the record would hold its alias, not the sine", s.frequency_hz));
-        }
-    }
-    Ok(())
-}
-
-/// How far the pivot may settle from the setting `sim record` asked for [mm] (an assumption:
-/// the simulated pivot drive settles within a few hundredths of a millimetre in its 3 s).
-const PIVOT_TOLERANCE_MM: f64 = 0.5;
 
 pub fn sim(cmd: SimCommand) -> ExitCode {
     match cmd {

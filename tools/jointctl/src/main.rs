@@ -18,6 +18,7 @@ mod calibrate;
 mod cmd;
 mod doctor;
 mod experiment;
+mod experiment_checks;
 mod gravity;
 mod ident;
 mod inspect;
