@@ -305,3 +305,13 @@ fn torque_tracking_refuses_settings_the_joint_cannot_take() {
         assert!(!out.status.success() && err.contains(expected), "{joint} {stiffness:?}: {err}");
     }
 }
+
+/// `sim characterise` on a joint it cannot characterise says why with the element the joint
+/// has: the rigid q1 was told that "a `pivot_table` element is the observer's own table".
+#[test]
+fn characterising_a_rigid_joint_says_it_is_rigid() {
+    let config = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml");
+    let out = std::process::Command::new(jointctl()).args(["sim", "characterise"]).arg(&config).args(["--joint", "q1", "--out"]).arg(scratch("characterise-rigid").join("q1.csv")).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(1) && err.contains("`q1`: a characterisation needs") && err.contains("it is rigid") && !err.contains("pivot_table"), "{err}");
+}

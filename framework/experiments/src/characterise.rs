@@ -106,9 +106,15 @@ fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64, angle_deg:
             Ok((lever.stiffness_at(pivot_mm) * (1.0 + anisotropy * (2.0 * angle_deg.to_radians()).cos()), *dead_zone_rad))
         }
         Some(ElementSimConfig::Linear { stiffness_nm_per_rad }) => Ok((*stiffness_nm_per_rad, sim.effects.dead_zone_rad)),
-        _ => Err(ExperimentError(format!(
-            "`{joint}`: a characterisation over pivot settings needs a simulated `lever_arm` (or `linear`) element, whose stiffness chooses the deflections; a `pivot_table` element is the observer's own table"
-        ))),
+        // Said with the element the joint has: a rigid joint was told about a `pivot_table`.
+        other => {
+            let has = match other {
+                Some(ElementSimConfig::Rigid) | None => "it is rigid: nothing deflects",
+                Some(ElementSimConfig::PivotTable | ElementSimConfig::WristTable) => "its table element is the observer's own table, not a plant to characterise",
+                Some(_) => "its element has no stiffness to choose deflections by",
+            };
+            Err(ExperimentError(format!("`{joint}`: a characterisation needs a simulated `lever_arm`, `wrist_lever_arm` or `linear` element, whose stiffness chooses the deflections; {has}")))
+        }
     }
 }
 
