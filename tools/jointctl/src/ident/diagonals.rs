@@ -89,21 +89,11 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
         )),
     };
     let md = markdown(a, &reports, &parts, &offsets, dof_names);
-    if let Some(dir) = &a.report
-        && let Err(e) = std::fs::create_dir_all(dir).and_then(|_| std::fs::write(dir.join("report.md"), &md))
-    {
-        return crate::fail(format!("cannot write the report: {e}"));
+    if let Err(e) = super::output::write_report_md(a, &md) {
+        return crate::fail(e);
     }
     if a.json {
-        let directions: Vec<serde_json::Value> = DIAGONALS_DEG
-            .iter()
-            .zip(&reports)
-            .map(|(angle, r)| {
-                let mut v = serde_json::to_value(r).unwrap_or_default();
-                v["angle_deg"] = serde_json::json!(angle);
-                v
-            })
-            .collect();
+        let directions: Vec<serde_json::Value> = DIAGONALS_DEG.iter().zip(&reports).map(|(angle, r)| super::output::part_json(r, "angle_deg", *angle)).collect();
         let offsets = match &offsets {
             Ok(o) => serde_json::json!({
                 dof_names[0]: {"offset_nm": o[0].0, "standard_error_nm": o[0].1},
@@ -130,16 +120,7 @@ fn markdown(a: &IdentifyArgs, reports: &[Report], parts: &[Vec<usize>; 2], offse
         dof_names[1]
     );
     for ((angle, r), idx) in DIAGONALS_DEG.iter().zip(reports).zip(parts) {
-        let causes: Vec<String> = r
-            .causes
-            .iter()
-            .map(|c| {
-                let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
-                format!("{} ({})", c.effect, params.join(", "))
-            })
-            .collect();
-        let named = if causes.is_empty() { "none".into() } else { causes.join("; ") };
-        let _ = writeln!(md, "| {angle} | {} | {:.4} | {:.4} | {:.4} | {named} |", idx.len(), r.rmse_before, r.rmse_after, r.unexplained.noise_floor_nm);
+        let _ = writeln!(md, "| {angle} | {} | {:.4} | {:.4} | {:.4} | {} |", idx.len(), r.rmse_before, r.rmse_after, r.unexplained.noise_floor_nm, super::output::causes_cell(r));
         if let Some(why) = &r.held_out_window.moved {
             let _ = writeln!(md, "|  |  |  |  |  | along {angle} deg {why} |");
         }

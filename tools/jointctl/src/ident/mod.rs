@@ -13,6 +13,7 @@ use jointctl_ident::identify::{BaselineModel, IdentifyOptions, identify};
 mod diagonals;
 mod extension;
 mod fit;
+mod output;
 mod reading;
 mod settings;
 
@@ -485,14 +486,6 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
             Ok(r) => r,
             Err(e) => return crate::fail(format!("{} at pivot {pivot_mm:.2} mm: {e}", a.data.display())),
         };
-        let causes: Vec<String> = report
-            .causes
-            .iter()
-            .map(|c| {
-                let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
-                format!("{} ({})", c.effect, params.join(", "))
-            })
-            .collect();
         let _ = writeln!(
             md,
             "| {pivot_mm:.2} | {} | {:.4} | {:.4} | {:.4} | {} |",
@@ -500,7 +493,7 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
             report.rmse_before,
             report.rmse_after,
             report.unexplained.noise_floor_nm,
-            if causes.is_empty() { "none".into() } else { causes.join("; ") }
+            output::causes_cell(&report)
         );
         if let Some(why) = &report.held_out_window.moved {
             let _ = writeln!(md, "|  |  |  |  |  | at {pivot_mm:.2} mm {why} |");
@@ -534,17 +527,14 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
             return crate::fail(e);
         }
     }
-    if let Some(dir) = &a.report
-        && let Err(e) = std::fs::create_dir_all(dir).and_then(|_| std::fs::write(dir.join("report.md"), &md))
-    {
-        return crate::fail(format!("cannot write the report: {e}"));
+    if let Err(e) = output::write_report_md(a, &md) {
+        return crate::fail(e);
     }
     if a.json {
         let settings: Vec<serde_json::Value> = reports
             .iter()
             .map(|(pivot_mm, r)| {
-                let mut v = serde_json::to_value(r).unwrap_or_default();
-                v["pivot_mm"] = serde_json::json!(pivot_mm);
+                let mut v = output::part_json(r, "pivot_mm", *pivot_mm);
                 // The extension's gains on what this setting held out.
                 if let Some(g) = ext.as_ref().and_then(|e| e.by_setting.iter().find(|g| g.pivot_mm == *pivot_mm)) {
                     v["gains"] = serde_json::json!({"simulation": g.simulation, "observer": g.observer});
