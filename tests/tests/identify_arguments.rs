@@ -30,8 +30,8 @@ fn bad_identify_arguments_are_errors_not_silently_changed() {
     };
     for (file, config, expected) in [
         (write("two-settings.csv", ",pivot_mm", &|i| format!(",{}", if i < 300 { 10 } else { 35 })), false, "2 pivot settings (10.00, 35.00 mm): without --config the baseline is one characteristic"),
-        (write("no-setting.csv", "", &|_| String::new()), true, "sample 1: no pivot_mm: the joint's model changes with its pivot (0-45 mm)"),
-        (write("beyond.csv", ",pivot_mm", &|_| ",200".into()), true, "sample 1: pivot_mm 200 is outside the joint's characteristic (0-45 mm)"),
+        (write("no-setting.csv", "", &|_| String::new()), true, "sample 1 (t = 0 s): no pivot setting: the joint's model changes with its pivot (0-45 mm)"),
+        (write("beyond.csv", ",pivot_mm", &|_| ",200".into()), true, "sample 1 (t = 0 s): pivot setting 200 mm is outside the joint's characteristic (0-45 mm)"),
     ] {
         let mut cmd = Command::new(jointctl());
         cmd.current_dir(root()).arg("identify").arg("--data").arg(&file);
@@ -49,7 +49,9 @@ fn bad_identify_arguments_are_errors_not_silently_changed() {
     let dir = scratch("identify-wrist-directions");
     let write = |name: &str, angle: &dyn Fn(usize) -> f64| {
         let path = dir.join(name);
-        let rows: String = (0..400).map(|i| format!("{},{},{},20,{}\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.05).sin(), 1.0 * (i as f64 * 0.05).sin(), angle(i))).collect();
+        // A NaN direction is an empty cell.
+        let cell = |a: f64| if a.is_nan() { String::new() } else { a.to_string() };
+        let rows: String = (0..400).map(|i| format!("{},{},{},20,{}\n", i as f64 * 0.01, 0.05 * (i as f64 * 0.05).sin(), 1.0 * (i as f64 * 0.05).sin(), cell(angle(i)))).collect();
         std::fs::write(&path, format!("t,deflection,torque,pivot_mm,angle_deg\n{rows}")).unwrap();
         path
     };
@@ -57,6 +59,9 @@ fn bad_identify_arguments_are_errors_not_silently_changed() {
         (write("q7-axis.csv", &|_| 0.0), "deflection direction 0 deg is the other wrist DOF's axis: identify `q7` from this record (`q6` from one along 90 deg)"),
         (write("q6-axis-reversed.csv", &|_| 270.0), "deflection direction 270 deg is a wrist axis reversed: record q7 along 0 deg and q6 along 90 deg"),
         (write("two-directions.csv", &|i| if i < 200 { 45.0 } else { 90.0 }), "sample 201: deflection direction 90 deg after 45 deg: identify one direction's record at a time"),
+        // From a review: one empty direction in a record along both diagonals was told to give
+        // one direction at a time; a direction is not guessed.
+        (write("a-gap.csv", &|i| if i == 250 { f64::NAN } else if i < 200 { 45.0 } else { 135.0 }), "sample 251 (t = 2.5 s): no deflection direction (angle_deg)"),
     ] {
         let out = Command::new(jointctl()).current_dir(root()).arg("identify").arg("--data").arg(&file).args(["--config", "configs/sherpa_arm.yaml", "--joint", "q6"]).output().unwrap();
         assert_eq!(out.status.code(), Some(1));

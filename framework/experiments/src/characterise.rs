@@ -109,7 +109,8 @@ fn plant_stiffness(loaded: &LoadedConfig, joint: &str, pivot_mm: f64, angle_deg:
         // Said with the element the joint has: a rigid joint was told about a `pivot_table`.
         other => {
             let has = match other {
-                Some(ElementSimConfig::Rigid) | None => "it is rigid: nothing deflects",
+                Some(ElementSimConfig::Rigid) => "it is rigid: nothing deflects",
+                None => "it has no simulated element",
                 Some(ElementSimConfig::PivotTable | ElementSimConfig::WristTable) => "its table element is the observer's own table, not a plant to characterise",
                 Some(_) => "its element has no stiffness to choose deflections by",
             };

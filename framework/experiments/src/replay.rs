@@ -240,12 +240,18 @@ pub fn replay_observers(path: &Path, loaded: &LoadedConfig, loader: &PluginLoade
             rep_defl.push(*defl);
             trace.push((rec.t_s[i], rec.observed_torque_nm[i], *tau, rec.sensor_torque_nm[i]));
         }
-        // A channel the DOF does not have (a rigid joint observes no torque or deflection) has
-        // no sample to compare: left out, as in the simulated replay, not a row of NaN.
-        for c in [ChannelError::of(name, "observed_torque", "Nm", &rep_tau, &rec_tau), ChannelError::of(name, "deflection", "rad", &rep_defl, &rec_defl)] {
-            if c.samples > 0 {
-                report.channels.push(c);
+        // A channel the DOF does not have in the recording (a rigid joint observes no torque or
+        // deflection) is left out, not a row of NaN; one the recording has and the replay does
+        // not give is kept (its NaN is a finding) and said.
+        for (channel, unit, replayed, recorded) in [("observed_torque", "Nm", &rep_tau, &rec_tau), ("deflection", "rad", &rep_defl, &rec_defl)] {
+            if !recorded.iter().any(|x| x.is_finite()) {
+                continue;
             }
+            let c = ChannelError::of(name, channel, unit, replayed, recorded);
+            if c.samples == 0 {
+                report.notes.push(format!("`{name}`: the recording has its {channel}, the config's observer gives none"));
+            }
+            report.channels.push(c);
         }
         if ft.iter().any(|x| x.is_finite()) {
             report.channels.push(ChannelError::of(name, "recorded_observer_vs_ft", "Nm", &rec_tau, &ft));

@@ -263,7 +263,7 @@ pub fn read(path: &Path) -> Result<Data, DataError> {
 /// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,zero\n", "a.csv".as_ref()).unwrap_err();
 /// assert_eq!(e.to_string(), "a.csv:2: column `torque`: `zero` is not a number");
 /// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1\n0.01,0.15,0.001,0.2\n", "a.csv".as_ref()).unwrap_err();
-/// assert_eq!(e.to_string(), "a.csv:3: 4 values where the header names 3 columns (the first beyond them, `0.2`, in column 4): a row shifted or run together");
+/// assert_eq!(e.to_string(), "a.csv:3: 4 fields where the header names 3 columns (the first value beyond them, `0.2`, in column 4): a row shifted or run together");
 /// let e = jointctl_ident::csv::parse("t,deflection,torque\n0,0,1e308\n", "a.csv".as_ref()).unwrap_err();
 /// assert_eq!(e.to_string(), "a.csv:2: column `torque`: 1e308 is implausible: this column holds values within +-10000");
 /// ```
@@ -342,7 +342,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         // together) leaves every named column's cell in doubt: read as it stood, one shifted row
         // moved identify's held-out error by a fifth and the fit's largest error six times.
         if let Some(extra) = record.iter().skip(names.len()).position(|f| !f.is_empty()) {
-            return Err(err(line, None, format!("{} values where the header names {} columns (the first beyond them, `{}`, in column {}): a row shifted or run together", record.iter().filter(|f| !f.is_empty()).count(), names.len(), &record[names.len() + extra], names.len() + extra + 1)));
+            return Err(err(line, None, format!("{} fields where the header names {} columns (the first value beyond them, `{}`, in column {}): a row shifted or run together", record.len(), names.len(), &record[names.len() + extra], names.len() + extra + 1)));
         }
         let mut values = [f64::NAN; 7];
         for (k, c) in idx.iter().enumerate() {
@@ -406,7 +406,10 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     }
     for (name, column) in [("deflection", &data.deflection), ("torque", &data.torque)] {
         if let Some((row, low, high)) = far_outlier(column) {
-            let line = text.lines().enumerate().skip(h).filter(|(_, l)| !l.trim().trim_matches(',').is_empty()).nth(row).map_or(0, |(i, _)| i + 1);
+            // The parser skips a row whose every field is empty (quotes and blanks aside): so
+            // does this count.
+            let empty_row = |l: &str| l.split(',').all(|f| f.trim().trim_matches('"').trim().is_empty());
+            let line = text.lines().enumerate().skip(h).filter(|(_, l)| !empty_row(l)).nth(row).map_or(0, |(i, _)| i + 1);
             return Err(err(
                 line,
                 Some(name),
@@ -417,11 +420,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     Ok(data)
 }
 
-/// The first value of `x` beyond its 0.1 % and 99.9 % quantiles by more than [`FAR_SPANS`]
-/// times their span, with the two: a reading no continuous signal makes (a corrupt cell, a
-/// unit mixed up in one row). The quantiles come from at most 100 000 evenly spaced values, so
-/// that a 2-million-row file is not copied again; a record of fewer than 2000 values is not
-/// judged (its quantiles would be its extremes).
+/// The first value of `x` that jumps out from both its neighbours and lies beyond the column's
+/// 0.1 % and 99.9 % quantiles, each by more than [`FAR_SPANS`] times their span, with the two
+/// quantiles: a reading no continuous signal makes (a corrupt cell, a unit mixed up in one row).
+/// A motion that goes as far over several samples is data, and so is a value of exactly zero: a
+/// lost reading that reads as zero is a dropout, which identify finds and leaves out itself.
+/// The quantiles come from at most 100 000 evenly spaced values, so that a 2-million-row file
+/// is not copied again; a record of fewer than 2000 values, or whose bulk is one value, is not
+/// judged (there is no spread to judge by).
 fn far_outlier(x: &[f64]) -> Option<(usize, f64, f64)> {
     if x.len() < 2000 {
         return None;
@@ -431,14 +437,20 @@ fn far_outlier(x: &[f64]) -> Option<(usize, f64, f64)> {
     let n = some.len();
     let low = *some.select_nth_unstable_by(n / 1000, f64::total_cmp).1;
     let high = *some.select_nth_unstable_by(n - 1 - n / 1000, f64::total_cmp).1;
-    let span = high - low;
-    let row = x.iter().position(|v| *v < low - FAR_SPANS * span || *v > high + FAR_SPANS * span)?;
+    let far = FAR_SPANS * (high - low);
+    if far <= 0.0 {
+        return None;
+    }
+    let row = (1..x.len() - 1).find(|&i| {
+        let v = x[i];
+        v != 0.0 && (v < low - far || v > high + far) && (v - x[i - 1]).abs() > far && (v - x[i + 1]).abs() > far
+    })?;
     Some((row, low, high))
 }
 
-/// How many spans of the bulk (0.1-99.9 %) beyond it a value is far out (an assumption: three
-/// spans beyond the extremes of 99.8 % of a record is a jump no joint's deflection or torque
-/// makes between two samples and back).
+/// How many spans of the bulk (0.1-99.9 %) a value must lie beyond it, and jump from each
+/// neighbour, to be far out (an assumption: a jump of three such spans between two samples and
+/// back is one no joint's deflection or torque makes).
 const FAR_SPANS: f64 = 3.0;
 
 #[cfg(test)]
@@ -489,6 +501,24 @@ mod tests {
         }
         let e = parse_text(&text).unwrap_err();
         assert!(e.to_string().starts_with("x.csv:1002: column `deflection`: 12 lies far outside the rest"), "{e}");
+        // A row of empty fields, which the parser skips, still counts as a line of the file.
+        let e = parse_text(&text.replacen("\n", "\n , ,\n", 1)).unwrap_err();
+        assert!(e.to_string().starts_with("x.csv:1003: column `deflection`"), "{e}");
+        // A lost reading that reads as zero in a column far from zero is a dropout, left to
+        // identify (which finds and leaves those out); a motion as far over several samples
+        // (5 of 3000, under 0.1 % of them) is data.
+        let mut far_from_zero = String::from("t,deflection,torque\n");
+        for i in 0..3000 {
+            let d = 1.0 + 0.07 * (i as f64 * 0.01).sin();
+            far_from_zero += &format!("{},{},{}\n", i as f64 * 0.001, if i == 1000 { 0.0 } else { d }, 20.0 + d);
+        }
+        assert!(parse_text(&far_from_zero).is_ok());
+        let mut excursion = String::from("t,deflection,torque\n");
+        for i in 0..3000 {
+            let bump = if (1000..1005).contains(&i) { [0.2, 0.5, 0.8, 0.5, 0.2][i - 1000] } else { 0.0 };
+            excursion += &row(i, 0.07 * (i as f64 * 0.01).sin() + bump);
+        }
+        assert!(parse_text(&excursion).is_ok());
         // A departure held over more than 0.1 % of the record (20 of 3000 samples) is part of
         // the data, not one reading.
         let mut smooth = String::from("t,deflection,torque\n");

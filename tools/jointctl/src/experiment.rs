@@ -385,7 +385,7 @@ pub fn sim(cmd: SimCommand) -> ExitCode {
                 },
                 None => vec![Segment { amplitude_rad: amplitude, frequency_hz: frequency, duration_s: duration }],
             };
-            if let Err(e) = check_record_options(&segments, rate, experiment.is_none()) {
+            if let Err(e) = check_record_options(&segments, rate, experiment.as_deref()) {
                 return crate::fail(e);
             }
             let loaded = match jointctl_config::load(&config) {

@@ -31,8 +31,10 @@ fn shown(x: f64) -> String {
 
 /// The checks of `sim record`'s options beyond each segment's: the sample rate a config's loop
 /// may run at ([1, 10000] Hz, `rate_hz`'s rule), every sine below half of it (at or above, the
-/// record holds its alias, not the sine), and a direction that is a number.
-pub(crate) fn check_record_options(segments: &[Segment], rate_hz: f64, cli: bool) -> Result<(), String> {
+/// record holds its alias, not the sine); `experiment` the file the segments come from, if not
+/// the command line.
+pub(crate) fn check_record_options(segments: &[Segment], rate_hz: f64, experiment: Option<&std::path::Path>) -> Result<(), String> {
+    let cli = experiment.is_none();
     if !(1.0..=10_000.0).contains(&rate_hz) {
         return Err(format!("--rate: {} must be in [1, 10000] Hz (a config's loop rate)", shown(rate_hz)));
     }
@@ -41,7 +43,7 @@ pub(crate) fn check_record_options(segments: &[Segment], rate_hz: f64, cli: bool
             check_segment(s, |f| format!("--{}", f.split('_').next().unwrap_or(f)))?;
         }
         if s.frequency_hz >= rate_hz / 2.0 {
-            let which = if cli { "--frequency".to_string() } else { format!("segments[{i}].frequency_hz") };
+            let which = experiment.map_or("--frequency".to_string(), |file| format!("{}: segments[{i}].frequency_hz", file.display()));
             return Err(format!("{which}: {} Hz is not below half the sample rate (--rate {rate_hz} Hz): the record would hold its alias, not the sine", s.frequency_hz));
         }
     }

@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::process::ExitCode;
 
 use jointctl_ident::csv::Data;
-use jointctl_ident::identify::{BaselineModel, IdentifyOptions, Report, identify};
+use jointctl_ident::identify::{BaselineModel, Cause, IdentifyOptions, Report, identify};
 
 use super::{ConfiguredJoint, IdentifyArgs};
 
@@ -39,6 +39,16 @@ pub(super) fn pair(joint: &ConfiguredJoint, data: &Data) -> Option<[Vec<usize>; 
     parts.iter().all(|p| !p.is_empty()).then_some(parts)
 }
 
+/// The first sample without a direction in a wrist record whose other samples have one: a
+/// direction is not guessed (it decides the baseline), and a record along both diagonals with
+/// a gap in its `angle_deg` was told to give one direction at a time.
+pub(super) fn first_without_direction(joint: &ConfiguredJoint, data: &Data) -> Option<usize> {
+    if !joint.spec.as_ref().is_some_and(|s| s.is_two_dof()) || !data.angle_deg.iter().any(|a| a.is_finite()) {
+        return None;
+    }
+    (0..data.len()).find(|i| !data.angle_deg_at(*i).is_finite())
+}
+
 /// The torque offsets of the two DOFs [Nm] with their standard errors, from the offsets named
 /// along 45 and 135 deg (`offset_nm` and its standard error each).
 fn split_offsets(along_45: (f64, f64), along_135: (f64, f64)) -> [(f64, f64); 2] {
@@ -47,10 +57,18 @@ fn split_offsets(along_45: (f64, f64), along_135: (f64, f64)) -> [(f64, f64); 2]
     [(r * (along_45.0 + along_135.0), se), (r * (along_45.0 - along_135.0), se)]
 }
 
-/// The offset named in a report and its standard error, if one was named.
-fn named_offset(report: &Report) -> Option<(f64, f64)> {
-    let c = report.causes.iter().find(|c| c.effect == "sensor_offset")?;
-    Some((*c.params.get("offset_nm")?, c.uncertainty.get("offset_nm").copied().unwrap_or(f64::NAN)))
+/// The offset named in a report and its standard error: `Ok(None)` when none was named, an
+/// error when what was named cannot be split (a drift: its offset is held at zero, not
+/// estimated, or is of the direction's own middle time, not the other's).
+fn named_offset(causes: &[Cause], angle: f64) -> Result<Option<(f64, f64)>, String> {
+    let Some(c) = causes.iter().find(|c| c.effect == "sensor_offset") else { return Ok(None) };
+    if c.params.contains_key("drift_nm_per_s") {
+        return Err(format!("no torque offset per DOF: along {angle} deg the offset drifts, so the two directions' offsets are of different moments (or not estimated) and are not split"));
+    }
+    match (c.params.get("offset_nm"), c.uncertainty.get("offset_nm")) {
+        (Some(o), Some(se)) if se.is_finite() => Ok(Some((*o, *se))),
+        _ => Err(format!("no torque offset per DOF: along {angle} deg the offset has no standard error")),
+    }
 }
 
 /// Identifies each diagonal's samples against the table's torque along it, reports both, and
@@ -81,9 +99,12 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
             Err(e) => return crate::fail(format!("{} along {angle} deg: {e}", a.data.display())),
         }
     }
-    let offsets = match (named_offset(&reports[0]), named_offset(&reports[1])) {
-        (Some(r45), Some(r135)) => Ok(split_offsets(r45, r135)),
-        (r45, _) => Err(format!(
+    // Split where both diagonals name one. Where one names none, o6 = -o7 (or o6 = o7) would
+    // follow from the other alone; not assumed: the other may have been too small to name.
+    let offsets = match (named_offset(&reports[0].causes, DIAGONALS_DEG[0]), named_offset(&reports[1].causes, DIAGONALS_DEG[1])) {
+        (Err(e), _) | (_, Err(e)) => Err(e),
+        (Ok(Some(r45)), Ok(Some(r135))) => Ok(split_offsets(r45, r135)),
+        (Ok(r45), Ok(_)) => Err(format!(
             "no torque offset per DOF: an offset is split where both diagonals name one, and along {} deg none was named",
             if r45.is_none() { DIAGONALS_DEG[0] } else { DIAGONALS_DEG[1] }
         )),
@@ -152,5 +173,23 @@ mod tests {
         let [o6, o7] = split_offsets((0.1 * r, 0.003), (0.5 * r, 0.004));
         assert!((o6.0 - 0.3).abs() < 1e-12 && (o7.0 + 0.2).abs() < 1e-12, "{o6:?} {o7:?}");
         assert!((o6.1 - 0.005 * r).abs() < 1e-12 && o6.1 == o7.1, "{o6:?} {o7:?}");
+    }
+
+    fn offset(params: &[(&str, f64)], uncertainty: &[(&str, f64)]) -> Cause {
+        let map = |kv: &[(&str, f64)]| kv.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        Cause { effect: "sensor_offset".into(), params: map(params), rmse_gain: 0.1, uncertainty: map(uncertainty), evidence: String::new(), fragments: Default::default() }
+    }
+
+    /// From a review: a drift named alone reports `offset_nm` 0 without an error (held, not
+    /// estimated), and was split as if it were an offset; a drifting offset is of its own
+    /// direction's middle time. Neither is split now.
+    #[test]
+    fn only_an_estimated_constant_offset_is_split() {
+        assert_eq!(named_offset(&[offset(&[("offset_nm", 0.2)], &[("offset_nm", 0.001)])], 45.0), Ok(Some((0.2, 0.001))));
+        assert_eq!(named_offset(&[], 45.0), Ok(None));
+        let drift_alone = offset(&[("offset_nm", 0.0), ("drift_nm_per_s", 0.01)], &[("drift_nm_per_s", 0.001)]);
+        assert!(named_offset(&[drift_alone], 135.0).is_err_and(|e| e.contains("along 135 deg the offset drifts")));
+        let unestimated = offset(&[("offset_nm", 0.0)], &[]);
+        assert!(named_offset(&[unestimated], 45.0).is_err_and(|e| e.contains("no standard error")));
     }
 }

@@ -211,6 +211,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     }
     if let (Some(cj), Some(config), Some(joint)) = (&configured, &a.config, &a.joint) {
         let settings = data.pivot_settings(MIN_SETTING_SAMPLES);
+        if let Some(i) = diagonals::first_without_direction(cj, &data) {
+            return crate::fail(format!("{}: sample {} (t = {} s): no deflection direction (angle_deg), where the record's other samples have one", a.data.display(), i + 1, data.t[i]));
+        }
         // Along both diagonals in one record: each apart, and the torque offset per DOF.
         if let (Some(parts), [first, second]) = (diagonals::pair(cj, &data), cj.dof_names.as_slice()) {
             return diagonals::identify_both(&a, cj, &data, parts, [first, second]);

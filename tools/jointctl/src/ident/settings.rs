@@ -26,11 +26,15 @@ pub(super) fn fit_the_baseline(a: &IdentifyArgs, configured: Option<&ConfiguredJ
     let known = spec.pivot_settings_mm();
     let (lo, hi) = (known[0], known[known.len() - 1]);
     if let Some(i) = (0..data.len()).find(|i| !data.pivot_mm_at(*i).is_finite()) {
-        return Err(format!("{file}: sample {}: no pivot_mm: the joint's model changes with its pivot ({lo}-{hi} mm), so each sample needs its setting (a `pivot_mm` column)", i + 1));
+        return Err(format!(
+            "{file}: sample {} (t = {} s): no pivot setting: the joint's model changes with its pivot ({lo}-{hi} mm), so each sample needs its setting (a `pivot_mm` column in a CSV, the pivot's reading in a recording)",
+            i + 1,
+            data.t[i]
+        ));
     }
     // Half a millimetre either side: what the encoder reads of a setting held at an end.
     if let Some(i) = (0..data.len()).find(|i| !(lo - 0.5..=hi + 0.5).contains(&data.pivot_mm_at(*i))) {
-        return Err(format!("{file}: sample {}: pivot_mm {} is outside the joint's characteristic ({lo}-{hi} mm): its model is not known there", i + 1, data.pivot_mm_at(i)));
+        return Err(format!("{file}: sample {} (t = {} s): pivot setting {} mm is outside the joint's characteristic ({lo}-{hi} mm): its model is not known there", i + 1, data.t[i], data.pivot_mm_at(i)));
     }
     Ok(())
 }
