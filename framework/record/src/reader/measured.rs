@@ -25,7 +25,8 @@ pub struct Measured {
     /// deflection [deg] (0 = the second DOF only, 90 = the first), the nearest of section
     /// 3.5.2's four (0, 45, 90, 135); deflection and torque are then along it. Else empty.
     pub angle_deg: Vec<f64>,
-    /// Samples of the joint left out: deflection or F/T torque unknown.
+    /// Samples of the joint left out: deflection, F/T torque or (where it is recorded) the pivot
+    /// unknown.
     pub left_out: usize,
     /// Samples of the joint in the recording.
     pub samples: usize,
@@ -46,7 +47,11 @@ pub fn measured(path: &Path, joint: &str) -> Result<Measured, ReadError> {
         return measured_along_directions(path, &first, &second);
     }
     let s = joint_series(path, joint)?;
-    let keep: Vec<usize> = (0..s.len()).filter(|&i| s.deflection_rad[i].is_finite() && s.sensor_torque_nm[i].is_finite()).collect();
+    // A joint whose pivot is recorded needs it in every sample it gives (its model changes with
+    // it): a cycle whose pivot reading was not usable is left out with the others, never read
+    // as a setting.
+    let has_pivot = s.pivot_mm.iter().any(|p| p.is_finite());
+    let keep: Vec<usize> = (0..s.len()).filter(|&i| s.deflection_rad[i].is_finite() && s.sensor_torque_nm[i].is_finite() && (!has_pivot || s.pivot_mm[i].is_finite())).collect();
     let pick = |col: &[f64]| keep.iter().map(|&i| col[i]).collect::<Vec<f64>>();
     let mut m = Measured { t_s: pick(&s.t_s), deflection_rad: pick(&s.deflection_rad), torque_nm: pick(&s.sensor_torque_nm), left_out: s.len() - keep.len(), samples: s.len(), ft_samples: s.sensor_torque_nm.iter().filter(|t| t.is_finite()).count(), ..Measured::default() };
     // The observer's pivot carries its encoder's quantisation: settings are told apart to 0.1 mm.
@@ -75,12 +80,15 @@ fn measured_along_directions(path: &Path, first: &str, second: &str) -> Result<M
     let a = all.remove(first).ok_or_else(|| no(first))?;
     let b = all.remove(second).ok_or_else(|| no(second))?;
     let mut m = Measured { samples: a.len().min(b.len()), ..Measured::default() };
+    // As for one DOF: with the pivot recorded, a cycle without a usable reading of it is left
+    // out (one such cycle used to drop the whole record's pivot column).
+    let has_pivot = a.pivot_mm.iter().any(|p| p.is_finite());
     for i in 0..m.samples {
         let (d1, d2, t1, t2) = (a.deflection_rad[i], b.deflection_rad[i], a.sensor_torque_nm[i], b.sensor_torque_nm[i]);
         if t1.is_finite() && t2.is_finite() {
             m.ft_samples += 1;
         }
-        if !(d1.is_finite() && d2.is_finite() && t1.is_finite() && t2.is_finite()) {
+        if !(d1.is_finite() && d2.is_finite() && t1.is_finite() && t2.is_finite()) || (has_pivot && !a.pivot_mm[i].is_finite()) {
             m.left_out += 1;
             continue;
         }

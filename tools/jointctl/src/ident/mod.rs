@@ -92,7 +92,7 @@ fn load_data(path: &Path, joint: Option<&str>) -> Result<jointctl_ident::csv::Da
     data.motor_position = m.motor_position_rad;
     data.angle_deg = m.angle_deg;
     if m.left_out > 0 {
-        data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection or F/T torque unknown", m.left_out, m.samples));
+        data.notes.push(format!("{} of {} samples of `{joint}` left out: deflection, F/T torque or pivot unknown", m.left_out, m.samples));
     }
     Ok(data)
 }
