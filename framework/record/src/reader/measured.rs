@@ -101,12 +101,11 @@ fn measured_along_directions(path: &Path, first: &str, second: &str) -> Result<M
         m.deflection_rad.push(d1 * sa + d2 * ca);
         m.torque_nm.push(t1 * sa + t2 * ca);
         m.angle_deg.push(angle);
-        if a.pivot_mm[i].is_finite() {
+        // Every sample kept has its pivot where the pivot is recorded (above): the column is
+        // whole or empty.
+        if has_pivot {
             m.pivot_mm.push((a.pivot_mm[i] * 10.0).round() / 10.0);
         }
-    }
-    if m.pivot_mm.len() != m.t_s.len() {
-        m.pivot_mm.clear();
     }
     Ok(m)
 }

@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::process::ExitCode;
 
 use jointctl_ident::csv::Data;
-use jointctl_ident::identify::{BaselineModel, Cause, IdentifyOptions, Report, identify};
+use jointctl_ident::identify::{Cause, IdentifyOptions, Report, identify};
 
 use super::{ConfiguredJoint, IdentifyArgs};
 
@@ -90,9 +90,9 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
             let listed: Vec<String> = settings.iter().map(|(p, _)| format!("{p:.2}")).collect();
             return crate::fail(format!("{}: {} pivot settings along {angle} deg ({} mm): identify one setting's record at a time along the diagonals", a.data.display(), settings.len(), listed.join(", ")));
         }
-        let baseline = match jointctl_experiments::model_loop::configured_torque_along(&joint.params, *angle) {
-            Ok(torque) => BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))),
-            Err(e) => return crate::fail(e.to_string()),
+        let baseline = match joint.baseline_along(*angle) {
+            Ok(b) => b,
+            Err(e) => return crate::fail(e),
         };
         match identify(&data.subset(idx), &IdentifyOptions { baseline, baseline_friction: false, held_out: a.held_out.into(), ..IdentifyOptions::default() }) {
             Ok(r) => reports.push(r),

@@ -125,6 +125,13 @@ impl ConfiguredJoint {
         Ok(BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))))
     }
 
+    /// The baseline along deflection direction `angle_deg` of a 2-DOF joint (the wrist): the
+    /// table's torque along it, both DOFs deflected (section 3.5.2).
+    fn baseline_along(&self, angle_deg: f64) -> Result<BaselineModel, String> {
+        let torque = jointctl_experiments::model_loop::configured_torque_along(&self.params, angle_deg).map_err(|e| e.to_string())?;
+        Ok(BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))))
+    }
+
     /// Whether its model changes with a pivot (the shoulder, the wrist).
     fn has_pivot_settings(&self) -> bool {
         self.spec.as_ref().is_some_and(|s| s.pivot_settings_mm().len() > 1)
@@ -230,9 +237,9 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
                 let listed: Vec<String> = settings.iter().map(|(p, _)| format!("{p:.2}")).collect();
                 return crate::fail(format!("{}: {} pivot settings along {angle} deg ({} mm): identify one setting's record at a time along a diagonal", a.data.display(), settings.len(), listed.join(", ")));
             }
-            baseline = match jointctl_experiments::model_loop::configured_torque_along(&cj.params, angle) {
-                Ok(torque) => BaselineModel::Given(Box::new(move |deflection_rad, pivot_mm| torque(pivot_mm, deflection_rad))),
-                Err(e) => return crate::fail(e.to_string()),
+            baseline = match cj.baseline_along(angle) {
+                Ok(b) => b,
+                Err(e) => return crate::fail(e),
             };
         }
         // A record of several pivot settings against a joint with pivot settings: each setting apart.
