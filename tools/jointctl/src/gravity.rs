@@ -31,6 +31,11 @@ enum NamedPose {
     AppendixC,
 }
 
+/// The largest angle `--q` takes [rad]: one turn either way. Gravity repeats each turn, so a
+/// larger angle adds nothing; it is most likely degrees typed as radians (an angle of 1e300 was
+/// taken and printed with its 300 digits, though at that size an f64 no longer resolves a turn).
+const MAX_ANGLE_RAD: f64 = std::f64::consts::TAU;
+
 /// `q2=0.785,q4=-0.3` onto the chain's DOFs (the rest 0).
 fn parse_pose(text: &str, dofs: &[String]) -> Result<Vec<f64>, String> {
     let mut q = vec![0.0; dofs.len()];
@@ -42,6 +47,9 @@ fn parse_pose(text: &str, dofs: &[String]) -> Result<Vec<f64>, String> {
         let v: f64 = value.parse().map_err(|_| format!("--q: {name}: `{value}` is not a number [rad]"))?;
         if !v.is_finite() {
             return Err(format!("--q: {name}: {v} is not a finite angle"));
+        }
+        if v.abs() > MAX_ANGLE_RAD {
+            return Err(format!("--q: {name}: {value} rad is more than a turn either way (at most {MAX_ANGLE_RAD:.4}): gravity repeats each turn, and a larger number is most likely degrees; --q takes radians"));
         }
         if given.contains(&k) {
             return Err(format!("--q: `{name}` is given twice"));
@@ -136,6 +144,9 @@ mod tests {
         assert_eq!(parse_pose("q2=0.5", &dofs), Ok(vec![0.0, 0.5]));
         assert!(parse_pose("q9=0.5", &dofs).unwrap_err().contains("`q9` is not a joint of the URDF (q1, q2)"));
         assert!(parse_pose("q2=nan", &dofs).unwrap_err().contains("not a finite angle"));
+        assert!(parse_pose("q2=1e300", &dofs).unwrap_err().contains("1e300 rad is more than a turn either way"));
+        assert!(parse_pose("q2=45", &dofs).unwrap_err().contains("most likely degrees"));
+        assert_eq!(parse_pose("q1=-6.2,q2=6.2", &dofs), Ok(vec![-6.2, 6.2]));
         assert!(parse_pose("q2=abc", &dofs).unwrap_err().contains("`abc` is not a number"));
         assert!(parse_pose("q2", &dofs).unwrap_err().contains("not JOINT=RADIANS"));
         assert!(parse_pose("q2=1,q2=2", &dofs).unwrap_err().contains("given twice"));

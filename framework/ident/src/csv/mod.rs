@@ -268,7 +268,7 @@ pub fn read(path: &Path) -> Result<Data, DataError> {
 /// assert_eq!(e.to_string(), "a.csv:2: column `torque`: 1e308 is implausible: this column holds values within +-10000");
 /// ```
 pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
-    let err = |line: usize, column: Option<&str>, message: String| DataError { file: file.into(), line, column: column.map(str::to_string), message };
+    let err = |line: usize, column: Option<&str>, message: String| DataError { file: file.into(), line, column: column.map(shown), message };
     // The parser strips a UTF-8 byte-order mark itself; `trim` takes blanks around fields.
     let mut reader = ::csv::ReaderBuilder::new().flexible(true).trim(::csv::Trim::All).from_reader(text.as_bytes());
     let header = match reader.headers() {
@@ -297,7 +297,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
                 .find(|(c, _)| names.len() == 1 && header_text.contains(*c))
                 .map(|(_, what)| format!("; the file seems separated by {what}: separate columns by commas"))
                 .unwrap_or_default();
-            return Err(err(h, Some(required), format!("missing required column (the header is `{header_text}`){hint}")));
+            return Err(err(h, Some(required), format!("missing required column (the header is `{}`){hint}", shown(&header_text))));
         }
     }
     let mut data = Data::default();
@@ -305,7 +305,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     // 100 000 notes).
     let unused: Vec<&&str> = names.iter().filter(|n| !KNOWN.contains(n)).collect();
     for n in unused.iter().take(5) {
-        data.notes.push(format!("column `{n}` is not used"));
+        data.notes.push(format!("column `{}` is not used", shown(n)));
     }
     if unused.len() > 5 {
         data.notes.push(format!("and {} more columns are not used", unused.len() - 5));
@@ -313,6 +313,9 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     let idx: Vec<Option<usize>> = KNOWN.iter().map(|k| col(k)).collect();
     // Time added to the file's own since the last restart, and where that repetition began.
     let (mut shift, mut segment_start) = (0.0, 0usize);
+    // After a restart, until the next sample: the restart's line, its time and the previous
+    // repetition's last time (a stray stamp is told from a restart by the sample after it).
+    let mut just_restarted: Option<(usize, f64, f64)> = None;
     // The file's line of a parser position: the parser's own line count skips blank lines, and
     // a record's byte position can point at the blank lines before it. Positions only grow:
     // newlines are counted from the previous one (counting from the start made a long file
@@ -342,7 +345,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         // together) leaves every named column's cell in doubt: read as it stood, one shifted row
         // moved identify's held-out error by a fifth and the fit's largest error six times.
         if let Some(extra) = record.iter().skip(names.len()).position(|f| !f.is_empty()) {
-            return Err(err(line, None, format!("{} fields where the header names {} columns (the first value beyond them, `{}`, in column {}): a row shifted or run together", record.len(), names.len(), &record[names.len() + extra], names.len() + extra + 1)));
+            return Err(err(line, None, format!("{} fields where the header names {} columns (the first value beyond them, `{}`, in column {}): a row shifted or run together", record.len(), names.len(), shown(&record[names.len() + extra]), names.len() + extra + 1)));
         }
         let mut values = [f64::NAN; 7];
         for (k, c) in idx.iter().enumerate() {
@@ -354,14 +357,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
                 }
                 continue;
             }
-            let v: f64 = cell.parse().map_err(|_| err(line, Some(KNOWN[k]), format!("`{cell}` is not a number")))?;
+            let v: f64 = cell.parse().map_err(|_| err(line, Some(KNOWN[k]), format!("`{}` is not a number", shown(cell))))?;
             if !v.is_finite() {
-                return Err(err(line, Some(KNOWN[k]), format!("`{cell}` is not a finite number")));
+                return Err(err(line, Some(KNOWN[k]), format!("`{}` is not a finite number", shown(cell))));
             }
             if v.abs() > PLAUSIBLE_ABS[k] {
                 // Loggers that stamp nanoseconds (ROS, many DAQs) write 1.7e18 in 2024.
                 let hint = if k == 0 && (1e17..1e20).contains(&v.abs()) { " (it looks like nanoseconds since the Unix epoch: write seconds)" } else { "" };
-                return Err(err(line, Some(KNOWN[k]), format!("{cell} is implausible: this column holds values within +-{}{hint}", PLAUSIBLE_ABS[k])));
+                return Err(err(line, Some(KNOWN[k]), format!("{} is implausible: this column holds values within +-{}{hint}", shown(cell), PLAUSIBLE_ABS[k])));
             }
             values[k] = v;
         }
@@ -370,6 +373,11 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         // RESTART_GAP_S (so time increases and identification sees a new segment); any other
         // step back, or a time that repeats, is an error.
         let (raw, mut at) = (values[0], values[0] + shift);
+        if let Some((restart_line, restart_raw, before)) = just_restarted.take()
+            && raw > before
+        {
+            return Err(err(restart_line, Some("t"), stray_stamp(restart_raw, before, line, raw)));
+        }
         if let Some(&prev) = data.t.last() {
             let (start, prev_raw) = (data.t[segment_start] - shift, prev - shift);
             let restarts = raw < prev_raw && raw <= start + 0.1 * (prev_raw - start);
@@ -386,6 +394,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
                 at = raw + shift;
                 segment_start = data.t.len();
                 data.restarts.push(data.t.len());
+                just_restarted = Some((line, raw, prev_raw));
                 data.notes.push(format!("time restarts at line {line} ({raw} after {prev_raw}): a new repetition, laid {RESTART_GAP_S} s after the previous one"));
             } else if at <= prev {
                 return Err(err(line, Some("t"), format!("time {raw} does not increase (previous {prev_raw})")));
@@ -404,6 +413,9 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
     if data.is_empty() {
         return Err(err(h + 1, None, "the file has a header but no samples".into()));
     }
+    if let Some((line, raw, before)) = just_restarted {
+        return Err(err(line, Some("t"), format!("time {raw} steps back from {before} on the last row: a repetition of one sample is no test (a stray time stamp?); remove the row")));
+    }
     for (name, column) in [("deflection", &data.deflection), ("torque", &data.torque)] {
         if let Some((row, low, high)) = far_outlier(column) {
             // The parser skips a row whose every field is empty (quotes and blanks aside): so
@@ -418,6 +430,11 @@ pub fn parse(text: &str, file: &Path) -> Result<Data, DataError> {
         }
     }
     Ok(data)
+}
+
+/// Why a time that stepped back at `line` and resumed after it is not a restart.
+fn stray_stamp(raw: f64, before: f64, next_line: usize, next: f64) -> String {
+    format!("time {raw} steps back from {before}, and line {next_line}'s {next} resumes after {before}: a stray time stamp, not a repetition whose time restarts; fix or remove the row")
 }
 
 /// The first value of `x` that jumps out from both its neighbours and lies beyond the column's
@@ -453,138 +470,28 @@ fn far_outlier(x: &[f64]) -> Option<(usize, f64, f64)> {
 /// back is one no joint's deflection or torque makes).
 const FAR_SPANS: f64 = 3.0;
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// The most characters of a cell or a name an error or a note shows (an assumption: a number
+/// or a column name fits; a longer cell is garbage whose start says enough).
+const SHOWN_CHARS: usize = 40;
 
-    fn parse_text(text: &str) -> Result<Data, DataError> {
-        parse(text, Path::new("x.csv"))
-    }
-
-    /// Issue 40, finding 3: a file of 50 rows and 100 000 header columns printed 100 000 "not
-    /// used" notes (and its header check was quadratic in the columns).
-    #[test]
-    fn a_header_of_many_unused_columns_gives_one_note_for_the_rest() {
-        let extra: Vec<String> = (0..100_000).map(|i| format!("x{i}")).collect();
-        let mut text = format!("t,deflection,torque,{}\n", extra.join(","));
-        for r in 0..50 {
-            text += &format!("{},{},{}{}\n", f64::from(r) * 0.01, f64::from(r) * 0.001, f64::from(r) * 0.1, ",0".repeat(100_000));
+/// A cell or a column name as an error or a note shows it: control characters escaped (a NUL
+/// byte in a cell went to the terminal as it stood) and at most [`SHOWN_CHARS`] characters, with
+/// how many more there are (a 100 000-column header was echoed whole).
+fn shown(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars().take(SHOWN_CHARS) {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
         }
-        let d = parse_text(&text).unwrap();
-        assert_eq!(d.len(), 50);
-        assert_eq!(d.notes.len(), 6, "{:?}", &d.notes[..d.notes.len().min(8)]);
-        assert_eq!(d.notes[5], "and 99995 more columns are not used");
-        // A duplicate far down the header is still found, with both columns.
-        let e = parse_text("t,deflection,torque,a,b,c,a\n0,0,0,0,0,0,0\n").unwrap_err();
-        assert!(e.to_string().contains("appears twice in the header (columns 4 and 7)"), "{e}");
     }
-
-    /// Findings: the reader rejected quoted headers and a UTF-8 BOM (as "missing column `t`"),
-    /// used a duplicated column silently and said nothing useful for `;`-separated files.
-    #[test]
-    fn quoted_headers_and_a_byte_order_mark_are_read() {
-        let d = parse_text("\"t\",\"deflection\",\"torque\"\n0,0.001,\"0.1\"\n0.01,0.002,0.2\n").unwrap();
-        assert_eq!((d.len(), d.torque[0]), (2, 0.1));
-        let d = parse_text("\u{feff}t,deflection,torque\n0,0.001,0.1\n").unwrap();
-        assert_eq!(d.len(), 1);
+    let more = text.chars().count().saturating_sub(SHOWN_CHARS);
+    if more > 0 {
+        out.push_str(&format!("... ({more} more characters)"));
     }
-
-    /// Found by a hunt for bad input: one deflection of 12 rad in a record within +-0.07 rad
-    /// (line 1002 of 3000) was fitted as it stood: stiffness 3.40 Nm/rad for about 127, and
-    /// `check` accepted the characteristic. The row is now an error that says where.
-    #[test]
-    fn a_reading_far_outside_the_rest_is_an_error_at_its_line() {
-        let row = |i: usize, d: f64| format!("{},{d},{}\n", i as f64 * 0.001, 127.0 * d);
-        let mut text = String::from("t,deflection,torque\n");
-        for i in 0..3000 {
-            text += &row(i, if i == 1000 { 12.0 } else { 0.07 * (i as f64 * 0.01).sin() });
-        }
-        let e = parse_text(&text).unwrap_err();
-        assert!(e.to_string().starts_with("x.csv:1002: column `deflection`: 12 lies far outside the rest"), "{e}");
-        // A row of empty fields, which the parser skips, still counts as a line of the file.
-        let e = parse_text(&text.replacen("\n", "\n , ,\n", 1)).unwrap_err();
-        assert!(e.to_string().starts_with("x.csv:1003: column `deflection`"), "{e}");
-        // A lost reading that reads as zero in a column far from zero is a dropout, left to
-        // identify (which finds and leaves those out); a motion as far over several samples
-        // (5 of 3000, under 0.1 % of them) is data.
-        let mut far_from_zero = String::from("t,deflection,torque\n");
-        for i in 0..3000 {
-            let d = 1.0 + 0.07 * (i as f64 * 0.01).sin();
-            far_from_zero += &format!("{},{},{}\n", i as f64 * 0.001, if i == 1000 { 0.0 } else { d }, 20.0 + d);
-        }
-        assert!(parse_text(&far_from_zero).is_ok());
-        let mut excursion = String::from("t,deflection,torque\n");
-        for i in 0..3000 {
-            let bump = if (1000..1005).contains(&i) { [0.2, 0.5, 0.8, 0.5, 0.2][i - 1000] } else { 0.0 };
-            excursion += &row(i, 0.07 * (i as f64 * 0.01).sin() + bump);
-        }
-        assert!(parse_text(&excursion).is_ok());
-        // A departure held over more than 0.1 % of the record (20 of 3000 samples) is part of
-        // the data, not one reading.
-        let mut smooth = String::from("t,deflection,torque\n");
-        for i in 0..3000 {
-            smooth += &row(i, 0.07 * (i as f64 * 0.01).sin() + if (990..1010).contains(&i) { 0.5 } else { 0.0 });
-        }
-        assert!(parse_text(&smooth).is_ok());
-    }
-
-    #[test]
-    fn a_duplicated_column_is_an_error() {
-        let e = parse_text("t,deflection,torque,torque\n0,0,1,2\n").unwrap_err();
-        assert_eq!(e.to_string(), "x.csv:1: column `torque`: appears twice in the header (columns 3 and 4): which one is meant?");
-    }
-
-    #[test]
-    fn another_separator_is_named() {
-        let e = parse_text("t;deflection;torque\n0;0;1\n").unwrap_err();
-        assert!(e.to_string().ends_with("the file seems separated by `;`: separate columns by commas"), "{e}");
-        let e = parse_text("t\tdeflection\ttorque\n0\t0\t1\n").unwrap_err();
-        assert!(e.to_string().contains("separated by tabs"), "{e}");
-    }
-
-    /// Finding (issue 36): repetitions logged one file each and concatenated, whose time restarts
-    /// at zero, were refused as "time does not increase"; Unix-epoch time stamps as "implausible".
-    #[test]
-    fn a_restarting_time_is_a_new_repetition_and_epoch_seconds_are_time() {
-        // Two repetitions of 50 samples, 0 to 0.98 s each.
-        let rows = |n: usize| (0..n).map(|i| format!("{},0,1\n", i as f64 * 0.02)).collect::<String>();
-        let d = parse_text(&format!("t,deflection,torque\n{}{}", rows(50), rows(2))).unwrap();
-        assert_eq!(d.t[49..], [0.98, 0.98 + RESTART_GAP_S, 1.0 + RESTART_GAP_S]);
-        assert!(d.notes[0].starts_with("time restarts at line 52"), "{:?}", d.notes);
-        // The repetition is marked where it begins (its time since the last is not known), and
-        // a subset keeps the mark at the first sample it takes from it.
-        assert_eq!(d.restarts, [50]);
-        assert_eq!(d.subset(&[0, 2, 51]).restarts, [2]);
-        assert!(d.subset(&[50, 51]).restarts.is_empty());
-        // A step back that is not a restart (near the end of a repetition) stays an error, as does a repeat.
-        let e = parse_text(&format!("t,deflection,torque\n{}0.9,0,1\n", rows(50))).unwrap_err();
-        assert_eq!(e.to_string(), "x.csv:52: column `t`: time 0.9 does not increase (previous 0.98)");
-        assert!(parse_text("t,deflection,torque\n0,0,1\n0,0,1\n").is_err());
-        let d = parse_text("t,deflection,torque\n1722285643.101,0,1\n1722285643.103,0,1\n").unwrap();
-        assert_eq!(d.len(), 2);
-    }
-
-    /// Finding: a log whose time runs backwards at every row was read as 3999 repetitions of one
-    /// sample each (a note for each) and identified; one whose time steps back and forth, as
-    /// repetitions of two. A time that goes back before a repetition's worth of samples is an
-    /// error that says where.
-    #[test]
-    fn a_time_that_steps_back_before_a_repetitions_worth_is_an_error() {
-        let backwards: String = (0..100).map(|i| format!("{},0,1\n", -(i as f64) * 0.005)).collect();
-        let e = parse_text(&format!("t,deflection,torque\n{backwards}")).unwrap_err();
-        assert_eq!((e.line, e.column.as_deref()), (3, Some("t")), "{e}");
-        assert!(e.to_string().contains("goes back (previous 0) 1 samples after the time began at 0"), "{e}");
-        let back_and_forth: String = (0..100).map(|i| format!("{},0,1\n", if i % 2 == 1 { 1.0 } else { -1.0 } * i as f64 * 0.005)).collect();
-        let e = parse_text(&format!("t,deflection,torque\n{back_and_forth}")).unwrap_err();
-        assert_eq!(e.line, 4, "{e}");
-        // Nanoseconds since the epoch are named as such.
-        let e = parse_text("t,deflection,torque\n1700000000000000000,0,1\n").unwrap_err();
-        assert!(e.to_string().ends_with("(it looks like nanoseconds since the Unix epoch: write seconds)"), "{e}");
-    }
-
-    #[test]
-    fn errors_name_the_line_of_the_row() {
-        let e = parse_text("t,deflection,torque\n0,0,1\n\n0.01,0,x\n").unwrap_err();
-        assert_eq!((e.line, e.column.as_deref()), (4, Some("torque")), "{e}");
-    }
+    out
 }
+
+#[cfg(test)]
+mod tests;
