@@ -130,6 +130,8 @@ pub struct Report {
     pub samples: usize,
     /// Samples excluded as dropouts.
     pub dropped_samples: usize,
+    /// Deflection readings excluded as glitches: a leap away and back within a few samples.
+    pub glitch_samples: usize,
     /// Samples excluded at the torque sensor's limit (saturated; see `prepare`).
     pub saturated_samples: usize,
     /// A torque that falls as the deflection rises: one column's sign reversed, likely.
@@ -524,6 +526,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let report = Report {
         samples: p.samples,
         dropped_samples: p.dropped,
+        glitch_samples: p.glitches,
         saturated_samples: p.saturated,
         warning: p.reversed_sign.clone(),
         resolution_rad: p.resolution_rad,

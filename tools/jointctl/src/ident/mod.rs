@@ -301,7 +301,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         report.samples,
         report.segments,
         report.dropped_samples,
-        if report.saturated_samples > 0 { format!(", {} at the torque sensor's limit (saturated: the sensor past its range) left out", report.saturated_samples) } else { String::new() },
+        output::left_out_sentence(&report),
         report.resolution_rad,
         split_sentence(&report.held_out_window),
         bins_sentence(report.bin_averages.as_ref()),

@@ -29,3 +29,16 @@ pub(super) fn causes_cell(report: &jointctl_ident::identify::Report) -> String {
         .collect();
     if causes.is_empty() { "none".into() } else { causes.join("; ") }
 }
+
+/// What else was left out before fitting, for the report's first sentence: the deflection's
+/// glitches and the samples at the torque sensor's limit, each when there are any.
+pub(super) fn left_out_sentence(report: &jointctl_ident::identify::Report) -> String {
+    let mut s = String::new();
+    if report.glitch_samples > 0 {
+        s += &format!(", {} deflection readings left out as glitches (a leap away and back within {} samples, farther than the encoder's resolution, its noise and the motion explain)", report.glitch_samples, jointctl_ident::identify::prepare::MAX_GLITCH_SAMPLES);
+    }
+    if report.saturated_samples > 0 {
+        s += &format!(", {} at the torque sensor's limit (saturated: the sensor past its range) left out", report.saturated_samples);
+    }
+    s
+}

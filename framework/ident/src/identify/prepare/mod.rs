@@ -5,6 +5,7 @@ use std::borrow::Cow;
 
 mod bins;
 mod dropouts;
+mod glitches;
 mod saturation;
 mod sign;
 mod noise;
@@ -18,6 +19,8 @@ pub use rest::{AtRest, REST_S};
 pub(crate) use rest::scored_on_every_sample;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 use dropouts::dropouts_by_segment;
+use glitches::glitches_by_segment;
+pub use glitches::MAX_GLITCH_SAMPLES;
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES};
@@ -172,6 +175,8 @@ pub(crate) struct Prepared {
     pub samples: usize,
     /// Samples left out as dropouts (see `dropouts`).
     pub dropped: usize,
+    /// Deflection readings left out as glitches, not already dropouts (see `glitches`).
+    pub glitches: usize,
     /// Samples left out at the torque sensor's limit, not already dropouts (see `saturation`).
     pub saturated: usize,
     /// A torque that falls as the deflection rises, said (see `sign`).
@@ -317,10 +322,21 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let torque_noise = noise_floor(&data.torque, &raw_starts);
     lost.iter_mut().zip(dropouts_by_segment(&data.torque, &raw_starts, torque_noise)).for_each(|(a, b)| *a |= b);
     let dropouts = lost.iter().filter(|l| **l).count();
+    // Deflection readings that leap and come back (see `glitches`), besides the dropouts; its
+    // noise measured on the raw series, as the torque's is.
+    let deflection_noise = noise_floor(&data.deflection, &raw_starts);
+    let leaps = glitches_by_segment(&data.deflection, &data.t, &raw_starts, resolution, deflection_noise);
+    let mut glitches = 0;
+    for (l, leap) in lost.iter_mut().zip(leaps) {
+        if leap && !*l {
+            *l = true;
+            glitches += 1;
+        }
+    }
     let at_limit = saturation::saturated(&data.torque, &data.deflection, &lost);
     lost.iter_mut().zip(at_limit).for_each(|(a, b)| *a |= b);
     let dropped = lost.iter().filter(|l| **l).count();
-    let saturated = dropped - dropouts;
+    let saturated = dropped - dropouts - glitches;
     if n_all - dropped < 50 && saturated > 0 {
         return Err(PrepareError::Saturated { saturated, samples: n_all, left: n_all - dropped, needed: 50 });
     }
@@ -464,7 +480,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let spring_share = spring_share(&train);
     let stops = rest::stops(&t, &d, &v, spacing, resolution);
     let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
+    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, glitches, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
