@@ -54,8 +54,8 @@ fn run_back_from(x: &[f64], t: &[f64], i: usize, resolution: f64, noise: f64) ->
         let reach = 3.0 * resolution + 6.0 * noise + 2.0 * step;
         let span = (j - i + 1) as f64;
         // Each reading of the run against the line from `before` to `after`, all on one side.
-        let off: Vec<f64> = (i..j).map(|k| x[k] - (before + (after - before) * (k - i + 1) as f64 / span)).collect();
-        let one_side = off.iter().all(|o| *o > reach) || off.iter().all(|o| *o < -reach);
+        let beyond = |side: f64| (i..j).all(|k| side * (x[k] - (before + (after - before) * (k - i + 1) as f64 / span)) > reach);
+        let one_side = beyond(1.0) || beyond(-1.0);
         // Back: `after` on the signal's line from `before`, not a level the signal moved to.
         if one_side && (after - before).abs() <= reach {
             return Some(j);
