@@ -117,8 +117,8 @@ mod tests {
         let x: Vec<f64> = (0..3000).map(|i| 0.01 * (std::f64::consts::TAU * 100.0 * i as f64 / 1000.0).sin()).collect();
         assert!(!glitches(&x, &ms(3000), q, 0.0).contains(&true));
         // Within six times a noisy reading's noise.
-        let mut rng = normal_rng(7);
-        let noisy: Vec<f64> = (0..20_000).map(|_| 1e-4 * rng()).collect();
+        let mut rng = jointctl_test_support::XorShift64::new(7);
+        let noisy: Vec<f64> = (0..20_000).map(|_| 1e-4 * rng.normal()).collect();
         assert!(!glitches(&noisy, &ms(20_000), 2e-6, 1e-4).contains(&true));
         // A reading between two gaps: the motion went that far in them (blind seed 3's 040, a
         // 0.5 Hz swing of 0.06 rad binned to 20 Hz with gaps of 0.21 and 0.16 s around one bin).
@@ -128,17 +128,5 @@ mod tests {
         // The same readings 50 ms apart throughout would be one.
         let even: Vec<f64> = (0..x.len()).map(|k| k as f64 * 0.05).collect();
         assert!(glitches(&x, &even, q, 0.0)[5]);
-    }
-
-    /// A normal variable's samples (Box-Muller on an xorshift), without a dependency.
-    fn normal_rng(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        let mut uniform = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            ((s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        move || (-2.0 * uniform().ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos()
     }
 }
