@@ -26,6 +26,11 @@ fn record(seed: u64, offset_nm: f64) -> jointctl_ident::csv::Data {
 /// ringing of that many encoder counts (peak) at 12 Hz decaying over 0.1 s about the stop's
 /// position, its friction turning with it.
 fn record_with(seed: u64, offset_nm: f64, settle_counts: f64) -> jointctl_ident::csv::Data {
+    record_damped(seed, offset_nm, settle_counts, 0.0)
+}
+
+/// [`record_with`] with a viscous friction of `damping` [Nm s/rad] beside the Coulomb friction.
+fn record_damped(seed: u64, offset_nm: f64, settle_counts: f64, damping: f64) -> jointctl_ident::csv::Data {
     let mut rng = jointctl_test_support::XorShift64::new(0x9e37_79b9_7f4a_7c15 ^ seed);
     let q = std::f64::consts::TAU / 16384.0;
     let dt = 1e-3;
@@ -45,7 +50,7 @@ fn record_with(seed: u64, offset_nm: f64, settle_counts: f64) -> jointctl_ident:
             let ramp = (s / 0.04).min(1.0).min((duration - s) / 0.04).max(0.0);
             let v = side * speed * ramp;
             x += v * dt;
-            friction = FC_NM * (v / V_EPS_RAD_PER_S).tanh();
+            friction = FC_NM * (v / V_EPS_RAD_PER_S).tanh() + damping * v;
             samples.push((x, friction));
         }
         // The settling: position x + A e^(-s/0.1) sin(2 pi 12 s), for 0.3 s.
@@ -84,7 +89,7 @@ fn a_friction_records_stops_are_left_out_and_its_offset_named() {
         let rest = report.at_rest.as_ref().unwrap_or_else(|| panic!("seed {seed}: no stops found"));
         assert!(rest.samples > 5_000 && rest.held_out_samples > 0, "seed {seed}: {rest:?}");
         // The stops' torque, held and let go, is what no sliding model predicts.
-        assert!(rest.torque_range_nm[0] < -1.0 && rest.torque_range_nm[1] > 1.0, "seed {seed}: {rest:?}");
+        assert!(rest.torque_range_nm[0].is_some_and(|lo| lo < -1.0) && rest.torque_range_nm[1].is_some_and(|hi| hi > 1.0), "seed {seed}: {rest:?}");
         let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
         let offset = report.causes.iter().find(|c| c.effect == "sensor_offset").unwrap_or_else(|| panic!("seed {seed}: offset not named: {named:?}, {:?}", report.rejected));
         let value = offset.params["offset_nm"];
@@ -149,7 +154,11 @@ fn a_slow_sines_reversals_are_no_stops() {
         let torque = t.iter().map(|t| FC_NM * (amplitude * TAU * hz * (TAU * hz * t).cos() / V_EPS_RAD_PER_S).tanh() + NOISE_NM * rng.normal()).collect();
         let position = x.iter().map(|x| (x / q).round() * q).collect();
         let report = identify(&jointctl_ident::csv::Data::from_columns(t, position, torque), &IdentifyOptions::default()).expect("identified");
-        assert!(report.at_rest.is_none(), "{amplitude} rad at {hz} Hz: {:?}", report.at_rest);
+        // No stop; its turns, where the reading stays on the count at which the sine turned,
+        // are left out (see `friction_turns`), and they are a turn's few counts' worth, not the
+        // pre-sliding that follows them (2284 samples of the first sine, 1.9 %: below 5 %).
+        let (stops, turns) = report.at_rest.as_ref().map_or((0, 0), |r| (r.samples, r.turn_samples));
+        assert!(stops == 0 && turns < 6_000, "{amplitude} rad at {hz} Hz: {:?}", report.at_rest);
     }
 }
 
@@ -160,4 +169,24 @@ fn a_rate_that_is_not_a_number_is_no_stop() {
     let mut data = record(1, 0.25);
     data.deflection[55_000] = f64::NAN;
     let _ = identify(&data, &IdentifyOptions::default());
+}
+
+
+#[test]
+fn a_stop_lasts_until_the_reading_leaves_its_count() {
+    // Finding (the blind generator's seed 6's 065): at the end of a stop the rate, a slope over a
+    // window centred on each sample, read the coming stroke's motion 10 ms before the reading's
+    // first tick, and the model predicted the sliding friction where the joint still held the
+    // stop's torque. Here each stroke sets off from a stop whose torque has eased to a level of
+    // its own: before, the baseline's held-out error was 0.11-0.14 Nm (5-7 times the noise) and
+    // the viscous friction was named on 3 of these 6 seeds; with the stop on until the reading
+    // leaves its count, 0.025-0.035 Nm and all 6.
+    let damping = 0.4;
+    for seed in 1..=6 {
+        let report = identify(&record_damped(seed, 0.0, 0.0, damping), &IdentifyOptions::default()).expect("identified");
+        let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+        let found = report.causes.iter().find(|c| c.effect == "viscous_friction").map(|c| c.params["damping_nms_per_rad"]);
+        assert!(named == ["viscous_friction"] && found.is_some_and(|b| (b / damping - 1.0).abs() < 0.25), "seed {seed}: named {named:?}, damping {found:?}, held out {:.4} -> {:.4} Nm", report.rmse_before, report.rmse_after);
+        assert!(report.rmse_before < 2.0 * NOISE_NM, "seed {seed}: the baseline's held-out error {:.4} Nm", report.rmse_before);
+    }
 }

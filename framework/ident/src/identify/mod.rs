@@ -163,8 +163,8 @@ pub struct Report {
     /// or a slow log's as narrow as one sample either side or through a local cubic (see
     /// [`bin_reading::choose_rate_reading`]).
     pub narrow_rate: Option<bin_reading::NarrowRate>,
-    /// Set when a friction record's stops are left out (see [`prepare::AtRest`]): the held-out
-    /// figures above are then over the samples that slide.
+    /// Set when a friction record's stops or turns are left out (see [`prepare::AtRest`]): the
+    /// held-out figures above are then over the samples that slide.
     pub at_rest: Option<prepare::AtRest>,
     /// The part of the time range held out (fractions of it), and why it is not the last part
     /// when it is not (see [`prepare::held_out_window`]).
@@ -334,7 +334,8 @@ fn centre(p: &prepare::Prepared, baseline: &BaselineModel) -> f64 {
 
 /// The search, the selection and the report on prepared data.
 fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[&dyn CandidateCause], opts: &IdentifyOptions, force_bins: bool) -> Result<bin_reading::Extended, IdentifyError> {
-    // A friction record's stops are left out of the fit and the judgement (see `prepare::rest`).
+    // A friction record's stops and turns are left out of the fit and the judgement (see
+    // `prepare::rest` and `prepare::turns`).
     let whole = p;
     let sliding;
     let mut at_rest = None;
@@ -400,8 +401,8 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let after = select::held_out_errors(&model, &spec, p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);
-    // Over every held-out sample as well, the stops included (not through the held-out cache:
-    // it knows a model by its terms, not by the samples it is scored on).
+    // Over every held-out sample as well, the stops and turns included (not through the
+    // held-out cache: it knows a model by its terms, not by the samples it is scored on).
     let at_rest = at_rest.map(|r| {
         let every = prepare::scored_on_every_sample(p, whole);
         let all = |s: &Spec| select::compute_held_out(&model, s, &every).map(|e| select::rmse(&e.errors));

@@ -39,19 +39,36 @@ pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_read
     })
 }
 
-/// What a friction record's stops held and the error over every held-out sample, when they
-/// are left out.
+/// What a friction record's stops held, its turns, and the error over every held-out sample,
+/// when they are left out.
 pub(super) fn rest_sentence(r: Option<&jointctl_ident::identify::prepare::AtRest>) -> String {
     r.map_or(String::new(), |r| {
         let figure = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.4}"));
-        format!(
-            " Stops: {} samples ({:.1} s, {} of them held out) at rest (the rate below one count per {} s for at least as long), where the friction is static and held {:.3} to {:.3} Nm, set by what held the joint and not by its motion: left out of the fit and the judgement, and the figures below are over the samples that slide. Over every held-out sample, stops included: baseline {} Nm, extended {} Nm.",
-            r.samples,
-            r.seconds,
-            r.held_out_samples,
-            jointctl_ident::identify::prepare::REST_S,
-            r.torque_range_nm[0],
-            r.torque_range_nm[1],
+        let mut s = String::new();
+        if r.samples > 0 {
+            s += &format!(
+                " Stops: {} samples ({:.1} s, {} of them held out) at rest (the rate below one count per {} s for at least as long), where the friction is static and held {} to {} Nm, set by what held the joint and not by its motion: left out of the fit and the judgement.",
+                r.samples,
+                r.seconds,
+                r.held_out_samples,
+                jointctl_ident::identify::prepare::REST_S,
+                r.torque_range_nm[0].map_or("-".into(), |x| format!("{x:.3}")),
+                r.torque_range_nm[1].map_or("-".into(), |x| format!("{x:.3}")),
+            );
+        }
+        if r.turn_samples > 0 {
+            s += &format!(
+                " Turns: {} samples ({} of them held out) where the reading stays on the count at which the motion turned: the encoder cannot say which way the joint moves there, nor the friction's sign: left out of the fit and the judgement.",
+                r.turn_samples, r.turn_held_out_samples
+            );
+        }
+        let what = match (r.samples > 0, r.turn_samples > 0) {
+            (true, true) => "stops and turns",
+            (true, false) => "stops",
+            _ => "turns",
+        };
+        s + &format!(
+            " The figures below are over the samples that slide; over every held-out sample, {what} included: baseline {} Nm, extended {} Nm.",
             figure(r.rmse_before_all_nm),
             figure(r.rmse_after_all_nm)
         )

@@ -12,6 +12,7 @@ mod noise;
 mod pieces;
 mod rate;
 mod rest;
+mod turns;
 mod window;
 
 pub use noise::noise_floor;
@@ -201,6 +202,9 @@ pub(crate) struct Prepared {
     /// Where the joint is at rest, `(start, end)` [s] from `t0` (see `rest`); left out of a
     /// friction record's fit and judgement.
     pub stops: Vec<(f64, f64)>,
+    /// Where the reading stays on the count at which the motion turned, `(start, end)` [s] from
+    /// `t0` (see `turns`); left out of a friction record's fit and judgement as well.
+    pub turns: Vec<(f64, f64)>,
 }
 
 impl Prepared {
@@ -479,8 +483,9 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     };
     let spring_share = spring_share(&train);
     let stops = rest::stops(&t, &d, &v, spacing, resolution);
+    let turn_runs = turns::turns(&t, &d);
     let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, glitches, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops })
+    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, glitches, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, turns: turn_runs })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples

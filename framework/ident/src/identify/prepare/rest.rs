@@ -23,7 +23,8 @@ use crate::identify::design::Part;
 /// generator's friction records and of an arm's test motions last 0.3 s and more).
 pub const REST_S: f64 = 0.1;
 
-/// The samples at rest and what they held, over the whole record.
+/// What a friction record leaves out of the fit and the judgement: its samples at rest and what
+/// they held, and its turns (see `turns`), over the whole record.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct AtRest {
     /// Samples at rest of the training and held-out parts as fitted and scored (each at most
@@ -34,9 +35,15 @@ pub struct AtRest {
     pub held_out_samples: usize,
     /// The time at rest in the training and held-out parts [s].
     pub seconds: f64,
-    /// The smallest and the largest torque held at rest [Nm].
-    pub torque_range_nm: [f64; 2],
-    /// The baseline's held-out RMSE over every held-out sample, those at rest included [Nm]
+    /// The smallest and the largest torque held at rest [Nm]; `null` without a stop.
+    pub torque_range_nm: [Option<f64>; 2],
+    /// Samples at turns, of the training and held-out parts as fitted and scored (counted as
+    /// `samples` are), not at rest: where the reading stays on the count at which the motion
+    /// turned, the encoder cannot say which way the joint moves, nor the friction's sign.
+    pub turn_samples: usize,
+    /// Of them, in the held-out part.
+    pub turn_held_out_samples: usize,
+    /// The baseline's held-out RMSE over every held-out sample, those at rest and at turns in [Nm]
     /// (`rmse_before` is over the samples that slide).
     pub rmse_before_all_nm: Option<f64>,
     /// The extended model's, likewise [Nm].
@@ -61,7 +68,8 @@ const STOP_TURNS: f64 = 3.0;
 /// them out parts the record there (more than [`GAP_STEPS`] sample periods: the fit's states and
 /// delays restart after a stop, as after a logger's gap), and longer than a turn would be (see
 /// [`STOP_TURNS`]), then widened over the samples either side where the reading dithers
-/// within a count ([`dithers`]). Found on the whole record, so that a part that begins inside
+/// within a count ([`dithers`]), and on over those that still read the stop's first or last
+/// count ([`on_its_count`]). Found on the whole record, so that a part that begins inside
 /// a stop knows how the joint came to it. A rate that is not a number is no rest.
 pub(super) fn stops(t: &[f64], d: &[f64], v: &[f64], spacing: f64, resolution_rad: f64) -> Vec<(f64, f64)> {
     let n = t.len().min(v.len()).min(d.len());
@@ -122,7 +130,7 @@ pub(super) fn stops(t: &[f64], d: &[f64], v: &[f64], spacing: f64, resolution_ra
                     j += 1;
                 }
             }
-            (i, j)
+            on_its_count(&d[..n], (i, j), observed)
         })
         .collect();
     // A stop widened may reach over the next one, or back over the one before (a joint hunting
@@ -136,6 +144,24 @@ pub(super) fn stops(t: &[f64], d: &[f64], v: &[f64], spacing: f64, resolution_ra
         }
     }
     merged.into_iter().map(|(i, j)| (t[i], t[j - 1])).collect()
+}
+
+/// The stop `[i, j)` widened over the samples either side that read its first and its last
+/// count, where `observed` (the logged step before a sample [s], zero across a gap) says they
+/// were watched. Until the reading leaves the count the encoder cannot tell a joint at rest from
+/// one that creeps within it, and the rate, a slope over a window centred on each sample, reads
+/// the motion either side before the reading moves: at the end of a stop of the blind
+/// generator's seed 6's 065 it read -0.016 to -0.030 rad/s over the 10 ms before the first tick,
+/// the model predicted the sliding friction, -2.7 Nm, where the joint still held 0.2 Nm, and
+/// those samples took the held-out error over the samples that slide from 0.30 to 0.68 Nm.
+fn on_its_count(d: &[f64], (mut i, mut j): (usize, usize), observed: impl Fn(usize) -> f64) -> (usize, usize) {
+    while i > 0 && d[i - 1] == d[i] && observed(i) > 0.0 {
+        i -= 1;
+    }
+    while j < d.len() && j > 0 && d[j] == d[j - 1] && observed(j) > 0.0 {
+        j += 1;
+    }
+    (i, j)
 }
 
 /// Whether the reading dithers over the [`REST_S`] centred on each sample: it stays within one
@@ -237,34 +263,50 @@ fn without(part: &Part, drop: &[bool]) -> Part {
 const MIN_SLIDING: usize = 200;
 
 impl Prepared {
-    /// The record without its samples at rest (see the module), and what they were; `None` when
-    /// it has none, or when too little would be left to judge on.
+    /// The record without its samples at rest (see the module) and at its turns (see `turns`),
+    /// and what they were; `None` when it has neither, or when too little would be left to judge
+    /// on.
     pub(crate) fn sliding_only(&self) -> Option<(Prepared, AtRest)> {
-        let stops = &self.stops;
+        let (stops, turns) = (&self.stops, &self.turns);
         let (train, test) = (within(&self.train, stops), within(&self.test, stops));
+        // A turn's samples that are not at rest already.
+        let turning = |part: &Part, at_rest: &[bool]| within(part, turns).into_iter().zip(at_rest).map(|(turn, rest)| turn && !*rest).collect::<Vec<bool>>();
+        let (turn_train, turn_test) = (turning(&self.train, &train), turning(&self.test, &test));
         let count = |f: &[bool]| f.iter().filter(|r| **r).count();
         let (rest_train, rest_test) = (count(&train), count(&test));
-        if rest_train + rest_test == 0 || self.train.len() - rest_train < MIN_SLIDING || self.test.len() - rest_test < MIN_SLIDING {
+        let (out_train, out_test) = (rest_train + count(&turn_train), rest_test + count(&turn_test));
+        if out_train + out_test == 0 || self.train.len() - out_train < MIN_SLIDING || self.test.len() - out_test < MIN_SLIDING {
             return None;
         }
+        let either = |a: &[bool], b: &[bool]| a.iter().zip(b).map(|(a, b)| *a || *b).collect::<Vec<bool>>();
+        let left_out = |part: &Part| either(&within(part, stops), &within(part, turns));
         let mut p = self.clone();
-        p.train = without(&self.train, &train);
-        p.test = without(&self.test, &test);
-        p.coarse = without(&self.coarse, &within(&self.coarse, stops));
-        p.stretch = without(&self.stretch, &within(&self.stretch, stops));
+        p.train = without(&self.train, &either(&train, &turn_train));
+        p.test = without(&self.test, &either(&test, &turn_test));
+        p.coarse = without(&self.coarse, &left_out(&self.coarse));
+        p.stretch = without(&self.stretch, &left_out(&self.stretch));
         if p.coarse.len() < MIN_SLIDING || p.stretch.len() < MIN_SLIDING {
             return None;
         }
         let held = self.train.tau.iter().zip(&train).chain(self.test.tau.iter().zip(&test)).filter(|(_, r)| **r).map(|(x, _)| *x);
-        let torque_range_nm = held.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], x| [lo.min(x), hi.max(x)]);
+        let torque_range_nm = held.fold([None, None], |[lo, hi]: [Option<f64>; 2], x| [Some(lo.map_or(x, |l| l.min(x))), Some(hi.map_or(x, |h| h.max(x)))]);
         let seconds = |part: &Part, f: &[bool]| part.dt * count(f) as f64;
-        let reading = AtRest { samples: rest_train + rest_test, held_out_samples: rest_test, seconds: seconds(&self.train, &train) + seconds(&self.test, &test), torque_range_nm, rmse_before_all_nm: None, rmse_after_all_nm: None };
+        let reading = AtRest {
+            samples: rest_train + rest_test,
+            held_out_samples: rest_test,
+            seconds: seconds(&self.train, &train) + seconds(&self.test, &test),
+            torque_range_nm,
+            turn_samples: out_train + out_test - rest_train - rest_test,
+            turn_held_out_samples: out_test - rest_test,
+            rmse_before_all_nm: None,
+            rmse_after_all_nm: None,
+        };
         Some((p, reading))
     }
 }
 
-/// `sliding` (the record without its stops) with `whole`'s held-out part, stops included: a
-/// model fitted on the samples that slide, scored over every held-out sample.
+/// `sliding` (the record without its stops and turns) with `whole`'s held-out part, where they
+/// are in: a model fitted on the samples that slide, scored over every held-out sample.
 pub(crate) fn scored_on_every_sample(sliding: &Prepared, whole: &Prepared) -> Prepared {
     let mut test = whole.test.clone();
     if sliding.test.rate_edges.is_empty() {
