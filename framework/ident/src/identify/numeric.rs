@@ -1,6 +1,6 @@
 //! Numerical helpers of the search that know nothing of causes or models: a log-spaced grid,
-//! a golden-section minimum on a log scale, a mean over an interval, and how a report prints a
-//! value. A leaf: every other module of `identify` may use it.
+//! a golden-section minimum on a log scale, a mean over an interval, a series' segments, and how
+//! a report prints a value. A leaf: every other module of `identify` may use it.
 
 /// A log-spaced grid of `n` values from `lo` to `hi` (both > 0).
 pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
@@ -41,6 +41,16 @@ pub(crate) fn refine_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, iterations: u
 pub(crate) fn median_step(t: &[f64]) -> f64 {
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|s| *s > 0.0).collect();
     median(&mut steps).unwrap_or(1.0)
+}
+
+/// The index range of each segment of a series of `n` samples whose segments start at each of
+/// `starts` (in order, the first 0, see `prepare::segment_starts`): from one start to the next,
+/// the last to `n`.
+pub(crate) fn segment_ranges(starts: &[usize], n: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    starts.iter().enumerate().map(move |(k, &a)| {
+        let b = starts.get(k + 1).copied().unwrap_or(n).min(n);
+        a.min(b)..b
+    })
 }
 
 /// The median of `values` (the upper one of an even count), by a partition that reorders them;

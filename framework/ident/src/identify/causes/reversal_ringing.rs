@@ -11,6 +11,7 @@
 use super::{CandidateCause, InputSet, Parameter, Refine, Samples, SearchContext, log_grid, reversals};
 use crate::identify::spectrum;
 use jointctl_models::effect::Effect;
+use crate::identify::numeric::segment_ranges;
 
 /// Rings after velocity reversals: frequency [Hz] and damping ratio [-] shared, amplitude and
 /// phase per ring. It writes no fragment yet: the simulation's mode (`sim.effects.vibration`) is
@@ -74,8 +75,7 @@ impl CandidateCause for ReversalRinging {
         let (w, zeta) = (std::f64::consts::TAU * p[0], p[1].max(0.0));
         let starts = self.segments(p, s).unwrap_or_default();
         let (mut sin, mut cos) = (vec![0.0; s.t_s.len()], vec![0.0; s.t_s.len()]);
-        for (k, &a) in starts.iter().enumerate() {
-            let b = starts.get(k + 1).copied().unwrap_or(s.t_s.len());
+        for std::ops::Range { start: a, end: b } in segment_ranges(&starts, s.t_s.len()) {
             for i in a..b {
                 (sin[i], cos[i]) = ring(w, zeta, s.t_s[i] - s.t_s[a]);
             }

@@ -9,6 +9,8 @@
 //! module gives each sample the rate at its interval's start and end; whether a record is read
 //! so is the data's to say (see `identify::extend`).
 
+use crate::identify::numeric::segment_ranges;
+
 /// Logs at 100 Hz and slower, a median step of this or longer [s], may be read as bin averages
 /// (an assumption: loggers average to lower the rate, and faster than 100 Hz the rate of the
 /// thesis' hand-driven characterisation (section 3.3.1, motions up to a few Hz) changes by
@@ -42,8 +44,7 @@ pub fn tried_as_bins(median_step_s: f64) -> bool {
 pub fn rate_edges(v_rad_per_s: &[f64], starts: &[usize]) -> Vec<[f64; 2]> {
     let n = v_rad_per_s.len();
     let mut edges = vec![[0.0, 0.0]; n];
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(n).min(n);
+    for std::ops::Range { start: a, end: b } in segment_ranges(starts, n) {
         for i in a..b {
             let v = v_rad_per_s[i];
             let before = if i > a { 0.5 * (v_rad_per_s[i - 1] - v) } else { 0.0 };

@@ -1,6 +1,8 @@
 //! Readings lost on the way (thesis appendix A: lost CAN frames read as zero): found, so that
 //! they are left out, never used as values.
 
+use crate::identify::numeric::segment_ranges;
+
 /// Exact zeros that the signal cannot have reached: a run of zeros far from the line between the
 /// readings either side of it, farther than three times a reading's uncertainty (`uncertainty`:
 /// the encoder's resolution, the torque sensor's noise) plus twice the signal's own local step
@@ -44,7 +46,7 @@ pub(super) fn dropouts(series: &[f64], uncertainty: f64) -> Vec<bool> {
 /// a record that starts from rest after a gap (a repetition, an experiment's next sine) reads
 /// exactly zero there, and the reading before the gap is no neighbour of it.
 pub(super) fn dropouts_by_segment(series: &[f64], starts: &[usize], uncertainty: f64) -> Vec<bool> {
-    starts.iter().enumerate().flat_map(|(k, &a)| dropouts(&series[a..starts.get(k + 1).copied().unwrap_or(series.len())], uncertainty)).collect()
+    segment_ranges(starts, series.len()).flat_map(|r| dropouts(&series[r], uncertainty)).collect()
 }
 
 #[cfg(test)]

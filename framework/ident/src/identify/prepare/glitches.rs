@@ -4,6 +4,8 @@
 //! viscous friction made its rate reading a spike that outweighed the record: identify named a
 //! loop and a cubic in the viscous friction's place.
 
+use crate::identify::numeric::segment_ranges;
+
 /// The most samples a glitch lasts (an assumption: a misread is one or a few samples; a leap
 /// that stays longer is a motion, or a fault the record shows as it is).
 pub const MAX_GLITCH_SAMPLES: usize = 3;
@@ -67,14 +69,7 @@ fn run_back_from(x: &[f64], t: &[f64], i: usize, resolution: f64, noise: f64) ->
 /// [`glitches`] in each segment of contiguous logging apart (`starts` from
 /// [`super::segment_starts`]): the reading before a gap is no neighbour of the one after it.
 pub(super) fn glitches_by_segment(series: &[f64], t: &[f64], starts: &[usize], resolution: f64, noise: f64) -> Vec<bool> {
-    starts
-        .iter()
-        .enumerate()
-        .flat_map(|(k, &a)| {
-            let b = starts.get(k + 1).copied().unwrap_or(series.len());
-            glitches(&series[a..b], &t[a..b], resolution, noise)
-        })
-        .collect()
+    segment_ranges(starts, series.len().min(t.len())).flat_map(|r| glitches(&series[r.clone()], &t[r], resolution, noise)).collect()
 }
 
 #[cfg(test)]

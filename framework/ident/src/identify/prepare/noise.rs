@@ -1,6 +1,8 @@
 //! How noisy a series is, from its own samples: the white part of the noise (the torque's floor)
 //! and the scatter from sample to sample (the deflection's).
 
+use crate::identify::numeric::segment_ranges;
+
 /// The squared pseudo-residuals `(y[i-1] + y[i+1]) / 2 - y[i]` within each segment, scaled to
 /// unit variance for white noise (a factor 2/3 on their mean square).
 pub(super) fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
@@ -12,8 +14,7 @@ pub(super) fn pseudo_residual_squares(y: &[f64], starts: &[usize]) -> Vec<f64> {
 /// samples).
 fn pseudo_residual_squares_of(n: usize, y: impl Fn(usize) -> f64, starts: &[usize]) -> Vec<f64> {
     let mut squares = Vec::with_capacity(n);
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(n);
+    for std::ops::Range { start: a, end: b } in segment_ranges(starts, n) {
         for i in a + 1..b.saturating_sub(1) {
             let e = 0.5 * (y(i - 1) + y(i + 1)) - y(i);
             squares.push(e * e / 1.5);

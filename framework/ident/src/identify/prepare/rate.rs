@@ -2,6 +2,7 @@
 //! narrows where the deflection bends faster than its noise allows.
 
 use super::super::parallel::parallel_map;
+use crate::identify::numeric::segment_ranges;
 
 /// The half-width of the velocity's window is this fraction of the local period of the motion:
 /// a least-squares slope over +-P/50 reads a sine's rate 0.16 % low (its gain is
@@ -216,8 +217,7 @@ const MIN_TICKS: usize = 20;
 /// unquantised signal) has too few ticks, and the smallest step stands.
 pub(super) fn coarsest_tick_rad(d: &[f64], starts: &[usize], resolution_rad: f64) -> f64 {
     let mut ticks = Vec::new();
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(d.len());
+    for std::ops::Range { start: a, end: b } in segment_ranges(starts, d.len()) {
         for i in a + 1..b.saturating_sub(2) {
             let step = (d[i + 1] - d[i]).abs();
             if step > 0.0 && d[i] == d[i - 1] && d[i + 2] == d[i + 1] {
@@ -248,8 +248,7 @@ type RateBlock = (std::ops::Range<usize>, std::ops::Range<usize>);
 /// the ladder's widest rung).
 fn rate_blocks(starts: &[usize], n: usize, half: &[usize]) -> Vec<RateBlock> {
     let mut blocks = Vec::new();
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(n);
+    for std::ops::Range { start: a, end: b } in segment_ranges(starts, n) {
         let reach = half[a..b].iter().copied().max().unwrap_or(0).max(RATE_HALF_WIDTHS[RATE_HALF_WIDTHS.len() - 1]);
         let mut from = a;
         while from < b {
@@ -308,8 +307,7 @@ const CUBIC_HALF_WIDTH: usize = 2;
 pub(super) fn cubic_rate_by_segment(t: &[f64], d: &[f64], starts: &[usize]) -> Vec<f64> {
     let n = d.len();
     let mut v = vec![0.0; n];
-    for (k, &a) in starts.iter().enumerate() {
-        let b = starts.get(k + 1).copied().unwrap_or(n);
+    for std::ops::Range { start: a, end: b } in segment_ranges(starts, n) {
         for i in a..b {
             let (lo, hi) = (i.saturating_sub(CUBIC_HALF_WIDTH).max(a), (i + CUBIC_HALF_WIDTH + 1).min(b));
             v[i] = local_slope(&t[lo..hi], &d[lo..hi], t[i]);
