@@ -9,7 +9,7 @@
 //! nothing is left out.
 //!
 //! Finding (the blind generator's friction-position records, Stribeck and LuGre friction, a
-//! 12-bit encoder at 250 Hz-2 kHz): at each turn the torque flipped between the static levels,
+//! 14-bit encoder at 200 Hz-2 kHz): at each turn the torque flipped between the static levels,
 //! +-6.7 Nm, over readings of one count whose rates read up to 0.006 rad/s either way. On seed
 //! 8's 063, 2 % of the held-out samples (those below 0.01 rad/s) carried 90 % of the held-out
 //! squared error, 6.7 times the noise in all, and the viscous friction hidden there was refused
