@@ -24,7 +24,7 @@ use glitches::glitches_by_segment;
 pub use glitches::MAX_GLITCH_SAMPLES;
 use noise::scatter_rms;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
-pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES};
+pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, WIDEST_RATE_REACH_S, widest_rate_window};
 use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals, turn_step_rad};
@@ -371,7 +371,7 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     let v = match rate {
         RateReading::Adaptive { narrowest, reach_scale } => {
             let noise = DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter, reach_scale };
-            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, narrowest))
+            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, [narrowest, widest_rate_window(super::numeric::median_step(&t))]))
         }
         RateReading::Cubic => cubic_rate_by_segment(&t, &d, &starts),
     };

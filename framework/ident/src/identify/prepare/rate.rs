@@ -13,15 +13,13 @@ const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
 /// of the local period, twice the stroke between the reversals around the sample (debounced at
 /// a tenth of the range), never more than of the fundamental's `period_samples`; between
 /// `narrowest` ([`NARROWEST_RATE_WINDOW`], or one sample for a slow log that the data reads
-/// better so: see `bin_reading`) and 100 samples (an assumption: +-0.1 s at 1 kHz, where a hand's motion of a few hertz bends;
-/// the first version stopped at 25, which at 1 kHz left a 14-bit encoder's staircase in the rate
-/// of a slow stroke). A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
+/// better so: see `bin_reading`) and `widest` ([`widest_rate_window`]). A slow characterisation with fast bursts, a sweep or a multi-sine moves far faster
 /// in places than its fundamental says: a window sized on the fundamental reads those rates low,
 /// and every rate-driven torque (viscous friction most) comes out too large. Where the motion
 /// bends faster than its strokes tell (a corner between a hold and a ramp; every sample of a
 /// slow log), [`adaptive_velocity`] narrows the window further.
-pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64, narrowest: usize) -> Vec<usize> {
-    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(narrowest, 100);
+pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples: f64, [narrowest, widest]: [usize; 2]) -> Vec<usize> {
+    let half = |period: f64| ((period.min(period_samples) / VELOCITY_WINDOWS_PER_PERIOD).round() as usize).clamp(narrowest, widest.max(narrowest));
     let mut out = vec![half(period_samples); n];
     for w in reversals.windows(2) {
         let h = half(2.0 * (w[1] - w[0]) as f64);
@@ -29,6 +27,33 @@ pub(super) fn velocity_half_widths(n: usize, reversals: &[usize], period_samples
     }
     out
 }
+
+/// The widest the rate's window may reach either side [s] (an assumption: where a hand's motion
+/// of a few hertz bends; the motion's own strokes and [`adaptive_velocity`] narrow it further).
+pub const WIDEST_RATE_REACH_S: f64 = 0.1;
+
+/// The widest the rate's window may be either side [samples], at the median time step
+/// `median_step_s`: [`WIDEST_RATE_REACH_S`], and never fewer than 100 samples. The cap was first
+/// 100 samples, +-0.1 s at 1 kHz: at 2 kHz that halved the reach, and a 14-bit encoder's
+/// staircase on a slow stroke (a count every 50 ms at 0.1 Hz) stayed in the rate, the torque's
+/// eq. 3.5 arctan read through it. The floor keeps a slow log's window, where the strokes and
+/// the intervals decide. A reach of 0.25 s was measured and not taken: on the blind generator it
+/// named two viscous frictions fewer, and raised 45 records' held-out error by more than 1 %
+/// (16 fell).
+///
+/// ```
+/// use jointctl_ident::identify::prepare::widest_rate_window;
+/// assert_eq!(widest_rate_window(1e-3), 100);
+/// assert_eq!(widest_rate_window(5e-4), 200);
+/// assert_eq!(widest_rate_window(5e-3), 100);
+/// ```
+pub fn widest_rate_window(median_step_s: f64) -> usize {
+    let reach = WIDEST_RATE_REACH_S / median_step_s;
+    if reach.is_finite() { (reach.round() as usize).max(WIDEST_RATE_WINDOW_FLOOR) } else { WIDEST_RATE_WINDOW_FLOOR }
+}
+
+/// The fewest samples [`widest_rate_window`] allows either side (see there).
+const WIDEST_RATE_WINDOW_FLOOR: usize = 100;
 
 /// The narrowest the widest rate window may be, samples either side (an assumption: at +-1 a
 /// slope is a central difference, the quantisation's step over two sample periods; a slow log
@@ -112,8 +137,8 @@ fn each_window(t: &[f64], d: &[f64], half: impl Fn(usize) -> usize, mut visit: i
 
 /// The half-widths the rate's window is chosen from [samples], narrowest first (an assumption:
 /// steps of about 1.4 in width, so the chosen window is at most 40 % narrower than the widest
-/// the data allow, up to the 100 samples of [`velocity_half_widths`]).
-const RATE_HALF_WIDTHS: [usize; 13] = [1, 2, 3, 4, 6, 8, 11, 16, 25, 35, 50, 70, 100];
+/// the data allow, up to 800 samples, 0.1 s at 8 kHz: see [`widest_rate_window`]).
+const RATE_HALF_WIDTHS: [usize; 19] = [1, 2, 3, 4, 6, 8, 11, 16, 25, 35, 50, 70, 100, 140, 200, 280, 400, 560, 800];
 
 /// Standard errors a wider window's slope may lie from every narrower one's before the wider
 /// window is refused (an assumption: three, a 0.3 % chance each that noise alone refuses it).
@@ -234,7 +259,7 @@ pub(super) fn coarsest_tick_rad(d: &[f64], starts: &[usize], resolution_rad: f64
 
 /// Samples [`adaptive_velocity`] works on at once in one block, beside the windows' reach either
 /// side (an assumption: its intervals then take 0.2 MB a core, not 24 bytes a sample of the whole
-/// record; far beyond the widest reach, 100 samples, so that the blocks' overlap costs little).
+/// record; far beyond the widest reach, 100 samples, so that the blocks' overlap costs little; wider at a fast log's [`widest_rate_window`]).
 /// The same on every machine: where the blocks part moves the rates' last bits (each block sums
 /// its windows from its own start), so the blocks must not follow the number of cores.
 const RATE_BLOCK: usize = 1 << 13;
@@ -245,11 +270,11 @@ type RateBlock = (std::ops::Range<usize>, std::ops::Range<usize>);
 /// The blocks of [`velocity_by_segment`], in order: they tile `0..n`, none empty. A segment (from
 /// each of `starts` to the next) goes in blocks of [`RATE_BLOCK`] samples, each reading the samples
 /// its windows reach on either side within the segment (the widest half-width of `half`, at least
-/// the ladder's widest rung).
+/// [`WIDEST_RATE_WINDOW_FLOOR`]).
 fn rate_blocks(starts: &[usize], n: usize, half: &[usize]) -> Vec<RateBlock> {
     let mut blocks = Vec::new();
     for std::ops::Range { start: a, end: b } in segment_ranges(starts, n) {
-        let reach = half[a..b].iter().copied().max().unwrap_or(0).max(RATE_HALF_WIDTHS[RATE_HALF_WIDTHS.len() - 1]);
+        let reach = half[a..b].iter().copied().max().unwrap_or(0).max(WIDEST_RATE_WINDOW_FLOOR);
         let mut from = a;
         while from < b {
             let to = (from + RATE_BLOCK).min(b);
@@ -459,7 +484,7 @@ mod tests {
         // Strokes of 1000 samples (a period of 2000, capped by the fundamental's 1000: a
         // window of +-20), then of 50 (+-2); after the last reversal the fundamental's.
         let reversals = [0, 1000, 2000, 2050, 2100, 2150];
-        let half = velocity_half_widths(2300, &reversals, 1000.0, NARROWEST_RATE_WINDOW);
+        let half = velocity_half_widths(2300, &reversals, 1000.0, [NARROWEST_RATE_WINDOW, 100]);
         assert_eq!((half[500], half[1500], half[2020], half[2120], half[2200]), (20, 20, 2, 2, 20));
     }
 
@@ -492,7 +517,7 @@ mod tests {
         t.push(200.0);
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.002 * (17.0 * t).sin()) / q).round() * q).collect();
         let starts = [0, long, long + 3000];
-        let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0, NARROWEST_RATE_WINDOW);
+        let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0, [NARROWEST_RATE_WINDOW, 100]);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale: 1.0 };
         let shared = velocity_by_segment(&t, &d, &starts, noise, &half);
         let mut whole = adaptive_velocity(&t[..long], &d[..long], noise, &half[..long]);
@@ -512,7 +537,7 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3).collect();
         let edge = RATE_BLOCK as f64 * 1e-3;
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.01 * (40.0 * t).sin() * (-(t - edge).powi(2)).exp()) / q).round() * q).collect();
-        let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0, NARROWEST_RATE_WINDOW);
+        let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0, [NARROWEST_RATE_WINDOW, 100]);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale: 1.0 };
         let (whole, blocks) = (adaptive_velocity(&t, &d, noise, &half), velocity_by_segment(&t, &d, &[0], noise, &half));
         assert_eq!(whole.len(), blocks.len());
