@@ -43,7 +43,7 @@ fn a_fast_logs_rate_reads_a_slow_stroke_over_0_1_s() {
     // 0.053-0.059 Nm on these seeds, 6.6-7.3 times the noise, and the rate's error was named a
     // time delay, a loop or a viscous friction on each. After (+-0.1 s): 0.023-0.028 Nm, and no
     // cause on seeds 2 and 3. What is left is the staircase a window of 0.1 s still sees (a loop
-    // is named on seed 1; 0.25 s took the baseline to 0.013 Nm here and was not taken, see
+    // is named on seed 1; 0.25 s took the baseline to 0.012-0.014 Nm here and was not taken, see
     // `widest_rate_window`).
     let mut clean = 0;
     for seed in 1..=3 {
