@@ -92,7 +92,8 @@ pub struct NegligibleCause {
 /// A record without a spring: what the baseline's friction took on for it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NoSpring {
-    /// The torque's variance share a line in the deflection explains (< [`NO_SPRING_SHARE`]) [-].
+    /// The torque's variance share a line in the deflection explains, of the whole or beside
+    /// the friction's sign and a line in the rate (< [`NO_SPRING_SHARE`]) [-].
     pub deflection_share: f64,
     /// The friction's Dahl pre-sliding, as the hysteresis cause reports it (in the extended
     /// model, not among the causes); empty when none was found.
@@ -510,7 +511,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         let [presliding, stribeck, lag] = FRICTION_PARTS.map(&mut take);
         let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {}", format_value(*v))).collect::<Vec<_>>().join(", ");
         let note = format!(
-            "no spring: a line in the deflection explains {:.1} % of the torque's variance (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",
+            "no spring: a line in the deflection explains {:.1} % of the torque's variance, of the whole or of what the friction's sign and a line in the rate leave (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",
             100.0 * p.spring_share,
             100.0 * NO_SPRING_SHARE,
             presliding.as_ref().map_or("no Dahl pre-sliding found".into(), |c| format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", listed(c))),

@@ -7,6 +7,7 @@ mod bins;
 mod dropouts;
 mod glitches;
 mod saturation;
+mod spring;
 mod sign;
 mod noise;
 mod pieces;
@@ -23,6 +24,7 @@ use dropouts::dropouts_by_segment;
 use glitches::glitches_by_segment;
 pub use glitches::MAX_GLITCH_SAMPLES;
 use noise::scatter_rms;
+pub(crate) use spring::spring_share;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, WIDEST_RATE_REACH_S, widest_rate_window};
 use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
@@ -192,8 +194,8 @@ pub(crate) struct Prepared {
     /// The torque's noise floor [Nm] (see [`noise_floor`]), on what a line in the deflection,
     /// its rate and an offset leave of the torque (the spring's own curvature out of it).
     pub noise_floor_nm: f64,
-    /// The share of the training part's torque variance a line in the deflection explains
-    /// (see [`spring_share`]).
+    /// The share of the training part's torque variance a line in the deflection explains, of
+    /// the whole or beside the friction (see [`spring_share`]).
     pub spring_share: f64,
     /// The part of the time range held out.
     pub held_out: HeldOutWindow,
@@ -517,22 +519,6 @@ fn line_in_deflection_and_rate(d: &[f64], v: &[f64], tau: &[f64]) -> Option<[f64
     Some([a, b, mt - a * md - b * mv])
 }
 
-/// The squared correlation of deflection and torque on a part: the share of the torque's
-/// variance a straight line in the deflection explains.
-pub(crate) fn spring_share(part: &Part) -> f64 {
-    let n = part.len().min(part.tau.len()) as f64;
-    if n < 2.0 {
-        return 1.0;
-    }
-    let (mx, my) = (part.d.iter().sum::<f64>() / n, part.tau.iter().sum::<f64>() / n);
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (x, y) in part.d.iter().zip(&part.tau) {
-        sxy += (x - mx) * (y - my);
-        sxx += (x - mx) * (x - mx);
-        syy += (y - my) * (y - my);
-    }
-    if sxx > 0.0 && syy > 0.0 { sxy * sxy / (sxx * syy) } else { 1.0 }
-}
 
 #[cfg(test)]
 mod tests {
