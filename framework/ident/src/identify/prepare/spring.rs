@@ -9,9 +9,10 @@ use crate::identify::design::Part;
 /// several times its torque explains little of the whole (the third generator's seed 1's 053, a
 /// clean record of 41 Nm/rad on 0.018 rad beside eq. 3.5's 0.96 Nm: 5 % of the variance, and it
 /// was read as a friction record, a joint position and no spring, and an offset named on it), and
-/// more than 20 % of what the friction leaves. The friction's sign is `tanh(v / v_s)`, `v_s` a twentieth of the 95th
-/// percentile of the rate's size (an assumption: a Coulomb friction that turns within the
-/// slowest twentieth of the motion; only whether the deflection adds is asked of it).
+/// more than 20 % of what the friction leaves. The friction's sign is `tanh(v / v_s)`, `v_s` a
+/// twentieth of the 95th percentile of the rate's size (an assumption: a Coulomb friction that
+/// turns within the slowest twentieth of the motion; only whether the deflection adds is asked
+/// of it).
 pub(crate) fn spring_share(part: &Part) -> f64 {
     let n = part.len().min(part.tau.len()).min(part.v.len());
     if n < 2 {
