@@ -367,13 +367,15 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
     };
     let turning = reversals(&d);
+    // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
+    let spacing = super::numeric::median_step(&t);
     // The deflection's noise: its quantisation (at most half a step, see `DeflectionNoise`) and
     // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
     let v = match rate {
         RateReading::Adaptive { narrowest, reach_scale } => {
             let noise = DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter, reach_scale };
-            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, [narrowest, widest_rate_window(super::numeric::median_step(&t))]))
+            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, [narrowest, widest_rate_window(spacing)]))
         }
         RateReading::Cubic => cubic_rate_by_segment(&t, &d, &starts),
     };
@@ -394,8 +396,6 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
         Some([a, b, c]) => noise::noise_floor_of(tau.len(), |i| tau[i] - a * d[i] - b * v[i] - c, &starts),
         None => noise_floor(&tau, &starts),
     };
-    // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
-    let spacing = super::numeric::median_step(&t);
     // The held-out window, chosen on the record as read (dropouts in: a lost reading's zero adds
     // travel and range, accepted so that the model loop's gains, which see the same columns,
     // choose the same window).
