@@ -488,6 +488,17 @@ impl Model<'_> {
         (self.design(spec, p).cols, predicted, residual)
     }
 
+    /// The RMS on `p` of the torque term `i` of `spec` predicts with `fit`'s coefficients [Nm]
+    /// (its ordinary columns only; a segment-wise term has none). One design, no prediction:
+    /// asked inside the selection, where a second design per proposal raised identify's peak.
+    pub fn term_rms_nm(&self, spec: &Spec, fit: &Fit, i: usize, p: &Part) -> f64 {
+        let d = self.design(spec, p);
+        let span = d.spans[i].clone();
+        let n = p.len();
+        let sum: f64 = (0..n).map(|row| span.clone().map(|j| d.cols[j][row] * fit.coefs[j]).sum::<f64>().powi(2)).sum();
+        (sum / n.max(1) as f64).sqrt()
+    }
+
     /// The model's torque on a part with coefficients from another; segment-wise coefficients
     /// are fitted on this part (they cannot carry over), with their leverage for the Cp charge.
     pub fn predict(&self, spec: &Spec, fit: &Fit, p: &Part) -> Prediction {

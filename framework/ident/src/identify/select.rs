@@ -127,6 +127,19 @@ pub(crate) fn verdict(r: &HeldOut, f: &HeldOut, p: &Prepared) -> Judgement {
     judge(&r.errors, &f.errors, test, p.noise_floor_nm * p.noise_floor_nm)
 }
 
+/// The RMS over the held-out part of the torque that `cause`'s own term predicts in `spec` [Nm]:
+/// its ordinary columns there by its coefficients fitted on the training part (see
+/// [`Judgement::carrying`]). `None` for a cause no baseline term can absorb, one without
+/// ordinary coefficients, or without a fit.
+fn carried_nm(model: &Model, spec: &Spec, cause: usize, p: &Prepared) -> Option<f64> {
+    let i = spec.terms.iter().position(|t| t.cause == cause && model.causes[cause].baseline_can_absorb())?;
+    let held = held_out_errors(model, spec, p)?;
+    if held.fit.spans[i].is_empty() || !held.fit.segment_coefs[i].is_empty() {
+        return None;
+    }
+    Some(model.term_rms_nm(spec, &held.fit, i, &p.test))
+}
+
 /// What a polished proposal came to on the held-out part.
 enum Checked {
     /// A cause's fit on the training part is physically impossible (that cause, why).
@@ -312,6 +325,16 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         'proposals: for chunk in top.chunks(cores()) {
             let tested = parallel_map(chunk, |(_, s, _)| check(model, &polish(model, s, coarse, &p.stretch), &reduced, p, &name));
             for ((b, _, c), outcome) in chunk.iter().zip(tested) {
+                // Proposed by BIC and significant on the held-out part, its gain below the
+                // threshold: relevant still if its own term carries the noise's size (asked
+                // here, one at a time, not beside the other workers' fits).
+                let outcome = match outcome {
+                    Checked::Tested(s, judgement) if judgement.negligible() => {
+                        let judgement = carried_nm(model, &s, *c, p).map_or(judgement, |term| judgement.carrying(term, p.noise_floor_nm));
+                        Checked::Tested(s, judgement)
+                    }
+                    other => other,
+                };
                 match outcome {
                     Checked::Impossible(_, why) => rejected.push(why),
                     Checked::Tested(s, judgement) if judgement.named() => {
@@ -429,6 +452,9 @@ pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn 
             .into_iter()
             .zip(&s.chosen)
             .map(|((judgement, reduced, dropped), ch)| {
+                // A cause proposed by BIC is held to the same relevance as when it was named:
+                // what its own term carries counts where its gain is below the threshold.
+                let judgement = judgement.map(|j| if j.negligible() && ch.against.is_none() { carried_nm(model, &s.spec, ch.cause, p).map_or(j, |term| j.carrying(term, p.noise_floor_nm)) } else { j });
                 let held = |j: &Judgement| !j.test.significant() || model.causes[ch.cause].held_to_its_coefficients();
                 let untold = judgement.filter(|j| j.named() && held(j)).and_then(|_| {
                     let jacobian = jacobian.get_or_insert_with(|| Jacobian::new(model, &s.spec, &full.fit, &p.train));

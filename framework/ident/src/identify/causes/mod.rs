@@ -381,6 +381,17 @@ pub trait CandidateCause: Send + Sync {
     fn held_to_its_coefficients(&self) -> bool {
         false
     }
+    /// Whether a baseline term can take this cause as its own within the recorded rates, so that
+    /// its held-out gain understates it: proposed by BIC and significant on the held-out part,
+    /// it is then relevant too when its own term carries the noise floor (see
+    /// `significance::Judgement::carrying`). A viscous friction only: eq. 3.5's arctan, `k_b`
+    /// fitted, bends into a line and takes the damping, and beyond the recorded rates the two
+    /// part. Elsewhere a large term with a small gain is one the others cancel: asked of every
+    /// cause, a speed vibration carried more than the floor beside a triangle's viscous friction
+    /// and was named (`tests/memory.rs`'s record).
+    fn baseline_can_absorb(&self) -> bool {
+        false
+    }
     /// Whether [`CandidateCause::transform`] changes the inputs (the search then refits the
     /// whole model for every value instead of projecting the cause's columns).
     fn transforms(&self) -> bool {

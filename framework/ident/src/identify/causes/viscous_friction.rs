@@ -24,6 +24,10 @@ impl CandidateCause for ViscousFriction {
     fn columns(&self, _: &[f64], s: &Samples) -> Vec<Vec<f64>> {
         vec![s.velocity_rad_per_s.to_vec()]
     }
+    fn baseline_can_absorb(&self) -> bool {
+        // Eq. 3.5's arctan, bent into a line, takes the damping as its own.
+        true
+    }
     fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
         (c[0] < 0.0).then(|| "negative viscous damping".into())
     }

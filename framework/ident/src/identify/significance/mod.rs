@@ -4,7 +4,9 @@
 //!   of the noise floor's variance and at least [`RELEVANT_SHARE_OF_EXCESS`] of what the model
 //!   without the cause leaves above that floor. The floor is measured on the data (see
 //!   [`super::prepare::noise_floor`]). A significant gain below this is listed apart, as
-//!   negligible, not named.
+//!   negligible, not named, unless the cause, proposed by BIC on the training part, carries at
+//!   least the floor's RMS in its own term ([`Judgement::carrying`]: another term took it as
+//!   its own).
 //! - evidence: the block t-test below (a Diebold-Mariano comparison of the two predictors,
 //!   batch means); or forecast encompassing (the held-out residual regressed on the cause's
 //!   correction, [`encompassing_test`]) significant with the correction confirmed in size in
@@ -125,12 +127,61 @@ pub struct Judgement {
     /// The gain is at least [`LARGE_SHARE_OF_EXCESS`] of what the model without the cause
     /// leaves above the floor.
     pub large: bool,
+    /// What the cause's own term carries over the held-out part [Nm RMS] and the noise floor
+    /// [Nm], where they were measured ([`Judgement::carrying`]); `None` elsewhere.
+    pub carried: Option<Carried>,
+}
+
+/// What a cause's own term carries over the held-out part, against the noise floor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Carried {
+    /// The RMS over the held-out part of the torque the cause's own term predicts [Nm]: its
+    /// columns there by its coefficients fitted on the training part.
+    pub term_nm: f64,
+    /// The noise floor [Nm].
+    pub floor_nm: f64,
+}
+
+impl Carried {
+    /// At least the noise floor's RMS ([`Judgement::carrying`] says why).
+    pub fn relevant(&self) -> bool {
+        self.term_nm >= self.floor_nm
+    }
 }
 
 impl Judgement {
-    /// Relevant.
+    /// Relevant: the gain is, or the cause's own term carries at least the noise floor where
+    /// that was measured ([`Judgement::carrying`]).
     pub fn relevant(&self) -> bool {
-        self.gain_nm2 >= self.relevant_nm2
+        self.gain_nm2 >= self.relevant_nm2 || self.carried.is_some_and(|c| c.relevant())
+    }
+    /// The judgement with what the cause's own term carries over the held-out part (`term_nm`,
+    /// Nm RMS) beside the noise floor `floor_nm`. Relevance asks a gain of a twentieth of the
+    /// noise's variance because a term's gain is its RMS squared when the cause is right: a term
+    /// below a fifth of the noise changes an observer's torque by less than the noise it
+    /// carries. Where another term of the model takes the cause as its own within the recorded
+    /// rates (eq. 3.5's arctan, its `k_b` fitted, bends into a line and takes a viscous
+    /// friction's damping: the third generator's seed 1's 037, 18 Nm s/rad carrying 0.84 Nm
+    /// against 0.31 of noise, gained 4.1e-3 Nm^2 where 4.8e-3 is relevant), the gain is only what
+    /// the two readings differ by there, far below the term's RMS squared, and they part beyond
+    /// the recorded rates by up to what the term carries. So a cause whose gain is below the
+    /// threshold is relevant too when its term carries at least the noise floor's RMS (an
+    /// assumption: an effect as large as the noise, the size at which the sources' effects
+    /// start). Asked only of a cause with evidence on both parts (see `select`): proposed by
+    /// BIC on the training part and significant on the held-out part.
+    ///
+    /// ```
+    /// use jointctl_ident::identify::significance::{block_test, judge};
+    /// let reduced = vec![1.01; 4000];
+    /// let full = vec![1.0; 4000];
+    /// let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
+    /// let j = judge(&reduced, &full, block_test(&diff), 1.0);
+    /// assert!(j.negligible());
+    /// // Its term carries 1.2 Nm against a floor of 1.0: relevant; 0.5 Nm: still negligible.
+    /// assert!(j.carrying(1.2, 1.0).named() && j.carrying(0.5, 1.0).negligible());
+    /// ```
+    pub fn carrying(self, term_nm: f64, floor_nm: f64) -> Judgement {
+        Judgement { carried: Some(Carried { term_nm, floor_nm }), ..self }
     }
     /// There is evidence for the gain: significant, or large and consistent; coefficients
     /// fitted on the held-out part, significant and large, and against a structured residual
@@ -155,6 +206,13 @@ impl Judgement {
 impl std::fmt::Display for Judgement {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}; held-out MSE gain {:.3e} Nm^2 (relevant from {:.3e})", self.test, self.gain_nm2, self.relevant_nm2)?;
+        if let Some(c) = self.carried.filter(|c| c.relevant() && self.gain_nm2 < self.relevant_nm2) {
+            write!(
+                f,
+                ", below that, but its own term carries {:.3e} Nm RMS there, at least the noise floor ({:.3e} Nm): another term of the model takes it as its own within the recorded rates, and the two part beyond them",
+                c.term_nm, c.floor_nm
+            )?;
+        }
         if self.consistent {
             write!(f, ", consistent over {CONSISTENCY_PARTS} parts of the held-out record")?;
         } else if self.test.kind == TestKind::AddedCoefficients && self.structured {
@@ -217,7 +275,7 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
     let structured = excess >= noise_nm2;
     let large = gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
     let consistent = structured && worse_allowed && most_parts_better && large;
-    Judgement { test, gain_nm2: gain, relevant_nm2, consistent, structured, large }
+    Judgement { test, gain_nm2: gain, relevant_nm2, consistent, structured, large, carried: None }
 }
 
 /// The two tests.
