@@ -519,7 +519,6 @@ fn line_in_deflection_and_rate(d: &[f64], v: &[f64], tau: &[f64]) -> Option<[f64
     Some([a, b, mt - a * md - b * mv])
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
