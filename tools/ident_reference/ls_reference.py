@@ -13,6 +13,12 @@ the reference's, and flags records where identify is more than 1.25 times the re
 
 Needs numpy. The reference names nothing: it says how far a generic fit gets, so that a record
 where identify stops far above it points at a cause the search missed.
+
+With `--library` the reference is a larger generic fit, in the manner of a sparse-regression
+library (PySINDy's): every column at once, fitted by least squares on the same part (no
+thresholding, so at least as close on the training part as any sparse subset): a polynomial of
+the deflection to the fifth power, the rate, `v |v|`, `v^3`, `sign(v) sqrt|v|`, five arctans of
+the rate, five Dahl states of different scales, an offset and a drift in time.
 """
 import argparse
 import json
@@ -65,9 +71,10 @@ def read(path):
     return a['t'], a['deflection'], a['torque']
 
 
-def reference(path, window=(0.7, 1.0)):
-    """(the reference's baseline alone, the whole reference): RMSE [Nm] on the held-out
-    `window` (fractions of the time range), fitted on the rest."""
+def prepared(path, window):
+    """Time from the record's start [s] (repetitions laid one after the other), deflection,
+    torque, the deflection's moving average and its rate, and the held-out `window`'s samples
+    (fractions of the time range) as a mask."""
     t, d, y = read(path)
     t = t - t[0]
     dt = np.diff(t)
@@ -85,6 +92,13 @@ def reference(path, window=(0.7, 1.0)):
         if len(s) > 2:
             rate[s] = np.gradient(smooth[s], t[s])
     test = (t >= window[0] * t[-1]) & (t <= window[1] * t[-1])
+    return t, d, y, smooth, rate, test
+
+
+def reference(path, window=(0.7, 1.0)):
+    """(the reference's baseline alone, the whole reference): RMSE [Nm] on the held-out
+    `window` (fractions of the time range), fitted on the rest."""
+    t, d, y, smooth, rate, test = prepared(path, window)
     train = ~test
     span = np.ptp(smooth) or 1.0
     speed = np.percentile(np.abs(rate), 95) or 1.0
@@ -107,11 +121,30 @@ def reference(path, window=(0.7, 1.0)):
     return best_base[1], best[1]
 
 
+def library(path, window=(0.7, 1.0)):
+    """The library fit's RMSE [Nm] on the held-out `window`, fitted on the rest (see above)."""
+    t, d, y, smooth, rate, test = prepared(path, window)
+    train = ~test
+    span = np.ptp(smooth) or 1.0
+    # Normalised so that the columns' sizes are alike (the fit's conditioning).
+    x = d / (np.max(np.abs(d)) or 1.0)
+    v = rate / (np.percentile(np.abs(rate), 95) or 1.0)
+    columns = [np.ones_like(d), t / (t[-1] or 1.0)] + [x ** p for p in range(1, 6)]
+    columns += [v, v * np.abs(v), v ** 3, np.sign(v) * np.sqrt(np.abs(v))]
+    columns += [np.arctan(kb * v) for kb in [1, 3, 10, 30, 100]]
+    columns += [dahl(t, smooth, span / share) for share in [3, 10, 30, 100, 300]]
+    a = np.column_stack(columns)
+    c, *_ = np.linalg.lstsq(a[train], y[train], rcond=None)
+    return float(np.sqrt(np.mean((y[test] - a[test] @ c) ** 2)))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--jointctl', default='target/release/jointctl')
+    parser.add_argument('--library', action='store_true', help='the larger generic fit (see above) in place of the plain one')
     parser.add_argument('files', nargs='+')
     args = parser.parse_args()
+    kind = 'library' if args.library else 'reference'
     for path in args.files:
         name = os.path.basename(path)
         out = subprocess.run([args.jointctl, 'identify', '--data', path, '--json'], capture_output=True, text=True)
@@ -120,12 +153,14 @@ def main():
         window = (held.get('start', 0.7), held.get('end', 1.0))
         try:
             base, ref = reference(path, window)
+            if args.library:
+                ref = library(path, window)
         except (OSError, ValueError) as e:
             print(f'{name:45s} no reference: {e}')
             continue
         if report is None:
             why = out.stderr.strip().splitlines()[-1] if out.stderr.strip() else f'exit {out.returncode}'
-            print(f'{name:45s} identify refused ({why}); reference {ref:.4f} Nm')
+            print(f'{name:45s} identify refused ({why}); {kind} {ref:.4f} Nm')
             continue
         causes = '+'.join(c['effect'] for c in report['causes']) or 'no cause'
         # A friction record's stops are left out of identify's own figures; the reference is
@@ -138,12 +173,12 @@ def main():
             stops += f", held out {100 * window[0]:.0f}-{100 * window[1]:.0f} % as identify did"
 
         if before is None or after is None:
-            print(f'{name:45s} identify gave no figure over every held-out sample (stops left out); reference {ref:.4f} Nm')
+            print(f'{name:45s} identify gave no figure over every held-out sample (stops left out); {kind} {ref:.4f} Nm')
             continue
         ratio = after / ref if ref > 0 else float('nan')
         flag = '  WORSE' if ratio > 1.25 else ''
         print(f"{name:45s} held out [Nm]: identify {before:.4f} -> {after:.4f} ({causes}{stops}); "
-              f"reference {ref:.4f} (its baseline alone {base:.4f}); identify/reference {ratio:.2f}{flag}")
+              f"{kind} {ref:.4f} (the plain baseline alone {base:.4f}); identify/{kind} {ratio:.2f}{flag}")
 
 if __name__ == '__main__':
     main()
