@@ -164,11 +164,12 @@ struct Design {
 
 pub(crate) struct Model<'a> {
     pub baseline: &'a BaselineModel,
-    /// The deflection the baseline's polynomial is taken about [rad]: zero for a spring (no
-    /// torque at zero deflection, the thesis' fits); for a record read as a joint's friction,
-    /// whose first column is a joint position with an arbitrary zero, the training part's mean
-    /// position, so that a constant torque is a sensor offset's and not the polynomial's linear
-    /// term times the distance of the motion from that zero.
+    /// The deflection the baseline's polynomial and the causes' elastic deflection are taken
+    /// about [rad]: zero for a spring (no torque at zero deflection, the thesis' fits); for a
+    /// record read as a joint's friction, whose first column is a joint position with an
+    /// arbitrary zero, the training part's mean position, so that a constant torque is a sensor
+    /// offset's and not the polynomial's linear term, or a cubic's, times the distance of the
+    /// motion from that zero.
     pub centre_rad: f64,
     /// The middle of the record's time span [s] (see [`Samples::record_middle_s`]).
     pub middle_s: f64,
@@ -281,7 +282,11 @@ impl Model<'_> {
 
     fn design(&self, spec: &Spec, p: &Part) -> Design {
         let n = p.len();
-        let mut inputs = Inputs { t_s: p.t.clone(), deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad: p.d.clone(), sample_period_s: p.dt };
+        // The elastic deflection about the centre, for the baseline and every cause that reads
+        // it alike: a cubic of a friction record's position about that position's arbitrary zero
+        // took a constant torque as its own (see `centre_rad`).
+        let elastic_rad = if self.centre_rad == 0.0 { p.d.clone() } else { p.d.iter().map(|x| x - self.centre_rad).collect() };
+        let mut inputs = Inputs { t_s: p.t.clone(), deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad, sample_period_s: p.dt };
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
         }
@@ -290,11 +295,10 @@ impl Model<'_> {
         match self.baseline {
             BaselineModel::Polynomial(order) => {
                 // Each power from the one before (a power by a run-time exponent is a call a sample).
-                let about = self.centre_rad;
                 for k in 1..=*order {
                     let next = match cols.last() {
-                        Some(below) if k > 1 => below.iter().zip(&inputs.elastic_rad).map(|(b, x)| b * (x - about)).collect(),
-                        _ => inputs.elastic_rad.iter().map(|x| x - about).collect(),
+                        Some(below) if k > 1 => below.iter().zip(&inputs.elastic_rad).map(|(b, x)| b * x).collect(),
+                        _ => inputs.elastic_rad.clone(),
                     };
                     cols.push(next);
                 }

@@ -252,7 +252,9 @@ pub struct Inputs {
     pub deflection_rad: Vec<f64>,
     /// Deflection rate [rad/s] as the torque channel sees it.
     pub velocity_rad_per_s: Vec<f64>,
-    /// Deflection the elastic element transmits torque for [rad] (after play).
+    /// Deflection the elastic element transmits torque for [rad] (after play); on a record read
+    /// as a joint's friction, its position about the training part's mean (the zero of a joint
+    /// position is arbitrary).
     pub elastic_rad: Vec<f64>,
     /// Sample period of these inputs [s] (the median step; the time stamps may jitter and gap).
     pub sample_period_s: f64,
@@ -266,7 +268,8 @@ pub struct Samples<'a> {
     pub deflection_rad: &'a [f64],
     /// Deflection rate [rad/s] as the torque channel sees it.
     pub velocity_rad_per_s: &'a [f64],
-    /// Deflection the elastic element transmits torque for [rad] (after a dead zone).
+    /// Deflection the elastic element transmits torque for [rad] (after a dead zone); on a record
+    /// read as a joint's friction, its position about the training part's mean.
     pub elastic_rad: &'a [f64],
     /// Stiffness setting [mm] (0 when the data has none).
     pub pivot_mm: &'a [f64],
