@@ -285,7 +285,7 @@ impl Model<'_> {
         // The elastic deflection about the centre, for the baseline and every cause that reads
         // it alike: a cubic of a friction record's position about that position's arbitrary zero
         // took a constant torque as its own (see `centre_rad`).
-        let elastic_rad = if self.centre_rad == 0.0 { p.d.clone() } else { p.d.iter().map(|x| x - self.centre_rad).collect() };
+        let elastic_rad = p.d.iter().map(|x| x - self.centre_rad).collect();
         let mut inputs = Inputs { t_s: p.t.clone(), deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad, sample_period_s: p.dt };
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
