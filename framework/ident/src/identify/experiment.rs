@@ -3,7 +3,11 @@
 //! different ways, and a motion that varies what one depends on and not the other separates
 //! them. The experiment is a list of flow-source sines run one after the other, each from rest
 //! (`jointctl sim record --experiment`, or the same references on the arm), never beyond the
-//! recorded amplitude or peak rate: what the arm already did is known to be safe.
+//! recorded amplitude, and never beyond the recorded peak rate but for one pair: eq. 3.5's
+//! arctan, nearly straight over the recorded rates, against a viscous friction in its place.
+//! Those two part only where the arctan saturates, faster than the arm went, so their
+//! experiment goes there ([`propose`]'s `saturates_rad_per_s`); what else the arm already did is
+//! known to be safe.
 
 use jointctl_models::effect::Effect;
 use serde::{Deserialize, Serialize};
@@ -87,25 +91,60 @@ const RATE_STEPS: [f64; 3] = [0.25, 0.5, 1.0];
 /// torque, while a cubic's share falls sixteen-fold).
 const AMPLITUDE_STEPS: [f64; 3] = [0.25, 0.5, 1.0];
 
+/// Multiples of the rate where eq. 3.5's arctan saturates (`3 / k_b`, where it reaches 80 % of
+/// its limit) that the pair of a nearly straight arctan and a viscous friction is run at, beside
+/// the recorded frequency (an assumption: at twice that rate the arctan is at 90 % of its limit
+/// and adds a tenth of it more, while a viscous torque doubles; on the simulated elbow, a
+/// viscous friction of 3 Nm s/rad confounded so on a 0.05 rad, 0.25 Hz sine was named at 2.93
+/// after this experiment, and a straight arctan of 0.5 Nm x 10 s/rad was left to the baseline).
+pub const SATURATION_STEPS: [f64; 2] = [1.0, 2.0];
+
 /// The experiment that separates every confounded pair `(named, alternative)` of a record whose
 /// excitation had amplitude `amplitude_rad` and fundamental `frequency_hz`; `None` without pairs.
 /// A pair where one cause depends on the rate (or on time) is run at lower frequencies along the
-/// same amplitude; any other pair at smaller amplitudes at the same frequency.
+/// same amplitude; any other pair at smaller amplitudes at the same frequency. With
+/// `saturates_rad_per_s` (`3 / k_b` of eq. 3.5's arctan in the baseline, when the record cannot
+/// tell it, nearly straight, from a viscous friction in its place), the same amplitude at the
+/// recorded frequency and at the frequencies whose peak rates are [`SATURATION_STEPS`] times
+/// that: the one proposal beyond the recorded peak rate, since the two part only there.
 ///
 /// ```
 /// use jointctl_ident::identify::experiment::propose;
-/// let e = propose(&[("dead_zone".into(), "stiffness_nonlinearity".into())], 0.1, 0.25).unwrap();
+/// let e = propose(&[("dead_zone".into(), "stiffness_nonlinearity".into())], 0.1, 0.25, None).unwrap();
 /// // Smaller amplitudes at the recorded frequency: a play against a cubic.
 /// assert!(e.segments.iter().all(|s| s.frequency_hz == 0.25 && s.amplitude_rad <= 0.1));
 /// // Three amplitudes, the set run three times.
 /// assert_eq!(e.segments.len(), 9);
-/// let e = propose(&[("hysteresis".into(), "viscous_friction".into())], 0.1, 0.25).unwrap();
+/// let e = propose(&[("hysteresis".into(), "viscous_friction".into())], 0.1, 0.25, None).unwrap();
 /// // Slower along the same amplitude: a viscous torque falls with the rate, a Dahl loop does not.
 /// assert!(e.segments.iter().all(|s| s.amplitude_rad == 0.1 && s.frequency_hz <= 0.25));
-/// assert!(propose(&[], 0.1, 0.25).is_none());
+/// assert!(propose(&[], 0.1, 0.25, None).is_none());
+/// // A straight arctan against a viscous friction: faster, to where the arctan saturates
+/// // (0.6 rad/s, k_b = 5 s/rad) and twice that, beside the recorded 0.157 rad/s.
+/// let e = propose(&[], 0.1, 0.25, Some(0.6)).unwrap();
+/// let peaks: Vec<f64> = e.segments.iter().take(3).map(|s| 2.0 * std::f64::consts::PI * s.amplitude_rad * s.frequency_hz).collect();
+/// assert!((peaks[0] - 0.157).abs() < 1e-3 && (peaks[1] - 0.6).abs() < 1e-9 && (peaks[2] - 1.2).abs() < 1e-9);
 /// ```
-pub fn propose(pairs: &[(String, String)], amplitude_rad: f64, frequency_hz: f64) -> Option<Experiment> {
+pub fn propose(pairs: &[(String, String)], amplitude_rad: f64, frequency_hz: f64, saturates_rad_per_s: Option<f64>) -> Option<Experiment> {
     let (mut purpose, mut segments) = (Vec::new(), Vec::<Segment>::new());
+    let add = |segments: &mut Vec<Segment>, a: f64, f: f64| {
+        if !segments.iter().any(|s| s.amplitude_rad == a && s.frequency_hz == f) {
+            segments.push(Segment { amplitude_rad: a, frequency_hz: f, duration_s: (SEGMENT_CYCLES / f).max(SEGMENT_MIN_S) });
+        }
+    };
+    let recorded_peak = 2.0 * std::f64::consts::PI * amplitude_rad * frequency_hz;
+    if let Some(rate) = saturates_rad_per_s.filter(|r| r.is_finite() && *r > recorded_peak && recorded_peak > 0.0) {
+        let faster: Vec<f64> = SATURATION_STEPS.iter().map(|m| frequency_hz * m * rate / recorded_peak).collect();
+        purpose.push(format!(
+            "coulomb_friction or viscous_friction (eq. 3.5's arctan nearly straight over the recorded rates): the same amplitude ({amplitude_rad:.4} rad) at the recorded frequency ({frequency_hz:.3} Hz) and at {} Hz, whose peak rates are {} times {} rad/s, where the arctan saturates (3 / k_b): the two part only there, so this is the one proposal beyond the recorded excitation (its fundamental's peak rate {recorded_peak:.4} rad/s); before it runs on the arm, check that the joint may move that fast (`cmd experiment --dry-run` prints each segment's peak rate, and the runtime clips a set-point faster than the joint's rate limit)",
+            faster.iter().map(|f| format!("{f:.3}")).collect::<Vec<_>>().join(" and "),
+            SATURATION_STEPS.map(|m| format!("{m}")).join(" and "),
+            super::numeric::format_value(rate),
+        ));
+        for f in std::iter::once(frequency_hz).chain(faster) {
+            add(&mut segments, amplitude_rad, f);
+        }
+    }
     for (named, other) in pairs {
         let by_rate = [named, other].iter().any(|e| matches!(dependence(e), Some(Dependence::Rate | Dependence::Time)));
         let steps: Vec<(f64, f64)> = if by_rate {
@@ -116,9 +155,7 @@ pub fn propose(pairs: &[(String, String)], amplitude_rad: f64, frequency_hz: f64
             AMPLITUDE_STEPS.iter().map(|a| (amplitude_rad * a, frequency_hz)).collect()
         };
         for (a, f) in steps {
-            if !segments.iter().any(|s| s.amplitude_rad == a && s.frequency_hz == f) {
-                segments.push(Segment { amplitude_rad: a, frequency_hz: f, duration_s: (SEGMENT_CYCLES / f).max(SEGMENT_MIN_S) });
-            }
+            add(&mut segments, a, f);
         }
     }
     if segments.is_empty() {

@@ -4,10 +4,10 @@
 //! `b dphi/dt` is one. The baseline's arctan then takes a viscous friction as its own (its
 //! held-out error sits at the noise floor, and `viscous_friction` adds nothing), and the data
 //! cannot say which of the two the joint has: the report says so, by the same rule as for two
-//! causes (see `docs/identify/significance.md`, "Confounds"). It proposes no experiment for
-//! them: they part only where the arctan saturates, faster than the training part went, and the
-//! proposals stay within what the arm did. Where the held-out part went faster, it decides
-//! ([`decide_on_held_out`]).
+//! causes (see `docs/identify/significance.md`, "Confounds"). They part only where the arctan
+//! saturates, faster than the training part went: their experiment goes there, the one proposal
+//! beyond the recorded peak rate (`experiment::propose`). Where the held-out part went faster,
+//! it decides ([`decide_on_held_out`]).
 
 use jointctl_models::effect::Effect;
 
@@ -188,8 +188,9 @@ fn saturating(spec: &Spec, friction: usize, peak_rad_per_s: f64) -> Option<Spec>
 }
 
 /// `k_b` times the training part's peak rate at which the arctan counts as saturated there: 3,
-/// where it reaches 80 % of its limit (the "3 / k_b" of the confound's sentence).
-const SATURATES: f64 = 3.0;
+/// where it reaches 80 % of its limit (the "3 / k_b" of the confound's sentence and its
+/// experiment).
+pub(crate) const SATURATES: f64 = 3.0;
 
 /// What the held-out part said of a viscous friction in the place of eq. 3.5's nearly straight
 /// arctan, when it was not named: the confound's sentence says it, so that a report never says

@@ -484,20 +484,28 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
             evidence: c.held_out_said(&name(c.named), &name(c.alternative)).unwrap_or_else(|| confound_evidence(&name(c.named), &name(c.alternative), c.bic[0], c.bic[1], c.bic[2])),
         })
         .collect();
-    let experiment = experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz);
-    // No experiment for this pair: within the recorded rates both stay straight lines; they part
-    // only where the arctan saturates, faster than the arm was driven.
-    if let Some(c) = friction_confound::baseline_friction_confound(&model, &spec, p) {
+    // Within the recorded rates eq. 3.5's nearly straight arctan and a viscous friction are both
+    // straight lines; they part only where the arctan saturates, faster than the arm was driven,
+    // and their experiment goes there.
+    let friction = friction_confound::baseline_friction_confound(&model, &spec, p);
+    let saturates = friction.as_ref().map(|c| friction_confound::SATURATES / c.k_b_s_per_rad);
+    let experiment = experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz, saturates);
+    if let Some(c) = friction {
         let [with, instead, before] = c.bic;
         let why = confound_rule(with, instead, before, "the arctan");
         let shape = format!(
-            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates; {}; no experiment is proposed for them (the proposals stay within what the arm did)",
+            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates; {}; {}",
             name(c.viscous),
             format_value(c.k_b_s_per_rad),
             format_value(c.peak_rad_per_s),
             100.0 * c.share,
-            format_value(3.0 / c.k_b_s_per_rad),
-            held_out_said.as_ref().map_or_else(|| "the held-out part was not asked".to_string(), ToString::to_string)
+            format_value(friction_confound::SATURATES / c.k_b_s_per_rad),
+            held_out_said.as_ref().map_or_else(|| "the held-out part was not asked".to_string(), ToString::to_string),
+            // Only this pair's segments go faster than the recorded excitation.
+            match experiment.as_ref().is_some_and(|e| e.segments.iter().any(|s| s.amplitude_rad * s.frequency_hz > p.excitation.amplitude_rad * p.excitation.frequency_hz)) {
+                true => "the experiment proposed runs the recorded amplitude that fast and faster, beyond what the arm did",
+                false => "no experiment is proposed for them (the recorded excitation has no amplitude and frequency to run faster)",
+            }
         );
         confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
     }
