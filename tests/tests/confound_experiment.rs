@@ -199,6 +199,8 @@ fn an_experiment_file_runs_on_the_running_arm_in_torque_control() {
     assert!(!refused.status.success() && String::from_utf8_lossy(&refused.stderr).contains("has no joint `q9` (it has q1, q2"), "{}", String::from_utf8_lossy(&refused.stderr));
     let plan = experiment(&["q2", file.to_str().unwrap(), "--dry-run", "--stiffness", "100"]);
     assert!(plan.status.success() && String::from_utf8_lossy(&plan.stderr).contains("1: torque sine 1.0000 Nm at 0.5000 Hz for 4.00 s"), "whole periods: {}", String::from_utf8_lossy(&plan.stderr));
+    // Each segment's peak rate, to check against the joint's before a run (2 pi x 0.01 rad x 0.5 Hz).
+    assert!(String::from_utf8_lossy(&plan.stderr).contains("(deflection 0.01000 rad, peak rate 0.031 rad/s)"), "{}", String::from_utf8_lossy(&plan.stderr));
 
     let recording = work.join("r.mcap");
     let mut record = Running(Command::new(jointctl()).args(["record", "--arm", &arm, "--duration", "15", "--out"]).arg(&recording).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap());

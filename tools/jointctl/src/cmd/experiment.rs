@@ -151,7 +151,9 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, pos
     let total: f64 = plan.iter().map(|s| s.duration_s + REST_S).sum();
     eprintln!("{}: {} segments on {joint}, {k:.3} Nm/rad, {total:.0} s", file.display(), plan.len());
     for (i, s) in plan.iter().enumerate() {
-        eprintln!("  {}: torque sine {:.4} Nm at {:.4} Hz for {:.2} s (deflection {:.5} rad), then {REST_S} s at 0 Nm", i + 1, s.amplitude_nm, s.frequency_hz, s.duration_s, experiment.segments[i].amplitude_rad);
+        let deflection_rad = experiment.segments[i].amplitude_rad;
+        let peak_rate = std::f64::consts::TAU * deflection_rad * s.frequency_hz;
+        eprintln!("  {}: torque sine {:.4} Nm at {:.4} Hz for {:.2} s (deflection {deflection_rad:.5} rad, peak rate {peak_rate:.3} rad/s), then {REST_S} s at 0 Nm", i + 1, s.amplitude_nm, s.frequency_hz, s.duration_s);
     }
     if dry_run {
         return ExitCode::SUCCESS;
