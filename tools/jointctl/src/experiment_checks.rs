@@ -14,7 +14,7 @@ pub(crate) fn check_segment(s: &Segment, field: impl Fn(&str) -> String) -> Resu
     if !(s.amplitude_rad.is_finite() && s.amplitude_rad > 0.0 && s.amplitude_rad <= std::f64::consts::PI) {
         return bad("amplitude_rad", s.amplitude_rad, "in (0, pi] rad");
     }
-    if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= 100.0) {
+    if !(s.frequency_hz.is_finite() && s.frequency_hz >= 1e-3 && s.frequency_hz <= jointctl_ident::identify::experiment::MAX_FREQUENCY_HZ) {
         return bad("frequency_hz", s.frequency_hz, "in [0.001, 100] Hz");
     }
     if !(s.duration_s.is_finite() && s.duration_s > 0.0 && s.duration_s <= 86_400.0) {

@@ -99,6 +99,11 @@ const AMPLITUDE_STEPS: [f64; 3] = [0.25, 0.5, 1.0];
 /// after this experiment, and a straight arctan of 0.5 Nm x 10 s/rad was left to the baseline).
 pub const SATURATION_STEPS: [f64; 2] = [1.0, 2.0];
 
+/// The highest frequency a segment may have [Hz] (`sim record`'s check of an experiment file):
+/// a faster segment of the arctan's pair, for a small recorded amplitude, is left out, and the
+/// purpose says so.
+pub const MAX_FREQUENCY_HZ: f64 = 100.0;
+
 /// The experiment that separates every confounded pair `(named, alternative)` of a record whose
 /// excitation had amplitude `amplitude_rad` and fundamental `frequency_hz`; `None` without pairs.
 /// A pair where one cause depends on the rate (or on time) is run at lower frequencies along the
@@ -124,6 +129,8 @@ pub const SATURATION_STEPS: [f64; 2] = [1.0, 2.0];
 /// let e = propose(&[], 0.1, 0.25, Some(0.6)).unwrap();
 /// let peaks: Vec<f64> = e.segments.iter().take(3).map(|s| 2.0 * std::f64::consts::PI * s.amplitude_rad * s.frequency_hz).collect();
 /// assert!((peaks[0] - 0.157).abs() < 1e-3 && (peaks[1] - 0.6).abs() < 1e-9 && (peaks[2] - 1.2).abs() < 1e-9);
+/// // From 0.1 mrad, 0.6 rad/s needs 955 Hz: beyond what a segment may have, no experiment.
+/// assert!(propose(&[], 1e-4, 0.25, Some(0.6)).is_none());
 /// ```
 pub fn propose(pairs: &[(String, String)], amplitude_rad: f64, frequency_hz: f64, saturates_rad_per_s: Option<f64>) -> Option<Experiment> {
     let (mut purpose, mut segments) = (Vec::new(), Vec::<Segment>::new());
@@ -134,15 +141,22 @@ pub fn propose(pairs: &[(String, String)], amplitude_rad: f64, frequency_hz: f64
     };
     let recorded_peak = 2.0 * std::f64::consts::PI * amplitude_rad * frequency_hz;
     if let Some(rate) = saturates_rad_per_s.filter(|r| r.is_finite() && *r > recorded_peak && recorded_peak > 0.0) {
-        let faster: Vec<f64> = SATURATION_STEPS.iter().map(|m| frequency_hz * m * rate / recorded_peak).collect();
+        let all: Vec<f64> = SATURATION_STEPS.iter().map(|m| frequency_hz * m * rate / recorded_peak).collect();
+        let faster: Vec<f64> = all.iter().copied().filter(|f| *f <= MAX_FREQUENCY_HZ).collect();
+        let left_out = match all.len() - faster.len() {
+            0 => String::new(),
+            n => format!(" ({n} of them above {MAX_FREQUENCY_HZ} Hz, the most a segment may have, left out: the recorded amplitude is too small to reach that rate slower)"),
+        };
         purpose.push(format!(
-            "coulomb_friction or viscous_friction (eq. 3.5's arctan nearly straight over the recorded rates): the same amplitude ({amplitude_rad:.4} rad) at the recorded frequency ({frequency_hz:.3} Hz) and at {} Hz, whose peak rates are {} times {} rad/s, where the arctan saturates (3 / k_b): the two part only there, so this is the one proposal beyond the recorded excitation (its fundamental's peak rate {recorded_peak:.4} rad/s); before it runs on the arm, check that the joint may move that fast (`cmd experiment --dry-run` prints each segment's peak rate; in the position form the runtime clips a set-point faster than the joint's rate limit)",
-            faster.iter().map(|f| format!("{f:.3}")).collect::<Vec<_>>().join(" and "),
+            "coulomb_friction or viscous_friction (eq. 3.5's arctan nearly straight over the recorded rates): the same amplitude ({amplitude_rad:.4} rad) at the recorded frequency ({frequency_hz:.3} Hz) and at {} Hz, whose peak rates are {} times {} rad/s, where the arctan saturates (3 / k_b): the two part only there, so this is the one proposal beyond the recorded excitation (its fundamental's peak rate {recorded_peak:.4} rad/s); before it runs on the arm, check that the joint may move that fast (`cmd experiment --dry-run` prints each segment's peak rate; in the position form the runtime clips a set-point faster than the joint's rate limit){left_out}",
+            all.iter().map(|f| format!("{f:.3}")).collect::<Vec<_>>().join(" and "),
             SATURATION_STEPS.map(|m| format!("{m}")).join(" and "),
             super::numeric::format_value(rate),
         ));
-        for f in std::iter::once(frequency_hz).chain(faster) {
-            add(&mut segments, amplitude_rad, f);
+        if !faster.is_empty() {
+            for f in std::iter::once(frequency_hz).chain(faster) {
+                add(&mut segments, amplitude_rad, f);
+            }
         }
     }
     for (named, other) in pairs {

@@ -504,7 +504,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
             // Only this pair's segments go faster than the recorded excitation.
             match experiment.as_ref().is_some_and(|e| e.segments.iter().any(|s| s.amplitude_rad * s.frequency_hz > p.excitation.amplitude_rad * p.excitation.frequency_hz)) {
                 true => "the experiment proposed runs the recorded amplitude that fast and faster, beyond what the arm did",
-                false => "no experiment is proposed for them (the recorded excitation has no amplitude and frequency to run faster)",
+                false => "no experiment is proposed for them (the recorded excitation gives no amplitude and frequency to run faster, or that rate needs a segment above the highest frequency one may have)",
             }
         );
         confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
