@@ -62,8 +62,9 @@ fn the_elbows_play_that_stands_for_its_curve_is_gone_after_the_proposed_experime
 
 /// Finding (issue 32, item 4): eq. 3.5's arctan nearly straight over a slow record's rates and a
 /// viscous friction in its place were reported as confounded with "no experiment is proposed
-/// for them (the proposals stay within what the arm did)" (the blind generators' viscous
-/// frictions beside a small arctan: 27 such records left so). They part only where the arctan
+/// for them (the proposals stay within what the arm did)" (on the blind generator's seeds 1-16,
+/// its devices of seeds 1-10 and the third generator's seeds 1-6, 27 hidden viscous frictions
+/// were left so, the held-out part undecided). They part only where the arctan
 /// saturates; the experiment now goes there, and the pair resolves both ways on the simulated
 /// elbow: a viscous friction beside a small sharp arctan is named, a straight arctan of the
 /// plant's own is left to the baseline.
