@@ -118,8 +118,9 @@ fn reports_pair(json: &serde_json::Value, a: &str, b: &str) -> bool {
 /// What one case came to.
 struct Case {
     confound_reported: bool,
-    /// Named the hidden cause and not the other: after the experiment when one was proposed,
-    /// else on the first record.
+    /// Named the hidden cause and not the other (for the baseline's own arctan, hidden against
+    /// the thesis' baseline: the other not named and the pair no longer reported): after the
+    /// experiment when one was proposed, else on the first record.
     resolved: bool,
 }
 

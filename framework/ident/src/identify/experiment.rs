@@ -104,8 +104,27 @@ pub const SATURATION_STEPS: [f64; 2] = [1.0, 2.0];
 /// purpose says so.
 pub const MAX_FREQUENCY_HZ: f64 = 100.0;
 
+/// The arctan's pair, as its purpose names it.
+const SATURATION_PAIR: &str = "coulomb_friction or viscous_friction";
+
+/// The fastest peak deflection rate of `experiment`'s segments [rad/s], when it runs eq. 3.5's
+/// nearly straight arctan against a viscous friction beyond the recorded rates (`propose`'s
+/// `saturates_rad_per_s`); `None` when it does not.
+///
+/// ```
+/// use jointctl_ident::identify::experiment::{fastest_for_saturation, propose};
+/// let e = propose(&[], 0.1, 0.25, Some(0.6)).unwrap();
+/// assert!((fastest_for_saturation(&e).unwrap() - 1.2).abs() < 1e-9);
+/// let e = propose(&[("hysteresis".into(), "viscous_friction".into())], 0.1, 0.25, None).unwrap();
+/// assert_eq!(fastest_for_saturation(&e), None);
+/// ```
+pub fn fastest_for_saturation(experiment: &Experiment) -> Option<f64> {
+    experiment.purpose.iter().any(|p| p.starts_with(SATURATION_PAIR)).then(|| experiment.segments.iter().map(|s| std::f64::consts::TAU * s.amplitude_rad * s.frequency_hz).fold(0.0, f64::max))
+}
+
 /// The experiment that separates every confounded pair `(named, alternative)` of a record whose
-/// excitation had amplitude `amplitude_rad` and fundamental `frequency_hz`; `None` without pairs.
+/// excitation had amplitude `amplitude_rad` and fundamental `frequency_hz`; `None` without pairs
+/// (and without a rate for the arctan's pair that a segment can reach).
 /// A pair where one cause depends on the rate (or on time) is run at lower frequencies along the
 /// same amplitude; any other pair at smaller amplitudes at the same frequency. With
 /// `saturates_rad_per_s` (`3 / k_b` of eq. 3.5's arctan in the baseline, when the record cannot
@@ -139,21 +158,22 @@ pub fn propose(pairs: &[(String, String)], amplitude_rad: f64, frequency_hz: f64
             segments.push(Segment { amplitude_rad: a, frequency_hz: f, duration_s: (SEGMENT_CYCLES / f).max(SEGMENT_MIN_S) });
         }
     };
-    let recorded_peak = 2.0 * std::f64::consts::PI * amplitude_rad * frequency_hz;
-    if let Some(rate) = saturates_rad_per_s.filter(|r| r.is_finite() && *r > recorded_peak && recorded_peak > 0.0) {
-        let all: Vec<f64> = SATURATION_STEPS.iter().map(|m| frequency_hz * m * rate / recorded_peak).collect();
+    let recorded_peak = std::f64::consts::TAU * amplitude_rad * frequency_hz;
+    if let Some(rate) = saturates_rad_per_s.filter(|r| r.is_finite() && *r > 0.0 && amplitude_rad > 0.0 && frequency_hz > 0.0) {
+        // Pure sines of the recorded amplitude, each peaking at its multiple of the rate.
+        let all: Vec<f64> = SATURATION_STEPS.iter().map(|m| m * rate / (std::f64::consts::TAU * amplitude_rad)).collect();
         let faster: Vec<f64> = all.iter().copied().filter(|f| *f <= MAX_FREQUENCY_HZ).collect();
-        let left_out = match all.len() - faster.len() {
-            0 => String::new(),
-            n => format!(" ({n} of them above {MAX_FREQUENCY_HZ} Hz, the most a segment may have, left out: the recorded amplitude is too small to reach that rate slower)"),
-        };
-        purpose.push(format!(
-            "coulomb_friction or viscous_friction (eq. 3.5's arctan nearly straight over the recorded rates): the same amplitude ({amplitude_rad:.4} rad) at the recorded frequency ({frequency_hz:.3} Hz) and at {} Hz, whose peak rates are {} times {} rad/s, where the arctan saturates (3 / k_b): the two part only there, so this is the one proposal beyond the recorded excitation (its fundamental's peak rate {recorded_peak:.4} rad/s); before it runs on the arm, check that the joint may move that fast (`cmd experiment --dry-run` prints each segment's peak rate; in the position form the runtime clips a set-point faster than the joint's rate limit){left_out}",
-            all.iter().map(|f| format!("{f:.3}")).collect::<Vec<_>>().join(" and "),
-            SATURATION_STEPS.map(|m| format!("{m}")).join(" and "),
-            super::numeric::format_value(rate),
-        ));
         if !faster.is_empty() {
+            let left_out = match all.len() - faster.len() {
+                0 => String::new(),
+                n => format!("; {n} of them, above {MAX_FREQUENCY_HZ} Hz (the most a segment may have), left out: the recorded amplitude is too small to reach that rate slower"),
+            };
+            purpose.push(format!(
+                "{SATURATION_PAIR} (eq. 3.5's arctan nearly straight over the recorded rates): the same amplitude ({amplitude_rad:.4} rad) at the recorded frequency ({frequency_hz:.3} Hz) and at {} Hz, whose peak rates are {} times {} rad/s, where the arctan saturates (3 / k_b){left_out}: the two part only there, so this is the one proposal beyond the recorded excitation (its fundamental's peak rate {recorded_peak:.4} rad/s); before it runs on the arm, check that the joint may move that fast (`cmd experiment --dry-run` prints each segment's peak rate; in the position form the runtime clips a set-point faster than the joint's rate limit), and record it at more than twice its fastest frequency",
+                all.iter().map(|f| format!("{f:.3}")).collect::<Vec<_>>().join(" and "),
+                SATURATION_STEPS.map(|m| format!("{m}")).join(" and "),
+                super::numeric::format_value(rate),
+            ));
             for f in std::iter::once(frequency_hz).chain(faster) {
                 add(&mut segments, amplitude_rad, f);
             }

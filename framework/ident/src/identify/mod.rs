@@ -501,10 +501,9 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
             100.0 * c.share,
             format_value(friction_confound::SATURATES / c.k_b_s_per_rad),
             held_out_said.as_ref().map_or_else(|| "the held-out part was not asked".to_string(), ToString::to_string),
-            // Only this pair's segments go faster than the recorded excitation.
-            match experiment.as_ref().is_some_and(|e| e.segments.iter().any(|s| s.amplitude_rad * s.frequency_hz > p.excitation.amplitude_rad * p.excitation.frequency_hz)) {
-                true => "the experiment proposed runs the recorded amplitude that fast and faster, beyond what the arm did",
-                false => "no experiment is proposed for them (the recorded excitation gives no amplitude and frequency to run faster, or that rate needs a segment above the highest frequency one may have)",
+            match experiment.as_ref().and_then(experiment::fastest_for_saturation) {
+                Some(fastest) => format!("the experiment proposed runs the recorded amplitude up to {} rad/s, beyond what the arm did", format_value(fastest)),
+                None => "no experiment is proposed for them (the recorded excitation gives no amplitude and frequency to run faster, or that rate needs a segment above the highest frequency one may have)".to_string(),
             }
         );
         confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
