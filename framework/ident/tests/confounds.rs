@@ -85,7 +85,8 @@ fn viscous_record(b: f64) -> jointctl_ident::csv::Data {
 /// seed 2: a viscous torque of 37 times the noise, the baseline's held-out error at the noise
 /// floor). The report names the pair as confounded (eq. 3.5's friction in the baseline,
 /// `coulomb_friction`, or `viscous_friction`) and proposes an experiment that goes where they
-/// part: beyond the recorded rates, the one proposal that does (until 2026-12-02, none). The thesis' sharp arctan bends within the rates: no such entry.
+/// part: beyond the recorded rates, the one proposal that does (until 2026-12-02, none). The
+/// thesis' sharp arctan bends within the rates: no such entry.
 /// Where BIC proposes the damping and the held-out part confirms it, it is named since its own
 /// term's size counts (`absorbed_damping.rs`): at 4 Nm s/rad here (held-out t = 4.0, its term
 /// 0.197 Nm RMS against a floor of 0.045), where this test once asked for the pair; at 2 Nm s/rad

@@ -54,6 +54,19 @@ pub struct Segment {
     pub duration_s: f64,
 }
 
+impl Segment {
+    /// The sine's peak deflection rate, `2 pi A f` [rad/s].
+    ///
+    /// ```
+    /// use jointctl_ident::identify::experiment::Segment;
+    /// let s = Segment { amplitude_rad: 0.01, frequency_hz: 0.5, duration_s: 4.0 };
+    /// assert!((s.peak_rate_rad_per_s() - 0.0314159).abs() < 1e-6);
+    /// ```
+    pub fn peak_rate_rad_per_s(&self) -> f64 {
+        std::f64::consts::TAU * self.amplitude_rad * self.frequency_hz
+    }
+}
+
 /// An experiment: why, and the segments to run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Experiment {
@@ -119,7 +132,7 @@ const SATURATION_PAIR: &str = "coulomb_friction or viscous_friction";
 /// assert_eq!(fastest_for_saturation(&e), None);
 /// ```
 pub fn fastest_for_saturation(experiment: &Experiment) -> Option<f64> {
-    experiment.purpose.iter().any(|p| p.starts_with(SATURATION_PAIR)).then(|| experiment.segments.iter().map(|s| std::f64::consts::TAU * s.amplitude_rad * s.frequency_hz).fold(0.0, f64::max))
+    experiment.purpose.iter().any(|p| p.starts_with(SATURATION_PAIR)).then(|| experiment.segments.iter().map(Segment::peak_rate_rad_per_s).fold(0.0, f64::max))
 }
 
 /// The experiment that separates every confounded pair `(named, alternative)` of a record whose
@@ -146,7 +159,7 @@ pub fn fastest_for_saturation(experiment: &Experiment) -> Option<f64> {
 /// // A straight arctan against a viscous friction: faster, to where the arctan saturates
 /// // (0.6 rad/s, k_b = 5 s/rad) and twice that, beside the recorded 0.157 rad/s.
 /// let e = propose(&[], 0.1, 0.25, Some(0.6)).unwrap();
-/// let peaks: Vec<f64> = e.segments.iter().take(3).map(|s| 2.0 * std::f64::consts::PI * s.amplitude_rad * s.frequency_hz).collect();
+/// let peaks: Vec<f64> = e.segments.iter().take(3).map(|s| s.peak_rate_rad_per_s()).collect();
 /// assert!((peaks[0] - 0.157).abs() < 1e-3 && (peaks[1] - 0.6).abs() < 1e-9 && (peaks[2] - 1.2).abs() < 1e-9);
 /// // From 0.1 mrad, 0.6 rad/s needs 955 Hz: beyond what a segment may have, no experiment.
 /// assert!(propose(&[], 1e-4, 0.25, Some(0.6)).is_none());

@@ -151,9 +151,8 @@ pub fn run(args: &CmdArgs, joint: &str, file: &Path, stiffness: Option<f64>, pos
     let total: f64 = plan.iter().map(|s| s.duration_s + REST_S).sum();
     eprintln!("{}: {} segments on {joint}, {k:.3} Nm/rad, {total:.0} s", file.display(), plan.len());
     for (i, s) in plan.iter().enumerate() {
-        let deflection_rad = experiment.segments[i].amplitude_rad;
-        let peak_rate = std::f64::consts::TAU * deflection_rad * s.frequency_hz;
-        eprintln!("  {}: torque sine {:.4} Nm at {:.4} Hz for {:.2} s (deflection {deflection_rad:.5} rad, peak rate {peak_rate:.3} rad/s), then {REST_S} s at 0 Nm", i + 1, s.amplitude_nm, s.frequency_hz, s.duration_s);
+        let segment = &experiment.segments[i];
+        eprintln!("  {}: torque sine {:.4} Nm at {:.4} Hz for {:.2} s (deflection {:.5} rad, peak rate {:.3} rad/s), then {REST_S} s at 0 Nm", i + 1, s.amplitude_nm, s.frequency_hz, s.duration_s, segment.amplitude_rad, segment.peak_rate_rad_per_s());
     }
     if dry_run {
         return ExitCode::SUCCESS;
@@ -206,7 +205,7 @@ fn run_position(args: &CmdArgs, joint: &str, file: &Path, segments: &[Segment], 
             0.5 / s.frequency_hz,
             p.duration_s,
             if count == 1 { "trajectory" } else { "trajectories" },
-            s.amplitude_rad * 2.0 * std::f64::consts::PI * s.frequency_hz,
+            s.peak_rate_rad_per_s(),
         );
     }
     eprintln!("(a sine faster than the joint's set-point rate limit, controller.max_setpoint_rate_rad_s or its velocity limit, is clipped by the runtime and counted as rate_limited)");
