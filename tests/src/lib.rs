@@ -5,6 +5,7 @@
 //! them first): `jointctl` and the plugin `.so` files next to it in `target/<profile>/`.
 
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 /// `target/<profile>/`, where cargo puts binaries and cdylibs.
 pub fn target_dir() -> PathBuf {
@@ -215,4 +216,18 @@ pub fn replace_once(text: &str, from: &str, to: &str) -> String {
     let n = text.matches(from).count();
     assert_eq!(n, 1, "`{from}` occurs {n} times, expected once");
     text.replacen(from, to, 1)
+}
+
+/// Runs `cmd`, asserts that it succeeded (its stderr in the message), and returns its stdout.
+pub fn run_ok(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(out.status.success(), "{cmd:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// The relative drop of the held-out RMSE in `jointctl identify --json`'s `gains.<side>`
+/// (`simulation`, `observer`; 0.6: 60 % smaller).
+pub fn identify_gain(json: &serde_json::Value, side: &str) -> f64 {
+    let g = &json["gains"][side];
+    1.0 - g["rmse_after"].as_f64().unwrap() / g["rmse_before"].as_f64().unwrap()
 }

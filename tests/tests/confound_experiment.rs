@@ -6,16 +6,10 @@ use std::process::Command;
 
 use jointctl_experiments::record::{RecordOptions, record};
 use jointctl_runtime::PluginLoader;
-use jointctl_tests::{jointctl, scratch};
+use jointctl_tests::{jointctl, run_ok, scratch};
 
 fn config() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sherpa_arm.yaml")
-}
-
-fn run_ok(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap();
-    assert!(out.status.success(), "{cmd:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
 }
 
 fn causes(json: &serde_json::Value) -> Vec<String> {

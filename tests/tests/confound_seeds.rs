@@ -24,7 +24,7 @@ use std::path::Path;
 use std::process::Command;
 
 use jointctl_sim::rng::SplitMix64;
-use jointctl_tests::{Edit, arm_name, jointctl, scratch, sherpa_with};
+use jointctl_tests::{Edit, arm_name, jointctl, run_ok, scratch, sherpa_with};
 use serde_yaml::Value;
 
 /// Draws one side of a pair: the plant's `sim.effects` YAML.
@@ -87,12 +87,6 @@ const PAIRS: [(&str, Side, Side, &Characterisation); 4] = [
     ("dahl-visc", ("hysteresis", dahl), ("viscous_friction", viscous), &USUAL),
     ("atan-visc", ("viscous_friction", viscous_beside_arctan), ("coulomb_friction", straight_arctan), &SLOW),
 ];
-
-fn run_ok(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap();
-    assert!(out.status.success(), "{cmd:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
 
 fn identify(csv: &Path, config: Option<&Path>, report: Option<&Path>) -> serde_json::Value {
     let mut cmd = Command::new(jointctl());

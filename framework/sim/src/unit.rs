@@ -408,7 +408,33 @@ impl Unit {
     /// assert!((tau[2] - 2.5).abs() < 1e-12);
     /// ```
     pub fn replay(&mut self, dof: usize, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64], rate_window_s: f64) -> Vec<f64> {
+        let mut along = [0.0; MAX_UNIT_DOF];
+        if let Some(w) = along.get_mut(dof) {
+            *w = 1.0;
+        }
+        self.replay_along(&along, t_s, deflection_rad, pivot_mm, rate_window_s)
+    }
+
+    /// [`Unit::replay`] along a direction of several DOFs: DOF `i` deflected by `direction[i]`
+    /// times the recorded deflection, and the sensors' readings projected back onto the
+    /// direction (`sum direction[i] torque[i]`), as a record along that direction projects them
+    /// (section 3.5.2's wrist: q6 by `sin a`, q7 by `cos a` of a deflection along `a`).
+    ///
+    /// ```
+    /// use jointctl_config::{EffectsConfig, EnvironmentConfig};
+    /// use jointctl_sim::unit::{Element, Unit};
+    /// let mut unit = Unit::new(vec!["a".into(), "b".into()], vec![0, 1], vec![vec![1.0, 0.0], vec![0.0, 1.0]],
+    ///     vec![Element::Linear(100.0), Element::Linear(300.0)], None,
+    ///     vec![EnvironmentConfig::Fixed { position_rad: 0.0 }; 2], EffectsConfig::default());
+    /// unit.set_effects(1, EffectsConfig { torque_offset_nm: 0.5, ..Default::default() });
+    /// let r = std::f64::consts::FRAC_1_SQRT_2;
+    /// let tau = unit.replay_along(&[r, r], &[0.0, 0.01], &[0.0, 0.01], &[f64::NAN; 2], 0.02);
+    /// // (100 + 300) / 2 Nm/rad along the diagonal, and b's offset projected onto it.
+    /// assert!((tau[1] - (2.0 + 0.5 * r)).abs() < 1e-12);
+    /// ```
+    pub fn replay_along(&mut self, direction: &[f64], t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64], rate_window_s: f64) -> Vec<f64> {
         let n = t_s.len().min(deflection_rad.len());
+        let dofs = direction.len().min(MAX_UNIT_DOF);
         self.state = [EffectState::default(); MAX_UNIT_DOF];
         let mut out = Vec::with_capacity(n);
         let mut lo = 0;
@@ -430,10 +456,12 @@ impl Unit {
             let dt = if k == 0 { 0.0 } else { t_s[k] - t_s[k - 1] };
             let (mut d_eff, mut w) = ([0.0; MAX_UNIT_DOF], [0.0; MAX_UNIT_DOF]);
             let d = deflection_rad[k];
-            d_eff[dof] = elastic_deflection(d, self.effects[dof].dead_zone_rad, self.effects[dof].dead_zone_ramp_rad);
-            w[dof] = rate;
+            for i in (0..dofs).filter(|i| direction[*i] != 0.0) {
+                d_eff[i] = elastic_deflection(d * direction[i], self.effects[i].dead_zone_rad, self.effects[i].dead_zone_ramp_rad);
+                w[i] = rate * direction[i];
+            }
             self.element_step(&d_eff, &w, dt, None);
-            out.push(self.sensor_torque[dof]);
+            out.push((0..dofs).filter(|i| direction[*i] != 0.0).map(|i| direction[i] * self.sensor_torque[i]).sum());
         }
         out
     }

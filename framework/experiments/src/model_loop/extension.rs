@@ -24,6 +24,10 @@ pub struct Extension {
     pub observer_params: Value,
     /// The DOF's plant effects with the extended simulation.
     pub plant_effects: PlantEffects,
+    /// The joint's other DOFs whose plant effects change too, by DOF index (the wrist's torque
+    /// offsets split from its diagonals, [`super::extend_wrist_offsets`]); empty when the
+    /// extension is one DOF's.
+    pub other_dofs: Vec<(usize, PlantEffects)>,
     /// Causes whose plant terms went into the simulation (with their setting, by pivot).
     pub plant_causes: Vec<String>,
     /// Why other causes did not change one side or the other.
@@ -191,6 +195,7 @@ fn finish(dof: &str, (j, i, entry): (usize, usize, &jointctl_config::JointConfig
         joint_index: j,
         observer_params: params_after,
         plant_effects: effects,
+        other_dofs: Vec::new(),
         plant_causes,
         notes,
         simulation: gain(&sim_before, &current),

@@ -25,6 +25,7 @@ mod gain;
 mod observer;
 mod plant_choice;
 mod simulation;
+mod wrist_offsets;
 mod write;
 
 pub use self::extension::{Extension, SettingGain, extend, extend_by_pivot};
@@ -32,6 +33,7 @@ pub use self::found::{Found, SettingFound};
 pub use self::gain::{Gain, Split, Trace, observer_gain_along};
 pub use self::observer::{configured_torque, configured_torque_along, observer_torque, observer_torque_along, observer_torque_of};
 pub use self::simulation::{PlantEffects, REPLAY_RATE_WINDOW_S, simulated_torque};
+pub use self::wrist_offsets::{DiagonalPart, extend_wrist_offsets};
 pub use self::write::{Written, write};
 
 fn err(m: impl Into<String>) -> ExperimentError {

@@ -85,7 +85,7 @@ pub(super) enum JointEffects {
 
 impl JointEffects {
     /// Into `sim`, the other forms cleared.
-    fn apply(self, sim: &mut JointSimConfig) {
+    pub(super) fn apply(self, sim: &mut JointSimConfig) {
         sim.effects = EffectsConfig::default();
         sim.effects_per_dof.clear();
         sim.effects_by_pivot.clear();
@@ -118,6 +118,19 @@ impl JointEffects {
             ),
         })
     }
+}
+
+/// `sim` with each of `other_dofs`' effects in its DOF's place (each in the form it takes, the
+/// DOFs not listed as configured): what an extension of several DOFs starts its own DOF from.
+///
+/// # Errors
+/// As [`PlantEffects::joint_effects`].
+pub(super) fn with_other_dofs(sim: &JointSimConfig, other_dofs: &[(usize, PlantEffects)]) -> Result<JointSimConfig, ExperimentError> {
+    let mut sim = sim.clone();
+    for (d, effects) in other_dofs {
+        effects.joint_effects(&sim, *d)?.apply(&mut sim);
+    }
+    Ok(sim)
 }
 
 /// DOF `d`'s configured effects (at `pivot_mm` when they are by setting).
@@ -167,6 +180,35 @@ pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &PlantEffects
     let mut last = 0.0;
     let held: Vec<f64> = deflection_rad.iter().map(|d| if d.is_finite() { last = *d; *d } else { last }).collect();
     let mut out = unit.replay(i, t_s, &held, pivot_mm, REPLAY_RATE_WINDOW_S);
+    for (o, d) in out.iter_mut().zip(deflection_rad) {
+        if !d.is_finite() {
+            *o = f64::NAN;
+        }
+    }
+    Ok(out)
+}
+
+/// The simulated torque sensors of joint `j` (the wrist) replayed along deflection direction
+/// `angle_deg` (section 3.5.2: its first DOF deflected by `sin`, its second by `cos` of the
+/// deflection) and projected back onto it, with the joint's `sim` section `sim` [Nm]; NaN where
+/// the deflection is unknown.
+///
+/// # Errors
+/// The joint is not simulated, or does not have two DOFs.
+pub(super) fn simulated_torque_along(loaded: &LoadedConfig, j: usize, sim: &JointSimConfig, angle_deg: f64, t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Result<Vec<f64>, ExperimentError> {
+    let mut cfg = loaded.config.clone();
+    let entry = cfg.joints.get_mut(j).ok_or_else(|| err(format!("no joints[{j}]")))?;
+    entry.sim = Some(sim.clone());
+    let names: Vec<String> = entry.dof_names().iter().map(|n| n.to_string()).collect();
+    if names.len() != 2 {
+        return Err(err(format!("joints[{j}] has {} DOFs: a direction is of a 2-DOF joint's", names.len())));
+    }
+    let hal = jointctl_sim::SimHal::with_chain(&cfg, loaded.chain.as_ref()).map_err(|e| err(e.to_string()))?;
+    let mut unit = hal.units().iter().find(|u| u.dof_names == names).ok_or_else(|| err(format!("joints[{j}] ({}) is not simulated as one unit", names.join(", "))))?.clone();
+    let (sin, cos) = angle_deg.to_radians().sin_cos();
+    let mut last = 0.0;
+    let held: Vec<f64> = deflection_rad.iter().map(|d| if d.is_finite() { last = *d; *d } else { last }).collect();
+    let mut out = unit.replay_along(&[sin, cos], t_s, &held, pivot_mm, REPLAY_RATE_WINDOW_S);
     for (o, d) in out.iter_mut().zip(deflection_rad) {
         if !d.is_finite() {
             *o = f64::NAN;

@@ -78,7 +78,7 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     let entry = &loaded.config.joints[ext.joint_index];
     let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
     let (key, effects) = match entry.sim.as_ref() {
-        Some(sim) => ext.plant_effects.joint_effects(sim, i)?.yaml_entry()?,
+        Some(sim) => super::simulation::with_other_dofs(sim, &ext.other_dofs).and_then(|sim| ext.plant_effects.joint_effects(&sim, i))?.yaml_entry()?,
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     };
     put(&written.plant, format!("# `sim.{key}` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&effects)?))?;

@@ -75,14 +75,6 @@ fn named_offset(causes: &[Cause], angle: f64) -> Result<Option<(f64, f64)>, Stri
 /// splits a torque offset named along both between the two DOFs (`dof_names`: the first DOF,
 /// deflected by `sin`, then the second).
 pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Data, parts: [Vec<usize>; 2], dof_names: [&str; 2]) -> ExitCode {
-    if a.out.is_some() {
-        return crate::fail(format!(
-            "{}: --out is refused: a record along both diagonals gives each DOF's torque offset (reported), and the rest of what it finds belongs to the pair; the extension is per DOF and is written from records along 90 deg ({}) and 0 deg ({})",
-            a.data.display(),
-            dof_names[0],
-            dof_names[1]
-        ));
-    }
     let mut reports = Vec::new();
     for (angle, idx) in DIAGONALS_DEG.iter().zip(&parts) {
         let settings = data.subset(idx).pivot_settings(super::MIN_SETTING_SAMPLES);
@@ -109,7 +101,20 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
             if r45.is_none() { DIAGONALS_DEG[0] } else { DIAGONALS_DEG[1] }
         )),
     };
-    let md = markdown(a, &reports, &parts, &offsets, dof_names);
+    let mut md = markdown(a, &reports, &parts, &offsets, dof_names);
+    // The offsets into each DOF's extension, with both gains along the diagonals.
+    let extension = match (&offsets, &a.config, &a.joint) {
+        (Ok(o), Some(config), Some(dof)) => match offsets_extension(a, config, dof, [o[0].0, o[1].0], data, &parts, &mut md) {
+            Ok(ext) => Some(ext),
+            Err(e) if a.out.is_some() => return crate::fail(format!("cannot write the extension: {e}")),
+            Err(e) => {
+                eprintln!("note: no simulation or observer gains: {e}");
+                None
+            }
+        },
+        (Err(why), _, _) if a.out.is_some() => return crate::fail(format!("{}: --out has nothing to write: {why}", a.data.display())),
+        _ => None,
+    };
     if let Err(e) = super::output::write_report_md(a, &md) {
         return crate::fail(e);
     }
@@ -122,11 +127,30 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
             }),
             Err(why) => serde_json::json!({"note": why}),
         };
-        outln!("{}", serde_json::json!({"directions": directions, "offsets_per_dof": offsets}));
+        let mut json = serde_json::json!({"directions": directions, "offsets_per_dof": offsets});
+        if let Some(ext) = &extension {
+            json["extension"] = super::extension::extension_json(ext);
+            json["gains"] = serde_json::json!({"simulation": ext.simulation, "observer": ext.observer});
+        }
+        outln!("{json}");
     } else {
         out!("{md}");
     }
     ExitCode::SUCCESS
+}
+
+/// The wrist's extension by the offsets split between its DOFs (`offsets_nm`, in the joint's DOF
+/// order), its gains table in `md`, and with `--out` its files (said in `md`).
+fn offsets_extension(a: &IdentifyArgs, config: &std::path::Path, dof: &str, offsets_nm: [f64; 2], data: &Data, parts: &[Vec<usize>; 2], md: &mut String) -> Result<jointctl_experiments::model_loop::Extension, String> {
+    use jointctl_experiments::model_loop::{DiagonalPart, extend_wrist_offsets};
+    let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
+    let diagonals = [0, 1].map(|k| DiagonalPart { angle_deg: DIAGONALS_DEG[k], samples: &parts[k] });
+    let ext = extend_wrist_offsets(&loaded, dof, offsets_nm, data, diagonals, super::split(a)).map_err(|e| format!("{}: {e}", config.display()))?;
+    md.push_str("\nThe offsets per DOF are the extension (each DOF's `model_extension` entry and simulated effects); the rest of what the diagonals find belongs to the pair and is not written.\n");
+    md.push_str(&super::extension::gains_table(&ext));
+    let provenance = format!("by `jointctl identify --data {}` (the offsets split from both wrist diagonals)", a.data.display());
+    super::extension::write_extension(a, &ext, &loaded, &provenance, &Default::default(), md)?;
+    Ok(ext)
 }
 
 /// The report: each direction's line and the offsets per DOF, or why there are none.

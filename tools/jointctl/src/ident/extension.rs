@@ -37,10 +37,14 @@ pub(super) fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> S
     md
 }
 
-/// The gains as a Markdown table, with what was left out and why.
-/// The extension in `--json`: the observer's terms, the plant's effects and the notes.
+/// The extension in `--json`: the observer's terms, the plant's effects and the notes, and the
+/// joint's other DOFs whose effects change too (the wrist's split offsets), by DOF index.
 pub(super) fn extension_json(ext: &Extension) -> serde_json::Value {
-    serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects.to_json(), "plant_causes": ext.plant_causes, "notes": ext.notes})
+    let mut json = serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects.to_json(), "plant_causes": ext.plant_causes, "notes": ext.notes});
+    if !ext.other_dofs.is_empty() {
+        json["plant_other_dofs"] = ext.other_dofs.iter().map(|(d, p)| serde_json::json!({"dof_index": d, "plant": p.to_json()})).collect();
+    }
+    json
 }
 
 /// The extension's files (`--out`) and gain plots (`--report`, else `--out`), each said in `md`.
@@ -60,6 +64,7 @@ pub(super) fn write_extension(a: &IdentifyArgs, ext: &Extension, loaded: &jointc
     Ok(())
 }
 
+/// The gains as a Markdown table, with what was left out and why.
 pub(super) fn gains_table(ext: &Extension) -> String {
     let mut md = String::from("\n## Gains on the held-out part\n\n| | before [Nm] | after [Nm] | gain |\n|---|---|---|---|\n");
     for (name, g) in [("simulation (replayed along the recorded motion, vs F/T)", ext.simulation), ("observer (recorded deflections, vs F/T)", ext.observer)] {

@@ -178,7 +178,7 @@ impl ConfiguredJoint {
 /// What a record along a diagonal direction of the wrist says, in the report and its JSON.
 fn diagonal_note(angle_deg: f64) -> String {
     format!(
-        "a wrist record along {angle_deg} deg deflects both DOFs (q6 by sin, q7 by cos of the direction): the baseline is the table's torque along it, and a cause found here belongs to the pair; the extension is per DOF and is written from records along 90 deg (q6) and 0 deg (q7)"
+        "a wrist record along {angle_deg} deg deflects both DOFs (q6 by sin, q7 by cos of the direction): the baseline is the table's torque along it, and a cause found here belongs to the pair; the extension is per DOF and is written from records along 90 deg (q6) and 0 deg (q7), and each DOF's torque offset from one record along both 45 and 135 deg"
     )
 }
 
