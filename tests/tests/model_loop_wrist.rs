@@ -154,7 +154,9 @@ fn the_wrist_recorded_along_its_diagonals_is_identified_against_the_tables_torqu
 /// record` runs, the second's time after the first's, as a rig logs one test after another) is
 /// identified per direction and the offsets split; a record of two directions was refused. With
 /// `--out` the offsets are the extension, each DOF's observer entry and simulated effects, with
-/// gains of at least 50 % along the diagonals (`--out` was refused for such a record). The clean
+/// gains of at least 50 % along the diagonals (`--out` was refused for such a record); they
+/// replace offsets configured in either place, go into terms by pivot setting at each setting,
+/// and leave a simulation that has them already as it is. The clean
 /// plant: no offset, the report says why none is split, and `--out` says it has nothing to write.
 #[test]
 fn a_record_along_both_wrist_diagonals_splits_a_torque_offset_between_the_dofs() {
@@ -210,6 +212,32 @@ fn a_record_along_both_wrist_diagonals_splits_a_torque_offset_between_the_dofs()
     let (simulation, observer) = (gain(&written, "simulation"), gain(&written, "observer"));
     println!("{name}: gains along the diagonals: simulation {simulation:.2}, observer {observer:.2}; {}", written["gains"]);
     assert!(simulation >= 0.5 && observer >= 0.5, "gains simulation {simulation:.2}, observer {observer:.2}");
+    assert_eq!((written["extension"]["plant_dof"].as_str(), written["extension"]["plant_other_dofs"][0]["dof"].as_str()), (Some("q7"), Some("q6")), "{}", written["extension"]);
+    // From a review: against a config whose simulation has an offset on q6 already and whose q7
+    // observer terms are by pivot setting, the offsets replace what is there (they are read
+    // against the table alone): q6's simulated offset was written 0.1 Nm too large, and q7's
+    // entry refused ("either flat or by_pivot").
+    let mut edits = edits(", torque_offset_nm: 0.1", "");
+    edits.push(Edit::Set("joints[wrist].params.model_extension", serde_yaml::from_str("[null, {by_pivot: [{pivot_mm: 10.0, terms: {torque_offset_nm: 0.05}}, {pivot_mm: 30.0, terms: {torque_offset_nm: 0.05}}]}]").unwrap()));
+    let configured = sherpa_with(&format!("{name}-c2"), &arm, &edits);
+    let out = work.join("offsets-ext-2");
+    let json: serde_json::Value = serde_json::from_str(&run_ok(Command::new(jointctl()).args(["identify", "--data"]).arg(&file).arg("--config").arg(&configured).args(["--joint", "q7", "--json", "--out"]).arg(&out))).unwrap();
+    run_ok(Command::new(jointctl()).arg("check").arg(out.join("extended.yaml")));
+    let plant_yaml: Value = serde_yaml::from_str(&std::fs::read_to_string(out.join("plant.yaml")).unwrap()).unwrap();
+    let q6 = plant_yaml[0]["torque_offset_nm"].as_f64().unwrap();
+    assert!((q6 - 0.3).abs() < 0.01, "q6's simulated offset {q6:.4} Nm, hidden 0.3 (configured 0.1)");
+    let observer: Value = serde_yaml::from_str(&std::fs::read_to_string(out.join("observer.yaml")).unwrap()).unwrap();
+    for setting in observer["model_extension"][1]["by_pivot"].as_sequence().unwrap() {
+        let o = setting["terms"]["torque_offset_nm"].as_f64().unwrap();
+        assert!((o + 0.2).abs() < 0.01, "q7 at {:?} mm: {o:.4} Nm, hidden -0.2", setting["pivot_mm"]);
+    }
+    let notes = json["extension"]["notes"].to_string();
+    assert!(notes.contains("q6's configured simulated offset (0.1 Nm) is replaced") && notes.contains("by pivot setting"), "{notes}");
+    // A simulation that has the offsets already is left as it is (they must better its replay
+    // of the training parts significantly, as any cause's plant terms must).
+    let json: serde_json::Value = serde_json::from_str(&run_ok(Command::new(jointctl()).args(["identify", "--data"]).arg(&file).arg("--config").arg(&plant).args(["--joint", "q7", "--json"]))).unwrap();
+    assert!(json["extension"]["plant_causes"].as_array().unwrap().is_empty(), "{}", json["extension"]);
+    assert!(json["extension"]["notes"].to_string().contains("left out of the simulation"), "{}", json["extension"]["notes"]);
     let clean_file = both(&config, "clean");
     let refused = Command::new(jointctl()).args(["identify", "--data"]).arg(&clean_file).arg("--config").arg(&config).args(["--joint", "q7", "--out"]).arg(work.join("x")).output().unwrap();
     let why = String::from_utf8_lossy(&refused.stderr);

@@ -27,7 +27,7 @@ pub struct Extension {
     /// The joint's other DOFs whose plant effects change too, by DOF index (the wrist's torque
     /// offsets split from its diagonals, [`super::extend_wrist_offsets`]); empty when the
     /// extension is one DOF's.
-    pub other_dofs: Vec<(usize, PlantEffects)>,
+    pub other_dofs: Vec<DofEffects>,
     /// Causes whose plant terms went into the simulation (with their setting, by pivot).
     pub plant_causes: Vec<String>,
     /// Why other causes did not change one side or the other.
@@ -42,6 +42,17 @@ pub struct Extension {
     pub observer_trace: Trace,
     /// For a record of several pivot settings, both gains at each (empty for one record).
     pub by_setting: Vec<SettingGain>,
+}
+
+/// Another DOF's plant effects, changed beside the extension's own DOF's.
+#[derive(Clone, Debug)]
+pub struct DofEffects {
+    /// The DOF.
+    pub dof: String,
+    /// Its index in its joint.
+    pub index: usize,
+    /// Its effects.
+    pub effects: PlantEffects,
 }
 
 /// Both gains on what one pivot setting's identification held out.

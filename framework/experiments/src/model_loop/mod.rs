@@ -28,7 +28,7 @@ mod simulation;
 mod wrist_offsets;
 mod write;
 
-pub use self::extension::{Extension, SettingGain, extend, extend_by_pivot};
+pub use self::extension::{DofEffects, Extension, SettingGain, extend, extend_by_pivot};
 pub use self::found::{Found, SettingFound};
 pub use self::gain::{Gain, Split, Trace, observer_gain_along};
 pub use self::observer::{configured_torque, configured_torque_along, observer_torque, observer_torque_along, observer_torque_of};

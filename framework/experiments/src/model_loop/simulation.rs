@@ -125,10 +125,10 @@ impl JointEffects {
 ///
 /// # Errors
 /// As [`PlantEffects::joint_effects`].
-pub(super) fn with_other_dofs(sim: &JointSimConfig, other_dofs: &[(usize, PlantEffects)]) -> Result<JointSimConfig, ExperimentError> {
+pub(super) fn with_other_dofs<'a>(sim: &JointSimConfig, other_dofs: impl IntoIterator<Item = (usize, &'a PlantEffects)>) -> Result<JointSimConfig, ExperimentError> {
     let mut sim = sim.clone();
     for (d, effects) in other_dofs {
-        effects.joint_effects(&sim, *d)?.apply(&mut sim);
+        effects.joint_effects(&sim, d)?.apply(&mut sim);
     }
     Ok(sim)
 }

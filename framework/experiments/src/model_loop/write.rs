@@ -78,7 +78,7 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     let entry = &loaded.config.joints[ext.joint_index];
     let i = entry.dof_names().iter().position(|n| *n == ext.dof).unwrap_or(0);
     let (key, effects) = match entry.sim.as_ref() {
-        Some(sim) => super::simulation::with_other_dofs(sim, &ext.other_dofs).and_then(|sim| ext.plant_effects.joint_effects(&sim, i))?.yaml_entry()?,
+        Some(sim) => super::simulation::with_other_dofs(sim, ext.other_dofs.iter().map(|o| (o.index, &o.effects))).and_then(|sim| ext.plant_effects.joint_effects(&sim, i))?.yaml_entry()?,
         None => return Err(err(format!("{}: joints[{}] has no sim section", config.display(), ext.joint_index))),
     };
     put(&written.plant, format!("# `sim.{key}` of `{}`'s joint in {}, extended {provenance}.\n{}", ext.dof, config.display(), yaml(&effects)?))?;
@@ -114,10 +114,16 @@ pub fn write(ext: &Extension, loaded: &LoadedConfig, dir: &Path, provenance: &st
     }
     put(
         &written.extended,
-        format!("# {} with `{}`'s observer (observer.yaml) and simulation (plant.yaml) extended {provenance}.\n# Written, not edited: the original's comments are in the original.\n{}", config.display(), ext.dof, serde_yaml::to_string(&doc).map_err(|e| err(e.to_string()))?),
+        format!("# {} with `{}`'s observer (observer.yaml) and simulation (plant.yaml) extended {provenance}.\n# Written, not edited: the original's comments are in the original.\n{}", config.display(), extended_dofs(ext), serde_yaml::to_string(&doc).map_err(|e| err(e.to_string()))?),
     )?;
     jointctl_config::load(&written.extended).map_err(|e| err(format!("the extended config does not load: {e}")))?;
     Ok(written)
+}
+
+/// The DOFs an extension changes, for the files' headers: its own, and its joint's others whose
+/// effects change too.
+fn extended_dofs(ext: &Extension) -> String {
+    std::iter::once(ext.dof.as_str()).chain(ext.other_dofs.iter().map(|o| o.dof.as_str())).collect::<Vec<_>>().join("` and `")
 }
 
 /// `params` with this jointctl's file format first (`version:`), for a file a joint includes.

@@ -146,7 +146,11 @@ fn offsets_extension(a: &IdentifyArgs, config: &std::path::Path, dof: &str, offs
     let loaded = jointctl_config::load(config).map_err(|e| e.to_string())?;
     let diagonals = [0, 1].map(|k| DiagonalPart { angle_deg: DIAGONALS_DEG[k], samples: &parts[k] });
     let ext = extend_wrist_offsets(&loaded, dof, offsets_nm, data, diagonals, super::split(a)).map_err(|e| format!("{}: {e}", config.display()))?;
-    md.push_str("\nThe offsets per DOF are the extension (each DOF's `model_extension` entry and simulated effects); the rest of what the diagonals find belongs to the pair and is not written.\n");
+    md.push_str(if ext.plant_causes.is_empty() {
+        "\nThe offsets per DOF are the extension: each DOF's `model_extension` entry (the simulation's effects stay as configured, below); the rest of what the diagonals find belongs to the pair and is not written.\n"
+    } else {
+        "\nThe offsets per DOF are the extension: each DOF's `model_extension` entry and simulated effects; the rest of what the diagonals find belongs to the pair and is not written.\n"
+    });
     md.push_str(&super::extension::gains_table(&ext));
     let provenance = format!("by `jointctl identify --data {}` (the offsets split from both wrist diagonals)", a.data.display());
     super::extension::write_extension(a, &ext, &loaded, &provenance, &Default::default(), md)?;

@@ -42,7 +42,8 @@ pub(super) fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> S
 pub(super) fn extension_json(ext: &Extension) -> serde_json::Value {
     let mut json = serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects.to_json(), "plant_causes": ext.plant_causes, "notes": ext.notes});
     if !ext.other_dofs.is_empty() {
-        json["plant_other_dofs"] = ext.other_dofs.iter().map(|(d, p)| serde_json::json!({"dof_index": d, "plant": p.to_json()})).collect();
+        json["plant_dof"] = serde_json::json!(ext.dof);
+        json["plant_other_dofs"] = ext.other_dofs.iter().map(|o| serde_json::json!({"dof": o.dof, "plant": o.effects.to_json()})).collect();
     }
     json
 }
@@ -85,13 +86,29 @@ pub(super) fn gains_table(ext: &Extension) -> String {
     md
 }
 
+/// What an extension's plots are of: its DOF, or its joint's DOFs when others changed too (the
+/// wrist's offsets split from its diagonals: the torque along each).
+fn subject(ext: &Extension) -> String {
+    if ext.other_dofs.is_empty() {
+        return ext.dof.clone();
+    }
+    let mut dofs: Vec<&str> = std::iter::once(ext.dof.as_str()).chain(ext.other_dofs.iter().map(|o| o.dof.as_str())).collect();
+    dofs.sort_unstable();
+    format!("{} (torque along the diagonals)", dofs.join(" and "))
+}
+
+/// Which held-out part the plots show: one, or each diagonal's in turn.
+fn held_out_part(ext: &Extension) -> &'static str {
+    if ext.other_dofs.is_empty() { "held-out part" } else { "held-out parts, 45 then 135 deg" }
+}
+
 /// One plot per side: the held-out F/T torque with the configured and the extended model.
 pub(super) fn gain_plots(dir: &Path, ext: &Extension) -> Result<Vec<(String, String)>, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let mut files = Vec::new();
     for (side, trace, g) in [("simulation", &ext.simulation_trace, ext.simulation), ("observer", &ext.observer_trace, ext.observer)] {
         let pick = |v: &[f64]| trace.t_s.iter().zip(v).filter(|(_, y)| y.is_finite()).map(|(t, y)| (*t, *y)).collect::<Vec<_>>();
-        let title = format!("{} {side} vs F/T, held-out part (RMSE {:.4} -> {:.4} Nm)", ext.dof, g.rmse_before, g.rmse_after);
+        let title = format!("{} {side} vs F/T, {} (RMSE {:.4} -> {:.4} Nm)", subject(ext), held_out_part(ext), g.rmse_before, g.rmse_after);
         let file = format!("gain-{side}.svg");
         lines(&dir.join(&file), &title, "t [s]", "torque [Nm]", &[
             Series { name: "F/T sensor", points: pick(&trace.measured_nm), color: COLORS[0] },
