@@ -10,6 +10,7 @@
 
 use jointctl_config::LoadedConfig;
 use jointctl_ident::csv::Data;
+use jointctl_ident::identify::significance::{BlockTest, block_test};
 use serde_json::Value;
 
 use super::err;
@@ -17,7 +18,6 @@ use super::extension::{DofEffects, Extension};
 use super::gain::{Gain, Split, held_out_mask, rmse, squared_errors, trace};
 use super::observer::{observer_torque_along, two_dof};
 use super::simulation::{PlantEffects, configured_plant, simulated_torque_along, with_other_dofs};
-use jointctl_ident::identify::significance::{BlockTest, block_test};
 use crate::ExperimentError;
 
 /// One diagonal of a record along both: its direction [deg] and its samples' indices in the

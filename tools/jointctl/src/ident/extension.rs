@@ -38,7 +38,8 @@ pub(super) fn loop_table(l: &jointctl_experiments::loop_causes::LoopReport) -> S
 }
 
 /// The extension in `--json`: the observer's terms, the plant's effects and the notes, and the
-/// joint's other DOFs whose effects change too (the wrist's split offsets), by DOF index.
+/// joint's other DOFs whose effects change too (the wrist's split offsets), each by name, with
+/// `plant_dof` naming the DOF of `plant`.
 pub(super) fn extension_json(ext: &Extension) -> serde_json::Value {
     let mut json = serde_json::json!({"observer": ext.observer_params.get("model_extension"), "plant": ext.plant_effects.to_json(), "plant_causes": ext.plant_causes, "notes": ext.notes});
     if !ext.other_dofs.is_empty() {
