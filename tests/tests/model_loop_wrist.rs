@@ -156,7 +156,8 @@ fn the_wrist_recorded_along_its_diagonals_is_identified_against_the_tables_torqu
 /// `--out` the offsets are the extension, each DOF's observer entry and simulated effects, with
 /// gains of at least 50 % along the diagonals (`--out` was refused for such a record); they
 /// replace offsets configured in either place, go into terms by pivot setting at each setting,
-/// and leave a simulation that has them already as it is. The clean
+/// and leave a simulation that has them already as it is; configured, they explain the record
+/// along each diagonal (`directions[].observer`, which a record along both did not give). The clean
 /// plant: no offset, the report says why none is split, and `--out` says it has nothing to write.
 #[test]
 fn a_record_along_both_wrist_diagonals_splits_a_torque_offset_between_the_dofs() {
@@ -213,6 +214,14 @@ fn a_record_along_both_wrist_diagonals_splits_a_torque_offset_between_the_dofs()
     println!("{name}: gains along the diagonals: simulation {simulation:.2}, observer {observer:.2}; {}", written["gains"]);
     assert!(simulation >= 0.5 && observer >= 0.5, "gains simulation {simulation:.2}, observer {observer:.2}");
     assert_eq!((written["extension"]["plant_dof"].as_str(), written["extension"]["plant_other_dofs"][0]["dof"].as_str()), (Some("q7"), Some("q6")), "{}", written["extension"]);
+    // The written extension, configured, explains the record along each diagonal (the plugin's
+    // own evaluation along the direction).
+    let again: serde_json::Value = serde_json::from_str(&run_ok(Command::new(jointctl()).args(["identify", "--data"]).arg(&file).arg("--config").arg(out.join("extended.yaml")).args(["--joint", "q7", "--json"]))).unwrap();
+    for d in again["directions"].as_array().unwrap() {
+        let (table, with) = (d["observer"]["rmse_table"].as_f64().unwrap(), d["observer"]["rmse_extended"].as_f64().unwrap());
+        println!("{name} along {} deg, the written extension configured: held-out {table:.4} -> {with:.4} Nm", d["angle_deg"]);
+        assert!(with <= 0.5 * table, "along {} deg: {with:.4} of the table's {table:.4} Nm", d["angle_deg"]);
+    }
     // From a review: against a config whose simulation has an offset on q6 already and whose q7
     // observer terms are by pivot setting, the offsets replace what is there (they are read
     // against the table alone): q6's simulated offset was written 0.1 Nm too large, and q7's

@@ -13,6 +13,7 @@ use std::fmt::Write as _;
 use std::process::ExitCode;
 
 use jointctl_ident::csv::Data;
+use jointctl_experiments::model_loop::{Gain, observer_gain_along};
 use jointctl_ident::identify::{Cause, IdentifyOptions, Report, identify};
 
 use super::{ConfiguredJoint, IdentifyArgs};
@@ -91,6 +92,20 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
             Err(e) => return crate::fail(format!("{} along {angle} deg: {e}", a.data.display())),
         }
     }
+    // The configured extension along each diagonal: how one written before (from the axes, or
+    // from an earlier record along both) explains this record; said, not fatal, when it cannot be
+    // evaluated (as along one diagonal).
+    let configured: Vec<Option<Gain>> = DIAGONALS_DEG
+        .iter()
+        .zip(&parts)
+        .map(|(angle, idx)| match observer_gain_along(&joint.params, *angle, &data.subset(idx), super::split(a)) {
+            Ok(g) => g,
+            Err(e) => {
+                eprintln!("note: no observer gain along {angle} deg: {e}");
+                None
+            }
+        })
+        .collect();
     // Split where both diagonals name one. Where one names none, o6 = -o7 (or o6 = o7) would
     // follow from the other alone; not assumed: the other may have been too small to name.
     let offsets = match (named_offset(&reports[0].causes, DIAGONALS_DEG[0]), named_offset(&reports[1].causes, DIAGONALS_DEG[1])) {
@@ -102,6 +117,11 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
         )),
     };
     let mut md = markdown(a, &reports, &parts, &offsets, dof_names);
+    for (angle, g) in DIAGONALS_DEG.iter().zip(&configured) {
+        if let Some(g) = g {
+            let _ = writeln!(md, "\nThe configured wrist observer along {angle} deg, held-out RMSE: {:.4} Nm with the table alone, {:.4} Nm with its model_extension.", g.rmse_before, g.rmse_after);
+        }
+    }
     // The offsets into each DOF's extension, with both gains along the diagonals.
     let extension = match (&offsets, &a.config, &a.joint) {
         (Ok(o), Some(config), Some(dof)) => match offsets_extension(a, config, dof, [o[0].0, o[1].0], data, &parts, &mut md) {
@@ -119,7 +139,18 @@ pub(super) fn identify_both(a: &IdentifyArgs, joint: &ConfiguredJoint, data: &Da
         return crate::fail(e);
     }
     if a.json {
-        let directions: Vec<serde_json::Value> = DIAGONALS_DEG.iter().zip(&reports).map(|(angle, r)| super::output::part_json(r, "angle_deg", *angle)).collect();
+        let directions: Vec<serde_json::Value> = DIAGONALS_DEG
+            .iter()
+            .zip(&reports)
+            .zip(&configured)
+            .map(|((angle, r), g)| {
+                let mut v = super::output::part_json(r, "angle_deg", *angle);
+                if let Some(g) = g {
+                    v["observer"] = serde_json::json!({"rmse_table": g.rmse_before, "rmse_extended": g.rmse_after});
+                }
+                v
+            })
+            .collect();
         let offsets = match &offsets {
             Ok(o) => serde_json::json!({
                 dof_names[0]: {"offset_nm": o[0].0, "standard_error_nm": o[0].1},
