@@ -174,18 +174,24 @@ pub fn simulated_torque(loaded: &LoadedConfig, dof: &str, effects: &PlantEffects
     }
     let hal = jointctl_sim::SimHal::with_chain(&cfg, loaded.chain.as_ref()).map_err(|e| err(e.to_string()))?;
     let unit = hal.units().iter().find(|u| u.dof_names.iter().any(|n| n == dof)).ok_or_else(|| err(format!("`{dof}` is not simulated")))?;
-    let mut unit = unit.clone();
-    // A NaN deflection (unknown) is replayed as the last known one: the element did not stop
-    // existing; the comparison leaves that sample out.
+    let mut along = vec![0.0; i + 1];
+    along[i] = 1.0;
+    Ok(replay_known(&mut unit.clone(), &along, t_s, deflection_rad, pivot_mm))
+}
+
+/// `unit` replayed along `direction` (see [`jointctl_sim::unit::Unit::replay_along`]), NaN where
+/// the deflection is unknown: such a sample is replayed as the last known deflection (the element
+/// did not stop existing) and the comparison leaves it out.
+fn replay_known(unit: &mut jointctl_sim::unit::Unit, direction: &[f64], t_s: &[f64], deflection_rad: &[f64], pivot_mm: &[f64]) -> Vec<f64> {
     let mut last = 0.0;
     let held: Vec<f64> = deflection_rad.iter().map(|d| if d.is_finite() { last = *d; *d } else { last }).collect();
-    let mut out = unit.replay(i, t_s, &held, pivot_mm, REPLAY_RATE_WINDOW_S);
+    let mut out = unit.replay_along(direction, t_s, &held, pivot_mm, REPLAY_RATE_WINDOW_S);
     for (o, d) in out.iter_mut().zip(deflection_rad) {
         if !d.is_finite() {
             *o = f64::NAN;
         }
     }
-    Ok(out)
+    out
 }
 
 /// The simulated torque sensors of joint `j` (the wrist) replayed along deflection direction
@@ -206,15 +212,7 @@ pub(super) fn simulated_torque_along(loaded: &LoadedConfig, j: usize, sim: &Join
     let hal = jointctl_sim::SimHal::with_chain(&cfg, loaded.chain.as_ref()).map_err(|e| err(e.to_string()))?;
     let mut unit = hal.units().iter().find(|u| u.dof_names == names).ok_or_else(|| err(format!("joints[{j}] ({}) is not simulated as one unit", names.join(", "))))?.clone();
     let (sin, cos) = angle_deg.to_radians().sin_cos();
-    let mut last = 0.0;
-    let held: Vec<f64> = deflection_rad.iter().map(|d| if d.is_finite() { last = *d; *d } else { last }).collect();
-    let mut out = unit.replay_along(&[sin, cos], t_s, &held, pivot_mm, REPLAY_RATE_WINDOW_S);
-    for (o, d) in out.iter_mut().zip(deflection_rad) {
-        if !d.is_finite() {
-            *o = f64::NAN;
-        }
-    }
-    Ok(out)
+    Ok(replay_known(&mut unit, &[sin, cos], t_s, deflection_rad, pivot_mm))
 }
 
 /// `fragment` merged into `effects`: linear coefficients add, everything else replaces.
