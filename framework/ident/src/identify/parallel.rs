@@ -52,44 +52,40 @@ mod tests {
         assert_eq!(super::parallel_map(&[7u64], |x| (x + 1, std::thread::current().id() == caller)), vec![(8, true)]);
     }
 
+    /// Marks that an item ran on the calling thread or elsewhere, then waits (up to 5 s)
+    /// until items have run on both: whichever thread takes the first item cannot take them
+    /// all, so the test does not rest on which thread starts first.
+    fn mark_and_wait_for_both(caller: std::thread::ThreadId, seen: &[std::sync::atomic::AtomicBool; 2]) -> bool {
+        use std::sync::atomic::Ordering::SeqCst;
+        let here = std::thread::current().id() == caller;
+        seen[usize::from(here)].store(true, SeqCst);
+        let start = std::time::Instant::now();
+        while !(seen[0].load(SeqCst) && seen[1].load(SeqCst)) && start.elapsed() < std::time::Duration::from_secs(5) {
+            std::thread::yield_now();
+        }
+        here
+    }
+
     #[test]
     fn the_calling_thread_works_and_a_panic_on_any_worker_is_passed_on() {
         if super::cores() < 2 {
             return;
         }
-        // Each item waits until some item ran on another thread: the calling thread and a
-        // worker both take items (the first of them cannot finish alone).
         let caller = std::thread::current().id();
-        let elsewhere = std::sync::atomic::AtomicBool::new(false);
-        let on_caller: Vec<bool> = super::parallel_map(&[0u64; 8], |_| {
-            let here = std::thread::current().id() == caller;
-            if !here {
-                elsewhere.store(true, std::sync::atomic::Ordering::Relaxed);
-            }
-            let start = std::time::Instant::now();
-            while !elsewhere.load(std::sync::atomic::Ordering::Relaxed) && start.elapsed() < std::time::Duration::from_secs(5) {
-                std::thread::yield_now();
-            }
-            here
-        });
+        let seen = Default::default();
+        let on_caller: Vec<bool> = super::parallel_map(&[0u64; 8], |_| mark_and_wait_for_both(caller, &seen));
         assert!(on_caller.contains(&true) && on_caller.contains(&false), "{on_caller:?}");
-        // A panic is passed on whichever thread it happens on (the other waits for a worker
-        // to have taken an item, so that the worker does).
+        // A panic is passed on whichever thread it happens on.
         for on_the_caller in [true, false] {
-            let elsewhere = std::sync::atomic::AtomicBool::new(false);
+            let seen: [std::sync::atomic::AtomicBool; 2] = Default::default();
             let panicked = std::panic::catch_unwind(|| {
                 super::parallel_map(&[0u64; 8], |_| {
                     let here = std::thread::current().id() == caller;
-                    if !here {
-                        elsewhere.store(true, std::sync::atomic::Ordering::Relaxed);
-                    }
                     if here == on_the_caller {
+                        seen[usize::from(here)].store(true, std::sync::atomic::Ordering::SeqCst);
                         panic!("a cause's bug");
                     }
-                    let start = std::time::Instant::now();
-                    while !elsewhere.load(std::sync::atomic::Ordering::Relaxed) && start.elapsed() < std::time::Duration::from_secs(5) {
-                        std::thread::yield_now();
-                    }
+                    mark_and_wait_for_both(caller, &seen);
                 })
             });
             assert!(panicked.is_err(), "on the caller: {on_the_caller}");
