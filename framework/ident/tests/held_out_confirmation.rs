@@ -78,8 +78,9 @@ fn a_time_delay_seen_in_one_fast_stretch_of_the_held_out_part_is_confirmed() {
     // training part; the torque lags the encoder by `delay_s`; 120 Nm/rad, eq. 3.5 friction,
     // 14-bit deflection, 0.02 Nm noise, 200 Hz.
     //
-    // The training part's stretch is for BIC: on the slow sine alone, a 20 ms delay is a term in
-    // the rate that eq. 3.5's nearly straight arctan takes, and the delay was proposed through
+    // The training part's stretch is for BIC: on the slow sine alone, a 20 ms delay is to first
+    // order a torque in the rate (120 Nm/rad times 20 ms: 2.4 Nm s/rad), which the baseline's
+    // eq. 3.5 friction, odd in the rate as well, also fits; and the delay was proposed through
     // 14 bits on 4 of 4 noise draws but through 17 or 20 bits on 1 of 4: it rested on the
     // encoder's staircase (docs/identification.md, held counts). With the stretch, 4 of 4 at
     // each, 20 ms each time.
