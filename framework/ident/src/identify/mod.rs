@@ -294,7 +294,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (sharper, p) = match opts.baseline_friction {
-        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Sharper { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Adaptive { narrowest, reach_scale: 1.0 })?),
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
@@ -323,7 +323,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());
     others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
     drop(p);
-    others.extend(sharper.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Sharper, e)));
+    others.extend(sharper.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));
     Ok(bin_reading::best_reading(first, others))
 }
 

@@ -25,14 +25,15 @@ pub(super) fn bins_sentence(b: Option<&jointctl_ident::identify::bin_reading::Bi
 pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_reading::NarrowRate>) -> String {
     use jointctl_ident::identify::bin_reading::RateWindow;
     r.map_or(String::new(), |r| {
-        // The narrow window is judged on the baseline's fit, the cubic and the sharper
-        // intervals on the whole model's against the first pass's reading.
+        // The narrow window is judged on the baseline's fit, the cubic, the sharper intervals
+        // and the wider windows on the whole model's against the first pass's reading.
         let (judged, against) = match r.window {
             RateWindow::OneSampleEitherSide => ("the baseline's training BIC", "over the usual window"),
-            RateWindow::CubicTwoEitherSide | RateWindow::Sharper { .. } => ("the whole model's training BIC", "as identify read it first"),
+            RateWindow::CubicTwoEitherSide | RateWindow::Sharper { .. } | RateWindow::Wider { .. } => ("the whole model's training BIC", "as identify read it first"),
         };
         let usual = match r.window {
             RateWindow::Sharper { .. } => "a window is kept while its slope agrees with every narrower one's to within three standard errors of the deflection's scatter and the most its quantisation can tilt it".to_string(),
+            RateWindow::Wider { .. } => format!("no wider than the local period over {} either side", jointctl_ident::identify::prepare::VELOCITY_WINDOWS_PER_PERIOD),
             _ => format!("at least {} samples either side", jointctl_ident::identify::prepare::NARROWEST_RATE_WINDOW),
         };
         format!(" The rate read {}; usually {usual}. Judged by {judged} {:.0} against {:.0} {against}; {}.", r.window.describe(), r.bic_narrow, r.bic_usual, r.evidence)

@@ -26,7 +26,7 @@ pub use glitches::MAX_GLITCH_SAMPLES;
 use noise::scatter_rms;
 pub(crate) use spring::spring_share;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
-pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, WIDEST_RATE_REACH_S, widest_rate_window};
+pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, WIDEST_RATE_REACH_S, widest_rate_window};
 use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
 
 use super::causes::{Excitation, reversals, turn_step_rad};
@@ -292,7 +292,7 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
 }
 
 pub(crate) fn prepare(data: &Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
-    prepare_with_rate_window(data, train_fraction, how, RateReading::Adaptive { narrowest: NARROWEST_RATE_WINDOW, reach_scale: 1.0 })
+    prepare_with_rate_window(data, train_fraction, how, RateReading::usual(NARROWEST_RATE_WINDOW))
 }
 
 /// How the deflection's rate is read.
@@ -300,11 +300,20 @@ pub(crate) fn prepare(data: &Data, train_fraction: f64, how: HeldOut) -> Result<
 pub(crate) enum RateReading {
     /// A least-squares line over a window chosen at each sample, at least `narrowest` samples
     /// either side (see [`NARROWEST_RATE_WINDOW`]), each window's interval `reach_scale` of its
-    /// reach (1 as derived, less for a sharper reading: see [`SHARPER_REACH_SCALES`]).
-    Adaptive { narrowest: usize, reach_scale: f64 },
+    /// reach (1 as derived, less for a sharper reading: see [`SHARPER_REACH_SCALES`]), none
+    /// wider than the local period over `windows_per_period` (see [`WIDER_WINDOWS_PER_PERIOD`]).
+    Adaptive { narrowest: usize, reach_scale: f64, windows_per_period: f64 },
     /// A slow log's: the slope of a local cubic through two samples either side (see
     /// `rate::cubic_rate_by_segment`).
     Cubic,
+}
+
+impl RateReading {
+    /// The usual reading: adaptive windows at least `narrowest` samples either side, their
+    /// intervals at full reach, none wider than [`VELOCITY_WINDOWS_PER_PERIOD`] allows.
+    pub(crate) fn usual(narrowest: usize) -> Self {
+        RateReading::Adaptive { narrowest, reach_scale: 1.0, windows_per_period: VELOCITY_WINDOWS_PER_PERIOD }
+    }
 }
 
 /// [`prepare`] with the rate read as `rate` says.
@@ -373,9 +382,9 @@ pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, 
     // its scatter about a line from sample to sample (see [`scatter_rms`]).
     let deflection_scatter = scatter_rms(&d, &starts);
     let v = match rate {
-        RateReading::Adaptive { narrowest, reach_scale } => {
+        RateReading::Adaptive { narrowest, reach_scale, windows_per_period } => {
             let noise = DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter, reach_scale };
-            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, [narrowest, widest_rate_window(spacing)]))
+            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, windows_per_period, [narrowest, widest_rate_window(spacing)]))
         }
         RateReading::Cubic => cubic_rate_by_segment(&t, &d, &starts),
     };
