@@ -125,7 +125,7 @@ impl RateWindow {
             RateWindow::OneSampleEitherSide => "over a window as narrow as one sample either side".into(),
             RateWindow::CubicTwoEitherSide => "through a local cubic over two samples either side (of bin means: their interval's rate)".into(),
             RateWindow::Sharper { reach_scale } => format!("over windows whose slopes must agree to within {reach_scale} of the usual reach (sharper where the rate turns)"),
-            RateWindow::Wider { windows_per_period } => format!("over windows up to the local period over {windows_per_period} either side, where the usual stop at a fiftieth (coarse counts averaged over more of them)"),
+            RateWindow::Wider { windows_per_period } => format!("over windows up to the local period over {windows_per_period} either side (coarse counts averaged over more of them)"),
         }
     }
 }
@@ -337,13 +337,13 @@ pub(crate) fn best_reading(first: Extended, others: Vec<(Reading, Extended)>) ->
             let narrow_rate = NarrowRate { window: RateWindow::CubicTwoEitherSide, bic_narrow: cubic.training_bic, bic_usual: first.training_bic, evidence: evidence(&cubic) };
             Report { narrow_rate: Some(narrow_rate), ..cubic.report }
         }
-        Some((Reading::Other, mut sharper)) => {
+        Some((Reading::Other, mut other)) => {
             // Its reading, as `identify` handed it to this pass, judged now on the whole model.
-            let judged = (sharper.training_bic, evidence(&sharper));
-            if let Some(r) = sharper.report.narrow_rate.as_mut() {
+            let judged = (other.training_bic, evidence(&other));
+            if let Some(r) = other.report.narrow_rate.as_mut() {
                 (r.bic_narrow, r.bic_usual, r.evidence) = (judged.0, first.training_bic, judged.1);
             }
-            sharper.report
+            other.report
         }
         None => first.report,
     }

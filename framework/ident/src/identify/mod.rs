@@ -160,8 +160,8 @@ pub struct Report {
     pub no_spring: Option<NoSpring>,
     /// Set when a slow log is read as bin averages (see [`bin_reading`]).
     pub bin_averages: Option<bin_reading::BinAverages>,
-    /// Set when the rate is read otherwise than over the usual window: with sharper intervals,
-    /// or a slow log's as narrow as one sample either side or through a local cubic (see
+    /// Set when the rate is read otherwise than over the usual window: with sharper intervals or
+    /// over wider windows, or a slow log's as narrow as one sample either side or through a local cubic (see
     /// [`bin_reading::choose_rate_reading`]).
     pub narrow_rate: Option<bin_reading::NarrowRate>,
     /// Set when a friction record's stops or turns are left out (see [`prepare::AtRest`]): the
@@ -284,8 +284,9 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let builtin = causes::builtin();
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     // A slow log's rate as narrow as one sample either side, should the baseline read better
-    // so, and sharper intervals for the whole model to confirm (see `bin_reading`); should the
-    // screening fail (it fits the built-in friction only), the usual reading.
+    // so, and sharper intervals or wider windows for the whole model to confirm (see
+    // `bin_reading`); should the screening fail (it fits the built-in friction only), the usual
+    // reading.
     let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(data, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
     let slow = p.may_hold_bins() && opts.baseline_friction;
     let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow)).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
@@ -293,7 +294,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // Screened before any report holds its held-out series, on the first reading handed over
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
-    let (sharper, p) = match opts.baseline_friction {
+    let (other_reading, p) = match opts.baseline_friction {
         true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
@@ -323,7 +324,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());
     others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
     drop(p);
-    others.extend(sharper.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));
+    others.extend(other_reading.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));
     Ok(bin_reading::best_reading(first, others))
 }
 

@@ -10,18 +10,18 @@ use crate::identify::numeric::segment_ranges;
 pub const VELOCITY_WINDOWS_PER_PERIOD: f64 = 50.0;
 
 /// Wider windows for the data to choose from, as [`VELOCITY_WINDOWS_PER_PERIOD`]'s divisor of the
-/// local period (see `bin_reading::choose_rate_reading`): +-P/12.5, where a sine's rate reads
-/// 2.6 % low (an assumption: wider still, a viscous friction's damping comes out that much
-/// larger; where the motion bends more than the noise the interval test narrows the window
-/// anyway). One step: with a 25th as well, the third generator's seeds 3-10 named 456 of their
-/// 488 hidden effects against 458 with this one alone, and each record paid a second screening. The usual window is sized on the motion's bias alone: a slope over
-/// +-P/50 of a sine is 0.16 % low. Where the encoder's counts are coarse beside the stroke its
-/// variance is what matters: a stroke of 46 counts of a 14-bit encoder at 1 kHz (the third
-/// generator's seed 6's 062, a chirp at up to 2.5 Hz, eq. 3.5's friction 0.70 Nm beside a
-/// spring's 0.51) read its rate over +-8 samples through the count's staircase, the arctan
-/// turned at the wrong instants, and the baseline left 0.0689 Nm held out for a noise floor of
-/// 0.0385; over +-P/12.5, 0.0392. The usual window's interval test cannot see that: a window
-/// inside one count has a slope of zero within its reach.
+/// local period (see `bin_reading::choose_rate_reading`). The usual window is sized on the
+/// motion's bias alone: a slope over +-P/50 of a sine is 0.16 % low. Where the encoder's counts
+/// are coarse beside the stroke the staircase is what matters: a stroke of 46 counts of a 14-bit
+/// encoder at 1 kHz (the third generator's seed 6's 062, a chirp at up to 2.5 Hz, eq. 3.5's
+/// friction 0.70 Nm beside a spring's 0.51) read its rate over +-8 samples through the counts,
+/// the arctan turned at the wrong instants, and the baseline left 0.0689 Nm held out for a noise
+/// floor of 0.0385; over +-P/12.5, 0.0392. The interval test cannot see that: a window inside one
+/// count has a slope of zero within its reach. +-P/12.5 reads a sine's rate 2.6 % low (an
+/// assumption: wider still, a viscous friction's damping comes out that much larger; where the
+/// motion bends more than the noise the interval test narrows the window anyway). One step: with
+/// a 25th as well, the third generator's seeds 3-10 named 456 of their 488 hidden effects against
+/// 458 with this one alone, and each record paid a second screening.
 pub const WIDER_WINDOWS_PER_PERIOD: [f64; 1] = [12.5];
 
 /// The widest the velocity window may be per sample [samples]: [`VELOCITY_WINDOWS_PER_PERIOD`]
