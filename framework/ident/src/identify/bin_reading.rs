@@ -192,10 +192,8 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
     // identify ran 6.22 times the fit step against 4.65 without the wider reading).
     let floor_nm2 = usual.noise_floor_nm.powi(2);
     let relevant = |window: RateWindow, error: f64| {
-        use super::significance::{RELEVANT_SHARE_OF_EXCESS, RELEVANT_SHARE_OF_NOISE};
         let usual_nm2 = held_usual * held_usual;
-        let needed = (RELEVANT_SHARE_OF_NOISE * floor_nm2).max(RELEVANT_SHARE_OF_EXCESS * (usual_nm2 - floor_nm2).max(0.0));
-        !matches!(window, RateWindow::Wider { .. }) || usual_nm2 - error * error >= needed
+        !matches!(window, RateWindow::Wider { .. }) || usual_nm2 - error * error >= super::significance::relevant_gain_nm2(usual_nm2, floor_nm2)
     };
     // What is left of the usual reading, when it is given, is not needed any more.
     drop(usual);

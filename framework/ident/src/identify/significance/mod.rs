@@ -87,6 +87,19 @@ pub const RELEVANT_SHARE_OF_NOISE: f64 = 0.05;
 /// significant and negligible).
 pub const RELEVANT_SHARE_OF_EXCESS: f64 = 0.05;
 
+/// The least held-out gain of mean squared error that is relevant [Nm^2] for a model without the
+/// change at `mse_reduced` over a noise floor of `noise_nm2` (see [`RELEVANT_SHARE_OF_NOISE`] and
+/// [`RELEVANT_SHARE_OF_EXCESS`]).
+///
+/// ```
+/// use jointctl_ident::identify::significance::relevant_gain_nm2;
+/// assert_eq!(relevant_gain_nm2(1.0, 1.0), 0.05);
+/// assert_eq!(relevant_gain_nm2(5.0, 1.0), 0.2);
+/// ```
+pub fn relevant_gain_nm2(mse_reduced: f64, noise_nm2: f64) -> f64 {
+    (RELEVANT_SHARE_OF_NOISE * noise_nm2).max(RELEVANT_SHARE_OF_EXCESS * (mse_reduced - noise_nm2).max(0.0))
+}
+
 /// A gain accepted on consistency instead of the t-test, or of coefficients fitted on the
 /// held-out part, must remove at least this share of the excess (an assumption: a cause that
 /// removes a fifth of what is wrong, in most parts of the held-out record and worsening none, is
@@ -248,7 +261,7 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
     let (mse_reduced, mse_full) = (mean(&reduced[..n]), mean(&full[..n]));
     let gain = mse_reduced - mse_full;
     let excess = (mse_reduced - noise_nm2).max(0.0);
-    let relevant_nm2 = (RELEVANT_SHARE_OF_NOISE * noise_nm2).max(RELEVANT_SHARE_OF_EXCESS * excess);
+    let relevant_nm2 = relevant_gain_nm2(mse_reduced, noise_nm2);
     // Per part: what the reduced model leaves above the floor, and the gain.
     let per_part: Vec<(f64, f64)> = consistency_parts(n)
         .map(|(lo, hi)| {
