@@ -158,8 +158,8 @@ pub(crate) enum RateReadings {
 ///   sharper at the corners suits the baseline's arctan and can suit the causes worse (the
 ///   blind generator's seed-6 cubic spring with a delay read so named a Dahl hysteresis beside
 ///   them, its held-out error 0.079 Nm for 0.063, the baseline's alike either way).
-pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::IdentifyOptions, all: &[&dyn CandidateCause], centre_rad: f64, usual: std::borrow::Cow<'_, Prepared>, readings: RateReadings) -> Option<(NarrowRate, Prepared)> {
-    use super::prepare::{RateReading, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, prepare_with_rate_window};
+pub(crate) fn choose_rate_reading(read: &super::prepare::Read, opts: &super::IdentifyOptions, all: &[&dyn CandidateCause], centre_rad: f64, usual: std::borrow::Cow<'_, Prepared>, readings: RateReadings) -> Option<(NarrowRate, Prepared)> {
+    use super::prepare::{RateReading, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD};
     fn as_points(p: &Prepared) -> std::borrow::Cow<'_, Prepared> {
         if p.may_hold_bins() { std::borrow::Cow::Owned(p.as_points()) } else { std::borrow::Cow::Borrowed(p) }
     }
@@ -202,7 +202,7 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
         if let Some((_, _, prepared)) = best.as_mut() {
             *prepared = None;
         }
-        let Some(p) = prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok() else { continue };
+        let Some(p) = read.prepare(opts.train_fraction, opts.held_out, how).ok() else { continue };
         let (m, read) = (model(), as_points(&p));
         let Some((spec, bic_narrow)) = on(&m, &read).and_then(|s| score(&m, &s, &read).map(|b| (s, b))) else { continue };
         if bic_usual - bic_narrow <= BIC_THRESHOLD || best.as_ref().is_some_and(|(r, _, _)| r.bic_narrow <= bic_narrow) {
@@ -217,7 +217,7 @@ pub(crate) fn choose_rate_reading(data: &crate::csv::Data, opts: &super::Identif
     // data and reading prepare alike).
     let p = match prepared {
         Some(p) => p,
-        None => prepare_with_rate_window(data, opts.train_fraction, opts.held_out, how).ok()?,
+        None => read.prepare(opts.train_fraction, opts.held_out, how).ok()?,
     };
     Some((rate, p))
 }

@@ -280,14 +280,16 @@ pub enum IdentifyError {
 /// assert!(report.rmse_after < 0.01 && report.rmse_before > 0.4);
 /// ```
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
-    let p = prepare::prepare(data, opts.train_fraction, opts.held_out)?;
+    // Read once: each reading of the rate starts from the record as read (see `prepare::Read`).
+    let read = prepare::Read::of(data)?;
+    let p = read.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::usual(prepare::NARROWEST_RATE_WINDOW))?;
     let builtin = causes::builtin();
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     // A slow log's rate as narrow as one sample either side, should the baseline read better
     // so, and sharper intervals or wider windows for the whole model to confirm (see
     // `bin_reading`); should the screening fail (it fits the built-in friction only), the usual
     // reading.
-    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(data, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
+    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(&read, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
     let slow = p.may_hold_bins() && opts.baseline_friction;
     let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow)).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
     let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
@@ -295,9 +297,12 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (other_reading, p) = match opts.baseline_friction {
-        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), read.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
+    // The record as read is kept for a slow log's cubic reading only (a long record's times
+    // are not held beside the searches).
+    let read = slow.then_some(read);
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
     let checked_and_extended = || {
@@ -318,7 +323,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // issue 13's 150; 148 now).
     let mut others = Vec::new();
     // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
-    let cubic = slow.then(|| prepare::prepare_with_rate_window(data, opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok()).flatten();
+    let cubic = read.and_then(|read| read.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok());
     others.extend(cubic.and_then(|c| again(&c, None, false)).map(|e| (bin_reading::Reading::Cubic, e)));
     // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());

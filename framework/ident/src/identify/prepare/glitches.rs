@@ -23,8 +23,20 @@ pub const MAX_GLITCH_SAMPLES: usize = 3;
 pub(super) fn glitches(series: &[f64], t: &[f64], resolution: f64, noise: f64) -> Vec<bool> {
     let n = series.len();
     let mut glitch = vec![false; n];
+    // A run's first reading lies beyond the line by more than the reach (at least `least`), and
+    // the line there from `before` by at most half the reach (the run is back within the reach,
+    // over two steps or more): so it leaps from `before` by more than half of `least`. A reading
+    // that does not is no run's start, and is passed over without the run's test (most of this
+    // search's time on a smooth record: the test reads the rates on either side for each length).
+    // A fifth of `least` below that, so that rounding in the test's line cannot matter.
+    let least = 3.0 * resolution + 6.0 * noise;
+    let leap = 0.4 * least;
     let mut i = 1;
     while i + 1 < n {
+        if (series[i] - series[i - 1]).abs() <= leap {
+            i += 1;
+            continue;
+        }
         if let Some(j) = run_back_from(series, t, i, resolution, noise) {
             glitch[i..j].iter_mut().for_each(|g| *g = true);
             i = j;
@@ -99,6 +111,49 @@ mod tests {
         }
         // Down as well as up.
         assert_eq!(glitches(&ramp_with_leap(-6.0, 2), &ms(3000), q, 0.0).iter().filter(|g| **g).count(), 2);
+    }
+
+    /// The readings passed over without the run's test are none that it would take for a run's
+    /// start: on random walks with leaps of every size, steps in time with gaps, noise and
+    /// resolutions, the glitches are those of the test tried at every reading.
+    #[test]
+    fn passing_over_small_steps_finds_what_the_test_at_every_reading_finds() {
+        let at_every_reading = |x: &[f64], t: &[f64], resolution: f64, noise: f64| {
+            let mut glitch = vec![false; x.len()];
+            let mut i = 1;
+            while i + 1 < x.len() {
+                match run_back_from(x, t, i, resolution, noise) {
+                    Some(j) => {
+                        glitch[i..j].iter_mut().for_each(|g| *g = true);
+                        i = j;
+                    }
+                    None => i += 1,
+                }
+            }
+            glitch
+        };
+        let mut rng = jointctl_test_support::XorShift64::new(11);
+        let mut found = 0;
+        for _ in 0..200 {
+            let resolution: f64 = [0.0, 2e-6, 3.8e-4][(rng.uniform() * 3.0) as usize % 3];
+            let noise: f64 = [0.0, 1e-5, 1e-3][(rng.uniform() * 3.0) as usize % 3];
+            let (mut x, mut t) = (vec![0.0], vec![0.0]);
+            for _ in 1..2000 {
+                let gap = if rng.uniform() < 0.01 { rng.range(0.01, 0.3) } else { 1e-3 };
+                t.push(t[t.len() - 1] + gap);
+                x.push(x[x.len() - 1] + rng.range(-1.0, 1.0) * 4.0 * (resolution + noise).max(1e-6));
+            }
+            for _ in 0..20 {
+                let (at, run) = ((rng.uniform() * 1990.0) as usize + 2, (rng.uniform() * 4.0) as usize + 1);
+                let leap = rng.range(-1.0, 1.0) * 30.0 * (resolution + noise).max(1e-6);
+                x[at..at + run].iter_mut().for_each(|v| *v += leap);
+            }
+            let g = glitches(&x, &t, resolution, noise);
+            assert_eq!(g, at_every_reading(&x, &t, resolution, noise));
+            found += g.iter().filter(|g| **g).count();
+        }
+        // Glitches were there to find.
+        assert!(found > 500, "{found}");
     }
 
     #[test]

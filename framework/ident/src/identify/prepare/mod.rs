@@ -1,8 +1,6 @@
 //! Preparation: dropouts out, the deflection rate, enough excitation, and the split into the
 //! training part and the held-out part.
 
-use std::borrow::Cow;
-
 mod bins;
 mod dropouts;
 mod glitches;
@@ -11,6 +9,7 @@ mod spring;
 mod sign;
 mod noise;
 mod pieces;
+mod read;
 mod rate;
 mod rest;
 mod turns;
@@ -20,18 +19,15 @@ pub use noise::noise_floor;
 pub use rest::{AtRest, REST_S};
 pub(crate) use rest::scored_on_every_sample;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
-use dropouts::dropouts_by_segment;
-use glitches::glitches_by_segment;
 pub use glitches::MAX_GLITCH_SAMPLES;
-use noise::scatter_rms;
 pub(crate) use spring::spring_share;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, WIDEST_RATE_REACH_S, widest_rate_window};
-use rate::{DeflectionNoise, coarsest_tick_rad, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
+use rate::{DeflectionNoise, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
+pub(crate) use read::Read;
 
-use super::causes::{Excitation, reversals, turn_step_rad};
+use super::causes::Excitation;
 use super::design::Part;
-use crate::csv::Data;
 
 /// One count of the SHERPA joints' 14-bit absolute encoders [rad] (thesis section 3.1): the
 /// coarsest resolution assumed when the data's own steps cannot tell (see [`resolution_rad`]).
@@ -291,8 +287,10 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
     }
 }
 
-pub(crate) fn prepare(data: &Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
-    prepare_with_rate_window(data, train_fraction, how, RateReading::usual(NARROWEST_RATE_WINDOW))
+/// `data` prepared with the rate over the usual windows (see [`Read`]).
+#[cfg(test)]
+pub(crate) fn prepare(data: &crate::csv::Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
+    Read::of(data)?.prepare(train_fraction, how, RateReading::usual(NARROWEST_RATE_WINDOW))
 }
 
 /// How the deflection's rate is read.
@@ -316,187 +314,126 @@ impl RateReading {
     }
 }
 
-/// [`prepare`] with the rate read as `rate` says.
-pub(crate) fn prepare_with_rate_window<'a>(data: &'a Data, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
-    let n_all = data.len();
-    if n_all < 50 {
-        return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
-    }
-    if let Some((column, len)) = data.uneven_column() {
-        return Err(PrepareError::UnevenColumn { column, len, samples: n_all });
-    }
-    let resolution = resolution_rad(&data.deflection);
-    // Each segment of contiguous logging apart: a record that starts from rest (a repetition,
-    // an experiment's next sine) reads exactly zero after a gap, and the reading before the gap
-    // is no neighbour of it.
-    let raw_starts = segment_starts(&data.t);
-    let mut lost = dropouts_by_segment(&data.deflection, &raw_starts, resolution);
-    // A torque reading is uncertain by its sensor's noise (a noisy torque near zero may read
-    // exactly zero between two readings either side of it: a quantised F/T sensor of 1/640 Nm
-    // with 0.03 Nm of noise did), measured on the raw series as the floor is.
-    let torque_noise = noise_floor(&data.torque, &raw_starts);
-    lost.iter_mut().zip(dropouts_by_segment(&data.torque, &raw_starts, torque_noise)).for_each(|(a, b)| *a |= b);
-    let dropouts = lost.iter().filter(|l| **l).count();
-    // Deflection readings that leap and come back (see `glitches`), besides the dropouts; its
-    // noise measured on the raw series, as the torque's is.
-    let deflection_noise = noise_floor(&data.deflection, &raw_starts);
-    let leaps = glitches_by_segment(&data.deflection, &data.t, &raw_starts, resolution, deflection_noise);
-    let mut glitches = 0;
-    for (l, leap) in lost.iter_mut().zip(leaps) {
-        if leap && !*l {
-            *l = true;
-            glitches += 1;
+impl Read<'_> {
+    /// The deflection's rate read as `rate` says [rad/s], at each kept sample.
+    pub(crate) fn rate(&self, rate: RateReading) -> Vec<f64> {
+        let (t, d, starts) = (&self.t, &self.d, &self.starts);
+        match rate {
+            RateReading::Adaptive { narrowest, reach_scale, windows_per_period } => {
+                let noise = DeflectionNoise { quantum_rad: self.quantum_rad, scatter_rad: self.scatter_rad, reach_scale };
+                velocity_by_segment(t, d, starts, noise, &velocity_half_widths(d.len(), &self.turning, self.period_samples, windows_per_period, [narrowest, widest_rate_window(self.spacing_s)]))
+            }
+            RateReading::Cubic => cubic_rate_by_segment(t, d, starts),
         }
     }
-    let at_limit = saturation::saturated(&data.torque, &data.deflection, &lost);
-    lost.iter_mut().zip(at_limit).for_each(|(a, b)| *a |= b);
-    let dropped = lost.iter().filter(|l| **l).count();
-    let saturated = dropped - dropouts - glitches;
-    if n_all - dropped < 50 && saturated > 0 {
-        return Err(PrepareError::Saturated { saturated, samples: n_all, left: n_all - dropped, needed: 50 });
+
+    /// The record prepared with its rate read as `rate` says.
+    pub(crate) fn prepare(&self, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
+        self.prepare_with_rate(train_fraction, how, self.rate(rate))
     }
-    // The columns without the dropouts: borrowed when there are none (a long record is not
-    // copied whole).
-    let kept = |column: &'a [f64]| -> Cow<'a, [f64]> {
-        if dropped == 0 { Cow::Borrowed(column) } else { Cow::Owned(column.iter().zip(&lost).filter(|(_, l)| !**l).map(|(x, _)| *x).collect()) }
-    };
-    let (d, tau, pivot) = (kept(&data.deflection), kept(&data.torque), kept(&data.pivot_mm));
-    // Each sample's repetition: the count of restarts at or before it; none for a record of one
-    // repetition, so that every part of a record says the same (a part inside the first
-    // repetition of a restarted record still fits per repetition what the others do).
-    let rep: Vec<u32> = if data.restarts.is_empty() { Vec::new() } else { (0..n_all).filter(|i| !lost[*i]).map(|i| data.repetition(i)).collect() };
-    // Time counted from the first sample: Unix-epoch stamps (1.7e9 s) would leave a sine of the
-    // time a few digits only.
-    let t0 = data.t[0];
-    let t: Vec<f64> = kept(&data.t).iter().map(|x| x - t0).collect();
-    let starts = segment_starts(&t);
-    let frequency_hz = fundamental_hz(&t, &d);
-    let period_samples = {
-        let duration = t[t.len() - 1] - t[0];
-        (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
-    };
-    let turning = reversals(&d);
-    // The sample period: the median step (irregular logs jitter around it; gaps are not steps).
-    let spacing = super::numeric::median_step(&t);
-    // The deflection's noise: its quantisation (at most half a step, see `DeflectionNoise`) and
-    // its scatter about a line from sample to sample (see [`scatter_rms`]).
-    let deflection_scatter = scatter_rms(&d, &starts);
-    let v = match rate {
-        RateReading::Adaptive { narrowest, reach_scale, windows_per_period } => {
-            let noise = DeflectionNoise { quantum_rad: coarsest_tick_rad(&d, &starts, resolution), scatter_rad: deflection_scatter, reach_scale };
-            velocity_by_segment(&t, &d, &starts, noise, &velocity_half_widths(d.len(), &turning, period_samples, windows_per_period, [narrowest, widest_rate_window(spacing)]))
+
+    /// The record prepared with its rate `v` [rad/s] (see [`Read::rate`]).
+    pub(crate) fn prepare_with_rate(&self, train_fraction: f64, how: HeldOut, v: Vec<f64>) -> Result<Prepared, PrepareError> {
+        let Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, spacing_s: spacing, resolution_rad: resolution, scatter_rad: deflection_scatter, .. } = self;
+        let (t0, frequency_hz, period_samples, spacing, resolution, deflection_scatter) = (*t0, *frequency_hz, *period_samples, *spacing, *resolution, *deflection_scatter);
+        // The torque's floor under a line in the deflection and its rate, each residual computed
+        // where it is needed (a long record's residual is not held: see `noise_floor_of`).
+        let noise_floor_nm = match line_in_deflection_and_rate(d, &v, tau) {
+            Some([a, b, c]) => noise::noise_floor_of(tau.len(), |i| tau[i] - a * d[i] - b * v[i] - c, starts),
+            None => noise_floor(tau, starts),
+        };
+        // The held-out window, chosen on the record as read (dropouts in: a lost reading's zero adds
+        // travel and range, accepted so that the model loop's gains, which see the same columns,
+        // choose the same window).
+        let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
+        // A slow log's rate at each interval's ends, should it hold bin averages (see `bins`).
+        let edges = if tried_as_bins(spacing) { rate_edges(&v, starts) } else { Vec::new() };
+        let (from, to) = held_out.times(&data.t);
+        let lo = t.partition_point(|x| *x < from - t0);
+        let hi = if held_out.end >= 1.0 { t.len() } else { t.partition_point(|x| *x < to - t0) };
+        // A stateful effect's history: back over a travel of twice the amplitude, at least two
+        // cycles (a Dahl state forgets within a travel far longer than its deflection scale, which
+        // the search keeps below a third of the amplitude), not the whole record before it. Counted
+        // in travel, not time: a held-out part that starts in a hold took two cycles of the hold as
+        // its history, its Dahl state started at zero where the joint held its loop's limit, and
+        // the right hysteresis (blind suite, LuGre) made the held-out part worse than none.
+        let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
+        let cycles = (2.0 * period_samples).max(100.0) as usize;
+        let warm_start = |start: usize| {
+            let mut travel = 0.0;
+            let mut i = start;
+            while i > 0 && (start - i < cycles || travel < 2.0 * amplitude_rad) {
+                travel += (d[i] - d[i - 1]).abs();
+                i -= 1;
+            }
+            i
+        };
+        // Every `k`-th sample of the range `r` (its history too), picked without a full-rate copy.
+        let part_every = |r: std::ops::Range<usize>, k: usize| {
+            let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
+            Part {
+                warm: d[warm_start(r.start)..r.start].iter().step_by(k).copied().collect(),
+                restarts: Vec::new(),
+                t: pick(t),
+                d: pick(d),
+                v: pick(&v),
+                tau: pick(tau),
+                // A pivot not given is none: the configured characteristic's own.
+                pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
+                rep: if rep.is_empty() { Vec::new() } else { rep[r.clone()].iter().step_by(k).copied().collect() },
+                rate_edges: if edges.is_empty() { Vec::new() } else { edges[r].iter().step_by(k).copied().collect() },
+                dt: spacing * k as f64,
+            }
+        };
+        let part = |r: std::ops::Range<usize>| part_every(r, 1);
+        let trained = lo + (t.len() - hi);
+        if trained < window::MIN_TRAINING || hi - lo < window::MIN_HELD_OUT {
+            return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
         }
-        RateReading::Cubic => cubic_rate_by_segment(&t, &d, &starts),
-    };
-    let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
-    let span = hi - lo;
-    let turns = turning.len();
-    if span < MIN_SPAN_LSB * resolution || turns < MIN_REVERSALS {
-        return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / resolution, reversals: turns });
+        // The first `limit` training samples: those before the held-out window, then those after
+        // it. Where the two meet, a loop's state starts again from the history before the second
+        // (`Part::then`).
+        let first = |limit: usize| {
+            let before = 0..lo.min(limit);
+            (before.clone(), hi..t.len().min(hi + limit.saturating_sub(before.len())))
+        };
+        // Every `k`-th of them, counted on across the held-out window.
+        let training = |limit: usize, k: usize| {
+            let (before, after) = first(limit);
+            let skip = (k - before.len() % k) % k;
+            let after = (after.start + skip).min(after.end)..after.end;
+            if after.is_empty() { part_every(before, k) } else { part_every(before, k).then(&part_every(after, k)) }
+        };
+        // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
+        // an alias of it): decimated up to that, then SEARCH_SAMPLES of them in pieces of at least
+        // two histories (four cycles) spread over the whole training part.
+        let k = trained.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
+        // (`spread` returns no range only for an empty training part, refused above.)
+        let coarse = pieces::spread(lo, hi, t.len(), k * SEARCH_SAMPLES, 2 * cycles).into_iter().map(|r| part_every(r, k)).reduce(|a, b| a.then(&b)).unwrap_or_else(|| training(k * SEARCH_SAMPLES, k));
+        // Final fits on at most FIT_SAMPLES training samples, taken evenly over the whole training
+        // part: parameters no longer move beyond (their standard errors shrink as 1/sqrt(n)), and a
+        // long record stays fast. Its first FIT_SAMPLES instead left out what came later: a 46 s
+        // record at 2 kHz whose sweep speeds up after 27 s (blind seed 7's 000) was fitted on its
+        // first 25 s only, at a tenth of the rates it reached, and its viscous friction (13.6 Nm
+        // s/rad beside an arctan of 0.07 Nm) was taken for the arctan. The held-out part likewise:
+        // at most HELD_OUT_SAMPLES, evenly over the whole window.
+        let every_fit = trained.div_ceil(FIT_SAMPLES).max(1);
+        let every_test = (hi - lo).div_ceil(HELD_OUT_SAMPLES).max(1);
+        let (train, test) = (training(every_fit * FIT_SAMPLES, every_fit), part_every(lo..hi, every_test));
+        let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter, resolution_rad: resolution, turn_step_rad: self.turn_step_rad };
+        // The full-rate stretch is contiguous (a delay's samples, a periodogram): the piece before
+        // the held-out window, or the one after it when that is longer.
+        let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };
+        let train_duration_s = {
+            let (before, after) = first(every_fit * FIT_SAMPLES);
+            let span = |r: std::ops::Range<usize>| if r.is_empty() { 0.0 } else { t[r.end - 1] - t[r.start] };
+            span(before) + span(after)
+        };
+        let spring_share = spring_share(&train);
+        let stops = rest::stops(t, d, &v, spacing, resolution);
+        let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
+        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, turns: self.turn_runs.clone() })
     }
-    // A constant torque under a deflection that moves was reported as too little excitation,
-    // with counts and reversals that met the bounds it quoted (issue 40, finding 10).
-    if tau.iter().all(|x| *x == tau[0]) {
-        return Err(PrepareError::ConstantTorque { value_nm: tau[0] });
-    }
-    // The torque's floor under a line in the deflection and its rate, each residual computed
-    // where it is needed (a long record's residual is not held: see `noise_floor_of`).
-    let noise_floor_nm = match line_in_deflection_and_rate(&d, &v, &tau) {
-        Some([a, b, c]) => noise::noise_floor_of(tau.len(), |i| tau[i] - a * d[i] - b * v[i] - c, &starts),
-        None => noise_floor(&tau, &starts),
-    };
-    // The held-out window, chosen on the record as read (dropouts in: a lost reading's zero adds
-    // travel and range, accepted so that the model loop's gains, which see the same columns,
-    // choose the same window).
-    let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
-    // A slow log's rate at each interval's ends, should it hold bin averages (see `bins`).
-    let edges = if tried_as_bins(spacing) { rate_edges(&v, &starts) } else { Vec::new() };
-    let (from, to) = held_out.times(&data.t);
-    let lo = t.partition_point(|x| *x < from - t0);
-    let hi = if held_out.end >= 1.0 { t.len() } else { t.partition_point(|x| *x < to - t0) };
-    // A stateful effect's history: back over a travel of twice the amplitude, at least two
-    // cycles (a Dahl state forgets within a travel far longer than its deflection scale, which
-    // the search keeps below a third of the amplitude), not the whole record before it. Counted
-    // in travel, not time: a held-out part that starts in a hold took two cycles of the hold as
-    // its history, its Dahl state started at zero where the joint held its loop's limit, and
-    // the right hysteresis (blind suite, LuGre) made the held-out part worse than none.
-    let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
-    let cycles = (2.0 * period_samples).max(100.0) as usize;
-    let warm_start = |start: usize| {
-        let mut travel = 0.0;
-        let mut i = start;
-        while i > 0 && (start - i < cycles || travel < 2.0 * amplitude_rad) {
-            travel += (d[i] - d[i - 1]).abs();
-            i -= 1;
-        }
-        i
-    };
-    // Every `k`-th sample of the range `r` (its history too), picked without a full-rate copy.
-    let part_every = |r: std::ops::Range<usize>, k: usize| {
-        let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
-        Part {
-            warm: d[warm_start(r.start)..r.start].iter().step_by(k).copied().collect(),
-            restarts: Vec::new(),
-            t: pick(&t),
-            d: pick(&d),
-            v: pick(&v),
-            tau: pick(&tau),
-            // A pivot not given is none: the configured characteristic's own.
-            pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(&pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
-            rep: if rep.is_empty() { Vec::new() } else { rep[r.clone()].iter().step_by(k).copied().collect() },
-            rate_edges: if edges.is_empty() { Vec::new() } else { edges[r].iter().step_by(k).copied().collect() },
-            dt: spacing * k as f64,
-        }
-    };
-    let part = |r: std::ops::Range<usize>| part_every(r, 1);
-    let trained = lo + (t.len() - hi);
-    if trained < window::MIN_TRAINING || hi - lo < window::MIN_HELD_OUT {
-        return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
-    }
-    // The first `limit` training samples: those before the held-out window, then those after
-    // it. Where the two meet, a loop's state starts again from the history before the second
-    // (`Part::then`).
-    let first = |limit: usize| {
-        let before = 0..lo.min(limit);
-        (before.clone(), hi..t.len().min(hi + limit.saturating_sub(before.len())))
-    };
-    // Every `k`-th of them, counted on across the held-out window.
-    let training = |limit: usize, k: usize| {
-        let (before, after) = first(limit);
-        let skip = (k - before.len() % k) % k;
-        let after = (after.start + skip).min(after.end)..after.end;
-        if after.is_empty() { part_every(before, k) } else { part_every(before, k).then(&part_every(after, k)) }
-    };
-    // Searches see at least 100 samples a cycle (a Dahl state or a delay needs the motion, not
-    // an alias of it): decimated up to that, then SEARCH_SAMPLES of them in pieces of at least
-    // two histories (four cycles) spread over the whole training part.
-    let k = trained.div_ceil(SEARCH_SAMPLES).min((period_samples / 100.0).floor().max(1.0) as usize);
-    // (`spread` returns no range only for an empty training part, refused above.)
-    let coarse = pieces::spread(lo, hi, t.len(), k * SEARCH_SAMPLES, 2 * cycles).into_iter().map(|r| part_every(r, k)).reduce(|a, b| a.then(&b)).unwrap_or_else(|| training(k * SEARCH_SAMPLES, k));
-    // Final fits on at most FIT_SAMPLES training samples, taken evenly over the whole training
-    // part: parameters no longer move beyond (their standard errors shrink as 1/sqrt(n)), and a
-    // long record stays fast. Its first FIT_SAMPLES instead left out what came later: a 46 s
-    // record at 2 kHz whose sweep speeds up after 27 s (blind seed 7's 000) was fitted on its
-    // first 25 s only, at a tenth of the rates it reached, and its viscous friction (13.6 Nm
-    // s/rad beside an arctan of 0.07 Nm) was taken for the arctan. The held-out part likewise:
-    // at most HELD_OUT_SAMPLES, evenly over the whole window.
-    let every_fit = trained.div_ceil(FIT_SAMPLES).max(1);
-    let every_test = (hi - lo).div_ceil(HELD_OUT_SAMPLES).max(1);
-    let (train, test) = (training(every_fit * FIT_SAMPLES, every_fit), part_every(lo..hi, every_test));
-    let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter, resolution_rad: resolution, turn_step_rad: turn_step_rad(&d, &starts) };
-    // The full-rate stretch is contiguous (a delay's samples, a periodogram): the piece before
-    // the held-out window, or the one after it when that is longer.
-    let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };
-    let train_duration_s = {
-        let (before, after) = first(every_fit * FIT_SAMPLES);
-        let span = |r: std::ops::Range<usize>| if r.is_empty() { 0.0 } else { t[r.end - 1] - t[r.start] };
-        span(before) + span(after)
-    };
-    let spring_share = spring_share(&train);
-    let stops = rest::stops(&t, &d, &v, spacing, resolution);
-    let turn_runs = turns::turns(&t, &d);
-    let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-    Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: n_all, dropped: dropouts, glitches, saturated, reversed_sign: sign::reversed_sign(&d, &tau), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, turns: turn_runs })
 }
 
 /// The least-squares `tau = a d + b v + c` [Nm/rad, Nm s/rad, Nm] from sums over the samples
@@ -531,6 +468,7 @@ fn line_in_deflection_and_rate(d: &[f64], v: &[f64], tau: &[f64]) -> Option<[f64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::csv::Data;
 
     /// Issue 40, finding 10: a constant torque was refused as "too little excitation: 413.7
     /// counts, 20 reversals; needs at least 16 and 3", a reason the data meets.

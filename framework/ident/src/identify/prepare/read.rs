@@ -1,0 +1,139 @@
+//! The record as read, before its rate: the readings left out (dropouts, glitches, a torque at
+//! its sensor's limit), the columns kept, the motion's period, reversals and quantisation. It
+//! does not depend on how the rate is read, so a record is read once and each rate reading of
+//! it ([`Read::prepare`]) starts from here: identify screens several readings of one record
+//! (see `bin_reading`), and reading the record again for each took half of identify's time on
+//! a 100 000-sample record (the glitch search alone a tenth).
+
+use std::borrow::Cow;
+
+use super::dropouts::dropouts_by_segment;
+use super::glitches::glitches_by_segment;
+use super::noise::scatter_rms;
+use super::rate::coarsest_tick_rad;
+use super::{MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, fundamental_hz, noise_floor, resolution_rad, saturation, segment_starts, sign, turns};
+use crate::csv::Data;
+use crate::identify::causes::{reversals, turn_step_rad};
+
+/// A record as read, before its rate (see the module's doc).
+pub(crate) struct Read<'a> {
+    /// The record.
+    pub data: &'a Data,
+    /// The deflection, torque and pivot without the readings left out [rad, Nm, mm]: borrowed
+    /// when none is (a long record is not copied whole).
+    pub d: Cow<'a, [f64]>,
+    pub tau: Cow<'a, [f64]>,
+    pub pivot: Cow<'a, [f64]>,
+    /// Each kept sample's repetition (see `Data::repetition`); empty for a record of one.
+    pub rep: Vec<u32>,
+    /// The kept samples' times from the first sample's, `t0` [s] (Unix-epoch stamps, 1.7e9 s,
+    /// would leave a sine of the time a few digits only).
+    pub t: Vec<f64>,
+    pub t0: f64,
+    /// Where each segment of contiguous logging starts, in the kept samples.
+    pub starts: Vec<usize>,
+    /// The motion's fundamental [Hz] and its period [samples].
+    pub frequency_hz: f64,
+    pub period_samples: f64,
+    /// The samples where the motion turns (see `causes::reversals`).
+    pub turning: Vec<usize>,
+    /// The median time step [s] (irregular logs jitter around it; gaps are not steps).
+    pub spacing_s: f64,
+    /// The deflection's resolution, its coarsest quantiser's step and its scatter about a line
+    /// from sample to sample [rad] (see `resolution_rad`, `rate::coarsest_tick_rad`,
+    /// `noise::scatter_rms`).
+    pub resolution_rad: f64,
+    pub quantum_rad: f64,
+    pub scatter_rad: f64,
+    /// Readings left out: dropouts, glitches besides them, and torques at the sensor's limit
+    /// besides both.
+    pub dropouts: usize,
+    pub glitches: usize,
+    pub saturated: usize,
+    /// What `Prepared` reports of the whole record: the deflection's step at its turns [rad],
+    /// why the torque reads against the deflection if it does (see `sign`), and the turns'
+    /// spans of held readings [s] (see `turns`).
+    pub turn_step_rad: f64,
+    pub reversed_sign: Option<String>,
+    pub turn_runs: Vec<(f64, f64)>,
+}
+
+impl<'a> Read<'a> {
+    /// `data` read: its refusals are those of identify's preparation that do not depend on the
+    /// rate (too few samples, uneven columns, a saturated sensor, too little excitation, a
+    /// constant torque).
+    pub(crate) fn of(data: &'a Data) -> Result<Self, PrepareError> {
+        let n_all = data.len();
+        if n_all < 50 {
+            return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
+        }
+        if let Some((column, len)) = data.uneven_column() {
+            return Err(PrepareError::UnevenColumn { column, len, samples: n_all });
+        }
+        let resolution = resolution_rad(&data.deflection);
+        // Each segment of contiguous logging apart: a record that starts from rest (a
+        // repetition, an experiment's next sine) reads exactly zero after a gap, and the reading
+        // before the gap is no neighbour of it.
+        let raw_starts = segment_starts(&data.t);
+        let mut lost = dropouts_by_segment(&data.deflection, &raw_starts, resolution);
+        // A torque reading is uncertain by its sensor's noise (a noisy torque near zero may read
+        // exactly zero between two readings either side of it: a quantised F/T sensor of 1/640
+        // Nm with 0.03 Nm of noise did), measured on the raw series as the floor is.
+        let torque_noise = noise_floor(&data.torque, &raw_starts);
+        lost.iter_mut().zip(dropouts_by_segment(&data.torque, &raw_starts, torque_noise)).for_each(|(a, b)| *a |= b);
+        let dropouts = lost.iter().filter(|l| **l).count();
+        // Deflection readings that leap and come back (see `glitches`), besides the dropouts;
+        // its noise measured on the raw series, as the torque's is.
+        let deflection_noise = noise_floor(&data.deflection, &raw_starts);
+        let leaps = glitches_by_segment(&data.deflection, &data.t, &raw_starts, resolution, deflection_noise);
+        let mut glitches = 0;
+        for (l, leap) in lost.iter_mut().zip(leaps) {
+            if leap && !*l {
+                *l = true;
+                glitches += 1;
+            }
+        }
+        let at_limit = saturation::saturated(&data.torque, &data.deflection, &lost);
+        lost.iter_mut().zip(at_limit).for_each(|(a, b)| *a |= b);
+        let dropped = lost.iter().filter(|l| **l).count();
+        let saturated = dropped - dropouts - glitches;
+        if n_all - dropped < 50 && saturated > 0 {
+            return Err(PrepareError::Saturated { saturated, samples: n_all, left: n_all - dropped, needed: 50 });
+        }
+        let kept = |column: &'a [f64]| -> Cow<'a, [f64]> {
+            if dropped == 0 { Cow::Borrowed(column) } else { Cow::Owned(column.iter().zip(&lost).filter(|(_, l)| !**l).map(|(x, _)| *x).collect()) }
+        };
+        let (d, tau, pivot) = (kept(&data.deflection), kept(&data.torque), kept(&data.pivot_mm));
+        // Each sample's repetition: the count of restarts at or before it; none for a record of
+        // one repetition, so that every part of a record says the same (a part inside the first
+        // repetition of a restarted record still fits per repetition what the others do).
+        let rep: Vec<u32> = if data.restarts.is_empty() { Vec::new() } else { (0..n_all).filter(|i| !lost[*i]).map(|i| data.repetition(i)).collect() };
+        let t0 = data.t[0];
+        let t: Vec<f64> = kept(&data.t).iter().map(|x| x - t0).collect();
+        let starts = segment_starts(&t);
+        let frequency_hz = fundamental_hz(&t, &d);
+        let period_samples = {
+            let duration = t[t.len() - 1] - t[0];
+            (d.len() as f64 / (frequency_hz * duration).max(1.0)).max(1.0)
+        };
+        let turning = reversals(&d);
+        let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+        let span = hi - lo;
+        if span < MIN_SPAN_LSB * resolution || turning.len() < MIN_REVERSALS {
+            return Err(PrepareError::TooLittleExcitation { span_rad: span, lsb: span / resolution, reversals: turning.len() });
+        }
+        // A constant torque under a deflection that moves was reported as too little
+        // excitation, with counts and reversals that met the bounds it quoted (issue 40,
+        // finding 10).
+        if tau.iter().all(|x| *x == tau[0]) {
+            return Err(PrepareError::ConstantTorque { value_nm: tau[0] });
+        }
+        let spacing_s = crate::identify::numeric::median_step(&t);
+        // The deflection's noise: its quantisation (at most half a step, see
+        // `rate::DeflectionNoise`) and its scatter about a line from sample to sample.
+        let scatter_rad = scatter_rms(&d, &starts);
+        let quantum_rad = coarsest_tick_rad(&d, &starts, resolution);
+        let (turn_step, reversed_sign, turn_runs) = (turn_step_rad(&d, &starts), sign::reversed_sign(&d, &tau), turns::turns(&t, &d));
+        Ok(Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, turning, spacing_s, resolution_rad: resolution, quantum_rad, scatter_rad, dropouts, glitches, saturated, turn_step_rad: turn_step, reversed_sign, turn_runs })
+    }
+}
