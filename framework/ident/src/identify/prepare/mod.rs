@@ -2,6 +2,7 @@
 //! training part and the held-out part.
 
 mod bins;
+mod cubic_rate;
 mod dropouts;
 mod glitches;
 mod saturation;
@@ -23,7 +24,8 @@ pub use glitches::MAX_GLITCH_SAMPLES;
 pub(crate) use spring::spring_share;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, WIDEST_RATE_REACH_S, widest_rate_window};
-use rate::{DeflectionNoise, cubic_rate_by_segment, velocity_by_segment, velocity_half_widths};
+use cubic_rate::cubic_rate_by_segment;
+use rate::{DeflectionNoise, velocity_by_segment, velocity_half_widths};
 pub(crate) use read::Read;
 
 use super::causes::Excitation;
@@ -302,7 +304,7 @@ pub(crate) enum RateReading {
     /// wider than the local period over `windows_per_period` (see [`WIDER_WINDOWS_PER_PERIOD`]).
     Adaptive { narrowest: usize, reach_scale: f64, windows_per_period: f64 },
     /// A slow log's: the slope of a local cubic through two samples either side (see
-    /// `rate::cubic_rate_by_segment`).
+    /// `cubic_rate::cubic_rate_by_segment`).
     Cubic,
 }
 
