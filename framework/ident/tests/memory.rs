@@ -79,7 +79,9 @@ fn identify_holds_little_beside_a_long_record() {
     // same before and after the rate's blocks were shared out over the cores: the time and rate
     // columns (16), each sample's window half-width (8), the held-out part (120 000 samples of
     // six columns: 14 a sample here), the searches' models. The finding's ladder held at least
-    // 32 bytes a sample more.
+    // 32 bytes a sample more. 64-67 later, 87 since the usual, sharper and wider readings of
+    // the rate are read ahead together for the screening (`prepare::ReadAhead`: four rates of
+    // 8 bytes a sample; a record of more than `READ_AHEAD_SAMPLES` reads them one at a time).
     assert!(per_sample < 110.0, "{per_sample:.1} bytes a sample");
 }
 

@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use super::causes::CandidateCause;
 use super::design::{Model, Spec, Term};
-use super::prepare::Prepared;
+use super::prepare::{Prepared, RateReading, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD};
 use super::select::{self, BIC_THRESHOLD, bic};
 use super::{IdentifyError, Report, search};
 
@@ -140,6 +140,14 @@ pub(crate) enum RateReadings {
     Other { narrowest: usize },
 }
 
+/// The readings [`RateReadings::Other`] screens, sharper then wider, none narrower than
+/// `narrowest` samples either side.
+pub(crate) fn other_readings(narrowest: usize) -> Vec<(RateWindow, RateReading)> {
+    let sharper = SHARPER_REACH_SCALES.iter().map(|&reach_scale| (RateWindow::Sharper { reach_scale }, RateReading::Adaptive { narrowest, reach_scale, windows_per_period: VELOCITY_WINDOWS_PER_PERIOD }));
+    let wider = WIDER_WINDOWS_PER_PERIOD.iter().map(|&windows_per_period| (RateWindow::Wider { windows_per_period }, RateReading::Adaptive { narrowest, reach_scale: 1.0, windows_per_period }));
+    sharper.chain(wider).collect()
+}
+
 /// A reading of the rate the baseline's fit prefers to `usual`'s: the baseline's friction
 /// fitted on each of `readings`, as point samples; a reading qualifies when the training BIC
 /// prefers it to the usual one by more than BIC's threshold and its held-out error is no
@@ -158,8 +166,7 @@ pub(crate) enum RateReadings {
 ///   sharper at the corners suits the baseline's arctan and can suit the causes worse (the
 ///   blind generator's seed-6 cubic spring with a delay read so named a Dahl hysteresis beside
 ///   them, its held-out error 0.079 Nm for 0.063, the baseline's alike either way).
-pub(crate) fn choose_rate_reading(read: &super::prepare::Read, opts: &super::IdentifyOptions, all: &[&dyn CandidateCause], centre_rad: f64, usual: std::borrow::Cow<'_, Prepared>, readings: RateReadings) -> Option<(NarrowRate, Prepared)> {
-    use super::prepare::{RateReading, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD};
+pub(crate) fn choose_rate_reading(read: &super::prepare::ReadAhead, opts: &super::IdentifyOptions, all: &[&dyn CandidateCause], centre_rad: f64, usual: std::borrow::Cow<'_, Prepared>, readings: RateReadings) -> Option<(NarrowRate, Prepared)> {
     fn as_points(p: &Prepared) -> std::borrow::Cow<'_, Prepared> {
         if p.may_hold_bins() { std::borrow::Cow::Owned(p.as_points()) } else { std::borrow::Cow::Borrowed(p) }
     }
@@ -168,11 +175,7 @@ pub(crate) fn choose_rate_reading(read: &super::prepare::Read, opts: &super::Ide
     }
     let readings: Vec<(RateWindow, RateReading)> = match readings {
         RateReadings::Narrow => vec![(RateWindow::OneSampleEitherSide, RateReading::usual(1))],
-        RateReadings::Other { narrowest } => {
-            let sharper = SHARPER_REACH_SCALES.iter().map(|&reach_scale| (RateWindow::Sharper { reach_scale }, RateReading::Adaptive { narrowest, reach_scale, windows_per_period: VELOCITY_WINDOWS_PER_PERIOD }));
-            let wider = WIDER_WINDOWS_PER_PERIOD.iter().map(|&windows_per_period| (RateWindow::Wider { windows_per_period }, RateReading::Adaptive { narrowest, reach_scale: 1.0, windows_per_period }));
-            sharper.chain(wider).collect()
-        }
+        RateReadings::Other { narrowest } => other_readings(narrowest),
     };
     let middle_s = usual.record_middle_s;
     let model = || Model { baseline: &opts.baseline, centre_rad, middle_s, causes: all, held_out: Default::default(), columns: Default::default() };

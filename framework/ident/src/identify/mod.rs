@@ -282,14 +282,20 @@ pub enum IdentifyError {
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     // Read once: each reading of the rate starts from the record as read (see `prepare::Read`).
     let read = prepare::Read::of(data)?;
-    let p = read.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::usual(prepare::NARROWEST_RATE_WINDOW))?;
+    // The usual reading and, unless the log may hold bin averages (whose narrowest window the
+    // data choose first), the ones screened beside it, read together (see `ReadAhead`).
+    let usual = prepare::RateReading::usual(prepare::NARROWEST_RATE_WINDOW);
+    let screened = opts.baseline_friction && !prepare::tried_as_bins(read.spacing_s);
+    let ahead: Vec<_> = std::iter::once(usual).chain(screened.then(|| bin_reading::other_readings(prepare::NARROWEST_RATE_WINDOW)).into_iter().flatten().map(|(_, r)| r)).collect();
+    let ahead = prepare::ReadAhead::new(&read, &ahead);
+    let p = ahead.prepare(opts.train_fraction, opts.held_out, usual)?;
     let builtin = causes::builtin();
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     // A slow log's rate as narrow as one sample either side, should the baseline read better
     // so, and sharper intervals or wider windows for the whole model to confirm (see
     // `bin_reading`); should the screening fail (it fits the built-in friction only), the usual
     // reading.
-    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(&read, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
+    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(&ahead, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
     let slow = p.may_hold_bins() && opts.baseline_friction;
     let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow)).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
     let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
@@ -297,11 +303,12 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (other_reading, p) = match opts.baseline_friction {
-        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), read.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
     // The record as read is kept for a slow log's cubic reading only (a long record's times
     // are not held beside the searches).
+    drop(ahead);
     let read = slow.then_some(read);
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.

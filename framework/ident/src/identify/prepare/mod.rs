@@ -24,9 +24,7 @@ pub use glitches::MAX_GLITCH_SAMPLES;
 pub(crate) use spring::spring_share;
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, WIDEST_RATE_REACH_S, widest_rate_window};
-use cubic_rate::cubic_rate_by_segment;
-use rate::{DeflectionNoise, velocity_by_segment, velocity_half_widths};
-pub(crate) use read::Read;
+pub(crate) use read::{Read, ReadAhead};
 
 use super::causes::Excitation;
 use super::design::Part;
@@ -317,30 +315,18 @@ impl RateReading {
 }
 
 impl Read<'_> {
-    /// The deflection's rate read as `rate` says [rad/s], at each kept sample.
-    pub(crate) fn rate(&self, rate: RateReading) -> Vec<f64> {
-        let (t, d, starts) = (&self.t, &self.d, &self.starts);
-        match rate {
-            RateReading::Adaptive { narrowest, reach_scale, windows_per_period } => {
-                let noise = DeflectionNoise { quantum_rad: self.quantum_rad, scatter_rad: self.scatter_rad, reach_scale };
-                velocity_by_segment(t, d, starts, noise, &velocity_half_widths(d.len(), &self.turning, self.period_samples, windows_per_period, [narrowest, widest_rate_window(self.spacing_s)]))
-            }
-            RateReading::Cubic => cubic_rate_by_segment(t, d, starts),
-        }
-    }
-
     /// The record prepared with its rate read as `rate` says.
     pub(crate) fn prepare(&self, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
-        self.prepare_with_rate(train_fraction, how, self.rate(rate))
+        self.prepare_with_rate(train_fraction, how, &self.rate(rate))
     }
 
     /// The record prepared with its rate `v` [rad/s] (see [`Read::rate`]).
-    pub(crate) fn prepare_with_rate(&self, train_fraction: f64, how: HeldOut, v: Vec<f64>) -> Result<Prepared, PrepareError> {
+    pub(crate) fn prepare_with_rate(&self, train_fraction: f64, how: HeldOut, v: &[f64]) -> Result<Prepared, PrepareError> {
         let Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, spacing_s: spacing, resolution_rad: resolution, scatter_rad: deflection_scatter, .. } = self;
         let (t0, frequency_hz, period_samples, spacing, resolution, deflection_scatter) = (*t0, *frequency_hz, *period_samples, *spacing, *resolution, *deflection_scatter);
         // The torque's floor under a line in the deflection and its rate, each residual computed
         // where it is needed (a long record's residual is not held: see `noise_floor_of`).
-        let noise_floor_nm = match line_in_deflection_and_rate(d, &v, tau) {
+        let noise_floor_nm = match line_in_deflection_and_rate(d, v, tau) {
             Some([a, b, c]) => noise::noise_floor_of(tau.len(), |i| tau[i] - a * d[i] - b * v[i] - c, starts),
             None => noise_floor(tau, starts),
         };
@@ -349,7 +335,7 @@ impl Read<'_> {
         // choose the same window).
         let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
         // A slow log's rate at each interval's ends, should it hold bin averages (see `bins`).
-        let edges = if tried_as_bins(spacing) { rate_edges(&v, starts) } else { Vec::new() };
+        let edges = if tried_as_bins(spacing) { rate_edges(v, starts) } else { Vec::new() };
         let (from, to) = held_out.times(&data.t);
         let lo = t.partition_point(|x| *x < from - t0);
         let hi = if held_out.end >= 1.0 { t.len() } else { t.partition_point(|x| *x < to - t0) };
@@ -378,7 +364,7 @@ impl Read<'_> {
                 restarts: Vec::new(),
                 t: pick(t),
                 d: pick(d),
-                v: pick(&v),
+                v: pick(v),
                 tau: pick(tau),
                 // A pivot not given is none: the configured characteristic's own.
                 pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
@@ -432,7 +418,7 @@ impl Read<'_> {
             span(before) + span(after)
         };
         let spring_share = spring_share(&train);
-        let stops = rest::stops(t, d, &v, spacing, resolution);
+        let stops = rest::stops(t, d, v, spacing, resolution);
         let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
         Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, turns: self.turn_runs.clone() })
     }

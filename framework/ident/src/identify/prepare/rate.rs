@@ -168,10 +168,10 @@ const RATE_WINDOW_SIGMAS: f64 = 3.0;
 /// noise, narrower. The window sized on the motion's strokes alone read a 20 Hz log's rate over
 /// +-2 to +-7 samples (0.2-0.7 s): the corners between its holds and ramps were smeared, and a
 /// delay of 85 ms with them (the blind devices' delay binned to 20 Hz was not named).
-fn adaptive_velocity(t: &[f64], d: &[f64], noise: DeflectionNoise, widest: &[usize]) -> Vec<f64> {
+fn adaptive_velocity(t: &[f64], d: &[f64], noises: &[DeflectionNoise], widest: &[usize]) -> Vec<Vec<f64>> {
     let n = d.len();
-    let (mut lo, mut hi) = (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]);
-    let mut out = vec![0.0; n];
+    // One rate per noise, each with its own intervals: the windows are the same for all.
+    let mut readings: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = noises.iter().map(|_| (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n], vec![0.0; n])).collect();
     // A rung no narrower than every sample's widest window would be passed over at each
     // sample: it is not computed (on a slow sine sampled fast, 5 of the 13).
     let widest_of_all = widest.iter().copied().max().unwrap_or(0);
@@ -179,18 +179,23 @@ fn adaptive_velocity(t: &[f64], d: &[f64], noise: DeflectionNoise, widest: &[usi
     // sample's intervals only narrow: once they no longer meet (`lo > hi`) its rate is chosen.
     for rung in RATE_HALF_WIDTHS.iter().filter(|h| **h < widest_of_all).map(|h| Some(*h)).chain(std::iter::once(None)) {
         each_window(t, d, |i| rung.unwrap_or(widest[i]), |i, Window { slope, spread, samples }| {
-            if lo[i] > hi[i] || rung.is_some_and(|h| h >= widest[i]) {
+            if rung.is_some_and(|h| h >= widest[i]) {
                 return;
             }
-            let reach = if spread > 0.0 { noise.slope_reach(samples, spread) } else { f64::INFINITY };
-            lo[i] = lo[i].max(slope - reach);
-            hi[i] = hi[i].min(slope + reach);
-            if lo[i] <= hi[i] {
-                out[i] = slope;
+            for (noise, (lo, hi, out)) in noises.iter().zip(readings.iter_mut()) {
+                if lo[i] > hi[i] {
+                    continue;
+                }
+                let reach = if spread > 0.0 { noise.slope_reach(samples, spread) } else { f64::INFINITY };
+                lo[i] = lo[i].max(slope - reach);
+                hi[i] = hi[i].min(slope + reach);
+                if lo[i] <= hi[i] {
+                    out[i] = slope;
+                }
             }
         });
     }
-    out
+    readings.into_iter().map(|(_, _, out)| out).collect()
 }
 
 /// What scatters a deflection reading about the motion: its quantisation and its own noise.
@@ -300,29 +305,37 @@ fn rate_blocks(starts: &[usize], n: usize, half: &[usize]) -> Vec<RateBlock> {
     blocks
 }
 
-/// The deflection rate of [`adaptive_velocity`], segment by segment: never differenced across a
-/// gap. A long segment goes in blocks ([`rate_blocks`]), each with the samples its windows reach
-/// on either side, so that every window is the one the whole segment would give it; the blocks
-/// are spread over the cores (a tenth of identify's time on a 100 000-sample record was this
-/// rate, on one core). A segment of one sample has no rate (0).
-pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise: DeflectionNoise, half: &[usize]) -> Vec<f64> {
-    // Each block writes its own slice of the rate (no second copy of the column: a 2-million-row
-    // record's peak memory is held to issue 13's 150 MB).
-    let mut v = vec![0.0; d.len()];
-    let mut rest = v.as_mut_slice();
+/// The deflection rate of [`adaptive_velocity`], segment by segment, once for each of `noises`
+/// (readings whose windows are the same share them: see `Read::rates`): never differenced
+/// across a gap. A long segment goes in blocks ([`rate_blocks`]), each with the samples its
+/// windows reach on either side, so that every window is the one the whole segment would give
+/// it; the blocks are spread over the cores (a tenth of identify's time on a 100 000-sample
+/// record was this rate, on one core). A segment of one sample has no rate (0).
+pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noises: &[DeflectionNoise], half: &[usize]) -> Vec<Vec<f64>> {
+    // Each block writes its own slice of each rate (no second copy of the column: a
+    // 2-million-row record's peak memory is held to issue 13's 150 MB).
+    let mut v: Vec<Vec<f64>> = noises.iter().map(|_| vec![0.0; d.len()]).collect();
+    let mut rests: Vec<&mut [f64]> = v.iter_mut().map(|x| x.as_mut_slice()).collect();
     let mut work = Vec::new();
     for (own, read) in rate_blocks(starts, d.len(), half) {
-        let (mine, others) = rest.split_at_mut(own.len());
-        rest = others;
+        let mut mine = Vec::with_capacity(rests.len());
+        for rest in rests.iter_mut() {
+            let (slice, others) = std::mem::take(rest).split_at_mut(own.len());
+            *rest = others;
+            mine.push(slice);
+        }
         work.push((own, read, std::sync::Mutex::new(mine)));
     }
     parallel_map(&work, |(own, read, out)| {
         if read.len() >= 2 {
-            let rates = adaptive_velocity(&t[read.clone()], &d[read.clone()], noise, &half[read.clone()]);
+            let rates = adaptive_velocity(&t[read.clone()], &d[read.clone()], noises, &half[read.clone()]);
             // Each slice is its block's alone: the lock is never contended.
-            out.lock().unwrap_or_else(|e| e.into_inner()).copy_from_slice(&rates[own.start - read.start..own.end - read.start]);
+            for (out, rate) in out.lock().unwrap_or_else(|e| e.into_inner()).iter_mut().zip(&rates) {
+                out.copy_from_slice(&rate[own.start - read.start..own.end - read.start]);
+            }
         }
     });
+    drop(work);
     v
 }
 
@@ -483,10 +496,10 @@ mod tests {
         let starts = [0, long, long + 3000];
         let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0, VELOCITY_WINDOWS_PER_PERIOD, [NARROWEST_RATE_WINDOW, 100]);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale: 1.0 };
-        let shared = velocity_by_segment(&t, &d, &starts, noise, &half);
-        let mut whole = adaptive_velocity(&t[..long], &d[..long], noise, &half[..long]);
+        let shared = velocity_by_segment(&t, &d, &starts, &[noise], &half).remove(0);
+        let mut whole = adaptive_velocity(&t[..long], &d[..long], &[noise], &half[..long]).remove(0);
         assert!(whole[long - 1] != 0.0);
-        whole.extend(adaptive_velocity(&t[long..long + 3000], &d[long..long + 3000], noise, &half[long..long + 3000]));
+        whole.extend(adaptive_velocity(&t[long..long + 3000], &d[long..long + 3000], &[noise], &half[long..long + 3000]).remove(0));
         whole.push(0.0);
         assert_eq!(shared.len(), whole.len());
         let worst = whole.iter().zip(&shared).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -503,9 +516,30 @@ mod tests {
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.01 * (40.0 * t).sin() * (-(t - edge).powi(2)).exp()) / q).round() * q).collect();
         let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0, VELOCITY_WINDOWS_PER_PERIOD, [NARROWEST_RATE_WINDOW, 100]);
         let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale: 1.0 };
-        let (whole, blocks) = (adaptive_velocity(&t, &d, noise, &half), velocity_by_segment(&t, &d, &[0], noise, &half));
+        let (whole, blocks) = (adaptive_velocity(&t, &d, &[noise], &half).remove(0), velocity_by_segment(&t, &d, &[0], &[noise], &half).remove(0));
         assert_eq!(whole.len(), blocks.len());
         let worst = whole.iter().zip(&blocks).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-9, "{worst}");
+    }
+
+    /// Readings whose windows are the same, read together, are each the rate read alone, bit
+    /// for bit: the usual and the sharper readings that identify screens share the ladder.
+    #[test]
+    fn readings_read_together_are_each_the_rate_read_alone() {
+        let n = RATE_BLOCK * 5 / 2;
+        let q = std::f64::consts::TAU / 16384.0;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3 + if i > n / 2 { 0.5 } else { 0.0 }).collect();
+        // A triangle (its rate turns in a sample: the sharper readings differ there).
+        let d: Vec<f64> = t.iter().map(|t| ((0.05 * (2.0 * (0.7 * t).fract() - 1.0).abs() + 0.001 * (9.0 * t).sin()) / q).round() * q).collect();
+        let starts = super::super::segment_starts(&t);
+        let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 1400.0, VELOCITY_WINDOWS_PER_PERIOD, [NARROWEST_RATE_WINDOW, 100]);
+        let noise = |reach_scale| DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale };
+        let noises = [noise(1.0), noise(0.5), noise(0.25)];
+        let together = velocity_by_segment(&t, &d, &starts, &noises, &half);
+        for (k, noise) in noises.iter().enumerate() {
+            assert_eq!(together[k], velocity_by_segment(&t, &d, &starts, &[*noise], &half).remove(0), "reading {k}");
+        }
+        // The readings differ: each was read with its own intervals.
+        assert!(together[0] != together[2]);
     }
 }

@@ -10,8 +10,9 @@ use std::borrow::Cow;
 use super::dropouts::dropouts_by_segment;
 use super::glitches::glitches_by_segment;
 use super::noise::scatter_rms;
-use super::rate::coarsest_tick_rad;
-use super::{MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, fundamental_hz, noise_floor, resolution_rad, saturation, segment_starts, sign, turns};
+use super::cubic_rate::cubic_rate_by_segment;
+use super::rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths, widest_rate_window};
+use super::{HeldOut, MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, Prepared, RateReading, fundamental_hz, noise_floor, resolution_rad, saturation, segment_starts, sign, turns};
 use crate::csv::Data;
 use crate::identify::causes::{reversals, turn_step_rad};
 
@@ -135,5 +136,73 @@ impl<'a> Read<'a> {
         let quantum_rad = coarsest_tick_rad(&d, &starts, resolution);
         let (turn_step, reversed_sign, turn_runs) = (turn_step_rad(&d, &starts), sign::reversed_sign(&d, &tau), turns::turns(&t, &d));
         Ok(Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, turning, spacing_s, resolution_rad: resolution, quantum_rad, scatter_rad, dropouts, glitches, saturated, turn_step_rad: turn_step, reversed_sign, turn_runs })
+    }
+}
+
+impl Read<'_> {
+    /// The deflection's rate read as `rate` says [rad/s], at each kept sample.
+    pub(crate) fn rate(&self, rate: RateReading) -> Vec<f64> {
+        self.rates(&[rate]).remove(0)
+    }
+
+    /// The deflection's rate read each way of `readings` [rad/s], in their order. Adaptive
+    /// readings whose windows are the same (the same narrowest window and windows per period:
+    /// the usual one and the sharper ones) are read together and share the ladder's windows
+    /// (see `rate::velocity_by_segment`), each bit for bit the rate read alone.
+    pub(crate) fn rates(&self, readings: &[RateReading]) -> Vec<Vec<f64>> {
+        let (t, d, starts) = (&self.t, &self.d, &self.starts);
+        let mut rates: Vec<Option<Vec<f64>>> = vec![None; readings.len()];
+        for k in 0..readings.len() {
+            match readings[k] {
+                _ if rates[k].is_some() => {}
+                RateReading::Cubic => rates[k] = Some(cubic_rate_by_segment(t, d, starts)),
+                RateReading::Adaptive { narrowest, windows_per_period, .. } => {
+                    let alike = |r: &RateReading| matches!(*r, RateReading::Adaptive { narrowest: n, windows_per_period: w, .. } if n == narrowest && w == windows_per_period);
+                    let together: Vec<usize> = (k..readings.len()).filter(|j| rates[*j].is_none() && alike(&readings[*j])).collect();
+                    let noise = |r: &RateReading| DeflectionNoise { quantum_rad: self.quantum_rad, scatter_rad: self.scatter_rad, reach_scale: if let RateReading::Adaptive { reach_scale, .. } = *r { reach_scale } else { 1.0 } };
+                    let noises: Vec<DeflectionNoise> = together.iter().map(|j| noise(&readings[*j])).collect();
+                    let half = velocity_half_widths(d.len(), &self.turning, self.period_samples, windows_per_period, [narrowest, widest_rate_window(self.spacing_s)]);
+                    for (j, rate) in together.into_iter().zip(velocity_by_segment(t, d, starts, &noises, &half)) {
+                        rates[j] = Some(rate);
+                    }
+                }
+            }
+        }
+        rates.into_iter().flatten().collect()
+    }
+}
+
+/// The most samples a record may have for [`ReadAhead`] to read its readings ahead (an
+/// assumption: four readings of 8 bytes a sample held together, 16 MB here; on the 2 million
+/// samples of issue 13's bound, 64 MB of its 150). A longer record's readings are read when
+/// each is prepared, one at a time, as before.
+pub const READ_AHEAD_SAMPLES: usize = 500_000;
+
+/// A record as read with rate readings read ahead, together where they can be (see
+/// [`Read::rates`]): identify prepares the usual reading, screens the sharper and wider ones
+/// beside it, and prepares the usual one again for the searches. Read one at a time, the usual
+/// reading was read twice and each sharper one walked the ladder's windows again (the rate was
+/// a third of identify's time on the speed benchmark's 100 000 samples).
+pub(crate) struct ReadAhead<'r, 'a> {
+    /// The record as read.
+    pub read: &'r Read<'a>,
+    /// The readings read ahead and their rates [rad/s].
+    ahead: Vec<(RateReading, Vec<f64>)>,
+}
+
+impl<'r, 'a> ReadAhead<'r, 'a> {
+    /// `readings` of `read` read ahead, when it has at most [`READ_AHEAD_SAMPLES`] samples;
+    /// none otherwise.
+    pub(crate) fn new(read: &'r Read<'a>, readings: &[RateReading]) -> Self {
+        let ahead = if read.d.len() <= READ_AHEAD_SAMPLES { readings.iter().copied().zip(read.rates(readings)).collect() } else { Vec::new() };
+        ReadAhead { read, ahead }
+    }
+
+    /// The record prepared with its rate read as `rate` says: read ahead or read now.
+    pub(crate) fn prepare(&self, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
+        match self.ahead.iter().find(|(r, _)| *r == rate) {
+            Some((_, v)) => self.read.prepare_with_rate(train_fraction, how, v),
+            None => self.read.prepare(train_fraction, how, rate),
+        }
     }
 }
