@@ -205,7 +205,7 @@ pub(crate) fn choose_rate_reading(read: &super::prepare::ReadAhead, opts: &super
         if let Some((_, _, prepared)) = best.as_mut() {
             *prepared = None;
         }
-        let Some(p) = read.prepare(opts.train_fraction, opts.held_out, how).ok() else { continue };
+        let Some(p) = read.prepare(how).ok() else { continue };
         let (m, read) = (model(), as_points(&p));
         let Some((spec, bic_narrow)) = on(&m, &read).and_then(|s| score(&m, &s, &read).map(|b| (s, b))) else { continue };
         if bic_usual - bic_narrow <= BIC_THRESHOLD || best.as_ref().is_some_and(|(r, _, _)| r.bic_narrow <= bic_narrow) {
@@ -220,7 +220,7 @@ pub(crate) fn choose_rate_reading(read: &super::prepare::ReadAhead, opts: &super
     // data and reading prepare alike).
     let p = match prepared {
         Some(p) => p,
-        None => read.prepare(opts.train_fraction, opts.held_out, how).ok()?,
+        None => read.prepare(how).ok()?,
     };
     Some((rate, p))
 }

@@ -281,14 +281,14 @@ pub enum IdentifyError {
 /// ```
 pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyError> {
     // Read once: each reading of the rate starts from the record as read (see `prepare::Read`).
-    let read = prepare::Read::of(data)?;
+    let read = prepare::Read::of(data, opts.train_fraction, opts.held_out)?;
     // The usual reading and, unless the log may hold bin averages (whose narrowest window the
     // data choose first), the ones screened beside it, read together (see `ReadAhead`).
     let usual = prepare::RateReading::usual(prepare::NARROWEST_RATE_WINDOW);
     let screened = opts.baseline_friction && !prepare::tried_as_bins(read.spacing_s);
     let ahead: Vec<_> = std::iter::once(usual).chain(screened.then(|| bin_reading::other_readings(prepare::NARROWEST_RATE_WINDOW)).into_iter().flatten().map(|(_, r)| r)).collect();
     let ahead = prepare::ReadAhead::new(&read, &ahead);
-    let p = ahead.prepare(opts.train_fraction, opts.held_out, usual)?;
+    let p = ahead.prepare(usual)?;
     let builtin = causes::builtin();
     let all: Vec<&dyn CandidateCause> = builtin.iter().chain(&opts.extra_candidates).map(|c| c.as_ref()).collect();
     // A slow log's rate as narrow as one sample either side, should the baseline read better
@@ -303,7 +303,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (other_reading, p) = match opts.baseline_friction {
-        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::usual(narrowest))?),
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
     // The record as read is kept for a slow log's cubic reading only (a long record's times
@@ -330,7 +330,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // issue 13's 150; 148 now).
     let mut others = Vec::new();
     // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
-    let cubic = read.and_then(|read| read.prepare(opts.train_fraction, opts.held_out, prepare::RateReading::Cubic).ok());
+    let cubic = read.and_then(|read| read.prepare(prepare::RateReading::Cubic).ok());
     others.extend(cubic.and_then(|c| again(&c, None, false)).map(|e| (bin_reading::Reading::Cubic, e)));
     // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());

@@ -290,7 +290,7 @@ pub fn split_time(t_s: &[f64], train_fraction: f64) -> f64 {
 /// `data` prepared with the rate over the usual windows (see [`Read`]).
 #[cfg(test)]
 pub(crate) fn prepare(data: &crate::csv::Data, train_fraction: f64, how: HeldOut) -> Result<Prepared, PrepareError> {
-    Read::of(data)?.prepare(train_fraction, how, RateReading::usual(NARROWEST_RATE_WINDOW))
+    Read::of(data, train_fraction, how)?.prepare(RateReading::usual(NARROWEST_RATE_WINDOW))
 }
 
 /// How the deflection's rate is read.
@@ -316,12 +316,12 @@ impl RateReading {
 
 impl Read<'_> {
     /// The record prepared with its rate read as `rate` says.
-    pub(crate) fn prepare(&self, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
-        self.prepare_with_rate(train_fraction, how, &self.rate(rate))
+    pub(crate) fn prepare(&self, rate: RateReading) -> Result<Prepared, PrepareError> {
+        self.prepare_with_rate(&self.rate(rate))
     }
 
     /// The record prepared with its rate `v` [rad/s] (see [`Read::rate`]).
-    pub(crate) fn prepare_with_rate(&self, train_fraction: f64, how: HeldOut, v: &[f64]) -> Result<Prepared, PrepareError> {
+    pub(crate) fn prepare_with_rate(&self, v: &[f64]) -> Result<Prepared, PrepareError> {
         let Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, spacing_s: spacing, resolution_rad: resolution, scatter_rad: deflection_scatter, .. } = self;
         let (t0, frequency_hz, period_samples, spacing, resolution, deflection_scatter) = (*t0, *frequency_hz, *period_samples, *spacing, *resolution, *deflection_scatter);
         // The torque's floor under a line in the deflection and its rate, each residual computed
@@ -330,10 +330,7 @@ impl Read<'_> {
             Some([a, b, c]) => noise::noise_floor_of(tau.len(), |i| tau[i] - a * d[i] - b * v[i] - c, starts),
             None => noise_floor(tau, starts),
         };
-        // The held-out window, chosen on the record as read (dropouts in: a lost reading's zero adds
-        // travel and range, accepted so that the model loop's gains, which see the same columns,
-        // choose the same window).
-        let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
+        let (held_out, train_fraction) = (self.held_out.clone(), self.train_fraction);
         // A slow log's rate at each interval's ends, should it hold bin averages (see `bins`).
         let edges = if tried_as_bins(spacing) { rate_edges(v, starts) } else { Vec::new() };
         let (from, to) = held_out.times(&data.t);

@@ -168,10 +168,12 @@ const RATE_WINDOW_SIGMAS: f64 = 3.0;
 /// noise, narrower. The window sized on the motion's strokes alone read a 20 Hz log's rate over
 /// +-2 to +-7 samples (0.2-0.7 s): the corners between its holds and ramps were smeared, and a
 /// delay of 85 ms with them (the blind devices' delay binned to 20 Hz was not named).
-fn adaptive_velocity(t: &[f64], d: &[f64], noises: &[DeflectionNoise], widest: &[usize]) -> Vec<Vec<f64>> {
-    let n = d.len();
-    // One rate per noise, each with its own intervals: the windows are the same for all.
-    let mut readings: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = noises.iter().map(|_| (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n], vec![0.0; n])).collect();
+fn adaptive_velocity(t: &[f64], d: &[f64], noise: DeflectionNoise, reach_scales: &[f64], widest: &[usize]) -> Vec<Vec<f64>> {
+    let (n, k) = (d.len(), reach_scales.len());
+    // One rate per reach scale, each with its own intervals, a sample's side by side: the
+    // windows and their reach are the same for all.
+    let mut bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); n * k];
+    let mut out = vec![vec![0.0; n]; k];
     // A rung no narrower than every sample's widest window would be passed over at each
     // sample: it is not computed (on a slow sine sampled fast, 5 of the 13).
     let widest_of_all = widest.iter().copied().max().unwrap_or(0);
@@ -182,20 +184,21 @@ fn adaptive_velocity(t: &[f64], d: &[f64], noises: &[DeflectionNoise], widest: &
             if rung.is_some_and(|h| h >= widest[i]) {
                 return;
             }
-            for (noise, (lo, hi, out)) in noises.iter().zip(readings.iter_mut()) {
-                if lo[i] > hi[i] {
+            let reach = if spread > 0.0 { noise.slope_reach(samples, spread) } else { f64::INFINITY };
+            for (r, (lo, hi)) in bounds[i * k..(i + 1) * k].iter_mut().enumerate() {
+                if *lo > *hi {
                     continue;
                 }
-                let reach = if spread > 0.0 { noise.slope_reach(samples, spread) } else { f64::INFINITY };
-                lo[i] = lo[i].max(slope - reach);
-                hi[i] = hi[i].min(slope + reach);
-                if lo[i] <= hi[i] {
-                    out[i] = slope;
+                let reach = if spread > 0.0 { reach_scales[r] * reach } else { f64::INFINITY };
+                *lo = lo.max(slope - reach);
+                *hi = hi.min(slope + reach);
+                if *lo <= *hi {
+                    out[r][i] = slope;
                 }
             }
         });
     }
-    readings.into_iter().map(|(_, _, out)| out).collect()
+    out
 }
 
 /// What scatters a deflection reading about the motion: its quantisation and its own noise.
@@ -211,15 +214,12 @@ pub(super) struct DeflectionNoise {
     /// The deflection's scatter about a line from sample to sample, rms [rad] (quantisation's
     /// share included: counted twice on a clean staircase, a margin on the safe side).
     pub scatter_rad: f64,
-    /// The share of its reach a window's interval is given: 1 as this module derives it, less
-    /// for a reading that the data chose sharper (see [`SHARPER_REACH_SCALES`]).
-    pub reach_scale: f64,
 }
 
 impl DeflectionNoise {
     /// How far a window's least-squares slope may lie from the motion's rate [rad/s], for a
-    /// window of `m` samples whose time stamps spread `spread` [s^2] about their mean, times
-    /// `reach_scale`: [`RATE_WINDOW_SIGMAS`] standard errors of the scatter, plus the most that quantisation
+    /// window of `m` samples whose time stamps spread `spread` [s^2] about their mean:
+    /// [`RATE_WINDOW_SIGMAS`] standard errors of the scatter, plus the most that quantisation
     /// can tilt it. Quantisation is no white noise on a slow motion: its error is a sawtooth that
     /// keeps its sign for many samples, bounded by half a step, so its tilt is bounded by
     /// `q/2 sum|t - mean t| / spread <= q/2 sqrt(m / spread)` (Cauchy-Schwarz). Taken as white
@@ -230,7 +230,7 @@ impl DeflectionNoise {
     /// error after the offset was 0.041 Nm for 0.029 now (noise 0.024). That viscous friction is
     /// still not named at full rate: eq. 3.5's arctan at a low `k_b` stands in for it.
     pub fn slope_reach(&self, m: f64, spread: f64) -> f64 {
-        self.reach_scale * (RATE_WINDOW_SIGMAS * self.scatter_rad / spread.sqrt() + 0.5 * self.quantum_rad * (m / spread).sqrt())
+        RATE_WINDOW_SIGMAS * self.scatter_rad / spread.sqrt() + 0.5 * self.quantum_rad * (m / spread).sqrt()
     }
 }
 
@@ -305,16 +305,19 @@ fn rate_blocks(starts: &[usize], n: usize, half: &[usize]) -> Vec<RateBlock> {
     blocks
 }
 
-/// The deflection rate of [`adaptive_velocity`], segment by segment, once for each of `noises`
-/// (readings whose windows are the same share them: see `Read::rates`): never differenced
+/// The deflection rate of [`adaptive_velocity`], segment by segment, once for each of
+/// `reach_scales`, the share of its reach ([`DeflectionNoise::slope_reach`]) each window's
+/// interval is given: 1 as this module derives it, less for a sharper reading (see
+/// [`SHARPER_REACH_SCALES`]); readings whose windows are the same share them (see
+/// `Read::rates`). Never differenced
 /// across a gap. A long segment goes in blocks ([`rate_blocks`]), each with the samples its
 /// windows reach on either side, so that every window is the one the whole segment would give
 /// it; the blocks are spread over the cores (a tenth of identify's time on a 100 000-sample
 /// record was this rate, on one core). A segment of one sample has no rate (0).
-pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noises: &[DeflectionNoise], half: &[usize]) -> Vec<Vec<f64>> {
+pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noise: DeflectionNoise, reach_scales: &[f64], half: &[usize]) -> Vec<Vec<f64>> {
     // Each block writes its own slice of each rate (no second copy of the column: a
     // 2-million-row record's peak memory is held to issue 13's 150 MB).
-    let mut v: Vec<Vec<f64>> = noises.iter().map(|_| vec![0.0; d.len()]).collect();
+    let mut v: Vec<Vec<f64>> = reach_scales.iter().map(|_| vec![0.0; d.len()]).collect();
     let mut rests: Vec<&mut [f64]> = v.iter_mut().map(|x| x.as_mut_slice()).collect();
     let mut work = Vec::new();
     for (own, read) in rate_blocks(starts, d.len(), half) {
@@ -328,7 +331,7 @@ pub(super) fn velocity_by_segment(t: &[f64], d: &[f64], starts: &[usize], noises
     }
     parallel_map(&work, |(own, read, out)| {
         if read.len() >= 2 {
-            let rates = adaptive_velocity(&t[read.clone()], &d[read.clone()], noises, &half[read.clone()]);
+            let rates = adaptive_velocity(&t[read.clone()], &d[read.clone()], noise, reach_scales, &half[read.clone()]);
             // Each slice is its block's alone: the lock is never contended.
             for (out, rate) in out.lock().unwrap_or_else(|e| e.into_inner()).iter_mut().zip(&rates) {
                 out.copy_from_slice(&rate[own.start - read.start..own.end - read.start]);
@@ -495,11 +498,11 @@ mod tests {
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.002 * (17.0 * t).sin()) / q).round() * q).collect();
         let starts = [0, long, long + 3000];
         let half = velocity_half_widths(d.len(), &crate::identify::causes::reversals(&d), 5000.0, VELOCITY_WINDOWS_PER_PERIOD, [NARROWEST_RATE_WINDOW, 100]);
-        let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale: 1.0 };
-        let shared = velocity_by_segment(&t, &d, &starts, &[noise], &half).remove(0);
-        let mut whole = adaptive_velocity(&t[..long], &d[..long], &[noise], &half[..long]).remove(0);
+        let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
+        let shared = velocity_by_segment(&t, &d, &starts, noise, &[1.0], &half).remove(0);
+        let mut whole = adaptive_velocity(&t[..long], &d[..long], noise, &[1.0], &half[..long]).remove(0);
         assert!(whole[long - 1] != 0.0);
-        whole.extend(adaptive_velocity(&t[long..long + 3000], &d[long..long + 3000], &[noise], &half[long..long + 3000]).remove(0));
+        whole.extend(adaptive_velocity(&t[long..long + 3000], &d[long..long + 3000], noise, &[1.0], &half[long..long + 3000]).remove(0));
         whole.push(0.0);
         assert_eq!(shared.len(), whole.len());
         let worst = whole.iter().zip(&shared).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -515,8 +518,8 @@ mod tests {
         let edge = RATE_BLOCK as f64 * 1e-3;
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (1.3 * t).sin() + 0.01 * (40.0 * t).sin() * (-(t - edge).powi(2)).exp()) / q).round() * q).collect();
         let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 5000.0, VELOCITY_WINDOWS_PER_PERIOD, [NARROWEST_RATE_WINDOW, 100]);
-        let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale: 1.0 };
-        let (whole, blocks) = (adaptive_velocity(&t, &d, &[noise], &half).remove(0), velocity_by_segment(&t, &d, &[0], &[noise], &half).remove(0));
+        let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
+        let (whole, blocks) = (adaptive_velocity(&t, &d, noise, &[1.0], &half).remove(0), velocity_by_segment(&t, &d, &[0], noise, &[1.0], &half).remove(0));
         assert_eq!(whole.len(), blocks.len());
         let worst = whole.iter().zip(&blocks).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-9, "{worst}");
@@ -533,11 +536,11 @@ mod tests {
         let d: Vec<f64> = t.iter().map(|t| ((0.05 * (2.0 * (0.7 * t).fract() - 1.0).abs() + 0.001 * (9.0 * t).sin()) / q).round() * q).collect();
         let starts = super::super::segment_starts(&t);
         let half = velocity_half_widths(n, &crate::identify::causes::reversals(&d), 1400.0, VELOCITY_WINDOWS_PER_PERIOD, [NARROWEST_RATE_WINDOW, 100]);
-        let noise = |reach_scale| DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt(), reach_scale };
-        let noises = [noise(1.0), noise(0.5), noise(0.25)];
-        let together = velocity_by_segment(&t, &d, &starts, &noises, &half);
-        for (k, noise) in noises.iter().enumerate() {
-            assert_eq!(together[k], velocity_by_segment(&t, &d, &starts, &[*noise], &half).remove(0), "reading {k}");
+        let noise = DeflectionNoise { quantum_rad: q, scatter_rad: q / 12f64.sqrt() };
+        let scales = [1.0, 0.5, 0.25];
+        let together = velocity_by_segment(&t, &d, &starts, noise, &scales, &half);
+        for (k, scale) in scales.iter().enumerate() {
+            assert_eq!(together[k], velocity_by_segment(&t, &d, &starts, noise, &[*scale], &half).remove(0), "reading {k}");
         }
         // The readings differ: each was read with its own intervals.
         assert!(together[0] != together[2]);

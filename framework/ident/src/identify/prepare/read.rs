@@ -12,7 +12,7 @@ use super::glitches::glitches_by_segment;
 use super::noise::scatter_rms;
 use super::cubic_rate::cubic_rate_by_segment;
 use super::rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths, widest_rate_window};
-use super::{HeldOut, MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, Prepared, RateReading, fundamental_hz, noise_floor, resolution_rad, saturation, segment_starts, sign, turns};
+use super::{HeldOut, HeldOutWindow, MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, Prepared, RateReading, fundamental_hz, noise_floor, resolution_rad, held_out_window, saturation, segment_starts, sign, turns};
 use crate::csv::Data;
 use crate::identify::causes::{reversals, turn_step_rad};
 
@@ -57,13 +57,19 @@ pub(crate) struct Read<'a> {
     pub turn_step_rad: f64,
     pub reversed_sign: Option<String>,
     pub turn_runs: Vec<(f64, f64)>,
+    /// The share of the record's time the training part takes, and the held-out window chosen
+    /// on the record as read (dropouts in: a lost reading's zero adds travel and range, accepted
+    /// so that the model loop's gains, which see the same columns, choose the same window).
+    pub train_fraction: f64,
+    pub held_out: HeldOutWindow,
 }
 
 impl<'a> Read<'a> {
-    /// `data` read: its refusals are those of identify's preparation that do not depend on the
+    /// `data` read, to be split `train_fraction` for training, the held-out part chosen as
+    /// `how` says: its refusals are those of identify's preparation that do not depend on the
     /// rate (too few samples, uneven columns, a saturated sensor, too little excitation, a
     /// constant torque).
-    pub(crate) fn of(data: &'a Data) -> Result<Self, PrepareError> {
+    pub(crate) fn of(data: &'a Data, train_fraction: f64, how: HeldOut) -> Result<Self, PrepareError> {
         let n_all = data.len();
         if n_all < 50 {
             return Err(PrepareError::TooFewSamples { samples: n_all, needed: 50 });
@@ -135,7 +141,8 @@ impl<'a> Read<'a> {
         let scatter_rad = scatter_rms(&d, &starts);
         let quantum_rad = coarsest_tick_rad(&d, &starts, resolution);
         let (turn_step, reversed_sign, turn_runs) = (turn_step_rad(&d, &starts), sign::reversed_sign(&d, &tau), turns::turns(&t, &d));
-        Ok(Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, turning, spacing_s, resolution_rad: resolution, quantum_rad, scatter_rad, dropouts, glitches, saturated, turn_step_rad: turn_step, reversed_sign, turn_runs })
+        let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
+        Ok(Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, turning, spacing_s, resolution_rad: resolution, quantum_rad, scatter_rad, dropouts, glitches, saturated, turn_step_rad: turn_step, reversed_sign, turn_runs, train_fraction, held_out })
     }
 }
 
@@ -159,10 +166,10 @@ impl Read<'_> {
                 RateReading::Adaptive { narrowest, windows_per_period, .. } => {
                     let alike = |r: &RateReading| matches!(*r, RateReading::Adaptive { narrowest: n, windows_per_period: w, .. } if n == narrowest && w == windows_per_period);
                     let together: Vec<usize> = (k..readings.len()).filter(|j| rates[*j].is_none() && alike(&readings[*j])).collect();
-                    let noise = |r: &RateReading| DeflectionNoise { quantum_rad: self.quantum_rad, scatter_rad: self.scatter_rad, reach_scale: if let RateReading::Adaptive { reach_scale, .. } = *r { reach_scale } else { 1.0 } };
-                    let noises: Vec<DeflectionNoise> = together.iter().map(|j| noise(&readings[*j])).collect();
+                    let scales: Vec<f64> = together.iter().map(|j| if let RateReading::Adaptive { reach_scale, .. } = readings[*j] { reach_scale } else { 1.0 }).collect();
+                    let noise = DeflectionNoise { quantum_rad: self.quantum_rad, scatter_rad: self.scatter_rad };
                     let half = velocity_half_widths(d.len(), &self.turning, self.period_samples, windows_per_period, [narrowest, widest_rate_window(self.spacing_s)]);
-                    for (j, rate) in together.into_iter().zip(velocity_by_segment(t, d, starts, &noises, &half)) {
+                    for (j, rate) in together.into_iter().zip(velocity_by_segment(t, d, starts, noise, &scales, &half)) {
                         rates[j] = Some(rate);
                     }
                 }
@@ -199,10 +206,10 @@ impl<'r, 'a> ReadAhead<'r, 'a> {
     }
 
     /// The record prepared with its rate read as `rate` says: read ahead or read now.
-    pub(crate) fn prepare(&self, train_fraction: f64, how: HeldOut, rate: RateReading) -> Result<Prepared, PrepareError> {
+    pub(crate) fn prepare(&self, rate: RateReading) -> Result<Prepared, PrepareError> {
         match self.ahead.iter().find(|(r, _)| *r == rate) {
-            Some((_, v)) => self.read.prepare_with_rate(train_fraction, how, v),
-            None => self.read.prepare(train_fraction, how, rate),
+            Some((_, v)) => self.read.prepare_with_rate(v),
+            None => self.read.prepare(rate),
         }
     }
 }
