@@ -205,6 +205,11 @@ pub(crate) fn choose_rate_reading(read: &super::prepare::ReadAhead, opts: &super
         if let Some((_, _, prepared)) = best.as_mut() {
             *prepared = None;
         }
+        // A reading whose rate is the usual one's or an earlier one's, bit for bit, would score
+        // as that one did (a sharper interval that never binds on a smooth record).
+        if read.repeats(how) {
+            continue;
+        }
         let Some(p) = read.prepare(how).ok() else { continue };
         let (m, read) = (model(), as_points(&p));
         let Some((spec, bic_narrow)) = on(&m, &read).and_then(|s| score(&m, &s, &read).map(|b| (s, b))) else { continue };

@@ -205,11 +205,52 @@ impl<'r, 'a> ReadAhead<'r, 'a> {
         ReadAhead { read, ahead }
     }
 
+    /// Whether `rate` was read ahead with a rate equal, sample for sample, to that of a reading
+    /// read ahead before it (the usual one first): prepared, it is that reading.
+    pub(crate) fn repeats(&self, rate: RateReading) -> bool {
+        self.ahead.iter().position(|(r, _)| *r == rate).is_some_and(|k| self.ahead[..k].iter().any(|(_, v)| *v == self.ahead[k].1))
+    }
+
     /// The record prepared with its rate read as `rate` says: read ahead or read now.
     pub(crate) fn prepare(&self, rate: RateReading) -> Result<Prepared, PrepareError> {
         match self.ahead.iter().find(|(r, _)| *r == rate) {
             Some((_, v)) => self.read.prepare_with_rate(v),
             None => self.read.prepare(rate),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD};
+    use super::*;
+
+    /// A 14-bit record of 0.1 rad at 0.2 Hz, 200 Hz (the speed benchmark's motion): a sine, or a
+    /// triangle whose rate turns in a sample.
+    fn record(triangle: bool) -> Data {
+        let q = std::f64::consts::TAU / 16384.0;
+        let t: Vec<f64> = (0..20_000).map(|i| i as f64 / 200.0).collect();
+        let wave = |t: f64| if triangle { 0.1 * (4.0 * (0.2 * t).fract() - 2.0).abs() - 0.1 } else { 0.1 * (std::f64::consts::TAU * 0.2 * t).sin() };
+        let d: Vec<f64> = t.iter().map(|t| (wave(*t) / q).round() * q).collect();
+        let tau = d.iter().enumerate().map(|(i, d)| 100.0 * d + 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5)).collect();
+        Data::from_columns(t, d, tau)
+    }
+
+    /// A sharper reading whose intervals never bind reads the usual rate, and its screening is
+    /// passed over; where the rate turns in a sample, it does not.
+    #[test]
+    fn a_reading_that_reads_an_earlier_ones_rate_repeats_it() {
+        let readings = |data: &Data| {
+            let read = Read::of(data, 0.7, HeldOut::Last).expect("read");
+            let usual = RateReading::usual(NARROWEST_RATE_WINDOW);
+            let sharper = |reach_scale| RateReading::Adaptive { narrowest: NARROWEST_RATE_WINDOW, reach_scale, windows_per_period: VELOCITY_WINDOWS_PER_PERIOD };
+            let all = [usual, sharper(SHARPER_REACH_SCALES[0]), sharper(SHARPER_REACH_SCALES[1])];
+            let ahead = ReadAhead::new(&read, &all);
+            all.map(|r| ahead.repeats(r))
+        };
+        let (sine, triangle) = (readings(&record(false)), readings(&record(true)));
+        // The usual reading repeats nothing; on the sine the half reach repeats it.
+        assert_eq!(sine[..2], [false, true], "{sine:?}");
+        assert_eq!(triangle, [false, false, false], "{triangle:?}");
     }
 }
