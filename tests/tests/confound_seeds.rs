@@ -17,7 +17,8 @@
 //! `cargo build --release --workspace && cargo test --release -p jointctl-tests --test
 //! confound_seeds -- --ignored --nocapture`; `JOINTCTL_CONFOUND_SEEDS=1,2,...` picks the seeds
 //! (default 1-10), `JOINTCTL_CONFOUND_PAIRS=atan-visc,...` picks the pairs by label (default
-//! all), `JOINTCTL_CONFOUND_SCALE` scales the effects (default 1), and
+//! all), `JOINTCTL_CONFOUND_SCALE` scales the effects (default 1), `JOINTCTL_CONFOUND_NOISE_NM`
+//! sets the plant's torque noise [Nm] for every pair (default each pair's own), and
 //! `JOINTCTL_CONFOUND_KEEP=1` keeps each case's records and configs in the temporary folder.
 
 use std::path::Path;
@@ -123,8 +124,10 @@ fn case(label: &str, seed: u64, hidden: Side, other: &str, how: &Characterisatio
     let effect = (hidden.1)(&mut rng);
     let name = format!("cf-{label}-{seed}");
     let arm = arm_name(&name);
+    // A noisier record hides what tells a pair apart (`JOINTCTL_CONFOUND_NOISE_NM`).
+    let noise_nm: f64 = std::env::var("JOINTCTL_CONFOUND_NOISE_NM").ok().and_then(|s| s.parse().ok()).unwrap_or(how.noise_nm);
     let edits = |effects: &str| {
-        let effects: Value = serde_yaml::from_str(&format!("{{torque_noise_nm: {}, {effects}}}", how.noise_nm)).unwrap();
+        let effects: Value = serde_yaml::from_str(&format!("{{torque_noise_nm: {noise_nm}, {effects}}}")).unwrap();
         vec![
             Edit::Set("joints[q4].sim.effects", effects),
             Edit::Remove("joints[q4].params.include"),

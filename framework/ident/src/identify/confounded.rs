@@ -17,7 +17,7 @@ pub const CONFOUND_BIC: f64 = 10.0;
 pub const CONFOUND_SHARE: f64 = 0.9;
 
 /// A named cause and a candidate left out that explains the data about as well in its place.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct Confounded {
     pub named: usize,
     pub alternative: usize,
@@ -27,6 +27,10 @@ pub(crate) struct Confounded {
     /// Held-out MSE gains [Nm^2] of the named cause and of the alternative, where the alternative
     /// was tested first (a better training BIC) and refused for want of evidence.
     pub held_out_gains_nm2: Option<[f64; 2]>,
+    /// The alternative's searched (non-linear) parameters as it was fitted in the named cause's
+    /// place (eq. 3.5's `k_b` for `coulomb_friction`: whether its arctan is nearly straight
+    /// decides the experiment, see `friction_confound::pair_saturates`); empty if not known.
+    pub alternative_params: Vec<f64>,
 }
 
 impl Confounded {
@@ -37,7 +41,7 @@ impl Confounded {
     /// BIC) and not told apart from it by the held-out part either. `bic`: the named cause's
     /// training BIC and the model's before it.
     pub(crate) fn on_held_out(named: usize, [named_bic, before]: [f64; 2], named_gain_nm2: f64, refused: &[(usize, f64, f64)]) -> impl Iterator<Item = Confounded> + '_ {
-        refused.iter().filter(move |r| r.1 < named_bic && named_gain_nm2 > 0.0 && r.2 >= CONFOUND_SHARE * named_gain_nm2).map(move |&(alternative, bic, gain)| Confounded { named, alternative, bic: [named_bic, bic, before], held_out_gains_nm2: Some([named_gain_nm2, gain]) })
+        refused.iter().filter(move |r| r.1 < named_bic && named_gain_nm2 > 0.0 && r.2 >= CONFOUND_SHARE * named_gain_nm2).map(move |&(alternative, bic, gain)| Confounded { named, alternative, bic: [named_bic, bic, before], held_out_gains_nm2: Some([named_gain_nm2, gain]), alternative_params: Vec::new() })
     }
 
     /// Why, in words, when the held-out part was asked: `None` for the training part's rule
@@ -107,7 +111,7 @@ mod tests {
         let said = pairs[0].held_out_said("hysteresis", "viscous_friction").unwrap_or_default();
         assert!(said.contains("improves the training BIC by 1504, hysteresis by 833") && said.contains("6.990e-4 Nm^2 against 7.200e-4"), "{said}");
         // The training part's rule alone says nothing of the held-out part.
-        let trained = Confounded { named: 1, alternative: 3, bic: [-100.0, -95.0, 0.0], held_out_gains_nm2: None };
+        let trained = Confounded { named: 1, alternative: 3, bic: [-100.0, -95.0, 0.0], held_out_gains_nm2: None, alternative_params: Vec::new() };
         assert!(trained.held_out_said("a", "b").is_none());
     }
 }

@@ -90,6 +90,11 @@ impl Spec {
     pub fn term(&self, cause: usize) -> Option<&Term> {
         self.terms.iter().find(|t| t.cause == cause)
     }
+
+    /// `cause`'s searched parameters, empty without its term.
+    pub fn params_of(&self, cause: usize) -> Vec<f64> {
+        self.term(cause).map(|t| t.params.clone()).unwrap_or_default()
+    }
 }
 
 /// A fitted model on one part.

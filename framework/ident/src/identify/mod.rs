@@ -500,9 +500,19 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     // Within the recorded rates eq. 3.5's nearly straight arctan and a viscous friction are both
     // straight lines; they part only where the arctan saturates, faster than the arm was driven,
     // and their experiment goes there.
+    // So are an arctan named as a cause and a viscous friction, confounded, the arctan nearly
+    // straight: their experiment goes there too, not slower.
     let friction = friction_confound::baseline_friction_confound(&model, &spec, p);
-    let saturates = friction.as_ref().map(|c| friction_confound::SATURATES / c.k_b_s_per_rad);
-    let experiment = experiment::propose(&confounded.iter().map(|c| (c.effect.clone(), c.alternative.clone())).collect::<Vec<_>>(), p.excitation.amplitude_rad, p.excitation.frequency_hz, saturates);
+    let straight_pair = friction_confound::pair_saturates(&model, &spec, &selection.confounded, p).map(|(named, other, k_b, peak, share)| (name(named), name(other), k_b, peak, share));
+    let is_straight_pair = |c: &Confound| straight_pair.as_ref().is_some_and(|(named, other, ..)| c.effect == *named && c.alternative == *other);
+    let saturates = friction.as_ref().map(|c| c.k_b_s_per_rad).or(straight_pair.as_ref().map(|s| s.2)).map(|k_b| friction_confound::SATURATES / k_b);
+    let pairs: Vec<(String, String)> = confounded.iter().filter(|c| !is_straight_pair(c)).map(|c| (c.effect.clone(), c.alternative.clone())).collect();
+    let experiment = experiment::propose(&pairs, p.excitation.amplitude_rad, p.excitation.frequency_hz, saturates);
+    if let Some((_, _, k_b, peak, share)) = straight_pair
+        && let Some(c) = confounded.iter_mut().find(|c| is_straight_pair(c))
+    {
+        c.evidence.push_str(&friction_confound::straight_pair_sentence(k_b, peak, share, experiment.as_ref().and_then(experiment::fastest_for_saturation).is_some()));
+    }
     if let Some(c) = friction {
         let [with, instead, before] = c.bic;
         let why = confound_rule(with, instead, before, "the arctan");

@@ -343,9 +343,9 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                         // rule; those tested before it and refused for want of evidence, with
                         // a better training BIC and about its gain, by the held-out part's.
                         let close = |bic: f64| (bic - b).abs() < CONFOUND_BIC || current - bic >= CONFOUND_SHARE * (current - b);
-                        let held_out = Confounded::on_held_out(*c, [*b, current], judgement.gain_nm2, &unconfirmed);
+                        let held_out = Confounded::on_held_out(*c, [*b, current], judgement.gain_nm2, &unconfirmed).map(|h| Confounded { alternative_params: top.iter().find(|t| t.2 == h.alternative).map_or_else(Vec::new, |t| t.1.params_of(h.alternative)), ..h });
                         let tested = |other: usize| unconfirmed.iter().any(|u| u.0 == other);
-                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0) && !tested(w.2)).map(|w| Confounded { named: *c, alternative: w.2, bic: [*b, w.0, current], held_out_gains_nm2: None }));
+                        about_as_well.extend(worth.iter().filter(|w| w.2 != *c && w.0 >= *b && close(w.0) && !tested(w.2)).map(|w| Confounded { named: *c, alternative: w.2, bic: [*b, w.0, current], held_out_gains_nm2: None, alternative_params: w.1.params_of(w.2) }));
                         about_as_well.extend(held_out);
                         chosen.push(Chosen { cause: *c, against: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part; {judgement}") });
                         current = score(&s, 0.0);
