@@ -7,7 +7,9 @@
 //! causes (see `docs/identify/significance.md`, "Confounds"). They part only where the arctan
 //! saturates, faster than the training part went: their experiment goes there, the one proposal
 //! beyond the recorded peak rate (`experiment::propose`). Where the held-out part went faster,
-//! it decides ([`decide_on_held_out`]).
+//! it decides ([`decide_on_held_out`]). Against a config without eq. 3.5's friction the arctan
+//! is a cause, and a confounded pair of it and a viscous friction is the same pair
+//! ([`pair_saturates`]).
 
 use jointctl_models::effect::Effect;
 
@@ -71,8 +73,9 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
 /// A confounded pair of `coulomb_friction` (eq. 3.5's arctan as a cause, where the baseline has
 /// none) and `viscous_friction`, either named, whose arctan is nearly straight over the training
 /// part's rates (by [`NEARLY_STRAIGHT`], as for the baseline's arctan): the pair's causes
-/// (named, alternative), the arctan's `k_b` [s/rad] (the named cause's in `spec`, or the alternative's as fitted in
-/// its place), the peak rate [rad/s] and the share of its tangent the arctan reaches there.
+/// (named, alternative), the arctan's `k_b` [s/rad] (the named cause's in `spec`, or the
+/// alternative's as fitted in its place), the peak rate [rad/s] and the share of its tangent the
+/// arctan reaches there.
 /// Such a pair parts only where the arctan saturates, as the baseline's does: its experiment
 /// goes faster than the record, not slower (slower, the two stay one line, and a small viscous
 /// torque falls below what is relevant: on the elbow, a 0.37 Nm s/rad viscous friction beside
