@@ -49,12 +49,10 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
     }
     let at = spec.terms.iter().position(|t| t.baseline && t.cause == friction)?;
     let k_b_s_per_rad = *spec.terms[at].params.first()?;
-    // The peak of the training part the final fits see (every sample, or every k-th of a long
-    // record; the fits below run on the searches' decimated part, as the confound rule's BICs do).
-    let peak_rad_per_s = p.train.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // The fits below run on the searches' decimated part, as the confound rule's BICs do.
+    let peak_rad_per_s = training_peak_rate(p);
     let part = &p.coarse;
-    let x = k_b_s_per_rad * peak_rad_per_s;
-    let share = if x > 0.0 { x.atan() / x } else { 1.0 };
+    let share = tangent_share(k_b_s_per_rad, peak_rad_per_s);
     if share < NEARLY_STRAIGHT {
         return None;
     }
@@ -70,6 +68,19 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
     (about_as_well && before - with > 0.0).then_some(FrictionConfound { friction, viscous, bic: [with, instead, before], k_b_s_per_rad, peak_rad_per_s, share })
 }
 
+/// The peak rate [rad/s] of the training part the final fits see (every sample, or every k-th
+/// of a long record).
+fn training_peak_rate(p: &Prepared) -> f64 {
+    p.train.v.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// The share of its tangent's line at zero that `atan(k_b v)` reaches at `peak_rad_per_s`,
+/// `atan(x) / x` with `x = k_b` times the peak rate (1 at no rate).
+fn tangent_share(k_b_s_per_rad: f64, peak_rad_per_s: f64) -> f64 {
+    let x = k_b_s_per_rad * peak_rad_per_s;
+    if x > 0.0 { x.atan() / x } else { 1.0 }
+}
+
 /// A confounded pair of `coulomb_friction` (eq. 3.5's arctan as a cause, where the baseline has
 /// none) and `viscous_friction`, either named, whose arctan is nearly straight over the training
 /// part's rates (by [`NEARLY_STRAIGHT`], as for the baseline's arctan): the pair's causes
@@ -83,7 +94,7 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
 /// the slower experiment, `tests/tests/confound_experiment.rs`).
 pub(crate) fn pair_saturates(model: &Model, spec: &Spec, confounded: &[Confounded], p: &Prepared) -> Option<(usize, usize, f64, f64, f64)> {
     let is = |c: usize, effect: Effect| model.causes.get(c).and_then(|c| c.effect()) == Some(effect);
-    let peak_rad_per_s = p.train.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let peak_rad_per_s = training_peak_rate(p);
     confounded.iter().find_map(|c| {
         let k_b = if is(c.named, Effect::CoulombFriction) && is(c.alternative, Effect::ViscousFriction) {
             *spec.term(c.named)?.params.first()?
@@ -92,8 +103,7 @@ pub(crate) fn pair_saturates(model: &Model, spec: &Spec, confounded: &[Confounde
         } else {
             return None;
         };
-        let x = k_b * peak_rad_per_s;
-        let share = if x > 0.0 { x.atan() / x } else { 1.0 };
+        let share = tangent_share(k_b, peak_rad_per_s);
         (k_b > 0.0 && share >= NEARLY_STRAIGHT).then_some((c.named, c.alternative, k_b, peak_rad_per_s, share))
     })
 }
