@@ -286,7 +286,8 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // data choose first), the ones screened beside it, read together (see `ReadAhead`).
     let usual = prepare::RateReading::usual(prepare::NARROWEST_RATE_WINDOW);
     let screened = opts.baseline_friction && !prepare::tried_as_bins(read.spacing_s);
-    let ahead: Vec<_> = std::iter::once(usual).chain(screened.then(|| bin_reading::other_readings(prepare::NARROWEST_RATE_WINDOW)).into_iter().flatten().map(|(_, r)| r)).collect();
+    let holds = opts.baseline_friction && read.holds_between_moves(prepare::WIDEST_RATE_REACH_S);
+    let ahead: Vec<_> = std::iter::once(usual).chain(screened.then(|| bin_reading::other_readings(prepare::NARROWEST_RATE_WINDOW, holds)).into_iter().flatten().map(|(_, r)| r)).collect();
     let ahead = prepare::ReadAhead::new(&read, &ahead);
     let p = ahead.prepare(usual)?;
     let builtin = causes::builtin();
@@ -303,7 +304,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (other_reading, p) = match opts.baseline_friction {
-        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest, holds }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
     // The record as read is kept for a slow log's cubic reading only (a long record's times

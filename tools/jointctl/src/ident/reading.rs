@@ -29,7 +29,7 @@ pub(super) fn narrow_rate_sentence(r: Option<&jointctl_ident::identify::bin_read
         // and the wider windows on the whole model's against the first pass's reading.
         let (judged, against) = match r.window {
             RateWindow::OneSampleEitherSide => ("the baseline's training BIC", "over the usual window"),
-            RateWindow::CubicTwoEitherSide | RateWindow::Sharper { .. } | RateWindow::Wider { .. } => ("the whole model's training BIC", "as identify read it first"),
+            RateWindow::CubicTwoEitherSide | RateWindow::Sharper { .. } | RateWindow::Wider { .. } | RateWindow::Crossings { .. } => ("the whole model's training BIC", "as identify read it first"),
         };
         let usual = match r.window {
             RateWindow::Sharper { .. } => "a window is kept while its slope agrees with every narrower one's to within three standard errors of the deflection's scatter and the most its quantisation can tilt it".to_string(),

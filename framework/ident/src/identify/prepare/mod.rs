@@ -2,6 +2,7 @@
 //! training part and the held-out part.
 
 mod bins;
+mod crossings;
 mod cubic_rate;
 mod dropouts;
 mod glitches;
@@ -22,6 +23,7 @@ pub(crate) use rest::scored_on_every_sample;
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 pub use glitches::MAX_GLITCH_SAMPLES;
 pub(crate) use spring::spring_share;
+pub use crossings::{REST_SHARE, STAIRCASE_HELD_SHARE};
 pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, WIDEST_RATE_REACH_S, widest_rate_window};
 pub(crate) use read::{Read, ReadAhead};
@@ -304,6 +306,9 @@ pub(crate) enum RateReading {
     /// A slow log's: the slope of a local cubic through two samples either side (see
     /// `cubic_rate::cubic_rate_by_segment`).
     Cubic,
+    /// A record's of holds between moves: through its count's crossings within `reach_s`
+    /// either side [s] (see `crossings::crossing_rate_by_segment`).
+    Crossings { reach_s: f64 },
 }
 
 impl RateReading {

@@ -10,6 +10,7 @@ use std::borrow::Cow;
 use super::dropouts::dropouts_by_segment;
 use super::glitches::glitches_by_segment;
 use super::noise::scatter_rms;
+use super::crossings::{crossing_rate_by_segment, holds_between_moves};
 use super::cubic_rate::cubic_rate_by_segment;
 use super::rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths, widest_rate_window};
 use super::{HeldOut, HeldOutWindow, MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, Prepared, RateReading, fundamental_hz, noise_floor, resolution_rad, held_out_window, saturation, segment_starts, sign, turns};
@@ -147,6 +148,12 @@ impl<'a> Read<'a> {
 }
 
 impl Read<'_> {
+    /// Whether the deflection is a staircase of holds between moves, whose rate may be read
+    /// through its crossings over `reach_s` either side (see `crossings::holds_between_moves`).
+    pub(crate) fn holds_between_moves(&self, reach_s: f64) -> bool {
+        holds_between_moves(&self.t, &self.d, &self.starts, reach_s)
+    }
+
     /// The deflection's rate read as `rate` says [rad/s], at each kept sample.
     pub(crate) fn rate(&self, rate: RateReading) -> Vec<f64> {
         self.rates(&[rate]).remove(0)
@@ -163,6 +170,7 @@ impl Read<'_> {
             match readings[k] {
                 _ if rates[k].is_some() => {}
                 RateReading::Cubic => rates[k] = Some(cubic_rate_by_segment(t, d, starts)),
+                RateReading::Crossings { reach_s } => rates[k] = Some(crossing_rate_by_segment(t, d, starts, reach_s)),
                 RateReading::Adaptive { narrowest, windows_per_period, .. } => {
                     let alike = |r: &RateReading| matches!(*r, RateReading::Adaptive { narrowest: n, windows_per_period: w, .. } if n == narrowest && w == windows_per_period);
                     let together: Vec<usize> = (k..readings.len()).filter(|j| rates[*j].is_none() && alike(&readings[*j])).collect();
