@@ -83,7 +83,7 @@ fn a_viscous_friction_between_holds_is_named_with_the_rate_read_through_the_cros
 
 #[test]
 fn without_one_nothing_is_named() {
-    // No cause on any of the 12 seeds, before and after; the crossings were taken on 6.
+    // No cause on any of the 12 seeds, before and after; the crossings were taken on 8.
     let with_a_cause: Vec<u64> = SEEDS.filter(|seed| !identify(&record(*seed, 0.0), &IdentifyOptions::default()).expect("identified").causes.is_empty()).collect();
     assert!(with_a_cause.len() <= 1, "a cause named on the clean seeds {with_a_cause:?}");
 }

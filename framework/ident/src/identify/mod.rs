@@ -286,8 +286,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // data choose first), the ones screened beside it, read together (see `ReadAhead`).
     let usual = prepare::RateReading::usual(prepare::NARROWEST_RATE_WINDOW);
     let screened = opts.baseline_friction && !prepare::tried_as_bins(read.spacing_s);
-    let holds = opts.baseline_friction && read.holds_between_moves(prepare::WIDEST_RATE_REACH_S);
-    let ahead: Vec<_> = std::iter::once(usual).chain(screened.then(|| bin_reading::other_readings(prepare::NARROWEST_RATE_WINDOW, holds)).into_iter().flatten().map(|(_, r)| r)).collect();
+    let ahead: Vec<_> = std::iter::once(usual).chain(screened.then(|| bin_reading::other_readings(prepare::NARROWEST_RATE_WINDOW)).into_iter().flatten().map(|(_, r)| r)).collect();
     let ahead = prepare::ReadAhead::new(&read, &ahead);
     let p = ahead.prepare(usual)?;
     let builtin = causes::builtin();
@@ -304,13 +303,13 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (other_reading, p) = match opts.baseline_friction {
-        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest, holds }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
+        true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
-    // The record as read is kept for a slow log's cubic reading only (a long record's times
-    // are not held beside the searches).
+    // Kept for a slow log's cubic and holds' crossings only: a long record's times not beside searches.
     drop(ahead);
-    let read = slow.then_some(read);
+    let holds = opts.baseline_friction && read.holds_between_moves(prepare::WIDEST_RATE_REACH_S);
+    let read = (slow || holds).then_some(read);
     // A cause that panics (a registered cause's bug) is an error, not a crash of the caller and
     // not a candidate silently lost. The caches a panic may leave behind are dropped with it.
     let checked_and_extended = || {
@@ -330,13 +329,15 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // triangle whose sharper reading is taken, 158 MB with the first reading still held, over
     // issue 13's 150; 148 now).
     let mut others = Vec::new();
-    // A slow log's rate through a local cubic, judged on the whole model (see `best_reading`).
-    let cubic = read.and_then(|read| read.prepare(prepare::RateReading::Cubic).ok());
+    // A slow log's rate through a local cubic and the crossings of a record of holds between
+    // moves (after the first reading is let go), each judged on the whole model (see `best_reading`).
+    let cubic = read.as_ref().filter(|_| slow).and_then(|read| read.prepare(prepare::RateReading::Cubic).ok());
     others.extend(cubic.and_then(|c| again(&c, None, false)).map(|e| (bin_reading::Reading::Cubic, e)));
     // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     let delayed = first.report.causes.iter().any(|c| c.effect == Effect::TimeDelay.name());
     others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
     drop(p);
+    others.extend(read.filter(|_| holds).and_then(|read| bin_reading::through_crossings(&read, |c| again(c, None, false))));
     others.extend(other_reading.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));
     Ok(bin_reading::best_reading(first, others))
 }

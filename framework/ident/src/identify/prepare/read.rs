@@ -149,9 +149,13 @@ impl<'a> Read<'a> {
 
 impl Read<'_> {
     /// Whether the deflection is a staircase of holds between moves, whose rate may be read
-    /// through its crossings over `reach_s` either side (see `crossings::holds_between_moves`).
+    /// through its crossings over `reach_s` either side (see `crossings::holds_between_moves`),
+    /// logged faster than a log tried as bin averages (see `bins::tried_as_bins`): a crossing is
+    /// an instant between two samples, and a slow log's sample may be a bin's mean, which holds
+    /// its value at rest and moves by no count (the blind device D of seed 2 at 20 Hz, read so,
+    /// named a Dahl loop beside its delay).
     pub(crate) fn holds_between_moves(&self, reach_s: f64) -> bool {
-        holds_between_moves(&self.t, &self.d, &self.starts, reach_s)
+        !super::tried_as_bins(self.spacing_s) && holds_between_moves(&self.t, &self.d, &self.starts, reach_s)
     }
 
     /// The deflection's rate read as `rate` says [rad/s], at each kept sample.
