@@ -248,15 +248,30 @@ fn a_command_flood_is_answered_and_does_not_slow_the_loop() {
     }
     let elapsed = t0.elapsed().as_secs_f64();
     let after = latest_diagnostics(&diag);
-    let last = clients[0].send_copy(jointctl_ipc::CommandRequest::new(jointctl_ipc::CommandKind::POSITION, "a", &[0.3])).unwrap();
-    while last.receive().unwrap().is_none() {
-        std::thread::sleep(Duration::from_millis(1));
-    }
+    // The command after the flood, sent again while the queue is still full of the flood's (the
+    // refusal says to try again), and its answer kept for the message below. Sent once and its
+    // answer unread, it once left q at -0.2002 for 0.3 on a loaded machine; three runs beside
+    // two busy loops did not repeat it, and the answer then is unknown.
+    let deadline = Instant::now() + Duration::from_secs(2);
+    let last_answer = loop {
+        let last = clients[0].send_copy(jointctl_ipc::CommandRequest::new(jointctl_ipc::CommandKind::POSITION, "a", &[0.3])).unwrap();
+        let answer = loop {
+            if let Some(r) = last.receive().unwrap() {
+                break r;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        };
+        if answer.accepted == 1 {
+            break answer.text().to_string();
+        }
+        assert!(answer.text().contains("queue is full") && Instant::now() < deadline, "the command after the flood: {}", answer.text());
+        std::thread::sleep(Duration::from_millis(10));
+    };
     let watch = jointctl_ipc::joint_state_service(&node, &jointctl_ipc::ServiceNames::for_arm(&arm).joint_state).unwrap().subscriber_builder().create().unwrap();
     std::thread::sleep(Duration::from_millis(1500));
-    let mut q = f64::NAN;
+    let (mut q, mut states) = (f64::NAN, 0);
     while let Some(s) = watch.receive().unwrap() {
-        q = s.joints[0].position_rad;
+        (q, states) = (s.joints[0].position_rad, states + 1);
     }
     stop(&mut run);
     eprintln!(
@@ -269,7 +284,7 @@ fn a_command_flood_is_answered_and_does_not_slow_the_loop() {
     );
     assert_eq!(answered, sent);
     assert!((after.cycle - before.cycle) as f64 >= 0.95 * 100.0 * elapsed, "{} cycles in {elapsed:.2} s", after.cycle - before.cycle);
-    assert!((q - 0.3).abs() < 0.01, "the command after the flood took effect: q = {q}");
+    assert!((q - 0.3).abs() < 0.01, "the command after the flood took effect: q = {q} (the last of {states} joint states received; the command's answer: {last_answer})");
 }
 
 /// Fault suite: SIGKILL (no handler can run), then a restart. Pass: the same arm starts again at
