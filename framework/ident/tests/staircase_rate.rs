@@ -2,10 +2,11 @@
 //! most samples, and a move crosses a count every few milliseconds. Read over the usual windows
 //! (a least-squares line through the readings), the rate is smeared where a move starts, stops
 //! and bends, and eq. 3.5's arctan fits better straight than as it is: at its lowest `k_b` it
-//! stands for a viscous friction beside it, which is then not told from zero. The data may
-//! choose to read the rate through the count's crossings (`prepare::CROSSING_REACHES_S`). The
-//! records are this file's own: a spring, eq. 3.5's friction, a viscous friction or none, the
-//! torque sensor's noise; each move a minimum-jerk stroke between holds.
+//! stands for a viscous friction beside it, which is then not told from zero. Such a record is
+//! identified again with its rate read through the count's crossings, kept when the whole model
+//! is better (`bin_reading::Reading::Crossings`). The records are this file's own: a spring,
+//! eq. 3.5's friction, a viscous friction or none, the torque sensor's noise; each move a
+//! minimum-jerk stroke between holds.
 
 use jointctl_ident::identify::bin_reading::RateWindow;
 use jointctl_ident::identify::{IdentifyOptions, identify};

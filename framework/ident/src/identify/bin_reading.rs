@@ -116,8 +116,8 @@ pub enum RateWindow {
         /// The local period's divisor of the widest window either side.
         windows_per_period: f64,
     },
-    /// A record's of holds between moves (a quantised deflection at rest most of its time, see
-    /// `prepare::crossings::holds_between_moves`): through its count's crossings within
+    /// For a record of holds between moves (a quantised deflection at rest most of its time,
+    /// see `prepare::crossings::holds_between_moves`): through its count's crossings within
     /// `reach_s` either side ([`super::prepare::WIDEST_RATE_REACH_S`], the usual windows' widest
     /// reach). Judged on the whole model, as the cubic is (see [`Reading::Crossings`]).
     Crossings {

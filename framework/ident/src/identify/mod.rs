@@ -306,7 +306,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
         true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
         false => (None, p),
     };
-    // Kept for a slow log's cubic and holds' crossings only: a long record's times not beside searches.
+    // Kept only for a slow log's cubic and a holds record's crossings: no long record's times held.
     drop(ahead);
     let holds = opts.baseline_friction && read.holds_between_moves(prepare::WIDEST_RATE_REACH_S);
     let read = (slow || holds).then_some(read);

@@ -33,11 +33,10 @@ const MIN_CROSSINGS: usize = 20;
 /// rad/s in the moves against 3.75-5.0e-3. Offered on every staircase (at rest or not) and
 /// screened on the baseline as the sharper readings are, the crossings were taken on 31 of 612
 /// records of the shared, blind and third generators' sets, 28 of them at rest less than half
-/// the time. Their held-out errors fell on 26 of
-/// those, by up to 36 %, and rose on 2 by up to 4 % (the crossings had taken the place of a
-/// sharper reading); two decisions at the margin turned: a viscous friction lost (its block t
-/// 3.4 for 3.58), and a delay of -3 ms named beside a LuGre loop (the generator's, where
-/// identify fits Dahl's).
+/// the time. Their held-out errors fell on 26 of those, by up to 36 %, and rose on 2 by up to
+/// 4 % (the crossings had taken the place of a sharper reading); two decisions at the margin
+/// turned: a viscous friction lost (its block t 3.4 for 3.58), and a delay of -3 ms named
+/// beside a LuGre loop (the generator's, where identify fits Dahl's).
 pub(super) fn holds_between_moves(t: &[f64], d: &[f64], starts: &[usize], reach_s: f64) -> bool {
     let (mut held, mut changed, mut resting) = (0usize, 0usize, 0usize);
     for range in segment_ranges(starts, d.len()) {
@@ -91,11 +90,12 @@ fn crossings_around(times: &[f64], at: f64, reach_s: f64, (mut lo, mut next, mut
 /// bends. On the blind device E of seed 5 at 1 kHz (a 14-bit encoder, holds between fast
 /// moves; a viscous friction of 12.0 Nm s/rad beside eq. 3.5's arctan of 0.20 Nm x 24 s/rad),
 /// the usual reading made a straight arctan fit better than the true one: with the damping
-/// and an offset, the training error was least at `k_b` 3 s/rad and rose to `k_b` 24, and
+/// and an offset, the training error was least at the lowest `k_b` tried, 3 s/rad, and rose
+/// towards the true 24, and
 /// identify fitted the arctan at its lowest `k_b` (1 / the peak rate), where it stands for
 /// the damping, whose error then came out at 11.4 Nm s/rad. Read through the crossings over
 /// +-0.1 s, the same fit was least at `k_b` 16 with the damping at 11.4, its training error
-/// 13 % lower.
+/// 14 % lower.
 pub(super) fn crossing_rate_by_segment(t: &[f64], d: &[f64], starts: &[usize], reach_s: f64) -> Vec<f64> {
     let mut v = vec![0.0; d.len()];
     for range in segment_ranges(starts, d.len()) {

@@ -306,7 +306,7 @@ pub(crate) enum RateReading {
     /// A slow log's: the slope of a local cubic through two samples either side (see
     /// `cubic_rate::cubic_rate_by_segment`).
     Cubic,
-    /// A record's of holds between moves: through its count's crossings within `reach_s`
+    /// For a record of holds between moves: through its count's crossings within `reach_s`
     /// either side [s] (see `crossings::crossing_rate_by_segment`).
     Crossings { reach_s: f64 },
 }
