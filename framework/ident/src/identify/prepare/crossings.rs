@@ -39,7 +39,7 @@ const MIN_CROSSINGS: usize = 20;
 /// beside a LuGre loop (the generator's, where identify fits Dahl's).
 pub(super) fn holds_between_moves(t: &[f64], d: &[f64], starts: &[usize], reach_s: f64) -> bool {
     let (mut held, mut changed, mut resting) = (0usize, 0usize, 0usize);
-    for range in segment_ranges(starts, d.len()) {
+    for range in segment_ranges(&starts_beyond(t, starts, reach_s), d.len()) {
         let (t, d) = (&t[range.clone()], &d[range]);
         for pair in d.windows(2) {
             if pair[0] == pair[1] { held += 1 } else { changed += 1 }
@@ -53,6 +53,18 @@ pub(super) fn holds_between_moves(t: &[f64], d: &[f64], starts: &[usize], reach_
     }
     let steps = held + changed;
     changed >= MIN_CROSSINGS && held as f64 >= STAIRCASE_HELD_SHARE * steps as f64 && resting as f64 >= REST_SHARE * d.len() as f64
+}
+
+/// The segments of `starts` (each a start of contiguous logging) that the crossings are read
+/// apart in: those after a gap longer than `reach_s`, or after a jump back in time (a
+/// repetition's restart). A shorter gap is a long step: a crossing within it lies at its middle,
+/// at most half of it off, and the joint moved on through it. Split at every gap of the usual
+/// rule (`GAP_STEPS` median steps), an irregular log of 1.4 ms steps and 15 ms gaps (blind device
+/// E of seed 1: 43 segments) read 0 near each of its 42 gaps, 6 % of its samples, and the
+/// whole model identified through the crossings held out 0.0471 Nm against 0.0333 over the
+/// usual windows (0.0336 now: still not taken).
+fn starts_beyond(t: &[f64], starts: &[usize], reach_s: f64) -> Vec<usize> {
+    starts.iter().copied().filter(|&s| s == 0 || s >= t.len() || !(t[s] > t[s - 1] && t[s] - t[s - 1] <= reach_s)).collect()
 }
 
 /// The crossings (their times, in order) around `at` within `reach_s` either side, moved on
@@ -72,7 +84,7 @@ fn crossings_around(times: &[f64], at: f64, reach_s: f64, (mut lo, mut next, mut
 }
 
 /// A quantised deflection's rate [rad/s] read through its count's crossings, segment by
-/// segment. Where the reading changes between two samples, the deflection crossed the edge
+/// segment (those of `starts` after a gap longer than the reach: see [`starts_beyond`]). Where the reading changes between two samples, the deflection crossed the edge
 /// between the two counts: a crossing is that edge (the two readings' mean) at the instant
 /// between the two samples (their times' mean). The rate at a sample is the slope at its time
 /// of the least-squares cubic through the crossings within `reach_s` either side (a cubic: a
@@ -98,7 +110,7 @@ fn crossings_around(times: &[f64], at: f64, reach_s: f64, (mut lo, mut next, mut
 /// 14 % lower.
 pub(super) fn crossing_rate_by_segment(t: &[f64], d: &[f64], starts: &[usize], reach_s: f64) -> Vec<f64> {
     let mut v = vec![0.0; d.len()];
-    for range in segment_ranges(starts, d.len()) {
+    for range in segment_ranges(&starts_beyond(t, starts, reach_s), d.len()) {
         let (t, d) = (&t[range.clone()], &d[range.clone()]);
         let crossings: Vec<(f64, f64)> = (1..d.len()).filter(|&i| d[i] != d[i - 1]).map(|i| (0.5 * (t[i] + t[i - 1]), 0.5 * (d[i] + d[i - 1]))).collect();
         let times: Vec<f64> = crossings.iter().map(|c| c.0).collect();
@@ -180,6 +192,19 @@ mod tests {
         let d = quantised(&t, |t| if t < 1.0 { 0.05 * t } else { 0.2 });
         let v = crossing_rate_by_segment(&t, &d, &[0, 1000], 0.1);
         assert!(v[1000..].iter().all(|v| *v == 0.0));
+    }
+
+    #[test]
+    fn a_gap_shorter_than_the_reach_is_read_through() {
+        // A ramp of 0.05 rad/s at 1 kHz with a 15 ms gap in its logging every 0.2 s (each a
+        // segment of the usual rule): read through, within 2 % everywhere past the first 0.1 s.
+        let t: Vec<f64> = (0..3000).map(|i| f64::from(i) * 1e-3 + 0.015 * f64::from(i / 200)).collect();
+        let d = quantised(&t, |t| 0.05 * t + 1e-5);
+        let starts: Vec<usize> = (0..15).map(|k| k * 200).collect();
+        let v = crossing_rate_by_segment(&t, &d, &starts, 0.1);
+        for (i, v) in v.iter().enumerate().take(2900).skip(150) {
+            assert!((v - 0.05).abs() < 0.05 * 0.02, "{i}: {v}");
+        }
     }
 
     #[test]
