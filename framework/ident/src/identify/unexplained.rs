@@ -67,13 +67,13 @@ pub const PEAK_SAMPLES: f64 = 0.01;
 pub const CONCENTRATED: f64 = 0.5;
 
 /// The share of the held-out mean squared error above the noise floor that the error's mean
-/// must carry, the error even over deflection, rate and time (see [`UNEVEN`]), for the summary to
-/// call what is left a constant (an assumption: most of it; a curve the model lacks has a mean
-/// of one sign too, and is uneven over the deflection). A
-/// torque sensor re-zeroed or drifting between repetitions (issue 36's rig) leaves the held-out
-/// repetition off the training part's offset by the same amount everywhere; the summary said
-/// "largest at large deflection, at fast rate and in the third quarter" of thirds and quarters
-/// 1 % apart (the shared real-like l3-case001: 0.3505-0.3532 Nm by deflection).
+/// must carry, the error even over deflection, rate and time (see [`UNEVEN`]), for the summary
+/// to call what is left a constant (an assumption: most of it; a curve the model lacks has a
+/// mean of one sign too, and is uneven over the deflection). A torque sensor re-zeroed or
+/// drifting between repetitions (issue 36's rig) leaves the held-out repetition off the
+/// training part's offset by the same amount everywhere; the summary said "largest at large
+/// deflection, at fast rate and in the third quarter" of thirds and quarters 1 % apart (the
+/// shared real-like l3-case001: 0.3505-0.3532 Nm by deflection).
 pub const CONSTANT: f64 = 0.5;
 
 /// How much larger than the smallest a third or quarter's error must be for the summary to say
