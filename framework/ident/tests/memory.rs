@@ -118,6 +118,10 @@ fn a_sharper_reading_is_identified_without_the_first_readings_preparation() {
     assert!(matches!(report.narrow_rate.as_ref().map(|r| &r.window), Some(jointctl_ident::identify::bin_reading::RateWindow::Sharper { .. })), "{:?}", report.narrow_rate);
     // 147 bytes a sample before the finding's fix, 128 after (live bytes on every thread; the
     // resident peak of the 2-million-sample triangle through `jointctl identify` fell from 158
-    // to 148 MB with the worker threads' arenas, see `parallel_map`).
-    assert!(per_sample < 138.0, "{per_sample:.1} bytes a sample");
+    // to 148 MB with the worker threads' arenas, see `parallel_map`). 170 since a Stribeck dip
+    // is tried beside a spring (2026-12-04): its columns fill the design's column cache, a
+    // fixed 16 MiB, which this record had not reached (32 bytes a sample of the 42 here: with
+    // a 4 MiB cache 138.6), and the dip is one more column in the fits; the resident peak of a
+    // 2-million-sample triangle went from 151 to 174 MB.
+    assert!(per_sample < 184.0, "{per_sample:.1} bytes a sample");
 }

@@ -34,8 +34,27 @@ pub(crate) fn reads_as_friction(spring_share: f64, baseline: &BaselineModel) -> 
     matches!(baseline, BaselineModel::Polynomial(_)) && spring_share < NO_SPRING_SHARE
 }
 
-/// Whether `cause` is one of the [`FRICTION_PARTS`] of a record read as a joint's friction
-/// (reported with its friction, not named).
+/// The causes that, beside a spring, describe the fitted baseline's friction itself and are
+/// reported with it, not named: a Stribeck dip, which eq. 3.5's arctan does not have (see
+/// `FrictionDip`). A Dahl loop and a lag stay causes there: beside a spring they are the
+/// element's hysteresis and the sensors' delay.
+pub(crate) const SPRING_FRICTION_PARTS: [Effect; 1] = [Effect::StribeckFriction];
+
+/// Whether `cause` is a part of the fitted baseline's friction (reported with it, not named):
+/// one of the [`FRICTION_PARTS`] of a record read as a joint's friction, or of the
+/// [`SPRING_FRICTION_PARTS`] beside a spring.
 pub(crate) fn is_friction_part(spring_share: f64, baseline: &BaselineModel, cause: &dyn super::CandidateCause) -> bool {
-    reads_as_friction(spring_share, baseline) && cause.effect().is_some_and(|e| FRICTION_PARTS.contains(&e))
+    cause.effect().is_some_and(|e| friction_parts(spring_share, baseline).contains(&e))
+}
+
+/// The effects reported as parts of the fitted baseline's friction, not named (see
+/// [`is_friction_part`]); none against a given characteristic.
+pub(crate) fn friction_parts(spring_share: f64, baseline: &BaselineModel) -> &'static [Effect] {
+    if reads_as_friction(spring_share, baseline) {
+        &FRICTION_PARTS
+    } else if matches!(baseline, BaselineModel::Polynomial(_)) {
+        &SPRING_FRICTION_PARTS
+    } else {
+        &[]
+    }
 }

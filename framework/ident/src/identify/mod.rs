@@ -31,6 +31,7 @@ mod design;
 pub(crate) mod least_squares;
 pub mod experiment;
 mod friction_confound;
+mod friction_parts;
 mod numeric;
 mod parallel;
 mod registered;
@@ -47,9 +48,10 @@ pub use unexplained::{BEYOND_TRAINING_RANGE, BEYOND_TRAINING_RATE, FAR_ABOVE_NOI
 use unexplained::unexplained;
 
 pub use baseline::{BaselineModel, NO_SPRING_SHARE};
+pub use friction_parts::{FrictionDip, NoSpring};
 pub use confounded::confound_evidence;
 use confounded::confound_rule;
-use baseline::{FRICTION_PARTS, is_friction_part, reads_as_friction};
+use baseline::{friction_parts, is_friction_part, reads_as_friction};
 pub use experiment::Confound;
 pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, Samples, SearchContext};
 pub use prepare::PrepareError;
@@ -87,28 +89,6 @@ pub struct NegligibleCause {
     pub effect: String,
     /// The judgement (gain and the relevance threshold it missed).
     pub evidence: String,
-}
-
-/// A record without a spring: what the baseline's friction took on for it.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct NoSpring {
-    /// The torque's variance share a line in the deflection explains, of the whole or beside
-    /// the friction's sign and a line in the rate (< [`NO_SPRING_SHARE`]) [-].
-    pub deflection_share: f64,
-    /// The friction's Dahl pre-sliding, as the hysteresis cause reports it (in the extended
-    /// model, not among the causes); empty when none was found.
-    pub presliding: BTreeMap<String, f64>,
-    /// The friction's Stribeck dip (the `stribeck_friction` candidate, tried on friction records
-    /// only), in the extended model; empty when none was found.
-    pub stribeck: BTreeMap<String, f64>,
-    /// A lag between the torque and the position (the `time_delay` candidate), in the extended
-    /// model, not among the causes: in a friction record the torque follows the motion through
-    /// the friction's sign at each reversal, where the friction's own transition (a LuGre
-    /// model's bristles, their damping) acts too, so the two are not told apart; empty when
-    /// none was found.
-    pub lag: BTreeMap<String, f64>,
-    /// One sentence for the report.
-    pub note: String,
 }
 
 /// How significance was decided, for the report.
@@ -158,6 +138,10 @@ pub struct Report {
     pub unexplained: Unexplained,
     /// Set when the record has no spring (see [`NoSpring`]).
     pub no_spring: Option<NoSpring>,
+    /// Beside a spring, the Stribeck dip found in the fitted baseline's friction (see
+    /// [`FrictionDip`]); `None` when none was found, on a friction record (see [`NoSpring`]) and
+    /// against a given characteristic.
+    pub friction_dip: Option<FrictionDip>,
     /// Set when a slow log is read as bin averages (see [`bin_reading`]).
     pub bin_averages: Option<bin_reading::BinAverages>,
     /// Set when the rate is read otherwise than over the usual window: with sharper intervals or
@@ -484,7 +468,10 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let ((rate_train, range_train), (rate_test, range_test)) = (reach(&p.train), reach(&p.test));
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
     let held_out_reach = [ratio(rate_test, rate_train), ratio(range_test, range_train)];
-    let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, !found.iter().any(|c| c.effect != "dropout"), held_out_reach, opts.held_out);
+    // The friction's parts (reported with it below) are not causes.
+    let parts = friction_parts(p.spring_share, &opts.baseline);
+    let no_cause = !found.iter().any(|c| c.effect != "dropout" && !parts.iter().any(|e| e.name() == c.effect));
+    let unexplained = unexplained(&held_out, &after.errors, p.noise_floor_nm, no_cause, held_out_reach, opts.held_out);
     // A friction record's loop, dip and lag are its friction's parts (see `no_spring` below),
     // not causes: two of them are not a pair of causes.
     let friction_part = |c: usize| is_friction_part(p.spring_share, &opts.baseline, all[c]);
@@ -533,25 +520,8 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         );
         confounded.push(Confound { effect: name(c.friction), alternative: name(c.viscous), bic: [with, instead], evidence: shape });
     }
-    // A record without a spring (the first column a joint position): a Dahl loop is the
-    // friction's pre-sliding (Dahl's model is a friction model), not an elastic element's
-    // hysteresis: it stays in the extended model and is reported with the friction. So does a
-    // time delay: the torque follows the motion through the friction's sign at the reversals,
-    // where the friction's own transition acts, and the two cannot be told apart there.
-    let no_spring = reads_as_friction(p.spring_share, &opts.baseline).then(|| {
-        let mut take = |effect: Effect| found.iter().position(|c| c.effect == effect.name()).map(|i| found.remove(i).params);
-        let [presliding, stribeck, lag] = FRICTION_PARTS.map(&mut take);
-        let listed = |params: &BTreeMap<String, f64>| params.iter().map(|(k, v)| format!("{k} = {}", format_value(*v))).collect::<Vec<_>>().join(", ");
-        let note = format!(
-            "no spring: a line in the deflection explains {:.1} % of the torque's variance, of the whole or of what the friction's sign and a line in the rate leave (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",
-            100.0 * p.spring_share,
-            100.0 * NO_SPRING_SHARE,
-            presliding.as_ref().map_or("no Dahl pre-sliding found".into(), |c| format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", listed(c))),
-            stribeck.as_ref().map_or(String::new(), |c| format!("; its Stribeck dip: {}", listed(c))),
-            lag.as_ref().map_or(String::new(), |c| format!("; a lag between torque and position ({}), not told apart from the friction's own transition after each reversal", listed(c))),
-        );
-        NoSpring { deflection_share: p.spring_share, presliding: presliding.unwrap_or_default(), stribeck: stribeck.unwrap_or_default(), lag: lag.unwrap_or_default(), note }
-    });
+    let no_spring = friction_parts::no_spring(p, &opts.baseline, &mut found);
+    let friction_dip = friction_parts::friction_dip(p, &opts.baseline, &mut found);
     let negligible = selection.negligible.iter().map(|(c, evidence)| NegligibleCause { effect: name(*c), evidence: evidence.clone() }).collect();
     let mut rejected = selection.rejected;
     rejected.sort();
@@ -573,6 +543,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         confounded,
         unexplained,
         no_spring,
+        friction_dip,
         bin_averages,
         narrow_rate: rate.cloned(),
         at_rest,

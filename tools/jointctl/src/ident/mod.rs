@@ -336,13 +336,16 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     if let Some(n) = &report.no_spring {
         let _ = writeln!(md, "Read as a friction record: {}.\n", n.note);
     }
+    if let Some(dip) = &report.friction_dip {
+        let _ = writeln!(md, "The friction: {}; {}.\n", dip.note, dip.evidence);
+    }
     let _ = writeln!(
         md,
         "A cause is named when BIC on the training part proposes it, its held-out gain is relevant ({}) and there is evidence for it: a {} at level {} ({} blocks).\n",
         report.significance.relevance, report.significance.test, report.significance.level, report.significance.blocks
     );
     if report.causes.is_empty() {
-        let _ = writeln!(md, "{}", no_cause_sentence(&report));
+        let _ = writeln!(md, "{}", output::no_cause_sentence(&report));
     } else {
         md.push_str("| cause | parameters (± standard error) | RMSE gain [Nm] | evidence |\n|---|---|---|---|\n");
         for c in &report.causes {
@@ -567,33 +570,4 @@ fn identify_by_pivot(a: &IdentifyArgs, config: &Path, joint: &str, configured: &
 /// The split identify used: the model loop's gains are measured on what it held out.
 fn split(a: &IdentifyArgs) -> jointctl_experiments::model_loop::Split {
     jointctl_experiments::model_loop::Split { held_out: a.held_out.into(), ..jointctl_experiments::model_loop::Split::of(&IdentifyOptions::default()) }
-}
-
-/// The sentence of a report without causes. A friction record's extended model holds the
-/// friction's parts its reading found (a Dahl pre-sliding, a Stribeck dip, a lag: part of the
-/// friction, not causes), so its held-out error, which `unexplained` measures, is not the
-/// baseline's there, and the sentence says whose it is.
-fn no_cause_sentence(report: &jointctl_ident::identify::Report) -> String {
-    let u = &report.unexplained;
-    let parts: Vec<&str> = report
-        .no_spring
-        .iter()
-        .flat_map(|n| [(!n.presliding.is_empty()).then_some("Dahl pre-sliding"), (!n.stribeck.is_empty()).then_some("Stribeck dip"), (!n.lag.is_empty()).then_some("lag")])
-        .flatten()
-        .collect();
-    let parts = match parts.split_last() {
-        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
-        _ => parts.join(""),
-    };
-    let with_parts = !parts.is_empty() && report.rmse_after != report.rmse_before;
-    match (u.times_noise > jointctl_ident::identify::FAR_ABOVE_NOISE, with_parts) {
-        (true, false) => "No listed cause explains what the baseline leaves.".into(),
-        (true, true) => format!("No listed cause explains what the baseline and the friction's {parts} leave."),
-        (false, false) => format!("No cause found; the baseline's held-out error is {:.1} times the noise floor.", u.times_noise),
-        (false, true) => format!(
-            "No cause found; with the friction's {parts} read above, the held-out error is {:.1} times the noise floor (the baseline's alone {:.1} times).",
-            u.times_noise,
-            report.rmse_before / u.noise_floor_nm
-        ),
-    }
 }

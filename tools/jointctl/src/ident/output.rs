@@ -42,3 +42,33 @@ pub(super) fn left_out_sentence(report: &jointctl_ident::identify::Report) -> St
     }
     s
 }
+
+/// The sentence of a report without causes. A friction record's extended model holds the
+/// friction's parts its reading found (a Dahl pre-sliding, a Stribeck dip, a lag: part of the
+/// friction, not causes), as a spring record's holds its friction's Stribeck dip, so its held-out error, which `unexplained` measures, is not the
+/// baseline's there, and the sentence says whose it is.
+pub(super) fn no_cause_sentence(report: &jointctl_ident::identify::Report) -> String {
+    let u = &report.unexplained;
+    let parts: Vec<&str> = report
+        .no_spring
+        .iter()
+        .flat_map(|n| [(!n.presliding.is_empty()).then_some("Dahl pre-sliding"), (!n.stribeck.is_empty()).then_some("Stribeck dip"), (!n.lag.is_empty()).then_some("lag")])
+        .flatten()
+        .chain(report.friction_dip.as_ref().map(|_| "Stribeck dip"))
+        .collect();
+    let parts = match parts.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => parts.join(""),
+    };
+    let with_parts = !parts.is_empty() && report.rmse_after != report.rmse_before;
+    match (u.times_noise > jointctl_ident::identify::FAR_ABOVE_NOISE, with_parts) {
+        (true, false) => "No listed cause explains what the baseline leaves.".into(),
+        (true, true) => format!("No listed cause explains what the baseline and the friction's {parts} leave."),
+        (false, false) => format!("No cause found; the baseline's held-out error is {:.1} times the noise floor.", u.times_noise),
+        (false, true) => format!(
+            "No cause found; with the friction's {parts} read above, the held-out error is {:.1} times the noise floor (the baseline's alone {:.1} times).",
+            u.times_noise,
+            report.rmse_before / u.noise_floor_nm
+        ),
+    }
+}

@@ -1,8 +1,9 @@
 //! The Stribeck dip of a joint's friction: `+ s tanh(v / (v_s / 10)) exp(-(v / v_s)^2)`, the
 //! friction above its Coulomb level at low speed that falls to it by the Stribeck speed `v_s`
-//! (Armstrong-Helouvry et al. 1994). Tried on friction records only (no spring: the deflection
-//! column a joint position), where it is reported with the friction, not as a cause of its own:
-//! beside a spring the thesis' eq. 3.5 arctan stands for the whole friction.
+//! (Armstrong-Helouvry et al. 1994). Tried where the baseline is fitted on the data: on friction
+//! records (no spring: the deflection column a joint position) and beside a spring, where eq.
+//! 3.5's arctan, which rises monotonically to its limit, has no dip. Either way it is reported
+//! with the friction, not as a cause of its own (see `baseline::is_friction_part`).
 
 use super::{CandidateCause, InputSet, Parameter, Refine, Samples, SearchContext, log_grid};
 use jointctl_models::effect::Effect;
@@ -24,7 +25,9 @@ impl CandidateCause for StribeckFriction {
         vec!["stribeck_nm".into()]
     }
     fn applicable(&self, c: &SearchContext) -> bool {
-        c.no_spring
+        // Against a given characteristic (a configured joint) the friction is the config's, and
+        // a dip would be a cause of its own: not tried there.
+        c.no_spring || c.baseline_fitted
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
         // From a three-hundredth of the peak speed to a third of it (an assumption: beyond, the
