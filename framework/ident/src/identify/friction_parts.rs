@@ -43,8 +43,8 @@ pub struct NoSpring {
     /// The friction's Dahl pre-sliding, as the hysteresis cause reports it (in the extended
     /// model, not among the causes); empty when none was found.
     pub presliding: BTreeMap<String, f64>,
-    /// The friction's Stribeck dip (the `stribeck_friction` candidate, tried on friction records
-    /// only), in the extended model; empty when none was found.
+    /// The friction's Stribeck dip (the `stribeck_friction` candidate; beside a spring it is
+    /// [`FrictionDip`]), in the extended model; empty when none was found.
     pub stribeck: BTreeMap<String, f64>,
     /// A lag between the torque and the position (the `time_delay` candidate), in the extended
     /// model, not among the causes: in a friction record the torque follows the motion through
@@ -83,8 +83,8 @@ pub(crate) fn no_spring(p: &Prepared, baseline: &BaselineModel, found: &mut Vec<
 /// of `found` (the causes); `None` when none was found, on a friction record and against a
 /// given characteristic.
 pub(crate) fn friction_dip(p: &Prepared, baseline: &BaselineModel, found: &mut Vec<Cause>) -> Option<FrictionDip> {
-    friction_parts(p.spring_share, baseline)
-        .contains(&Effect::StribeckFriction)
+    // On a friction record the dip is `NoSpring`'s, whichever is asked first.
+    (!reads_as_friction(p.spring_share, baseline) && friction_parts(p.spring_share, baseline).contains(&Effect::StribeckFriction))
         .then(|| found.iter().position(|c| c.effect == Effect::StribeckFriction.name()))
         .flatten()
         .map(|i| {

@@ -45,8 +45,9 @@ pub(super) fn left_out_sentence(report: &jointctl_ident::identify::Report) -> St
 
 /// The sentence of a report without causes. A friction record's extended model holds the
 /// friction's parts its reading found (a Dahl pre-sliding, a Stribeck dip, a lag: part of the
-/// friction, not causes), as a spring record's holds its friction's Stribeck dip, so its held-out error, which `unexplained` measures, is not the
-/// baseline's there, and the sentence says whose it is.
+/// friction, not causes), as a spring record's holds its friction's Stribeck dip, so its
+/// held-out error, which `unexplained` measures, is not the baseline's there, and the sentence
+/// says whose it is.
 pub(super) fn no_cause_sentence(report: &jointctl_ident::identify::Report) -> String {
     let u = &report.unexplained;
     let parts: Vec<&str> = report
