@@ -506,8 +506,12 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         let [with, instead, before] = c.bic;
         let why = confound_rule(with, instead, before, "the arctan");
         let shape = format!(
-            "{} in place of eq. 3.5's friction in the baseline explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates; {}; {}",
+            "{} {} explains the training part about as well ({why}): the baseline's arctan has k_b = {} s/rad, and at the recorded peak rate ({} rad/s) it still reaches {:.0} % of its tangent's line: nearly straight, as a viscous friction is; no viscous friction is named. The two part where the arctan saturates, above about {} rad/s (3 / k_b): beyond the training part's rates; {}; {}",
             name(c.viscous),
+            match c.beside_saturating_k_b {
+                None => "in place of eq. 3.5's friction in the baseline".to_string(),
+                Some(k_b) => format!("beside eq. 3.5's arctan held to saturate within the training part's rates (k_b = {} s/rad)", format_value(k_b)),
+            },
             format_value(c.k_b_s_per_rad),
             format_value(c.peak_rad_per_s),
             100.0 * c.share,
