@@ -53,8 +53,39 @@ fn record(k_a_nm: f64, b_nms_per_rad: f64, seed: u64) -> jointctl_ident::csv::Da
     jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
 }
 
+/// 120 s at 100 Hz: 40 Nm/rad, `k_a atan(30 v)`, `b_nms_per_rad` of viscous friction, 0.01 Nm
+/// of noise; the deflection four sines of 0.15-0.45 Hz with random phases, their amplitude
+/// 0.005 rad each over the first 10 s growing to three times that at the end (the rate grows
+/// with it), read by a 14-bit encoder.
+fn growing(k_a_nm: f64, b_nms_per_rad: f64, seed: u64) -> jointctl_ident::csv::Data {
+    use std::f64::consts::TAU;
+    let mut rng = jointctl_test_support::XorShift64::new(seed);
+    let sines: Vec<(f64, f64)> = (0..4).map(|_| (0.15 + 0.3 * rng.uniform(), TAU * rng.uniform())).collect();
+    let envelope = |t: f64| 0.005 * (1.0 + 2.0 * ((t - 10.0) / 110.0).clamp(0.0, 1.0));
+    let x = |t: f64| envelope(t) * sines.iter().map(|(f, p)| (TAU * f * t + p).sin()).sum::<f64>();
+    let q = TAU / 16384.0;
+    let (mut t_s, mut deflection, mut torque) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..12_000 {
+        let t = i as f64 / 100.0;
+        let v = (x(t + 1e-6) - x(t - 1e-6)) / 2e-6;
+        t_s.push(t);
+        deflection.push((x(t) / q).round() * q);
+        torque.push(40.0 * x(t) + k_a_nm * (30.0 * v).atan() + b_nms_per_rad * v + 0.01 * rng.normal());
+    }
+    jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
+}
+
 fn named(report: &Report) -> Vec<&str> {
     report.causes.iter().map(|c| c.effect.as_str()).collect()
+}
+
+/// `Ok` when the viscous friction alone is named, within 25 % of 4 Nm s/rad; otherwise what was
+/// named (also printed either way).
+fn not_the_damping_alone_at_size(report: &Report, seed: u64) -> Result<(), String> {
+    let b = report.causes.iter().find(|c| c.effect == "viscous_friction").map(|c| c.params["damping_nms_per_rad"]);
+    let line = format!("seed {seed:x}: named {:?}, b {b:?}, held out {:.4} -> {:.4} Nm", named(report), report.rmse_before, report.rmse_after);
+    println!("{line}");
+    if named(report) == ["viscous_friction"] && b.is_some_and(|b| (b / 4.0 - 1.0).abs() < 0.25) { Ok(()) } else { Err(line) }
 }
 
 const SEEDS: [u64; 4] = [0xd3e5_0000_0000_0001, 0xd3e5_0000_0000_0002, 0xd3e5_0000_0000_0003, 0xd3e5_0000_0000_0004];
@@ -72,13 +103,10 @@ fn a_large_damping_beside_a_small_saturating_arctan_is_named_at_its_size() {
     let (mut wrong, mut at_size) = (Vec::new(), 0);
     for seed in SEEDS {
         let report = identify(&record(0.04, 4.0, seed), &last).unwrap();
-        let b = report.causes.iter().find(|c| c.effect == "viscous_friction").map(|c| c.params["damping_nms_per_rad"]);
-        let line = format!("seed {seed:x}: named {:?}, b {b:?}, held out {:.4} -> {:.4} Nm", named(&report), report.rmse_before, report.rmse_after);
-        println!("{line}");
-        if named(&report) != ["viscous_friction"] {
-            wrong.push(line);
-        } else if b.is_some_and(|b| (b / 4.0 - 1.0).abs() < 0.25) {
-            at_size += 1;
+        match not_the_damping_alone_at_size(&report, seed) {
+            Ok(()) => at_size += 1,
+            Err(line) if named(&report) != ["viscous_friction"] => wrong.push(line),
+            Err(_) => {}
         }
     }
     assert!(wrong.is_empty(), "{wrong:#?}");
@@ -96,12 +124,7 @@ fn a_damping_that_misses_the_coulomb_step_in_the_arctans_place_is_still_a_confou
     let mut wrong = Vec::new();
     for seed in SEEDS {
         let report = identify(&record(0.08, 4.0, seed), &last).unwrap();
-        let b = report.causes.iter().find(|c| c.effect == "viscous_friction").map(|c| c.params["damping_nms_per_rad"]);
-        let line = format!("seed {seed:x}: named {:?}, b {b:?}, held out {:.4} -> {:.4} Nm", named(&report), report.rmse_before, report.rmse_after);
-        println!("{line}");
-        if named(&report) != ["viscous_friction"] || !b.is_some_and(|b| (b / 4.0 - 1.0).abs() < 0.25) {
-            wrong.push(line);
-        }
+        wrong.extend(not_the_damping_alone_at_size(&report, seed).err());
     }
     assert!(wrong.is_empty(), "{wrong:#?}");
     for seed in SEEDS {
@@ -110,6 +133,26 @@ fn a_damping_that_misses_the_coulomb_step_in_the_arctans_place_is_still_a_confou
             assert!(report.causes.is_empty(), "clean, seed {seed:x}, held out {held_out:?}: {:?}", named(&report));
         }
     }
+}
+
+#[test]
+fn a_damping_named_by_bic_is_split_from_the_arctan_as_the_held_out_part_reads_it() {
+    // BIC names the damping here, beside an arctan that bends (`k_b` free) to take part of it.
+    // Measured before the split was read on the held-out part: seed 3 named it at 2.24 Nm s/rad
+    // with a time delay beside it (held out 0.0153 Nm); now at 4.63 alone (0.0136 Nm), the delay
+    // no longer earning its place beside the arctan held to saturate. The other seeds' split
+    // stands (the bent arctan errs less on their held-out part).
+    let last = IdentifyOptions { held_out: jointctl_ident::identify::prepare::HeldOut::Last, ..IdentifyOptions::default() };
+    let mut wrong = Vec::new();
+    for seed in SEEDS {
+        let report = identify(&growing(0.06, 4.0, seed), &last).unwrap();
+        wrong.extend(not_the_damping_alone_at_size(&report, seed).err());
+        let clean = identify(&growing(0.06, 0.0, seed), &last).unwrap();
+        if !clean.causes.is_empty() {
+            wrong.push(format!("clean, seed {seed:x}: named {:?}", named(&clean)));
+        }
+    }
+    assert!(wrong.is_empty(), "{wrong:#?}");
 }
 
 #[test]

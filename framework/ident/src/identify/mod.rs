@@ -395,6 +395,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         None => p,
     };
     let held_out_said = friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
+    friction_confound::resplit_on_held_out(&model, &mut selection, p, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
