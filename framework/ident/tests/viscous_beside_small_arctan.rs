@@ -19,9 +19,8 @@ use jointctl_ident::identify::{IdentifyOptions, Report, identify};
 /// 60 s at 100 Hz: 40 Nm/rad, `k_a atan(40 v)`, `b_nms_per_rad` of viscous friction, 0.01 Nm of
 /// noise. The deflection holds for 3 s, runs a triangle of 0.04 rad at 0.08 rad/s to 22 s and at
 /// 0.03 rad/s to 41 s (two rates each way: eq. 3.5's arctan meets a friction at two rates with
-/// one `k_b` or another), then four sines of 0.3-0.9 Hz
-/// with random phases, 0.04 rad in all under a rising envelope (up to about 0.25 rad/s, most of
-/// the held-out part).
+/// one `k_b` or another), then four sines of 0.3-0.9 Hz with random phases, 0.04 rad in all
+/// under a rising envelope (up to about 0.25 rad/s, most of the held-out part).
 fn record(k_a_nm: f64, b_nms_per_rad: f64, seed: u64) -> jointctl_ident::csv::Data {
     use std::f64::consts::TAU;
     let mut rng = jointctl_test_support::XorShift64::new(seed);

@@ -51,8 +51,7 @@ pub(crate) struct FrictionConfound {
 /// BIC gain, no confound reported, the damping refused as negative, no cause at 4.5-6 times
 /// the floor).
 pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepared) -> Option<FrictionConfound> {
-    let position = |effect: Effect| model.causes.iter().position(|c| c.effect() == Some(effect));
-    let (friction, viscous) = (position(Effect::CoulombFriction)?, position(Effect::ViscousFriction)?);
+    let (friction, viscous) = friction_and_viscous(model)?;
     if spec.term(viscous).is_some() {
         return None;
     }
@@ -87,6 +86,12 @@ pub(crate) fn baseline_friction_confound(model: &Model, spec: &Spec, p: &Prepare
     let (instead, fit) = score(&beside)?;
     let k_b = beside.terms.iter().find(|t| t.baseline && t.cause == friction)?.params.first().copied()?;
     (possible(&beside, &fit) && about_as_well(instead)).then(|| found(instead, Some(k_b)))
+}
+
+/// The candidates' indices of eq. 3.5's arctan (`coulomb_friction`) and `viscous_friction`.
+fn friction_and_viscous(model: &Model) -> Option<(usize, usize)> {
+    let position = |effect: Effect| model.causes.iter().position(|c| c.effect() == Some(effect));
+    Some((position(Effect::CoulombFriction)?, position(Effect::ViscousFriction)?))
 }
 
 /// The peak rate [rad/s] of the training part the final fits see (every sample, or every k-th
@@ -155,10 +160,10 @@ pub(crate) fn straight_pair_sentence(k_b: f64, peak_rad_per_s: f64, share: f64, 
 /// judged too, and taken when it is named with a damping the training part tells from zero and
 /// the first's damping is not, or its held-out error is lower. Refused as impossible, the
 /// held-out part never saw the reading it could decide (blind seed 5's 000, the generator's
-/// 0.43 Nm x 116 s/rad beside 23 Nm s/rad: no cause at 1.6 times the noise). Not always so: where the training part is
-/// slower than `3 / k_b` of the joint's own arctan, a saturating one misfits it (on the first of
-/// `linear_friction`'s records, held-out 0.450 Nm against 0.222 with `k_b` free, noise 0.20), so
-/// the free fit comes first. Named so, its reported gain is against the model the held-out
+/// 0.43 Nm x 116 s/rad beside 23 Nm s/rad: no cause at 1.6 times the noise). Not always so:
+/// where the training part is slower than `3 / k_b` of the joint's own arctan, a saturating one
+/// misfits it (on the first of `linear_friction`'s records, held-out 0.450 Nm against 0.222 with
+/// `k_b` free, noise 0.20), so the free fit comes first. Named so, its reported gain is against the model the held-out
 /// part judged it against ([`Chosen::against`]), not the model without it, whose arctan stays
 /// where the damping's fit moved it (seed 5's 000 reported a gain of 0.232 Nm so, for a held-out
 /// RMSE of 0.474 -> 0.382 Nm). The viscous friction joins `selection` when it passes and
@@ -283,8 +288,7 @@ fn told_from_zero(model: &Model, with: &Spec, viscous: usize, p: &Prepared) -> b
 /// generator's s3's 024: 2.85 -> 4.19 Nm s/rad for 4.24; blind 092 of seed 2: 36.3 -> 56.7 for
 /// 59.3). Returns whether it was taken.
 pub(crate) fn resplit_on_held_out(model: &Model, selection: &mut Selection, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> bool {
-    let position = |effect: Effect| model.causes.iter().position(|c| c.effect() == Some(effect));
-    let (Some(friction), Some(viscous)) = (position(Effect::CoulombFriction), position(Effect::ViscousFriction)) else { return false };
+    let Some((friction, viscous)) = friction_and_viscous(model) else { return false };
     let spec = &selection.spec;
     let Some(at) = spec.terms.iter().position(|t| t.baseline && t.cause == friction) else { return false };
     let peak_rad_per_s = training_peak_rate(p);
@@ -297,11 +301,10 @@ pub(crate) fn resplit_on_held_out(model: &Model, selection: &mut Selection, p: &
     let rmse = |s: &Spec| select::held_out_errors(model, s, p).map(|h| select::rmse(&h.errors));
     let (Some(before), Some(after)) = (rmse(spec), rmse(&with)) else { return false };
     // Every term still possible with the arctan so held (as `check` asks of a proposal).
-    let possible = select::held_out_errors(model, &with, p).is_some_and(|h| with.terms.iter().enumerate().all(|(i, t)| t.baseline || model.causes[t.cause].impossible(&t.params, h.fit.of(i)).is_none()));
-    if after >= before || !possible || !told_from_zero(model, &with, viscous, p) {
+    if after >= before || select::impossible_term(model, &with, p).is_some() || !told_from_zero(model, &with, viscous, p) {
         return false;
     }
-    let k_b_after = with.terms.iter().find(|t| t.baseline && t.cause == friction).and_then(|t| t.params.first().copied()).unwrap_or(f64::NAN);
+    let Some(k_b_after) = with.terms.iter().find(|t| t.baseline && t.cause == friction).and_then(|t| t.params.first().copied()) else { return false };
     let mut chosen = selection.chosen.clone();
     if let Some(chosen) = chosen.iter_mut().find(|c| c.cause == viscous) {
         chosen.evidence += &format!(

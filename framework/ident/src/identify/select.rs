@@ -83,7 +83,7 @@ fn impossible(model: &Model, spec: &Spec, p: &Prepared, name: &dyn Fn(usize) -> 
 }
 
 /// The first cause of `spec` whose fit on the training part is physically impossible, and why.
-fn impossible_term(model: &Model, spec: &Spec, p: &Prepared) -> Option<(usize, String)> {
+pub(crate) fn impossible_term(model: &Model, spec: &Spec, p: &Prepared) -> Option<(usize, String)> {
     let fit = &held_out_errors(model, spec, p)?.fit;
     spec.terms.iter().enumerate().filter(|(_, t)| !t.baseline).find_map(|(i, t)| model.causes[t.cause].impossible(&t.params, fit.of(i)).map(|why| (t.cause, why)))
 }
