@@ -35,6 +35,7 @@ mod friction_parts;
 mod numeric;
 mod parallel;
 mod registered;
+mod rest_line;
 pub use numeric::format_value;
 pub mod prepare;
 mod search;

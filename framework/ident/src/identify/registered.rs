@@ -19,7 +19,7 @@ pub(super) fn check(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
             return Err(super::IdentifyError::CauseClaimsEffect { name: name.into(), effect });
         }
         let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: &p.stretch.tau };
-        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, baseline_fitted, reads_as_friction(p.spring_share, baseline));
+        let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, &p.stops, baseline_fitted, reads_as_friction(p.spring_share, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
         let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges, record_middle_s: p.record_middle_s };

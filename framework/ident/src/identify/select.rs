@@ -253,7 +253,7 @@ pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residuals
     *residuals = (residual(&p.coarse), residual(&p.stretch));
     let (coarse, stretch) = (&residuals.0, &residuals.1);
     let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: stretch };
-    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, coarse, full_rate, matches!(model.baseline, super::baseline::BaselineModel::Polynomial(_)), super::baseline::reads_as_friction(p.spring_share, model.baseline))
+    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, coarse, full_rate, &p.stops, matches!(model.baseline, super::baseline::BaselineModel::Polynomial(_)), super::baseline::reads_as_friction(p.spring_share, model.baseline))
 }
 
 pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String + Sync) -> Selection {

@@ -69,7 +69,7 @@ pub(crate) fn resolvable(t: &[f64], excitation_hz: f64) -> f64 {
 /// for the same sizes again (the vibrations' scans: a tenth of identify's time on the speed
 /// benchmark's record, a third of it planning). The planner is locked only while it plans or
 /// looks a plan up; the plan runs outside the lock.
-fn forward_fft(size: usize) -> std::sync::Arc<dyn rustfft::Fft<f64>> {
+pub(crate) fn forward_fft(size: usize) -> std::sync::Arc<dyn rustfft::Fft<f64>> {
     static PLANNER: std::sync::OnceLock<std::sync::Mutex<rustfft::FftPlanner<f64>>> = std::sync::OnceLock::new();
     let planner = PLANNER.get_or_init(|| std::sync::Mutex::new(rustfft::FftPlanner::new()));
     planner.lock().unwrap_or_else(|e| e.into_inner()).plan_fft_forward(size)

@@ -113,8 +113,12 @@ pub struct SearchContext<'a> {
     /// The record has no spring: its deflection column is a joint position and its torque
     /// friction (see [`crate::identify::NO_SPRING_SHARE`]).
     pub no_spring: bool,
-    /// The residual's dominant frequency, once asked for (several vibration causes ask).
-    dominant: std::sync::OnceLock<Option<f64>>,
+    /// Where the joint is at rest, `(start, end)` [s] on the time of `t_s` (the prepared
+    /// record's stops): a line there is no error of the motion.
+    stops: &'a [(f64, f64)],
+    /// The residual's dominant frequency and the line found at rest, once asked for (several
+    /// vibration causes ask).
+    dominant: std::sync::OnceLock<(Option<f64>, Option<super::rest_line::RestLine>)>,
     /// Each candidate's grids by its index among the model's causes, once asked for: the
     /// selection's first step asks every candidate for its grids to schedule the searches, and
     /// each search asks again (a vibration's scan of the residual, twice).
@@ -135,8 +139,9 @@ pub struct FullRate<'a> {
 
 impl<'a> SearchContext<'a> {
     /// The context of one search step: the decimated part's series and the full-rate stretch's.
-    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, baseline_fitted: bool, no_spring: bool) -> Self {
-        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new(), grids: Default::default() }
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, stops: &'a [(f64, f64)], baseline_fitted: bool, no_spring: bool) -> Self {
+        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, stops, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new(), grids: Default::default() }
     }
 
     /// The grids of the cause at `index` among the model's causes ([`CandidateCause::parameters`]
@@ -182,8 +187,36 @@ impl<'a> SearchContext<'a> {
     /// # assert_eq!(Ripple.name(), "ripple");
     /// ```
     pub fn dominant_frequency_hz(&self) -> Option<f64> {
+        let (band, rest) = self.lines();
+        match (band, rest.map(|r| r.frequency_hz)) {
+            (Some(b), Some(r)) => {
+                // The stronger over the training part: a steady vibration runs through it all.
+                let uniform = false;
+                let power = |f: f64| {
+                    let (s, c) = super::spectrum::projection(self.t_s, self.residual_nm, std::f64::consts::TAU * f, uniform);
+                    s * s + c * c
+                };
+                Some(if power(r) > power(b) { r } else { b })
+            }
+            (b, r) => b.or(r),
+        }
+    }
+
+    /// The band's line on the full-rate stretch and the line at rest on the training part,
+    /// scanned once per context.
+    fn lines(&self) -> (Option<f64>, Option<super::rest_line::RestLine>) {
         let f = self.full_rate;
-        *self.dominant.get_or_init(|| super::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz))
+        *self.dominant.get_or_init(|| {
+            (super::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz), super::rest_line::line_at_rest(self.t_s, self.residual_nm, self.stops))
+        })
+    }
+
+    /// How many frequencies the scans behind [`SearchContext::dominant_frequency_hz`] resolve:
+    /// the band's over the full-rate stretch, and the scan at rest's when it found a line (the
+    /// look-elsewhere count of a cause at that frequency).
+    pub fn frequencies_scanned(&self) -> f64 {
+        let band = super::spectrum::resolvable(self.full_rate.t_s, self.excitation.frequency_hz);
+        band + self.lines().1.map_or(0.0, |r| r.resolvable)
     }
 }
 

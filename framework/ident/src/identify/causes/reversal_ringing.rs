@@ -9,7 +9,6 @@
 //! measure of the mode, not a prediction of the rings.
 
 use super::{CandidateCause, InputSet, Parameter, Refine, Samples, SearchContext, log_grid, reversals};
-use crate::identify::spectrum;
 use jointctl_models::effect::Effect;
 use crate::identify::numeric::segment_ranges;
 
@@ -90,7 +89,7 @@ impl CandidateCause for ReversalRinging {
         [("frequency_hz".to_string(), p[0]), ("damping_ratio".to_string(), p[1]), ("ring_amplitude_nm".to_string(), super::rms_amplitude(c))].into_iter().collect()
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
-        2.0 * spectrum::resolvable(c.full_rate.t_s, c.excitation.frequency_hz).ln()
+        2.0 * c.frequencies_scanned().ln()
     }
 }
 

@@ -7,7 +7,6 @@
 //! phase are fitted on each repetition apart (see [`CandidateCause::segments`]).
 
 use super::{CandidateCause, InputSet, Excitation, Parameter, Refine, Samples, SearchContext, repetition_starts, rms_amplitude};
-use crate::identify::spectrum;
 use jointctl_models::effect::Effect;
 
 /// `+ g(v) (a sin(2 pi f t) + b cos(2 pi f t))` [Nm], `g = 1` (steady, `onset_speed_rad_per_s` 0)
@@ -73,7 +72,7 @@ impl CandidateCause for Vibration {
     }
     fn look_elsewhere(&self, c: &SearchContext) -> f64 {
         // The frequency is the best of M resolvable ones: 2 ln M on top of BIC's count.
-        2.0 * spectrum::resolvable(c.full_rate.t_s, c.excitation.frequency_hz).ln()
+        2.0 * c.frequencies_scanned().ln()
     }
 }
 
