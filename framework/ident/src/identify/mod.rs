@@ -54,7 +54,7 @@ pub use confounded::confound_evidence;
 use confounded::confound_rule;
 use baseline::{friction_parts, is_friction_part, reads_as_friction};
 pub use experiment::Confound;
-pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, Samples, SearchContext};
+pub use causes::{CandidateCause, Excitation, Fragments, FullRate, Inputs, Parameter, Refine, Restart, RestSamples, Samples, SearchContext};
 pub use prepare::PrepareError;
 pub use select::BIC_THRESHOLD;
 

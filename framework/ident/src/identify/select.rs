@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use super::parallel::{cores, parallel_map};
-use super::causes::{FullRate, SearchContext};
+use super::causes::{RestSamples, FullRate, SearchContext};
 use super::confounded::{CONFOUND_BIC, CONFOUND_SHARE, Confounded};
 use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
@@ -244,16 +244,17 @@ fn at_simpler_decimated(term: &Term) -> Option<Term> {
 
 /// The search context of `spec`: its fit on the decimated part, and its residuals there and on
 /// the full-rate stretch (kept in `residuals`).
-pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residuals: &'a mut (Vec<f64>, Vec<f64>)) -> SearchContext<'a> {
+pub(crate) fn context<'a>(model: &Model, spec: &Spec, p: &'a Prepared, residuals: &'a mut (Vec<f64>, Vec<f64>, Vec<f64>)) -> SearchContext<'a> {
     let fit = model.fit(spec, &p.coarse);
     let residual = |part: &Part| match &fit {
         Some(fit) => part.tau.iter().zip(&model.predict(spec, fit, part).torque_nm).map(|(y, m)| y - m).collect(),
         None => part.tau.clone(),
     };
-    *residuals = (residual(&p.coarse), residual(&p.stretch));
-    let (coarse, stretch) = (&residuals.0, &residuals.1);
+    *residuals = (residual(&p.coarse), residual(&p.stretch), p.at_rest.as_ref().map_or_else(Vec::new, residual));
+    let (coarse, stretch, at_rest) = (&residuals.0, &residuals.1, &residuals.2);
     let full_rate = FullRate { t_s: &p.stretch.t, velocity_rad_per_s: &p.stretch.v, residual_nm: stretch };
-    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, coarse, full_rate, &p.stops, matches!(model.baseline, super::baseline::BaselineModel::Polynomial(_)), super::baseline::reads_as_friction(p.spring_share, model.baseline))
+    let rest = RestSamples { t_s: p.at_rest.as_ref().map_or(&[][..], |r| &r.t), residual_nm: at_rest };
+    SearchContext::new(p.excitation, &p.coarse.t, &p.coarse.v, coarse, full_rate, rest, matches!(model.baseline, super::baseline::BaselineModel::Polynomial(_)), super::baseline::reads_as_friction(p.spring_share, model.baseline))
 }
 
 pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize, name: impl Fn(usize) -> String + Sync) -> Selection {

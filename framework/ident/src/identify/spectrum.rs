@@ -4,7 +4,7 @@ use super::numeric::{log_grid, median_step, refine_log};
 
 /// Whether the time stamps are uniformly spaced (to 1e-9 of a step): [`projection`] may rotate
 /// its phasor. Asked once per scan, not per frequency (it cost a third of a projection).
-fn uniform(t: &[f64]) -> bool {
+pub(crate) fn uniform(t: &[f64]) -> bool {
     let n = t.len();
     n > 2 && {
         let dt = (t[n - 1] - t[0]) / (n - 1) as f64;

@@ -204,13 +204,13 @@ fn shape(p: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Excitation, FullRate, SearchContext};
+    use super::super::{Excitation, FullRate, RestSamples, SearchContext};
     use super::{CandidateCause, Hysteresis};
 
     fn scales(amplitude_rad: f64, resolution_rad: f64) -> Vec<f64> {
         let excitation = Excitation { amplitude_rad, frequency_hz: 0.5, sample_period_s: 0.05, deflection_scatter_rad: 0.0, resolution_rad, turn_step_rad: resolution_rad };
         let full_rate = FullRate { t_s: &[], velocity_rad_per_s: &[], residual_nm: &[] };
-        let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, &[], true, false);
+        let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, RestSamples::default(), true, false);
         Hysteresis.parameters(&ctx)[0].grid.clone()
     }
 

@@ -56,7 +56,7 @@ mod tests {
     //! reads none it does not say. A wrong declaration would hand a model another's columns.
 
     use super::InputSet;
-    use crate::identify::causes::{Excitation, FullRate, Inputs, Parameter, Restart, Samples, SearchContext, builtin};
+    use crate::identify::causes::{Excitation, FullRate, Inputs, Parameter, Restart, RestSamples, Samples, SearchContext, builtin};
 
     /// A record of two repetitions with a restart, its inputs unrelated to one another.
     fn inputs() -> Inputs {
@@ -115,7 +115,7 @@ mod tests {
         let residual: Vec<f64> = base.t_s.iter().map(|t| 0.3 * (std::f64::consts::TAU * 23.0 * t).sin()).collect();
         let excitation = Excitation { amplitude_rad: 0.024, frequency_hz: 0.4, sample_period_s: 0.005, deflection_scatter_rad: 1e-5, resolution_rad: 3.8e-4, turn_step_rad: 3.8e-4 };
         let full_rate = FullRate { t_s: &base.t_s, velocity_rad_per_s: &base.velocity_rad_per_s, residual_nm: &residual };
-        let context = SearchContext::new(excitation, &base.t_s, &base.velocity_rad_per_s, &residual, full_rate, &[], true, false);
+        let context = SearchContext::new(excitation, &base.t_s, &base.velocity_rad_per_s, &residual, full_rate, RestSamples::default(), true, false);
         for cause in builtin() {
             let p = parameters(&cause.parameters(&context));
             let reads = cause.reads();

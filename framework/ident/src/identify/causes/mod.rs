@@ -113,9 +113,9 @@ pub struct SearchContext<'a> {
     /// The record has no spring: its deflection column is a joint position and its torque
     /// friction (see [`crate::identify::NO_SPRING_SHARE`]).
     pub no_spring: bool,
-    /// Where the joint is at rest, `(start, end)` [s] on the time of `t_s` (the prepared
-    /// record's stops): a line there is no error of the motion.
-    stops: &'a [(f64, f64)],
+    /// The training part's samples at rest at the full rate and the current model's residual
+    /// there: a line there is no error of the motion.
+    at_rest: RestSamples<'a>,
     /// The residual's dominant frequency and the line found at rest, once asked for (several
     /// vibration causes ask).
     dominant: std::sync::OnceLock<(Option<f64>, Option<super::rest_line::RestLine>)>,
@@ -123,6 +123,16 @@ pub struct SearchContext<'a> {
     /// selection's first step asks every candidate for its grids to schedule the searches, and
     /// each search asks again (a vibration's scan of the residual, twice).
     grids: std::sync::Mutex<std::collections::HashMap<usize, Vec<Parameter>>>,
+}
+
+/// The training part's samples at rest at the full rate, in runs (see
+/// [`SearchContext::dominant_frequency_hz`]); empty without a stop.
+#[derive(Clone, Copy, Default)]
+pub struct RestSamples<'a> {
+    /// Time [s].
+    pub t_s: &'a [f64],
+    /// The current model's residual [Nm].
+    pub residual_nm: &'a [f64],
 }
 
 /// Series of a contiguous full-rate stretch of the training part (see
@@ -140,8 +150,8 @@ pub struct FullRate<'a> {
 impl<'a> SearchContext<'a> {
     /// The context of one search step: the decimated part's series and the full-rate stretch's.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, stops: &'a [(f64, f64)], baseline_fitted: bool, no_spring: bool) -> Self {
-        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, stops, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new(), grids: Default::default() }
+    pub(crate) fn new(excitation: Excitation, t_s: &'a [f64], velocity_rad_per_s: &'a [f64], residual_nm: &'a [f64], full_rate: FullRate<'a>, at_rest: RestSamples<'a>, baseline_fitted: bool, no_spring: bool) -> Self {
+        SearchContext { excitation, t_s, velocity_rad_per_s, residual_nm, full_rate, at_rest, baseline_fitted, no_spring, dominant: std::sync::OnceLock::new(), grids: Default::default() }
     }
 
     /// The grids of the cause at `index` among the model's causes ([`CandidateCause::parameters`]
@@ -187,33 +197,39 @@ impl<'a> SearchContext<'a> {
     /// # assert_eq!(Ripple.name(), "ripple");
     /// ```
     pub fn dominant_frequency_hz(&self) -> Option<f64> {
-        let (band, rest) = self.lines();
-        match (band, rest.map(|r| r.frequency_hz)) {
-            (Some(b), Some(r)) => {
-                // The stronger over the training part: a steady vibration runs through it all.
-                let uniform = false;
-                let power = |f: f64| {
-                    let (s, c) = super::spectrum::projection(self.t_s, self.residual_nm, std::f64::consts::TAU * f, uniform);
-                    s * s + c * c
-                };
-                Some(if power(r) > power(b) { r } else { b })
-            }
-            (b, r) => b.or(r),
-        }
+        self.lines().0
     }
 
-    /// The band's line on the full-rate stretch and the line at rest on the training part,
-    /// scanned once per context.
+    /// The line searched and, where it is the line found at rest, that line, scanned once per
+    /// context. The band's line on the full-rate stretch, unless the scan of the samples at rest
+    /// found one below the band (which the band cannot see; see `rest_line`) that stands out
+    /// on that stretch too (a steady vibration runs through the motion as well; a slow motion
+    /// within one encoder count, read as rest, makes lines at rest that do not) and is the
+    /// stronger there.
     fn lines(&self) -> (Option<f64>, Option<super::rest_line::RestLine>) {
         let f = self.full_rate;
         *self.dominant.get_or_init(|| {
-            (super::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz), super::rest_line::line_at_rest(self.t_s, self.residual_nm, self.stops))
+            let band = super::spectrum::dominant_frequency(f.t_s, f.residual_nm, self.excitation.frequency_hz);
+            let rest = super::rest_line::line_at_rest(self.at_rest.t_s, self.at_rest.residual_nm);
+            let power = |hz: f64| {
+                let (s, c) = super::spectrum::projection(f.t_s, f.residual_nm, std::f64::consts::TAU * hz, false);
+                s * s + c * c
+            };
+            let below_band = |r: &super::rest_line::RestLine| f.t_s.len() > 2 && r.frequency_hz < super::spectrum::band(f.t_s, self.excitation.frequency_hz).0;
+            // Steady: a line on the full-rate stretch too, standing out of its neighbours there.
+            let steady = |r: &super::rest_line::RestLine| super::rest_line::stands_out(f.t_s, f.residual_nm, r.frequency_hz);
+            match (band, rest) {
+                (b, Some(r)) if below_band(&r) && steady(&r) && b.is_none_or(|b| power(r.frequency_hz) > power(b)) => (Some(r.frequency_hz), Some(r)),
+                (b, _) => (b, None),
+            }
         })
     }
 
     /// How many frequencies the scans behind [`SearchContext::dominant_frequency_hz`] resolve:
-    /// the band's over the full-rate stretch, and the scan at rest's when it found a line (the
-    /// look-elsewhere count of a cause at that frequency).
+    /// the band's over the full-rate stretch, and where the line at rest is the one searched,
+    /// the scan at rest's too (the look-elsewhere count of a cause at that frequency). Where the
+    /// band's line is searched, the scan at rest changed nothing; under noise alone it adds its
+    /// own false-alarm level (0.1 %).
     pub fn frequencies_scanned(&self) -> f64 {
         let band = super::spectrum::resolvable(self.full_rate.t_s, self.excitation.frequency_hz);
         band + self.lines().1.map_or(0.0, |r| r.resolvable)

@@ -202,6 +202,9 @@ pub(crate) struct Prepared {
     /// Where the joint is at rest, `(start, end)` [s] from `t0` (see `rest`); left out of a
     /// friction record's fit and judgement.
     pub stops: Vec<(f64, f64)>,
+    /// The training part's samples inside those stops at the full rate, the longest runs first,
+    /// at most [`REST_SAMPLES`]; `None` without a stop on the training part.
+    pub at_rest: Option<Part>,
     /// Where the reading stays on the count at which the motion turned, `(start, end)` [s] from
     /// `t0` (see `turns`); left out of a friction record's fit and judgement as well.
     pub turns: Vec<(f64, f64)>,
@@ -232,6 +235,11 @@ pub const SEARCH_SAMPLES: usize = 5000;
 /// every sample, a mode's frequency above the decimated part's Nyquist frequency (an
 /// assumption: 80 s at 200 Hz, 16 cycles of a 0.2 Hz excitation).
 pub const STRETCH_SAMPLES: usize = 16_000;
+
+/// Full-rate training samples at rest kept for the scan of a line there (an assumption: 8 s
+/// of a 1 kHz log's holds resolve a line to 0.13 Hz, and a search step's residual on them
+/// costs about what its residual on the searches' part does).
+pub const REST_SAMPLES: usize = 8_192;
 
 /// Fits run on at most this many training samples, taken evenly over the training part (an assumption: 50 000 samples put
 /// a coefficient's standard error at 0.45 % of the noise-to-signal ratio, 1/sqrt(n); more only
@@ -421,8 +429,34 @@ impl Read<'_> {
         };
         let spring_share = spring_share(&train);
         let stops = rest::stops(t, d, v, spacing, resolution);
+        // The training part's samples at rest, at the full rate, for the scan of a line there
+        // (`rest_line`): the longest runs first, at most REST_SAMPLES, then in time order. The
+        // searches' part is decimated without a filter, and a line above its Nyquist frequency
+        // folds below it (a 46.2 Hz vibration logged at 2 kHz read 37.1 Hz there).
+        let at_rest = {
+            let mut runs: Vec<std::ops::Range<usize>> = stops
+                .iter()
+                .flat_map(|(a, b)| {
+                    let (i, j) = (t.partition_point(|x| *x < *a), t.partition_point(|x| *x <= *b));
+                    [i.min(lo)..j.min(lo), i.max(hi)..j.max(hi)]
+                })
+                .filter(|r| r.len() >= 16)
+                .collect();
+            runs.sort_by_key(|r| std::cmp::Reverse(r.len()));
+            let mut left = REST_SAMPLES;
+            let mut kept: Vec<std::ops::Range<usize>> = runs
+                .into_iter()
+                .filter_map(|r| {
+                    let take = r.len().min(left);
+                    left -= take;
+                    (take >= 16).then_some(r.start..r.start + take)
+                })
+                .collect();
+            kept.sort_by_key(|r| r.start);
+            kept.into_iter().map(part).reduce(|a, b| a.then(&b))
+        };
         let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, turns: self.turn_runs.clone() })
+        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, at_rest, turns: self.turn_runs.clone() })
     }
 }
 
