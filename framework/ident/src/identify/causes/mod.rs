@@ -127,6 +127,12 @@ pub struct SearchContext<'a> {
 
 /// The training part's samples at rest at the full rate, in runs (see
 /// [`SearchContext::dominant_frequency_hz`]); empty without a stop.
+///
+/// ```
+/// use jointctl_ident::identify::RestSamples;
+/// let none = RestSamples::default();
+/// assert!(none.t_s.is_empty() && none.residual_nm.is_empty());
+/// ```
 #[derive(Clone, Copy, Default)]
 pub struct RestSamples<'a> {
     /// Time [s].
