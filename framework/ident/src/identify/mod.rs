@@ -385,13 +385,21 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let mut selection = select::select(&model, p, base.clone(), opts.max_causes, name);
     // The floor read again on what the named causes leave, and the selection made again when it
     // falls clearly (see `bin_reading::FLOOR_FALL`): a steady vibration near the Nyquist
-    // frequency had counted as noise.
+    // frequency had counted as noise. That floor is what those causes leave: a selection on it
+    // that refuses one of them does not stand (see `bin_reading::stands_on_fallen_floor`).
     let refloored;
     let p = match (!selection.chosen.is_empty()).then(|| bin_reading::floor_fallen(&model, &selection.spec, p)).flatten() {
         Some(q) => {
-            refloored = q;
-            selection = select::select(&model, &refloored, base.clone(), opts.max_causes, name);
-            &refloored
+            let again = select::select(&model, &q, base.clone(), opts.max_causes, name);
+            let causes = |s: &select::Selection| s.chosen.iter().map(|c| c.cause).collect::<Vec<_>>();
+            match bin_reading::stands_on_fallen_floor(&causes(&selection), &causes(&again)) {
+                true => {
+                    refloored = q;
+                    selection = again;
+                    &refloored
+                }
+                false => p,
+            }
         }
         None => p,
     };

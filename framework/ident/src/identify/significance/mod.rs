@@ -15,7 +15,8 @@
 //!   again above the floor (a structured residual), a gain that is large
 //!   ([`LARGE_SHARE_OF_EXCESS`] of the excess) and consistent over [`CONSISTENCY_PARTS`]
 //!   contiguous parts of the held-out part: none made worse by a relevant amount, or one only
-//!   when every other part is made better by one and its loss is below the parts' median gain; of
+//!   when every other part is made better by one or has nothing to explain, and its loss is
+//!   below the parts' median gain; of
 //!   those with something to explain, at least two and more than half made better by one. On real records the residual is mostly structure that the listed causes
 //!   explain only in part; the blocks' gains then scatter and the t statistic stays small while the
 //!   cause halves the error. Consistency in time is the evidence that holds there.
@@ -108,7 +109,8 @@ pub const LARGE_SHARE_OF_EXCESS: f64 = 0.2;
 
 /// Contiguous parts of the held-out part a consistent gain is judged on: in none may the cause
 /// worsen the error by the relevance threshold, or in one only when it betters every other part
-/// by as much and that part's loss is below the parts' median gain (the folds' median and signs of hv-block
+/// by as much, or that part has nothing to explain (the model without the cause is within the
+/// threshold of the floor there), and the loss is below the parts' median gain (the folds' median and signs of hv-block
 /// cross-validation; a Dahl loop fitted for a Bouc-Wen loop took 86 % of the excess off the
 /// blind seed 4's 009, 92-100 % of it in three parts, and was refused for the fourth, made worse
 /// by 0.063 Nm^2 where 0.040 is relevant); of the parts where the model without it leaves
@@ -281,7 +283,11 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
     gains.sort_by(f64::total_cmp);
     let median = if gains.is_empty() { 0.0 } else { 0.5 * (gains[(gains.len() - 1) / 2] + gains[gains.len() / 2]) };
     let worst_loss = -per_part.iter().map(|(_, g)| *g).fold(f64::INFINITY, f64::min);
-    let worse_allowed = worse == 0 || (worse == 1 && per_part.len() >= CONSISTENCY_PARTS && bettered + 1 == per_part.len() && worst_loss < median);
+    // The one part made worse is let pass when every other part gains by a relevant amount or
+    // has nothing to explain (the model without the cause at the floor there: it can gain
+    // nothing, and counts neither way, as above).
+    let idle = per_part.iter().filter(|(e, g)| *e < relevant_nm2 && *g < relevant_nm2 && *g >= -relevant_nm2).count();
+    let worse_allowed = worse == 0 || (worse == 1 && per_part.len() >= CONSISTENCY_PARTS && bettered + idle + 1 == per_part.len() && worst_loss < median);
     let informative: Vec<f64> = per_part.iter().filter(|(e, _)| *e >= relevant_nm2).map(|(_, g)| *g).collect();
     let better = informative.iter().filter(|g| **g >= relevant_nm2).count();
     let most_parts_better = better >= 2 && 2 * better > informative.len();
