@@ -9,55 +9,8 @@ use nalgebra::{DMatrix, DVector};
 use super::least_squares::{ar1_inflated_variance, dot, dot_row, fit_segments, least_squares};
 
 use super::baseline::BaselineModel;
-use super::causes::{CandidateCause, Inputs, Restart, Samples};
-
-/// Prepared samples of one part of the data (training or held out).
-#[derive(Clone, Debug)]
-pub(crate) struct Part {
-    /// Deflections before this part (a stateful effect carries over).
-    pub warm: Vec<f64>,
-    /// Pieces inside the part that do not follow on from the samples before them, each with
-    /// its own history (see [`Samples::restarts`]).
-    pub restarts: Vec<Restart>,
-    pub t: Vec<f64>,
-    pub d: Vec<f64>,
-    pub v: Vec<f64>,
-    pub tau: Vec<f64>,
-    pub pivot: Vec<f64>,
-    /// Which repetition of the record each sample belongs to; empty for a record of one (see
-    /// [`Samples::repetition`]).
-    pub rep: Vec<u32>,
-    /// For a record read as bin averages, each sample's rate at its interval's start and end
-    /// less its own [rad/s] (see `prepare::rate_edges`); empty for point samples.
-    pub rate_edges: Vec<[f64; 2]>,
-    /// Sample period [s].
-    pub dt: f64,
-}
-
-impl Part {
-    pub fn len(&self) -> usize {
-        self.t.len()
-    }
-
-    /// This part's samples followed by `next`'s (training samples either side of a held-out
-    /// window, the searches' pieces); the history before it is this part's, and `next` starts
-    /// again from its own (a restart at its first sample).
-    pub fn then(&self, next: &Part) -> Part {
-        if next.len() == 0 {
-            return self.clone();
-        }
-        if self.len() == 0 {
-            return next.clone();
-        }
-        let join = |a: &Vec<f64>, b: &Vec<f64>| a.iter().chain(b).copied().collect();
-        // Repetitions are both parts' or none (a record of one repetition has none).
-        let rep = if self.rep.is_empty() || next.rep.is_empty() { Vec::new() } else { self.rep.iter().chain(&next.rep).copied().collect() };
-        let rate_edges = if self.rate_edges.is_empty() || next.rate_edges.is_empty() { Vec::new() } else { self.rate_edges.iter().chain(&next.rate_edges).copied().collect() };
-        // `next` starts from its own history, not from where this part ended.
-        let restarts = self.restarts.iter().cloned().chain(std::iter::once(Restart { at: self.len(), history_rad: next.warm.clone() })).chain(next.restarts.iter().map(|r| Restart { at: r.at + self.len(), history_rad: r.history_rad.clone() })).collect();
-        Part { warm: self.warm.clone(), restarts, t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, rate_edges, dt: self.dt }
-    }
-}
+use super::causes::{CandidateCause, Inputs, Samples};
+pub(crate) use super::part::{Lead, Part};
 
 /// One extension of the model: a cause (index into the candidate list) and its parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -139,6 +92,7 @@ pub(crate) struct Projector {
     q: DMatrix<f64>,
     residual: Vec<f64>,
     inputs: Inputs,
+    history_rad: Option<Vec<f64>>,
     /// The given characteristic's torque on the inputs (zeros for a fitted baseline).
     model_nm: Vec<f64>,
     /// The part and the input transforms of the model it was fitted for, as in [`ColumnKey`]:
@@ -159,6 +113,8 @@ type Segmented = (Vec<Vec<f64>>, Vec<usize>);
 
 struct Design {
     inputs: Inputs,
+    /// A stateful cause's history when the transforms changed the lead (else the part's own).
+    history_rad: Option<Vec<f64>>,
     fixed: Vec<f64>,
     cols: Vec<Vec<f64>>,
     spans: Vec<Range<usize>>,
@@ -290,10 +246,29 @@ impl Model<'_> {
         // The elastic deflection about the centre, for the baseline and every cause that reads
         // it alike: a cubic of a friction record's position about that position's arbitrary zero
         // took a constant torque as its own (see `centre_rad`).
-        let elastic_rad = p.d.iter().map(|x| x - self.centre_rad).collect();
-        let mut inputs = Inputs { t_s: p.t.clone(), deflection_rad: p.d.clone(), velocity_rad_per_s: p.v.clone(), elastic_rad, sample_period_s: p.dt };
+        // The transforms read the samples before the part first (see `Lead`), and the part's own
+        // are kept.
+        let ahead = p.lead.t.len();
+        let with_lead = |lead: &[f64], own: &[f64]| -> Vec<f64> { lead.iter().chain(own).copied().collect() };
+        let deflection_rad = with_lead(&p.lead.d, &p.d);
+        let elastic_rad = deflection_rad.iter().map(|x| x - self.centre_rad).collect();
+        let mut inputs = Inputs { t_s: with_lead(&p.lead.t, &p.t), deflection_rad, velocity_rad_per_s: with_lead(&p.lead.v, &p.v), elastic_rad, sample_period_s: p.dt };
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
+        }
+        // A stateful cause's history runs into the part as its inputs do: the history's last
+        // samples are the lead's (see `prepare`), taken as transformed. Raw, a delayed part
+        // replayed the delay's last stretch after its history, a reversal the joint never made:
+        // a Dahl state off at each part's start (a Bouc-Wen loop behind a 90 ms delay, blind
+        // seed 41's 097: both refused once the lead was read, the held-out error 0.055 -> 0.092 Nm).
+        let history_rad = match p.warm.len().checked_sub(ahead) {
+            Some(keep) if ahead > 0 && inputs.deflection_rad[..ahead] != p.lead.d[..] => Some(p.warm[..keep].iter().chain(&inputs.deflection_rad[..ahead]).copied().collect()),
+            _ => None,
+        };
+        if ahead > 0 {
+            for x in [&mut inputs.t_s, &mut inputs.deflection_rad, &mut inputs.velocity_rad_per_s, &mut inputs.elastic_rad] {
+                x.drain(..ahead.min(x.len()));
+            }
         }
         let mut fixed = vec![0.0; n];
         let mut cols: Vec<Vec<f64>> = Vec::new();
@@ -321,7 +296,7 @@ impl Model<'_> {
             elastic_rad: &inputs.elastic_rad,
             pivot_mm: &p.pivot,
             repetition: &p.rep,
-            history_rad: &p.warm,
+            history_rad: history_rad.as_deref().unwrap_or(&p.warm),
             restarts: &p.restarts,
             model_nm: &fixed,
             rate_edges_rad_per_s: &p.rate_edges,
@@ -351,7 +326,7 @@ impl Model<'_> {
                 }
             }
         }
-        Design { inputs, fixed, cols, spans, segmented, nonlinear }
+        Design { inputs, history_rad, fixed, cols, spans, segmented, nonlinear }
     }
 
     /// The model fitted on a part, ready to score one more term at the cost of projecting its
@@ -373,7 +348,7 @@ impl Model<'_> {
         let live: Vec<&Vec<f64>> = d.cols.iter().filter(|c| c.iter().any(|x| *x != 0.0)).collect();
         let q = if live.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_fn(n, live.len(), |i, j| live[j][i]).qr().q() };
         let (part, transforms) = self.column_key(spec, p);
-        Some(Projector { q, residual, inputs: d.inputs, model_nm: d.fixed, part, transforms })
+        Some(Projector { q, residual, inputs: d.inputs, history_rad: d.history_rad, model_nm: d.fixed, part, transforms })
     }
 
     /// The RSS of the projector's model with `term` added (a term without an input transform).
@@ -386,7 +361,7 @@ impl Model<'_> {
             elastic_rad: &proj.inputs.elastic_rad,
             pivot_mm: &p.pivot,
             repetition: &p.rep,
-            history_rad: &p.warm,
+            history_rad: proj.history_rad.as_deref().unwrap_or(&p.warm),
             restarts: &p.restarts,
             model_nm: &proj.model_nm,
             rate_edges_rad_per_s: &p.rate_edges,
@@ -562,7 +537,7 @@ mod tests {
 
     fn part(t0: f64, d: &[f64], warm: &[f64]) -> Part {
         let t: Vec<f64> = (0..d.len()).map(|i| t0 + 0.01 * i as f64).collect();
-        Part { warm: warm.to_vec(), restarts: Vec::new(), t, d: d.to_vec(), v: vec![0.0; d.len()], tau: vec![0.0; d.len()], pivot: vec![0.0; d.len()], rep: Vec::new(), rate_edges: Vec::new(), dt: 0.01 }
+        Part { warm: warm.to_vec(), lead: Default::default(), restarts: Vec::new(), t, d: d.to_vec(), v: vec![0.0; d.len()], tau: vec![0.0; d.len()], pivot: vec![0.0; d.len()], rep: Vec::new(), rate_edges: Vec::new(), dt: 0.01 }
     }
 
     fn loop_column(p: &Part) -> Vec<f64> {
@@ -570,6 +545,36 @@ mod tests {
         let s = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, elastic_rad: &p.d, pivot_mm: &p.pivot, repetition: &p.rep, history_rad: &p.warm, restarts: &p.restarts, model_nm: &zeros, rate_edges_rad_per_s: &p.rate_edges, record_middle_s: 0.0 };
         // A Dahl loop of 1 mrad, no dead band.
         super::super::causes::Hysteresis.columns(&[1e-3, 0.0, 1.0], &s).remove(0)
+    }
+
+    #[test]
+    fn a_delayed_part_reads_its_inputs_and_its_loop_as_the_whole_record_does() {
+        // A part that starts inside the record is the record's slice: its delayed deflection
+        // reads the samples before it (the lead), and a loop's state runs in from a history
+        // delayed alike. Held at the part's first value, a 70 ms delay put its first 7 samples
+        // where the joint had been before; with a raw history, the delayed part replayed the
+        // delay's last stretch after it and the loop's state was off at the part's start.
+        use super::super::causes::{Hysteresis, TimeDelay};
+        let causes: [&dyn CandidateCause; 2] = [&TimeDelay, &Hysteresis];
+        let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, causes: &causes, held_out: Default::default(), columns: Default::default() };
+        let term = |cause, params: &[f64]| Term { cause, params: params.to_vec(), grids: Vec::new(), baseline: false };
+        let spec = Spec { terms: vec![term(0, &[0.07]), term(1, &[1e-3, 0.0, 1.0])] };
+        let w = 2.0 * std::f64::consts::PI * 0.5;
+        let d: Vec<f64> = (0..600).map(|i| 5e-3 * (w * 0.01 * i as f64).sin()).collect();
+        let v: Vec<f64> = (0..600).map(|i| 5e-3 * w * (w * 0.01 * i as f64).cos()).collect();
+        let mut whole = part(0.0, &d, &[]);
+        whole.v = v.clone();
+        let start = 300;
+        let mut slice = part(3.0, &d[start..], &d[..start]);
+        slice.v = v[start..].to_vec();
+        slice.lead = Lead { t: whole.t[..start].to_vec(), d: d[..start].to_vec(), v: v[..start].to_vec() };
+        let (all, own) = (model.design(&spec, &whole), model.design(&spec, &slice));
+        for i in 0..slice.len() {
+            let (x, y) = (all.inputs.deflection_rad[start + i], own.inputs.deflection_rad[i]);
+            assert!((x - y).abs() < 1e-12, "sample {i}: deflection {y}, the record's {x}");
+            let (x, y) = (all.cols[1][start + i], own.cols[1][i]);
+            assert!((x - y).abs() < 1e-9, "sample {i}: loop {y}, the record's {x}");
+        }
     }
 
     #[test]

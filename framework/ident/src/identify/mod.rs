@@ -34,6 +34,7 @@ mod friction_confound;
 mod friction_parts;
 mod numeric;
 mod parallel;
+mod part;
 mod registered;
 mod rest_line;
 pub use numeric::format_value;

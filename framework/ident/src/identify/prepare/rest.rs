@@ -245,6 +245,7 @@ fn without(part: &Part, drop: &[bool]) -> Part {
     let keep = |x: &Vec<f64>| -> Vec<f64> { x.iter().zip(drop).filter(|(_, d)| !**d).map(|(x, _)| *x).collect() };
     Part {
         warm: part.warm.clone(),
+        lead: part.lead.clone(),
         // Each restart at the first sample kept from where it was.
         restarts: part.restarts.iter().map(|r| Restart { at: drop[..r.at.min(drop.len())].iter().filter(|d| !**d).count(), history_rad: r.history_rad.clone() }).collect(),
         t: keep(&part.t),
@@ -377,6 +378,7 @@ mod tests {
         let n = 10;
         let part = Part {
             warm: vec![0.0],
+            lead: Default::default(),
             restarts: vec![Restart { at: 4, history_rad: vec![1.0] }, Restart { at: 8, history_rad: vec![2.0] }],
             t: (0..n).map(|i| i as f64).collect(),
             d: vec![0.0; n],
