@@ -10,7 +10,7 @@ use super::least_squares::{ar1_inflated_variance, dot, dot_row, fit_segments, le
 
 use super::baseline::BaselineModel;
 use super::causes::{CandidateCause, Inputs, Samples};
-pub(crate) use super::part::{Lead, Part};
+pub(crate) use super::part::Part;
 
 /// One extension of the model: a cause (index into the candidate list) and its parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -113,7 +113,7 @@ type Segmented = (Vec<Vec<f64>>, Vec<usize>);
 
 struct Design {
     inputs: Inputs,
-    /// A stateful cause's history when the transforms changed the lead (else the part's own).
+    /// A stateful cause's history when the transforms changed it (else the part's `warm`).
     history_rad: Option<Vec<f64>>,
     fixed: Vec<f64>,
     cols: Vec<Vec<f64>>,
@@ -243,28 +243,26 @@ impl Model<'_> {
 
     fn design(&self, spec: &Spec, p: &Part) -> Design {
         let n = p.len();
+        // The transforms read the part's history first (see `Lead`), and the part's own samples
+        // are kept. The history's deflections are `warm`; `Lead` holds their times and rates (a
+        // part without them is read alone).
+        let ahead = if p.lead.t.len() == p.warm.len() && p.lead.v.len() == p.warm.len() { p.warm.len() } else { 0 };
+        let with_lead = |lead: &[f64], own: &[f64]| -> Vec<f64> { lead.iter().chain(own).copied().collect() };
+        let deflection_rad = with_lead(&p.warm[..ahead], &p.d);
         // The elastic deflection about the centre, for the baseline and every cause that reads
         // it alike: a cubic of a friction record's position about that position's arbitrary zero
         // took a constant torque as its own (see `centre_rad`).
-        // The transforms read the samples before the part first (see `Lead`), and the part's own
-        // are kept.
-        let ahead = p.lead.t.len();
-        let with_lead = |lead: &[f64], own: &[f64]| -> Vec<f64> { lead.iter().chain(own).copied().collect() };
-        let deflection_rad = with_lead(&p.lead.d, &p.d);
         let elastic_rad = deflection_rad.iter().map(|x| x - self.centre_rad).collect();
-        let mut inputs = Inputs { t_s: with_lead(&p.lead.t, &p.t), deflection_rad, velocity_rad_per_s: with_lead(&p.lead.v, &p.v), elastic_rad, sample_period_s: p.dt };
+        let mut inputs = Inputs { t_s: with_lead(&p.lead.t[..ahead], &p.t), deflection_rad, velocity_rad_per_s: with_lead(&p.lead.v[..ahead], &p.v), elastic_rad, sample_period_s: p.dt };
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
         }
-        // A stateful cause's history runs into the part as its inputs do: the history's last
-        // samples are the lead's (see `prepare`), taken as transformed. Raw, a delayed part
-        // replayed the delay's last stretch after its history, a reversal the joint never made:
-        // a Dahl state off at each part's start (a Bouc-Wen loop behind a 90 ms delay, blind
-        // seed 41's 097: both refused once the lead was read, the held-out error 0.055 -> 0.092 Nm).
-        let history_rad = match p.warm.len().checked_sub(ahead) {
-            Some(keep) if ahead > 0 && inputs.deflection_rad[..ahead] != p.lead.d[..] => Some(p.warm[..keep].iter().chain(&inputs.deflection_rad[..ahead]).copied().collect()),
-            _ => None,
-        };
+        // A stateful cause's history runs into the part as its inputs do: taken as transformed.
+        // Raw, a delayed part replayed the delay's last stretch after its history, a reversal the
+        // joint never made: a Dahl state off at each part's start (a Bouc-Wen loop behind a 90 ms
+        // delay, blind seed 41's 097: both refused once the history was read, the held-out error
+        // 0.055 -> 0.092 Nm). `None` where the transforms left it as it was.
+        let history_rad = (ahead > 0 && inputs.deflection_rad[..ahead] != p.warm[..]).then(|| inputs.deflection_rad[..ahead].to_vec());
         if ahead > 0 {
             for x in [&mut inputs.t_s, &mut inputs.deflection_rad, &mut inputs.velocity_rad_per_s, &mut inputs.elastic_rad] {
                 x.drain(..ahead.min(x.len()));
@@ -555,6 +553,7 @@ mod tests {
         // where the joint had been before; with a raw history, the delayed part replayed the
         // delay's last stretch after it and the loop's state was off at the part's start.
         use super::super::causes::{Hysteresis, TimeDelay};
+        use super::super::part::Lead;
         let causes: [&dyn CandidateCause; 2] = [&TimeDelay, &Hysteresis];
         let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, causes: &causes, held_out: Default::default(), columns: Default::default() };
         let term = |cause, params: &[f64]| Term { cause, params: params.to_vec(), grids: Vec::new(), baseline: false };
@@ -567,7 +566,7 @@ mod tests {
         let start = 300;
         let mut slice = part(3.0, &d[start..], &d[..start]);
         slice.v = v[start..].to_vec();
-        slice.lead = Lead { t: whole.t[..start].to_vec(), d: d[..start].to_vec(), v: v[..start].to_vec() };
+        slice.lead = Lead { t: whole.t[..start].to_vec(), v: v[..start].to_vec() };
         let (all, own) = (model.design(&spec, &whole), model.design(&spec, &slice));
         for i in 0..slice.len() {
             let (x, y) = (all.inputs.deflection_rad[start + i], own.inputs.deflection_rad[i]);

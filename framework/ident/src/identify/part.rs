@@ -28,19 +28,18 @@ pub(crate) struct Part {
     pub dt: f64,
 }
 
-/// The record's samples before a part, at its stride: their times [s], deflections [rad] and
-/// rates [rad/s], over the part's history (`Part::warm` holds their deflections). The transforms
-/// read them ahead of the part's own (see `Model::design`): a delay's first samples are the
-/// deflection before the part, which the part alone does not hold, and a loop's history is
-/// delayed with the part.
-/// Held at the part's first value instead, a delay of 1.4 samples at 20 Hz put the first two
-/// samples of a held-out window where the joint had been 50-120 ms before (the blind device D of
-/// seed 46 at 20 Hz: its first held-out sample 1.57 Nm off, the held-out error 7.6 times the
-/// noise floor).
+/// The times [s] and rates [rad/s] of the record's samples before a part, at its stride: the
+/// part's history, whose deflections are `Part::warm`. The transforms read the history ahead of
+/// the part's own samples (see `Model::design`): a delay's first samples are the deflection
+/// before the part, which the part alone does not hold, and a loop's history is delayed with
+/// the part. Held at the part's first value instead, a delay of 1.4 samples at 20 Hz put the
+/// first two samples of a held-out window where the joint had been 50-120 ms before (the blind
+/// device D of seed 46 at 20 Hz: its first held-out sample 1.57 Nm off, the held-out error 7.6
+/// times the noise floor). Empty where a part has no such samples (a test's part, say): the
+/// transforms then read the part alone.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Lead {
     pub t: Vec<f64>,
-    pub d: Vec<f64>,
     pub v: Vec<f64>,
 }
 

@@ -43,7 +43,7 @@ pub struct TimeDelay;
 /// with the rates `dx` at the two samples when they are given, linear otherwise; held at the
 /// first value before the record and never interpolated across a gap of more than `max_step`
 /// (the value on the sample's own side of the gap is taken, extrapolated along its rate when the
-/// rates are given). A part's inputs begin with its history (`design::Lead`), so the first value
+/// rates are given). A part's inputs begin with its history (`part::Lead`), so the first value
 /// is held only at the record's own start. Extrapolated there along the rate instead, 3 of 1946
 /// generated reports moved, none by 1 %, and four of this project's own delay tests read their
 /// delays a millisecond late or named a cause beside it (not understood; not taken).

@@ -370,11 +370,11 @@ impl Read<'_> {
         let part_every = |r: std::ops::Range<usize>, k: usize| {
             let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
             // The history's samples, which a delay reads before the part's own and a stateful
-            // cause reads transformed with them (see `design::Lead`).
+            // cause reads transformed with them (see `part::Lead`).
             let lead: Vec<usize> = (warm_start(r.start)..r.start).step_by(k.max(1)).collect();
             let lead_of = |x: &[f64]| lead.iter().map(|i| x[*i]).collect::<Vec<f64>>();
             Part {
-                lead: crate::identify::design::Lead { t: lead_of(t), d: lead_of(d), v: lead_of(v) },
+                lead: crate::identify::part::Lead { t: lead_of(t), v: lead_of(v) },
                 warm: lead_of(d),
                 restarts: Vec::new(),
                 t: pick(t),

@@ -7,6 +7,14 @@ fn parts(levels: &[f64], n: usize) -> Vec<f64> {
     levels.iter().flat_map(|l| std::iter::repeat_n(*l, n)).collect()
 }
 
+/// The judgement on held-out squared errors of 1000 samples a part, at the parts' levels
+/// without the cause (`reduced`) and with it (`full`), the noise's variance 1.
+fn judged(reduced: &[f64], full: &[f64]) -> Judgement {
+    let (reduced, full) = (parts(reduced, 1000), parts(full, 1000));
+    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
+    judge(&reduced, &full, block_test(&diff), 1.0)
+}
+
 #[test]
 fn a_large_gain_with_one_part_made_worse_is_consistent_when_every_other_part_gains() {
     // Finding (the blind generator's seed 4, 009: a Bouc-Wen loop, Dahl's fitted for it):
@@ -15,24 +23,20 @@ fn a_large_gain_with_one_part_made_worse_is_consistent_when_every_other_part_gai
     // relevance threshold 0.040): refused, and no cause was named at 2.5 times the noise.
     // A cause that models an effect nearly right is worse somewhere; the parts' median and
     // their signs decide (hv-block cross-validation's rule), one part against three.
-    let reduced = parts(&[3.0, 7.0, 1.5, 2.0], 1000);
-    let full = parts(&[1.0, 1.0, 1.8, 1.0], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    let j = judge(&reduced, &full, block_test(&diff), 1.0);
+    let reduced = &[3.0, 7.0, 1.5, 2.0];
+    let full = &[1.0, 1.0, 1.8, 1.0];
+    let j = judged(reduced, full);
     assert!(j.consistent, "{j:?}");
     // Two parts made worse: not consistent, however large the rest.
-    let full = parts(&[1.0, 1.0, 1.8, 2.3], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+    let full = &[1.0, 1.0, 1.8, 2.3];
+    assert!(!judged(reduced, full).consistent);
     // One part worse and another without a relevant gain: not consistent either.
-    let full = parts(&[1.0, 1.0, 1.8, 1.95], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+    let full = &[1.0, 1.0, 1.8, 1.95];
+    assert!(!judged(reduced, full).consistent);
     // One part worse by more than the parts' median gain (gains 2, 6, -3.5 and 1: median
     // 1.5): not consistent.
-    let full = parts(&[1.0, 1.0, 5.0, 1.0], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+    let full = &[1.0, 1.0, 5.0, 1.0];
+    assert!(!judged(reduced, full).consistent);
 }
 
 #[test]
@@ -43,21 +47,18 @@ fn a_part_with_nothing_to_explain_counts_neither_way_beside_the_one_made_worse()
     // by 0.0130 Nm^2 (the threshold 0.0108) where the model without it was at the floor in
     // both: refused, for want of a gain in a part that had nothing to give, and "no cause" was
     // reported at 2.9 times the noise floor.
-    let reduced = parts(&[3.0, 7.0, 1.0, 1.0], 1000);
-    let full = parts(&[1.0, 1.0, 1.0, 1.3], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    let j = judge(&reduced, &full, block_test(&diff), 1.0);
+    let reduced = &[3.0, 7.0, 1.0, 1.0];
+    let full = &[1.0, 1.0, 1.0, 1.3];
+    let j = judged(reduced, full);
     assert!(j.consistent, "{j:?}");
     // The same with the third part holding something to explain that the cause leaves: refused.
-    let reduced = parts(&[3.0, 7.0, 2.0, 1.0], 1000);
-    let full = parts(&[1.0, 1.0, 2.0, 1.3], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+    let reduced = &[3.0, 7.0, 2.0, 1.0];
+    let full = &[1.0, 1.0, 2.0, 1.3];
+    assert!(!judged(reduced, full).consistent);
     // Two parts with nothing to explain, both made worse: refused.
-    let full = parts(&[1.0, 1.0, 1.3, 1.3], 1000);
-    let reduced = parts(&[3.0, 7.0, 1.0, 1.0], 1000);
-    let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
-    assert!(!judge(&reduced, &full, block_test(&diff), 1.0).consistent);
+    let full = &[1.0, 1.0, 1.3, 1.3];
+    let reduced = &[3.0, 7.0, 1.0, 1.0];
+    assert!(!judged(reduced, full).consistent);
 }
 
 #[test]
