@@ -187,7 +187,8 @@ pub(crate) fn choose_rate_reading(read: &super::prepare::ReadAhead, opts: &super
         RateReadings::Other { narrowest } => other_readings(narrowest),
     };
     let middle_s = usual.record_middle_s;
-    let model = || Model { baseline: &opts.baseline, centre_rad, middle_s, causes: all, held_out: Default::default(), columns: Default::default() };
+    let friction_record = super::baseline::reads_as_friction(usual.spring_share, &opts.baseline);
+    let model = || Model { baseline: &opts.baseline, centre_rad, middle_s, friction_record, causes: all, held_out: Default::default(), columns: Default::default() };
     let score = |m: &Model, s: &Spec, p: &Prepared| m.fit(s, &p.coarse).map(|f| bic(f.rss, p.coarse.len(), f.parameters));
     let held = |m: &Model, s: &Spec, p: &Prepared| select::compute_held_out(m, s, p).map(|e| select::rmse(&e.errors));
     let on = |m: &Model, p: &Prepared| baseline_friction(m, all, p).ok().map(|term| Spec { terms: vec![term] });

@@ -134,6 +134,8 @@ pub(crate) struct Model<'a> {
     pub centre_rad: f64,
     /// The middle of the record's time span [s] (see [`Samples::record_middle_s`]).
     pub middle_s: f64,
+    /// Read as a joint's friction (see [`CandidateCause::searched_within_bounds`]).
+    pub friction_record: bool,
     pub causes: &'a [&'a dyn CandidateCause],
     /// Held-out errors of the models evaluated so far (selection, the final check and the report
     /// ask for the same models again).
@@ -349,8 +351,9 @@ impl Model<'_> {
         Some(Projector { q, residual, inputs: d.inputs, history_rad: d.history_rad, model_nm: d.fixed, part, transforms })
     }
 
-    /// The RSS of the projector's model with `term` added (a term without an input transform).
-    pub fn rss_with(&self, proj: &Projector, term: &Term, p: &Part) -> f64 {
+    /// The RSS of the projector's model with `term` added (a term without an input transform),
+    /// and the term's coefficients: those of the whole model's fit (Frisch-Waugh-Lovell).
+    pub fn fit_with(&self, proj: &Projector, term: &Term, p: &Part) -> (f64, Vec<f64>) {
         let cause = self.causes[term.cause];
         let samples = Samples {
             t_s: &p.t,
@@ -373,8 +376,8 @@ impl Model<'_> {
         let r = &proj.residual;
         if let Some(starts) = cause.segments(&term.params, &samples) {
             // Rings are short and near-orthogonal to the smooth design: fitted on the residual.
-            let (fitted, _, _) = fit_segments(&cols, &starts, r, false);
-            return r.iter().zip(&fitted).map(|(a, b)| (a - b).powi(2)).sum();
+            let (fitted, coefs, _) = fit_segments(&cols, &starts, r, false);
+            return (r.iter().zip(&fitted).map(|(a, b)| (a - b).powi(2)).sum(), coefs);
         }
         let orthogonal: Vec<Vec<f64>> = cols
             .iter()
@@ -385,8 +388,8 @@ impl Model<'_> {
             })
             .collect();
         match least_squares(&orthogonal, r) {
-            Some(k) => (0..r.len()).map(|i| (r[i] - dot_row(&orthogonal, &k, i)).powi(2)).sum(),
-            None => f64::INFINITY,
+            Some(k) => ((0..r.len()).map(|i| (r[i] - dot_row(&orthogonal, &k, i)).powi(2)).sum(), k),
+            None => (f64::INFINITY, Vec::new()),
         }
     }
 
@@ -520,7 +523,7 @@ mod tests {
     fn a_term_keeps_its_columns_across_transforms_it_does_not_see() {
         use super::super::causes::{CoulombFriction, DeadZone, Hysteresis, StiffnessNonlinearity, TimeDelay};
         let causes: [&dyn CandidateCause; 5] = [&CoulombFriction, &DeadZone, &TimeDelay, &Hysteresis, &StiffnessNonlinearity];
-        let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, causes: &causes, held_out: Default::default(), columns: Default::default() };
+        let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, friction_record: false, causes: &causes, held_out: Default::default(), columns: Default::default() };
         let (dead_zone, delay) = ((1, vec![1e-3f64.to_bits()], false), (2, vec![0.01f64.to_bits()], false));
         // A dead zone maps the spring's deflection: the arctan (the rate) and the loop (the
         // deflection) do not see it, the spring's curve does.
@@ -555,7 +558,7 @@ mod tests {
         use super::super::causes::{Hysteresis, TimeDelay};
         use super::super::part::Lead;
         let causes: [&dyn CandidateCause; 2] = [&TimeDelay, &Hysteresis];
-        let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, causes: &causes, held_out: Default::default(), columns: Default::default() };
+        let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, friction_record: false, causes: &causes, held_out: Default::default(), columns: Default::default() };
         let term = |cause, params: &[f64]| Term { cause, params: params.to_vec(), grids: Vec::new(), baseline: false };
         let spec = Spec { terms: vec![term(0, &[0.07]), term(1, &[1e-3, 0.0, 1.0])] };
         let w = 2.0 * std::f64::consts::PI * 0.5;

@@ -350,7 +350,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         None => p,
     };
     let centre_rad = centre(p, &opts.baseline);
-    let model = Model { baseline: &opts.baseline, centre_rad, middle_s: p.record_middle_s, causes: all, held_out: Default::default(), columns: Default::default() };
+    let model = Model { baseline: &opts.baseline, centre_rad, middle_s: p.record_middle_s, friction_record: reads_as_friction(p.spring_share, &opts.baseline), causes: all, held_out: Default::default(), columns: Default::default() };
     let name = |c: usize| all[c].name().to_string();
 
     // The baseline: the configured model, with eq. 3.5's k_b searched when it has that friction.

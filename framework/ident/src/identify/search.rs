@@ -33,9 +33,13 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
     // The grid on the decimated part by projection when the cause leaves the inputs alone; full
     // refits otherwise.
     let projector = if model.causes[cause].transforms() { None } else { model.projector(spec, coarse) };
+    let added = spec.terms.len();
     let rss = |p: &[f64], part: &Part| match &projector {
-        Some(proj) if std::ptr::eq(part, coarse) => model.rss_with(proj, &term(p), coarse),
-        _ => model.fit(&spec.with(term(p)), part).map_or(f64::INFINITY, |f| f.rss),
+        Some(proj) if std::ptr::eq(part, coarse) => {
+            let (rss, coefs) = model.fit_with(proj, &term(p), coarse);
+            within_bounds(model, &term(p), &coefs, rss)
+        }
+        _ => model.fit(&spec.with(term(p)), part).map_or(f64::INFINITY, |f| within_bounds(model, &term(p), f.of(added), f.rss)),
     };
     if params.iter().any(|p| p.grid.is_empty()) {
         return None;
@@ -127,6 +131,14 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
     Some(Term { cause, params: best, grids: params, baseline: false })
 }
 
+/// `rss`, or no fit (infinite) where `term`'s cause keeps to its bounds on a friction record and
+/// its coefficients `coefs` there are impossible (see
+/// [`super::causes::CandidateCause::searched_within_bounds`]).
+fn within_bounds(model: &Model, term: &Term, coefs: &[f64], rss: f64) -> f64 {
+    let cause = model.causes[term.cause];
+    if model.friction_record && cause.searched_within_bounds() && cause.impossible(&term.params, coefs).is_some() { f64::INFINITY } else { rss }
+}
+
 /// The best non-zero integer in [lo, hi]: a scan every eighth of the range, then around the
 /// best with the stride halved until it is one (a delay's RSS is smooth and unimodal near its
 /// minimum; about 8 + 2 log2(range) evaluations instead of the range).
@@ -206,7 +218,8 @@ pub(crate) fn profile_terms(model: &Model, spec: &Spec, coarse: &Part) -> Spec {
             let at = |x: f64| {
                 let mut term = spec.terms[t].clone();
                 term.params[j] = x;
-                model.rss_with(&projector, &term, coarse)
+                let (rss, coefs) = model.fit_with(&projector, &term, coarse);
+                within_bounds(model, &term, &coefs, rss)
             };
             let now = at(spec.terms[t].params[j]);
             let best = p.grid.iter().map(|x| (at(*x), *x)).min_by(|a, b| a.0.total_cmp(&b.0));
@@ -238,7 +251,7 @@ fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, w
             let at = |x: f64, part: &Part| {
                 let mut s = spec.clone();
                 s.terms[t].params[j] = x;
-                model.fit(&s, part).map_or(f64::INFINITY, |f| f.rss)
+                model.fit(&s, part).map_or(f64::INFINITY, |f| within_bounds(model, &s.terms[t], f.of(t), f.rss))
             };
             let better = match p.refine {
                 // Within the grid's range: a parameter outside it is outside what the cause
@@ -253,7 +266,8 @@ fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, w
                         Some(proj) => {
                             let mut term = spec.terms[t].clone();
                             term.params[j] = x;
-                            model.rss_with(proj, &term, coarse)
+                            let (rss, coefs) = model.fit_with(proj, &term, coarse);
+                            within_bounds(model, &term, &coefs, rss)
                         }
                         None => at(x, coarse),
                     };

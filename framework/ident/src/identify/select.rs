@@ -557,7 +557,7 @@ mod tests {
         let wander = |t: f64| 0.05 * (std::f64::consts::TAU * t / 6.0).sin();
         let untold = |extra: &dyn Fn(f64) -> f64| {
             let p = prepare::prepare(&spring_with(extra), 0.7, Window::Last).unwrap();
-            let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.record_middle_s, causes: &all, held_out: Default::default(), columns: Default::default() };
+            let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.record_middle_s, friction_record: false, causes: &all, held_out: Default::default(), columns: Default::default() };
             let full = held_out_errors(&model, &spec, &p).unwrap();
             let jacobian = Jacobian::new(&model, &spec, &full.fit, &p.train);
             untold_from_zero(&model, &spec, &full, &jacobian, offset, &p)
@@ -578,7 +578,7 @@ mod tests {
         let builtin = causes::builtin();
         let all: Vec<&dyn CandidateCause> = builtin.iter().map(|c| c.as_ref()).collect();
         let baseline = BaselineModel::Polynomial(1);
-        let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.record_middle_s, causes: &all, held_out: Default::default(), columns: Default::default() };
+        let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.record_middle_s, friction_record: false, causes: &all, held_out: Default::default(), columns: Default::default() };
         let index = |effect: Effect| all.iter().position(|c| c.effect() == Some(effect)).unwrap();
         let (viscous, delay) = (index(Effect::ViscousFriction), index(Effect::TimeDelay));
         let term = |cause: usize, params: Vec<f64>| Term { cause, params, grids: Vec::new(), baseline: false };

@@ -474,6 +474,21 @@ pub trait CandidateCause: Send + Sync {
         let _ = (parameters, coefficients);
         None
     }
+    /// Whether, on a record read as a joint's friction, the search and the polish keep to the
+    /// parameter values at which the cause's fit is possible ([`CandidateCause::impossible`]
+    /// says nothing): its best fit is then the best possible one, the constrained optimum,
+    /// rather than the best of all, rejected when it is impossible. For a cause whose bound is
+    /// on a coefficient's sign alone, where another cause of the library, searched on its own,
+    /// explains what the impossible fit takes (a Stribeck dip as wide as the recorded rates,
+    /// upside down, is a viscous friction). Not beside a spring, where the friction is a small
+    /// part of the torque: there a dip the data does not have was fitted to what a 20 Hz log's
+    /// bin averages leave of eq. 3.5's arctan read as points, and the record was read as
+    /// points (`tests/bin_averages.rs`, one of four seeds). False by default: a bound on a
+    /// parameter (a ring's damping) or a sign that stands for no other cause (a negative loop
+    /// is a delay's) is the search's to report, not to avoid.
+    fn searched_within_bounds(&self) -> bool {
+        false
+    }
     /// Segments (start indices) on each of which the coefficients are fitted anew, when they
     /// cannot carry over from one stretch of data to the next (the amplitude and phase of each
     /// ring of a structure, rung at random by each reversal). They are fitted on every part, the
