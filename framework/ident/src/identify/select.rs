@@ -53,6 +53,11 @@ pub(crate) fn bic(rss: f64, n: usize, parameters: usize) -> f64 {
     n as f64 * (rss / n as f64).max(1e-300).ln() + parameters as f64 * (n as f64).ln()
 }
 
+/// The BIC of `spec` fitted on `part` (infinite without a fit).
+fn training_bic(model: &Model, spec: &Spec, part: &Part) -> f64 {
+    model.fit(spec, part).map_or(f64::INFINITY, |f| bic(f.rss, part.len(), f.parameters))
+}
+
 /// Held-out errors of `spec` fitted on the training part (each model fitted once: selection,
 /// the physics check, the final check and the report ask for the same models again).
 pub(crate) fn held_out_errors(model: &Model, spec: &Spec, p: &Prepared) -> Option<Arc<HeldOut>> {
@@ -212,8 +217,7 @@ fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepar
     // A choice of `Refine::NestedDecimated` kept only when the refit's BIC agrees.
     if let Some(simpler) = at_simpler_decimated(&term) {
         let simpler = profile_terms(model, &spec.with(simpler), &p.coarse);
-        let score = |s: &Spec| model.fit(s, &p.coarse).map_or(f64::INFINITY, |f| bic(f.rss, p.coarse.len(), f.parameters));
-        if score(&simpler) <= score(&s) {
+        if training_bic(model, &simpler, &p.coarse) <= training_bic(model, &s, &p.coarse) {
             s = simpler;
         }
     }
@@ -266,7 +270,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
     // Named causes and the candidates that explained the data about as well, in the step each
     // was named (see `Confounded`).
     let mut about_as_well: Vec<Confounded> = Vec::new();
-    let score = |s: &Spec, extra: f64| model.fit(s, coarse).map_or(f64::INFINITY, |f| bic(f.rss, coarse.len(), f.parameters) + extra);
+    let score = |s: &Spec, extra: f64| training_bic(model, s, coarse) + extra;
     let mut current = score(&spec, 0.0);
     // Each candidate's best parameters of the previous step: the next search starts there.
     let mut warm: std::collections::HashMap<usize, Vec<f64>> = std::collections::HashMap::new();
@@ -409,9 +413,8 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
         if !accepted
             && let Some(&(first, ..)) = unconfirmed.first()
             && let Some((_, with_first, _)) = top.iter().find(|t| t.2 == first)
-            && let Some((both, test, b)) = beside_an_unconfirmed(model, with_first, &impossible_alone, &reduced, p, &name)
+            && let Some((second, both, test, b)) = beside_an_unconfirmed(model, with_first, &impossible_alone, &reduced, p, &name)
         {
-            let second = both.terms.last().map_or(first, |t| t.cause);
             for k in [first, second] {
                 chosen.push(Chosen { cause: k, against: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together ({} alone impossible); {}", name(first), name(second), name(second), test) });
             }
@@ -434,18 +437,17 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
 /// The first of `candidates` (each impossible alone) that, searched beside `with_first` (the
 /// model with a proposal whose held-out gain was relevant but not confirmed), earns its place on
 /// the training part (by [`BIC_THRESHOLD`]) and with it passes the held-out test against
-/// `reduced`: the model with both, the judgement and its training BIC.
-fn beside_an_unconfirmed(model: &Model, with_first: &Spec, candidates: &[usize], reduced: &HeldOut, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Option<(Spec, Judgement, f64)> {
-    let score = |s: &Spec| model.fit(s, &p.coarse).map_or(f64::INFINITY, |f| bic(f.rss, p.coarse.len(), f.parameters));
-    let alone = score(with_first);
+/// `reduced`: that candidate, the model with both, the judgement and its training BIC.
+fn beside_an_unconfirmed(model: &Model, with_first: &Spec, candidates: &[usize], reduced: &HeldOut, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Option<(usize, Spec, Judgement, f64)> {
+    let alone = training_bic(model, with_first, &p.coarse);
     let mut residuals = Default::default();
     let ctx = context(model, with_first, p, &mut residuals);
     candidates.iter().find_map(|&c| {
         let Candidate::Proposed(s) = propose(model, with_first, c, &ctx, p, None) else { return None };
         let both = polish(model, &s, &p.coarse, &p.stretch);
-        let b = score(&both);
+        let b = training_bic(model, &both, &p.coarse);
         match (alone - b > BIC_THRESHOLD).then(|| check(model, &both, reduced, p, name))? {
-            Checked::Tested(both, test) if test.named() => Some((both, test, b)),
+            Checked::Tested(both, test) if test.named() => Some((c, both, test, b)),
             _ => None,
         }
     })
