@@ -434,6 +434,14 @@ impl Read<'_> {
         };
         let spring_share = spring_share(&train);
         let stops = rest::stops(t, d, v, spacing, resolution);
+        // The floor where the joint holds, when clearly lower than the floor over the whole
+        // record: the second differences in motion also take what the model misses between
+        // samples (see `noise::floor_at_rest`).
+        let rest_ranges: Vec<std::ops::Range<usize>> = stops.iter().map(|(a, b)| t.partition_point(|x| *x < *a)..t.partition_point(|x| *x <= *b)).collect();
+        let noise_floor_nm = match noise::floor_at_rest(t, tau, &rest_ranges, GAP_STEPS * spacing) {
+            Some(at_rest) if at_rest < noise::REST_FLOOR_FALL * noise_floor_nm => at_rest,
+            _ => noise_floor_nm,
+        };
         // The training part's samples at rest, at the full rate, for the scan of a line there
         // (`rest_line`): the longest runs first, at most REST_SAMPLES, then in time order. The
         // searches' part is decimated without a filter, and a line above its Nyquist frequency
