@@ -47,7 +47,7 @@ fn a_stribeck_dip_in_bin_averages_is_averaged_over_each_interval() {
     // Measured on seeds 1-6 (seed 2 is read as point samples and left alone): evaluated at each
     // interval's mean rate, the dip came out 0.38-0.41 Nm at 0.0076-0.0080 rad/s (for 0.5
     // at 0.006: the speed 27-33 % off), held out 0.032-0.049 Nm; averaged over the interval,
-    // 0.53-0.59 Nm at 0.0064-0.0066 rad/s (7-10 % off), held out 0.026-0.044 Nm. The test asks
+    // 0.52-0.59 Nm at 0.0063-0.0065 rad/s (5-8 % off), held out 0.024-0.044 Nm. The test asks
     // the speed within 20 % and the height within 25 % on every record read as bins, and at
     // least four such records.
     let mut read_as_bins = 0;
