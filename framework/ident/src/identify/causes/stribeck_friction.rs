@@ -49,9 +49,9 @@ impl CandidateCause for StribeckFriction {
         // 20 Hz bin runs through at a reversal is another curve: blind seeds 48's and 53's 033
         // (a Stribeck friction at 0.006 rad/s in 20 Hz bins) fitted it upside down and said "no
         // cause" at 15 times the noise (on 53's the dip is still not found; on twelve blind 20
-        // Hz records, 48's among them, its mean lowers the held-out error). The mean is taken of `sgn(v) exp(-(v / v_s)^2) + tanh(10
-        // v / v_s) - sgn(v)`, the dip with its tanh's departure from the sign taken where the
-        // Gaussian is still 1 (it is above 0.98 within 0.13 v_s, where the two differ by more
+        // Hz records, 48's among them, its mean lowers the held-out error). The mean is taken of
+        // `sgn(v) exp(-(v / v_s)^2) + tanh(10 v / v_s) - sgn(v)`, the dip with its tanh's
+        // departure from the sign taken where the Gaussian is still 1 (it is above 0.98 within 0.13 v_s, where the two differ by more
         // than 13 %), whose antiderivative is `v_s sqrt(pi) / 2 erf(|v| / v_s) + v_s / 10 (ln(1
         // + exp(-20 |v| / v_s)) - ln 2)`: as smooth through zero as the dip, so that a rate that
         // flickers about zero in a hold does not switch the full dip on a bin either.

@@ -434,9 +434,9 @@ impl Read<'_> {
         };
         let spring_share = spring_share(&train);
         let stops = rest::stops(t, d, v, spacing, resolution);
-        // The floor where the joint holds, when clearly lower than the floor over the whole
-        // record: the second differences in motion also take what the model misses between
-        // samples (see `noise::floor_at_rest`).
+        // The stops as index ranges. The floor where the joint holds, when clearly lower than the
+        // floor over the whole record: the second differences in motion also take what the model
+        // misses between samples (see `noise::floor_at_rest`).
         let rest_ranges: Vec<std::ops::Range<usize>> = stops.iter().map(|(a, b)| t.partition_point(|x| *x < *a)..t.partition_point(|x| *x <= *b)).collect();
         let noise_floor_nm = match noise::floor_at_rest(t, tau, &rest_ranges, GAP_STEPS * spacing) {
             Some(at_rest) if at_rest < noise::REST_FLOOR_FALL * noise_floor_nm => at_rest,
@@ -447,12 +447,9 @@ impl Read<'_> {
         // searches' part is decimated without a filter, and a line above its Nyquist frequency
         // folds below it (a 46.2 Hz vibration logged at 2 kHz read 37.1 Hz there).
         let at_rest = {
-            let mut runs: Vec<std::ops::Range<usize>> = stops
+            let mut runs: Vec<std::ops::Range<usize>> = rest_ranges
                 .iter()
-                .flat_map(|(a, b)| {
-                    let (i, j) = (t.partition_point(|x| *x < *a), t.partition_point(|x| *x <= *b));
-                    [i.min(lo)..j.min(lo), i.max(hi)..j.max(hi)]
-                })
+                .flat_map(|r| [r.start.min(lo)..r.end.min(lo), r.start.max(hi)..r.end.max(hi)])
                 .filter(|r| r.len() >= 16)
                 .collect();
             runs.sort_by_key(|r| std::cmp::Reverse(r.len()));
