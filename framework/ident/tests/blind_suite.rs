@@ -174,7 +174,8 @@ fn one_device_written_four_ways() {
                 let apart = each.iter().enumerate().any(|(i, a)| each[i + 1..].iter().any(|b| (a.0 - b.0).abs() > 2.0 * (a.1 * a.1 + b.1 * b.1).sqrt()));
                 // A delay's lag (its share and time constant) is reported, not held to this:
                 // the 20 Hz bins read it shorter than the full-rate variants (32.9 +- 4.4 ms for
-                // 43-44 +- 2-3 here, 2.3 combined errors; over the blind devices of 20 seeds
+                // 43-44 +- 2-3 here, 2.3 combined errors, likely from a lag run on 50 ms means
+                // as on a line between them; over the blind devices of 20 seeds
                 // the lag's pairs agree on 77 of 158), while the delay itself agrees.
                 if name == "lag_s" || name == "lag_share" {
                     println!("{device} {} {name} (not asserted): {each:?}{}", cause.effect, if apart { ", apart" } else { "" });

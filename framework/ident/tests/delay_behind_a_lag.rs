@@ -5,8 +5,7 @@
 //! generator's device D (a transport delay and a low-pass), the delays read on one device's
 //! variants (irregular, 20 Hz bins, one and three repetitions) disagreed beyond their errors on
 //! 66 of 120 pairs, and read 1-25 ms short. The records here are this file's own: the lag acts
-//! on the torque (the sensor's side), where identify's lag acts on the deflection; for a linear
-//! spring the two are one, for the friction they differ at reversals.
+//! on the torque (the sensor's side), as identify's lag does (on every column of its model).
 
 use jointctl_ident::identify::{IdentifyOptions, identify};
 

@@ -7,7 +7,7 @@ use std::ops::Range;
 use nalgebra::{DMatrix, DVector};
 
 use super::least_squares::{ar1_inflated_variance, dot, dot_row, fit_segments, least_squares};
-use super::numeric::lagged;
+use super::numeric::{LagStart, lagged};
 
 use super::baseline::BaselineModel;
 use super::causes::{CandidateCause, Inputs, Samples};
@@ -126,6 +126,9 @@ struct Design {
     nonlinear: usize,
     /// The lag the torque reaches the log through (see [`CandidateCause::output_lag_s`]).
     lag: Option<OutputLag>,
+    /// Behind a lag, the given characteristic's torque before it (what causes read); `fixed`
+    /// is lagged.
+    model_nm: Option<Vec<f64>>,
 }
 
 /// A first-order lag on a part's columns (see [`CandidateCause::output_lag_s`]).
@@ -143,8 +146,19 @@ impl OutputLag {
         Some(OutputLag { tau_s, max_step_s: 10.0 * p.dt })
     }
 
-    fn apply(&self, t: &[f64], column: &mut Vec<f64>) {
-        *column = lagged(t, column, self.tau_s, self.max_step_s);
+    /// `column` on part `p` through the lag, started again where a piece of the part does not
+    /// follow on (`Part::restarts`), settled on the column's line there.
+    fn apply(&self, p: &Part, column: &mut Vec<f64>) {
+        let starts: Vec<usize> = p.restarts.iter().map(|r| r.at).collect();
+        *column = lagged(&p.t, column, self.tau_s, self.max_step_s, &starts, LagStart::Settled);
+    }
+
+    /// A segment-wise column through the lag, each segment on its own from zero (a ring is zero
+    /// before the reversal that starts it, and its coefficients are the segment's own).
+    fn apply_segments(&self, p: &Part, column: &mut Vec<f64>, segments: &[usize]) {
+        let mut starts: Vec<usize> = p.restarts.iter().map(|r| r.at).chain(segments.iter().copied()).collect();
+        starts.sort_unstable();
+        *column = lagged(&p.t, column, self.tau_s, self.max_step_s, &starts, LagStart::Zero);
     }
 }
 
@@ -353,13 +367,18 @@ impl Model<'_> {
         }
         // Behind a sensor's lag every modelled torque is seen lagged, the given characteristic's
         // too: the model is linear in its coefficients, so lagging the columns lags the torque.
+        // What the causes read as the given characteristic's torque stays unlagged.
         let lag = OutputLag::of(self, spec, p);
+        let model_nm = lag.map(|_| fixed.clone());
         if let Some(lag) = lag {
-            for c in cols.iter_mut().chain(std::iter::once(&mut fixed)).chain(segmented.iter_mut().flatten().flat_map(|(c, _)| c.iter_mut())) {
-                lag.apply(&p.t, c);
+            for c in cols.iter_mut().chain(std::iter::once(&mut fixed)) {
+                lag.apply(p, c);
+            }
+            for (c, starts) in segmented.iter_mut().flatten() {
+                c.iter_mut().for_each(|c| lag.apply_segments(p, c, starts));
             }
         }
-        Design { inputs, history_rad, fixed, cols, spans, segmented, nonlinear, lag }
+        Design { inputs, history_rad, fixed, model_nm, cols, spans, segmented, nonlinear, lag }
     }
 
     /// The model fitted on a part, ready to score one more term at the cost of projecting its
@@ -381,7 +400,7 @@ impl Model<'_> {
         let live: Vec<&Vec<f64>> = d.cols.iter().filter(|c| c.iter().any(|x| *x != 0.0)).collect();
         let q = if live.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_fn(n, live.len(), |i, j| live[j][i]).qr().q() };
         let (part, transforms) = self.column_key(spec, p);
-        Some(Projector { q, residual, inputs: d.inputs, history_rad: d.history_rad, model_nm: d.fixed, part, transforms, lag: d.lag })
+        Some(Projector { q, residual, inputs: d.inputs, history_rad: d.history_rad, model_nm: d.model_nm.unwrap_or(d.fixed), part, transforms, lag: d.lag })
     }
 
     /// The RSS of the projector's model with `term` added (a term without an input transform),
@@ -408,7 +427,10 @@ impl Model<'_> {
         let mut cols = self.columns.get_or(key, || cause.columns(&term.params, &samples));
         if let Some(lag) = proj.lag {
             let mut lagged = (*cols).clone();
-            lagged.iter_mut().for_each(|c| lag.apply(&p.t, c));
+            match cause.segments(&term.params, &samples) {
+                Some(starts) => lagged.iter_mut().for_each(|c| lag.apply_segments(p, c, &starts)),
+                None => lagged.iter_mut().for_each(|c| lag.apply(p, c)),
+            }
             cols = lagged.into();
         }
         let r = &proj.residual;

@@ -410,8 +410,15 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
-    // A named delay read again as a transport delay behind a lag (see `lag`).
-    let spec = lag::behind_named_delay(&model, &spec, p).unwrap_or(spec);
+    // A named delay read again as a transport delay behind a lag (see `lag`), in the models
+    // causes were judged against too.
+    let spec = match lag::behind_named_delay(&model, &spec, p) {
+        Some(lagged) => {
+            selection.chosen.iter_mut().filter_map(|c| c.against.as_mut()).for_each(|a| *a = lag::with_lag_of(&model, &lagged, a));
+            lagged
+        }
+        None => spec,
+    };
     let after = select::held_out_errors(&model, &spec, p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);

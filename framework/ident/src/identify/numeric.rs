@@ -12,16 +12,18 @@ pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
 
 /// `x` through a first-order lag of time constant `tau` [s] (`y' = (x - y) / tau`), exact for
 /// an input linear between the samples at times `t` (any steps). It starts, and starts again
-/// after a step wider than `max_step` (a logging gap, a join of parts), as if the input had run
+/// after a step wider than `max_step` (a logging gap, a join of parts) and at the sorted indices
+/// `starts` (pieces that do not follow on), as `from` says: settled, as if the input had run
 /// along its line over the next `tau` for long: that slope times `tau` behind the input. What
 /// came before is not known here, and a part that starts where the input bends starts off (a
 /// 3.7 Hz sine through a 40 ms lag: 1.5 Nm, gone within `5 tau`). Started at the input instead,
 /// a spring's column on a part that starts in motion began `K v tau` off; along its first
 /// step's slope, a quantised deflection's one count in a millisecond put a held-out part's first
 /// 0.2 s 7 Nm off; along a parabola fitted over `2 tau`, the searched delays' fits were worse.
-pub(crate) fn lagged(t: &[f64], x: &[f64], tau: f64, max_step: f64) -> Vec<f64> {
+pub(crate) fn lagged(t: &[f64], x: &[f64], tau: f64, max_step: f64, starts: &[usize], from: LagStart) -> Vec<f64> {
     let n = x.len().min(t.len());
-    let within = |i: usize| i + 1 < n && t[i + 1] - t[i] > 0.0 && t[i + 1] - t[i] <= max_step;
+    // Whether sample i + 1 follows on from sample i: no gap and no start marked there.
+    let within = |i: usize| i + 1 < n && t[i + 1] - t[i] > 0.0 && t[i + 1] - t[i] <= max_step && starts.binary_search(&(i + 1)).is_err();
     let settled = |i: usize| {
         let mut j = i;
         while within(j) && (j == i || t[j + 1] - t[i] <= tau) {
@@ -38,11 +40,22 @@ pub(crate) fn lagged(t: &[f64], x: &[f64], tau: f64, max_step: f64) -> Vec<f64> 
             let slope = (x[i] - x[i - 1]) / (t[i] - t[i - 1]);
             x[i] - slope * tau + (y - x[i - 1] + slope * tau) * (-(t[i] - t[i - 1]) / tau).exp()
         } else {
-            settled(i)
+            match from {
+                LagStart::Settled => settled(i),
+                LagStart::Zero => 0.0,
+            }
         };
         out.push(y);
     }
     out
+}
+
+/// Where [`lagged`] starts a run: settled on the input's line, or from zero (a ring, which is
+/// zero before the reversal that starts it).
+#[derive(Clone, Copy)]
+pub(crate) enum LagStart {
+    Settled,
+    Zero,
 }
 
 /// Golden-section minimum of `f` over [lo, hi] on a log scale (both > 0).
@@ -128,20 +141,32 @@ mod tests {
 
     #[test]
     fn a_lag_follows_a_ramp_tau_behind_on_any_stamps_and_starts_again_after_a_gap() {
+        use super::{LagStart, lagged};
         // A ramp on jittered stamps, a gap of a second in the middle: the lag's output is the
-        // ramp 20 ms late from the first sample on, after the gap too; a sine through it is
-        // attenuated as 1 / sqrt(1 + (omega tau)^2).
+        // ramp 20 ms late from the first sample on, after the gap too.
         let mut t: Vec<f64> = (0..400).map(|i| i as f64 * 0.002 + if i % 3 == 0 { 0.0007 } else { 0.0 }).collect();
         t.iter_mut().skip(200).for_each(|x| *x += 1.0);
         let x: Vec<f64> = t.iter().map(|t| 0.5 * t).collect();
-        let y = super::lagged(&t, &x, 0.02, 0.02);
+        let y = lagged(&t, &x, 0.02, 0.02, &[], LagStart::Settled);
         for i in 0..400 {
             assert!((y[i] - 0.5 * (t[i] - 0.02)).abs() < 1e-12, "{i}: {} for {}", y[i], 0.5 * (t[i] - 0.02));
         }
+        // A sine through it, with a gap of 0.3 s and a start marked at 12 s: once the start's
+        // transient is gone (10 tau), the output is the steady state
+        // `sin(omega t - atan(omega tau)) / sqrt(1 + (omega tau)^2)`, its phase too; a zero start
+        // begins at zero.
         let (tau, omega) = (0.05, std::f64::consts::TAU * 2.0);
-        let t: Vec<f64> = (0..20_000).map(|i| i as f64 * 1e-3).collect();
-        let y = super::lagged(&t, &t.iter().map(|t| (omega * t).sin()).collect::<Vec<_>>(), tau, 0.01);
-        let peak = y[10_000..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        assert!((peak - 1.0 / (1.0 + (omega * tau).powi(2)).sqrt()).abs() < 1e-3, "{peak}");
+        let t: Vec<f64> = (0..20_000).map(|i| i as f64 * 1e-3 + if i >= 8000 { 0.3 } else { 0.0 }).collect();
+        let x: Vec<f64> = t.iter().map(|t| (omega * t).sin()).collect();
+        let steady = |t: f64| (omega * t - (omega * tau).atan()).sin() / (1.0 + (omega * tau).powi(2)).sqrt();
+        let y = lagged(&t, &x, tau, 0.01, &[12_000], LagStart::Settled);
+        for start in [0, 8000, 12_000] {
+            for i in start + 500..start + 4000 {
+                assert!((y[i] - steady(t[i])).abs() < 1e-4, "{i}: {} for {}", y[i], steady(t[i]));
+            }
+        }
+        let y = lagged(&t, &x, tau, 0.01, &[12_000], LagStart::Zero);
+        assert!(y[0] == 0.0 && y[8000] == 0.0 && y[12_000] == 0.0);
+        assert!((y[12_600] - steady(t[12_600])).abs() < 1e-4);
     }
 }
