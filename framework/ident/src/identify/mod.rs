@@ -409,13 +409,16 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     friction_confound::resplit_on_held_out(&model, &mut selection, p, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
-    let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec };
+    let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec.clone() };
     // A named delay read again as a transport delay behind a lag (see `lag`), in the models
-    // causes were judged against too.
+    // causes were judged against too; the other causes judged again beside it, as the selection
+    // judged them (`select::prune`): one that made up for a pure delay's misfit leaves.
     let spec = match lag::behind_named_delay(&model, &spec, p) {
         Some(lagged) => {
             selection.chosen.iter_mut().filter_map(|c| c.against.as_mut()).for_each(|a| *a = lag::with_lag_of(&model, &lagged, a));
-            lagged
+            selection.spec = lagged;
+            select::prune(&model, p, &mut selection, &name);
+            if selection.chosen.is_empty() { base.clone() } else { selection.spec.clone() }
         }
         None => spec,
     };
