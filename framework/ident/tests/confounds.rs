@@ -119,11 +119,14 @@ fn a_viscous_friction_taken_by_a_nearly_straight_arctan_is_reported_confounded()
 /// the relevance threshold, and the report said "the data cannot tell these apart ... the
 /// held-out part did not decide it". That record's damping, proposed by BIC, is named now for
 /// what its term carries (2.8 times the floor); the sentence is checked on the blind seed 10's
-/// 094 (a loop and a dead zone, no viscous friction hidden), where a damping the training part
-/// did not propose gains significantly and negligibly on the held-out part alone.
+/// 032 (a cubic on a 2e-6 rad encoder, no viscous friction hidden), where a damping gains
+/// significantly and negligibly on the held-out part alone (encompassing t = 9.0). The seed's
+/// 094 (a loop and a dead zone) served until the consistency rule weighed the held-out parts by
+/// what is left there (`significance::MOST_BY_EXCESS`): its dead zone is then named first, and
+/// the damping is no longer tried beside the arctan.
 #[test]
 fn a_friction_confound_says_what_the_held_out_part_said() {
-    let (case, _) = jointctl_blind_gen::suite_plan(10).into_iter().find(|s| s.name == "094_hyst-deadzone_plain").unwrap().generate().unwrap();
+    let (case, _) = jointctl_blind_gen::suite_plan(10).into_iter().find(|s| s.name == "032_stiff_linear2e-6").unwrap().generate().unwrap();
     let report = identify(&through_the_reader::blind_case(&case, "confound"), &IdentifyOptions::default()).unwrap();
     let confound = report.confounded.iter().find(|c| c.effect == "coulomb_friction" && c.alternative == "viscous_friction").expect("the arctan confounded with a viscous friction");
     let viscous_negligible = report.negligible.iter().any(|n| n.effect == "viscous_friction");
