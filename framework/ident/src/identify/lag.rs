@@ -12,7 +12,7 @@
 use jointctl_models::effect::Effect;
 
 use super::causes::{delay_unit, lag_share_parameter};
-use super::design::{Model, Spec};
+use super::design::{Model, Spec, Term};
 use super::numeric::refine_log;
 use super::parallel::parallel_map;
 use super::prepare::Prepared;
@@ -34,14 +34,13 @@ const REACH: f64 = 0.8;
 /// is then integrated across the decimation step, and the held-out error says whether that
 /// holds).
 pub(crate) fn behind_named_delay(model: &Model, spec: &Spec, p: &Prepared) -> Option<Spec> {
-    let t = spec.terms.iter().position(|term| model.causes[term.cause].effect() == Some(Effect::TimeDelay))?;
+    let t = spec.terms.iter().position(|term| is_delay(model, term))?;
     let pure_s = *spec.terms[t].params.first()?;
     // On a slow log too: device D's 20 Hz bins (the blind generator's seed 1) read their delay
     // with the full-rate variants with a lag (85.0 +- 1.2 ms for 86.4-86.9; 77.0 as a pure
     // delay), the lag itself shorter (32.9 +- 4.4 ms for 43-44 +- 2-3). A bin's mean and a lag
     // commute in continuous time, but the lag here runs on the means as if the torque were a
     // line between them, 50 ms apart (1.25 tau there): a likely cause, not tested.
-
     if !(pure_s > 0.0) {
         return None;
     }
@@ -82,10 +81,14 @@ pub(crate) fn behind_named_delay(model: &Model, spec: &Spec, p: &Prepared) -> Op
 /// `other` (a model a cause was judged against) with its delay read as in `lagged`: a gain
 /// reported against the model as it was before the lag would credit the cause with the lag's.
 pub(crate) fn with_lag_of(model: &Model, lagged: &Spec, other: &Spec) -> Spec {
-    let is_delay = |term: &super::design::Term| model.causes[term.cause].effect() == Some(Effect::TimeDelay);
     let mut out = other.clone();
-    if let (Some(from), Some(to)) = (lagged.terms.iter().find(|t| is_delay(t)), out.terms.iter_mut().find(|t| is_delay(t))) {
+    if let (Some(from), Some(to)) = (lagged.terms.iter().find(|t| is_delay(model, t)), out.terms.iter_mut().find(|t| is_delay(model, t))) {
         *to = from.clone();
     }
     out
+}
+
+/// Whether `term` is a time delay.
+fn is_delay(model: &Model, term: &Term) -> bool {
+    model.causes[term.cause].effect() == Some(Effect::TimeDelay)
 }

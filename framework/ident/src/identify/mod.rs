@@ -409,19 +409,15 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     friction_confound::resplit_on_held_out(&model, &mut selection, p, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
-    let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec.clone() };
     // A named delay read again as a transport delay behind a lag (see `lag`), in the models
     // causes were judged against too; the other causes judged again beside it, as the selection
     // judged them (`select::prune`): one that made up for a pure delay's misfit leaves.
-    let spec = match lag::behind_named_delay(&model, &spec, p) {
-        Some(lagged) => {
-            selection.chosen.iter_mut().filter_map(|c| c.against.as_mut()).for_each(|a| *a = lag::with_lag_of(&model, &lagged, a));
-            selection.spec = lagged;
-            select::prune(&model, p, &mut selection, &name);
-            if selection.chosen.is_empty() { base.clone() } else { selection.spec.clone() }
-        }
-        None => spec,
-    };
+    if let Some(lagged) = (!selection.chosen.is_empty()).then(|| lag::behind_named_delay(&model, &selection.spec, p)).flatten() {
+        selection.chosen.iter_mut().filter_map(|c| c.against.as_mut()).for_each(|a| *a = lag::with_lag_of(&model, &lagged, a));
+        selection.spec = lagged;
+        select::prune(&model, p, &mut selection, &name);
+    }
+    let spec = if selection.chosen.is_empty() { base.clone() } else { selection.spec.clone() };
     let after = select::held_out_errors(&model, &spec, p).ok_or(IdentifyError::Degenerate { model: "extended" })?;
     let fit = &after.fit;
     let rmse_after = select::rmse(&after.errors);
