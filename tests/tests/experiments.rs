@@ -170,7 +170,7 @@ fn hysteresis_and_dead_zone_in_the_plant_show_in_the_recording() {
     let plain = loop_area(&record_with(&base, "q4", None, 0.0));
     let mut with = base.clone();
     let sim = with.config.joints[2].sim.as_mut().unwrap();
-    sim.effects.hysteresis = Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 1.5, shape: 1.0 });
+    sim.effects.hysteresis = Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 1.5, shape: 1.0, presliding_damping_s: 0.0 });
     sim.effects.dead_zone_rad = 0.01;
     let samples = record_with(&with, "q4", None, 0.0);
     let area = loop_area(&samples);

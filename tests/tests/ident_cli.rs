@@ -342,7 +342,7 @@ fn hysteresis_and_dead_zone_in_the_plant_come_without_a_delay_or_a_vibration() {
     let hysteresis = q4_recording(
         |e| {
             e.torque_noise_nm = 0.01;
-            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2, shape: 1.0 });
+            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2, shape: 1.0, presliding_damping_s: 0.0 });
         },
         100.0,
     );
@@ -367,7 +367,7 @@ fn a_sharper_hysteresis_in_the_plant_is_named_with_its_shape() {
     let report = q4_recording(
         |e| {
             e.torque_noise_nm = 0.01;
-            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2, shape: 3.0 });
+            e.hysteresis = Some(DahlConfig { sigma_nm_per_rad: 300.0, limit_nm: 1.2, shape: 3.0, presliding_damping_s: 0.0 });
         },
         100.0,
     );

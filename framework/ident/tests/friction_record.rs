@@ -95,13 +95,17 @@ fn a_friction_records_lag_is_reported_with_the_friction_not_as_a_time_delay() {
     // records (063-067 on seeds 1-4: a `time_delay` named on 7 of 20, three of them clean or
     // beside the hidden cause): the torque follows a joint's motion through the friction's sign
     // at each reversal, where the bristles' own transition (their stiffness and damping) acts,
-    // so a lag between the channels is not told apart from the friction's dynamics.
+    // so a lag between the channels is not told apart from the friction's dynamics. A lead
+    // beside the pre-sliding loop is read again as the loop's damping (`identify::presliding`):
+    // this record's (LuGre's sigma1 / sigma0, 2.2 ms) reads 2 ms, reported with the pre-sliding.
     let b = 0.4;
     let report = identify(&lugre_record(b, 0x51ed_270b_a1c3_9f47), &IdentifyOptions::default()).unwrap();
     let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
     let no_spring = report.no_spring.as_ref().expect("read as a friction record");
     assert_eq!(named, ["viscous_friction"], "{no_spring:?}");
-    assert!(no_spring.lag.contains_key("delay_s") && no_spring.note.contains("lag"), "{no_spring:?}");
+    let as_lag = no_spring.lag.contains_key("delay_s") && no_spring.note.contains("lag");
+    let as_damping = no_spring.presliding.get("presliding_damping_s").is_some_and(|d| *d > 0.5 * 2.0 / 900.0 && *d < 2.0 * 2.0 / 900.0);
+    assert!(as_lag || as_damping, "{no_spring:?}");
 }
 
 #[test]

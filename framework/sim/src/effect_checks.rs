@@ -46,7 +46,7 @@ pub fn check_effects(fx: &EffectsConfig) -> Result<(), (String, String)> {
         values.extend([("arctan_friction.k_a_nm", f.k_a_nm, true), ("arctan_friction.k_b_s_per_rad", f.k_b_s_per_rad, true)]);
     }
     if let Some(h) = fx.hysteresis {
-        values.extend([("hysteresis.sigma_nm_per_rad", h.sigma_nm_per_rad, true), ("hysteresis.limit_nm", h.limit_nm, true)]);
+        values.extend([("hysteresis.sigma_nm_per_rad", h.sigma_nm_per_rad, true), ("hysteresis.limit_nm", h.limit_nm, true), ("hysteresis.presliding_damping_s", h.presliding_damping_s, true)]);
         if !(h.shape >= 1.0 && h.shape <= jointctl_models::extension::MAX_LOOP_SHAPE) {
             return Err(("hysteresis.shape".into(), format!("must be between 1 and {}, got {}", jointctl_models::extension::MAX_LOOP_SHAPE, h.shape)));
         }

@@ -61,6 +61,7 @@ fn interpolate(a: &EffectsConfig, b: &EffectsConfig, w: f64) -> EffectsConfig {
             sigma_nm_per_rad: lerp(x.sigma_nm_per_rad, y.sigma_nm_per_rad),
             limit_nm: lerp(x.limit_nm, y.limit_nm),
             shape: lerp(x.shape, y.shape),
+            presliding_damping_s: lerp(x.presliding_damping_s, y.presliding_damping_s),
         })
         .filter(|h| h.limit_nm > 0.0);
     out.vibration = pair(a.vibration, b.vibration, |m| jointctl_config::VibrationConfig { gain: 0.0, ..m }).map(|(x, y)| jointctl_config::VibrationConfig {
@@ -82,7 +83,7 @@ mod tests {
     use jointctl_config::DahlConfig;
 
     fn loop_at(pivot_mm: f64, limit_nm: f64) -> PivotEffectsConfig {
-        PivotEffectsConfig { pivot_mm, effects: EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 100.0 * limit_nm, limit_nm, shape: 1.0 }), ..Default::default() }, effects_per_dof: Vec::new() }
+        PivotEffectsConfig { pivot_mm, effects: EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 100.0 * limit_nm, limit_nm, shape: 1.0, presliding_damping_s: 0.0 }), ..Default::default() }, effects_per_dof: Vec::new() }
     }
 
     #[test]

@@ -364,9 +364,10 @@ impl Unit {
                 // in place of z/fc (Bouc-Wen with beta = 1, gamma = 0; the same at n = 1).
                 let v = rate[i];
                 let r = st.dahl_z / h.limit_nm;
-                st.dahl_z += h.sigma_nm_per_rad * (1.0 - r * r.abs().powf(h.shape - 1.0) * v.signum()) * v * dt;
-                st.dahl_z = st.dahl_z.clamp(-h.limit_nm, h.limit_nm);
-                t += st.dahl_z;
+                let dz_dt = h.sigma_nm_per_rad * (1.0 - r * r.abs().powf(h.shape - 1.0) * v.signum()) * v;
+                st.dahl_z = (st.dahl_z + dz_dt * dt).clamp(-h.limit_nm, h.limit_nm);
+                // LuGre's bristle damping, sigma1 dz/dt with sigma1 = sigma tau_d.
+                t += st.dahl_z + h.presliding_damping_s * dz_dt;
             }
             self.torque[i] = t;
             // The torque sensor: a structural mode rings on changes of the torque.

@@ -193,10 +193,10 @@ fn plant_effects_that_are_not_numbers_or_not_physical_are_refused_by_field() {
     let (field, message) = check_effects(&negative).unwrap_err();
     assert_eq!(field, "arctan_friction.k_a_nm");
     assert_eq!(message, "must be a finite number >= 0, got -0.1");
-    let zero_limit = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.0, shape: 1.0 }), ..EffectsConfig::default() };
+    let zero_limit = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.0, shape: 1.0, presliding_damping_s: 0.0 }), ..EffectsConfig::default() };
     assert_eq!(check_effects(&zero_limit).unwrap_err().0, "hysteresis.limit_nm");
     for shape in [0.5, 9.0, f64::NAN] {
-        let loop_shape = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.5, shape }), ..EffectsConfig::default() };
+        let loop_shape = EffectsConfig { hysteresis: Some(jointctl_config::DahlConfig { sigma_nm_per_rad: 100.0, limit_nm: 0.5, shape, presliding_damping_s: 0.0 }), ..EffectsConfig::default() };
         assert_eq!(check_effects(&loop_shape).unwrap_err().0, "hysteresis.shape", "shape {shape}");
     }
     let wide_ramp = EffectsConfig { dead_zone_rad: 0.002, dead_zone_ramp_rad: 0.003, ..EffectsConfig::default() };
@@ -374,7 +374,7 @@ fn effects_by_pivot_follow_the_pivot_drive() {
 fn a_loop_that_fades_with_the_pivot_scales_its_state() {
     use jointctl_config::{DahlConfig, PivotEffectsConfig};
     let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
-    let with_loop = EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 0.4, shape: 1.0 }), ..Default::default() };
+    let with_loop = EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 0.4, shape: 1.0, presliding_damping_s: 0.0 }), ..Default::default() };
     let settings = vec![
         PivotEffectsConfig { pivot_mm: 10.0, effects: with_loop, effects_per_dof: Vec::new() },
         PivotEffectsConfig { pivot_mm: 20.0, effects: EffectsConfig::default(), effects_per_dof: Vec::new() },
@@ -403,4 +403,33 @@ fn a_loop_that_fades_with_the_pivot_scales_its_state() {
     // A unit without a pivot cannot take effects by setting.
     let mut rigid = Unit::new(vec!["q".into()], vec![0], vec![vec![1.0]], vec![Element::Linear(0.0)], None, vec![fixed], EffectsConfig::default());
     assert_eq!(rigid.set_effects_by_pivot(settings).unwrap_err().0, "effects_by_pivot");
+}
+
+/// A loop with a pre-sliding damping adds `tau_d dz/dt` to its state's torque (LuGre's
+/// `sigma1 dz/dt`, `sigma1 = sigma tau_d`): largest while the state moves, none at its limit.
+#[test]
+fn a_loops_presliding_damping_adds_its_time_constant_times_the_states_rate() {
+    use jointctl_config::DahlConfig;
+    let fixed = EnvironmentConfig::Fixed { position_rad: 0.0 };
+    let loop_of = |presliding_damping_s: f64| EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 500.0, limit_nm: 0.4, shape: 1.0, presliding_damping_s }), ..Default::default() };
+    let unit = |fx| {
+        let mut u = Unit::new(vec!["q".into()], vec![0], vec![vec![1.0]], vec![Element::Linear(0.0)], None, vec![fixed.clone()], fx);
+        u.start(&[0.0]);
+        u
+    };
+    let (mut bare, mut damped) = (unit(loop_of(0.0)), unit(loop_of(0.01)));
+    let (dt, mut loads, mut rng) = (0.0005, [0.0; 1], SplitMix64(1));
+    // Deflecting at 1 rad/s from rest: dz/dt = sigma (1 - z / limit) v at the state the step
+    // starts from, 500 Nm/s at first.
+    let mut z = 0.0;
+    for k in 1..=400 {
+        bare.step(&[k as f64 * 5e-4], &[1.0], &mut loads, dt, &mut rng);
+        damped.step(&[k as f64 * 5e-4], &[1.0], &mut loads, dt, &mut rng);
+        let expected = 0.01 * 500.0 * (1.0 - z / 0.4);
+        z = bare.torque[0];
+        assert!((damped.torque[0] - z - expected).abs() < 1e-9, "step {k}: {} vs {}", damped.torque[0] - z, expected);
+    }
+    // At the limit the damping is gone.
+    assert!((damped.torque[0] - bare.torque[0]).abs() < 1e-3);
+    assert!(jointctl_sim::effect_checks::check_effects(&loop_of(-0.01)).is_err_and(|e| e.0 == "hysteresis.presliding_damping_s"));
 }

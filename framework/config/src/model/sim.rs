@@ -244,6 +244,10 @@ pub enum ElementSimConfig {
     },
 }
 
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
 fn one() -> f64 {
     1.0
 }
@@ -382,6 +386,11 @@ pub struct DahlConfig {
     /// gamma = 0; the observer's `model_extension.hysteresis.shape` is the same exponent).
     #[serde(default = "one")]
     pub shape: f64,
+    /// The pre-sliding damping's time constant `tau_d` [s] (0, the default: none): the loop adds
+    /// `tau_d dz/dt`, LuGre's `sigma1 dz/dt` with `sigma1 = sigma tau_d` (the observer's
+    /// `model_extension.hysteresis.presliding_damping_s` is the same constant).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub presliding_damping_s: f64,
 }
 
 /// A structural vibration mode.

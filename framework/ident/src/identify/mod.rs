@@ -36,6 +36,7 @@ mod lag;
 mod numeric;
 mod parallel;
 mod part;
+mod presliding;
 mod registered;
 mod rest_line;
 pub use numeric::format_value;
@@ -407,6 +408,8 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     };
     let held_out_said = friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
     friction_confound::resplit_on_held_out(&model, &mut selection, p, &name);
+    // A lead named beside a loop read again as the loop's pre-sliding damping (see `presliding`).
+    presliding::instead_of_a_lead(&model, &mut selection, p, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     // A named delay read again as a transport delay behind a lag (see `lag`), in the models

@@ -19,7 +19,7 @@ mod evaluator;
 mod pivot;
 mod spec;
 
-pub use self::evaluator::{ModelExtension, dead_band_step, loop_step};
+pub use self::evaluator::{ModelExtension, dead_band_step, loop_rate, loop_step};
 pub use self::spec::{DahlSpec, ExtensionError, ExtensionSpec, FrictionSpec, MAX_LOOP_SHAPE, PivotTerms, RATE_STEPS, Terms};
 
 #[cfg(test)]

@@ -12,10 +12,10 @@ impl Terms {
     /// ```
     /// use jointctl_models::extension::{DahlSpec, Terms};
     /// let a = Terms { cubic_nm_per_rad3: 100.0, ..Default::default() };
-    /// let b = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4, input_dead_band_rad: 0.0, shape: 1.0 }), ..Default::default() };
+    /// let b = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }), ..Default::default() };
     /// let mid = a.blend(&b, 0.5);
     /// assert_eq!(mid.cubic_nm_per_rad3, 200.0);
-    /// assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.2, input_dead_band_rad: 0.0, shape: 1.0 }));
+    /// assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.2, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }));
     /// ```
     pub fn blend(&self, other: &Terms, w: f64) -> Terms {
         let mix = |a: f64, b: f64| a + (b - a) * w;
@@ -29,8 +29,8 @@ impl Terms {
         let hysteresis = match (self.hysteresis, other.hysteresis) {
             (None, None) => None,
             (a, b) => {
-                let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0, shape: 1.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0, shape: 1.0 }) }));
-                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm), input_dead_band_rad: mix(a.input_dead_band_rad, b.input_dead_band_rad), shape: mix(a.shape, b.shape) }).filter(|h| h.limit_nm > 0.0)
+                let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }) }));
+                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm), input_dead_band_rad: mix(a.input_dead_band_rad, b.input_dead_band_rad), shape: mix(a.shape, b.shape), presliding_damping_s: mix(a.presliding_damping_s, b.presliding_damping_s) }).filter(|h| h.limit_nm > 0.0)
             }
         };
         Terms {

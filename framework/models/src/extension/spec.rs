@@ -38,6 +38,12 @@ pub struct DahlSpec {
     /// with `beta = 1`, `gamma = 0`; a larger `n` turns sharper at the limit.
     #[serde(default = "one")]
     pub shape: f64,
+    /// The pre-sliding damping's time constant `tau_d` [s] (0, the default: none): the loop's
+    /// torque is `F_c (u + tau_d du/dt)`, LuGre's `sigma0 z + sigma1 dz/dt` with `sigma1 =
+    /// sigma tau_d`, a damping of the bristles while they deflect that stops once they slide
+    /// (the rate `du/dt` from the loop's law at the deflection rate, [`super::loop_rate`]).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub presliding_damping_s: f64,
 }
 
 /// The terms of the sum in the module docs, without the rate estimate's settings: what changes
@@ -144,6 +150,11 @@ impl Terms {
         {
             return bad("hysteresis.shape", format!("must be between 1 and {MAX_LOOP_SHAPE}, got {}", h.shape));
         }
+        if let Some(h) = self.hysteresis
+            && !(h.presliding_damping_s >= 0.0 && h.presliding_damping_s.is_finite())
+        {
+            return bad("hysteresis.presliding_damping_s", format!("must be >= 0, got {}", h.presliding_damping_s));
+        }
         Ok(())
     }
 }
@@ -249,6 +260,10 @@ impl ExtensionSpec {
 /// [`ExtensionSpec::rate_resolution_rad`]). Assumption: 4, so that one count more or less
 /// changes the slope by a quarter at most.
 pub const RATE_STEPS: f64 = 4.0;
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
 
 fn one() -> f64 {
     1.0

@@ -5,7 +5,7 @@ use super::*;
 
 #[test]
 fn the_dahl_state_follows_identifys_per_step_solution_and_resets() {
-    let mut e = ModelExtension::new(ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 1.0 }), ..Default::default() }).unwrap();
+    let mut e = ModelExtension::new(ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }), ..Default::default() }).unwrap();
     // Up by far more than lambda (4 mrad): the limit; back down: the other limit.
     assert_eq!(e.dahl_torque(0.0), 0.0);
     assert!((e.dahl_torque(0.1) - 1.2).abs() < 1e-9);
@@ -18,11 +18,42 @@ fn the_dahl_state_follows_identifys_per_step_solution_and_resets() {
     assert_eq!(e.dahl_torque(0.3), 0.0, "a reset state starts at zero, where it is");
 }
 
+/// The pre-sliding damping is `F_c tau_d du/dt` at the state the loop's step left, whose rate
+/// is the loop's law at the deflection rate (what `identify` fits: `F_c (u + tau_d du/dt)`):
+/// against the state's own finite differences along a sine, for Dahl's shape and shape 3; a
+/// negative time constant is refused by field.
+#[test]
+fn the_presliding_damping_is_the_loops_state_rate_times_its_time_constant() {
+    for shape in [1.0, 3.0] {
+        let spec = DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape, presliding_damping_s: 0.015 };
+        let mut e = ModelExtension::new(ExtensionSpec { hysteresis: Some(spec), ..Default::default() }).unwrap();
+        let (dt, mut before) = (1e-4, 0.0);
+        for k in 1..=20_000 {
+            let t = k as f64 * dt;
+            let (phi, w) = (0.02 * (3.0 * t).sin(), 0.06 * (3.0 * t).cos());
+            let u = e.dahl_torque(phi) / 1.2;
+            let damping = e.presliding_damping_torque(w);
+            // The state's rate from its steps (the step just taken and the next one, centred).
+            let next = loop_step(u, 0.02 * (3.0 * (t + dt)).sin() - phi, 1.2 / 300.0, shape);
+            let differenced = (next - before) / (2.0 * dt);
+            if k > 1 {
+                assert!((damping - 1.2 * 0.015 * differenced).abs() < 2e-3, "shape {shape}, t {t}: {damping} vs {}", 1.2 * 0.015 * differenced);
+            }
+            before = u;
+        }
+    }
+    let bad = ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: -0.01 }), ..Default::default() };
+    assert_eq!(ModelExtension::new(bad).unwrap_err().field, "hysteresis.presliding_damping_s");
+    // Without a damping the term is zero and is not written out.
+    let none = DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 };
+    assert!(!serde_json::to_string(&none).unwrap().contains("presliding_damping_s"));
+}
+
 #[test]
 fn a_shaped_loop_steps_as_identifys_loop_step() {
     // Shape 2 from zero, one lambda up: tanh(1) of the limit; then down past zero to the other
     // side, each step as `loop_step` takes it.
-    let spec = DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 2.0 };
+    let spec = DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 2.0, presliding_damping_s: 0.0 };
     let mut e = ModelExtension::new(ExtensionSpec { hysteresis: Some(spec), ..Default::default() }).unwrap();
     let lambda = 1.2 / 300.0;
     assert_eq!(e.dahl_torque(0.0), 0.0);
@@ -45,7 +76,7 @@ fn a_reading_that_flickers_inside_the_input_dead_band_leaves_the_dahl_state_at_i
     // A stiff loop (lambda 1.3 mrad) read by a 2 um encoder that flickers one count: each
     // flicker steps the state back by 2 s / lambda and the next step returns almost nothing
     // near the limit, so without a band the flicker walks the state towards zero.
-    let spec = |band: f64| ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 1800.0, limit_nm: 2.4, input_dead_band_rad: band, shape: 1.0 }), ..Default::default() };
+    let spec = |band: f64| ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: 1800.0, limit_nm: 2.4, input_dead_band_rad: band, shape: 1.0, presliding_damping_s: 0.0 }), ..Default::default() };
     let (mut bare, mut banded) = (ModelExtension::new(spec(0.0)).unwrap(), ModelExtension::new(spec(8e-6)).unwrap());
     // Loaded to the limit (20 mrad, 15 lambda), then the reading flickers between two counts.
     let (mut a, mut b) = (0.0, 0.0);
@@ -143,7 +174,7 @@ fn each_term_is_the_one_identify_fits() {
 /// sample; between two it weighs each parameter linearly; bad settings are errors at their field.
 #[test]
 fn terms_by_pivot_are_each_settings_own_and_weighted_between() {
-    let a = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4, input_dead_band_rad: 0.0, shape: 1.0 }), friction: Some(FrictionSpec { ka_nm: 0.1, kb_s_per_rad: 50.0 }), ..Default::default() };
+    let a = Terms { cubic_nm_per_rad3: 300.0, hysteresis: Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }), friction: Some(FrictionSpec { ka_nm: 0.1, kb_s_per_rad: 50.0 }), ..Default::default() };
     let b = Terms { torque_scale: 0.95, dead_zone_rad: 0.002, viscous_nms_per_rad: 0.3, torque_offset_nm: -0.1, ..Default::default() };
     let flat = |t: Terms| ExtensionSpec {
         torque_scale: t.torque_scale,
@@ -175,7 +206,7 @@ fn terms_by_pivot_are_each_settings_own_and_weighted_between() {
     assert_eq!(run(by_pivot.clone(), 20.0), run(flat(a.blend(&b, 0.4)), 20.0));
     let mid = a.blend(&b, 0.4);
     assert!((mid.cubic_nm_per_rad3 - 180.0).abs() < 1e-9 && (mid.dead_zone_rad - 0.0008).abs() < 1e-12);
-    assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 * 0.6, input_dead_band_rad: 0.0, shape: 1.0 }));
+    assert_eq!(mid.hysteresis, Some(DahlSpec { sigma_nm_per_rad: 200.0, limit_nm: 0.4 * 0.6, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }));
 
     let err = |spec: ExtensionSpec| ModelExtension::new(spec).unwrap_err();
     let both = ExtensionSpec { cubic_nm_per_rad3: 1.0, ..by_pivot.clone() };
@@ -186,7 +217,7 @@ fn terms_by_pivot_are_each_settings_own_and_weighted_between() {
     assert_eq!(e.field, "by_pivot[1].pivot_mm");
     assert!(e.message.contains("increasing"), "{e}");
     let mut bad = by_pivot;
-    bad.by_pivot[1].terms.hysteresis = Some(DahlSpec { sigma_nm_per_rad: -1.0, limit_nm: 0.2, input_dead_band_rad: 0.0, shape: 1.0 });
+    bad.by_pivot[1].terms.hysteresis = Some(DahlSpec { sigma_nm_per_rad: -1.0, limit_nm: 0.2, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 });
     assert_eq!(err(bad).field, "by_pivot[1].terms.hysteresis");
 }
 
@@ -203,7 +234,7 @@ fn terms_by_pivot_read_from_yaml_like_json() {
 /// static terms at once; with no filter, the swing is there at once.
 #[test]
 fn the_dynamic_terms_are_low_passed_and_the_static_ones_are_not() {
-    let hysteresis = Some(DahlSpec { sigma_nm_per_rad: 1e6, limit_nm: 1.0, input_dead_band_rad: 0.0, shape: 1.0 });
+    let hysteresis = Some(DahlSpec { sigma_nm_per_rad: 1e6, limit_nm: 1.0, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 });
     let run = |filter_s: f64| {
         let mut e = ModelExtension::new(ExtensionSpec { hysteresis, torque_offset_nm: 0.5, dynamic_terms_filter_s: filter_s, ..Default::default() }).unwrap();
         // Up (u = +1, settled), then one step down (u = -1 at once: sigma is huge).

@@ -97,6 +97,22 @@ pub fn dead_band(d: &[f64], width_rad: f64) -> Vec<f64> {
 /// fraction of a count, which pass every count.
 const DEAD_BAND_IN_SCATTER: [f64; 5] = [0.0, 1.0, 2.0, 4.0, 8.0];
 
+/// The pre-sliding damping's time constants tried [s]: none, then from 2 to 50 ms (an
+/// assumption: LuGre fits of joints and drives put `sigma1 / sigma0` between a few and a few
+/// tens of milliseconds). The loop's torque is then `F_c (u + tau_d du/dt)`: LuGre's
+/// `sigma0 z + sigma1 dz/dt` (Canudas de Wit et al. 1995) with `sigma1 = sigma tau_d`, the
+/// bristles' damping, which acts while they deflect and not once they slide. Not searched with
+/// the loop: tried in place of a lead named beside it (see `identify::presliding`).
+pub(crate) fn presliding_damping_parameter() -> Parameter {
+    Parameter { name: "presliding_damping_s".into(), grid: PRESLIDING_DAMPING_S.to_vec(), refine: Refine::Nested }
+}
+
+const PRESLIDING_DAMPING_S: [f64; 6] = [0.0, 0.002, 0.005, 0.01, 0.02, 0.05];
+
+/// The index of the pre-sliding damping among the loop's parameters (after the scale, the dead
+/// band and the shape, which the search always sets).
+pub(crate) const PRESLIDING_DAMPING_AT: usize = 3;
+
 /// The smallest deflection scale tried: a thousandth of the amplitude, and no less than one
 /// step of the deflection reading nor than a quarter of the log's first step away from a turn
 /// ([`crate::identify::Excitation::turn_step_rad`]) (at most a tenth of the largest scale: below
@@ -165,6 +181,13 @@ impl CandidateCause for Hysteresis {
             }
             unit.extend_from_slice(&loop_unit(&history, p[0], shape(p))[before.len()..]);
         }
+        let damping_s = presliding_damping_s(p);
+        if damping_s > 0.0 {
+            // `u + tau_d du/dt`, the state's rate from the loop's law at the rate reading.
+            for (u, v) in unit.iter_mut().zip(s.velocity_rad_per_s) {
+                *u += damping_s * jointctl_models::extension::loop_rate(*u, *v, p[0], shape(p));
+            }
+        }
         vec![unit]
     }
     fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
@@ -179,12 +202,18 @@ impl CandidateCause for Hysteresis {
         if shape(p) != 1.0 {
             out.insert("shape".into(), shape(p));
         }
+        if presliding_damping_s(p) > 0.0 {
+            out.insert("presliding_damping_s".into(), presliding_damping_s(p));
+        }
         out
     }
     fn fragments(&self, p: &[f64], c: &[f64]) -> Fragments {
         let mut h = json!({"sigma_nm_per_rad": c[0] / p[0], "limit_nm": c[0]});
         if shape(p) != 1.0 {
             h["shape"] = json!(shape(p));
+        }
+        if presliding_damping_s(p) > 0.0 {
+            h["presliding_damping_s"] = json!(presliding_damping_s(p));
         }
         // The band filters the reading the observer sees; the simulated plant's loop is driven
         // by its true deflection and needs none.
@@ -200,6 +229,11 @@ impl CandidateCause for Hysteresis {
 /// The shape exponent of parameters `p` (1 when the search left it out).
 fn shape(p: &[f64]) -> f64 {
     p.get(2).copied().unwrap_or(1.0)
+}
+
+/// The pre-sliding damping's time constant of parameters `p` [s] (0 when none was taken).
+fn presliding_damping_s(p: &[f64]) -> f64 {
+    p.get(PRESLIDING_DAMPING_AT).copied().unwrap_or(0.0)
 }
 
 #[cfg(test)]

@@ -44,6 +44,7 @@ pub use viscous_friction::ViscousFriction;
 pub use input_set::InputSet;
 pub use refine::Refine;
 pub use reversals::turn_step_rad;
+pub(crate) use hysteresis::{PRESLIDING_DAMPING_AT, presliding_damping_parameter};
 
 /// The built-in vocabulary: a cause for each model effect, in [`Effect::ALL`]'s order (the order
 /// candidates are tried; ties go to the earlier one), and last the sensor offset's drift, which

@@ -50,17 +50,7 @@ pub fn loop_step(u: f64, step_rad: f64, lambda_rad: f64, shape: f64) -> f64 {
     let integrated = xi.min(MAX_SUBSTEPS as f64 * SUBSTEP_IN_SCALES);
     let substeps = ((integrated / SUBSTEP_IN_SCALES).ceil() as usize).clamp(1, MAX_SUBSTEPS);
     let h = integrated / substeps as f64;
-    // `w |w|^(shape - 1)` by multiplication for the whole shapes identify searches (2, 3, 4):
-    // `powf` here was about a tenth of identify's CPU time on the 100 000-sample benchmark record.
-    let f = |w: f64| {
-        let odd_power = match shape {
-            2.0 => w * w.abs(),
-            3.0 => w * w * w,
-            4.0 => w * w * w * w.abs(),
-            _ => w * w.abs().powf(shape - 1.0),
-        };
-        1.0 - odd_power
-    };
+    let f = |w: f64| 1.0 - odd_power(w, shape);
     let mut w = s * u;
     for _ in 0..substeps {
         let k1 = f(w);
@@ -74,6 +64,37 @@ pub fn loop_step(u: f64, step_rad: f64, lambda_rad: f64, shape: f64) -> f64 {
         w = 1.0 - (1.0 - w) * (-shape * rest).exp();
     }
     s * w
+}
+
+/// The unit state's rate `du/dt` [1/s] at state `u` and deflection rate `rate_rad_per_s`, from
+/// the loop's law `du/dphi = (1 - sgn(dphi) u |u|^(shape - 1)) / lambda` (see [`loop_step`]):
+/// what a pre-sliding damping multiplies (LuGre's `sigma1 dz/dt`).
+///
+/// ```
+/// use jointctl_models::extension::loop_rate;
+/// // From the middle of the loop the state moves at rate / lambda; at its limit, not at all.
+/// assert!((loop_rate(0.0, 0.2, 0.1, 1.0) - 2.0).abs() < 1e-12);
+/// assert_eq!(loop_rate(1.0, 0.2, 0.1, 3.0), 0.0);
+/// // Just after a turn it moves at twice that.
+/// assert!((loop_rate(1.0, -0.2, 0.1, 1.0) + 4.0).abs() < 1e-12);
+/// ```
+pub fn loop_rate(u: f64, rate_rad_per_s: f64, lambda_rad: f64, shape: f64) -> f64 {
+    if rate_rad_per_s == 0.0 {
+        return 0.0;
+    }
+    (1.0 - rate_rad_per_s.signum() * odd_power(u, shape)) * rate_rad_per_s / lambda_rad
+}
+
+/// `w |w|^(shape - 1)`, by multiplication for the whole shapes identify searches (1-4): `powf`
+/// here was about a tenth of identify's CPU time on the 100 000-sample benchmark record.
+fn odd_power(w: f64, shape: f64) -> f64 {
+    match shape {
+        1.0 => w,
+        2.0 => w * w.abs(),
+        3.0 => w * w * w,
+        4.0 => w * w * w * w.abs(),
+        _ => w * w.abs().powf(shape - 1.0),
+    }
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use super::spec::{ExtensionError, ExtensionSpec, Terms};
 mod hysteresis_loop;
 mod rate;
 
-pub use hysteresis_loop::loop_step;
+pub use hysteresis_loop::{loop_rate, loop_step};
 
 /// Samples the deflection-rate window holds (at most; fewer when the window is shorter).
 const RATE_CAPACITY: usize = 256;
@@ -139,6 +139,16 @@ impl ModelExtension {
         h.limit_nm * u
     }
 
+    /// The loop's pre-sliding damping at deflection rate `w` [rad/s], at the state
+    /// [`ModelExtension::dahl_torque`] left: `F_c tau_d du/dt` [Nm] (0 without hysteresis or
+    /// damping).
+    pub fn presliding_damping_torque(&self, w: f64) -> f64 {
+        match self.live.hysteresis {
+            Some(h) if h.presliding_damping_s > 0.0 => h.limit_nm * h.presliding_damping_s * loop_rate(self.dahl.0, w, h.limit_nm / h.sigma_nm_per_rad, h.shape),
+            _ => 0.0,
+        }
+    }
+
     /// Eq. 3.5 and viscous friction at rate `w`: `b w + k_a atan(k_b w)` [Nm].
     pub fn friction_torque(&self, w: f64) -> f64 {
         let arctan = self.live.friction.map_or(0.0, |f| f.ka_nm * (f.kb_s_per_rad * w).atan());
@@ -164,6 +174,7 @@ impl ModelExtension {
         let phi_e = self.elastic_deflection(phi);
         let w = self.deflection_rate(t_s, phi);
         let mut dynamic = self.friction_torque(w) + self.dahl_torque(phi);
+        dynamic += self.presliding_damping_torque(w);
         if self.spec.dynamic_terms_filter_s > 0.0 {
             dynamic = match self.filtered {
                 Some((y, t0)) => {
