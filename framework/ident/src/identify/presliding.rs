@@ -7,8 +7,8 @@
 //! already named (`lag`). Searched with every loop (a nested choice on the decimated training
 //! part, kept where the whole model erred less with it on the held-out part), it was taken by
 //! loops without it too: over 2292 generated records it took the cause beside the hidden ones
-//! away on 11 and put one there on 8 (3 of them the blind devices', where it took none away;
-//! one record lost its hidden viscous friction to it).
+//! away on 11 and put one there on 8 (4 of them the blind devices', where it took none away),
+//! and two records lost their hidden viscous friction to it.
 
 use jointctl_models::effect::Effect;
 
