@@ -104,8 +104,7 @@ fn a_loop_alone_gets_no_offset_or_drift() {
 /// The blind generator's record `name` of seed `seed`'s suite (that case alone generated),
 /// through the CSV reader.
 fn blind(seed: u64, name: &str) -> Data {
-    let (case, _) = jointctl_blind_gen::suite_plan(seed).into_iter().find(|s| s.name == name).unwrap().generate().unwrap();
-    through_the_reader::blind_case(&case, &format!("drift-{seed}-{name}"))
+    through_the_reader::suite_record(seed, name)
 }
 
 /// Finding (the blind generator, seed 4's 037): an offset of 1.65 Nm drifting 0.032 Nm/s

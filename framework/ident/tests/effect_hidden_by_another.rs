@@ -74,8 +74,7 @@ fn record(seed: u64, drift: f64) -> jointctl_ident::csv::Data {
 /// The blind generator's record `name` of seed `seed`'s suite (that case alone generated),
 /// through the CSV reader.
 fn blind(seed: u64, name: &str) -> jointctl_ident::csv::Data {
-    let (case, _) = jointctl_blind_gen::suite_plan(seed).into_iter().find(|s| s.name == name).unwrap().generate().unwrap();
-    through_the_reader::blind_case(&case, &format!("hidden-{seed}-{name}"))
+    through_the_reader::suite_record(seed, name)
 }
 
 /// The causes named, less dropouts.

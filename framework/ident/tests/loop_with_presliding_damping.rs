@@ -70,8 +70,7 @@ fn record(seed: u64, sigma1: f64, static_nm: f64) -> jointctl_ident::csv::Data {
 /// The blind generator's record `name` of seed `seed`'s suite (that case alone generated),
 /// through the CSV reader.
 fn blind(seed: u64, name: &str) -> jointctl_ident::csv::Data {
-    let (case, _) = jointctl_blind_gen::suite_plan(seed).into_iter().find(|s| s.name == name).unwrap().generate().unwrap();
-    through_the_reader::blind_case(&case, &format!("presliding-{seed}-{name}"))
+    through_the_reader::suite_record(seed, name)
 }
 
 /// The finding's records (the blind generator's LuGre loops, `sigma1 / sigma0` 9-15 ms): before,

@@ -46,3 +46,10 @@ pub fn try_blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Result<Data
 pub fn blind_case(case: &jointctl_blind_gen::Case, tag: &str) -> Data {
     try_blind_case(case, tag).unwrap()
 }
+
+/// The blind generator's record `name` of seed `seed`'s suite (that case alone generated),
+/// through the CSV reader.
+pub fn suite_record(seed: u64, name: &str) -> Data {
+    let (case, _) = jointctl_blind_gen::suite_plan(seed).into_iter().find(|s| s.name == name).unwrap().generate().unwrap();
+    blind_case(&case, &format!("suite-{seed}-{name}"))
+}
