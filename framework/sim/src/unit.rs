@@ -365,9 +365,13 @@ impl Unit {
                 let v = rate[i];
                 let r = st.dahl_z / h.limit_nm;
                 let dz_dt = h.sigma_nm_per_rad * (1.0 - r * r.abs().powf(h.shape - 1.0) * v.signum()) * v;
+                let z_before = st.dahl_z;
                 st.dahl_z = (st.dahl_z + dz_dt * dt).clamp(-h.limit_nm, h.limit_nm);
-                // LuGre's bristle damping, sigma1 dz/dt with sigma1 = sigma tau_d.
-                t += st.dahl_z + h.presliding_damping_s * dz_dt;
+                // LuGre's bristle damping, sigma1 dz/dt with sigma1 = sigma tau_d, at the step the
+                // state took: a stiff loop's Euler rate overshoots the limit in one step (then
+                // clamped), and that rate was a spike the state never made.
+                let taken_dz_dt = if dt > 0.0 { (st.dahl_z - z_before) / dt } else { 0.0 };
+                t += st.dahl_z + h.presliding_damping_s * taken_dz_dt;
             }
             self.torque[i] = t;
             // The torque sensor: a structural mode rings on changes of the torque.

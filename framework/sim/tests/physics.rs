@@ -431,5 +431,17 @@ fn a_loops_presliding_damping_adds_its_time_constant_times_the_states_rate() {
     }
     // At the limit the damping is gone.
     assert!((damped.torque[0] - bare.torque[0]).abs() < 1e-3);
+    // A stiff loop crosses from limit to limit in one step, clamped: the damping is the step the
+    // state took (0.8 Nm in 0.5 ms), not the Euler rate that overshot it (2 sigma v, 25 times more).
+    let stiff = |presliding_damping_s: f64| EffectsConfig { hysteresis: Some(DahlConfig { sigma_nm_per_rad: 20_000.0, limit_nm: 0.4, shape: 1.0, presliding_damping_s }), ..Default::default() };
+    let (mut bare, mut damped) = (unit(stiff(0.0)), unit(stiff(0.01)));
+    for k in 1..=4 {
+        bare.step(&[k as f64 * 5e-4], &[1.0], &mut loads, dt, &mut rng);
+        damped.step(&[k as f64 * 5e-4], &[1.0], &mut loads, dt, &mut rng);
+    }
+    bare.step(&[1.5e-3], &[-1.0], &mut loads, dt, &mut rng);
+    damped.step(&[1.5e-3], &[-1.0], &mut loads, dt, &mut rng);
+    assert!((bare.torque[0] + 0.4).abs() < 1e-12, "from limit to limit: {}", bare.torque[0]);
+    assert!((damped.torque[0] - bare.torque[0] - 0.01 * -0.8 / dt).abs() < 1e-9, "{}", damped.torque[0] - bare.torque[0]);
     assert!(jointctl_sim::effect_checks::check_effects(&loop_of(-0.01)).is_err_and(|e| e.0 == "hysteresis.presliding_damping_s"));
 }

@@ -139,12 +139,19 @@ impl ModelExtension {
         h.limit_nm * u
     }
 
-    /// The loop's pre-sliding damping at deflection rate `w` [rad/s], at the state
-    /// [`ModelExtension::dahl_torque`] left: `F_c tau_d du/dt` [Nm] (0 without hysteresis or
-    /// damping).
-    pub fn presliding_damping_torque(&self, w: f64) -> f64 {
+    /// The loop's pre-sliding damping at the unit state's rate `du/dt` [1/s]: `F_c tau_d du/dt`
+    /// [Nm] (0 without hysteresis or damping). [`ModelExtension::torque`] gives it the state's
+    /// own step over the time step; see there why not the loop's law at the rate estimate.
+    ///
+    /// ```
+    /// use jointctl_models::extension::{DahlSpec, ExtensionSpec, ModelExtension};
+    /// let h = DahlSpec { sigma_nm_per_rad: 300.0, limit_nm: 1.2, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.01 };
+    /// let e = ModelExtension::new(ExtensionSpec { hysteresis: Some(h), ..Default::default() }).unwrap();
+    /// assert!((e.presliding_damping_torque(50.0) - 1.2 * 0.01 * 50.0).abs() < 1e-12);
+    /// ```
+    pub fn presliding_damping_torque(&self, state_rate_per_s: f64) -> f64 {
         match self.live.hysteresis {
-            Some(h) if h.presliding_damping_s > 0.0 => h.limit_nm * h.presliding_damping_s * loop_rate(self.dahl.0, w, h.limit_nm / h.sigma_nm_per_rad, h.shape),
+            Some(h) if h.presliding_damping_s > 0.0 => h.limit_nm * h.presliding_damping_s * state_rate_per_s,
             _ => 0.0,
         }
     }
@@ -172,9 +179,20 @@ impl ModelExtension {
     /// ```
     pub fn torque(&mut self, t_s: f64, phi: f64, curve_torque_nm: f64) -> f64 {
         let phi_e = self.elastic_deflection(phi);
+        let previous_t_s = (self.len > 0).then(|| self.ring[(self.head + self.len - 1) % RATE_CAPACITY].0);
+        let u_before = self.dahl.0;
         let w = self.deflection_rate(t_s, phi);
         let mut dynamic = self.friction_torque(w) + self.dahl_torque(phi);
-        dynamic += self.presliding_damping_torque(w);
+        // The state's rate from its own step, not the loop's law at the rate estimate `w`: that
+        // estimate is causal and lags, and for a while after a turn it still points the old way
+        // while the state already runs the new branch (the law at it was off by 0.51 of the
+        // term's RMS along a 1 Hz sine; the step, 0.01). The dynamic terms' low-pass smooths the
+        // step's count-by-count jumps on a quantised reading.
+        let state_rate_per_s = match previous_t_s {
+            Some(t0) if t_s > t0 => (self.dahl.0 - u_before) / (t_s - t0),
+            _ => 0.0,
+        };
+        dynamic += self.presliding_damping_torque(state_rate_per_s);
         if self.spec.dynamic_terms_filter_s > 0.0 {
             dynamic = match self.filtered {
                 Some((y, t0)) => {
