@@ -241,7 +241,7 @@ fn the_dynamic_terms_are_low_passed_and_the_static_ones_are_not() {
 /// Through [`ModelExtension::torque`], with the observer's causal rate: the pre-sliding damping
 /// follows `F_c tau_d du/dt` of the state's true motion (what `identify` fits, the loop's law
 /// at a centred rate), also just after a turn, where the causal rate estimate still points the
-/// old way. Along a 1 Hz sine the law at that estimate was off by 0.51 of the term's RMS; on a
+/// old way. Along a 1 Hz sine the law at that estimate was off by 0.58 of the term's RMS; on a
 /// 14-bit reading with the default low-pass the state's step is compared with the exact term
 /// through the same low-pass.
 #[test]
