@@ -49,6 +49,22 @@ def report(binary, path, cache):
     return out
 
 
+def hidden_effects(answer):
+    """The hidden effects of a record's answer (`"a+b"`, or `"none"`)."""
+    return {e for e in answer.get("effect", "none").split("+") if e not in ("none", "")}
+
+
+def records(dirs):
+    """Every record of `dirs` that has an answer: (folder, record name, path, answer)."""
+    for d in dirs:
+        with open(os.path.join(d, "answers.json")) as f:
+            answers = json.load(f)
+        for name, answer in sorted(answers.items()):
+            path = os.path.join(d, name)
+            if os.path.exists(path):
+                yield d, name, path, answer
+
+
 def named(rep):
     return set() if "refused" in rep else {c["effect"] for c in rep["causes"] if c["effect"] != "dropout"}
 
@@ -61,15 +77,7 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--cache")
     a = ap.parse_args()
-    jobs = []
-    for d in a.dirs:
-        with open(os.path.join(d, "answers.json")) as f:
-            answers = json.load(f)
-        for name, answer in sorted(answers.items()):
-            path = os.path.join(d, name)
-            if os.path.exists(path):
-                hidden = {e for e in answer.get("effect", "none").split("+") if e not in ("none", "")}
-                jobs.append((source(d), os.path.basename(os.path.normpath(d)), name, path, hidden))
+    jobs = [(source(d), os.path.basename(os.path.normpath(d)), name, path, hidden_effects(answer)) for d, name, path, answer in records(a.dirs)]
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
         reports = list(pool.map(lambda j: (report(a.before, j[3], a.cache), report(a.after, j[3], a.cache)), jobs))
     totals = collections.OrderedDict()

@@ -19,6 +19,7 @@ device; the parameters agree within their stated uncertainty"):
 """
 import argparse
 import collections
+import concurrent.futures
 import itertools
 import json
 import math
@@ -26,7 +27,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare_binaries import report  # noqa: E402
+from compare_binaries import hidden_effects, records, report  # noqa: E402
 
 # Parameters from a grid, not estimated with an error.
 GRID_VALUED = {"shape"}
@@ -40,26 +41,18 @@ def main():
     ap.add_argument("--cache")
     ap.add_argument("--worst", type=int, default=15)
     a = ap.parse_args()
-    import concurrent.futures
-    jobs = []
-    for d in a.dirs:
-        with open(os.path.join(d, "answers.json")) as f:
-            answers = json.load(f)
-        for name, answer in sorted(answers.items()):
-            if name.startswith("dev") and os.path.exists(os.path.join(d, name)):
-                jobs.append((d, name, answer))
+    jobs = [(d, name, answer) for d, name, _, answer in records(a.dirs) if name.startswith("dev")]
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
         reps = list(ex.map(lambda j: report(a.binary, os.path.join(j[0], j[1]), a.cache), jobs))
     devices = collections.defaultdict(list)
     for (d, name, answer), rep in zip(jobs, reps):
         device, _, variant = name[:-4].split("_", 2)
-        want = tuple(sorted(e for e in answer.get("effect", "none").split("+") if e not in ("none", "")))
+        want = tuple(sorted(hidden_effects(answer)))
         causes = {} if "refused" in rep else {c["effect"]: (c["params"], c.get("uncertainty", {})) for c in rep["causes"] if c["effect"] != "dropout"}
         devices[(os.path.basename(os.path.normpath(d)), device)].append((variant, want, causes))
     same = hidden = 0
     pairs = agree = 0
-    by_param, by_variants, worst, devices_agreeing = collections.Counter(), collections.Counter(), [], 0
-    by_param_all = collections.Counter()
+    by_param, by_param_all, by_variants, worst, devices_agreeing = collections.Counter(), collections.Counter(), collections.Counter(), [], 0
     for (folder, device), variants in sorted(devices.items()):
         named = {tuple(sorted(c)) for _, _, c in variants}
         if len(named) != 1:

@@ -455,7 +455,8 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
 /// The first of `candidates` (impossible alone, or short of BIC's threshold alone) that,
 /// searched beside `with_first` (the model with a proposal whose held-out gain was relevant but
 /// not confirmed), earns its place on the training part (by [`BIC_THRESHOLD`]) and with it
-/// passes the held-out test against `reduced`: that candidate, the model with both, the judgement and its training BIC.
+/// passes the held-out test against `reduced`: that candidate, the model with both, the
+/// judgement and its training BIC.
 fn beside_an_unconfirmed(model: &Model, with_first: &Spec, candidates: &[usize], reduced: &HeldOut, p: &Prepared, name: &(dyn Fn(usize) -> String + Sync)) -> Option<(usize, Spec, Judgement, f64)> {
     let alone = training_bic(model, with_first, &p.coarse);
     let mut residuals = Default::default();
