@@ -4,14 +4,15 @@
     python3 tools/ident_reference/device_consistency.py BINARY DIR... [--jobs 2] [--cache C] [--worst N]
 
 Each DIR holds the blind generator's device records (`blind-gen --out DIR --set devices`):
-`devX_k_<variant>.csv`, four variants of one device (irregular sampling, 20 Hz bins, one
-repetition, three repetitions) and `answers.json`. Every record runs once
+`devX_k_<variant>.csv`, the variants of one device (irregular sampling, 20 Hz bins, one
+repetition, three repetitions, and as a test rig logs a stiffness test at one or five drive
+amplitudes) and `answers.json`. Every record runs once
 (`identify --data FILE --json`); `--cache C` keeps and reads the reports as
 `compare_binaries.py` does (`C/<tag>/<folder>/<record>.json`).
 
 Prints, over the devices (issue 36's "the same causes are named across the variants of one
 device; the parameters agree within their stated uncertainty"):
-- devices whose four variants name the same causes, and of those the ones that are the hidden;
+- devices whose variants all name the same causes, and of those the ones that are the hidden;
 - for the devices with the same causes, every pair of variants and every reported parameter
   with a standard error on both sides (a loop's `shape`, a grid value, is left out): agree when
   `|a - b| <= 2 sqrt(se_a^2 + se_b^2)`; the count, by parameter and by pair of variants, and the

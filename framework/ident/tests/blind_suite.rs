@@ -137,29 +137,32 @@ fn the_blind_generators_suite_is_identified_at_least_as_well_as_today() {
     assert!(with.params_ok * 100 >= 90 * with.params, "{} of {} parameters within 25 %", with.params_ok, with.params);
 }
 
-/// One device's data written four ways (full-rate irregular, 20 Hz bins, one repetition, three
-/// repetitions): the same causes should be named on each (issue 36).
+/// One device's data written six ways (full-rate irregular, 20 Hz bins, one repetition, three
+/// repetitions, and as a test rig logs a stiffness test: at one or at five drive amplitudes,
+/// three runs each, ~550 Hz irregular epoch stamps and a 2e-6 rad encoder): the same causes
+/// should be named on each (issue 36).
 #[test]
-fn one_device_written_four_ways() {
+fn one_device_written_six_ways() {
     let cases = device_variants(1);
-    let mut answers: BTreeMap<String, Vec<(String, BTreeSet<String>)>> = BTreeMap::new();
+    // Per device: each variant's name, causes, and whether it is one of the rig's variants.
+    let mut variants: BTreeMap<String, Vec<(String, BTreeSet<String>, bool)>> = BTreeMap::new();
     let mut causes: BTreeMap<String, Vec<Vec<jointctl_ident::identify::Cause>>> = BTreeMap::new();
     for case in &cases {
         let found = run_causes(case);
         let got = found.as_ref().map(|c| c.iter().map(|x| x.effect.clone()).collect()).unwrap_or_else(|e| BTreeSet::from([format!("refused: {e}")]));
         let device = case.answer.device.clone().unwrap_or_default();
-        answers.entry(device.clone()).or_default().push((case.answer.variant.clone(), got));
+        variants.entry(device.clone()).or_default().push((case.answer.variant.clone(), got, case.answer.drive.is_some()));
         causes.entry(device).or_default().push(found.unwrap_or_default());
     }
     let mut same = 0;
     // Where the variants name the same causes, each parameter within two combined standard
     // errors between every two variants (issue 36: "parameters inside their stated
-    // uncertainty").
-    let (mut parameters, mut disagree) = (0, Vec::new());
-    for (device, variants) in &answers {
-        let agree = variants.windows(2).all(|w| w[0].1 == w[1].1);
+    // uncertainty"): asserted over the four loggings of one test, printed for the rig's.
+    let (mut parameters, mut disagree, mut rig_apart) = (0, Vec::new(), Vec::new());
+    for (device, each_variant) in &variants {
+        let agree = each_variant.windows(2).all(|w| w[0].1 == w[1].1);
         same += agree as usize;
-        println!("device {device}: {}", variants.iter().map(|(v, g)| format!("{v}: {}", g.iter().cloned().collect::<Vec<_>>().join("+"))).collect::<Vec<_>>().join("; "));
+        println!("device {device}: {}", each_variant.iter().map(|(v, g, _)| format!("{v}: {}", g.iter().cloned().collect::<Vec<_>>().join("+"))).collect::<Vec<_>>().join("; "));
         if !agree {
             continue;
         }
@@ -171,35 +174,40 @@ fn one_device_written_four_ways() {
             let Some(same) = same else { continue };
             for name in cause.params.keys() {
                 let Some(each) = same.iter().map(|c| Some((*c.params.get(name)?, *c.uncertainty.get(name)?))).collect::<Option<Vec<_>>>() else { continue };
-                let apart = each.iter().enumerate().any(|(i, a)| each[i + 1..].iter().any(|b| (a.0 - b.0).abs() > 2.0 * (a.1 * a.1 + b.1 * b.1).sqrt()));
-                // A delay's lag (its share and time constant) is reported, not held to this:
-                // the 20 Hz bins read it shorter than the full-rate variants (32.9 +- 4.4 ms for
-                // 43-44 +- 2-3 here, 2.3 combined errors, likely from a lag run on 50 ms means
-                // as on a line between them; over the blind devices of 20 seeds
-                // the lag's pairs agree on 77 of 158), while the delay itself agrees.
-                if name == "lag_s" || name == "lag_share" {
-                    println!("{device} {} {name} (not asserted): {each:?}{}", cause.effect, if apart { ", apart" } else { "" });
-                    continue;
-                }
+                let apart_in = |pick: &dyn Fn(usize) -> bool| {
+                    let chosen: Vec<(f64, f64)> = each.iter().enumerate().filter(|(i, _)| pick(*i)).map(|(_, e)| *e).collect();
+                    chosen.iter().enumerate().any(|(i, a)| chosen[i + 1..].iter().any(|b| (a.0 - b.0).abs() > 2.0 * (a.1 * a.1 + b.1 * b.1).sqrt()))
+                };
+                // A delay's lag on the 20 Hz bins read 32.9 +- 4.4 ms for 43-44 +- 2-3 at full
+                // rate here until the lag ran along a cubic between the bins (41.7 +- 3.8 ms
+                // since): asserted now with the other parameters.
                 parameters += 1;
-                if apart {
+                if apart_in(&|i| !each_variant[i].2) {
                     disagree.push(format!("{device} {} {name}: {each:?}", cause.effect));
+                } else if apart_in(&|_| true) {
+                    rig_apart.push(format!("{device} {} {name}: {each:?}", cause.effect));
                 }
             }
         }
     }
-    println!("devices whose variants all got the same causes: {same} of {}", answers.len());
-    println!("their parameters within two combined standard errors on every variant: {} of {parameters}", parameters - disagree.len());
+    println!("devices whose variants all got the same causes: {same} of {}", variants.len());
+    println!("their parameters within two combined standard errors on the four loggings of one test: {} of {parameters}", parameters - disagree.len());
+    println!("apart only with the rig's variants (not asserted): {rig_apart:#?}");
     let (_, _, _) = score(&cases, "blind generator, device_variants(1)");
     // 2 of 5 devices when this was written (13 of 16 records named); 3 of 5 since the rate's
     // window narrows where the deflection bends (14 of 16); 4 of 5 since the hysteresis loop
     // has a shape (device A's Bouc-Wen loop got a cubic beside it on the three-repetition record).
-    assert!(same >= 4, "{same} of {} devices got the same causes on every variant", answers.len());
+    // The same 4 of 5 with the rig's two variants (device E's viscous friction is missed on
+    // the irregular one).
+    assert!(same >= 4, "{same} of {} devices got the same causes on every variant", variants.len());
     // Before, only the loop's limit and sigma of these 6 had an error (a dead zone's width and
     // ramp and a delay none), and both disagreed: limits of 1.72-1.77 Nm with classical errors
     // of 0.005-0.05 Nm. On seeds 1-8,
     // 38 of 59 agree: the rest is the part of a misspecified model's parameter that follows
-    // its excitation (docs/identification.md, Parameter uncertainty).
+    // its excitation (docs/identification.md, Parameter uncertainty). The rig's variants show
+    // that part: device A's Bouc-Wen loop, fitted at the middle of five drive amplitudes, reads
+    // `sigma` 38.3 +- 5.1 Nm/rad where every other variant reads 52.8-57.2 (and over five
+    // amplitudes the loop comes out as Dahl's, shape 1, where one amplitude reads shape 2).
     assert!(parameters >= 6 && disagree.is_empty(), "{parameters} parameters compared; apart: {disagree:#?}");
 }
 

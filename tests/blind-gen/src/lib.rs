@@ -74,10 +74,27 @@ pub struct Answer {
     /// Physical duration [s] and number of rows.
     pub duration: f64,
     pub n_samples: usize,
+    /// Number of runs in the record (all levels' repetitions for `amplitudes<N>`).
     pub repetitions: usize,
+    /// The drive amplitudes of a test at several levels (`amplitudes<N>`), else None.
+    pub drive: Option<Drive>,
     /// White noise std per raw sample before any binning [Nm].
     pub noise_white_raw: f64,
     pub seed: u64,
+}
+
+/// A test at one or several drive amplitudes, each repeated: the runs of level `l` are runs
+/// `l * runs_per_level ..` of the record, levels in increasing amplitude.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Drive {
+    /// Each level's drive amplitude relative to the device's usual amplitude (the one of its
+    /// other variants).
+    pub scales: Vec<f64>,
+    /// Each level's drive amplitude [rad]: the test program's nominal peak deflection.
+    pub amplitudes_rad: Vec<f64>,
+    pub runs_per_level: usize,
+    /// `effect_rms_each` of each level's samples alone.
+    pub effect_rms_each: Vec<BTreeMap<String, f64>>,
 }
 
 /// Ground truth at the samples (for tests; not part of what a tool sees).
@@ -85,8 +102,8 @@ pub use synth::Truth;
 
 /// One case: `effect` is "none" or causes joined by '+', each optionally `cause:model`
 /// (e.g. "hysteresis:lugre+time_delay"); `variant` is "plain" or flags joined by '+'
-/// (irregular, epoch, repetitions, restart, encoder17, linear2e-6, bin20, long,
-/// friction_position). Panics on an impossible request; see `try_case`.
+/// (irregular, rig550, epoch, repetitions, restart, encoder17, linear2e-6, bin20, long,
+/// friction_position, amplitudes<N>). Panics on an impossible request; see `try_case`.
 pub fn case(seed: u64, effect: &str, variant: &str) -> Case {
     try_case(seed, effect, variant).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -323,17 +340,32 @@ pub const DEVICES: [(&str, &str); 5] = [
     ("devE", "viscous_friction+sensor_offset:constant"),
 ];
 
+/// Number of drive amplitudes of a device's `6_amp5` variant.
+pub const DRIVE_LEVELS: usize = 5;
+
 /// The variants each device is logged in: (file tag, variant flags).
-pub const DEVICE_VARIANTS: [(&str, &str); 4] = [
+///
+/// - `1_irregular`: the full rate with irregular time stamps;
+/// - `2_bin20`: 50 ms bin averages (20 Hz);
+/// - `3_rep1`: one run, uniform rate;
+/// - `4_rep3`: three runs;
+/// - `5_amp1` and `6_amp5`: as a series-elastic-actuator test rig logs a stiffness test, the
+///   test at one drive amplitude (the middle of the five), or at five (`DRIVE_LEVELS`), each
+///   run three times, the runs in one file with time jumps between them; ~550 Hz irregular
+///   epoch time stamps (`rig550`) and a 2e-6 rad linear encoder.
+pub const DEVICE_VARIANTS: [(&str, &str); 6] = [
     ("1_irregular", "irregular"),
     ("2_bin20", "bin20"),
     ("3_rep1", "plain"),
     ("4_rep3", "repetitions3"),
+    ("5_amp1", "linear2e-6+repetitions3+amplitudes1+rig550+epoch"),
+    ("6_amp5", "linear2e-6+repetitions3+amplitudes5+rig550+epoch"),
 ];
 
 /// Several records of each of a few devices, identical physics and test program per device,
-/// logged differently (full-rate irregular, binned to 20 Hz, one run, three runs): a tool's
-/// answers for one device should agree across its variants.
+/// logged differently (`DEVICE_VARIANTS`: full-rate irregular, binned to 20 Hz, one run, three
+/// runs, and as a test rig logs a stiffness test at one or five drive amplitudes, three runs
+/// each): a tool's answers for one device should agree across its variants.
 pub fn device_variants(seed: u64) -> Vec<Case> {
     try_device_variants(seed).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -367,9 +399,24 @@ pub fn try_device_variants_with_truth(seed: u64) -> Result<Vec<(Case, Truth)>, S
             for_device: true,
         };
         let setup = synth::draw_setup_retrying(&mut rng, &req).map_err(|e| format!("{dev}: set-up: {e}"))?;
+        let levels = synth::drive_levels(&setup, DRIVE_LEVELS);
         for (tag, variant) in DEVICE_VARIANTS {
             let mut vr = Rng::new(derive_seed(dev_seed, tag));
-            let flags = Flags::parse(variant, &mut vr).map_err(|e| format!("{dev}: variant {variant}: {e}"))?;
+            let mut flags = Flags::parse(variant, &mut vr)
+                .map_err(|e| format!("{dev}: variant {variant}: {e}"))?;
+            // Drive amplitudes are the device's: its levels, or the middle one alone.
+            flags.amplitudes = match flags.amplitudes.len() {
+                0 => Vec::new(),
+                1 => vec![levels[levels.len() / 2]],
+                n if n == levels.len() => levels.clone(),
+                n => {
+                    return Err(format!(
+                        "{dev}: {n} drive amplitudes; devices have 1 or {}",
+                        levels.len()
+                    ));
+                }
+            };
+            let setup = setup.relogged(&flags, &mut vr);
             let meta = Meta {
                 name: format!("{dev}_{tag}"),
                 device: Some(dev.to_string()),
@@ -392,7 +439,7 @@ pub fn answer_json(a: &Answer) -> serde_json::Value {
                 .collect::<Map<_, _>>(),
         )
     };
-    json!({
+    let mut v = json!({
         "effect": a.effect,
         "params": num(&a.params),
         "noise": a.noise,
@@ -416,7 +463,18 @@ pub fn answer_json(a: &Answer) -> serde_json::Value {
         "repetitions": a.repetitions,
         "noise_white_raw": a.noise_white_raw,
         "seed": a.seed,
-    })
+    });
+    // Only records of a test at several drive amplitudes have these keys.
+    if let (Some(d), Some(o)) = (&a.drive, v.as_object_mut()) {
+        o.insert("amplitude_scales".into(), json!(d.scales));
+        o.insert("amplitudes".into(), json!(d.amplitudes_rad));
+        o.insert("runs_per_amplitude".into(), json!(d.runs_per_level));
+        o.insert(
+            "effect_rms_each_amplitude".into(),
+            Value::Array(d.effect_rms_each.iter().map(num).collect()),
+        );
+    }
+    v
 }
 
 /// Writes `t,deflection,torque` with enough digits: microseconds for time (epoch stamps too),

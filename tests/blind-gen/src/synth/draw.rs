@@ -4,7 +4,7 @@
 use super::request::{Cause, Flags, Request};
 use super::sizing::{Grid, output_noise_factor, rms, solve_scale};
 use super::timeline::Timeline;
-use super::{ENC14_STEP, ENC17_STEP, LINEAR_STEP, RATES_HZ, Setup};
+use super::{ENC14_STEP, ENC17_STEP, LINEAR_STEP, RATES_HZ, RIG_MEDIAN_DT_S, Setup};
 use crate::excitation;
 use crate::model::{
     self, DeadZone, Delay, Friction, HystModel, Hysteresis, Offset, Physics, Spring, Vibration,
@@ -98,7 +98,10 @@ pub fn draw_setup(rng: &mut Rng, req: &Request) -> Result<Setup, SetupError> {
     } else {
         *rng.pick(&RATES_HZ)
     };
-    let irregular_dt_s = rng.range(1.0e-3, 2.0e-3);
+    let mut irregular_dt_s = rng.range(1.0e-3, 2.0e-3);
+    if f.rig_logger {
+        irregular_dt_s = rng.range(RIG_MEDIAN_DT_S.0, RIG_MEDIAN_DT_S.1);
+    }
     let fs_eff = if f.irregular {
         1.0 / irregular_dt_s
     } else {

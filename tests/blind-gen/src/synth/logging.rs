@@ -8,19 +8,48 @@ use super::timeline::{Timeline, sensor_at, states};
 use super::{EPOCH_BASE_US, Setup};
 use crate::model;
 use crate::rng::Rng;
-use crate::{Answer, Case};
+use crate::{Answer, Case, Drive};
 use std::collections::BTreeMap;
+
+/// How an irregular logger spaces its samples: besides a median step jittered by ±25 %, a
+/// fraction of long steps and a few stalls per run.
+struct Jitter {
+    long_frac: f64,
+    /// Range of the long steps [µs].
+    long_us: (f64, f64),
+    /// Number of stalls per run (inclusive range) and their extra length [µs].
+    gaps: (usize, usize),
+    gap_us: (f64, f64),
+}
+
+/// The generic irregular logger: 2.5 % of steps 3-15 ms (99th percentile ~10 ms), 1-3 stalls
+/// of 0.1-0.3 s per run.
+const LOGGER: Jitter = Jitter {
+    long_frac: 0.025,
+    long_us: (3.0e3, 15.0e3),
+    gaps: (1, 3),
+    gap_us: (0.1e6, 0.3e6),
+};
+
+/// The series-elastic-actuator rig's logger (`rig550`): 2.5 % of steps 3-23 ms (99th
+/// percentile ~15 ms), a stall of 0.05-0.26 s in about half of the runs.
+const RIG: Jitter = Jitter {
+    long_frac: 0.025,
+    long_us: (3.0e3, 23.0e3),
+    gaps: (0, 1),
+    gap_us: (0.05e6, 0.26e6),
+};
 
 /// Physical sample times [µs] of one repetition window.
 fn sample_times_us(
     rng: &mut Rng,
     setup: &Setup,
-    irregular: bool,
+    flags: &Flags,
     start_us: i64,
     end_us: i64,
 ) -> Vec<i64> {
     let mut out = Vec::new();
-    if !irregular {
+    if !flags.irregular {
         let step = (1e6 / setup.fs_hz).round() as i64;
         let mut t = start_us;
         while t < end_us {
@@ -29,10 +58,11 @@ fn sample_times_us(
         }
         return out;
     }
-    // Irregular: jittered median step, occasional long steps (99th percentile ~10 ms) and a
-    // few gaps of 0.1-0.3 s (a logger that stalled).
+    // Irregular: jittered median step, occasional long steps and a few gaps (a logger that
+    // stalled).
+    let j = if flags.rig_logger { &RIG } else { &LOGGER };
     let d0 = setup.irregular_dt_s * 1e6;
-    let n_gaps = rng.int(1, 3);
+    let n_gaps = rng.int(j.gaps.0, j.gaps.1);
     let mut gaps: Vec<i64> = (0..n_gaps)
         .map(|_| start_us + ((end_us - start_us) as f64 * rng.range(0.1, 0.9)) as i64)
         .collect();
@@ -41,13 +71,13 @@ fn sample_times_us(
     let mut t = start_us;
     while t < end_us {
         out.push(t);
-        let mut step = if rng.chance(0.025) {
-            rng.range(3.0e3, 15.0e3)
+        let mut step = if rng.chance(j.long_frac) {
+            rng.range(j.long_us.0, j.long_us.1)
         } else {
             d0 * (1.0 + rng.range(-0.25, 0.25))
         };
         if gi < gaps.len() && t >= gaps[gi] {
-            step += rng.range(0.1e6, 0.3e6);
+            step += rng.range(j.gap_us.0, j.gap_us.1);
             gi += 1;
         }
         t += step.round().max(50.0) as i64;
@@ -75,10 +105,25 @@ pub struct Meta {
 pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case, Truth) {
     let ph = &setup.physics;
     let reps = flags.reps.max(1);
-    let scales: Vec<f64> = (0..reps)
-        .map(|r| if r == 0 { 1.0 } else { rng.range(0.96, 1.04) })
-        .collect();
-    let gaps: Vec<f64> = (1..reps)
+    let scales: Vec<f64> = if flags.amplitudes.is_empty() {
+        (0..reps)
+            .map(|r| if r == 0 { 1.0 } else { rng.range(0.96, 1.04) })
+            .collect()
+    } else {
+        // A drive repeats its amplitude more closely than a hand (±1 %).
+        let mut v = Vec::new();
+        for a in &flags.amplitudes {
+            v.extend((0..reps).map(|r| {
+                if r == 0 {
+                    *a
+                } else {
+                    a * rng.range(0.99, 1.01)
+                }
+            }));
+        }
+        v
+    };
+    let gaps: Vec<f64> = (1..scales.len())
         .map(|_| (rng.range(3.0, 10.0) * 1e3).round() / 1e3)
         .collect();
     let tl = Timeline::build(setup, &scales, &gaps);
@@ -93,7 +138,7 @@ pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case,
         let ts = sample_times_us(
             rng,
             setup,
-            flags.irregular,
+            flags,
             (a * 1e6).round() as i64,
             (b * 1e6).round() as i64,
         );
@@ -268,6 +313,14 @@ pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case,
         let cc: Vec<f64> = v.iter().zip(&tr.tau_base).map(|(a, b)| a - b).collect();
         each.insert(c.name().to_string(), unexplained_rms(&cc, &regs) / noise);
     }
+    let drive = (!flags.amplitudes.is_empty()).then(|| Drive {
+        scales: flags.amplitudes.clone(),
+        amplitudes_rad: flags.amplitudes.iter().map(|a| a * setup.amp_rad).collect(),
+        runs_per_level: reps,
+        effect_rms_each: (0..flags.amplitudes.len())
+            .map(|l| level_ratios(setup, &tr, &contrib, &each_clean, noise, |r| r / reps == l))
+            .collect(),
+    });
     let params = answer_params(setup, &tr, &offs, total);
     let tau_max = tr.tau_clean.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let level = {
@@ -301,7 +354,8 @@ pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case,
         torque_span: setup.span_nm,
         duration: t_phys.last().copied().unwrap_or(0.0) - t_phys.first().copied().unwrap_or(0.0),
         n_samples: t_out.len(),
-        repetitions: reps,
+        repetitions: scales.len(),
+        drive,
         noise_white_raw: setup.noise_white,
         seed: meta.seed,
     };
@@ -315,4 +369,32 @@ pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case,
         },
         tr,
     )
+}
+
+/// `effect_rms_each` over the samples of the runs `runs` selects alone (their own projection on
+/// the baseline's regressors): how clearly each cause shows at one drive amplitude.
+fn level_ratios(
+    setup: &Setup,
+    tr: &Truth,
+    contrib: &[f64],
+    each_clean: &[(Cause, Vec<f64>)],
+    noise: f64,
+    runs: impl Fn(usize) -> bool,
+) -> BTreeMap<String, f64> {
+    let idx: Vec<usize> = (0..tr.rep.len()).filter(|&i| runs(tr.rep[i])).collect();
+    let sub = |x: &[f64]| -> Vec<f64> { idx.iter().map(|&i| x[i]).collect() };
+    let (phi, fric) = (sub(&tr.phi), sub(&tr.friction));
+    let regs: [&[f64]; 2] = [&phi, &fric];
+    let mut m = BTreeMap::new();
+    if setup.causes.len() == 1 {
+        m.insert(
+            setup.causes[0].name().to_string(),
+            unexplained_rms(&sub(contrib), &regs) / noise,
+        );
+    }
+    for (c, v) in each_clean {
+        let cc: Vec<f64> = idx.iter().map(|&i| v[i] - tr.tau_base[i]).collect();
+        m.insert(c.name().to_string(), unexplained_rms(&cc, &regs) / noise);
+    }
+    m
 }

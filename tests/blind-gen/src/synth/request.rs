@@ -77,8 +77,27 @@ pub struct Flags {
     /// Time restarts at 0 for each repetition (implies repetitions).
     pub restart: bool,
     pub irregular: bool,
+    /// Time stamps of a series-elastic-actuator test rig's logger (implies `irregular`): median
+    /// step 1.75-1.85 ms (about 550 Hz), 2.5 % of steps 3-23 ms (99th percentile about 15 ms),
+    /// a gap of 0.05-0.26 s in about half of the runs.
+    pub rig_logger: bool,
     pub epoch: bool,
     pub bin20: bool,
+    /// Drive amplitudes of a test at several levels, relative to the set-up's amplitude, in the
+    /// order they are run (increasing for `amplitudes<N>` and devices); each level is run
+    /// `reps` times, one after the other (empty: one level, the set-up's).
+    pub amplitudes: Vec<f64>,
+}
+
+/// Evenly spread relative drive amplitudes from 0.4 to 1.0 (1.0 alone for one level): the
+/// levels of `amplitudes<N>` unless the caller sets its own (devices do).
+pub fn default_amplitudes(n: usize) -> Vec<f64> {
+    if n <= 1 {
+        return vec![1.0];
+    }
+    (0..n)
+        .map(|i| 0.4 + 0.6 * i as f64 / (n - 1) as f64)
+        .collect()
 }
 
 impl Flags {
@@ -88,6 +107,10 @@ impl Flags {
             match tok {
                 "plain" => {}
                 "irregular" => f.irregular = true,
+                "rig550" => {
+                    f.irregular = true;
+                    f.rig_logger = true;
+                }
                 "epoch" => f.epoch = true,
                 "repetitions" => f.reps = f.reps.max(rng.int(2, 3)),
                 "repetitions2" => f.reps = 2,
@@ -101,7 +124,10 @@ impl Flags {
                 "bin20" => f.bin20 = true,
                 "long" => f.long = true,
                 "friction_position" => f.friction_position = true,
-                other => return Err(format!("unknown variant token `{other}`")),
+                other => match other.strip_prefix("amplitudes").map(str::parse::<usize>) {
+                    Some(Ok(n)) if (1..=9).contains(&n) => f.amplitudes = default_amplitudes(n),
+                    _ => return Err(format!("unknown variant token `{other}`")),
+                },
             }
         }
         if f.linear && f.encoder17 {
@@ -133,7 +159,13 @@ impl Flags {
         } else if self.reps > 1 {
             t.push("repetitions");
         }
-        if self.irregular {
+        let levels = format!("amplitudes{}", self.amplitudes.len());
+        if !self.amplitudes.is_empty() {
+            t.push(&levels);
+        }
+        if self.rig_logger {
+            t.push("rig550");
+        } else if self.irregular {
             t.push("irregular");
         }
         if self.epoch {
@@ -157,6 +189,7 @@ impl Flags {
             self.encoder17,
             self.long,
             self.reps > 1,
+            self.amplitudes.len() > 1,
             self.irregular,
             self.epoch,
             self.bin20,
