@@ -13,6 +13,7 @@ amplitudes) and `answers.json`. Every record runs once
 Prints, over the devices (issue 36's "the same causes are named across the variants of one
 device; the parameters agree within their stated uncertainty"):
 - devices whose variants all name the same causes, and of those the ones that are the hidden;
+- per variant, the hidden effects named and the records with a cause beside them;
 - for the devices with the same causes, every pair of variants and every reported parameter
   with a standard error on both sides (a loop's `shape`, a grid value, is left out): agree when
   `|a - b| <= 2 sqrt(se_a^2 + se_b^2)`; the count, by parameter and by pair of variants, and the
@@ -81,6 +82,15 @@ def main():
                     worst.append((apart, f"{folder} {device} {effect}.{param}: {va} {x:.5g} +- {ua[param]:.2g}, {vb} {pb[param]:.5g} +- {ub[param]:.2g}"))
         devices_agreeing += all_agree
     print(f"\ndevices: {len(devices)}; the same causes over their variants: {same} (the hidden ones: {hidden})")
+    # Per variant: the hidden effects named, the records with a cause beside them.
+    per_variant = collections.defaultdict(collections.Counter)
+    for variants in devices.values():
+        for variant, want, causes in variants:
+            t = per_variant[variant]
+            t["hidden"] += len(want)
+            t["named"] += len(set(want) & set(causes))
+            t["beside"] += bool(set(causes) - set(want))
+    print("per variant, hidden effects named (records with a cause beside): " + ", ".join(f"{v} {t['named']} of {t['hidden']} ({t['beside']})" for v, t in sorted(per_variant.items())))
     print(f"parameter pairs within 2 combined standard errors: {agree} of {pairs}; devices with every pair so: {devices_agreeing} of {same}")
     print("apart, by parameter: " + ", ".join(f"{k} {v} of {by_param_all[k]}" for k, v in by_param.most_common()))
     print("apart, by variants: " + ", ".join(f"{k} {v}" for k, v in by_variants.most_common()))
