@@ -16,15 +16,16 @@ pub fn log_grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
 /// low-pass of its own, and the lag fitted through it comes out short: a spring's torque behind
 /// a 62 ms transport delay and a 22.4 ms lag, 14-bit deflection, read from its 20 Hz bins as a
 /// lag of 9.3 ms, 22.1 ms at full rate; along the cubic 20.1 ms (noise-free, the line's output
-/// was 0.12 Nm off the bins of the lagged torque of 5 Nm, the cubic's 0.03). It starts, and starts again
-/// after a step wider than `max_step` (a logging gap, a join of parts) and at the sorted indices
-/// `starts` (pieces that do not follow on), as `from` says: settled, as if the input had run
-/// along its line over the next `tau` for long: that slope times `tau` behind the input. What
-/// came before is not known here, and a part that starts where the input bends starts off (a
-/// 3.7 Hz sine through a 40 ms lag: 1.5 Nm, gone within `5 tau`). Started at the input instead,
-/// a spring's column on a part that starts in motion began `K v tau` off; along its first
-/// step's slope, a quantised deflection's one count in a millisecond put a held-out part's first
-/// 0.2 s 7 Nm off; along a parabola fitted over `2 tau`, the searched delays' fits were worse.
+/// was 0.12 Nm off the bins of the lagged torque of 5 Nm, the cubic's 0.03). It starts, and
+/// starts again after a step wider than `max_step` (a logging gap, a join of parts) and at the
+/// sorted indices `starts` (pieces that do not follow on), as `from` says: settled, as if the
+/// input had run along its line over the next `tau` for long: that slope times `tau` behind the
+/// input. What came before is not known here, and a part that starts where the input bends
+/// starts off (a 3.7 Hz sine through a 40 ms lag: 1.5 Nm, gone within `5 tau`). Started at the
+/// input instead, a spring's column on a part that starts in motion began `K v tau` off; along
+/// its first step's slope, a quantised deflection's one count in a millisecond put a held-out
+/// part's first 0.2 s 7 Nm off; along a parabola fitted over `2 tau`, the searched delays' fits
+/// were worse.
 pub(crate) fn lagged(t: &[f64], x: &[f64], tau: f64, max_step: f64, starts: &[usize], from: LagStart) -> Vec<f64> {
     let n = x.len().min(t.len());
     // Whether sample i + 1 follows on from sample i: no gap and no start marked there.
@@ -72,7 +73,7 @@ pub(crate) fn lagged(t: &[f64], x: &[f64], tau: f64, max_step: f64, starts: &[us
 /// a 7-11 Hz low-pass it read the lag 22, 20 and 0 ms (device D of seeds 47, 59, 42; the chord
 /// 21, 19 and 9, one run at full rate 26, 18 and 19), and 16.9 ms for the 22.4 of [`lagged`]'s
 /// record (the chord 20.1).
-pub(crate) fn sample_rates(t: &[f64], x: &[f64], within: &dyn Fn(usize) -> bool) -> Vec<f64> {
+fn sample_rates(t: &[f64], x: &[f64], within: &dyn Fn(usize) -> bool) -> Vec<f64> {
     let rate = |i: usize| {
         let back = i > 0 && within(i - 1);
         let (a, b) = (if back { i - 1 } else { i }, if within(i) { i + 1 } else { i });

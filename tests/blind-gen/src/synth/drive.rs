@@ -37,7 +37,7 @@ pub fn drive_levels(setup: &Setup, n: usize) -> Vec<f64> {
 
 /// The smallest ratio of a cause's unexplained RMS to the output noise over one run of the
 /// test at relative amplitude `s`, predicted on the sizing grid (infinite without causes).
-pub fn weakest_ratio(setup: &Setup, s: f64) -> f64 {
+fn weakest_ratio(setup: &Setup, s: f64) -> f64 {
     let ph = &setup.physics;
     let tl = Timeline::build(setup, &[s], &[]);
     let grid = Grid::new(&ph.baseline(), &tl);

@@ -305,14 +305,7 @@ pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case,
         .collect();
     let regs: [&[f64]; 2] = [&tr.phi, &tr.friction];
     let unexpl = unexplained_rms(&contrib, &regs);
-    let mut each = BTreeMap::new();
-    if setup.causes.len() == 1 {
-        each.insert(setup.causes[0].name().to_string(), unexpl / noise);
-    }
-    for (c, v) in &each_clean {
-        let cc: Vec<f64> = v.iter().zip(&tr.tau_base).map(|(a, b)| a - b).collect();
-        each.insert(c.name().to_string(), unexplained_rms(&cc, &regs) / noise);
-    }
+    let each = level_ratios(setup, &tr, &contrib, &each_clean, noise, |_| true);
     let drive = (!flags.amplitudes.is_empty()).then(|| Drive {
         scales: flags.amplitudes.clone(),
         amplitudes_rad: flags.amplitudes.iter().map(|a| a * setup.amp_rad).collect(),
@@ -372,7 +365,8 @@ pub fn record(setup: &Setup, flags: &Flags, rng: &mut Rng, meta: Meta) -> (Case,
 }
 
 /// `effect_rms_each` over the samples of the runs `runs` selects alone (their own projection on
-/// the baseline's regressors): how clearly each cause shows at one drive amplitude.
+/// the baseline's regressors): how clearly each cause shows over the record, or at one drive
+/// amplitude.
 fn level_ratios(
     setup: &Setup,
     tr: &Truth,

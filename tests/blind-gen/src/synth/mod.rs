@@ -23,7 +23,7 @@ mod timeline;
 
 pub use answer::Truth;
 pub use draw::{SetupError, draw_setup, draw_setup_retrying};
-pub use drive::{drive_levels, weakest_ratio};
+pub use drive::drive_levels;
 pub use logging::{Meta, record};
 pub use request::{ALL_CAUSES, Cause, Flags, Request, default_amplitudes, parse_effects};
 pub use sizing::{lstsq, unexplained_rms};
