@@ -304,9 +304,7 @@ impl Model<'_> {
         // it alike: a cubic of a friction record's position about that position's arbitrary zero
         // took a constant torque as its own (see `centre_rad`).
         let elastic_rad = deflection_rad.iter().map(|x| x - self.centre_rad).collect();
-        // A bin's edges are known for the part's own samples; its history's are taken flat.
-        let rate_edges_rad_per_s = if p.rate_edges.len() == n { std::iter::repeat_n([0.0; 2], ahead).chain(p.rate_edges.iter().copied()).collect() } else { Vec::new() };
-        let mut inputs = Inputs { t_s: with_lead(&p.lead.t[..ahead], &p.t), deflection_rad, velocity_rad_per_s: with_lead(&p.lead.v[..ahead], &p.v), elastic_rad, sample_period_s: p.dt, rate_edges_rad_per_s };
+        let mut inputs = Inputs { t_s: with_lead(&p.lead.t[..ahead], &p.t), deflection_rad, velocity_rad_per_s: with_lead(&p.lead.v[..ahead], &p.v), elastic_rad, sample_period_s: p.dt };
         for term in &spec.terms {
             self.causes[term.cause].transform(&term.params, &mut inputs);
         }
@@ -320,8 +318,6 @@ impl Model<'_> {
             for x in [&mut inputs.t_s, &mut inputs.deflection_rad, &mut inputs.velocity_rad_per_s, &mut inputs.elastic_rad] {
                 x.drain(..ahead.min(x.len()));
             }
-            let edges = &mut inputs.rate_edges_rad_per_s;
-            edges.drain(..ahead.min(edges.len()));
         }
         let mut fixed = vec![0.0; n];
         let mut cols: Vec<Vec<f64>> = Vec::new();
@@ -352,7 +348,7 @@ impl Model<'_> {
             history_rad: history_rad.as_deref().unwrap_or(&p.warm),
             restarts: &p.restarts,
             model_nm: &fixed,
-            rate_edges_rad_per_s: &inputs.rate_edges_rad_per_s,
+            rate_edges_rad_per_s: &p.rate_edges,
             record_middle_s: self.middle_s,
         };
         let mut spans = Vec::new();
@@ -431,7 +427,7 @@ impl Model<'_> {
             history_rad: proj.history_rad.as_deref().unwrap_or(&p.warm),
             restarts: &p.restarts,
             model_nm: &proj.model_nm,
-            rate_edges_rad_per_s: &proj.inputs.rate_edges_rad_per_s,
+            rate_edges_rad_per_s: &p.rate_edges,
             record_middle_s: self.middle_s,
         };
         // The term leaves the inputs alone (see `search`), so its columns are those a design

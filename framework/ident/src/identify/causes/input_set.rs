@@ -65,7 +65,7 @@ mod tests {
         let deflection_rad = t_s.iter().map(|t| 0.02 * (1.3 * t).sin() + 0.004 * (7.0 * t).sin()).collect();
         let velocity_rad_per_s = t_s.iter().map(|t| 0.03 * (2.1 * t).cos() - 0.01).collect();
         let elastic_rad = t_s.iter().map(|t| 0.015 * (0.9 * t + 0.4).sin()).collect();
-        Inputs { t_s, deflection_rad, velocity_rad_per_s, elastic_rad, sample_period_s: 0.005, rate_edges_rad_per_s: Vec::new() }
+        Inputs { t_s, deflection_rad, velocity_rad_per_s, elastic_rad, sample_period_s: 0.005 }
     }
 
     /// `inputs` with every input outside `keep` replaced by another signal.

@@ -273,10 +273,6 @@ pub struct Inputs {
     pub elastic_rad: Vec<f64>,
     /// Sample period of these inputs [s] (the median step; the time stamps may jitter and gap).
     pub sample_period_s: f64,
-    /// A slow log read as bin averages: each sample's rate at its interval's start and end less
-    /// its own rate [rad/s] (see `prepare::rate_edges`), as the torque channel sees them (a
-    /// delay shifts them with the rate); empty for point samples.
-    pub rate_edges_rad_per_s: Vec<[f64; 2]>,
 }
 
 /// What a candidate sees of one part of the data (training or held out).

@@ -155,13 +155,6 @@ impl CandidateCause for TimeDelay {
         inputs.elastic_rad = if elastic_is_deflection { deflection.clone() } else { delayed(&inputs.t_s, &inputs.elastic_rad, None, p[0], max_step) };
         inputs.deflection_rad = deflection;
         inputs.velocity_rad_per_s = delayed(&inputs.t_s, &inputs.velocity_rad_per_s, None, p[0], max_step);
-        // A bin's edges with its rate: left where they were, eq. 3.5's arctan averaged over each
-        // bin read the delayed rate with the undelayed bin's turns.
-        if inputs.rate_edges_rad_per_s.len() == inputs.t_s.len() {
-            let edge = |k: usize| delayed(&inputs.t_s, &inputs.rate_edges_rad_per_s.iter().map(|e| e[k]).collect::<Vec<f64>>(), None, p[0], max_step);
-            let (start, end) = (edge(0), edge(1));
-            inputs.rate_edges_rad_per_s = start.into_iter().zip(end).map(|(a, b)| [a, b]).collect();
-        }
     }
     fn columns(&self, _: &[f64], _: &Samples) -> Vec<Vec<f64>> {
         Vec::new()

@@ -94,32 +94,3 @@ fn a_piece_joined_after_another_starts_its_loop_from_its_own_history() {
     }
     assert_eq!(&column[..rising.len()], &loop_column(&a)[..]);
 }
-
-/// A log of bin averages, delayed by exactly one bin: eq. 3.5's arctan averaged over each bin
-/// reads the bin's rate and the rates at its edges, and the delay must move both. The edges
-/// were left where they were, so the arctan averaged the delayed rate over the undelayed bin's
-/// turns (at a reversal, the wrong side's): on 20 Hz bins a torque channel 30-55 ms late was
-/// read as bins on 3 of 12 records of `tests/bin_averages.rs`'s generator, 7 of 12 now.
-#[test]
-fn a_delay_of_one_bin_moves_a_bin_averaged_arctan_by_one_sample() {
-    use super::super::causes::{CoulombFriction, TimeDelay};
-    use std::f64::consts::TAU;
-    let causes: [&dyn CandidateCause; 2] = [&CoulombFriction, &TimeDelay];
-    let model = Model { baseline: &BaselineModel::Polynomial(1), centre_rad: 0.0, middle_s: 0.0, friction_record: false, causes: &causes, held_out: Default::default(), columns: Default::default() };
-    // 20 Hz bins of a 0.7 Hz stroke: the rate turns inside a bin at every reversal.
-    let n = 200;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.05).collect();
-    let d: Vec<f64> = t.iter().map(|t| 0.05 * (TAU * 0.7 * t).sin()).collect();
-    let v: Vec<f64> = t.iter().map(|t| 0.05 * TAU * 0.7 * (TAU * 0.7 * t).cos()).collect();
-    // Each edge the mean of the two rates beside it, less the sample's own (as
-    // `prepare::rate_edges` gives them; written out here, the design not importing `prepare`).
-    let rate_edges: Vec<[f64; 2]> = (0..n).map(|i| [if i > 0 { 0.5 * (v[i - 1] - v[i]) } else { 0.0 }, if i + 1 < n { 0.5 * (v[i + 1] - v[i]) } else { 0.0 }]).collect();
-    let zeros = vec![0.0; n];
-    let p = Part { warm: Vec::new(), lead: Default::default(), restarts: Vec::new(), t, d, v, tau: zeros.clone(), pivot: zeros, rep: Vec::new(), rate_edges, dt: 0.05 };
-    let term = |cause, params: &[f64]| Term { cause, params: params.to_vec(), grids: Vec::new(), baseline: false };
-    let arctan = |spec: Spec| model.design(&spec, &p).cols.pop().expect("the arctan's column");
-    let undelayed = arctan(Spec { terms: vec![term(0, &[20.0])] });
-    let delayed = arctan(Spec { terms: vec![term(1, &[0.05]), term(0, &[20.0])] });
-    let worst = (2..n).map(|i| (delayed[i] - undelayed[i - 1]).abs()).fold(0.0, f64::max);
-    assert!(worst < 1e-9, "the delayed column is off the undelayed one a sample earlier by up to {worst}");
-}
