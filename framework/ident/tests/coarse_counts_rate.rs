@@ -21,6 +21,11 @@ const NOISE_NM: f64 = 0.03;
 /// 0.5 Hz (its phase the integral of the falling frequency), then 24 s of two sines of
 /// 0.3-0.4 and 0.6-0.8 Hz; a viscous friction of `damping` [Nm s/rad].
 fn record(seed: u64, damping: f64) -> jointctl_ident::csv::Data {
+    record_beside(seed, damping, 0.0)
+}
+
+/// [`record`] with the torque sensor reading `offset_nm` [Nm] high: a cause the baseline lacks.
+fn record_beside(seed: u64, damping: f64, offset_nm: f64) -> jointctl_ident::csv::Data {
     use std::f64::consts::TAU;
     let mut rng = jointctl_test_support::XorShift64::new(0x5851_f42d_4c95_7f2d ^ seed);
     let q = TAU / 16384.0;
@@ -44,7 +49,7 @@ fn record(seed: u64, damping: f64) -> jointctl_ident::csv::Data {
         };
         t_s.push(t);
         deflection.push((x / q).round() * q);
-        torque.push(K_NM_PER_RAD * x + K_A_NM * (K_B_S_PER_RAD * v).atan() + damping * v + NOISE_NM * rng.normal());
+        torque.push(offset_nm + K_NM_PER_RAD * x + K_A_NM * (K_B_S_PER_RAD * v).atan() + damping * v + NOISE_NM * rng.normal());
     }
     jointctl_ident::csv::Data::from_columns(t_s, deflection, torque)
 }
@@ -81,5 +86,25 @@ fn a_viscous_friction_beside_it_is_not_taken_for_a_loop() {
         let damping = report.causes.iter().find(|c| c.effect == "viscous_friction").map(|c| c.params["damping_nms_per_rad"]);
         assert!(damping.is_none_or(|b| (b - 1.0).abs() < 0.25), "seed {seed}: damping {damping:?}");
         assert!(report.rmse_after < 1.25 * NOISE_NM, "seed {seed}: held out {:.4} Nm after {named:?}", report.rmse_after);
+    }
+}
+
+#[test]
+fn a_cause_the_baseline_lacks_does_not_hide_the_wider_windows() {
+    // The same strokes with the torque sensor reading 0.3 Nm high (ten times the noise). The
+    // reading is judged on the baseline before any cause is in it; the offset it lacks is most
+    // of what it leaves above the noise floor, and the wider windows' gain, judged as a share
+    // of that (as a cause's relevance is), was refused: the usual windows' staircase stayed in
+    // the whole model, which held out 1.50, 1.64 and 1.53 times the noise after the offset on
+    // these seeds; over the wider windows, 1.02-1.04 times. (Found on the blind devices'
+    // records of a play, a loop or an offset beside a viscous friction; this file's own strokes
+    // test it.)
+    for seed in 1..=3 {
+        let report = identify(&record_beside(seed, 0.0, 0.3), &IdentifyOptions::default()).expect("identified");
+        let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
+        let window = report.narrow_rate.as_ref().map(|r| r.window);
+        assert_eq!(named, ["sensor_offset"], "seed {seed}: rate read {window:?}");
+        assert!(matches!(window, Some(RateWindow::Wider { .. })), "seed {seed}: rate read {window:?}, held out {:.4} Nm", report.rmse_after);
+        assert!(report.rmse_after < 1.25 * NOISE_NM, "seed {seed}: held out {:.4} Nm ({:.2} times the noise)", report.rmse_after, report.rmse_after / NOISE_NM);
     }
 }
