@@ -283,16 +283,16 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // so, and sharper intervals or wider windows for the whole model to confirm (see
     // `bin_reading`); should the screening fail (it fits the built-in friction only), the usual
     // reading.
-    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(&ahead, opts, &all, centre(&p, &opts.baseline), p, r))).ok().flatten();
+    let reading = |p: std::borrow::Cow<prepare::Prepared>, r| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bin_reading::choose_rate_reading(&ahead, opts, &all, centre(&p, &opts.baseline), p, r))).unwrap_or_default();
     let slow = p.may_hold_bins() && opts.baseline_friction;
-    let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow)).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
+    let (p, rate) = slow.then(|| reading(std::borrow::Cow::Borrowed(&p), bin_reading::RateReadings::Narrow).into_iter().next()).flatten().map_or((p, None), |(rate, q)| (q, Some(rate)));
     let narrowest = if rate.is_some() { 1 } else { prepare::NARROWEST_RATE_WINDOW };
     // Screened before any report holds its held-out series, on the first reading handed over
     // and prepared again: on a 2-million-sample sine the peak was 14 MB higher screened after
     // the first pass, 8 MB beside the first reading, unchanged so (0.5 s longer, of 1.8 s).
     let (other_reading, p) = match opts.baseline_friction {
         true => (reading(std::borrow::Cow::Owned(p), bin_reading::RateReadings::Other { narrowest }), ahead.prepare(prepare::RateReading::usual(narrowest))?),
-        false => (None, p),
+        false => (Vec::new(), p),
     };
     // Kept only for a slow log's cubic and a holds record's crossings: no long record's times held.
     drop(ahead);
@@ -326,7 +326,7 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
     drop(p);
     others.extend(read.filter(|_| holds).and_then(|read| bin_reading::through_crossings(&read, |c| again(c, None, false))));
-    others.extend(other_reading.and_then(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));
+    others.extend(other_reading.into_iter().filter_map(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));
     Ok(bin_reading::best_reading(first, others))
 }
 

@@ -217,6 +217,11 @@ impl<'r, 'a> ReadAhead<'r, 'a> {
         ReadAhead { read, ahead }
     }
 
+    /// Whether the readings were read ahead (the record has at most [`READ_AHEAD_SAMPLES`]).
+    pub(crate) fn has_read_ahead(&self) -> bool {
+        !self.ahead.is_empty()
+    }
+
     /// Whether `rate` was read ahead with a rate equal, sample for sample, to that of a reading
     /// read ahead before it (the usual one first): prepared, it is that reading.
     pub(crate) fn repeats(&self, rate: RateReading) -> bool {
