@@ -13,9 +13,11 @@ run when present, so a third build can be compared with either side without runn
 Prints each record whose report differs (its causes and held-out RMSE before and after), then
 per source (the folder name's letters: the blind suites `s`, the blind devices `d`, the third
 generator `g`, any other folder by its name): records, reports that differ in any byte, hidden
-effects named, records with a cause beside the hidden ones, clean records with a cause, and among
-the records whose causes stayed the same, how many held-out RMSEs fell and rose. A change that
-betters one source and worsens another is the issue 31 rule's case; this prints both.
+effects named, records with a cause beside the hidden ones, clean records with a cause, among
+the records whose causes stayed the same how many held-out RMSEs fell and rose, and the hidden
+effects' parameters within 25 % of the answer's (those whose answer gives the one `PARAMETERS`
+names; an effect not named counts as not within). A change that betters one source and worsens
+another is the issue 31 rule's case; this prints both.
 """
 import argparse
 import collections
@@ -65,6 +67,33 @@ def records(dirs):
                 yield d, name, path, answer
 
 
+# A hidden effect's parameter in the answers (the blind and third generators' `params`) and the
+# one identify reports for it, compared within 25 % (issue 31's tolerance).
+PARAMETERS = {
+    "viscous_friction": ("b", "damping_nms_per_rad"),
+    "hysteresis": ("force", "limit_nm"),
+    "dead_zone": ("width", "half_width_rad"),
+    "stiffness_nonlinearity": ("k3", "k3_nm_per_rad3"),
+    "sensor_offset": ("offset", "offset_nm"),
+    "time_delay": ("delay", "delay_s"),
+}
+
+
+def parameters_within(rep, answer, hidden):
+    """(hidden effects with a parameter in the answer, of those reported within 25 % of it)."""
+    causes = {} if "refused" in rep else {c["effect"]: c for c in rep["causes"]}
+    checked = within = 0
+    for effect in sorted(hidden):
+        truth_key, key = PARAMETERS.get(effect, (None, None))
+        truth = answer.get("params", {}).get(truth_key)
+        if truth is None:
+            continue
+        checked += 1
+        got = causes.get(effect, {}).get("params", {}).get(key)
+        within += got is not None and abs(got - truth) <= 0.25 * abs(truth)
+    return checked, within
+
+
 def named(rep):
     return set() if "refused" in rep else {c["effect"] for c in rep["causes"] if c["effect"] != "dropout"}
 
@@ -77,12 +106,16 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--cache")
     a = ap.parse_args()
-    jobs = [(source(d), os.path.basename(os.path.normpath(d)), name, path, hidden_effects(answer)) for d, name, path, answer in records(a.dirs)]
+    jobs = [(source(d), os.path.basename(os.path.normpath(d)), name, path, hidden_effects(answer), answer) for d, name, path, answer in records(a.dirs)]
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
         reports = list(pool.map(lambda j: (report(a.before, j[3], a.cache), report(a.after, j[3], a.cache)), jobs))
     totals = collections.OrderedDict()
-    for (src, folder, name, _, hidden), (b, c) in zip(jobs, reports):
+    for (src, folder, name, _, hidden, answer), (b, c) in zip(jobs, reports):
         t = totals.setdefault(src, collections.Counter())
+        checked, within_before = parameters_within(b, answer, hidden)
+        t["parameters"] += checked
+        t["parameters before"] += within_before
+        t["parameters after"] += parameters_within(c, answer, hidden)[1]
         t["records"] += 1
         t["differ"] += b != c
         nb, nc = named(b), named(c)
@@ -104,10 +137,10 @@ def main():
             rmse = f"{rb:.4f} -> {rc:.4f} Nm" if rb is not None and rc is not None else "refused on one side"
             print(f"{folder}/{name}: hidden {sorted(hidden) or 'none'}; {sorted(nb)} -> {sorted(nc)}; held out {rmse}")
     print()
-    print("| source | records | reports that differ | hidden effects named | records with a cause beside | clean with a cause | held-out RMSE lower / higher (same causes) |")
-    print("|---|---|---|---|---|---|---|")
+    print("| source | records | reports that differ | hidden effects named | records with a cause beside | clean with a cause | held-out RMSE lower / higher (same causes) | parameters within 25 % |")
+    print("|---|---|---|---|---|---|---|---|")
     for src, t in totals.items():
-        print(f"| {src} | {t['records']} | {t['differ']} | {t['named before']} -> {t['named after']} of {t['hidden']} | {t['beside before']} -> {t['beside after']} | {t['clean with a cause before']} -> {t['clean with a cause after']} of {t['clean']} | {t['held-out lower']} / {t['held-out higher']} |")
+        print(f"| {src} | {t['records']} | {t['differ']} | {t['named before']} -> {t['named after']} of {t['hidden']} | {t['beside before']} -> {t['beside after']} | {t['clean with a cause before']} -> {t['clean with a cause after']} of {t['clean']} | {t['held-out lower']} / {t['held-out higher']} | {t['parameters before']} -> {t['parameters after']} of {t['parameters']} |")
 
 
 if __name__ == "__main__":
