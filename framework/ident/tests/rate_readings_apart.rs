@@ -4,9 +4,10 @@
 //! windows were screened beside the noise floor (`bin_reading::wider_reading_gains`), their
 //! reading displaced the sharper intervals' on two of the blind generator's records, whose whole
 //! model over the sharper intervals had been the better. Now the best of each family is handed
-//! over. The records are the blind generator's (`tests/blind-gen`), where this was found; none of
-//! the third generator's 819 records or of 48 of this project's own (triangles and multi-sines
-//! through 14-bit counts, with a delay or a viscous friction) has two readings screened.
+//! over. The records are the blind generator's (`tests/blind-gen`), where this was found: of the
+//! third generator's 819 records none reports otherwise with both handed over, and none of 48 of
+//! this project's own (triangles and multi-sines through 14-bit counts, with a delay or a viscous
+//! friction) has two readings screened.
 
 mod through_the_reader;
 
