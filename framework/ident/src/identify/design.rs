@@ -349,6 +349,7 @@ impl Model<'_> {
             restarts: &p.restarts,
             model_nm: &fixed,
             rate_edges_rad_per_s: &p.rate_edges,
+            bin_width_s: p.bin_width_s,
             record_middle_s: self.middle_s,
         };
         let mut spans = Vec::new();
@@ -428,6 +429,7 @@ impl Model<'_> {
             restarts: &p.restarts,
             model_nm: &proj.model_nm,
             rate_edges_rad_per_s: &p.rate_edges,
+            bin_width_s: p.bin_width_s,
             record_middle_s: self.middle_s,
         };
         // The term leaves the inputs alone (see `search`), so its columns are those a design

@@ -24,6 +24,9 @@ pub(crate) struct Part {
     /// For a record read as bin averages, each sample's rate at its interval's start and end
     /// less its own [rad/s] (see `prepare::rate_edges`); empty for point samples.
     pub rate_edges: Vec<[f64; 2]>,
+    /// For a record read as bin averages, the interval each sample averages over [s]: the log's
+    /// own step, whatever the part's stride (a decimated part's samples are bins apart).
+    pub bin_width_s: f64,
     /// Sample period [s].
     pub dt: f64,
 }
@@ -64,6 +67,6 @@ impl Part {
         let rate_edges = if self.rate_edges.is_empty() || next.rate_edges.is_empty() { Vec::new() } else { self.rate_edges.iter().chain(&next.rate_edges).copied().collect() };
         // `next` starts from its own history, not from where this part ended.
         let restarts = self.restarts.iter().cloned().chain(std::iter::once(Restart { at: self.len(), history_rad: next.warm.clone() })).chain(next.restarts.iter().map(|r| Restart { at: r.at + self.len(), history_rad: r.history_rad.clone() })).collect();
-        Part { warm: self.warm.clone(), lead: self.lead.clone(), restarts, t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, rate_edges, dt: self.dt }
+        Part { warm: self.warm.clone(), lead: self.lead.clone(), restarts, t: join(&self.t, &next.t), d: join(&self.d, &next.d), v: join(&self.v, &next.v), tau: join(&self.tau, &next.tau), pivot: join(&self.pivot, &next.pivot), rep, rate_edges, bin_width_s: self.bin_width_s, dt: self.dt }
     }
 }

@@ -22,7 +22,7 @@ pub(super) fn check(builtin: &[Box<dyn CandidateCause>], registered: &[Box<dyn C
         let ctx = SearchContext::new(p.excitation, &part.t, &part.v, &part.tau, full_rate, RestSamples { t_s: p.at_rest.as_ref().map_or(&[][..], |r| &r.t), residual_nm: p.at_rest.as_ref().map_or(&[][..], |r| &r.tau) }, baseline_fitted, reads_as_friction(p.spring_share, baseline));
         let values: Vec<f64> = c.parameters(&ctx).iter().map(|p| p.grid.first().copied().unwrap_or(0.0)).collect();
         let model_nm = vec![0.0; part.len()];
-        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges, record_middle_s: p.record_middle_s };
+        let samples = Samples { t_s: &part.t, deflection_rad: &part.d, velocity_rad_per_s: &part.v, elastic_rad: &part.d, pivot_mm: &part.pivot, repetition: &part.rep, history_rad: &part.warm, restarts: &part.restarts, model_nm: &model_nm, rate_edges_rad_per_s: &part.rate_edges, bin_width_s: part.bin_width_s, record_middle_s: p.record_middle_s };
         let columns = c.columns(&values, &samples);
         let expected = c.coefficient_names().len();
         if columns.len() != expected || columns.iter().any(|col| col.len() != part.len()) {

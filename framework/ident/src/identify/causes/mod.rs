@@ -94,6 +94,9 @@ pub struct Excitation {
     pub resolution_rad: f64,
     /// How finely the log shows the motion where it turns [rad] ([`turn_step_rad`]).
     pub turn_step_rad: f64,
+    /// For a record read as bin averages, the interval each sample averages over [s] (a cause
+    /// may then be averaged over it); 0 for point samples.
+    pub bin_width_s: f64,
 }
 
 /// What a candidate sees when it chooses its parameter grid: the experiment's scales and the
@@ -309,6 +312,10 @@ pub struct Samples<'a> {
     /// less its own [rad/s]: a term that is not a straight line in the rate averages over the
     /// interval (see `prepare::rate_edges`). Empty for point samples.
     pub rate_edges_rad_per_s: &'a [[f64; 2]],
+    /// For a record read as bin averages, the interval each sample averages over [s] (the log's
+    /// step, also where the samples are a decimated part's, bins apart); unused for point
+    /// samples.
+    pub bin_width_s: f64,
     /// The middle of the whole record's time span, on `t_s`'s scale [s]: what a cause in time
     /// is centred on (an offset's drift: the offset reported beside it is the one at the middle
     /// of the record's time, its mean for an evenly logged record). The same for every part of
@@ -529,7 +536,7 @@ mod tests {
         let samples = |repetition: &[u32]| -> Option<Vec<usize>> {
             let n = repetition.len();
             let (t, zeros) = ((0..n).map(|i| i as f64).collect::<Vec<f64>>(), vec![0.0; n]);
-            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], restarts: &[], model_nm: &zeros, rate_edges_rad_per_s: &[], record_middle_s: 0.0 })
+            repetition_starts(&Samples { t_s: &t, deflection_rad: &zeros, velocity_rad_per_s: &zeros, elastic_rad: &zeros, pivot_mm: &zeros, repetition, history_rad: &[], restarts: &[], model_nm: &zeros, rate_edges_rad_per_s: &[], bin_width_s: 0.0, record_middle_s: 0.0 })
         };
         // Inside the first repetition, inside a later one, across two.
         assert_eq!(samples(&[0, 0, 0]), Some(vec![0]));

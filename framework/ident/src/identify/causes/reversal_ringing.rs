@@ -126,7 +126,7 @@ mod tests {
         // One stroke: no reversal inside, so the whole of it is one ring.
         let d: Vec<f64> = t.iter().map(|x| 0.01 * x).collect();
         let (v, zeros) = (vec![0.01; n], vec![0.0; n]);
-        let s = Samples { t_s: &t, deflection_rad: &d, velocity_rad_per_s: &v, elastic_rad: &d, pivot_mm: &zeros, repetition: &[], history_rad: &[], restarts: &[], model_nm: &zeros, rate_edges_rad_per_s: &[], record_middle_s: 0.0 };
+        let s = Samples { t_s: &t, deflection_rad: &d, velocity_rad_per_s: &v, elastic_rad: &d, pivot_mm: &zeros, repetition: &[], history_rad: &[], restarts: &[], model_nm: &zeros, rate_edges_rad_per_s: &[], bin_width_s: 0.0, record_middle_s: 0.0 };
         ReversalRinging.columns(&[frequency_hz, damping], &s)
     }
 

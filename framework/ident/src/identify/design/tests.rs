@@ -35,12 +35,12 @@ fn a_term_keeps_its_columns_across_transforms_it_does_not_see() {
 
 fn part(t0: f64, d: &[f64], warm: &[f64]) -> Part {
     let t: Vec<f64> = (0..d.len()).map(|i| t0 + 0.01 * i as f64).collect();
-    Part { warm: warm.to_vec(), lead: Default::default(), restarts: Vec::new(), t, d: d.to_vec(), v: vec![0.0; d.len()], tau: vec![0.0; d.len()], pivot: vec![0.0; d.len()], rep: Vec::new(), rate_edges: Vec::new(), dt: 0.01 }
+    Part { warm: warm.to_vec(), lead: Default::default(), restarts: Vec::new(), t, d: d.to_vec(), v: vec![0.0; d.len()], tau: vec![0.0; d.len()], pivot: vec![0.0; d.len()], rep: Vec::new(), rate_edges: Vec::new(), bin_width_s: 0.01, dt: 0.01 }
 }
 
 fn loop_column(p: &Part) -> Vec<f64> {
     let zeros = vec![0.0; p.len()];
-    let s = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, elastic_rad: &p.d, pivot_mm: &p.pivot, repetition: &p.rep, history_rad: &p.warm, restarts: &p.restarts, model_nm: &zeros, rate_edges_rad_per_s: &p.rate_edges, record_middle_s: 0.0 };
+    let s = Samples { t_s: &p.t, deflection_rad: &p.d, velocity_rad_per_s: &p.v, elastic_rad: &p.d, pivot_mm: &p.pivot, repetition: &p.rep, history_rad: &p.warm, restarts: &p.restarts, model_nm: &zeros, rate_edges_rad_per_s: &p.rate_edges, bin_width_s: p.bin_width_s, record_middle_s: 0.0 };
     // A Dahl loop of 1 mrad, no dead band.
     super::super::causes::Hysteresis.columns(&[1e-3, 0.0, 1.0], &s).remove(0)
 }

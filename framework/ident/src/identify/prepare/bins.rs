@@ -65,6 +65,7 @@ impl super::Prepared {
     /// The same data read as point samples.
     pub fn as_points(&self) -> super::Prepared {
         let mut p = self.clone();
+        p.excitation.bin_width_s = 0.0;
         for part in [&mut p.train, &mut p.test, &mut p.coarse, &mut p.stretch] {
             part.rate_edges = Vec::new();
         }

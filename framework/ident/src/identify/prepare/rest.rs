@@ -255,6 +255,7 @@ fn without(part: &Part, drop: &[bool]) -> Part {
         pivot: if part.pivot.len() == part.len() { keep(&part.pivot) } else { part.pivot.clone() },
         rep: if part.rep.len() == part.len() { part.rep.iter().zip(drop).filter(|(_, d)| !**d).map(|(r, _)| *r).collect() } else { part.rep.clone() },
         rate_edges: if part.rate_edges.len() == part.len() { part.rate_edges.iter().zip(drop).filter(|(_, d)| !**d).map(|(r, _)| *r).collect() } else { part.rate_edges.clone() },
+        bin_width_s: part.bin_width_s,
         dt: part.dt,
     }
 }
@@ -387,6 +388,7 @@ mod tests {
             pivot: vec![0.0; n],
             rep: Vec::new(),
             rate_edges: Vec::new(),
+            bin_width_s: 0.0,
             dt: 1.0,
         };
         // Samples 1, 2 and 8 at rest: the restart at 4 comes after two fewer samples, the one
