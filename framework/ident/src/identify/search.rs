@@ -9,7 +9,10 @@ use super::numeric::refine_log;
 /// fit. With `warm` (the best of the previous step, before one more cause was added), each grid
 /// is narrowed to the five values nearest it: a cause added elsewhere moves a parameter a little,
 /// not across its grid; where its scale moved further (the best at the narrowed grid's edge),
-/// the whole grid is searched again. `stretch`: training samples at the full rate (see
+/// the whole grid is searched again. A nested parameter's grid is a set of choices whose first is
+/// the simpler model, not a scale: it is searched whole (sorted and narrowed, a loop's band
+/// grid with its reading over each bin's interval, `-1`, put that reading first, where a band
+/// had to better it). `stretch`: training samples at the full rate (see
 /// [`super::prepare::Prepared::full_rate_training`]).
 pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchContext, coarse: &Part, stretch: &Part, warm: Option<&[f64]>) -> Option<Term> {
     if !model.causes[cause].applicable(ctx) {
@@ -19,15 +22,7 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
     // The whole grids, for a narrowed one whose best lies at its edge.
     let whole: Vec<Vec<f64>> = params.iter().map(|p| p.grid.clone()).collect();
     if let Some(warm) = warm.filter(|w| w.len() == params.len()) {
-        for (p, w) in params.iter_mut().zip(warm) {
-            if p.grid.len() > 5 {
-                let mut sorted = p.grid.clone();
-                sorted.sort_by(f64::total_cmp);
-                let at = sorted.iter().enumerate().min_by(|a, b| (a.1 - w).abs().total_cmp(&(b.1 - w).abs())).map_or(0, |(i, _)| i);
-                let lo = at.saturating_sub(2).min(sorted.len() - 5);
-                p.grid = sorted[lo..lo + 5].to_vec();
-            }
-        }
+        narrow_to_warm(&mut params, warm);
     }
     let term = |p: &[f64]| Term { cause, params: p.to_vec(), grids: Vec::new(), baseline: false };
     // The grid on the decimated part by projection when the cause leaves the inputs alone; full
@@ -133,6 +128,21 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
         }
     }
     Some(Term { cause, params: best, grids: params, baseline: false })
+}
+
+/// Each grid of more than five values narrowed to the five nearest `warm`'s value (see
+/// [`search`]); a nested parameter's grid, a set of choices whose first is the simpler model,
+/// searched whole.
+fn narrow_to_warm(params: &mut [super::causes::Parameter], warm: &[f64]) {
+    for (p, w) in params.iter_mut().zip(warm) {
+        if p.grid.len() > 5 && !p.refine.is_nested() {
+            let mut sorted = p.grid.clone();
+            sorted.sort_by(f64::total_cmp);
+            let at = sorted.iter().enumerate().min_by(|a, b| (a.1 - w).abs().total_cmp(&(b.1 - w).abs())).map_or(0, |(i, _)| i);
+            let lo = at.saturating_sub(2).min(sorted.len() - 5);
+            p.grid = sorted[lo..lo + 5].to_vec();
+        }
+    }
 }
 
 /// `rss`, or no fit (infinite) where `term`'s cause keeps to its bounds on a friction record and
@@ -307,4 +317,25 @@ fn polish_round(model: &Model, spec: &mut Spec, coarse: &Part, stretch: &Part, w
         }
     }
     moved
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::causes::{Parameter, Refine};
+
+    #[test]
+    fn a_warm_search_narrows_a_scale_and_keeps_a_nested_choice_whole_and_in_order() {
+        // A loop's scale and its band's grid on a record read as bins (the widths, then -1: the
+        // loop over each bin's interval). Sorted and narrowed, the band's grid began at -1, the
+        // choice a band then had to better.
+        let scale: Vec<f64> = (0..16).map(|i| 1e-3 * 1.5f64.powi(i)).collect();
+        let band = vec![0.0, 1e-4, 2e-4, 4e-4, 8e-4, -1.0];
+        let mut params = vec![
+            Parameter { name: "lambda_rad".into(), grid: scale.clone(), refine: Refine::Between },
+            Parameter { name: "input_dead_band_rad".into(), grid: band.clone(), refine: Refine::Nested },
+        ];
+        super::narrow_to_warm(&mut params, &[scale[7], 0.0]);
+        assert_eq!(params[0].grid, scale[5..10].to_vec());
+        assert_eq!(params[1].grid, band);
+    }
 }

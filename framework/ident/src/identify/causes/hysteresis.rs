@@ -153,7 +153,8 @@ impl CandidateCause for Hysteresis {
         Effect::Hysteresis.name()
     }
     fn reads(&self) -> InputSet {
-        InputSet::DEFLECTION
+        // The rate too: the pre-sliding damping's `du/dt` and the path within a bin.
+        InputSet::DEFLECTION.union(InputSet::VELOCITY)
     }
     fn effect(&self) -> Option<Effect> {
         Some(Effect::Hysteresis)

@@ -31,7 +31,7 @@ impl InputSet {
     pub const ALL: InputSet = InputSet { deflection: true, velocity: true, elastic: true };
     /// None of them (an offset, a line in time, a mode in time).
     pub const NONE: InputSet = InputSet { deflection: false, velocity: false, elastic: false };
-    /// The deflection as the torque channel sees it (a Dahl loop, the reversals).
+    /// The deflection as the torque channel sees it (the reversals; a Dahl loop with the rate).
     pub const DEFLECTION: InputSet = InputSet { deflection: true, velocity: false, elastic: false };
     /// The deflection rate (the frictions, the vibrations' envelopes).
     pub const VELOCITY: InputSet = InputSet { deflection: false, velocity: true, elastic: false };
