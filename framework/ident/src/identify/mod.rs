@@ -324,8 +324,8 @@ pub fn identify(data: &Data, opts: &IdentifyOptions) -> Result<Report, IdentifyE
     // A friction record's lag is part of its friction (`no_spring.lag`), not a cause: not asked.
     // A loop too: the baseline lacks it, and it may be read over each bin (`causes::hysteresis`).
     let tips_the_reading = |e: &str| e == Effect::TimeDelay.name() || e == Effect::Hysteresis.name();
-    let delayed = first.report.causes.iter().any(|c| tips_the_reading(&c.effect));
-    others.extend((slow && first.report.bin_averages.is_none() && delayed).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
+    let tipped = first.report.causes.iter().any(|c| tips_the_reading(&c.effect));
+    others.extend((slow && first.report.bin_averages.is_none() && tipped).then(|| again(&p, rate.as_ref(), true)).flatten().map(|e| (bin_reading::Reading::AsBins, e)));
     drop(p);
     others.extend(read.filter(|_| holds).and_then(|read| bin_reading::through_crossings(&read, |c| again(c, None, false))));
     others.extend(other_reading.into_iter().filter_map(|(r, q)| again(&q, Some(&r), false)).map(|e| (bin_reading::Reading::Other, e)));

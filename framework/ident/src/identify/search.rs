@@ -48,10 +48,6 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
     let searched = params.iter().filter(|p| p.grid.len() > 1).count();
     for _ in 0..searched.clamp(1, 2) {
         for j in 0..params.len() {
-            // A nested parameter with one value is at it already.
-            if params[j].refine.is_nested() && params[j].grid.len() == 1 {
-                continue;
-            }
             let mut p = params[j].clone();
             let at = |x: f64| {
                 let mut q = best.clone();
