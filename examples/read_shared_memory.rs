@@ -39,11 +39,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             std::thread::sleep(Duration::from_millis(1));
             continue;
         };
-        // Only the first `joint_count` entries are joints; a field whose bit is not set in
-        // `valid_mask` is unknown this cycle (its value is NaN), never zero.
-        for joint in sample.joints() {
+        // The payload is a slice with one entry per DOF, the header the cycle's; a field whose
+        // bit is not set in `valid_mask` is unknown this cycle (its value is NaN), never zero.
+        for joint in sample.payload() {
             let position = joint.get(FieldMask::POSITION, joint.position_rad);
-            println!("cycle {:>5}  {}  position {}", sample.cycle, decode_name(&joint.name), position.map_or("unknown".into(), |q| format!("{q:+.4} rad")));
+            println!("cycle {:>5}  {}  position {}", sample.user_header().cycle, decode_name(&joint.name), position.map_or("unknown".into(), |q| format!("{q:+.4} rad")));
         }
         printed += 1;
         std::thread::sleep(Duration::from_millis(20));

@@ -24,7 +24,7 @@ fn cmd(arm: &str, args: &[&str]) -> (i32, String) {
 /// The latest published state of `arm`, read in this process.
 struct Watch {
     _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
-    sub: iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, jointctl_ipc::ArmState, ()>,
+    sub: iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, [jointctl_ipc::JointSample], jointctl_ipc::ArmStateHeader>,
 }
 
 impl Watch {
@@ -50,7 +50,7 @@ impl Watch {
         let mut last = None;
         loop {
             while let Some(s) = self.sub.receive().unwrap() {
-                last = Some(*s);
+                last = Some(jointctl_ipc::ArmState::from(&s));
             }
             if let Some(s) = last {
                 return s;

@@ -222,12 +222,12 @@ fn diagnostics_carry_whole_device_names() {
         let now = jointctl_runtime::timing::monotonic_ns();
         lp.step(now, now, None);
         if let Some(s) = sub.receive().unwrap() {
-            break *s;
+            break jointctl_ipc::Diagnostics::try_from(&s).unwrap();
         }
         assert!(t.elapsed() < std::time::Duration::from_secs(5), "no diagnostics");
         std::thread::sleep(std::time::Duration::from_millis(5));
     };
-    let published: Vec<&str> = d.devices[..d.device_count as usize].iter().map(|dev| jointctl_ipc::decode_name(&dev.name)).collect();
+    let published: Vec<&str> = d.devices.iter().map(|dev| jointctl_ipc::decode_name(&dev.name)).collect();
     assert_eq!(published, expected);
     let _ = lp.finish();
 }

@@ -37,7 +37,7 @@ fn every_reading_and_set_point_of_every_cycle_is_published_with_its_status() {
     let mut kept = None;
     for _ in 0..100 {
         if let Some(sample) = descriptor.receive().unwrap() {
-            kept = Some(*sample.payload());
+            kept = Some(jointctl_ipc::raw::RawDescriptor::try_from(&sample).unwrap());
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(5));
@@ -46,7 +46,7 @@ fn every_reading_and_set_point_of_every_cycle_is_published_with_its_status() {
     assert_eq!(refused, 0);
 
     let d = kept.expect("the descriptor is kept for late subscribers");
-    assert_eq!((d.encoder_count, d.drive_count), (13, 9), "section 2.2: 13 encoders, 9 drives");
+    assert_eq!((d.encoders.len(), d.drives.len()), (13, 9), "section 2.2: 13 encoders, 9 drives");
     assert_eq!(decode_name(&d.encoders[0].name), "enc_q1_out");
     assert_eq!(d.encoders[0].kind, DeviceKind::ABSOLUTE_ENCODER);
     assert_eq!(decode_name(&d.encoders[0].unit), "rad");
@@ -57,7 +57,7 @@ fn every_reading_and_set_point_of_every_cycle_is_published_with_its_status() {
 
     let mut frames = Vec::new();
     while let Some(sample) = raw.receive().unwrap() {
-        frames.push(*sample.payload());
+        frames.push(jointctl_ipc::raw::RawFrame::try_from(&sample).unwrap());
     }
     // The final frame is the shutdown's; the 40 cycles come first.
     assert!(frames.len() >= 40, "{} frames", frames.len());
@@ -140,11 +140,11 @@ fn accepted_commands_are_published_numbered_and_refused_ones_are_not() {
     // the answer's stamp alone leaves a cycle's doubt).
     let mut frames = Vec::new();
     while let Some(f) = raw.receive().unwrap() {
-        frames.push((f.cycle, f.commands_applied));
+        frames.push((f.user_header().cycle, f.user_header().commands_applied));
     }
     let mut modes = std::collections::HashMap::new();
     while let Some(st) = state.receive().unwrap() {
-        modes.insert(st.cycle, st.joints[0].mode);
+        modes.insert(st.user_header().cycle, st.payload()[0].mode);
     }
     assert!(frames.windows(2).all(|w| w[0].1 <= w[1].1), "{frames:?}");
     assert_eq!(frames.last().unwrap().1, 2, "two accepted commands applied");

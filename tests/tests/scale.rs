@@ -1,11 +1,11 @@
 //! Arms beyond the SHERPA arm's size: a generated arm of hundreds of DOFs runs its loop
-//! allocation-free; an arm bigger than the shared-memory samples is refused as a publisher with
-//! the reason (never published with joints or devices left out) and runs without publishing.
+//! allocation-free, and publishes every joint and device (the shared-memory samples are sized by
+//! the arm).
 
 use std::process::Command;
 
 use jointctl_modes::Mode;
-use jointctl_runtime::{ArmPublisher, ControlLoop, PluginLoader, RunError};
+use jointctl_runtime::{ArmPublisher, ControlLoop, PluginLoader};
 use jointctl_test_support::count_allocations;
 use jointctl_test_support::generated_arm::{JointKind, arm_yaml};
 use jointctl_tests::{arm_name, jointctl, scratch};
@@ -60,41 +60,92 @@ fn a_700_dof_arm_tracks_its_targets_and_its_cycle_allocates_nothing() {
 }
 
 #[test]
-fn an_arm_bigger_than_the_shared_memory_samples_is_refused_as_a_publisher_with_the_reason() {
-    let dofs = jointctl_api::MAX_ARM_DOF + 1;
-    let arm = build(&arm_yaml(&arm_name("scale-17"), dofs, JointKind::Rigid, 1000.0));
-    let e = ArmPublisher::new(&arm, None).err().expect("17 DOFs do not fit the samples");
-    assert!(matches!(e, RunError::TooLargeToPublish { what: "DOFs", count: 17, max: 16, .. }), "{e:?}");
-    assert!(e.to_string().contains("--no-ipc"), "{e}");
+fn a_700_dof_arm_publishes_every_joint_and_device_and_its_cycle_still_allocates_nothing() {
+    // The shared-memory samples were fixed at 16 DOFs and 32 devices: a bigger arm was refused
+    // as a publisher. They are sized by the arm now.
+    let mut arm = build(&arm_yaml(&arm_name("scale-pub-700"), 700, JointKind::Rigid, 1000.0));
+    let (encoders, drives) = arm.raw_devices();
+    assert_eq!((encoders.len(), drives.len()), (700, 700));
+    let device_names: Vec<String> = arm.device_names().map(str::to_string).collect();
+    let devices = device_names.len();
+    let mut publisher = ArmPublisher::new(&arm, None).unwrap_or_else(|e| panic!("700 DOFs are published: {e}"));
+    let node = jointctl_ipc::create_node(None, &format!("scale-pub-700-{}", std::process::id())).unwrap();
+    let names = jointctl_ipc::ServiceNames::for_arm(&arm.name);
+    let state = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
+    let diagnostics = jointctl_ipc::diagnostics_service(&node, &names.diagnostics).unwrap().subscriber_builder().create().unwrap();
+    let raw = jointctl_ipc::raw_service(&node, &names.raw).unwrap().subscriber_builder().create().unwrap();
+    let latest = jointctl_ipc::LatestStateReader::open(&jointctl_ipc::IpcScope::domain(None), &arm.name).unwrap();
+    let mut lp = ControlLoop::new(&mut arm, Some(&mut publisher), 0);
+    let step = |lp: &mut ControlLoop| {
+        let t = jointctl_runtime::timing::monotonic_ns();
+        lp.step(t, t, None);
+        // Paced, so that the publisher thread keeps up and no record is dropped.
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    };
+    for _ in 0..20 {
+        step(&mut lp);
+    }
+    let ((), n) = count_allocations(|| {
+        for _ in 0..20 {
+            step(&mut lp);
+        }
+    });
+    assert_eq!(n, 0, "{n} allocations in 20 published cycles of 700 DOFs");
+    let (_, refused) = lp.finish();
+    assert_eq!((refused, publisher.drops()), (0, 0), "every sample sent");
+    let (mut states, mut last_state) = (0, None);
+    while let Some(s) = state.receive().unwrap() {
+        states += 1;
+        last_state = Some(jointctl_ipc::ArmState::from(&s));
+    }
+    let s = last_state.expect("joint states");
+    assert!(states >= 40, "{states} joint states for 40 cycles");
+    assert_eq!(s.joints.len(), 700);
+    assert_eq!(jointctl_ipc::decode_name(&s.joints[699].name), "j699");
+    assert!(s.joints[699].position_rad.is_finite(), "the last joint is observed");
+    let mut last_diag = None;
+    while let Some(d) = diagnostics.receive().unwrap() {
+        last_diag = Some(jointctl_ipc::Diagnostics::try_from(&d).unwrap());
+    }
+    let d = last_diag.expect("diagnostics");
+    assert_eq!((d.joints.len(), d.devices.len()), (700, devices));
+    assert_eq!(jointctl_ipc::decode_name(&d.devices[devices - 1].name), device_names[devices - 1]);
+    let mut last_raw = None;
+    while let Some(f) = raw.receive().unwrap() {
+        last_raw = Some(jointctl_ipc::raw::RawFrame::try_from(&f).unwrap());
+    }
+    let f = last_raw.expect("raw frames");
+    assert_eq!((f.encoders().len(), f.drives().len()), (700, 700));
+    assert_eq!(f.encoders()[699].status, jointctl_ipc::raw::RawStatus::VALID);
+    let seen = latest.latest().unwrap();
+    assert_eq!((seen.joints.len(), seen.final_sample), (700, 1), "the blackboard's 44 pages");
+    assert_eq!(jointctl_ipc::decode_name(&seen.joints[699].name), "j699");
 }
 
 #[test]
-fn an_arm_whose_devices_overflow_the_diagnostics_is_refused_as_a_publisher() {
-    // 16 DOFs fit, and so do their 16 drives and 16 encoders; one force/torque sensor more makes
-    // 33 devices, one more than a diagnostics sample carries: it was published without it.
-    let yaml = arm_yaml(&arm_name("scale-devices"), jointctl_api::MAX_ARM_DOF, JointKind::Rigid, 1000.0)
-        .replacen("joints:\n", "  force_torque:\n    - {name: ft0, range_nm: 40.0, sim: {dof: j0}}\njoints:\n", 1);
-    let arm = build(&yaml);
-    let e = ArmPublisher::new(&arm, None).err().expect("33 devices do not fit the diagnostics");
-    assert!(matches!(e, RunError::TooLargeToPublish { count: 33, max: 32, .. }), "{e:?}");
-    assert!(e.to_string().contains("devices"), "{e}");
-}
-
-#[test]
-fn a_big_arm_is_checked_with_a_warning_refused_by_run_and_runs_without_publishing() {
+fn a_big_arm_runs_and_publishes_and_an_inspector_sees_all_its_joints() {
+    // `check` warned and `run` refused such an arm (pointing to `--no-ipc`) while the samples
+    // carried at most 16 DOFs.
     let arm = arm_name("scale-run");
     let yaml = scratch("scale-run").join("big.yaml");
     std::fs::write(&yaml, arm_yaml(&arm, 40, JointKind::Elastic, 200.0)).unwrap();
     let check = Command::new(jointctl()).arg("check").arg(&yaml).output().unwrap();
     let out = String::from_utf8_lossy(&check.stdout);
     assert!(check.status.success(), "{out}{}", String::from_utf8_lossy(&check.stderr));
-    assert!(out.contains("40 joint(s)") && out.contains("warning: arm") && out.contains("has 40 DOFs"), "{out}");
-    let run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "20"]).output().unwrap();
-    let err = String::from_utf8_lossy(&run.stderr);
-    assert!(!run.status.success() && err.contains("carry at most 16") && err.contains("--no-ipc"), "{err}");
-    let run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--cycles", "20", "--no-ipc"]).output().unwrap();
-    let err = String::from_utf8_lossy(&run.stderr);
-    assert!(run.status.success() && err.contains("20 cycles"), "{err}");
+    assert!(out.contains("40 joint(s)") && !out.contains("warning: arm"), "{out}");
+    let mut run = Command::new(jointctl()).arg("run").arg(&yaml).args(["--duration", "20"]).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let echo = Command::new(jointctl()).args(["inspect", "echo", "--arm", &arm, "--json", "--count", "3", "--timeout", "15"]).output().unwrap();
+    let diag = Command::new(jointctl()).args(["inspect", "diag", "--arm", &arm, "--json", "--timeout", "15"]).output().unwrap();
+    let _ = Command::new(jointctl()).args(["cmd", "stop", "--arm", &arm]).output();
+    let status = run.wait().unwrap();
+    let out = String::from_utf8_lossy(&echo.stdout);
+    assert!(echo.status.success(), "{out}{}", String::from_utf8_lossy(&echo.stderr));
+    let last: serde_json::Value = serde_json::from_str(out.lines().last().unwrap()).unwrap();
+    assert_eq!(last["joints"].as_array().map(Vec::len), Some(40), "{last}");
+    assert_eq!(last["joints"][39]["name"], "j39");
+    let d: serde_json::Value = serde_json::from_slice(&diag.stdout).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&diag.stderr)));
+    assert_eq!((d["joints"].as_array().map(Vec::len), d["devices"].as_array().map(Vec::len)), (Some(40), Some(80)), "{d}");
+    assert!(status.success(), "the run stopped cleanly");
 }
 
 /// The scheduling policy, priority and allowed CPUs of thread `tid` of this process.

@@ -28,12 +28,11 @@ import time
 
 import iceoryx2 as iox2
 
-# framework/ipc/src/lib.rs: MAX_JOINTS, NAME_LEN, DEVICE_NAME_LEN, MAX_DEVICES,
-# FAULT_MESSAGE_LEN, JITTER_BUCKET_UPPER_US; framework/api/src/state.rs: FieldMask bits.
-MAX_JOINTS = 16
+# framework/ipc/src/lib.rs: NAME_LEN, DEVICE_NAME_LEN, JITTER_BUCKET_UPPER_US; diagnostics.rs:
+# FAULT_MESSAGE_LEN; latest.rs: PAGE_JOINTS; framework/api/src/state.rs: FieldMask bits.
+PAGE_JOINTS = 16
 NAME_LEN = 16
 DEVICE_NAME_LEN = 48
-MAX_DEVICES = 32
 FAULT_MESSAGE_LEN = 128
 JITTER_BUCKET_UPPER_US = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000, None]
 POSITION, VELOCITY, DEFLECTION, TORQUE, STIFFNESS, PIVOT = 1 << 0, 1 << 1, 1 << 2, 1 << 3, 1 << 4, 1 << 5
@@ -42,7 +41,8 @@ MODES = {0: "hold", 1: "position", 2: "manual", 3: "trajectory", 4: "torque", 5:
 
 
 class JointSample(ctypes.Structure):
-    """Mirror of `jointctl_ipc::JointSample` (field order and types must match)."""
+    """Mirror of `jointctl_ipc::JointSample` (field order and types must match): the
+    joint-state service's payload is a slice of them, one per DOF."""
 
     _fields_ = [
         ("name", ctypes.c_uint8 * NAME_LEN),
@@ -61,21 +61,43 @@ class JointSample(ctypes.Structure):
         ("enabled", ctypes.c_uint32),
     ]
 
+    @staticmethod
+    def type_name() -> str:
+        return "jointctl.JointSample.v1"
 
-class ArmState(ctypes.Structure):
-    """Mirror of `jointctl_ipc::ArmState`; iceoryx2 matches it by type name, size and alignment."""
+
+class ArmStateHeader(ctypes.Structure):
+    """Mirror of `jointctl_ipc::ArmStateHeader`, the joint-state samples' user header;
+    iceoryx2 matches it by type name, size and alignment."""
 
     _fields_ = [
         ("cycle", ctypes.c_uint64),
         ("stamp_ns", ctypes.c_uint64),
-        ("joint_count", ctypes.c_uint32),
         ("final_sample", ctypes.c_uint32),
-        ("joints", JointSample * MAX_JOINTS),
+        ("joint_count", ctypes.c_uint32),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "jointctl.ArmState.v4"
+        return "jointctl.ArmStateHeader.v1"
+
+
+class LatestStatePage(ctypes.Structure):
+    """Mirror of `jointctl_ipc::LatestStatePage`: one entry of the latest-state blackboard."""
+
+    _fields_ = [
+        ("cycle", ctypes.c_uint64),
+        ("stamp_ns", ctypes.c_uint64),
+        ("arm_joint_count", ctypes.c_uint32),
+        ("first_joint", ctypes.c_uint32),
+        ("joint_count", ctypes.c_uint32),
+        ("final_sample", ctypes.c_uint32),
+        ("joints", JointSample * PAGE_JOINTS),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "jointctl.LatestStatePage.v1"
 
 
 class JointDiagnostics(ctypes.Structure):
@@ -116,8 +138,9 @@ class DeviceDiagnostics(ctypes.Structure):
     ]
 
 
-class Diagnostics(ctypes.Structure):
-    """Mirror of `jointctl_ipc::Diagnostics`."""
+class DiagnosticsHeader(ctypes.Structure):
+    """Mirror of `jointctl_ipc::DiagnosticsHeader`, the diagnostics samples' user header; their
+    payload is bytes: `joint_count` JointDiagnostics, then `device_count` DeviceDiagnostics."""
 
     _fields_ = [
         ("cycle", ctypes.c_uint64),
@@ -132,16 +155,23 @@ class Diagnostics(ctypes.Structure):
         ("max_jitter_ns", ctypes.c_uint64),
         ("jitter_histogram", ctypes.c_uint64 * 16),
         ("joint_count", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
-        ("joints", JointDiagnostics * MAX_JOINTS),
         ("device_count", ctypes.c_uint32),
-        ("_reserved2", ctypes.c_uint32),
-        ("devices", DeviceDiagnostics * MAX_DEVICES),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "jointctl.Diagnostics.v4"
+        return "jointctl.DiagnosticsHeader.v1"
+
+
+def diagnostics_entries(header: DiagnosticsHeader, payload: bytes):
+    """The joints' and devices' entries of a diagnostics sample's byte payload, or a ValueError
+    when its length is not what the header says."""
+    joints, devices = header.joint_count, header.device_count
+    expected = joints * ctypes.sizeof(JointDiagnostics) + devices * ctypes.sizeof(DeviceDiagnostics)
+    if len(payload) != expected:
+        raise ValueError(f"a diagnostics payload of {len(payload)} bytes, its header says {joints} joints and {devices} devices ({expected} bytes)")
+    at = joints * ctypes.sizeof(JointDiagnostics)
+    return (JointDiagnostics * joints).from_buffer_copy(payload, 0), (DeviceDiagnostics * devices).from_buffer_copy(payload, at)
 
 
 def text(raw) -> str:
@@ -149,8 +179,9 @@ def text(raw) -> str:
     return bytes(raw).split(b"\0", 1)[0].decode("utf-8", "replace")
 
 
-def diagnostics_json(d: Diagnostics) -> dict:
+def diagnostics_json(d: DiagnosticsHeader, payload: bytes) -> dict:
     """The shape of `jointctl inspect diag --json`."""
+    joints, devices = diagnostics_entries(d, payload)
     counters = ["cycle", "stamp_ns", "period_ns", "overruns", "missed_deadlines", "hal_errors", "publish_drops", "last_compute_ns", "max_compute_ns"]
     out = {k: getattr(d, k) for k in counters}
     out["max_lateness_ns"] = d.max_jitter_ns
@@ -158,11 +189,11 @@ def diagnostics_json(d: Diagnostics) -> dict:
     joint_counters = ["invalid_cycles", "fault_count", "setpoint_clamps", "torque_clamps", "rate_limited", "watchdog_trips", "missing_inputs", "plugin_max_ns", "over_budget_cycles", "setpoint_rejections"]
     out["joints"] = [
         {"name": text(j.name), "fault_code": j.fault_code, "fault_message": text(j.fault_message), "held": j.held != 0, **{k: getattr(j, k) for k in joint_counters}}
-        for j in d.joints[: min(d.joint_count, MAX_JOINTS)]
+        for j in joints
     ]
     out["devices"] = [
         {"name": text(x.name), "missing": x.missing, "invalid": x.invalid, "implausible": x.implausible, "emcy": x.emcy, "flags": x.flags}
-        for x in d.devices[: min(d.device_count, MAX_DEVICES)]
+        for x in devices
     ]
     return out
 
@@ -185,9 +216,10 @@ def wall_clock_ns(stamp_ns: int):
     return time.time_ns() - age if age >= 0 else None
 
 
-def as_json(state: ArmState) -> dict:
+def as_json(header, joints_in) -> dict:
+    """A joint-state sample as JSON: its header (`cycle`, `stamp_ns`) and its joints."""
     joints = []
-    for j in state.joints[: min(state.joint_count, MAX_JOINTS)]:
+    for j in joints_in:
         joints.append(
             {
                 "name": text(j.name),
@@ -206,7 +238,7 @@ def as_json(state: ArmState) -> dict:
                 "fault_code": j.fault_code,
             }
         )
-    return {"cycle": state.cycle, "stamp_ns": state.stamp_ns, "wall_ns": wall_clock_ns(state.stamp_ns), "joints": joints}
+    return {"cycle": header.cycle, "stamp_ns": header.stamp_ns, "wall_ns": wall_clock_ns(header.stamp_ns), "joints": joints}
 
 
 def node_in(domain, ipc_root):
@@ -220,19 +252,36 @@ def node_in(domain, ipc_root):
     return iox2.NodeBuilder.new().config(config).create(iox2.ServiceType.Ipc)
 
 
+def read_pages(entries):
+    """The latest state from the blackboard's pages: (first page, joints), or None when the loop
+    wrote between two pages' reads (they are of different cycles)."""
+    pages = [e.get().decode_as(LatestStatePage) for e in entries]
+    if any(p.cycle != pages[0].cycle for p in pages):
+        return None
+    joints = [j for p in pages for j in p.joints[: min(p.joint_count, PAGE_JOINTS)]]
+    return pages[0], joints
+
+
 def latest(node, args, hint) -> int:
-    """`--latest`: the arm's latest-state blackboard (`<arm>/latest_state`, key 0 of type u32,
-    one `ArmState`), a line per new cycle it shows (not before the loop's first)."""
+    """`--latest`: the arm's latest-state blackboard (`<arm>/latest_state`, keys 0.. of type u32,
+    one `LatestStatePage` of up to 16 joints each), a line per new cycle it shows (not before
+    the loop's first)."""
     service_name = f"{args.arm}/latest_state"
     try:
         service = node.service_builder(iox2.ServiceName.new(service_name)).blackboard_opener(ctypes.c_uint32).open()
-        entry = service.reader_builder().create().entry(ctypes.c_uint32(0), ArmState)
+        reader = service.reader_builder().create()
+        first = reader.entry(ctypes.c_uint32(0), LatestStatePage)
+        pages = max(1, -(-first.get().decode_as(LatestStatePage).arm_joint_count // PAGE_JOINTS))
+        entries = [first] + [reader.entry(ctypes.c_uint32(k), LatestStatePage) for k in range(1, pages)]
     except Exception as e:  # the arm is not running, or the layouts differ
         print(f"error: cannot open `{service_name}`: {e!r} (is `jointctl run` running with arm `{args.arm}`?){hint}", file=sys.stderr)
         return 1
     received, shown, last = 0, None, time.monotonic()
     while args.count is None or received < args.count:
-        state = entry.get().decode_as(ArmState)
+        read = read_pages(entries)
+        if read is None:
+            continue
+        state, joints = read
         if state.stamp_ns == 0 or state.cycle == shown:
             if time.monotonic() - last > args.timeout:
                 print(f"error: no new cycle on `{service_name}` for {args.timeout} s", file=sys.stderr)
@@ -241,7 +290,7 @@ def latest(node, args, hint) -> int:
             continue
         shown, last = state.cycle, time.monotonic()
         received += 1
-        print(json.dumps(as_json(state)), flush=True)
+        print(json.dumps(as_json(state, joints)), flush=True)
         if state.final_sample and args.count is None:
             break
     return 0
@@ -264,10 +313,15 @@ def main() -> int:
     hint = f" in domain `{args.domain}`" if args.domain else " (an arm whose YAML sets `ipc.domain` is found with --domain D)"
     if args.latest:
         return latest(node, args, hint)
-    topic, payload = ("diagnostics", Diagnostics) if args.diag else ("joint_state", ArmState)
+    topic = "diagnostics" if args.diag else "joint_state"
     service_name = f"{args.arm}/{topic}"
     try:
-        service = node.service_builder(iox2.ServiceName.new(service_name)).publish_subscribe(payload).open()
+        builder = node.service_builder(iox2.ServiceName.new(service_name))
+        if args.diag:
+            service = builder.publish_subscribe(iox2.Slice[ctypes.c_uint8]).user_header(DiagnosticsHeader).open()
+        else:
+            # A slice of joints sized by the arm, the cycle's fields in the user header.
+            service = builder.publish_subscribe(iox2.Slice[JointSample]).user_header(ArmStateHeader).open()
     except Exception as e:  # the arm is not running, or its payload layout differs
         print(f"error: cannot open `{service_name}`: {e!r} (is `jointctl run` running with arm `{args.arm}`?){hint}", file=sys.stderr)
         return 1
@@ -278,7 +332,7 @@ def main() -> int:
         while True:
             sample = subscriber.receive()
             if sample is not None:
-                newest = diagnostics_json(sample.payload().contents)
+                newest = diagnostics_json(sample.user_header().contents, bytes(sample.payload().as_memory_view()))
                 continue
             if newest is not None:
                 print(json.dumps(newest), flush=True)
@@ -299,9 +353,14 @@ def main() -> int:
             continue
         last = time.monotonic()
         received += 1
-        state = sample.payload().contents
-        print(json.dumps(as_json(state)), flush=True)
-        if state.final_sample and args.count is None:
+        header, joints = sample.user_header().contents, sample.payload()
+        # The header says how many joints; the package's slice length is in bytes (0.10) or
+        # in elements: anything else is a sample of another layout.
+        if joints.len() not in (header.joint_count, header.joint_count * ctypes.sizeof(JointSample)):
+            print(f"error: a joint-state sample of {joints.len()} payload units says {header.joint_count} joints", file=sys.stderr)
+            return 1
+        print(json.dumps(as_json(header, [joints[i] for i in range(header.joint_count)])), flush=True)
+        if header.final_sample and args.count is None:
             break
     return 0
 

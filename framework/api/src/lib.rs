@@ -27,20 +27,6 @@ pub use state::{FieldMask, JointState};
 /// Most degrees of freedom one plugin instance handles (the wrist plugin handles q6 and q7).
 pub const MAX_DOF: usize = 4;
 
-/// Most degrees of freedom of an arm that publishes to shared memory (the SHERPA arm has 7):
-/// every shared-memory payload is sized by it, and the runtime refuses to publish a bigger arm
-/// rather than lose joints silently (it runs without publishing: `jointctl run --no-ipc`).
-pub const MAX_ARM_DOF: usize = 16;
-
-/// Most encoders of an arm that publishes (the SHERPA arm has 13, section 2.2): every
-/// shared-memory payload of raw readings is sized by it.
-pub const MAX_ARM_ENCODERS: usize = 32;
-/// Most drives of an arm that publishes (the SHERPA arm has 9, section 2.2).
-pub const MAX_ARM_DRIVES: usize = 16;
-/// Most force/torque sensor axes of an arm that publishes (chapter 5 validated with one ATI
-/// Mini40 at a time).
-pub const MAX_ARM_TORQUE_SENSORS: usize = 8;
-
 /// Most degrees of freedom of any arm description, published or not: a bound on what one
 /// runtime builds (its memory and start-up), far above a humanoid's 30-60 so that a generated
 /// arm can show how the loop scales (700 DOFs in the scale benchmark). An assumption, not a

@@ -376,7 +376,7 @@ impl Commands {
 pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16)) -> Result<BridgeSummary, Ros2BridgeError> {
     let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
     let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-bridge-ros2-{}", std::process::id()))?;
-    let descriptor = *feed.descriptor();
+    let descriptor = feed.descriptor().clone();
     // The ROS 2 messages are made from the typed samples: no JSON.
     feed.set_json(false);
     let config_file = opts.config.clone().or_else(|| descriptor.config_path());

@@ -422,9 +422,7 @@ pub(crate) fn validate(c: &ArmConfig) -> Vec<(String, String)> {
             }
         }
     }
-    // Bounds on what one runtime builds; whether the arm fits the shared-memory samples
-    // (jointctl_api::MAX_ARM_DOF and its kin) is checked where they are made, so that a bigger
-    // arm can still run without publishing.
+    // Bounds on what one runtime builds (the shared-memory samples are sized by the arm).
     if total_dof > MAX_LOOP_DOF {
         err("joints".into(), format!("{total_dof} DOFs exceed the maximum of {MAX_LOOP_DOF}"));
     }

@@ -2,7 +2,7 @@
 
 use iceoryx2::prelude::*;
 
-use crate::{MAX_JOINTS, NAME_LEN, raw};
+use crate::{NAME_LEN, raw};
 
 /// Longest plugin name or version in a [`JointDescriptor`] [bytes, NUL included].
 pub const LABEL_LEN: usize = 64;
@@ -10,6 +10,7 @@ pub const LABEL_LEN: usize = 64;
 /// One plugin instance of the arm: what `ros2 control list_controllers` would list.
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
 #[repr(C)]
+#[type_name("jointctl.JointDescriptor.v1")]
 pub struct JointDescriptor {
     /// NUL-padded instance name (the YAML's `joints[].name`).
     pub name: [u8; NAME_LEN],
@@ -33,34 +34,57 @@ impl JointDescriptor {
         JointDescriptor { name: [0; NAME_LEN], plugin: [0; LABEL_LEN], version: [0; LABEL_LEN], library: [0; raw::PATH_LEN], first_dof: 0, dof_count: 0, budget_ns: 0 };
 }
 
+/// The user header of the plugin-instance sample; the instances are its payload, a slice
+/// with one [`JointDescriptor`] per instance in YAML order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[repr(C)]
+#[type_name("jointctl.JointsDescriptorHeader.v1")]
+pub struct JointsDescriptorHeader {
+    /// Nominal loop rate [Hz].
+    pub rate_hz: f64,
+}
+
 /// The arm's plugin instances, published once at start and kept for late readers.
 ///
 /// ```
 /// use jointctl_ipc::{JointDescriptor, JointsDescriptor, decode_name, encode_name};
-/// let mut d = JointsDescriptor::EMPTY;
-/// d.joints[0] = JointDescriptor { name: encode_name("q4"), plugin: encode_name("elastic"), dof_count: 1, ..JointDescriptor::EMPTY };
-/// d.joint_count = 1;
+/// let mut d = JointsDescriptor { rate_hz: 1000.0, joints: Vec::new() };
+/// d.joints.push(JointDescriptor { name: encode_name("q4"), plugin: encode_name("elastic"), dof_count: 1, ..JointDescriptor::EMPTY });
 /// assert_eq!(decode_name(&d.joints()[0].plugin), "elastic");
 /// ```
-#[derive(Clone, Copy, Debug, ZeroCopySend)]
-#[repr(C)]
-#[type_name("jointctl.JointsDescriptor.v1")]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct JointsDescriptor {
     /// Nominal loop rate [Hz].
     pub rate_hz: f64,
-    /// Number of valid entries in `joints`.
-    pub joint_count: u32,
-    _reserved: u32,
     /// The plugin instances, in YAML order (at most one per DOF).
-    pub joints: [JointDescriptor; MAX_JOINTS],
+    pub joints: Vec<JointDescriptor>,
 }
 
 impl JointsDescriptor {
     /// An empty descriptor.
-    pub const EMPTY: JointsDescriptor = JointsDescriptor { rate_hz: 0.0, joint_count: 0, _reserved: 0, joints: [JointDescriptor::EMPTY; MAX_JOINTS] };
+    pub const EMPTY: JointsDescriptor = JointsDescriptor { rate_hz: 0.0, joints: Vec::new() };
 
-    /// The valid entries.
+    /// The instances.
     pub fn joints(&self) -> &[JointDescriptor] {
-        &self.joints[..(self.joint_count as usize).min(MAX_JOINTS)]
+        &self.joints
+    }
+
+    /// The sample's header.
+    pub fn header(&self) -> JointsDescriptorHeader {
+        JointsDescriptorHeader { rate_hz: self.rate_hz }
+    }
+
+    /// A descriptor from a received sample's header and instances.
+    pub fn from_parts(header: &JointsDescriptorHeader, joints: &[JointDescriptor]) -> Self {
+        JointsDescriptor { rate_hz: header.rate_hz, joints: joints.to_vec() }
+    }
+}
+
+/// A received plugin-instance sample.
+pub type JointsDescriptorSample = iceoryx2::sample::Sample<ipc::Service, [JointDescriptor], JointsDescriptorHeader>;
+
+impl From<&JointsDescriptorSample> for JointsDescriptor {
+    fn from(sample: &JointsDescriptorSample) -> Self {
+        JointsDescriptor::from_parts(sample.user_header(), sample.payload())
     }
 }

@@ -3,10 +3,11 @@
 
 use iceoryx2::prelude::*;
 
-use crate::{DEVICE_NAME_LEN, MAX_JOINTS, NAME_LEN};
+use crate::wire::{ByteRecord, PayloadSizeError, bytes_of, put, take};
+use crate::{DEVICE_NAME_LEN, NAME_LEN};
 
 /// Health of one joint DOF.
-#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend, zerocopy::FromBytes, zerocopy::IntoBytes, zerocopy::Immutable, zerocopy::KnownLayout)]
 #[repr(C)]
 pub struct JointDiagnostics {
     /// NUL-padded joint name.
@@ -72,11 +73,8 @@ impl JointDiagnostics {
     };
 }
 
-/// Most devices (drives and encoders) in diagnostics.
-pub const MAX_DEVICES: usize = 32;
-
 /// Health of one device (drive or encoder): what the HAL did not use, and why.
-#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend, zerocopy::FromBytes, zerocopy::IntoBytes, zerocopy::Immutable, zerocopy::KnownLayout)]
 #[repr(C)]
 pub struct DeviceDiagnostics {
     /// NUL-padded device name, whole (see [`jointctl_api::MAX_DEVICE_NAME`]).
@@ -100,11 +98,10 @@ impl DeviceDiagnostics {
         DeviceDiagnostics { name: [0; DEVICE_NAME_LEN], missing: 0, invalid: 0, implausible: 0, emcy: 0, flags: 0, _reserved: 0 };
 }
 
-/// Loop health, once per cycle.
-#[derive(Clone, Copy, Debug, ZeroCopySend)]
+/// The loop's health in one cycle: what a diagnostics sample says beside its joints and devices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.Diagnostics.v4")]
-pub struct Diagnostics {
+pub struct LoopHealth {
     /// Cycle counter.
     pub cycle: u64,
     /// CLOCK_MONOTONIC time of the cycle [ns].
@@ -125,23 +122,13 @@ pub struct Diagnostics {
     pub max_compute_ns: u64,
     /// Largest wake-up lateness so far [ns].
     pub max_jitter_ns: u64,
-    /// Wake-up lateness histogram, buckets bounded by [`JITTER_BUCKET_UPPER_US`].
+    /// Wake-up lateness histogram, buckets bounded by [`crate::JITTER_BUCKET_UPPER_US`].
     pub jitter_histogram: [u64; 16],
-    /// Number of valid entries in `joints`.
-    pub joint_count: u32,
-    _reserved: u32,
-    /// Per-joint health, in the order of [`ArmState::joints`].
-    pub joints: [JointDiagnostics; MAX_JOINTS],
-    /// Number of valid entries in `devices`.
-    pub device_count: u32,
-    _reserved2: u32,
-    /// Per-device health: drives, then encoders, in YAML order.
-    pub devices: [DeviceDiagnostics; MAX_DEVICES],
 }
 
-impl Diagnostics {
-    /// An empty sample.
-    pub const EMPTY: Diagnostics = Diagnostics {
+impl LoopHealth {
+    /// Nothing counted yet.
+    pub const EMPTY: LoopHealth = LoopHealth {
         cycle: 0,
         stamp_ns: 0,
         period_ns: 0,
@@ -153,11 +140,120 @@ impl Diagnostics {
         max_compute_ns: 0,
         max_jitter_ns: 0,
         jitter_histogram: [0; 16],
-        joint_count: 0,
-        _reserved: 0,
-        joints: [JointDiagnostics::EMPTY; MAX_JOINTS],
-        device_count: 0,
-        _reserved2: 0,
-        devices: [DeviceDiagnostics::EMPTY; MAX_DEVICES],
     };
+}
+
+/// The user header of a diagnostics sample: the loop's health, and how many entries its payload
+/// holds, as bytes ([`crate::wire`]): `joint_count` [`JointDiagnostics`], then `device_count`
+/// [`DeviceDiagnostics`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
+#[repr(C)]
+#[type_name("jointctl.DiagnosticsHeader.v1")]
+pub struct DiagnosticsHeader {
+    /// The loop's health.
+    pub health: LoopHealth,
+    /// Entries of [`JointDiagnostics`] in the payload.
+    pub joint_count: u32,
+    /// Entries of [`DeviceDiagnostics`] in the payload, after the joints.
+    pub device_count: u32,
+}
+
+/// Loop health, once per cycle, as a process holds it: the loop's figures (reached through
+/// the sample as `d.cycle`, `d.overruns`, ...), every joint's and every device's.
+///
+/// ```
+/// use jointctl_ipc::wire::ByteRecord;
+/// let mut d = jointctl_ipc::Diagnostics::EMPTY;
+/// d.cycle = 9;
+/// d.joints = vec![jointctl_ipc::JointDiagnostics::EMPTY; 20];
+/// d.joints[19].fault_count = 3;
+/// d.devices = vec![jointctl_ipc::DeviceDiagnostics::EMPTY; 40];
+/// let mut bytes = vec![0u8; d.payload_len()];
+/// d.write_payload(&mut bytes);
+/// let back = jointctl_ipc::Diagnostics::from_parts(&d.header(), &bytes).unwrap();
+/// assert_eq!((back.cycle, back.joints.len(), back.joints[19].fault_count, back.devices.len()), (9, 20, 3, 40));
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Diagnostics {
+    /// The loop's figures.
+    pub health: LoopHealth,
+    /// Per-joint health, in the order of [`crate::ArmState::joints`].
+    pub joints: Vec<JointDiagnostics>,
+    /// Per-device health: drives, then encoders, in YAML order.
+    pub devices: Vec<DeviceDiagnostics>,
+}
+
+impl std::ops::Deref for Diagnostics {
+    type Target = LoopHealth;
+    fn deref(&self) -> &LoopHealth {
+        &self.health
+    }
+}
+
+impl std::ops::DerefMut for Diagnostics {
+    fn deref_mut(&mut self) -> &mut LoopHealth {
+        &mut self.health
+    }
+}
+
+impl Diagnostics {
+    /// A sample with no joints and no devices.
+    pub const EMPTY: Diagnostics = Diagnostics { health: LoopHealth::EMPTY, joints: Vec::new(), devices: Vec::new() };
+
+    /// A sample from a received header and payload.
+    pub fn from_parts(header: &DiagnosticsHeader, payload: &[u8]) -> Result<Self, PayloadSizeError> {
+        let mut d = Diagnostics::EMPTY;
+        d.copy_from_parts(header, payload)?;
+        Ok(d)
+    }
+
+    /// This sample overwritten by `other`; allocation-free when it holds as many entries.
+    pub fn copy_from(&mut self, other: &Diagnostics) {
+        self.health = other.health;
+        self.joints.clear();
+        self.joints.extend_from_slice(&other.joints);
+        self.devices.clear();
+        self.devices.extend_from_slice(&other.devices);
+    }
+}
+
+impl ByteRecord for Diagnostics {
+    type Header = DiagnosticsHeader;
+
+    fn header(&self) -> DiagnosticsHeader {
+        DiagnosticsHeader { health: self.health, joint_count: self.joints.len() as u32, device_count: self.devices.len() as u32 }
+    }
+
+    fn payload_len(&self) -> usize {
+        bytes_of::<JointDiagnostics>(self.joints.len()) + bytes_of::<DeviceDiagnostics>(self.devices.len())
+    }
+
+    fn write_payload(&self, out: &mut [u8]) {
+        let mut at = 0;
+        put(out, &mut at, &self.joints);
+        put(out, &mut at, &self.devices);
+    }
+
+    fn copy_from_parts(&mut self, header: &DiagnosticsHeader, payload: &[u8]) -> Result<(), PayloadSizeError> {
+        let (joints, devices) = (header.joint_count as usize, header.device_count as usize);
+        let expected = bytes_of::<JointDiagnostics>(joints) + bytes_of::<DeviceDiagnostics>(devices);
+        if payload.len() != expected {
+            return Err(PayloadSizeError { record: "diagnostics", what: format!("{joints} joints and {devices} devices"), expected, got: payload.len() });
+        }
+        self.health = header.health;
+        let mut at = 0;
+        take(payload, &mut at, joints, &mut self.joints);
+        take(payload, &mut at, devices, &mut self.devices);
+        Ok(())
+    }
+}
+
+/// A received diagnostics sample.
+pub type DiagnosticsSample = iceoryx2::sample::Sample<ipc::Service, [u8], DiagnosticsHeader>;
+
+impl TryFrom<&DiagnosticsSample> for Diagnostics {
+    type Error = PayloadSizeError;
+    fn try_from(sample: &DiagnosticsSample) -> Result<Self, PayloadSizeError> {
+        Diagnostics::from_parts(sample.user_header(), sample.payload())
+    }
 }

@@ -4,13 +4,17 @@
 //! inspector (subscribers), so that both sides always agree on types, names and QoS.
 //!
 //! Services per arm (`<arm>` is the YAML `arm:` name):
-//! - `<arm>/joint_state`: one [`ArmState`] per cycle;
+//! - `<arm>/joint_state`: one [`ArmState`] per cycle, on the wire a slice of [`JointSample`]s
+//!   sized by the arm, with an [`ArmStateHeader`];
 //! - `<arm>/diagnostics`: one [`Diagnostics`] per cycle;
+//!
+//! Every per-cycle sample is sized by the arm: a slice of joints, or a byte payload of several
+//! arrays ([`wire`]), with the cycle's fields in an iceoryx2 user header.
 //! - `<arm>/raw`, `<arm>/raw_descriptor`, `<arm>/commands`: what the loop read and wrote, and the
 //!   commands it accepted ([`raw`]);
 //! - `<arm>/command`: requests (request-response).
 //!
-//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.ArmState.v4`), so that
+//! Payloads are `#[repr(C)]` with a versioned iceoryx2 type name (`jointctl.JointSample.v1`), so that
 //! iceoryx2 clients in other languages (its Python package) can open them: iceoryx2 compares type
 //! name, size and alignment but not field order, hence the version in the name. Every process of
 //! one arm builds its iceoryx2 config with [`iceoryx2_config_in`] rather than looking for a config
@@ -27,6 +31,7 @@ mod latest;
 mod open;
 mod services;
 mod state;
+pub mod wire;
 
 pub use command::*;
 pub use descriptor::*;
@@ -35,14 +40,12 @@ pub use latest::*;
 pub use open::*;
 pub use services::*;
 pub use state::*;
+pub use wire::{SliceSendError, send_sliced};
 
 use iceoryx2::prelude::*;
 
 pub use jointctl_api::FieldMask;
 
-/// Most joint DOFs in one sample: the most DOFs an arm description may have (the config
-/// validates against the same constant, so the two cannot drift apart).
-pub const MAX_JOINTS: usize = jointctl_api::MAX_ARM_DOF;
 /// Bytes of a joint name in a sample (NUL-padded).
 pub const NAME_LEN: usize = 16;
 
@@ -64,7 +67,7 @@ const _: () = assert!(jointctl_api::MAX_DEVICE_NAME < DEVICE_NAME_LEN);
 macro_rules! named_codes {
     ($(#[$doc:meta])* $ty:ident { $($(#[$vdoc:meta])* $konst:ident = $value:literal, $name:literal;)+ }) => {
         $(#[$doc])*
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend)]
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, ZeroCopySend, zerocopy::FromBytes, zerocopy::IntoBytes, zerocopy::Immutable, zerocopy::KnownLayout)]
         #[repr(C)]
         pub struct $ty(pub u32);
 

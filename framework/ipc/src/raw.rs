@@ -10,14 +10,9 @@
 
 use iceoryx2::prelude::*;
 
+use crate::wire::{ByteRecord, PayloadSizeError, bytes_of, put, take};
 use crate::{CommandRequest, DEVICE_NAME_LEN, NAME_LEN, encode_name};
 
-/// Most encoders in a [`RawFrame`] (the config validates against the same constant).
-pub const MAX_RAW_ENCODERS: usize = jointctl_api::MAX_ARM_ENCODERS;
-/// Most drives in a [`RawFrame`].
-pub const MAX_RAW_DRIVES: usize = jointctl_api::MAX_ARM_DRIVES;
-/// Most force/torque sensor axes in a [`RawFrame`].
-pub const MAX_RAW_TORQUE_SENSORS: usize = jointctl_api::MAX_ARM_TORQUE_SENSORS;
 /// Bytes of the config path in a [`RawDescriptor`] (NUL-padded).
 pub const PATH_LEN: usize = 512;
 
@@ -54,7 +49,7 @@ named_codes! {
 }
 
 /// One reading: value [the device's unit], its age [s] and status.
-#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend, zerocopy::FromBytes, zerocopy::IntoBytes, zerocopy::Immutable, zerocopy::KnownLayout)]
 #[repr(C)]
 pub struct RawReading {
     /// The value; NaN when the status says there is none.
@@ -87,7 +82,7 @@ impl RawReading {
 }
 
 /// One drive in a cycle: what it reported and what it was sent.
-#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend, zerocopy::FromBytes, zerocopy::IntoBytes, zerocopy::Immutable, zerocopy::KnownLayout)]
 #[repr(C)]
 pub struct RawDrive {
     /// Motor (gearbox output) position [rad].
@@ -146,10 +141,49 @@ impl RawDrive {
     }
 }
 
-/// Every device of the arm in one cycle, in the order of [`RawDescriptor`].
-#[derive(Clone, Copy, Debug, ZeroCopySend)]
+/// The user header of a raw-readings sample: the cycle's fields and how many of each device
+/// the payload holds, as bytes ([`crate::wire`]): `encoder_count` [`RawReading`]s, then
+/// `drive_count` [`RawDrive`]s, then `torque_sensor_count` [`RawReading`]s.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.RawFrame.v2")]
+#[type_name("jointctl.RawFrameHeader.v1")]
+pub struct RawFrameHeader {
+    /// Cycle counter, the same as the cycle's [`crate::ArmState::cycle`].
+    pub cycle: u64,
+    /// CLOCK_MONOTONIC time of the cycle's sensor read [ns].
+    pub stamp_ns: u64,
+    /// Accepted commands the loop has applied so far, this cycle's included.
+    pub commands_applied: u64,
+    /// Encoders in the payload.
+    pub encoder_count: u32,
+    /// Drives in the payload.
+    pub drive_count: u32,
+    /// Force/torque sensors in the payload.
+    pub torque_sensor_count: u32,
+    _reserved: u32,
+}
+
+impl RawFrameHeader {
+    fn payload_len(&self) -> usize {
+        bytes_of::<RawReading>(self.encoder_count as usize) + bytes_of::<RawDrive>(self.drive_count as usize) + bytes_of::<RawReading>(self.torque_sensor_count as usize)
+    }
+}
+
+/// Every device of the arm in one cycle, in the order of [`RawDescriptor`].
+///
+/// ```
+/// use jointctl_ipc::raw::{RawDrive, RawFrame, RawReading};
+/// use jointctl_ipc::wire::ByteRecord;
+/// let mut f = RawFrame { cycle: 4, ..RawFrame::EMPTY };
+/// f.encoders = vec![RawReading::MISSING; 33];
+/// f.drives = vec![RawDrive::EMPTY; 17];
+/// f.drives[16].enabled = 1;
+/// let mut bytes = vec![0u8; f.payload_len()];
+/// f.write_payload(&mut bytes);
+/// let back = RawFrame::from_parts(&f.header(), &bytes).unwrap();
+/// assert_eq!((back.cycle, back.encoders().len(), back.drives()[16].enabled), (4, 33, 1));
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RawFrame {
     /// Cycle counter, the same as the cycle's [`crate::ArmState::cycle`].
     pub cycle: u64,
@@ -158,49 +192,105 @@ pub struct RawFrame {
     /// Accepted commands the loop has applied so far, this cycle's included: the
     /// [`CommandRecord::sequence`] up to which a replay applies them here.
     pub commands_applied: u64,
-    /// Valid entries in `encoders`.
-    pub encoder_count: u32,
-    /// Valid entries in `drives`.
-    pub drive_count: u32,
     /// Encoders [rad].
-    pub encoders: [RawReading; MAX_RAW_ENCODERS],
+    pub encoders: Vec<RawReading>,
     /// Drives.
-    pub drives: [RawDrive; MAX_RAW_DRIVES],
-    /// Valid entries in `torque_sensors`.
-    pub torque_sensor_count: u32,
-    _reserved: u32,
+    pub drives: Vec<RawDrive>,
     /// Force/torque sensors: the torque about each one's joint axis [Nm].
-    pub torque_sensors: [RawReading; MAX_RAW_TORQUE_SENSORS],
+    pub torque_sensors: Vec<RawReading>,
 }
 
 impl RawFrame {
-    /// An empty frame.
-    pub const EMPTY: RawFrame = RawFrame {
-        cycle: 0,
-        stamp_ns: 0,
-        commands_applied: 0,
-        encoder_count: 0,
-        drive_count: 0,
-        encoders: [RawReading::MISSING; MAX_RAW_ENCODERS],
-        drives: [RawDrive::EMPTY; MAX_RAW_DRIVES],
-        torque_sensor_count: 0,
-        _reserved: 0,
-        torque_sensors: [RawReading::MISSING; MAX_RAW_TORQUE_SENSORS],
-    };
+    /// A frame of no devices.
+    pub const EMPTY: RawFrame = RawFrame { cycle: 0, stamp_ns: 0, commands_applied: 0, encoders: Vec::new(), drives: Vec::new(), torque_sensors: Vec::new() };
 
-    /// The valid force/torque sensors.
+    /// A frame of missing readings and holding drives, for these many devices.
+    pub fn with_devices(encoders: usize, drives: usize, torque_sensors: usize) -> Self {
+        RawFrame { encoders: vec![RawReading::MISSING; encoders], drives: vec![RawDrive::EMPTY; drives], torque_sensors: vec![RawReading::MISSING; torque_sensors], ..RawFrame::EMPTY }
+    }
+
+    /// The force/torque sensors.
     pub fn torque_sensors(&self) -> &[RawReading] {
-        &self.torque_sensors[..(self.torque_sensor_count as usize).min(MAX_RAW_TORQUE_SENSORS)]
+        &self.torque_sensors
     }
 
-    /// The valid encoders.
+    /// The encoders.
     pub fn encoders(&self) -> &[RawReading] {
-        &self.encoders[..(self.encoder_count as usize).min(MAX_RAW_ENCODERS)]
+        &self.encoders
     }
 
-    /// The valid drives.
+    /// The drives.
     pub fn drives(&self) -> &[RawDrive] {
-        &self.drives[..(self.drive_count as usize).min(MAX_RAW_DRIVES)]
+        &self.drives
+    }
+
+    /// A frame from a received header and payload.
+    pub fn from_parts(header: &RawFrameHeader, payload: &[u8]) -> Result<Self, PayloadSizeError> {
+        let mut f = RawFrame::EMPTY;
+        f.copy_from_parts(header, payload)?;
+        Ok(f)
+    }
+
+    /// This frame overwritten by `other`; allocation-free when it holds as many devices.
+    pub fn copy_from(&mut self, other: &RawFrame) {
+        (self.cycle, self.stamp_ns, self.commands_applied) = (other.cycle, other.stamp_ns, other.commands_applied);
+        self.encoders.clear();
+        self.encoders.extend_from_slice(&other.encoders);
+        self.drives.clear();
+        self.drives.extend_from_slice(&other.drives);
+        self.torque_sensors.clear();
+        self.torque_sensors.extend_from_slice(&other.torque_sensors);
+    }
+}
+
+impl ByteRecord for RawFrame {
+    type Header = RawFrameHeader;
+
+    fn header(&self) -> RawFrameHeader {
+        RawFrameHeader {
+            cycle: self.cycle,
+            stamp_ns: self.stamp_ns,
+            commands_applied: self.commands_applied,
+            encoder_count: self.encoders.len() as u32,
+            drive_count: self.drives.len() as u32,
+            torque_sensor_count: self.torque_sensors.len() as u32,
+            _reserved: 0,
+        }
+    }
+
+    fn payload_len(&self) -> usize {
+        self.header().payload_len()
+    }
+
+    fn write_payload(&self, out: &mut [u8]) {
+        let mut at = 0;
+        put(out, &mut at, &self.encoders);
+        put(out, &mut at, &self.drives);
+        put(out, &mut at, &self.torque_sensors);
+    }
+
+    fn copy_from_parts(&mut self, header: &RawFrameHeader, payload: &[u8]) -> Result<(), PayloadSizeError> {
+        let expected = header.payload_len();
+        if payload.len() != expected {
+            let what = format!("{} encoders, {} drives and {} force/torque sensors", header.encoder_count, header.drive_count, header.torque_sensor_count);
+            return Err(PayloadSizeError { record: "raw-readings", what, expected, got: payload.len() });
+        }
+        (self.cycle, self.stamp_ns, self.commands_applied) = (header.cycle, header.stamp_ns, header.commands_applied);
+        let mut at = 0;
+        take(payload, &mut at, header.encoder_count as usize, &mut self.encoders);
+        take(payload, &mut at, header.drive_count as usize, &mut self.drives);
+        take(payload, &mut at, header.torque_sensor_count as usize, &mut self.torque_sensors);
+        Ok(())
+    }
+}
+
+/// A received raw-readings sample.
+pub type RawFrameSample = iceoryx2::sample::Sample<ipc::Service, [u8], RawFrameHeader>;
+
+impl TryFrom<&RawFrameSample> for RawFrame {
+    type Error = PayloadSizeError;
+    fn try_from(sample: &RawFrameSample) -> Result<Self, PayloadSizeError> {
+        RawFrame::from_parts(sample.user_header(), sample.payload())
     }
 }
 
@@ -221,7 +311,7 @@ named_codes! {
 }
 
 /// One device: its name, kind and the unit of its value.
-#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend, zerocopy::FromBytes, zerocopy::IntoBytes, zerocopy::Immutable, zerocopy::KnownLayout)]
 #[repr(C)]
 pub struct DeviceDescriptor {
     /// NUL-padded device name, as in the arm's YAML.
@@ -250,26 +340,46 @@ impl DeviceDescriptor {
     }
 }
 
-/// What the raw frames of an arm carry, published once when the runtime starts.
+/// The user header of the raw-reading descriptor: the rate, the config path, how many
+/// devices of each kind the payload describes, and the activation frame's header. The payload,
+/// as bytes ([`crate::wire`]): the encoders', drives' and force/torque sensors'
+/// [`DeviceDescriptor`]s, then the activation frame's payload.
 #[derive(Clone, Copy, Debug, ZeroCopySend)]
 #[repr(C)]
-#[type_name("jointctl.RawDescriptor.v1")]
+#[type_name("jointctl.RawDescriptorHeader.v1")]
+pub struct RawDescriptorHeader {
+    /// Nominal loop rate [Hz].
+    pub rate_hz: f64,
+    /// Encoders described.
+    pub encoder_count: u32,
+    /// Drives described.
+    pub drive_count: u32,
+    /// Force/torque sensors described.
+    pub torque_sensor_count: u32,
+    _reserved: u32,
+    /// The activation frame's header.
+    pub activation: RawFrameHeader,
+    /// NUL-padded absolute path of the arm's YAML, empty when unknown.
+    pub config_path: [u8; PATH_LEN],
+}
+
+impl Default for RawDescriptorHeader {
+    fn default() -> Self {
+        RawDescriptorHeader { rate_hz: 0.0, encoder_count: 0, drive_count: 0, torque_sensor_count: 0, _reserved: 0, activation: RawFrameHeader::default(), config_path: [0; PATH_LEN] }
+    }
+}
+
+/// What the raw frames of an arm carry, published once when the runtime starts.
+#[derive(Clone, Debug, PartialEq)]
 pub struct RawDescriptor {
     /// Nominal loop rate [Hz].
     pub rate_hz: f64,
-    /// Valid entries in `encoders`.
-    pub encoder_count: u32,
-    /// Valid entries in `drives`.
-    pub drive_count: u32,
     /// Encoders, in the order of [`RawFrame::encoders`].
-    pub encoders: [DeviceDescriptor; MAX_RAW_ENCODERS],
+    pub encoders: Vec<DeviceDescriptor>,
     /// Drives, in the order of [`RawFrame::drives`].
-    pub drives: [DeviceDescriptor; MAX_RAW_DRIVES],
-    /// Valid entries in `torque_sensors`.
-    pub torque_sensor_count: u32,
-    _reserved: u32,
+    pub drives: Vec<DeviceDescriptor>,
     /// Force/torque sensors, in the order of [`RawFrame::torque_sensors`].
-    pub torque_sensors: [DeviceDescriptor; MAX_RAW_TORQUE_SENSORS],
+    pub torque_sensors: Vec<DeviceDescriptor>,
     /// The readings the joints were activated with (observers take their zeros there, section
     /// 3.4.1): a replay of a recording that starts later activates with them.
     pub activation: RawFrame,
@@ -277,46 +387,35 @@ pub struct RawDescriptor {
     pub config_path: [u8; PATH_LEN],
 }
 
+impl Default for RawDescriptor {
+    fn default() -> Self {
+        RawDescriptor::EMPTY
+    }
+}
+
 impl RawDescriptor {
-    /// An empty descriptor.
-    pub const EMPTY: RawDescriptor = RawDescriptor {
-        rate_hz: 0.0,
-        encoder_count: 0,
-        drive_count: 0,
-        encoders: [DeviceDescriptor::EMPTY; MAX_RAW_ENCODERS],
-        drives: [DeviceDescriptor::EMPTY; MAX_RAW_DRIVES],
-        torque_sensor_count: 0,
-        _reserved: 0,
-        torque_sensors: [DeviceDescriptor::EMPTY; MAX_RAW_TORQUE_SENSORS],
-        activation: RawFrame::EMPTY,
-        config_path: [0; PATH_LEN],
-    };
+    /// A descriptor of no devices.
+    pub const EMPTY: RawDescriptor = RawDescriptor { rate_hz: 0.0, encoders: Vec::new(), drives: Vec::new(), torque_sensors: Vec::new(), activation: RawFrame::EMPTY, config_path: [0; PATH_LEN] };
 
     /// The descriptor of `encoders`, `drives` (name, bus index each) and `torque_sensors`, at
-    /// `rate_hz`; names past the frames' capacity are left out (the config refuses such arms).
+    /// `rate_hz`; its activation frame holds as many devices, missing and holding.
     ///
     /// ```
     /// let d = jointctl_ipc::raw::RawDescriptor::of(40.0, &[("enc_a", 0)], &[("elmo_a", 0), ("elmo_b", 0)], &["ft_q2"], None);
-    /// assert_eq!((d.encoder_count, d.drive_count, d.torque_sensor_count), (1, 2, 1));
+    /// assert_eq!((d.encoders.len(), d.drives.len(), d.torque_sensors.len()), (1, 2, 1));
     /// assert_eq!(jointctl_ipc::decode_name(&d.drives[1].name), "elmo_b");
     /// assert_eq!(jointctl_ipc::decode_name(&d.torque_sensors[0].unit), "Nm");
+    /// assert_eq!(d.activation.drives().len(), 2);
     /// ```
     pub fn of(rate_hz: f64, encoders: &[(&str, u32)], drives: &[(&str, u32)], torque_sensors: &[&str], config_path: Option<&std::path::Path>) -> Self {
-        let mut d = RawDescriptor { rate_hz, ..RawDescriptor::EMPTY };
-        for (slot, (name, bus)) in d.encoders.iter_mut().zip(encoders) {
-            *slot = DeviceDescriptor::new(name, DeviceKind::ABSOLUTE_ENCODER, *bus, "rad");
-        }
-        for (slot, (name, bus)) in d.drives.iter_mut().zip(drives) {
-            *slot = DeviceDescriptor::new(name, DeviceKind::DRIVE, *bus, "rad");
-        }
-        for (slot, name) in d.torque_sensors.iter_mut().zip(torque_sensors) {
-            *slot = DeviceDescriptor::new(name, DeviceKind::FORCE_TORQUE, 0, "Nm");
-        }
-        d.torque_sensor_count = torque_sensors.len().min(MAX_RAW_TORQUE_SENSORS) as u32;
-        d.encoder_count = encoders.len().min(MAX_RAW_ENCODERS) as u32;
-        d.drive_count = drives.len().min(MAX_RAW_DRIVES) as u32;
-        // The activation frame holds the same devices.
-        (d.activation.encoder_count, d.activation.drive_count, d.activation.torque_sensor_count) = (d.encoder_count, d.drive_count, d.torque_sensor_count);
+        let mut d = RawDescriptor {
+            rate_hz,
+            encoders: encoders.iter().map(|(name, bus)| DeviceDescriptor::new(name, DeviceKind::ABSOLUTE_ENCODER, *bus, "rad")).collect(),
+            drives: drives.iter().map(|(name, bus)| DeviceDescriptor::new(name, DeviceKind::DRIVE, *bus, "rad")).collect(),
+            torque_sensors: torque_sensors.iter().map(|name| DeviceDescriptor::new(name, DeviceKind::FORCE_TORQUE, 0, "Nm")).collect(),
+            activation: RawFrame::with_devices(encoders.len(), drives.len(), torque_sensors.len()),
+            config_path: [0; PATH_LEN],
+        };
         if let Some(p) = config_path {
             d.config_path = encode_name(&p.to_string_lossy());
         }
@@ -327,6 +426,68 @@ impl RawDescriptor {
     pub fn config_path(&self) -> Option<std::path::PathBuf> {
         let text = crate::decode_name(&self.config_path);
         (!text.is_empty()).then(|| std::path::PathBuf::from(text))
+    }
+
+    /// A descriptor from a received header and payload.
+    pub fn from_parts(header: &RawDescriptorHeader, payload: &[u8]) -> Result<Self, PayloadSizeError> {
+        let mut d = RawDescriptor::EMPTY;
+        d.copy_from_parts(header, payload)?;
+        Ok(d)
+    }
+}
+
+impl ByteRecord for RawDescriptor {
+    type Header = RawDescriptorHeader;
+
+    fn header(&self) -> RawDescriptorHeader {
+        RawDescriptorHeader {
+            rate_hz: self.rate_hz,
+            encoder_count: self.encoders.len() as u32,
+            drive_count: self.drives.len() as u32,
+            torque_sensor_count: self.torque_sensors.len() as u32,
+            _reserved: 0,
+            activation: self.activation.header(),
+            config_path: self.config_path,
+        }
+    }
+
+    fn payload_len(&self) -> usize {
+        bytes_of::<DeviceDescriptor>(self.encoders.len() + self.drives.len() + self.torque_sensors.len()) + self.activation.payload_len()
+    }
+
+    fn write_payload(&self, out: &mut [u8]) {
+        let mut at = 0;
+        put(out, &mut at, &self.encoders);
+        put(out, &mut at, &self.drives);
+        put(out, &mut at, &self.torque_sensors);
+        self.activation.write_payload(&mut out[at..]);
+    }
+
+    fn copy_from_parts(&mut self, header: &RawDescriptorHeader, payload: &[u8]) -> Result<(), PayloadSizeError> {
+        let (e, d, t) = (header.encoder_count as usize, header.drive_count as usize, header.torque_sensor_count as usize);
+        let devices = bytes_of::<DeviceDescriptor>(e + d + t);
+        let expected = devices + header.activation.payload_len();
+        if payload.len() != expected {
+            let what = format!("{e} encoders, {d} drives and {t} force/torque sensors with an activation frame of {} bytes", header.activation.payload_len());
+            return Err(PayloadSizeError { record: "raw-descriptor", what, expected, got: payload.len() });
+        }
+        self.activation.copy_from_parts(&header.activation, &payload[devices..])?;
+        (self.rate_hz, self.config_path) = (header.rate_hz, header.config_path);
+        let mut at = 0;
+        take(payload, &mut at, e, &mut self.encoders);
+        take(payload, &mut at, d, &mut self.drives);
+        take(payload, &mut at, t, &mut self.torque_sensors);
+        Ok(())
+    }
+}
+
+/// A received raw-descriptor sample.
+pub type RawDescriptorSample = iceoryx2::sample::Sample<ipc::Service, [u8], RawDescriptorHeader>;
+
+impl TryFrom<&RawDescriptorSample> for RawDescriptor {
+    type Error = PayloadSizeError;
+    fn try_from(sample: &RawDescriptorSample) -> Result<Self, PayloadSizeError> {
+        RawDescriptor::from_parts(sample.user_header(), sample.payload())
     }
 }
 

@@ -5,8 +5,9 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawFrame};
-use jointctl_ipc::{ArmState, Diagnostics, IpcScope, IpcSetupError, ServiceNames};
+use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawFrame, RawFrameHeader};
+use jointctl_ipc::wire::ByteRecord;
+use jointctl_ipc::{ArmState, ArmStateHeader, Diagnostics, DiagnosticsHeader, IpcScope, IpcSetupError, JointSample, ServiceNames};
 
 use crate::messages;
 
@@ -82,9 +83,15 @@ pub enum Sample<'a> {
 /// Subscribers to every published service of one arm.
 pub struct ArmFeed {
     names: ServiceNames,
-    raw: Subscriber<ipc::Service, RawFrame, ()>,
-    state: Subscriber<ipc::Service, ArmState, ()>,
-    diagnostics: Subscriber<ipc::Service, Diagnostics, ()>,
+    raw: Subscriber<ipc::Service, [u8], RawFrameHeader>,
+    // The last raw frame received, reused (the samples are sized by the arm).
+    raw_buf: RawFrame,
+    state: Subscriber<ipc::Service, [JointSample], ArmStateHeader>,
+    // The last joint state received, reused (the samples are slices sized by the arm).
+    state_buf: ArmState,
+    diagnostics: Subscriber<ipc::Service, [u8], DiagnosticsHeader>,
+    // The last diagnostics received, reused.
+    diagnostics_buf: Diagnostics,
     commands: Subscriber<ipc::Service, CommandRecord, ()>,
     descriptor: RawDescriptor,
     // One text buffer, reused: at 1 kHz, three messages a cycle.
@@ -109,12 +116,12 @@ fn open_waiting<T>(timeout: Duration, mut open: impl FnMut() -> Result<T, IpcSet
     }
 }
 
-fn subscriber<T: std::fmt::Debug + ZeroCopySend + 'static>(
+fn subscriber<T: std::fmt::Debug + iceoryx2::prelude::IceoryxSend + ?Sized + 'static, H: std::fmt::Debug + ZeroCopySend + 'static>(
     arm: &str,
     service: &str,
     timeout: Duration,
-    open: impl FnMut() -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, IpcSetupError>,
-) -> Result<Subscriber<ipc::Service, T, ()>, FeedError> {
+    open: impl FnMut() -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, H>, IpcSetupError>,
+) -> Result<Subscriber<ipc::Service, T, H>, FeedError> {
     open_waiting(timeout, open)
         .map_err(|source| FeedError::Ipc { arm: arm.to_string(), source })?
         .subscriber_builder()
@@ -149,7 +156,7 @@ impl ArmFeed {
         let started = Instant::now();
         let descriptor: RawDescriptor = loop {
             if let Some(s) = descriptor_sub.receive().map_err(|e| FeedError::Receive { service: names.raw_descriptor.clone(), reason: format!("{e:?}") })? {
-                break *s.payload();
+                break RawDescriptor::try_from(&s).map_err(|e| FeedError::Receive { service: names.raw_descriptor.clone(), reason: e.to_string() })?;
             }
             if started.elapsed() > timeout {
                 return Err(FeedError::Silent { arm: arm.to_string(), what: "raw-reading descriptor", timeout_s: timeout.as_secs_f64() });
@@ -157,7 +164,7 @@ impl ArmFeed {
             std::thread::sleep(Duration::from_millis(5));
         };
         drop(descriptor_sub);
-        Ok(ArmFeed { names, raw, state, diagnostics, commands, descriptor, text: String::with_capacity(16 * 1024), json: true, _node: node })
+        Ok(ArmFeed { names, raw, raw_buf: RawFrame::EMPTY, state, state_buf: ArmState::EMPTY, diagnostics, diagnostics_buf: Diagnostics::EMPTY, commands, descriptor, text: String::with_capacity(16 * 1024), json: true, _node: node })
     }
 
     /// Whether [`FeedMessage::json`] is written (on by default). A reader that uses only
@@ -195,25 +202,36 @@ impl ArmFeed {
         };
         let mut n = 0;
         let (text, json) = (&mut self.text, self.json);
-        while let Some(s) = self.raw.receive().map_err(receive_error(&self.names.raw))? {
+        // A sample whose payload is not what its header says is an error, never a frame.
+        let size_error = |service: &str| {
+            let service = service.to_string();
+            move |e: jointctl_ipc::wire::PayloadSizeError| FeedError::Receive { service: service.clone(), reason: e.to_string() }
+        };
+        while let Some(sample) = self.raw.receive().map_err(receive_error(&self.names.raw))? {
+            self.raw_buf.copy_from_parts(sample.user_header(), sample.payload()).map_err(size_error(&self.names.raw))?;
+            let s = &self.raw_buf;
             if json {
-                messages::write_raw(text, &s, &self.descriptor);
+                messages::write_raw(text, s, &self.descriptor);
             }
-            each(FeedMessage { topic: "raw", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Raw(&s) })?;
+            each(FeedMessage { topic: "raw", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Raw(s) })?;
             n += 1;
         }
-        while let Some(s) = self.state.receive().map_err(receive_error(&self.names.joint_state))? {
+        while let Some(sample) = self.state.receive().map_err(receive_error(&self.names.joint_state))? {
+            self.state_buf.copy_from_parts(sample.user_header(), sample.payload());
+            let s = &self.state_buf;
             if json {
-                messages::write_joint_state(text, &s);
+                messages::write_joint_state(text, s);
             }
-            each(FeedMessage { topic: "joint_state", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: s.final_sample != 0, sample: Sample::State(&s) })?;
+            each(FeedMessage { topic: "joint_state", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: s.final_sample != 0, sample: Sample::State(s) })?;
             n += 1;
         }
-        while let Some(s) = self.diagnostics.receive().map_err(receive_error(&self.names.diagnostics))? {
+        while let Some(sample) = self.diagnostics.receive().map_err(receive_error(&self.names.diagnostics))? {
+            self.diagnostics_buf.copy_from_parts(sample.user_header(), sample.payload()).map_err(size_error(&self.names.diagnostics))?;
+            let s = &self.diagnostics_buf;
             if json {
-                messages::write_diagnostics(text, &s);
+                messages::write_diagnostics(text, s);
             }
-            each(FeedMessage { topic: "diagnostics", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Diagnostics(&s) })?;
+            each(FeedMessage { topic: "diagnostics", number: s.cycle, stamp_ns: s.stamp_ns, json: text, final_sample: false, sample: Sample::Diagnostics(s) })?;
             n += 1;
         }
         while let Some(s) = self.commands.receive().map_err(receive_error(&self.names.commands))? {

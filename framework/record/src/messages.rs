@@ -129,7 +129,7 @@ pub fn write_joint_state(out: &mut String, s: &ArmState) {
 /// ```
 /// let mut s = jointctl_ipc::ArmState::EMPTY;
 /// s.cycle = 7;
-/// s.joint_count = 1;
+/// s.joints.push(jointctl_ipc::JointSample::EMPTY);
 /// s.joints[0].name = jointctl_ipc::encode_name("q2");
 /// s.joints[0].torque_nm = 1.5;
 /// s.joints[0].valid_mask = jointctl_ipc::FieldMask::TORQUE;
@@ -144,9 +144,7 @@ pub fn parse_joint_state(v: &Value) -> Result<ArmState, MessageError> {
     s.stamp_ns = count("stamp_ns")?;
     s.final_sample = u32::from(v["final"].as_bool().unwrap_or(false));
     let joints = v["joints"].as_array().ok_or_else(|| MessageError::new("joints", "is not an array"))?;
-    if joints.len() > s.joints.len() {
-        return Err(MessageError::new("joints", format!("at most {}, got {}", s.joints.len(), joints.len())));
-    }
+    s.joints = vec![jointctl_ipc::JointSample::EMPTY; joints.len()];
     for (i, (out, j)) in s.joints.iter_mut().zip(joints).enumerate() {
         let at = |key: &str| format!("joints[{i}].{key}");
         let name = j["name"].as_str().ok_or_else(|| MessageError::new(at("name"), "is not a string"))?;
@@ -176,7 +174,6 @@ pub fn parse_joint_state(v: &Value) -> Result<ArmState, MessageError> {
         out.enabled = u32::from(j["enabled"].as_bool().unwrap_or(true));
         out.fault_code = j["fault_code"].as_u64().and_then(|c| u32::try_from(c).ok()).unwrap_or(0);
     }
-    s.joint_count = joints.len() as u32;
     Ok(s)
 }
 
@@ -219,7 +216,7 @@ impl MessageError {
 ///
 /// ```
 /// let mut s = jointctl_ipc::ArmState::EMPTY;
-/// s.joint_count = 1;
+/// s.joints.push(jointctl_ipc::JointSample::EMPTY);
 /// s.joints[0].name = jointctl_ipc::encode_name("q2");
 /// let v = jointctl_record::messages::joint_state(&s);
 /// assert_eq!(v["joints"][0]["name"], "q2");
@@ -254,7 +251,7 @@ pub fn write_diagnostics(out: &mut String, d: &Diagnostics) {
         }
         j.int("cycles", *n);
     });
-    j.objects("joints", &d.joints[..(d.joint_count as usize).min(d.joints.len())], |j, x| {
+    j.objects("joints", &d.joints, |j, x| {
         j.str("name", decode_name(&x.name))
             .int("fault_code", u64::from(x.fault_code))
             .str("fault_message", decode_name(&x.fault_message))
@@ -270,7 +267,7 @@ pub fn write_diagnostics(out: &mut String, d: &Diagnostics) {
             .int("over_budget_cycles", x.over_budget_cycles)
             .int("setpoint_rejections", x.setpoint_rejections);
     });
-    j.objects("devices", &d.devices[..(d.device_count as usize).min(d.devices.len())], |j, x| {
+    j.objects("devices", &d.devices, |j, x| {
         j.str("name", decode_name(&x.name))
             .int("missing", x.missing)
             .int("invalid", x.invalid)
@@ -334,8 +331,7 @@ pub fn write_raw(out: &mut String, f: &RawFrame, d: &RawDescriptor) {
 /// use jointctl_ipc::raw::{RawDescriptor, RawFrame, RawReading};
 /// let d = RawDescriptor::of(40.0, &[("enc_q2_out", 0)], &[], &[], None);
 /// let mut f = RawFrame::EMPTY;
-/// f.encoder_count = 1;
-/// f.encoders[0] = RawReading::from_reading(&jointctl_api::Reading::valid(0.25));
+/// f.encoders.push(RawReading::from_reading(&jointctl_api::Reading::valid(0.25)));
 /// let v = jointctl_record::messages::raw(&f, &d);
 /// assert_eq!(v["encoders"][0]["name"], "enc_q2_out");
 /// assert_eq!(v["encoders"][0]["value"], 0.25);
@@ -544,7 +540,7 @@ mod tests {
     #[test]
     fn a_written_number_reads_back_to_the_same_bits() {
         let mut state = jointctl_ipc::ArmState::EMPTY;
-        state.joint_count = 1;
+        state.joints.push(jointctl_ipc::JointSample::EMPTY);
         for x in [0.012394129711854647, -0.005743346888941898, 1.0 / 3.0, 2.2250738585072014e-308, 123456.78901234567] {
             state.joints[0].sensor_torque_nm = x;
             let mut text = String::new();

@@ -291,7 +291,8 @@ fn unix_ns() -> u64 {
 pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, RecordError> {
     let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
     let mut feed = ArmFeed::open(&opts.arm, &opts.scope, timeout, &format!("jointctl-record-{}", std::process::id()))?;
-    let descriptor = *feed.descriptor();
+    let descriptor = feed.descriptor().clone();
+    let rate_hz = descriptor.rate_hz;
     // The ROS 2 profile's messages are made from the typed samples: no JSON.
     feed.set_json(opts.profile == Profile::Json);
 
@@ -382,7 +383,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     };
     // A failure while recording (a full disk, a reader gone) still closes what was written and
     // says how far it got.
-    let outcome = take_samples(&mut feed, &mut sink, opts, stop, timeout, descriptor.rate_hz);
+    let outcome = take_samples(&mut feed, &mut sink, opts, stop, timeout, rate_hz);
     let mut summary = sink.summary();
     let got_state = sink.newest("joint_state").is_some();
     let finished = sink.writer.finish().map_err(mcap_error);

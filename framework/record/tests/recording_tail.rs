@@ -29,10 +29,11 @@ fn the_last_joint_state_comes_with_its_raw_readings_and_diagnostics() {
     let state_pub = state.publisher_builder().create().unwrap();
     let diag_pub = jointctl_ipc::create_diagnostics_service(&node, &names.diagnostics, limits).unwrap().publisher_builder().create().unwrap();
     let raw_pub = jointctl_ipc::create_raw_service(&node, &names.raw, limits).unwrap().publisher_builder().create().unwrap();
+    // Samples of no joints and no devices: empty payloads.
     let _commands = jointctl_ipc::create_commands_service(&node, &names.commands, limits).unwrap().publisher_builder().create().unwrap();
     let descriptor = jointctl_ipc::create_raw_descriptor_service(&node, &names.raw_descriptor, limits).unwrap();
     let descriptor_pub = descriptor.publisher_builder().create().unwrap();
-    descriptor_pub.send_copy(RawDescriptor::of(100.0, &[], &[], &[], None)).unwrap();
+    jointctl_ipc::wire::send_record(&descriptor_pub, &RawDescriptor::of(100.0, &[], &[], &[], None)).unwrap();
 
     let out = std::env::temp_dir().join(format!("jointctl-test-{}-tail.mcap", std::process::id()));
     let opts = RecordOptions { arm: arm.into(), scope: scope.clone(), out: out.clone(), duration_s: Some(0.1), timeout_s: 5.0, profile: Default::default() };
@@ -50,12 +51,13 @@ fn the_last_joint_state_comes_with_its_raw_readings_and_diagnostics() {
     // 10 ms cycles; the recorder's duration (0.1 s) is reached at cycle 10.
     for cycle in 0..20u64 {
         let stamp_ns = 1_000_000_000 + cycle * 10_000_000;
-        state_pub.send_copy(ArmState { cycle, stamp_ns, ..ArmState::EMPTY }).unwrap();
+        let state = ArmState { cycle, stamp_ns, ..ArmState::EMPTY };
+        jointctl_ipc::send_sliced(&state_pub, state.header(), state.joints()).unwrap();
         std::thread::sleep(Duration::from_millis(20));
         let (mut diagnostics, mut raw) = (Diagnostics::EMPTY, RawFrame::EMPTY);
         (diagnostics.cycle, diagnostics.stamp_ns, raw.cycle, raw.stamp_ns) = (cycle, stamp_ns, cycle, stamp_ns);
-        diag_pub.send_copy(diagnostics).unwrap();
-        raw_pub.send_copy(raw).unwrap();
+        jointctl_ipc::wire::send_record(&diag_pub, &diagnostics).unwrap();
+        jointctl_ipc::wire::send_record(&raw_pub, &raw).unwrap();
         if recorder.is_finished() {
             break;
         }

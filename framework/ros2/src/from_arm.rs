@@ -50,7 +50,7 @@ fn known(s: &JointSample, bit: u32, value: f64) -> f64 {
 ///
 /// ```
 /// let mut s = jointctl_ipc::ArmState::EMPTY;
-/// s.joint_count = 1;
+/// s.joints.push(jointctl_ipc::JointSample::EMPTY);
 /// s.joints[0].name = jointctl_ipc::encode_name("q2");
 /// s.joints[0].position_rad = 0.5;
 /// s.joints[0].valid_mask = jointctl_ipc::FieldMask::POSITION;
@@ -73,7 +73,8 @@ pub fn joint_state(s: &ArmState, clock: &WallClock, arm: &str) -> msg::JointStat
 ///
 /// ```
 /// let mut s = jointctl_ipc::ArmState::EMPTY;
-/// (s.cycle, s.joint_count) = (7, 1);
+/// s.cycle = 7;
+/// s.joints.push(jointctl_ipc::JointSample::EMPTY);
 /// s.joints[0].sensor_torque_nm = 1.5;
 /// let m = jointctl_ros2::from_arm::joint_details(&s, &jointctl_ros2::from_arm::WallClock::from_pair(0, 0), "sherpa");
 /// assert_eq!((m.cycle, m.joints[0].sensor_torque_nm), (7, 1.5));
@@ -117,8 +118,7 @@ fn reading(name: &str, r: &RawReading) -> msg::RawReading {
 /// use jointctl_ipc::raw::{RawDescriptor, RawFrame, RawReading};
 /// let d = RawDescriptor::of(40.0, &[("enc_q2_out", 0)], &[], &[], None);
 /// let mut f = RawFrame::EMPTY;
-/// f.encoder_count = 1;
-/// f.encoders[0] = RawReading::from_reading(&jointctl_api::Reading::valid(0.25));
+/// f.encoders.push(RawReading::from_reading(&jointctl_api::Reading::valid(0.25)));
 /// let m = jointctl_ros2::from_arm::raw_frame(&f, &d, &jointctl_ros2::from_arm::WallClock::from_pair(0, 0), "sherpa");
 /// assert_eq!((m.encoders[0].name.as_str(), m.encoders[0].value, m.encoders[0].status.as_str()), ("enc_q2_out", 0.25, "valid"));
 /// ```
@@ -190,7 +190,7 @@ fn values(pairs: &[(&str, u64)]) -> Vec<KeyValue> {
 ///
 /// ```
 /// let mut d = jointctl_ipc::Diagnostics::EMPTY;
-/// d.joint_count = 1;
+/// d.joints.push(jointctl_ipc::JointDiagnostics::EMPTY);
 /// d.joints[0].name = jointctl_ipc::encode_name("q2");
 /// d.joints[0].fault_code = 3;
 /// let m = jointctl_ros2::from_arm::diagnostic_array(&d, &jointctl_ros2::from_arm::WallClock::from_pair(0, 0), "sherpa");
@@ -215,7 +215,7 @@ pub fn diagnostic_array(d: &Diagnostics, clock: &WallClock, arm: &str) -> msg::D
             ("max_lateness_ns", d.max_jitter_ns),
         ]),
     }];
-    for j in &d.joints[..(d.joint_count as usize).min(d.joints.len())] {
+    for j in &d.joints {
         let (level, message) = match (j.fault_code, j.held != 0) {
             (0, false) => (DiagnosticStatus::OK, "ok".to_string()),
             (0, true) => (DiagnosticStatus::WARN, "held".to_string()),
@@ -241,7 +241,7 @@ pub fn diagnostic_array(d: &Diagnostics, clock: &WallClock, arm: &str) -> msg::D
             ]),
         });
     }
-    for x in &d.devices[..(d.device_count as usize).min(d.devices.len())] {
+    for x in &d.devices {
         // The bits of `DeviceDiagnostics::flags` (jointctl_ipc), the HAL's device health.
         let flags: Vec<&str> = [(1, "silent"), (2, "fault"), (4, "bus-off"), (8, "error-passive")].iter().filter(|(bit, _)| x.flags & bit != 0).map(|(_, n)| *n).collect();
         status.push(DiagnosticStatus {

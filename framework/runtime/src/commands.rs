@@ -525,7 +525,7 @@ mod tests {
     fn enabled_has_one_source_of_truth_even_when_the_queue_is_full() {
         let v = validator();
         let status = Arc::clone(v.status());
-        let mut desk = crate::publisher::CommandDesk::new(v, 0.001);
+        let mut desk = crate::command_desk::CommandDesk::new(v, 0.001);
         let (mut queue, _loop_end) = rtrb::RingBuffer::<ArmCommand>::new(1);
         queue.push(ArmCommand::HoldAll).unwrap();
         let answer = desk.answer(&CommandRequest::new(CommandKind::DISABLE, "q4", &[]), &mut queue);

@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 pub mod arm;
+pub mod command_desk;
 pub mod commands;
 pub mod doctor;
 pub mod guard;
@@ -23,7 +24,7 @@ pub mod timing;
 
 pub use arm::{ActivateError, Arm, JointSlot};
 pub use loader::{LoadPluginError, PluginLoader, PluginSource};
-pub use publisher::{ArmPublisher, HopSample, fits_shared_memory};
+pub use publisher::{ArmPublisher, HopSample};
 pub use run_error::RunError;
 pub use runner::{ControlLoop, RunOptions, RunReport, run};
 

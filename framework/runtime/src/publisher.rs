@@ -8,17 +8,20 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
 use iceoryx2::port::update_connections::UpdateConnections;
-use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDrive, RawFrame, RawReading};
-use jointctl_ipc::{ArmState, CommandResponse, Diagnostics, JointDescriptor, JointDiagnostics, JointsDescriptor, ServiceNames, decode_name, encode_name};
+use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawDescriptorHeader, RawDrive, RawFrame, RawFrameHeader, RawReading};
+use jointctl_ipc::wire::ByteRecord;
+use jointctl_ipc::{ArmState, ArmStateHeader, CommandResponse, Diagnostics, DiagnosticsHeader, JointDescriptor, JointDiagnostics, JointSample, JointsDescriptor, JointsDescriptorHeader, ServiceNames, decode_name, encode_name};
 
 use crate::arm::Arm;
+use crate::command_desk::CommandDesk;
 use crate::commands::{ArmCommand, CommandValidator};
 use crate::run_error::{RunError, port_error};
 use crate::state_fill::fill_joints;
 use crate::timing::{LoopStats, monotonic_ns};
 
-/// One cycle's record, handed from the loop thread to the publisher thread.
-#[derive(Clone, Copy)]
+/// One cycle's record, handed from the loop thread to the publisher thread. Its joint state is
+/// sized by the arm: records go round between the two threads in boxes made at start (the
+/// loop fills one from its working record, the publisher thread sends it and gives it back).
 struct CycleRecord {
     state: ArmState,
     diagnostics: Diagnostics,
@@ -29,6 +32,16 @@ struct CycleRecord {
     readings_ns: u64,
     done_ns: u64,
     handed_ns: u64,
+}
+
+impl CycleRecord {
+    /// This record overwritten by `other`, allocation-free (both are of the same arm).
+    fn copy_from(&mut self, other: &CycleRecord) {
+        self.state.copy_from(&other.state);
+        self.diagnostics.copy_from(&other.diagnostics);
+        self.raw.copy_from(&other.raw);
+        (self.readings_ns, self.done_ns, self.handed_ns) = (other.readings_ns, other.done_ns, other.handed_ns);
+    }
 }
 
 /// Where one cycle's state spent its time between the sensor read and iceoryx2, all
@@ -64,61 +77,10 @@ const COMMAND_CAPACITY: usize = 32;
 
 pub use crate::state_fill::published_mode;
 
-/// Answers command requests: validates them against the loop's published status, queues the
-/// valid ones for the loop, and waits for the loop to apply an enable or disable before it
-/// answers (so that the next command is validated against the new state).
-pub struct CommandDesk {
-    validator: CommandValidator,
-    period: std::time::Duration,
-}
-
-impl CommandDesk {
-    /// A desk for a loop of this period.
-    pub fn new(validator: CommandValidator, period_s: f64) -> Self {
-        CommandDesk { validator, period: std::time::Duration::from_secs_f64(period_s) }
-    }
-
-    /// The answer to one request; a valid command is pushed into `queue` for the loop.
-    pub fn answer(&mut self, request: &jointctl_ipc::CommandRequest, queue: &mut rtrb::Producer<ArmCommand>) -> CommandResponse {
-        let (command, text) = match self.validator.validate(request) {
-            Ok(ok) => ok,
-            Err(reason) => return CommandResponse::new(false, &reason.to_string()),
-        };
-        if queue.push(command).is_err() {
-            return CommandResponse::new(false, "the runtime's command queue is full; try again");
-        }
-        if let ArmCommand::Stop = command {
-            self.validator.stop_queued();
-        }
-        if let ArmCommand::Enable { dof, enabled } = command
-            && !self.wait_applied(|s| s.enabled(dof) == enabled)
-        {
-            return CommandResponse::new(true, &format!("{text}; queued, the loop has not applied it yet"));
-        }
-        CommandResponse::new(true, &text)
-    }
-
-    /// Waits up to five periods (and at least 20 ms) for the loop to publish a status where
-    /// `applied` holds.
-    fn wait_applied(&self, applied: impl Fn(&crate::status::LoopStatus) -> bool) -> bool {
-        let status = self.validator.status();
-        let end = std::time::Instant::now() + (self.period * 5).max(std::time::Duration::from_millis(20));
-        loop {
-            if applied(status) {
-                return true;
-            }
-            if std::time::Instant::now() >= end || status.stopping() {
-                return false;
-            }
-            std::thread::sleep(std::time::Duration::from_micros(500));
-        }
-    }
-}
-
 /// Logs each joint whose fault count grew since `seen` (the publisher thread's view of the
 /// diagnostics), with its fault code and reason.
-fn log_new_faults(d: &Diagnostics, seen: &mut [u64; jointctl_ipc::MAX_JOINTS]) {
-    for (j, seen) in d.joints[..(d.joint_count as usize).min(d.joints.len())].iter().zip(seen.iter_mut()) {
+fn log_new_faults(d: &Diagnostics, seen: &mut [u64]) {
+    for (j, seen) in d.joints.iter().zip(seen.iter_mut()) {
         if j.fault_count > *seen {
             *seen = j.fault_count;
             tracing::error!(joint = decode_name(&j.name), fault = j.fault_code, "joint faulted and is held: {}", decode_name(&j.fault_message));
@@ -127,12 +89,11 @@ fn log_new_faults(d: &Diagnostics, seen: &mut [u64; jointctl_ipc::MAX_JOINTS]) {
 }
 
 /// The arm's plugin instances as `inspect joints` reads them.
-fn joints_descriptor(arm: &Arm) -> Box<JointsDescriptor> {
-    let mut d = Box::new(JointsDescriptor::EMPTY);
-    d.rate_hz = arm.rate_hz;
-    for (entry, slot) in d.joints.iter_mut().zip(&arm.slots) {
+fn joints_descriptor(arm: &Arm) -> JointsDescriptor {
+    let mut d = JointsDescriptor { rate_hz: arm.rate_hz, joints: Vec::with_capacity(arm.slots.len()) };
+    for slot in &arm.slots {
         let dofs = slot.dofs();
-        *entry = JointDescriptor {
+        d.joints.push(JointDescriptor {
             name: encode_name(&slot.name),
             plugin: encode_name(&slot.plugin),
             version: encode_name(&slot.plugin_version),
@@ -140,31 +101,37 @@ fn joints_descriptor(arm: &Arm) -> Box<JointsDescriptor> {
             first_dof: dofs.start as u32,
             dof_count: dofs.len() as u32,
             budget_ns: slot.budget_ns,
-        };
-        d.joint_count += 1;
+        });
     }
     d
 }
 
-/// Publishes the one sample a service keeps for late subscribers (descriptors); a failure is
-/// logged, since readers then wait for it in vain.
-fn publish_kept<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend>(publisher: &Publisher<ipc::Service, T, ()>, value: &T, service: &str) {
-    let sent = publisher.loan_uninit().map(|s| s.write_payload(*value).send().is_ok()).unwrap_or(false);
-    if !sent {
-        tracing::warn!(service, "could not publish the service's kept sample");
+/// Logs a kept sample (a descriptor) that could not be published: readers then wait for it in
+/// vain.
+fn warn_unkept<E: std::fmt::Display>(sent: Result<(), E>, service: &str) {
+    if let Err(e) = sent {
+        tracing::warn!(service, "could not publish the service's kept sample: {e}");
     }
+}
+
+/// Bytes of the payload of each per-cycle byte sample, for the publishers' slice lengths.
+#[derive(Clone, Copy)]
+struct PayloadSizes {
+    dofs: usize,
+    diagnostics: usize,
+    raw: usize,
 }
 
 /// What the publisher thread owns: the arm's node and ports.
 struct PublisherPorts {
     node: Node<ipc::Service>,
-    state: Publisher<ipc::Service, ArmState, ()>,
-    diagnostics: Publisher<ipc::Service, Diagnostics, ()>,
-    raw: Publisher<ipc::Service, RawFrame, ()>,
+    state: Publisher<ipc::Service, [JointSample], ArmStateHeader>,
+    diagnostics: Publisher<ipc::Service, [u8], DiagnosticsHeader>,
+    raw: Publisher<ipc::Service, [u8], RawFrameHeader>,
     /// Kept so that its one sample stays in the service's history for late subscribers.
-    descriptor: Publisher<ipc::Service, RawDescriptor, ()>,
+    descriptor: Publisher<ipc::Service, [u8], RawDescriptorHeader>,
     /// Kept likewise: the arm's plugin instances.
-    joints: Publisher<ipc::Service, JointsDescriptor, ()>,
+    joints: Publisher<ipc::Service, [JointDescriptor], JointsDescriptorHeader>,
     accepted: Publisher<ipc::Service, CommandRecord, ()>,
     server: iceoryx2::port::server::Server<ipc::Service, jointctl_ipc::CommandRequest, (), CommandResponse, ()>,
 }
@@ -181,6 +148,18 @@ fn publisher_of<T: std::fmt::Debug + ZeroCopySend + 'static>(
     create(node, service, limits)?.publisher_builder().create().map_err(|e| port_error(arm_name, service, e))
 }
 
+/// [`publisher_of`] a sliced service, for samples of up to `len` elements.
+fn sliced_publisher_of<T: std::fmt::Debug + ZeroCopySend + 'static, H: std::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<ipc::Service>,
+    arm_name: &str,
+    service: &str,
+    limits: jointctl_ipc::PortLimits,
+    create: jointctl_ipc::ServiceCreator<[T], H>,
+    len: usize,
+) -> Result<Publisher<ipc::Service, [T], H>, RunError> {
+    create(node, service, limits)?.publisher_builder().initial_max_slice_len(len.max(1)).create().map_err(|e| port_error(arm_name, service, e))
+}
+
 impl PublisherPorts {
     /// Creates the arm's node and services; a taken publisher or server slot means another
     /// runtime runs this arm.
@@ -190,6 +169,7 @@ impl PublisherPorts {
         limits: jointctl_ipc::PortLimits,
         description: &RawDescriptor,
         instances: &JointsDescriptor,
+        sizes: PayloadSizes,
     ) -> Result<Self, RunError> {
         let node = jointctl_ipc::create_node_in(scope, &format!("jointctl-run-{arm_name}"))?;
         let names = ServiceNames::for_arm(arm_name);
@@ -200,14 +180,14 @@ impl PublisherPorts {
             .server_builder()
             .create()
             .map_err(|e| port_error(arm_name, &command_name, e))?;
-        let raw = publisher_of(&node, arm_name, &names.raw, limits, jointctl_ipc::create_raw_service)?;
-        let descriptor = publisher_of(&node, arm_name, &names.raw_descriptor, limits, jointctl_ipc::create_raw_descriptor_service)?;
-        publish_kept(&descriptor, description, &names.raw_descriptor);
-        let joints = publisher_of(&node, arm_name, &names.joints, limits, jointctl_ipc::create_joints_service)?;
-        publish_kept(&joints, instances, &names.joints);
+        let raw = sliced_publisher_of(&node, arm_name, &names.raw, limits, jointctl_ipc::create_raw_service, sizes.raw)?;
+        let descriptor = sliced_publisher_of(&node, arm_name, &names.raw_descriptor, limits, jointctl_ipc::create_raw_descriptor_service, description.payload_len())?;
+        warn_unkept(jointctl_ipc::wire::send_record(&descriptor, description), &names.raw_descriptor);
+        let joints = sliced_publisher_of(&node, arm_name, &names.joints, limits, jointctl_ipc::create_joints_service, instances.joints.len())?;
+        warn_unkept(jointctl_ipc::send_sliced(&joints, instances.header(), instances.joints()), &names.joints);
         let accepted = publisher_of(&node, arm_name, &names.commands, limits, jointctl_ipc::create_commands_service)?;
-        let state = publisher_of(&node, arm_name, &names.joint_state, limits, jointctl_ipc::create_joint_state_service)?;
-        let diagnostics = publisher_of(&node, arm_name, &names.diagnostics, limits, jointctl_ipc::create_diagnostics_service)?;
+        let state = sliced_publisher_of(&node, arm_name, &names.joint_state, limits, jointctl_ipc::create_joint_state_service, sizes.dofs)?;
+        let diagnostics = sliced_publisher_of(&node, arm_name, &names.diagnostics, limits, jointctl_ipc::create_diagnostics_service, sizes.diagnostics)?;
         Ok(PublisherPorts { node, state, diagnostics, raw, descriptor, joints, accepted, server })
     }
 
@@ -215,7 +195,8 @@ impl PublisherPorts {
     /// iceoryx2 refused. Dropping the ports at the end releases the shared memory.
     fn serve(
         self,
-        mut records: rtrb::Consumer<CycleRecord>,
+        mut records: rtrb::Consumer<Box<CycleRecord>>,
+        mut spent: rtrb::Producer<Box<CycleRecord>>,
         mut commands: rtrb::Producer<ArmCommand>,
         mut desk: CommandDesk,
         stop: &AtomicBool,
@@ -226,21 +207,24 @@ impl PublisherPorts {
         let hop_log_capacity = hop_log_capacity.min(MAX_HOP_LOG);
         let mut hops = Vec::with_capacity(hop_log_capacity);
         let mut accepted_count = 0u64;
-        let mut faults_seen = [0u64; jointctl_ipc::MAX_JOINTS];
+        let mut faults_seen = Vec::new();
         loop {
             let stopping = stop.load(Ordering::Acquire);
             while let Ok(rec) = records.pop() {
                 // The final sample, published outside any cycle, has no hops.
                 let taken_ns = if hops.len() < hop_log_capacity && rec.state.final_sample == 0 { monotonic_ns() } else { 0 };
-                let ok_state = self.state.loan_uninit().map(|s| s.write_payload(rec.state).send().is_ok()).unwrap_or(false);
+                let ok_state = jointctl_ipc::send_sliced(&self.state, rec.state.header(), rec.state.joints()).is_ok();
                 if taken_ns != 0 {
                     let (cycle, read_ns) = (rec.state.cycle, rec.state.stamp_ns);
                     hops.push(HopSample { cycle, read_ns, readings_ns: rec.readings_ns, done_ns: rec.done_ns, handed_ns: rec.handed_ns, taken_ns, sent_ns: monotonic_ns() });
                 }
+                faults_seen.resize(rec.diagnostics.joints.len(), 0);
                 log_new_faults(&rec.diagnostics, &mut faults_seen);
-                let ok_diag = self.diagnostics.loan_uninit().map(|s| s.write_payload(rec.diagnostics).send().is_ok()).unwrap_or(false);
-                let ok_raw = self.raw.loan_uninit().map(|s| s.write_payload(rec.raw).send().is_ok()).unwrap_or(false);
+                let ok_diag = jointctl_ipc::wire::send_record(&self.diagnostics, &rec.diagnostics).is_ok();
+                let ok_raw = jointctl_ipc::wire::send_record(&self.raw, &rec.raw).is_ok();
                 failures += u64::from(!ok_state) + u64::from(!ok_diag) + u64::from(!ok_raw);
+                // Back to the loop; the ring holds every box there is, so it has room.
+                let _ = spent.push(rec);
             }
             // Commands are validated here, outside the control thread; only valid ones reach
             // the loop, and every request gets an answer. The accepted ones are published for
@@ -290,32 +274,19 @@ fn fill_raw(raw: &mut RawFrame, arm: &Arm) {
     }
 }
 
-/// Refuses an arm with more DOFs or devices than the shared-memory samples carry: the
-/// samples are fixed-size, and filling them from a bigger arm would drop joints or devices
-/// without a word.
-pub fn fits_shared_memory(arm: &Arm) -> Result<(), RunError> {
-    let (encoders, drives) = arm.raw_devices();
-    let counts = [
-        ("DOFs", arm.dof_names.len(), jointctl_ipc::MAX_JOINTS),
-        ("encoders", encoders.len(), jointctl_ipc::raw::MAX_RAW_ENCODERS),
-        ("drives", drives.len(), jointctl_ipc::raw::MAX_RAW_DRIVES),
-        ("force/torque sensors", arm.torque_sensor_names().len(), jointctl_ipc::raw::MAX_RAW_TORQUE_SENSORS),
-        ("devices (drives, encoders and force/torque sensors)", arm.device_names().count(), jointctl_ipc::MAX_DEVICES),
-    ];
-    match counts.into_iter().find(|&(_, count, max)| count > max) {
-        Some((what, count, max)) => Err(RunError::TooLargeToPublish { arm: arm.name.clone(), what, count, max }),
-        None => Ok(()),
-    }
-}
-
 /// The loop's shared-memory side.
 ///
 /// iceoryx2 0.10 allocates a small reference count in every `loan`, so the control thread never
 /// calls it: each cycle's record goes into a wait-free single-producer ring (no lock, no
 /// allocation, never waits) and a publisher thread, which owns the iceoryx2 node, sends it. A
-/// full ring drops the record and counts it (`publish_drops`); the loop never slows down.
+/// full ring drops the record and counts it (`publish_drops`); the loop never slows down. The
+/// records, sized by the arm, are made at start and go round: the loop fills an empty one
+/// from `spent`, the publisher thread sends it and puts it back there.
 pub struct ArmPublisher {
-    producer: rtrb::Producer<CycleRecord>,
+    producer: rtrb::Producer<Box<CycleRecord>>,
+    spent: rtrb::Consumer<Box<CycleRecord>>,
+    /// A box the full ring refused, used next.
+    spare: Option<Box<CycleRecord>>,
     health: Vec<jointctl_hal::DeviceHealth>,
     commands: rtrb::Consumer<ArmCommand>,
     status: Arc<crate::status::LoopStatus>,
@@ -331,7 +302,7 @@ pub struct ArmPublisher {
     failures: u64,
     /// The latest-state blackboard, written on the loop thread as soon as a cycle is observed.
     latest: jointctl_ipc::LatestStateWriter,
-    latest_state: Box<ArmState>,
+    latest_state: ArmState,
 }
 
 impl ArmPublisher {
@@ -353,8 +324,8 @@ impl ArmPublisher {
     /// the publisher's (the HAL read's return is always timed); the log's memory, at most
 /// [`MAX_HOP_LOG`] entries, is taken once, on the publisher thread.
     pub fn with_hop_log(arm: &Arm, scope: &jointctl_ipc::IpcScope, limits: jointctl_ipc::PortLimits, capacity: usize) -> Result<Self, RunError> {
-        fits_shared_memory(arm)?;
-        let (producer, consumer) = rtrb::RingBuffer::<CycleRecord>::new(RING_CAPACITY);
+        let (producer, consumer) = rtrb::RingBuffer::<Box<CycleRecord>>::new(RING_CAPACITY);
+        let (mut spent_producer, spent) = rtrb::RingBuffer::<Box<CycleRecord>>::new(RING_CAPACITY);
         let (command_producer, commands) = rtrb::RingBuffer::<ArmCommand>::new(COMMAND_CAPACITY);
         let status = Arc::new(crate::status::LoopStatus::new(arm.dof_names.len()));
         let desk = CommandDesk::new(CommandValidator::new(arm.dof_specs(), Arc::clone(&status)).with_loop_rate(1.0 / arm.dt_s), arm.dt_s);
@@ -362,10 +333,7 @@ impl ArmPublisher {
         // The latest-state blackboard before the publisher thread opens the other services, so
         // that a client that finds those finds it too. Written by the loop thread itself
         // (`post_observed`), not the publisher thread; until then it holds the named joints.
-        let mut latest_state = Box::new(ArmState { joint_count: arm.dof_names.len() as u32, ..ArmState::EMPTY });
-        for (sample, name) in latest_state.joints.iter_mut().zip(&arm.dof_names) {
-            sample.name = encode_name(name);
-        }
+        let latest_state = ArmState::named(arm.dof_names.iter().map(String::as_str));
         let latest = jointctl_ipc::LatestStateWriter::create(scope, &arm.name, limits.max_subscribers, &latest_state)?;
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<libc::pid_t, RunError>>();
         let arm_name = arm.name.clone();
@@ -374,11 +342,37 @@ impl ArmPublisher {
         let mut description = RawDescriptor::of(arm.rate_hz, &encoders, &drives, &arm.torque_sensor_names(), arm.config_path());
         fill_raw(&mut description.activation, arm);
         let instances = joints_descriptor(arm);
+        // The loop's working record: its joints and devices named. Every cycle's raw frame holds
+        // the described devices: the activation frame's shape.
+        let mut diagnostics = Diagnostics::EMPTY;
+        diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
+        let named = |mut d: JointDiagnostics, name: &str| {
+            d.name = encode_name(name);
+            d
+        };
+        diagnostics.joints = arm.dof_names.iter().map(|name| named(JointDiagnostics::EMPTY, name)).collect();
+        diagnostics.devices = arm
+            .device_names()
+            .map(|name| {
+                let mut d = jointctl_ipc::DeviceDiagnostics::EMPTY;
+                d.name = encode_name(name);
+                d
+            })
+            .collect();
+        let record = Box::new(CycleRecord { state: latest_state.clone(), diagnostics, raw: description.activation.clone(), readings_ns: 0, done_ns: 0, handed_ns: 0 });
+        let sizes = PayloadSizes { dofs: arm.dof_names.len(), diagnostics: record.diagnostics.payload_len(), raw: record.raw.payload_len() };
+        // The boxes the records go round in, made here, once.
+        for _ in 0..RING_CAPACITY {
+            let empty = Box::new(CycleRecord { state: record.state.clone(), diagnostics: record.diagnostics.clone(), raw: record.raw.clone(), readings_ns: 0, done_ns: 0, handed_ns: 0 });
+            if spent_producer.push(empty).is_err() {
+                break;
+            }
+        }
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::Builder::new()
             .name(format!("{arm_name}-publisher"))
             .spawn(move || {
-                let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description, &instances) {
+                let ports = match PublisherPorts::open(&scope, &arm_name, limits, &description, &instances, sizes) {
                     Ok(ports) => {
                         let _ = ready_tx.send(Ok(crate::timing::thread_id()));
                         ports
@@ -388,7 +382,7 @@ impl ArmPublisher {
                         return (0, Vec::new());
                     }
                 };
-                ports.serve(consumer, command_producer, desk, &thread_stop, capacity)
+                ports.serve(consumer, spent_producer, command_producer, desk, &thread_stop, capacity)
             })
             .map_err(|e| RunError::Thread(e.to_string()))?;
         let thread_tid = match ready_rx.recv() {
@@ -399,23 +393,8 @@ impl ArmPublisher {
             }
             Err(_) => return Err(RunError::Thread("the publisher thread ended during setup".into())),
         };
-        // Every cycle's raw frame holds the described devices: the activation frame's shape.
-        let mut record = Box::new(CycleRecord { state: ArmState::EMPTY, diagnostics: Diagnostics::EMPTY, raw: description.activation, readings_ns: 0, done_ns: 0, handed_ns: 0 });
-        record.state.joint_count = arm.dof_names.len() as u32;
-        record.diagnostics.joint_count = record.state.joint_count;
-        record.diagnostics.period_ns = (1e9 / arm.rate_hz) as u64;
-        for (i, name) in arm.dof_names.iter().enumerate() {
-            record.state.joints[i].name = encode_name(name);
-            record.diagnostics.joints[i].name = encode_name(name);
-        }
-        let mut devices = 0;
-        for (d, name) in record.diagnostics.devices.iter_mut().zip(arm.device_names()) {
-            d.name = encode_name(name);
-            devices += 1;
-        }
-        record.diagnostics.device_count = devices as u32;
-        let health = vec![jointctl_hal::DeviceHealth::default(); jointctl_ipc::MAX_DEVICES];
-        Ok(ArmPublisher { producer, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0, latest, latest_state })
+        let health = vec![jointctl_hal::DeviceHealth::default(); record.diagnostics.devices.len()];
+        Ok(ArmPublisher { producer, spent, spare: None, health, commands, status, record, thread: Some(thread), thread_tid, stop, drops: 0, log_hops: capacity > 0, hops: Vec::new(), failures: 0, latest, latest_state })
     }
 
     /// Fills the state and raw parts of this cycle's record.
@@ -531,8 +510,18 @@ impl ArmPublisher {
             self.record.readings_ns = arm.readings_ns;
             self.record.handed_ns = monotonic_ns();
         }
-        if self.producer.push(*self.record).is_err() {
-            self.drops += 1;
+        // No empty box: the publisher thread holds them all, behind by the ring's length.
+        match self.spare.take().or_else(|| self.spent.pop().ok()) {
+            Some(mut next) => {
+                next.copy_from(&self.record);
+                if let Err(rtrb::PushError::Full(next)) = self.producer.push(next) {
+                    // Cannot happen (as many boxes as places); the record is lost, the box
+                    // kept (never freed on this thread).
+                    self.drops += 1;
+                    self.spare = Some(next);
+                }
+            }
+            None => self.drops += 1,
         }
         if let Some(t) = &self.thread {
             t.thread().unpark();

@@ -31,18 +31,6 @@ pub enum RunError {
         /// iceoryx2's reason.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
-    /// The arm has more of something than its shared-memory samples carry.
-    #[error("arm `{arm}` has {count} {what}; its shared-memory samples carry at most {max}: run it without publishing (`jointctl run --no-ipc`) or split it into arms of at most {max}")]
-    TooLargeToPublish {
-        /// Arm name.
-        arm: String,
-        /// "DOFs", "encoders", "drives", "force/torque sensors" or "devices".
-        what: &'static str,
-        /// How many the arm has.
-        count: usize,
-        /// How many the samples carry.
-        max: usize,
-    },
     /// The publisher thread could not start.
     #[error("cannot start the publisher thread: {0}")]
     Thread(String),

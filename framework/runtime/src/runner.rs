@@ -9,7 +9,7 @@
 use jointctl_config::TimingConfig;
 
 use crate::arm::Arm;
-pub use crate::publisher::{ArmPublisher, HopSample, fits_shared_memory};
+pub use crate::publisher::{ArmPublisher, HopSample};
 pub use crate::run_error::RunError;
 use crate::signals::StopRequest;
 use crate::timing::{LoopStats, Pacer, monotonic_ns};

@@ -77,7 +77,7 @@ fn a_signal_holds_the_joints_publishes_a_final_state_and_releases_shared_memory(
     assert!(log.contains(&format!("signal={name}")), "{name}: {log}");
     let mut saw_final = false;
     while let Some(s) = sub.receive().unwrap() {
-        saw_final |= s.final_sample == 1;
+        saw_final |= s.user_header().final_sample == 1;
     }
     assert!(saw_final, "{name}: a final state was published at shutdown");
     drop(sub);
@@ -140,7 +140,7 @@ fn a_plugin_panic_prints_nothing_on_the_control_thread() {
 }
 
 /// Subscribes to a running arm's diagnostics from this process, waiting for the arm to come up.
-fn diagnostics_of(node: &iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>, arm: &str) -> iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, jointctl_ipc::Diagnostics, ()> {
+fn diagnostics_of(node: &iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>, arm: &str) -> iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, [u8], jointctl_ipc::DiagnosticsHeader> {
     let names = jointctl_ipc::ServiceNames::for_arm(arm);
     let t = Instant::now();
     loop {
@@ -153,12 +153,12 @@ fn diagnostics_of(node: &iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service
 }
 
 /// The newest diagnostics sample, waiting up to 5 s for one.
-fn latest_diagnostics(sub: &iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, jointctl_ipc::Diagnostics, ()>) -> jointctl_ipc::Diagnostics {
+fn latest_diagnostics(sub: &iceoryx2::port::subscriber::Subscriber<iceoryx2::prelude::ipc::Service, [u8], jointctl_ipc::DiagnosticsHeader>) -> jointctl_ipc::Diagnostics {
     let t = Instant::now();
     let mut last = None;
     loop {
         while let Some(s) = sub.receive().unwrap() {
-            last = Some(*s);
+            last = Some(jointctl_ipc::Diagnostics::try_from(&s).unwrap());
         }
         if let Some(d) = last {
             return d;
@@ -271,7 +271,7 @@ fn a_command_flood_is_answered_and_does_not_slow_the_loop() {
     std::thread::sleep(Duration::from_millis(1500));
     let (mut q, mut states) = (f64::NAN, 0);
     while let Some(s) = watch.receive().unwrap() {
-        (q, states) = (s.joints[0].position_rad, states + 1);
+        (q, states) = (s.payload()[0].position_rad, states + 1);
     }
     stop(&mut run);
     eprintln!(

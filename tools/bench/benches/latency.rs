@@ -46,7 +46,7 @@ fn latency_subscriber(arm: &str, cpu: Option<usize>, via: Via) -> (Arc<AtomicBoo
             let reader = jointctl_ipc::LatestStateReader::open(&jointctl_ipc::IpcScope::domain(None), &arm).unwrap();
             let mut last = u64::MAX;
             while !sub_stop.load(Ordering::Relaxed) {
-                let s = reader.latest();
+                let Ok(s) = reader.latest() else { continue };
                 if s.stamp_ns != 0 && s.cycle != last {
                     last = s.cycle;
                     seen.push((s.cycle, s.stamp_ns, monotonic_ns()));
@@ -61,7 +61,7 @@ fn latency_subscriber(arm: &str, cpu: Option<usize>, via: Via) -> (Arc<AtomicBoo
         let sub = jointctl_ipc::joint_state_service(&node, &names.joint_state).unwrap().subscriber_builder().create().unwrap();
         while !sub_stop.load(Ordering::Relaxed) {
             if let Some(s) = sub.receive().unwrap() {
-                seen.push((s.cycle, s.stamp_ns, monotonic_ns()));
+                seen.push((s.user_header().cycle, s.user_header().stamp_ns, monotonic_ns()));
             } else {
                 std::hint::spin_loop();
             }
@@ -142,19 +142,22 @@ fn sensor_to_inspector(name: &str, cycles: u64, realtime: bool, via: Via) -> Hop
     .expect("the loop thread")
 }
 
-/// The iceoryx2 hand-off alone: the arm-state type over the same service kind, stamped at send,
+/// The SHERPA arm's DOFs: the joint states the hand-off and the blackboard are measured with.
+const SHERPA_DOFS: [&str; 7] = ["q1", "q2", "q3", "q4", "q5", "q6", "q7"];
+
+/// The iceoryx2 hand-off alone: a 7-joint state over the same service kind, stamped at send,
 /// 1 kHz, a busy-polling subscriber thread: latencies [ns].
 fn handoff_alone(samples: u64) -> Vec<u64> {
     let node = jointctl_ipc::create_node(None, "bench-ipc-publisher").unwrap();
     let names = jointctl_ipc::ServiceNames::for_arm("bench-ipc");
-    let publisher = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, Default::default()).unwrap().publisher_builder().create().unwrap();
+    let publisher = jointctl_ipc::create_joint_state_service(&node, &names.joint_state, Default::default()).unwrap().publisher_builder().initial_max_slice_len(SHERPA_DOFS.len()).create().unwrap();
     let (stop, subscriber) = latency_subscriber("bench-ipc", None, Via::Subscriber);
     std::thread::sleep(Duration::from_millis(200));
-    let mut state = jointctl_ipc::ArmState::EMPTY;
+    let mut state = jointctl_ipc::ArmState::named(SHERPA_DOFS);
     for cycle in 0..samples {
         state.cycle = cycle;
         state.stamp_ns = monotonic_ns();
-        publisher.loan_uninit().unwrap().write_payload(state).send().unwrap();
+        jointctl_ipc::send_sliced(&publisher, state.header(), state.joints()).unwrap();
         std::thread::sleep(Duration::from_millis(1));
     }
     std::thread::sleep(Duration::from_millis(100));
@@ -162,15 +165,15 @@ fn handoff_alone(samples: u64) -> Vec<u64> {
     latencies(&subscriber.join().unwrap())
 }
 
-/// What one write of the latest-state blackboard costs the loop [ns]: an `ArmState` written
+/// What one write of the latest-state blackboard costs the loop [ns]: a 7-joint state written
 /// `samples` times at 1 kHz while an inspector thread busy-polls it (its reads contend for the
 /// entry's cache lines), each write timed alone.
 fn blackboard_write(samples: u64) -> Vec<u64> {
     let scope = jointctl_ipc::IpcScope::domain(None);
-    let writer = jointctl_ipc::LatestStateWriter::create(&scope, "bench-latest-write", 2, &jointctl_ipc::ArmState::EMPTY).unwrap();
+    let mut state = jointctl_ipc::ArmState::named(SHERPA_DOFS);
+    let mut writer = jointctl_ipc::LatestStateWriter::create(&scope, "bench-latest-write", 2, &state).unwrap();
     let (stop, poller) = latency_subscriber("bench-latest-write", None, Via::Blackboard);
     std::thread::sleep(Duration::from_millis(200));
-    let mut state = jointctl_ipc::ArmState::EMPTY;
     let mut took = Vec::with_capacity(samples as usize);
     for cycle in 0..samples {
         state.cycle = cycle;

@@ -2,13 +2,14 @@
 //!
 //! 1. Generated arms of 7, 16, 70 and 700 DOFs, rigid and elastic, on the simulated HAL and on
 //!    a HAL with no physics ([`jointctl_bench::EchoHal`]): cycle compute per DOF, and what
-//!    publishing costs the loop thread where the arm fits the shared-memory samples (16 DOFs).
-//! 2. Several arms on one machine, each its own `jointctl run` process.
-//! 3. The SHERPA arm at 1 kHz on an idle and on a loaded machine (a busy loop per core), with and
+//!    publishing costs the loop thread.
+//! 2. Publishing and recording at 7, 70 and 700 DOFs: `jointctl run` with `jointctl record`.
+//! 3. Several arms on one machine, each its own `jointctl run` process.
+//! 4. The SHERPA arm at 1 kHz on an idle and on a loaded machine (a busy loop per core), with and
 //!    without SCHED_FIFO and CPU affinity, with and without locked memory.
 //!
 //! Environment: `BENCH_LOAD_S` (default 60) seconds per loaded-machine run, `BENCH_ARMS_S`
-//! (default 10) per several-arms run; `BENCH_QUICK=1` shortens everything for a smoke run.
+//! (default 10) per several-arms run, `BENCH_RECORD_S` (default 5) per recorded run; `BENCH_QUICK=1` shortens everything for a smoke run.
 //! Needs `cargo build --release --workspace` first (the `jointctl` binary and the plugins).
 
 use std::process::{Child, Command, Stdio};
@@ -115,14 +116,16 @@ fn scale_table(quick: bool) {
     println!("## Publishing, 1 kHz: the loop thread's share (fill the state, diagnostics and raw record, hand it over), HAL \"none\"");
     let size = |n: usize| format!("{:.1} KiB", n as f64 / 1024.0);
     println!(
-        "A cycle's record is fixed-size whatever the arm: joint state {}, diagnostics {}, raw readings {}.",
-        size(std::mem::size_of::<jointctl_ipc::ArmState>()),
-        size(std::mem::size_of::<jointctl_ipc::Diagnostics>()),
-        size(std::mem::size_of::<jointctl_ipc::raw::RawFrame>())
+        "A cycle's record is sized by the arm: per DOF, joint state {}, diagnostics {}; per device, diagnostics {}; per drive, raw readings {}, per encoder {}.",
+        size(std::mem::size_of::<jointctl_ipc::JointSample>()),
+        size(std::mem::size_of::<jointctl_ipc::JointDiagnostics>()),
+        size(std::mem::size_of::<jointctl_ipc::DeviceDiagnostics>()),
+        size(std::mem::size_of::<jointctl_ipc::raw::RawDrive>()),
+        size(std::mem::size_of::<jointctl_ipc::raw::RawReading>())
     );
     println!();
-    println!("| joints | DOFs | median ns/cycle | p99 ns/cycle | median ns per DOF |");
-    println!("|---|---|---|---|---|");
+    println!("| joints | DOFs | median ns/cycle | p99 ns/cycle | median ns per DOF | records dropped (the publisher thread behind) |");
+    println!("|---|---|---|---|---|---|");
     for kind in [JointKind::Rigid, JointKind::Elastic] {
         for &dofs in &sizes {
             let name = format!("bench-pub-{}-{dofs}", kind.plugin());
@@ -130,7 +133,7 @@ fn scale_table(quick: bool) {
             let mut publisher = match ArmPublisher::new(&arm, None) {
                 Ok(p) => p,
                 Err(e) => {
-                    println!("| {} | {dofs} | - | - | - (not published: {}) |", kind.plugin(), short_reason(&e.to_string()));
+                    println!("| {} | {dofs} | - | - | - | - (not published: {}) |", kind.plugin(), short_reason(&e.to_string()));
                     continue;
                 }
             };
@@ -149,7 +152,7 @@ fn scale_table(quick: bool) {
                 }
             }
             let (m, p) = (percentile(&mut times, 50.0), percentile(&mut times, 99.0));
-            println!("| {} | {dofs} | {m} | {p} | {:.0} |", kind.plugin(), m as f64 / dofs as f64);
+            println!("| {} | {dofs} | {m} | {p} | {:.0} | {} of {cycles} |", kind.plugin(), m as f64 / dofs as f64, publisher.drops());
         }
     }
     println!();
@@ -197,6 +200,61 @@ fn several_arms(quick: bool) {
         }
     }
     println!();
+}
+
+/// A generated arm run as `jointctl run` at 1 kHz (simulated, publishing) with `jointctl record`
+/// attached, at each size: what the loop keeps of its deadlines, and what the recorder costs and
+/// loses. The recorder's CPU is its own (it is waited for before the runtime).
+fn recorded_at_size(quick: bool) {
+    let exe = jointctl_bench::release_dir().join("jointctl");
+    let seconds = jointctl_bench::env_or("BENCH_RECORD_S", if quick { 2.0 } else { 5.0 });
+    println!("## Publishing and recording at size: a generated rigid arm, `jointctl run --static-plugins` at 1 kHz (simulated HAL) with `jointctl record` ({seconds} s, JSON profile)");
+    println!("| DOFs | recorded messages | lost by the recorder | MiB written | recorder CPU, % of one core | loop cycles | overruns | missed deadlines | max compute us |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for dofs in [7, 70, 700] {
+        let arm = format!("bench-rec-{dofs}-{}", std::process::id());
+        let yaml = std::env::temp_dir().join(format!("{arm}.yaml"));
+        let out = std::env::temp_dir().join(format!("{arm}.mcap"));
+        std::fs::write(&yaml, arm_yaml(&arm, dofs, JointKind::Rigid, 1000.0)).expect("the arm's YAML");
+        let mut run = Command::new(&exe).arg("run").arg(&yaml).args(["--static-plugins", "--duration", &(seconds + 30.0).to_string()]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+        let cpu_before = jointctl_bench::children_cpu_s();
+        let record = Command::new(&exe).args(["record", "--arm", &arm, "--out"]).arg(&out).args(["--duration", &seconds.to_string(), "--json"]).output().unwrap();
+        let recorder_cpu = jointctl_bench::children_cpu_s() - cpu_before;
+        let _ = Command::new(&exe).args(["cmd", "stop", "--arm", &arm]).output();
+        let _ = run.kill_if_running();
+        let ran = run.wait_with_output().unwrap();
+        let summary: serde_json::Value = serde_json::from_slice(&record.stdout).unwrap_or(serde_json::Value::Null);
+        let run_sum = run_summary(&String::from_utf8_lossy(&ran.stderr));
+        match (summary.get("messages"), run_sum) {
+            (Some(m), Some(r)) => {
+                let messages: u64 = m.as_object().map_or(0, |o| o.values().filter_map(serde_json::Value::as_u64).sum());
+                let mib = summary["bytes"].as_f64().unwrap_or(f64::NAN) / (1024.0 * 1024.0);
+                println!("| {dofs} | {messages} | {} | {mib:.1} | {:.0} | {} | {} | {} | {:.1} |", summary["lost"], 100.0 * recorder_cpu / seconds, r[0], r[1], r[2], r[3]);
+            }
+            _ => println!("| {dofs} | - | - | - | - | - | - | - | - (record: {}; run: {}) |", String::from_utf8_lossy(&record.stderr).lines().last().unwrap_or(""), String::from_utf8_lossy(&ran.stderr).lines().last().unwrap_or("")),
+        }
+        let _ = std::fs::remove_file(&yaml);
+        let _ = std::fs::remove_file(&out);
+    }
+    println!();
+}
+
+/// Stops a child that outlived what it was asked to do.
+trait KillIfRunning {
+    fn kill_if_running(&mut self) -> std::io::Result<()>;
+}
+
+impl KillIfRunning for Child {
+    fn kill_if_running(&mut self) -> std::io::Result<()> {
+        // Given the `cmd stop` a moment to end the run cleanly first.
+        for _ in 0..100 {
+            if self.try_wait()?.is_some() {
+                return Ok(());
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        self.kill()
+    }
 }
 
 /// The loop's settings in one loaded-machine run.
@@ -256,6 +314,9 @@ fn main() {
     println!();
     if only.is_empty() || only == "size" {
         scale_table(quick);
+    }
+    if only.is_empty() || only == "record" {
+        recorded_at_size(quick);
     }
     if only.is_empty() || only == "arms" {
         several_arms(quick);

@@ -112,35 +112,72 @@ pub(crate) fn human(s: &ArmState, keep: impl Fn(&str) -> bool) -> String {
     out
 }
 
+/// A sample an inspector keeps: what one of the arm's services carries, as a process holds it.
+pub trait Readable: Sized {
+    /// The service's payload.
+    type Payload: std::fmt::Debug + iceoryx2::prelude::IceoryxSend + ?Sized + 'static;
+    /// Its user header.
+    type Header: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static;
+    /// The next buffered sample, kept.
+    fn receive(subscriber: &Subscription<Self::Payload, Self::Header>) -> Result<Option<Self>, String>;
+}
+
+impl Readable for Diagnostics {
+    type Payload = [u8];
+    type Header = jointctl_ipc::DiagnosticsHeader;
+    fn receive(subscriber: &Subscription<[u8], jointctl_ipc::DiagnosticsHeader>) -> Result<Option<Self>, String> {
+        match subscriber.receive().map_err(|e| format!("{e:?}"))? {
+            Some(s) => Diagnostics::try_from(&s).map(Some).map_err(|e| e.to_string()),
+            None => Ok(None),
+        }
+    }
+}
+
+impl Readable for ArmState {
+    type Payload = [JointSample];
+    type Header = jointctl_ipc::ArmStateHeader;
+    fn receive(subscriber: &Subscription<[JointSample], jointctl_ipc::ArmStateHeader>) -> Result<Option<Self>, String> {
+        Ok(subscriber.receive().map_err(|e| format!("{e:?}"))?.map(|s| ArmState::from(&s)))
+    }
+}
+
+impl Readable for jointctl_ipc::JointsDescriptor {
+    type Payload = [jointctl_ipc::JointDescriptor];
+    type Header = jointctl_ipc::JointsDescriptorHeader;
+    fn receive(subscriber: &Subscription<Self::Payload, Self::Header>) -> Result<Option<Self>, String> {
+        Ok(subscriber.receive().map_err(|e| format!("{e:?}"))?.map(|s| jointctl_ipc::JointsDescriptor::from(&s)))
+    }
+}
+
 /// [`newest`] for a running arm's options.
-pub fn newest_of<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
+pub fn newest_of<T: Readable>(
     at: &RunningArm,
     timeout: f64,
     service_name: impl Fn(&ServiceNames) -> String,
-    open: Opener<T>,
+    open: Opener<T::Payload, T::Header>,
 ) -> Result<T, String> {
     newest(&at.arm, at.domain.clone(), at.ipc_root.clone(), timeout, service_name, open)
 }
 
 /// [`subscribe`] for a running arm's options.
-pub fn subscription_of<T: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static>(
+pub fn subscription_of<T: std::fmt::Debug + iceoryx2::prelude::IceoryxSend + ?Sized + 'static, H: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static>(
     at: &RunningArm,
     timeout: f64,
     service_name: impl Fn(&ServiceNames) -> String,
-    open: Opener<T>,
-) -> Result<(iceoryx2::node::Node<ipc::Service>, Subscription<T>), String> {
+    open: Opener<T, H>,
+) -> Result<(iceoryx2::node::Node<ipc::Service>, Subscription<T, H>), String> {
     subscribe(&at.arm, at.domain.clone(), at.ipc_root.clone(), timeout, service_name, open)
 }
 
 /// The newest sample of one of the arm's services: waits up to `timeout` [s] for the first, then
 /// drains what is buffered.
-pub(crate) fn newest<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
+pub(crate) fn newest<T: Readable>(
     arm: &str,
     domain: Option<String>,
     ipc_root: Option<std::path::PathBuf>,
     timeout: f64,
     service_name: impl Fn(&ServiceNames) -> String,
-    open: Opener<T>,
+    open: Opener<T::Payload, T::Header>,
 ) -> Result<T, String> {
     let hint = domain_hint(&domain);
     let name = service_name(&ServiceNames::for_arm(arm));
@@ -148,8 +185,8 @@ pub(crate) fn newest<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend
     let started = Instant::now();
     let mut newest: Option<T> = None;
     loop {
-        match subscriber.receive() {
-            Ok(Some(sample)) => newest = Some(*sample),
+        match T::receive(&subscriber) {
+            Ok(Some(sample)) => newest = Some(sample),
             Ok(None) => match newest {
                 Some(n) => return Ok(n),
                 None if started.elapsed() > Duration::from_secs_f64(timeout) => {
@@ -157,7 +194,7 @@ pub(crate) fn newest<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend
                 }
                 None => std::thread::sleep(Duration::from_millis(1)),
             },
-            Err(e) => return Err(format!("receive from `{name}` failed: {e:?}")),
+            Err(e) => return Err(format!("receive from `{name}` failed: {e}")),
         }
     }
 }
@@ -306,21 +343,21 @@ pub(crate) fn domain_hint(domain: &Option<String>) -> String {
     }
 }
 
-pub type Opener<T> = fn(&iceoryx2::node::Node<ipc::Service>, &str) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>, jointctl_ipc::IpcSetupError>;
+pub type Opener<T, H = ()> = fn(&iceoryx2::node::Node<ipc::Service>, &str) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, H>, jointctl_ipc::IpcSetupError>;
 
-/// A subscriber of the arm's samples of type `T`.
-pub type Subscription<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>;
+/// A subscriber of the arm's samples of payload `T` and header `H`.
+pub type Subscription<T, H = ()> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, H>;
 
 /// A subscriber to one of the arm's services, waiting up to `timeout` [s] for the runtime to
 /// create it (it may still be starting). The node must outlive the subscriber.
-pub(crate) fn subscribe<T: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static>(
+pub(crate) fn subscribe<T: std::fmt::Debug + iceoryx2::prelude::IceoryxSend + ?Sized + 'static, H: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend + 'static>(
     arm: &str,
     domain: Option<String>,
     ipc_root: Option<std::path::PathBuf>,
     timeout: f64,
     service_name: impl Fn(&ServiceNames) -> String,
-    open: Opener<T>,
-) -> Result<(iceoryx2::node::Node<ipc::Service>, Subscription<T>), String> {
+    open: Opener<T, H>,
+) -> Result<(iceoryx2::node::Node<ipc::Service>, Subscription<T, H>), String> {
     let hint = domain_hint(&domain);
     let scope = jointctl_ipc::IpcScope { domain, root: ipc_root, group: None };
     let node = jointctl_ipc::create_node_in(&scope, &format!("jointctl-inspect-{}", std::process::id())).map_err(|e| crate::chain(&e))?;
@@ -368,7 +405,7 @@ pub(crate) fn diag_human(d: &Diagnostics) -> String {
     }
     let _ = writeln!(out, "joints:");
     let _ = writeln!(out, "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>8} {:>10}  fault", "joint", "held", "invalid", "faults", "pos clamp", "tq clamp", "rate lim", "watchdog", "missing", "refused", "max us");
-    for j in &d.joints[..(d.joint_count as usize).min(d.joints.len())] {
+    for j in &d.joints {
         let _ = writeln!(
             out,
             "  {:<8} {:>6} {:>8} {:>7} {:>10} {:>8} {:>8} {:>9} {:>8} {:>8} {:>10.1}  {}",
@@ -388,7 +425,7 @@ pub(crate) fn diag_human(d: &Diagnostics) -> String {
     }
     let _ = writeln!(out, "devices:");
     let _ = writeln!(out, "  {:<32} {:>8} {:>8} {:>11} {:>6}  flags", "device", "missing", "invalid", "implausible", "emcy");
-    for dev in &d.devices[..(d.device_count as usize).min(d.devices.len())] {
+    for dev in &d.devices {
         let flags: Vec<&str> = [(1, "silent"), (2, "fault"), (4, "bus-off"), (8, "error-passive")].iter().filter(|(bit, _)| dev.flags & bit != 0).map(|(_, n)| *n).collect();
         let _ = writeln!(out, "  {:<32} {:>8} {:>8} {:>11} {:>6}  {}", decode_name(&dev.name), dev.missing, dev.invalid, dev.implausible, dev.emcy, if flags.is_empty() { "-".into() } else { flags.join(",") });
     }

@@ -161,7 +161,7 @@ pub fn run(command: InspectCommand) -> ExitCode {
             echo(&opts, || match subscriber.receive() {
                 Ok(Some(sample)) => {
                     last = Instant::now();
-                    Ok(Some((*sample, jointctl_record::feed::wall_clock_ns(sample.stamp_ns))))
+                    Ok(Some((ArmState::from(&sample), jointctl_record::feed::wall_clock_ns(sample.user_header().stamp_ns))))
                 }
                 Ok(None) if last.elapsed() > Duration::from_secs_f64(timeout) => Err(format!(
                     "no joint state from arm `{arm}` for {timeout} s (service `{}`): is `jointctl run` running with this arm and domain?{hint}",
@@ -214,10 +214,11 @@ fn echo_latest(arm: &str, scope: jointctl_ipc::IpcScope, timeout_s: f64, hint: &
     };
     let (mut shown, mut last) = (None, Instant::now());
     echo(opts, || {
-        let s = reader.latest();
+        let s = reader.latest().map_err(|e| format!("cannot read `{name}`: {e}"))?;
         if s.stamp_ns != 0 && shown != Some(s.cycle) {
             (shown, last) = (Some(s.cycle), Instant::now());
-            return Ok(Some((s, jointctl_record::feed::wall_clock_ns(s.stamp_ns))));
+            let wall_ns = jointctl_record::feed::wall_clock_ns(s.stamp_ns);
+            return Ok(Some((s, wall_ns)));
         }
         if last.elapsed() > Duration::from_secs_f64(timeout_s) {
             return Err(format!("no new cycle on `{name}` for {timeout_s} s: has the arm's loop stopped?"));

@@ -128,12 +128,6 @@ pub fn run(a: RunArgs) -> ExitCode {
     if stop.requested() {
         return stopped_during_setup(&stop, Some(&mut arm));
     }
-    // Before activation enables any drive: an arm its samples cannot carry is refused here.
-    if !a.no_ipc
-        && let Err(e) = jointctl_runtime::fits_shared_memory(&arm)
-    {
-        return fail_err(e);
-    }
     if let Err(e) = arm.activate() {
         arm.shutdown();
         return fail_err(e);

@@ -4,6 +4,7 @@
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+use jointctl_ipc::wire::ByteRecord;
 use jointctl_ipc::{ArmState, Diagnostics, JITTER_BUCKET_UPPER_US, JointsDescriptor, decode_name};
 use ratatui::Frame;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyModifiers};
@@ -58,7 +59,7 @@ pub struct TopView {
 /// Draws the view into a frame.
 pub fn draw(frame: &mut Frame, view: &TopView) {
     let d = &view.diagnostics;
-    let [header, joints, devices] = Layout::vertical([Constraint::Length(6), Constraint::Min(6), Constraint::Length(3 + d.device_count.min(12) as u16)]).areas(frame.area());
+    let [header, joints, devices] = Layout::vertical([Constraint::Length(6), Constraint::Min(6), Constraint::Length(3 + d.devices.len().min(12) as u16)]).areas(frame.area());
     let nominal_hz = if d.period_ns > 0 { 1e9 / d.period_ns as f64 } else { f64::NAN };
     let rate = view.measured_rate_hz.map_or_else(|| "measuring".to_string(), |r| format!("{r:.1} Hz"));
     let silence = view.silent_s.map_or_else(String::new, |s| format!("   NO SAMPLE FOR {s:.1} s"));
@@ -101,7 +102,7 @@ pub fn draw(frame: &mut Frame, view: &TopView) {
     let header_row = Row::new(["joint", "plugin", "dof", "mode", "enabled", "valid", "held", "pos [rad]", "torque [Nm]", "ref [Nm]", "fault"]).style(Style::new().add_modifier(Modifier::BOLD));
     frame.render_widget(Table::new(rows, widths).header(header_row).block(Block::bordered().title(" joints ")), joints);
 
-    let device_rows = d.devices[..(d.device_count as usize).min(d.devices.len())].iter().map(|dev| {
+    let device_rows = d.devices.iter().map(|dev| {
         Row::new(vec![decode_name(&dev.name).to_string(), dev.missing.to_string(), dev.invalid.to_string(), dev.implausible.to_string(), dev.emcy.to_string()])
     });
     let widths = [Constraint::Fill(4), Constraint::Fill(1), Constraint::Fill(1), Constraint::Fill(1), Constraint::Fill(1)];
@@ -130,11 +131,14 @@ pub fn run(at: RunningArm, interval_s: f64, timeout_s: f64) -> ExitCode {
     let mut rate_from: Option<(Instant, u64)> = None;
     let outcome = loop {
         while let Ok(Some(s)) = states.receive() {
-            view.state = *s;
+            view.state.copy_from_parts(s.user_header(), s.payload());
         }
         let mut got = false;
         while let Ok(Some(d)) = diagnostics.receive() {
-            view.diagnostics = *d;
+            // A sample whose payload disagrees with its header is skipped, never shown.
+            if view.diagnostics.copy_from_parts(d.user_header(), d.payload()).is_err() {
+                continue;
+            }
             got = true;
         }
         let now = Instant::now();
@@ -192,16 +196,15 @@ mod tests {
     #[test]
     fn the_view_shows_the_loop_the_joints_and_the_devices() {
         let mut instances = JointsDescriptor::EMPTY;
-        instances.joints[0] = jointctl_ipc::JointDescriptor {
+        instances.joints.push(jointctl_ipc::JointDescriptor {
             name: jointctl_ipc::encode_name("elbow"),
             plugin: jointctl_ipc::encode_name("elastic"),
             version: jointctl_ipc::encode_name("0.1.0"),
             dof_count: 1,
             ..jointctl_ipc::JointDescriptor::EMPTY
-        };
-        instances.joint_count = 1;
+        });
         let mut state = ArmState::EMPTY;
-        state.joint_count = 1;
+        state.joints.push(jointctl_ipc::JointSample::EMPTY);
         state.joints[0].name = jointctl_ipc::encode_name("q4");
         state.joints[0].torque_nm = 1.25;
         state.joints[0].valid_mask = jointctl_ipc::FieldMask::TORQUE;
@@ -211,10 +214,10 @@ mod tests {
         diagnostics.period_ns = 1_000_000;
         diagnostics.overruns = 3;
         diagnostics.jitter_histogram[3] = 10; // 5-10 us
-        diagnostics.joint_count = 1;
+        diagnostics.joints.push(jointctl_ipc::JointDiagnostics::EMPTY);
         diagnostics.joints[0].name = state.joints[0].name;
         diagnostics.joints[0].fault_message = jointctl_ipc::encode_name("spring broke");
-        diagnostics.device_count = 1;
+        diagnostics.devices.push(jointctl_ipc::DeviceDiagnostics::EMPTY);
         diagnostics.devices[0].name = jointctl_ipc::encode_name("enc_elbow_output");
         diagnostics.devices[0].missing = 7;
         let view = TopView { arm: "sherpa".into(), instances, state, diagnostics, measured_rate_hz: Some(999.5), silent_s: None };

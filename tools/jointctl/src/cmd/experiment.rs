@@ -299,7 +299,7 @@ impl<'a> Session<'a> {
 
 /// The joint's newest published sample.
 fn published_sample(args: &CmdArgs, joint: &str) -> Result<jointctl_ipc::JointSample, String> {
-    let state = crate::arm_view::newest(&args.arm, args.domain.clone(), args.ipc_root.clone(), args.timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service)?;
+    let state: jointctl_ipc::ArmState = crate::arm_view::newest(&args.arm, args.domain.clone(), args.ipc_root.clone(), args.timeout, |n| n.joint_state.clone(), jointctl_ipc::joint_state_service)?;
     state.joints().iter().find(|j| jointctl_ipc::decode_name(&j.name) == joint).copied().ok_or_else(|| {
         let names: Vec<&str> = state.joints().iter().map(|j| jointctl_ipc::decode_name(&j.name)).collect();
         format!("arm `{}` has no joint `{joint}` (it has {})", args.arm, names.join(", "))
