@@ -61,19 +61,19 @@ pub struct LatestStatePage {
 impl LatestStatePage {
     /// Page `page` of `state`.
     fn of(state: &ArmState, page: usize) -> Self {
+        let mut p = LatestStatePage { cycle: 0, stamp_ns: 0, arm_joint_count: 0, first_joint: 0, joint_count: 0, final_sample: 0, joints: [JointSample::EMPTY; PAGE_JOINTS] };
+        p.fill(state, page);
+        p
+    }
+
+    /// This page made page `page` of `state`: its header and its part of the joints (the
+    /// entries past them left as they are).
+    fn fill(&mut self, state: &ArmState, page: usize) {
         let first = page * PAGE_JOINTS;
         let part = &state.joints[first.min(state.joints.len())..(first + PAGE_JOINTS).min(state.joints.len())];
-        let mut joints = [JointSample::EMPTY; PAGE_JOINTS];
-        joints[..part.len()].copy_from_slice(part);
-        LatestStatePage {
-            cycle: state.cycle,
-            stamp_ns: state.stamp_ns,
-            arm_joint_count: state.joints.len() as u32,
-            first_joint: first as u32,
-            joint_count: part.len() as u32,
-            final_sample: state.final_sample,
-            joints,
-        }
+        self.joints[..part.len()].copy_from_slice(part);
+        (self.cycle, self.stamp_ns, self.final_sample) = (state.cycle, state.stamp_ns, state.final_sample);
+        (self.arm_joint_count, self.first_joint, self.joint_count) = (state.joints.len() as u32, first as u32, part.len() as u32);
     }
 }
 
@@ -124,6 +124,9 @@ pub enum LatestReadError {
 /// ```
 pub struct LatestStateWriter {
     entries: Vec<EntryHandleMut<Kind, u32, LatestStatePage>>,
+    /// One page per entry, filled in place each write (made at creation: a write allocates
+    /// nothing and copies each joint once before the store).
+    pages: Vec<LatestStatePage>,
     _writer: iceoryx2::port::writer::Writer<Kind, u32>,
     _service: iceoryx2::service::port_factory::blackboard::PortFactory<Kind, u32>,
     _node: Node<Kind>,
@@ -155,11 +158,12 @@ impl LatestStateWriter {
             e => error(&name, "write to", e),
         })?;
         let mut entries = Vec::with_capacity(pages);
+        let page_buffers = (0..pages).map(|page| LatestStatePage::of(first, page)).collect();
         for page in 0..pages {
             let entry = writer.entry::<LatestStatePage>(&(page as u32)).map_err(|e| error(&name, "write to (a blackboard of the arm with fewer joints is still open)", e))?;
             entries.push(entry);
         }
-        let mut out = LatestStateWriter { entries, _writer: writer, _service: service, _node: node };
+        let mut out = LatestStateWriter { entries, pages: page_buffers, _writer: writer, _service: service, _node: node };
         // Written once here as well: a reopened blackboard shows the last run's final state
         // until then, and the first write touches the entries' cells before the loop does.
         out.write(first);
@@ -169,8 +173,9 @@ impl LatestStateWriter {
     /// Writes `state` as the latest, page by page: copies into shared memory, lock-free,
     /// allocation-free. `state` has the arm's joints (as many as the state it was created with).
     pub fn write(&mut self, state: &ArmState) {
-        for (page, entry) in self.entries.iter().enumerate() {
-            entry.update_with_copy(LatestStatePage::of(state, page));
+        for (page, (entry, buffer)) in self.entries.iter().zip(&mut self.pages).enumerate() {
+            buffer.fill(state, page);
+            entry.update_with_copy(*buffer);
         }
     }
 }
@@ -204,6 +209,13 @@ impl LatestStateReader {
     /// (`final_sample` 1). Every joint is of the one cycle the state names.
     pub fn latest(&self) -> Result<ArmState, LatestReadError> {
         let mut state = ArmState::EMPTY;
+        self.latest_into(&mut state)?;
+        Ok(state)
+    }
+
+    /// [`LatestStateReader::latest`] into `state`, its allocation reused (a reader that polls).
+    /// On an error `state` holds a part of what was read.
+    pub fn latest_into(&self, state: &mut ArmState) -> Result<(), LatestReadError> {
         let mut attempts = 0;
         loop {
             attempts += 1;
@@ -224,11 +236,37 @@ impl LatestStateReader {
                 state.joints.extend_from_slice(&p.joints[..(p.joint_count as usize).min(PAGE_JOINTS)]);
             }
             if whole && state.joints.len() == now {
-                return Ok(state);
+                return Ok(());
             }
             if attempts >= READ_ATTEMPTS {
                 return Err(LatestReadError::Torn { pages: self.entries.len(), attempts });
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pages_of_different_cycles_are_never_read_as_one_state() {
+        let scope = IpcScope::domain(None);
+        let arm = format!("latest-torn-{}", std::process::id());
+        let names: Vec<String> = (0..20).map(|i| format!("q{i}")).collect();
+        let mut state = ArmState::named(names.iter().map(String::as_str));
+        let mut writer = LatestStateWriter::create(&scope, &arm, 2, &state).unwrap();
+        state.cycle = 5;
+        writer.write(&state);
+        let reader = LatestStateReader::open(&scope, &arm).unwrap();
+        assert_eq!(reader.latest().map(|s| (s.cycle, s.joints.len())), Ok((5, 20)));
+        // The second page from another cycle, as a loop writing between two pages' reads
+        // leaves it for a moment; here it stays.
+        let mut later = state.clone();
+        later.cycle = 6;
+        writer.entries[1].update_with_copy(LatestStatePage::of(&later, 1));
+        assert_eq!(reader.latest().err(), Some(LatestReadError::Torn { pages: 2, attempts: READ_ATTEMPTS }));
+        writer.write(&later);
+        assert_eq!(reader.latest().map(|s| s.cycle), Ok(6));
     }
 }

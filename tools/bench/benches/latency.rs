@@ -45,8 +45,11 @@ fn latency_subscriber(arm: &str, cpu: Option<usize>, via: Via) -> (Arc<AtomicBoo
         if via == Via::Blackboard {
             let reader = jointctl_ipc::LatestStateReader::open(&jointctl_ipc::IpcScope::domain(None), &arm).unwrap();
             let mut last = u64::MAX;
+            let mut s = jointctl_ipc::ArmState::EMPTY;
             while !sub_stop.load(Ordering::Relaxed) {
-                let Ok(s) = reader.latest() else { continue };
+                if reader.latest_into(&mut s).is_err() {
+                    continue;
+                }
                 if s.stamp_ns != 0 && s.cycle != last {
                     last = s.cycle;
                     seen.push((s.cycle, s.stamp_ns, monotonic_ns()));
