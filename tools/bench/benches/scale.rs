@@ -208,19 +208,20 @@ fn several_arms(quick: bool) {
 fn recorded_at_size(quick: bool) {
     let exe = jointctl_bench::release_dir().join("jointctl");
     let seconds = jointctl_bench::env_or("BENCH_RECORD_S", if quick { 2.0 } else { 5.0 });
-    println!("## Publishing and recording at size: a generated rigid arm, `jointctl run --static-plugins` at 1 kHz (simulated HAL, publishing), alone and with `jointctl record` ({seconds} s, JSON profile)");
-    println!("| DOFs | recorder | recorded messages | lost by the recorder | MiB written | recorder CPU, % of one core | loop cycles | overruns | missed deadlines | max compute us |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("## Publishing and recording at size: a generated rigid arm, `jointctl run --static-plugins` at 1 kHz (simulated HAL, publishing), alone and with `jointctl record` ({seconds} s, its JSON and its ROS 2 profile)");
+    println!("| DOFs | recorder | recorded messages | lost by the recorder | MiB written | recorder wall s | recorder CPU s | loop cycles | overruns | missed deadlines | max compute us |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for dofs in [7, 70, 700] {
-        for recorded in [false, true] {
-            let arm = format!("bench-rec-{dofs}-{recorded}-{}", std::process::id());
+        for profile in [None, Some("json"), Some("ros2")] {
+            let arm = format!("bench-rec-{dofs}-{}-{}", profile.unwrap_or("none"), std::process::id());
             let yaml = std::env::temp_dir().join(format!("{arm}.yaml"));
             let out = std::env::temp_dir().join(format!("{arm}.mcap"));
             std::fs::write(&yaml, arm_yaml(&arm, dofs, JointKind::Rigid, 1000.0)).expect("the arm's YAML");
             let mut run = Command::new(&exe).arg("run").arg(&yaml).args(["--static-plugins", "--duration", &(seconds + 30.0).to_string()]).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
             let cpu_before = jointctl_bench::children_cpu_s();
-            let record = if recorded {
-                Some(Command::new(&exe).args(["record", "--arm", &arm, "--out"]).arg(&out).args(["--duration", &seconds.to_string(), "--json"]).output().unwrap())
+            let recorder_started = std::time::Instant::now();
+            let record = if let Some(profile) = profile {
+                Some(Command::new(&exe).args(["record", "--arm", &arm, "--profile", profile, "--out"]).arg(&out).args(["--duration", &seconds.to_string(), "--json"]).output().unwrap())
             } else {
                 // As long as the recorder's wait for the arm and its run: the arm's start and
                 // `seconds` of its loop.
@@ -230,25 +231,26 @@ fn recorded_at_size(quick: bool) {
                 None
             };
             let recorder_cpu = jointctl_bench::children_cpu_s() - cpu_before;
+            let recorder_wall = recorder_started.elapsed().as_secs_f64();
             let _ = Command::new(&exe).args(["cmd", "stop", "--arm", &arm]).output();
             let _ = run.kill_if_running();
             let ran = run.wait_with_output().unwrap();
             let run_sum = run_summary(&String::from_utf8_lossy(&ran.stderr));
             let recorder = match &record {
-                None => Some("none | - | - | - | -".to_string()),
+                None => Some("none | - | - | - | - | -".to_string()),
                 Some(record) => {
                     let summary: serde_json::Value = serde_json::from_slice(&record.stdout).unwrap_or(serde_json::Value::Null);
                     summary.get("messages").map(|m| {
                         let messages: u64 = m.as_object().map_or(0, |o| o.values().filter_map(serde_json::Value::as_u64).sum());
                         let mib = summary["bytes"].as_f64().unwrap_or(f64::NAN) / (1024.0 * 1024.0);
-                        format!("JSON | {messages} | {} | {mib:.1} | {:.0}", summary["lost"], 100.0 * recorder_cpu / seconds)
+                        format!("{} | {messages} | {} | {mib:.1} | {recorder_wall:.1} | {recorder_cpu:.1}", profile.unwrap_or("-"), summary["lost"])
                     })
                 }
             };
             match (recorder, run_sum) {
                 (Some(rec), Some(r)) => println!("| {dofs} | {rec} | {} | {} | {} | {:.1} |", r[0], r[1], r[2], r[3]),
                 _ => println!(
-                    "| {dofs} | - | - | - | - | - | - | - | - | - (record: {}; run: {}) |",
+                    "| {dofs} | - | - | - | - | - | - | - | - | - | - (record: {}; run: {}) |",
                     record.as_ref().map_or(String::new(), |r| String::from_utf8_lossy(&r.stderr).lines().last().unwrap_or("").to_string()),
                     String::from_utf8_lossy(&ran.stderr).lines().last().unwrap_or("")
                 ),
