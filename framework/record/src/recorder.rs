@@ -39,7 +39,9 @@ pub enum Profile {
     Json,
     /// The ROS 2 profile: CDR messages with `ros2msg` schemas on ROS 2 topics
     /// ([`jointctl_ros2::topics`]), as `ros2 bag record -s mcap` writes them (read by rosbags and
-    /// mcap-ros2-support in the tests). Stamps are the wall clock.
+    /// mcap-ros2-support in the tests). Stamps are the wall clock. `/diagnostics` carries the
+    /// loop's status each cycle and the others when they change, all once a second
+    /// ([`jointctl_ros2::direct::DirectEncoder::diagnostic_changes`]).
     Ros2,
 }
 
@@ -180,6 +182,9 @@ struct Sink<W: std::io::Write + std::io::Seek> {
     clock: jointctl_ros2::from_arm::WallClock,
     arm: String,
     descriptor: jointctl_ipc::raw::RawDescriptor,
+    /// The ROS 2 profile's writer and its message buffer, kept between messages.
+    direct: jointctl_ros2::direct::DirectEncoder,
+    cdr: Vec<u8>,
     /// Messages written, by the file's topic.
     counts: BTreeMap<&'static str, u64>,
     /// Numbering gaps, by the arm's channel.
@@ -210,27 +215,33 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             let header = mcap::records::MessageHeader { channel_id, sequence: *count as u32, log_time: stamp, publish_time: stamp };
             *count += 1;
             let data = match self.profile {
-                Profile::Json => std::borrow::Cow::Borrowed(m.json.as_bytes()),
-                Profile::Ros2 => std::borrow::Cow::Owned(self.ros2(topic, &m.sample)?),
+                Profile::Json => m.json.as_bytes(),
+                Profile::Ros2 => {
+                    self.ros2(topic, &m.sample)?;
+                    &self.cdr
+                }
             };
-            self.writer.write_to_known_channel(&header, &data).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })?;
+            self.writer.write_to_known_channel(&header, data).map_err(|source| RecordError::Mcap { file: self.out.clone(), source })?;
         }
         Ok(())
     }
 
-    /// The CDR of `sample` as the message of ROS 2 topic `topic`.
-    fn ros2(&self, topic: &str, sample: &crate::feed::Sample<'_>) -> Result<Vec<u8>, RecordError> {
+    /// The CDR of `sample` as the message of ROS 2 topic `topic`, into `self.cdr`: the cycle's
+    /// samples written directly (no message built: at 700 DOFs that was 40 000 strings a cycle),
+    /// `/diagnostics` with the statuses that changed (every one once a second, as ROS 2 nodes
+    /// publish them), a command through its message.
+    fn ros2(&mut self, topic: &str, sample: &crate::feed::Sample<'_>) -> Result<(), RecordError> {
         use crate::feed::Sample;
-        use jointctl_ros2::{encode, from_arm};
-        let (clock, arm) = (&self.clock, self.arm.as_str());
-        let encoded = match sample {
-            Sample::State(s) if topic == jointctl_ros2::JOINT_STATES => encode(&from_arm::joint_state(s, clock, arm)),
-            Sample::State(s) => encode(&from_arm::joint_details(s, clock, arm)),
-            Sample::Raw(f) => encode(&from_arm::raw_frame(f, &self.descriptor, clock, arm)),
-            Sample::Diagnostics(d) => encode(&from_arm::diagnostic_array(d, clock, arm)),
-            Sample::Command(c) => encode(&from_arm::command_record(c, clock, arm)),
-        };
-        encoded.map_err(|source| RecordError::Encode { file: self.out.clone(), source })
+        use jointctl_ros2::from_arm;
+        let (clock, arm, out) = (&self.clock, self.arm.as_str(), &mut self.cdr);
+        match sample {
+            Sample::State(s) if topic == jointctl_ros2::JOINT_STATES => self.direct.joint_state(s, clock, arm, out),
+            Sample::State(s) => self.direct.joint_details(s, clock, arm, out),
+            Sample::Raw(f) => self.direct.raw_frame(f, &self.descriptor, clock, arm, out),
+            Sample::Diagnostics(d) => self.direct.diagnostic_changes(d, clock, arm, out),
+            Sample::Command(c) => *out = jointctl_ros2::encode(&from_arm::command_record(c, clock, arm)).map_err(|source| RecordError::Encode { file: self.out.clone(), source })?,
+        }
+        Ok(())
     }
 
     /// The newest cycle (or command sequence) written on `topic`.
@@ -377,6 +388,8 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
         clock: jointctl_ros2::from_arm::WallClock::from_pair(start_unix_ns, start_monotonic_ns),
         arm: opts.arm.clone(),
         descriptor,
+        direct: Default::default(),
+        cdr: Vec::new(),
         first_stamp: None,
         last_stamp: 0,
         arm_stopped: false,

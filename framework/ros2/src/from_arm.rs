@@ -4,7 +4,7 @@
 //! reader of the file sees the same times as in the JSON form.
 
 use jointctl_ipc::raw::{CommandRecord, RawDescriptor, RawFrame, RawReading};
-use jointctl_ipc::{ArmState, Diagnostics, FieldMask, JointSample, decode_name};
+use jointctl_ipc::{ArmState, DeviceDiagnostics, Diagnostics, FieldMask, JointDiagnostics, JointSample, decode_name};
 
 use crate::msg::{self, DiagnosticStatus, Header, KeyValue, Time};
 
@@ -41,7 +41,7 @@ impl WallClock {
     }
 }
 
-fn known(s: &JointSample, bit: u32, value: f64) -> f64 {
+pub(crate) fn known(s: &JointSample, bit: u32, value: f64) -> f64 {
     s.get(bit, value).unwrap_or(f64::NAN)
 }
 
@@ -183,6 +183,57 @@ fn values(pairs: &[(&str, u64)]) -> Vec<KeyValue> {
     pairs.iter().map(|(k, v)| KeyValue { key: (*k).to_string(), value: v.to_string() }).collect()
 }
 
+/// The loop's counters in `/diagnostics` (shared with [`crate::direct`]).
+pub(crate) fn loop_values(d: &Diagnostics) -> [(&'static str, u64); 9] {
+    [
+        ("cycle", d.cycle),
+        ("period_ns", d.period_ns),
+        ("overruns", d.overruns),
+        ("missed_deadlines", d.missed_deadlines),
+        ("hal_errors", d.hal_errors),
+        ("publish_drops", d.publish_drops),
+        ("last_compute_ns", d.last_compute_ns),
+        ("max_compute_ns", d.max_compute_ns),
+        ("max_lateness_ns", d.max_jitter_ns),
+    ]
+}
+
+/// A joint's counters in `/diagnostics`.
+pub(crate) fn joint_values(j: &JointDiagnostics) -> [(&'static str, u64); 11] {
+    [
+        ("fault_code", u64::from(j.fault_code)),
+        ("invalid_cycles", j.invalid_cycles),
+        ("fault_count", j.fault_count),
+        ("setpoint_clamps", j.setpoint_clamps),
+        ("torque_clamps", j.torque_clamps),
+        ("rate_limited", j.rate_limited),
+        ("watchdog_trips", j.watchdog_trips),
+        ("missing_inputs", j.missing_inputs),
+        ("plugin_max_ns", j.plugin_max_ns),
+        ("over_budget_cycles", j.over_budget_cycles),
+        ("setpoint_rejections", j.setpoint_rejections),
+    ]
+}
+
+/// A device's counters in `/diagnostics`.
+pub(crate) fn device_values(x: &DeviceDiagnostics) -> [(&'static str, u64); 5] {
+    [("missing", x.missing), ("invalid", x.invalid), ("implausible", x.implausible), ("emcy", x.emcy), ("flags", u64::from(x.flags))]
+}
+
+/// A joint's level and message: fine (`ok`), held (`held`, WARN) or faulted (ERROR, `fault <code>:
+/// <its message>`; `Some(code)`).
+pub(crate) fn joint_level(j: &JointDiagnostics) -> (u8, &'static str, Option<u32>) {
+    match (j.fault_code, j.held != 0) {
+        (0, false) => (DiagnosticStatus::OK, "ok", None),
+        (0, true) => (DiagnosticStatus::WARN, "held", None),
+        (code, _) => (DiagnosticStatus::ERROR, "", Some(code)),
+    }
+}
+
+/// The bits of `DeviceDiagnostics::flags` (jointctl_ipc), the HAL's device health: a device
+/// with any of them is ERROR, its message their names joined by ", ".
+pub(crate) const DEVICE_FLAGS: [(u32, &str); 4] = [(1, "silent"), (2, "fault"), (4, "bus-off"), (8, "error-passive")];
+
 /// The loop's health, each joint's and each device's, as `/diagnostics` shows them (`rqt`'s
 /// runtime monitor, the diagnostic aggregator): the loop is OK, a joint with a fault is ERROR
 /// and a held one WARN, a device silent, faulted or off the bus (its flags) is ERROR. The
@@ -203,53 +254,26 @@ pub fn diagnostic_array(d: &Diagnostics, clock: &WallClock, arm: &str) -> msg::D
         name: format!("jointctl/{arm}/loop"),
         message: format!("cycle {}", d.cycle),
         hardware_id: arm.to_string(),
-        values: values(&[
-            ("cycle", d.cycle),
-            ("period_ns", d.period_ns),
-            ("overruns", d.overruns),
-            ("missed_deadlines", d.missed_deadlines),
-            ("hal_errors", d.hal_errors),
-            ("publish_drops", d.publish_drops),
-            ("last_compute_ns", d.last_compute_ns),
-            ("max_compute_ns", d.max_compute_ns),
-            ("max_lateness_ns", d.max_jitter_ns),
-        ]),
+        values: values(&loop_values(d)),
     }];
     for j in &d.joints {
-        let (level, message) = match (j.fault_code, j.held != 0) {
-            (0, false) => (DiagnosticStatus::OK, "ok".to_string()),
-            (0, true) => (DiagnosticStatus::WARN, "held".to_string()),
-            (code, _) => (DiagnosticStatus::ERROR, format!("fault {code}: {}", decode_name(&j.fault_message))),
-        };
+        let (level, message, fault) = joint_level(j);
         status.push(DiagnosticStatus {
             level,
             name: format!("jointctl/{arm}/joint/{}", decode_name(&j.name)),
-            message,
+            message: fault.map_or_else(|| message.to_string(), |code| format!("fault {code}: {}", decode_name(&j.fault_message))),
             hardware_id: arm.to_string(),
-            values: values(&[
-                ("fault_code", u64::from(j.fault_code)),
-                ("invalid_cycles", j.invalid_cycles),
-                ("fault_count", j.fault_count),
-                ("setpoint_clamps", j.setpoint_clamps),
-                ("torque_clamps", j.torque_clamps),
-                ("rate_limited", j.rate_limited),
-                ("watchdog_trips", j.watchdog_trips),
-                ("missing_inputs", j.missing_inputs),
-                ("plugin_max_ns", j.plugin_max_ns),
-                ("over_budget_cycles", j.over_budget_cycles),
-                ("setpoint_rejections", j.setpoint_rejections),
-            ]),
+            values: values(&joint_values(j)),
         });
     }
     for x in &d.devices {
-        // The bits of `DeviceDiagnostics::flags` (jointctl_ipc), the HAL's device health.
-        let flags: Vec<&str> = [(1, "silent"), (2, "fault"), (4, "bus-off"), (8, "error-passive")].iter().filter(|(bit, _)| x.flags & bit != 0).map(|(_, n)| *n).collect();
+        let flags: Vec<&str> = DEVICE_FLAGS.iter().filter(|(bit, _)| x.flags & bit != 0).map(|(_, n)| *n).collect();
         status.push(DiagnosticStatus {
             level: if flags.is_empty() { DiagnosticStatus::OK } else { DiagnosticStatus::ERROR },
             name: format!("jointctl/{arm}/device/{}", decode_name(&x.name)),
             message: if flags.is_empty() { "ok".to_string() } else { flags.join(", ") },
             hardware_id: arm.to_string(),
-            values: values(&[("missing", x.missing), ("invalid", x.invalid), ("implausible", x.implausible), ("emcy", x.emcy), ("flags", u64::from(x.flags))]),
+            values: values(&device_values(x)),
         });
     }
     msg::DiagnosticArray { header: clock.header(d.stamp_ns, arm), status }

@@ -14,6 +14,8 @@
 
 #![deny(missing_docs)]
 
+mod cdr_out;
+pub mod direct;
 pub mod from_arm;
 pub mod msg;
 
