@@ -26,13 +26,16 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use jointctl_record::feed::{ArmFeed, FeedError, FeedMessage};
+use jointctl_record::feed::{ArmFeed, FeedError, FeedMessage, NumberGaps};
 
 /// What a bridge forwarded.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct BridgeSummary {
     /// Messages read from the arm per topic (each sent to every client subscribed to it).
     pub messages: BTreeMap<String, u64>,
+    /// Samples the bridge never read, per topic: gaps in the cycle (or command sequence)
+    /// numbers, where it fell behind the arm and the arm's queue moved on.
+    pub lost: BTreeMap<String, u64>,
     /// The arm stopped (its final sample).
     pub arm_stopped: bool,
 }
@@ -69,11 +72,13 @@ fn pump(
     mut between: impl FnMut(),
 ) -> Result<BridgeSummary, FeedError> {
     let mut summary = BridgeSummary::default();
+    let mut gaps: BTreeMap<&'static str, NumberGaps> = BTreeMap::new();
     let mut last_sample = Instant::now();
     loop {
         let n = feed.poll_each(&mut |m| {
             send(&m);
             *summary.messages.entry(m.topic.to_string()).or_default() += 1;
+            gaps.entry(m.topic).or_default().see(m.number);
             summary.arm_stopped |= m.final_sample;
         })?;
         let silent = if n > 0 {
@@ -85,11 +90,11 @@ fn pump(
         if !silent {
             between();
         }
-        if stop.load(Ordering::Acquire) || summary.arm_stopped {
-            return Ok(summary);
-        }
-        if silent {
-            tracing::warn!(timeout_s = timeout.as_secs_f64(), "the arm fell silent; the {bridge} bridge stops");
+        if stop.load(Ordering::Acquire) || summary.arm_stopped || silent {
+            if silent {
+                tracing::warn!(timeout_s = timeout.as_secs_f64(), "the arm fell silent; the {bridge} bridge stops");
+            }
+            summary.lost = gaps.iter().map(|(topic, g)| (topic.to_string(), g.lost())).collect();
             return Ok(summary);
         }
         if n == 0 {
@@ -157,10 +162,12 @@ mod tests {
         assert_eq!(jointctl_config::COMMAND_KINDS.to_vec(), runtime);
     }
 
-    /// A stand-in for the arm: one joint state a poll, except the polls listed as empty.
+    /// A stand-in for the arm: one joint state a poll, except the polls listed as empty; the
+    /// state of poll `n` is cycle `n * stride` (a stride over 1: the bridge fell behind).
     struct Arm {
         polls: usize,
         empty: Vec<usize>,
+        stride: u64,
     }
 
     impl Samples for Arm {
@@ -169,7 +176,7 @@ mod tests {
             if self.empty.contains(&self.polls) {
                 return Ok(0);
             }
-            each(FeedMessage { topic: "joint_state", number: self.polls as u64, stamp_ns: 0, json: "{}", final_sample: false, sample: jointctl_record::feed::Sample::State(&jointctl_ipc::ArmState::EMPTY) });
+            each(FeedMessage { topic: "joint_state", number: self.polls as u64 * self.stride, stamp_ns: 0, json: "{}", final_sample: false, sample: jointctl_record::feed::Sample::State(&jointctl_ipc::ArmState::EMPTY) });
             Ok(1)
         }
     }
@@ -179,7 +186,7 @@ mod tests {
         // Issue 40, finding 13: the poll before a burst of commands found nothing, the burst took
         // longer than the timeout, and the bridge stopped as if the arm had fallen silent.
         let stop = AtomicBool::new(false);
-        let mut arm = Arm { polls: 0, empty: vec![1] };
+        let mut arm = Arm { polls: 0, empty: vec![1], stride: 1 };
         let mut betweens = 0;
         let summary = pump(&mut arm, &stop, Duration::from_millis(50), "test", |_| {}, || {
             betweens += 1;
@@ -193,12 +200,33 @@ mod tests {
         .unwrap();
         assert_eq!(betweens, 5, "the bridge stopped after {betweens} rounds");
         assert_eq!(summary.messages.get("joint_state"), Some(&4));
+        assert_eq!(summary.lost.get("joint_state"), Some(&0));
+    }
+
+    /// Finding (issue 34): a bridge said nothing of the samples it never read (the ROS 2 bridge
+    /// of a 700-DOF arm on a loaded 2-core machine forwarded 5467 joint states in 10 s, and
+    /// whether it had missed any could not be told). The summary now counts them, by the gaps
+    /// in the cycle numbers.
+    #[test]
+    fn samples_the_bridge_never_read_are_counted_as_lost() {
+        let stop = AtomicBool::new(false);
+        let mut arm = Arm { polls: 0, empty: Vec::new(), stride: 3 };
+        let mut polls = 0;
+        let summary = pump(&mut arm, &stop, Duration::from_millis(50), "test", |_| {}, || {
+            polls += 1;
+            if polls == 10 {
+                stop.store(true, Ordering::Release);
+            }
+        })
+        .unwrap();
+        // Cycles 3, 6, ..., 30 read: the 18 between them lost.
+        assert_eq!((summary.messages.get("joint_state"), summary.lost.get("joint_state")), (Some(&10), Some(&18)));
     }
 
     #[test]
     fn an_arm_that_stays_silent_stops_the_bridge() {
         let stop = AtomicBool::new(false);
-        let mut arm = Arm { polls: 0, empty: (1..10_000).collect() };
+        let mut arm = Arm { polls: 0, empty: (1..10_000).collect(), stride: 1 };
         let started = Instant::now();
         let summary = pump(&mut arm, &stop, Duration::from_millis(50), "test", |_| {}, || {}).unwrap();
         assert!(started.elapsed() >= Duration::from_millis(50) && summary.messages.is_empty(), "{summary:?}");

@@ -14,6 +14,8 @@ use std::time::{Duration, Instant};
 
 use jointctl_ipc::IpcScope;
 use jointctl_record::feed::{ArmFeed, FeedError, Sample};
+use jointctl_ros2::Encoded;
+use jointctl_ros2::direct::DirectEncoder;
 use jointctl_ros2::from_arm::{self, WallClock};
 use jointctl_ros2::msg::{self, Time};
 use ros2_client::qos::{Durability, History, WhenFull};
@@ -88,12 +90,24 @@ pub fn node_name(arm: &str) -> String {
 const DIAGNOSTICS_PERIOD: Duration = Duration::from_secs(1);
 
 /// A publisher for each of the profile's topics.
+/// The arm's topics. The cycle's messages go out already in CDR ([`Encoded`], written by
+/// [`DirectEncoder`] straight from the samples): built as messages, a 700-DOF arm's cycle was
+/// some 9000 strings, and the bridge fell behind a 1 kHz arm (docs/benchmarks.md).
 struct Publishers {
-    joint_states: Publisher<msg::JointState>,
-    joint_details: Publisher<msg::JointDetails>,
-    diagnostics: Publisher<msg::DiagnosticArray>,
-    raw: Publisher<msg::RawFrame>,
+    joint_states: Publisher<Encoded<msg::JointState>>,
+    joint_details: Publisher<Encoded<msg::JointDetails>>,
+    diagnostics: Publisher<Encoded<msg::DiagnosticArray>>,
+    raw: Publisher<Encoded<msg::RawFrame>>,
     commands: Publisher<msg::CommandRecord>,
+    direct: DirectEncoder,
+    cdr: Vec<u8>,
+}
+
+impl Publishers {
+    /// Publishes the message of type `M` in `cdr`: whether the write went.
+    fn send<M: msg::Message>(publisher: &Publisher<Encoded<M>>, cdr: &[u8]) -> bool {
+        Encoded::<M>::from_cdr(cdr).is_ok_and(|m| publisher.publish(m).is_ok())
+    }
 }
 
 /// A topic of `M` on the node, with ROS 2's default QoS (reliable: a default ROS 2 subscription
@@ -110,13 +124,19 @@ fn topic<M: msg::Message>(node: &Node, topic: &str, domain_id: u16, what: &str) 
 }
 
 fn publisher<M: msg::Message>(node: &mut Node, name: &str, domain_id: u16) -> Result<Publisher<M>, Ros2BridgeError> {
-    named_publisher(node, name, domain_id).map(|(p, _)| p)
+    named_publisher::<M, M>(node, name, domain_id).map(|(p, _)| p)
 }
 
-/// [`publisher`] and its topic's DDS name (`/jointctl/raw` is `rt/jointctl/raw` on the wire).
-fn named_publisher<M: msg::Message>(node: &mut Node, name: &str, domain_id: u16) -> Result<(Publisher<M>, String), Ros2BridgeError> {
+/// A publisher of `M` that takes it already in CDR.
+fn encoded_publisher<M: msg::Message>(node: &mut Node, name: &str, domain_id: u16) -> Result<Publisher<Encoded<M>>, Ros2BridgeError> {
+    named_publisher::<M, Encoded<M>>(node, name, domain_id).map(|(p, _)| p)
+}
+
+/// A publisher of `P` on a topic of type `M` ([`publisher`]), and the topic's DDS name
+/// (`/jointctl/raw` is `rt/jointctl/raw` on the wire).
+fn named_publisher<M: msg::Message, P: serde::Serialize>(node: &mut Node, name: &str, domain_id: u16) -> Result<(Publisher<P>, String), Ros2BridgeError> {
     let t = topic::<M>(node, name, domain_id, "publisher")?;
-    let publisher = node.create_publisher::<M>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("publisher of {name}"), domain_id, reason: e.to_string() })?;
+    let publisher = node.create_publisher::<P>(&t, None).map_err(|e| Ros2BridgeError::Dds { what: format!("publisher of {name}"), domain_id, reason: e.to_string() })?;
     Ok((publisher, t.name()))
 }
 
@@ -398,14 +418,16 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
     let name = node_name(&opts.arm);
     let node_name = NodeName::new("/", &name).map_err(|e| dds("node")(format!("{e:?}")))?;
     let mut node = context.new_node(node_name, NodeOptions::new().enable_rosout(false)).map_err(|e| dds("node")(e.to_string()))?;
-    let publishers = Publishers {
-        joint_states: publisher(&mut node, jointctl_ros2::JOINT_STATES, domain_id)?,
-        joint_details: publisher(&mut node, jointctl_ros2::JOINT_DETAILS, domain_id)?,
-        diagnostics: publisher(&mut node, jointctl_ros2::DIAGNOSTICS, domain_id)?,
-        raw: publisher(&mut node, jointctl_ros2::RAW, domain_id)?,
+    let mut publishers = Publishers {
+        joint_states: encoded_publisher(&mut node, jointctl_ros2::JOINT_STATES, domain_id)?,
+        joint_details: encoded_publisher(&mut node, jointctl_ros2::JOINT_DETAILS, domain_id)?,
+        diagnostics: encoded_publisher(&mut node, jointctl_ros2::DIAGNOSTICS, domain_id)?,
+        raw: encoded_publisher(&mut node, jointctl_ros2::RAW, domain_id)?,
         commands: publisher(&mut node, jointctl_ros2::COMMANDS, domain_id)?,
+        direct: DirectEncoder::default(),
+        cdr: Vec::new(),
     };
-    let (responses, responses_topic) = named_publisher(&mut node, jointctl_ros2::COMMAND_RESPONSES, domain_id)?;
+    let (responses, responses_topic) = named_publisher::<msg::CommandResponse, msg::CommandResponse>(&mut node, jointctl_ros2::COMMAND_RESPONSES, domain_id)?;
     let mut commands = Commands {
         trajectories: subscription(&mut node, jointctl_ros2::JOINT_TRAJECTORY, domain_id)?,
         requests: subscription(&mut node, jointctl_ros2::COMMAND, domain_id)?,
@@ -439,21 +461,26 @@ pub fn serve(opts: &Ros2Options, stop: &AtomicBool, ready: impl FnOnce(&str, u16
         "ROS 2",
         |m| {
             let stamps = clock.get();
+            let p = &mut publishers;
             let written = match m.sample {
-                Sample::State(s) => [
-                    publishers.joint_states.publish(from_arm::joint_state(s, &stamps, arm)).is_ok(),
-                    publishers.joint_details.publish(from_arm::joint_details(s, &stamps, arm)).is_ok(),
-                ]
-                .iter()
-                .all(|ok| *ok),
+                Sample::State(s) => {
+                    p.direct.joint_state(s, &stamps, arm, &mut p.cdr);
+                    let states = Publishers::send(&p.joint_states, &p.cdr);
+                    p.direct.joint_details(s, &stamps, arm, &mut p.cdr);
+                    Publishers::send(&p.joint_details, &p.cdr) && states
+                }
                 Sample::Diagnostics(d) if last_diagnostics.is_none_or(|t| t.elapsed() >= DIAGNOSTICS_PERIOD) => {
                     last_diagnostics = Some(Instant::now());
                     clock.set(clocks_now());
-                    publishers.diagnostics.publish(from_arm::diagnostic_array(d, &stamps, arm)).is_ok()
+                    p.direct.diagnostic_array(d, &stamps, arm, &mut p.cdr);
+                    Publishers::send(&p.diagnostics, &p.cdr)
                 }
                 Sample::Diagnostics(_) => true,
-                Sample::Raw(f) => publishers.raw.publish(from_arm::raw_frame(f, &descriptor, &stamps, arm)).is_ok(),
-                Sample::Command(c) => publishers.commands.publish(from_arm::command_record(c, &stamps, arm)).is_ok(),
+                Sample::Raw(f) => {
+                    p.direct.raw_frame(f, &descriptor, &stamps, arm, &mut p.cdr);
+                    Publishers::send(&p.raw, &p.cdr)
+                }
+                Sample::Command(c) => p.commands.publish(from_arm::command_record(c, &stamps, arm)).is_ok(),
             };
             if !written {
                 failed_writes += 1;

@@ -50,6 +50,44 @@ pub enum FeedError {
     },
 }
 
+/// Counts the gaps in a channel's numbering (cycles, command sequence numbers): the samples a
+/// reader lost because it fell behind the arm.
+///
+/// ```
+/// let mut g = jointctl_record::feed::NumberGaps::default();
+/// for n in [5, 6, 9, 8, 10] {
+///     g.see(n);
+/// }
+/// assert_eq!((g.lost(), g.newest()), (2, Some(10)), "7 and 8 missing when 9 came; 8 late is not found again");
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct NumberGaps {
+    next: Option<u64>,
+    lost: u64,
+}
+
+impl NumberGaps {
+    /// Takes the next number read.
+    pub fn see(&mut self, number: u64) {
+        if let Some(next) = self.next
+            && number > next
+        {
+            self.lost += number - next;
+        }
+        self.next = Some(self.next.map_or(number + 1, |n| n.max(number + 1)));
+    }
+
+    /// The newest number seen.
+    pub fn newest(&self) -> Option<u64> {
+        self.next.map(|n| n - 1)
+    }
+
+    /// Numbers skipped so far.
+    pub fn lost(&self) -> u64 {
+        self.lost
+    }
+}
+
 /// One published sample as JSON (the recording's form, [`messages`]).
 #[derive(Clone, Copy, Debug)]
 pub struct FeedMessage<'a> {

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use jointctl_ipc::IpcScope;
 use serde_json::Value;
 
-use crate::feed::{ArmFeed, FeedError, monotonic_ns};
+use crate::feed::{ArmFeed, FeedError, NumberGaps, monotonic_ns};
 use crate::messages;
 
 /// What to record.
@@ -148,29 +148,6 @@ pub enum RecordError {
     },
 }
 
-/// Counts gaps in a channel's numbering.
-#[derive(Default)]
-struct Gaps {
-    next: Option<u64>,
-    lost: u64,
-}
-
-impl Gaps {
-    fn see(&mut self, number: u64) {
-        if let Some(next) = self.next
-            && number > next
-        {
-            self.lost += number - next;
-        }
-        self.next = Some(self.next.map_or(number + 1, |n| n.max(number + 1)));
-    }
-
-    /// The newest number seen.
-    fn newest(&self) -> Option<u64> {
-        self.next.map(|n| n - 1)
-    }
-}
-
 /// Where the recorder writes: the file, and what it counts on the way.
 struct Sink<W: std::io::Write + std::io::Seek> {
     writer: mcap::Writer<W>,
@@ -188,7 +165,7 @@ struct Sink<W: std::io::Write + std::io::Seek> {
     /// Messages written, by the file's topic.
     counts: BTreeMap<&'static str, u64>,
     /// Numbering gaps, by the arm's channel.
-    gaps: BTreeMap<&'static str, Gaps>,
+    gaps: BTreeMap<&'static str, NumberGaps>,
     first_stamp: Option<u64>,
     last_stamp: u64,
     arm_stopped: bool,
@@ -246,7 +223,7 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
 
     /// The newest cycle (or command sequence) written on `topic`.
     fn newest(&self, topic: &str) -> Option<u64> {
-        self.gaps.get(topic).and_then(Gaps::newest)
+        self.gaps.get(topic).and_then(NumberGaps::newest)
     }
 
     /// What the file holds so far (its size is read once it is closed).
@@ -255,7 +232,7 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             file: self.out.clone(),
             duration_s: self.first_stamp.map_or(0.0, |f| self.last_stamp.saturating_sub(f) as f64 * 1e-9),
             messages: self.counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-            lost_by_channel: self.gaps.iter().map(|(source, g)| (source.to_string(), g.lost)).collect(),
+            lost_by_channel: self.gaps.iter().map(|(source, g)| (source.to_string(), g.lost())).collect(),
             bytes: 0,
             arm_stopped: self.arm_stopped,
         }
@@ -381,7 +358,7 @@ pub fn record(opts: &RecordOptions, stop: &AtomicBool) -> Result<RecordSummary, 
     let mut sink = Sink {
         writer,
         counts: channels.iter().map(|(t, ..)| (*t, 0)).collect(),
-        gaps: channels.iter().map(|(_, source, _)| (*source, Gaps::default())).collect(),
+        gaps: channels.iter().map(|(_, source, _)| (*source, NumberGaps::default())).collect(),
         channels,
         out: opts.out.clone(),
         profile: opts.profile,

@@ -368,6 +368,10 @@ mod tests {
             prop_assert_eq!(&out, &encode(&from_arm::raw_frame(&f, &desc, &clock, &arm)).unwrap());
             enc.diagnostic_array(&d, &clock, &arm, &mut out);
             prop_assert_eq!(&out, &encode(&from_arm::diagnostic_array(&d, &clock, &arm)).unwrap());
+            // Through a serde CDR serializer (RustDDS's is this crate's `cdr_encoding`), as the
+            // live bridge sends it: the same bytes after the header.
+            let passed = cdr_encoding::to_vec::<_, byteorder::LittleEndian>(&crate::Encoded::<crate::msg::DiagnosticArray>::from_cdr(&out).unwrap()).unwrap();
+            prop_assert_eq!(&passed[..], &out[4..]);
         }
     }
 

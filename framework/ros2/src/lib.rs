@@ -134,6 +134,51 @@ pub fn decode<M: msg::Message>(bytes: &[u8]) -> Result<M, DecodeError> {
     decoded.map(|(m, _)| m).map_err(|e| bad(e.to_string()))
 }
 
+/// A message of type `M` already in CDR ([`direct::DirectEncoder`] wrote it), for a DDS writer
+/// that serializes through serde (RustDDS's, under the live ROS 2 bridge): its serializer writes
+/// these bytes as they are (a tuple of octets: no length, no alignment) after its own
+/// encapsulation header. CDR aligns from the start of the data after that header, as
+/// `DirectEncoder` did, so the bytes on the wire are the message's.
+///
+/// ```
+/// use jointctl_ros2::{Encoded, msg::JointState};
+/// let m = JointState { name: vec!["q1".into()], position: vec![0.5], ..Default::default() };
+/// let cdr = jointctl_ros2::encode(&m).unwrap();
+/// let e = Encoded::<JointState>::from_cdr(&cdr).unwrap();
+/// assert_eq!(e.body(), &cdr[4..]);
+/// assert!(Encoded::<JointState>::from_cdr(&[0, 0, 0, 0, 1]).is_err(), "big-endian: not what DirectEncoder writes");
+/// ```
+pub struct Encoded<M> {
+    body: Vec<u8>,
+    _type: std::marker::PhantomData<fn() -> M>,
+}
+
+impl<M: msg::Message> Encoded<M> {
+    /// The message of `cdr`: a whole little-endian CDR message with its encapsulation header.
+    pub fn from_cdr(cdr: &[u8]) -> Result<Self, DecodeError> {
+        match cdr.split_at_checked(4) {
+            Some((header, body)) if header[..2] == CDR_LE[..2] => Ok(Encoded { body: body.to_vec(), _type: std::marker::PhantomData }),
+            _ => Err(DecodeError { type_name: M::NAME, reason: "not a little-endian CDR message with its encapsulation header".into() }),
+        }
+    }
+
+    /// The CDR after the encapsulation header.
+    pub fn body(&self) -> &[u8] {
+        &self.body
+    }
+}
+
+impl<M> serde::Serialize for Encoded<M> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple as _;
+        let mut octets = serializer.serialize_tuple(self.body.len())?;
+        for b in &self.body {
+            octets.serialize_element(b)?;
+        }
+        octets.end()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

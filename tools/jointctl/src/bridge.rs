@@ -90,7 +90,7 @@ pub fn run(command: BridgeCommand) -> ExitCode {
             });
             match served {
                 Ok(summary) => {
-                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, arm_stopped = summary.arm_stopped, "Foxglove bridge stopped");
+                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, lost = ?summary.lost, arm_stopped = summary.arm_stopped, "Foxglove bridge stopped");
                     ExitCode::SUCCESS
                 }
                 Err(e) => crate::fail_err(e),
@@ -103,7 +103,7 @@ pub fn run(command: BridgeCommand) -> ExitCode {
             });
             match served {
                 Ok(summary) => {
-                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, arm_stopped = summary.arm_stopped, "ROS 2 bridge stopped");
+                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, lost = ?summary.lost, arm_stopped = summary.arm_stopped, "ROS 2 bridge stopped");
                     ExitCode::SUCCESS
                 }
                 Err(e) => crate::fail_err(e),
@@ -117,7 +117,7 @@ pub fn run(command: BridgeCommand) -> ExitCode {
             });
             match served {
                 Ok(summary) => {
-                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, arm_stopped = summary.arm_stopped, "Zenoh bridge stopped");
+                    tracing::info!(arm = %opts.arm, messages = ?summary.messages, lost = ?summary.lost, arm_stopped = summary.arm_stopped, "Zenoh bridge stopped");
                     ExitCode::SUCCESS
                 }
                 Err(e) => crate::fail_err(e),
