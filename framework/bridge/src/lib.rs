@@ -34,7 +34,8 @@ pub struct BridgeSummary {
     /// Messages read from the arm per topic (each sent to every client subscribed to it).
     pub messages: BTreeMap<String, u64>,
     /// Samples the bridge never read, per topic: gaps in the cycle (or command sequence)
-    /// numbers, where it fell behind the arm and the arm's queue moved on.
+    /// numbers, where it fell behind the arm and the arm's queue moved on, or the runtime
+    /// dropped the record itself (its diagnostics' `publish_drops`).
     pub lost: BTreeMap<String, u64>,
     /// The arm stopped (its final sample).
     pub arm_stopped: bool,

@@ -89,10 +89,10 @@ pub fn node_name(arm: &str) -> String {
 /// thousand arrays a second of counters that change slowly.
 const DIAGNOSTICS_PERIOD: Duration = Duration::from_secs(1);
 
-/// A publisher for each of the profile's topics.
-/// The arm's topics. The cycle's messages go out already in CDR ([`Encoded`], written by
-/// [`DirectEncoder`] straight from the samples): built as messages, a 700-DOF arm's cycle was
-/// some 9000 strings, and the bridge fell behind a 1 kHz arm (docs/benchmarks.md).
+/// A publisher for each of the arm's topics. The cycle's messages go out already in CDR
+/// ([`Encoded`], written by [`DirectEncoder`] straight from the samples): built as messages, a
+/// 700-DOF arm's cycle was some 9000 strings, and the bridge took 81-88 % of a core at 1 kHz
+/// (61-62 % so; docs/benchmarks.md).
 struct Publishers {
     joint_states: Publisher<Encoded<msg::JointState>>,
     joint_details: Publisher<Encoded<msg::JointDetails>>,
@@ -104,7 +104,9 @@ struct Publishers {
 }
 
 impl Publishers {
-    /// Publishes the message of type `M` in `cdr`: whether the write went.
+    /// Publishes the message of type `M` in `cdr`: whether the write went (a buffer that is not
+    /// a little-endian CDR message, which `DirectEncoder` never writes, counts as a failed
+    /// write).
     fn send<M: msg::Message>(publisher: &Publisher<Encoded<M>>, cdr: &[u8]) -> bool {
         Encoded::<M>::from_cdr(cdr).is_ok_and(|m| publisher.publish(m).is_ok())
     }

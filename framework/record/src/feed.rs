@@ -51,7 +51,9 @@ pub enum FeedError {
 }
 
 /// Counts the gaps in a channel's numbering (cycles, command sequence numbers): the samples a
-/// reader lost because it fell behind the arm.
+/// reader never got, because it fell behind the arm or because the runtime dropped the record
+/// (its `publish_drops`). Numbers at or below the newest are passed over: a restarted arm,
+/// numbering again from 0 in the same reader, is not counted until it passes the old newest.
 ///
 /// ```
 /// let mut g = jointctl_record::feed::NumberGaps::default();
@@ -74,7 +76,7 @@ impl NumberGaps {
         {
             self.lost += number - next;
         }
-        self.next = Some(self.next.map_or(number + 1, |n| n.max(number + 1)));
+        self.next = Some(self.next.map_or(number.saturating_add(1), |n| n.max(number.saturating_add(1))));
     }
 
     /// The newest number seen.

@@ -216,7 +216,13 @@ impl<W: std::io::Write + std::io::Seek> Sink<W> {
             Sample::State(s) => self.direct.joint_details(s, clock, arm, out),
             Sample::Raw(f) => self.direct.raw_frame(f, &self.descriptor, clock, arm, out),
             Sample::Diagnostics(d) => self.direct.diagnostic_changes(d, clock, arm, out),
-            Sample::Command(c) => *out = jointctl_ros2::encode(&from_arm::command_record(c, clock, arm)).map_err(|source| RecordError::Encode { file: self.out.clone(), source })?,
+            Sample::Command(c) => {
+                // Copied into the kept buffer, not put in its place: the next cycle's messages
+                // would grow a new one again.
+                let cdr = jointctl_ros2::encode(&from_arm::command_record(c, clock, arm)).map_err(|source| RecordError::Encode { file: self.out.clone(), source })?;
+                out.clear();
+                out.extend_from_slice(&cdr);
+            }
         }
         Ok(())
     }

@@ -139,14 +139,16 @@ impl DirectEncoder {
         self.write_diagnostics(d, clock, arm, out);
     }
 
-    /// `diagnostic_msgs/msg/DiagnosticArray` of `d` as ROS 2 nodes publish diagnostics: the
-    /// loop's status each time, a joint's or a device's when it differs from what this encoder
-    /// last wrote of it (level, message, any counter), and every status once per
-    /// [`EVERY_STATUS_PERIOD_NS`] of the arm's time (and whenever the arm's parts change).
-    /// Readers key statuses by name (the diagnostic aggregator, `rqt_runtime_monitor`), and the
-    /// counters are totals since the start: carrying each status forward gives every cycle's
-    /// full array (the tests check it). At 700 DOFs a full array is 0.7 MB; at 1 kHz that is
-    /// more than one core writes.
+    /// `diagnostic_msgs/msg/DiagnosticArray` of `d` with the statuses that changed: the loop's
+    /// status each time, a joint's or a device's when what its status shows (name, level,
+    /// message, counters) differs from what this encoder last wrote of it, and every status
+    /// once per [`EVERY_STATUS_PERIOD_NS`] of the arm's time (and whenever the arm's parts
+    /// change). ROS 2's diagnostic aggregator and `rqt_runtime_monitor` key statuses by name,
+    /// and the counters are totals since the start: carrying each status forward gives every
+    /// cycle's full array (the tests check it). A reader that indexes statuses by their place
+    /// in the array (`status[3]`) sees other statuses there, and one that starts in the middle
+    /// of a file has every status within a second. At 700 DOFs a full array is 0.7 MB; at
+    /// 1 kHz that is more than one core writes.
     ///
     /// ```
     /// let mut d = jointctl_ipc::Diagnostics::EMPTY;
@@ -159,6 +161,9 @@ impl DirectEncoder {
     /// d.stamp_ns = 1_000_000;
     /// enc.diagnostic_changes(&d, &clock, "arm", &mut out);
     /// assert_eq!(statuses(&out), 1, "nothing changed: the loop's");
+    /// d.joints[0].valid_mask ^= 1;
+    /// enc.diagnostic_changes(&d, &clock, "arm", &mut out);
+    /// assert_eq!(statuses(&out), 1, "what the status does not show is no change");
     /// d.joints[0].fault_count = 1;
     /// enc.diagnostic_changes(&d, &clock, "arm", &mut out);
     /// assert_eq!(statuses(&out), 2, "the joint's changed");
@@ -174,12 +179,12 @@ impl DirectEncoder {
         }
         self.send_joint.clear();
         for (now, last) in d.joints.iter().zip(&mut self.last_joints) {
-            self.send_joint.push(now != last);
+            self.send_joint.push(joint_status_differs(now, last));
             *last = *now;
         }
         self.send_device.clear();
         for (now, last) in d.devices.iter().zip(&mut self.last_devices) {
-            self.send_device.push(now != last);
+            self.send_device.push(device_status_differs(now, last));
             *last = *now;
         }
         self.write_diagnostics(d, clock, arm, out);
@@ -237,6 +242,21 @@ impl DirectEncoder {
 /// 1 s, the period of ROS 2's `diagnostic_updater` (assumption: what a ROS 2 user's tools expect
 /// of a status that does not change).
 pub const EVERY_STATUS_PERIOD_NS: u64 = 1_000_000_000;
+
+/// Whether a joint's status shows something else: its name, level, message or counters (not
+/// what the status does not show, such as `valid_mask`, set again every cycle).
+fn joint_status_differs(now: &JointDiagnostics, last: &JointDiagnostics) -> bool {
+    let shown = |j: &JointDiagnostics| {
+        let (level, _, fault) = joint_level(j);
+        (j.name, level, fault.map(|_| j.fault_message), joint_values(j))
+    };
+    shown(now) != shown(last)
+}
+
+/// Whether a device's status shows something else: its name, flags or counters.
+fn device_status_differs(now: &DeviceDiagnostics, last: &DeviceDiagnostics) -> bool {
+    now.name != last.name || device_values(now) != device_values(last)
+}
 
 fn values(w: &mut CdrOut<'_>, pairs: &[(&str, u64)], number: &mut String) {
     w.len(pairs.len());
