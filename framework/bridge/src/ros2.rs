@@ -87,7 +87,7 @@ pub fn node_name(arm: &str) -> String {
 /// The diagnostics go out once a second, as ROS 2's `diagnostic_updater` sends them: the
 /// aggregator and `rqt_runtime_monitor` expect that, and every cycle at 1 kHz would be a
 /// thousand arrays a second of counters that change slowly.
-const DIAGNOSTICS_PERIOD: Duration = Duration::from_secs(1);
+const DIAGNOSTICS_PERIOD: Duration = Duration::from_nanos(jointctl_ros2::direct::EVERY_STATUS_PERIOD_NS);
 
 /// A publisher for each of the arm's topics. The cycle's messages go out already in CDR
 /// ([`Encoded`], written by [`DirectEncoder`] straight from the samples): built as messages, a

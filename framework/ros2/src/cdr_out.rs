@@ -35,24 +35,26 @@ impl<'a> CdrOut<'a> {
         self.buf.push(u8::from(v));
     }
 
+    /// A value of `N` bytes, aligned to its size.
+    fn put<const N: usize>(&mut self, bytes: [u8; N]) {
+        self.align(N);
+        self.buf.extend_from_slice(&bytes);
+    }
+
     pub(crate) fn u32(&mut self, v: u32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
+        self.put(v.to_le_bytes());
     }
 
     pub(crate) fn i32(&mut self, v: i32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
+        self.put(v.to_le_bytes());
     }
 
     pub(crate) fn u64(&mut self, v: u64) {
-        self.align(8);
-        self.buf.extend_from_slice(&v.to_le_bytes());
+        self.put(v.to_le_bytes());
     }
 
     pub(crate) fn f64(&mut self, v: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&v.to_le_bytes());
+        self.put(v.to_le_bytes());
     }
 
     /// A sequence's length (its elements follow).
