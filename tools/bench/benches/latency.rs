@@ -9,6 +9,14 @@
 //! latest-state blackboard the loop writes before control (`jointctl_ipc::LatestStateWriter`),
 //! an inspector thread busy-polling it for each new cycle. Each on an idle machine, then with a
 //! busy loop on every core.
+//!
+//! The target (p99 from the readings in hand to the inspector <= 20 us and <= 3x the hand-off
+//! alone) is judged last, in interleaved rounds: each round measures the hand-off alone, then the
+//! blackboard path with default timing and with SCHED_FIFO, one right after the other, and the
+//! ratio is taken within the round. This shared VM's speed moves over minutes (the hand-off
+//! alone's p99 read 4.9-9.8 us in runs of one build), so a ratio against a hand-off measured
+//! minutes apart weighs the machine's drift as much as the path. Every round is printed, and
+//! their median. `BENCH_ONLY=rounds` runs the rounds alone.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -191,9 +199,71 @@ fn blackboard_write(samples: u64) -> Vec<u64> {
     took
 }
 
+/// One interleaved round of the target's check: the hand-off alone, then the blackboard path
+/// from the readings in hand with default timing and with SCHED_FIFO (p99s [ns]).
+struct Round {
+    alone_p99: u64,
+    default_p99: u64,
+    fifo_p99: u64,
+}
+
+impl Round {
+    fn measure(index: usize, cycles: u64) -> Round {
+        let mut alone = handoff_alone(cycles);
+        let p99 = |realtime: bool, tag: &str| {
+            let mut h = sensor_to_inspector(&format!("bench-latency-round{index}-{tag}"), cycles, realtime, Via::Blackboard);
+            percentile(&mut h.from_readings, 99.0)
+        };
+        let default_p99 = p99(false, "default");
+        let fifo_p99 = p99(true, "fifo");
+        Round { alone_p99: percentile(&mut alone, 99.0), default_p99, fifo_p99 }
+    }
+
+    fn ratio(&self, p99: u64) -> f64 {
+        p99 as f64 / self.alone_p99.max(1) as f64
+    }
+}
+
+/// The median of `v` (the upper one of an even count).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// The target's table: every round, their median, and whether each of the two timings met it.
+fn print_rounds(rounds: &[Round]) {
+    println!("## Sensor → inspector p99 from the readings in hand (latest-state blackboard), interleaved rounds (target <= 20 us and <= 3x the hand-off alone of the same round)");
+    println!("| round | hand-off alone p99 us | default timing p99 us | ratio | SCHED_FIFO p99 us | ratio |");
+    println!("|---|---|---|---|---|---|");
+    let us = |v: u64| v as f64 / 1e3;
+    for (i, r) in rounds.iter().enumerate() {
+        println!("| {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} |", i + 1, us(r.alone_p99), us(r.default_p99), r.ratio(r.default_p99), us(r.fifo_p99), r.ratio(r.fifo_p99));
+    }
+    let med = |f: &dyn Fn(&Round) -> f64| median(rounds.iter().map(f).collect());
+    let (d, dr) = (med(&|r| us(r.default_p99)), med(&|r| r.ratio(r.default_p99)));
+    let (f, fr) = (med(&|r| us(r.fifo_p99)), med(&|r| r.ratio(r.fifo_p99)));
+    println!("| median of {} | {:.1} | {d:.1} | {dr:.2} | {f:.1} | {fr:.2} |", rounds.len(), med(&|r| us(r.alone_p99)));
+    let met = |p99: f64, ratio: f64| if p99 <= 20.0 && ratio <= 3.0 { "met" } else { "not met" };
+    let each = |f: &dyn Fn(&Round) -> bool| rounds.iter().filter(|r| f(r)).count();
+    println!();
+    println!(
+        "target on the rounds' median: default timing {}, SCHED_FIFO {}; rounds meeting it: default timing {} of {n}, SCHED_FIFO {} of {n}",
+        met(d, dr),
+        met(f, fr),
+        each(&|r| us(r.default_p99) <= 20.0 && r.ratio(r.default_p99) <= 3.0),
+        each(&|r| us(r.fifo_p99) <= 20.0 && r.ratio(r.fifo_p99) <= 3.0),
+        n = rounds.len()
+    );
+}
+
 fn main() {
     let quick = std::env::var("BENCH_QUICK").is_ok();
     let cycles = if quick { 1_000 } else { 10_000 };
+    let rounds = if quick { 2 } else { 5 };
+    if std::env::var("BENCH_ONLY").is_ok_and(|only| only == "rounds") {
+        print_rounds(&(0..rounds).map(|i| Round::measure(i, cycles)).collect::<Vec<_>>());
+        return;
+    }
     println!("jointctl latency benchmark ({} cores), 7-DOF SHERPA arm at 1 kHz, {cycles} cycles per run", std::thread::available_parallelism().map_or(0, |n| n.get()));
     println!();
     let mut alone = handoff_alone(cycles);
@@ -239,4 +309,6 @@ fn main() {
         let ratio = |v: u64| v as f64 / alone_p99.max(1) as f64;
         println!("| {what} | {:.1} | {:.2} | {:.1} | {:.2} |", total as f64 / 1e3, ratio(total), readings as f64 / 1e3, ratio(readings));
     }
+    println!();
+    print_rounds(&(0..rounds).map(|i| Round::measure(i, cycles)).collect::<Vec<_>>());
 }
