@@ -224,12 +224,6 @@ impl Round {
     }
 }
 
-/// The median of `v` (the upper one of an even count).
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 /// The target's table: every round, their median, and whether each of the two timings met it.
 fn print_rounds(rounds: &[Round]) {
     println!("## Sensor → inspector p99 from the readings in hand (latest-state blackboard), interleaved rounds (target <= 20 us and <= 3x the hand-off alone of the same round)");
@@ -239,7 +233,7 @@ fn print_rounds(rounds: &[Round]) {
     for (i, r) in rounds.iter().enumerate() {
         println!("| {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} |", i + 1, us(r.alone_p99), us(r.default_p99), r.ratio(r.default_p99), us(r.fifo_p99), r.ratio(r.fifo_p99));
     }
-    let med = |f: &dyn Fn(&Round) -> f64| median(rounds.iter().map(f).collect());
+    let med = |f: &dyn Fn(&Round) -> f64| jointctl_bench::median(&mut rounds.iter().map(f).collect::<Vec<_>>());
     let (d, dr) = (med(&|r| us(r.default_p99)), med(&|r| r.ratio(r.default_p99)));
     let (f, fr) = (med(&|r| us(r.fifo_p99)), med(&|r| r.ratio(r.fifo_p99)));
     println!("| median of {} | {:.1} | {d:.1} | {dr:.2} | {f:.1} | {fr:.2} |", rounds.len(), med(&|r| us(r.alone_p99)));

@@ -557,7 +557,8 @@ def simulate_rig(dev, thc, vc, sT, bT, dt):
                 qv[b] = qv[b] * Ev[b] + Gv[b] * dds
                 tve += qv[b]
         ds_prev = ds
-        # internal bearing (parallel to the spring)
+        # internal bearing (parallel to the spring): lugre_step's update with the levels scaled
+        # by the load, written out so that the scaling stays where the records were made with it
         av = dd if dd >= 0 else -dd
         if av > 1e-12:
             lf = 1.0 + i_lc * (tel if tel >= 0 else -tel)
@@ -569,23 +570,11 @@ def simulate_rig(dev, thc, vc, sT, bT, dt):
         tfi = i_s0 * zn + i_s1 * (zn - zi) / dt + bTl[i] * dd
         zi = zn
         # output bearing (parallel to the sensor)
-        av = wo if wo >= 0 else -wo
-        if av > 1e-12:
-            g = o_fc + (o_fs - o_fc) * exp(-(av / o_vs) ** o_al)
-            zss = g / o_s0 if wo > 0 else -g / o_s0
-            zn = zss + (zo - zss) * exp(-o_s0 * av / g * dt)
-        else:
-            zn = zo
+        zn = lugre_step(zo, wo, o_fc, o_fs, o_vs, o_al, o_s0, dt)
         tbo = o_s0 * zn + o_s1 * (zn - zo) / dt
         zo = zn
         # drive-side seal
-        av = wm if wm >= 0 else -wm
-        if av > 1e-12:
-            g = s_fc + (s_fs - s_fc) * exp(-(av / s_vs) ** s_al)
-            zss = g / s_s0 if wm > 0 else -g / s_s0
-            zn = zss + (zs - zss) * exp(-s_s0 * av / g * dt)
-        else:
-            zn = zs
+        zn = lugre_step(zs, wm, s_fc, s_fs, s_vs, s_al, s_s0, dt)
         tse = s_s0 * zn + s_s1 * (zn - zs) / dt
         zs = zn
         tpath = tel + tms + tve + tfi
