@@ -148,9 +148,14 @@ fn a_stall_costs_one_overrun(params: &str) {
 fn a_joints_own_budget_overrides_the_default() {
     let _alone = alone();
     let stall = "{stall_us: 2000, stall_every: 3}";
-    let mut arm = arm_with_faulty(100.0, stall);
-    step_100hz(&mut arm, 0..9);
-    assert_eq!(arm.slots[1].fault, 0, "2 ms is within 5 ms");
+    // A 2 ms stall is a 2 ms spin, which a loaded machine can stretch past 5 ms three times in a
+    // row (a CI run beside two identify jobs faulted it): tried again, as the stalls above are.
+    let within = (0..STALL_ATTEMPTS).any(|_| {
+        let mut arm = arm_with_faulty(100.0, stall);
+        step_100hz(&mut arm, 0..9);
+        arm.slots[1].fault == 0
+    });
+    assert!(within, "2 ms is within 5 ms in none of {STALL_ATTEMPTS} attempts");
     let extra = format!("  - name: b\n    plugin: faulty\n    budget_us: 1000\n    encoders: {{output: e1}}\n    drives: {{motor: m1}}\n    params: {stall}\n");
     let loaded = jointctl_config::parse_str(&rig_yaml("fault-injection", 100.0, &extra), "rig.yaml").unwrap();
     let mut arm = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).unwrap();
