@@ -449,13 +449,6 @@ pub trait CandidateCause: Send + Sync {
         let _ = (parameters, coefficients);
         None
     }
-    /// [`Self::impossible`] on a record of this `excitation`, for a rule that reads the
-    /// experiment's scales (a loop that runs the other way must turn within the stroke, see
-    /// `causes::hysteresis`); [`Self::impossible`] by default.
-    fn impossible_given(&self, parameters: &[f64], coefficients: &[f64], excitation: &Excitation) -> Option<String> {
-        let _ = excitation;
-        self.impossible(parameters, coefficients)
-    }
     /// Whether, on a record read as a joint's friction, the search and the polish keep to the
     /// parameter values at which the cause's fit is possible ([`CandidateCause::impossible`]
     /// says nothing): its best fit is then the best possible one, the constrained optimum,
