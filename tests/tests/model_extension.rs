@@ -48,7 +48,7 @@ fn bad_extension_parameters_are_errors_at_their_field() {
     .unwrap();
     let errs = jointctl_backends::build_arm(&loaded, &PluginLoader::new([])).map(|_| ()).unwrap_err();
     let e = errs.0.iter().find(|e| e.field.contains("model_extension")).unwrap_or_else(|| panic!("{errs}"));
-    assert!(e.field.ends_with("model_extension.hysteresis") && e.message.contains("sigma_nm_per_rad > 0"), "{e}");
+    assert!(e.field.ends_with("model_extension.hysteresis") && e.message.contains("sigma_nm_per_rad of its sign"), "{e}");
     // Terms per pivot setting on a joint without pivot settings would be read at the first
     // setting whatever the data said: refused.
     let loaded = jointctl_config::load(sherpa_with("ext-bad-by-pivot", &arm_name("ext-bad-by-pivot"), &[Edit::Set(

@@ -243,7 +243,7 @@ pub(crate) fn decide_on_held_out(model: &Model, selection: &mut Selection, base:
     let mut chosen = selection.chosen.clone();
     // Its gain is against the model the held-out part judged it against, the model as it was:
     // the model without it keeps the arctan where the damping's fit moved it.
-    chosen.push(Chosen { cause: c.viscous, evidence, against: Some(current.clone()) });
+    chosen.push(Chosen { cause: c.viscous, evidence, against: Some(current.clone()), partner: None });
     let mut trial = Selection { spec: with, chosen, rejected: Vec::new(), negligible: Vec::new(), confounded: Vec::new() };
     select::prune(model, p, &mut trial, name);
     if trial.chosen.iter().any(|ch| ch.cause == c.viscous) {

@@ -30,7 +30,7 @@ impl Terms {
             (None, None) => None,
             (a, b) => {
                 let (a, b) = (a.unwrap_or(DahlSpec { limit_nm: 0.0, ..b.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }) }), b.unwrap_or(DahlSpec { limit_nm: 0.0, ..a.unwrap_or(DahlSpec { limit_nm: 0.0, sigma_nm_per_rad: 1.0, input_dead_band_rad: 0.0, shape: 1.0, presliding_damping_s: 0.0 }) }));
-                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm), input_dead_band_rad: mix(a.input_dead_band_rad, b.input_dead_band_rad), shape: mix(a.shape, b.shape), presliding_damping_s: mix(a.presliding_damping_s, b.presliding_damping_s) }).filter(|h| h.limit_nm > 0.0)
+                Some(DahlSpec { sigma_nm_per_rad: mix(a.sigma_nm_per_rad, b.sigma_nm_per_rad), limit_nm: mix(a.limit_nm, b.limit_nm), input_dead_band_rad: mix(a.input_dead_band_rad, b.input_dead_band_rad), shape: mix(a.shape, b.shape), presliding_damping_s: mix(a.presliding_damping_s, b.presliding_damping_s) }).filter(|h| h.limit_nm != 0.0 && h.limit_nm / h.sigma_nm_per_rad > 0.0)
             }
         };
         Terms {

@@ -23,9 +23,13 @@ pub const MAX_LOOP_SHAPE: f64 = 8.0;
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DahlSpec {
-    /// Rest stiffness sigma [Nm/rad].
+    /// Rest stiffness sigma [Nm/rad], of the limit's sign.
     pub sigma_nm_per_rad: f64,
-    /// Limit F_c [Nm].
+    /// Limit F_c [Nm]. Negative for a loop that runs the other way in the torque reading: a
+    /// friction in a path beside the torque sensor (a bearing that carries torque past it)
+    /// takes a loop's worth of the element's torque from the reading, rising as the element
+    /// loads; such a loop is the reading's, observed and not simulated in the element (where
+    /// a loop that runs the other way would give energy).
     pub limit_nm: f64,
     /// Width of a dead band between the deflection reading and the Dahl state [rad] (0: none):
     /// the state takes a reading only once it is more than half the width from the last one
@@ -136,9 +140,9 @@ impl Terms {
             return bad("friction", format!("needs a finite ka_nm and kb_s_per_rad > 0, got {} and {}", f.ka_nm, f.kb_s_per_rad));
         }
         if let Some(h) = self.hysteresis
-            && !(h.sigma_nm_per_rad > 0.0 && h.limit_nm > 0.0 && h.sigma_nm_per_rad.is_finite() && h.limit_nm.is_finite())
+            && !(h.sigma_nm_per_rad.is_finite() && h.limit_nm.is_finite() && h.limit_nm != 0.0 && h.limit_nm / h.sigma_nm_per_rad > 0.0)
         {
-            return bad("hysteresis", format!("needs sigma_nm_per_rad > 0 and limit_nm > 0, got {} and {}", h.sigma_nm_per_rad, h.limit_nm));
+            return bad("hysteresis", format!("needs limit_nm != 0 and sigma_nm_per_rad of its sign (a loop's scale limit / sigma > 0), got sigma_nm_per_rad {} and limit_nm {}", h.sigma_nm_per_rad, h.limit_nm));
         }
         if let Some(h) = self.hysteresis
             && !(h.input_dead_band_rad >= 0.0 && h.input_dead_band_rad.is_finite())

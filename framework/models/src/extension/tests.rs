@@ -18,6 +18,21 @@ fn the_dahl_state_follows_identifys_per_step_solution_and_resets() {
     assert_eq!(e.dahl_torque(0.3), 0.0, "a reset state starts at zero, where it is");
 }
 
+/// A loop that runs the other way (a friction beside the torque sensor) is the mirror of the
+/// loop with the opposite limit; a limit and a rest stiffness of opposite signs (no scale) or a
+/// zero limit are refused by field.
+#[test]
+fn a_loop_that_runs_the_other_way_mirrors_its_opposite_and_mixed_signs_are_refused() {
+    let spec = |sigma: f64, limit: f64| ExtensionSpec { hysteresis: Some(DahlSpec { sigma_nm_per_rad: sigma, limit_nm: limit, input_dead_band_rad: 0.0, shape: 2.0, presliding_damping_s: 0.0 }), ..Default::default() };
+    let (mut up, mut down) = (ModelExtension::new(spec(300.0, 1.2)).unwrap(), ModelExtension::new(spec(-300.0, -1.2)).unwrap());
+    for phi in [0.0, 0.002, 0.01, 0.004, -0.003, 0.001] {
+        assert_eq!(down.dahl_torque(phi), -up.dahl_torque(phi));
+    }
+    for (sigma, limit) in [(-300.0, 1.2), (300.0, -1.2), (300.0, 0.0), (f64::NAN, 1.2)] {
+        assert_eq!(ModelExtension::new(spec(sigma, limit)).unwrap_err().field, "hysteresis", "{sigma} {limit}");
+    }
+}
+
 /// A negative pre-sliding damping is refused by field; none is not written out.
 #[test]
 fn a_negative_presliding_damping_is_refused_and_none_is_not_written() {

@@ -114,7 +114,7 @@ mod tests {
         let base = inputs();
         // A residual with a mode at 23 Hz, so that the vibrations have a frequency to take.
         let residual: Vec<f64> = base.t_s.iter().map(|t| 0.3 * (std::f64::consts::TAU * 23.0 * t).sin()).collect();
-        let excitation = Excitation { amplitude_rad: 0.024, frequency_hz: 0.4, sample_period_s: 0.005, deflection_scatter_rad: 1e-5, resolution_rad: 3.8e-4, turn_step_rad: 3.8e-4, bin_width_s: 0.0 };
+        let excitation = Excitation { amplitude_rad: 0.024, frequency_hz: 0.4, sample_period_s: 0.005, deflection_scatter_rad: 1e-5, resolution_rad: 3.8e-4, quantum_rad: 3.8e-4, turn_step_rad: 3.8e-4, bin_width_s: 0.0 };
         let full_rate = FullRate { t_s: &base.t_s, velocity_rad_per_s: &base.velocity_rad_per_s, residual_nm: &residual };
         let context = SearchContext::new(excitation, &base.t_s, &base.velocity_rad_per_s, &residual, full_rate, RestSamples::default(), true, false);
         for cause in builtin() {

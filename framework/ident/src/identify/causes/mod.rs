@@ -92,6 +92,11 @@ pub struct Excitation {
     pub deflection_scatter_rad: f64,
     /// The deflection reading's resolution [rad]: its smallest common step.
     pub resolution_rad: f64,
+    /// The step of the reading's coarsest quantiser [rad] (`prepare`'s `coarsest_tick_rad` or
+    /// the lattice its steps lie on, `prepare::lattice`, the coarser; at least `resolution_rad`):
+    /// a deflection that is a coarse output encoder less a fine motor encoder through a ratio
+    /// steps by the motor's count and is off by half the output's.
+    pub quantum_rad: f64,
     /// How finely the log shows the motion where it turns [rad] ([`turn_step_rad`]).
     pub turn_step_rad: f64,
     /// For a record read as bin averages, the interval each sample averages over [s] (a cause
@@ -448,6 +453,13 @@ pub trait CandidateCause: Send + Sync {
     fn impossible(&self, parameters: &[f64], coefficients: &[f64]) -> Option<String> {
         let _ = (parameters, coefficients);
         None
+    }
+    /// [`Self::impossible`] on a record of this `excitation`, for a rule that reads the
+    /// experiment's scales (a loop that runs the other way must turn within the stroke, see
+    /// `causes::hysteresis`); [`Self::impossible`] by default.
+    fn impossible_given(&self, parameters: &[f64], coefficients: &[f64], excitation: &Excitation) -> Option<String> {
+        let _ = excitation;
+        self.impossible(parameters, coefficients)
     }
     /// Whether, on a record read as a joint's friction, the search and the polish keep to the
     /// parameter values at which the cause's fit is possible ([`CandidateCause::impossible`]

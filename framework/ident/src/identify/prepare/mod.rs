@@ -6,6 +6,7 @@ mod crossings;
 mod cubic_rate;
 mod dropouts;
 mod glitches;
+mod lattice;
 mod saturation;
 mod spring;
 mod sign;
@@ -424,7 +425,7 @@ impl Read<'_> {
         let every_fit = trained.div_ceil(FIT_SAMPLES).max(1);
         let every_test = (hi - lo).div_ceil(HELD_OUT_SAMPLES).max(1);
         let (train, test) = (training(every_fit * FIT_SAMPLES, every_fit), part_every(lo..hi, every_test));
-        let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter, resolution_rad: resolution, turn_step_rad: self.turn_step_rad, bin_width_s: if edges.is_empty() { 0.0 } else { spacing } };
+        let excitation = Excitation { amplitude_rad, frequency_hz, sample_period_s: coarse.dt, deflection_scatter_rad: deflection_scatter, resolution_rad: resolution, quantum_rad: self.quantum_rad.max(self.lattice_rad), turn_step_rad: self.turn_step_rad, bin_width_s: if edges.is_empty() { 0.0 } else { spacing } };
         // The full-rate stretch is contiguous (a delay's samples, a periodogram): the piece before
         // the held-out window, or the one after it when that is longer.
         let stretch = if lo >= STRETCH_SAMPLES.min(t.len() - hi) { part(0..lo.min(STRETCH_SAMPLES)) } else { part(hi..t.len().min(hi + STRETCH_SAMPLES)) };

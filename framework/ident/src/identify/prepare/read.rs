@@ -12,6 +12,7 @@ use super::glitches::glitches_by_segment;
 use super::noise::scatter_rms;
 use super::crossings::{crossing_rate_by_segment, holds_between_moves};
 use super::cubic_rate::cubic_rate_by_segment;
+use super::lattice;
 use super::rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths, widest_rate_window};
 use super::{HeldOut, HeldOutWindow, MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, Prepared, RateReading, fundamental_hz, noise_floor, resolution_rad, held_out_window, saturation, segment_starts, sign, turns};
 use crate::csv::Data;
@@ -46,6 +47,8 @@ pub(crate) struct Read<'a> {
     /// `noise::scatter_rms`).
     pub resolution_rad: f64,
     pub quantum_rad: f64,
+    /// The count of the coarsest lattice its steps lie on [rad] (see `lattice`).
+    pub lattice_rad: f64,
     pub scatter_rad: f64,
     /// Readings left out: dropouts, glitches besides them, and torques at the sensor's limit
     /// besides both.
@@ -141,9 +144,10 @@ impl<'a> Read<'a> {
         // `rate::DeflectionNoise`) and its scatter about a line from sample to sample.
         let scatter_rad = scatter_rms(&d, &starts);
         let quantum_rad = coarsest_tick_rad(&d, &starts, resolution);
+        let lattice_rad = lattice::coarse_lattice_rad(&d, &starts, resolution);
         let (turn_step, reversed_sign, turn_runs) = (turn_step_rad(&d, &starts), sign::reversed_sign(&d, &tau), turns::turns(&t, &d));
         let held_out = held_out_window(&data.t, &data.deflection, train_fraction, how);
-        Ok(Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, turning, spacing_s, resolution_rad: resolution, quantum_rad, scatter_rad, dropouts, glitches, saturated, turn_step_rad: turn_step, reversed_sign, turn_runs, train_fraction, held_out })
+        Ok(Read { data, d, tau, pivot, rep, t, t0, starts, frequency_hz, period_samples, turning, spacing_s, resolution_rad: resolution, quantum_rad, lattice_rad, scatter_rad, dropouts, glitches, saturated, turn_step_rad: turn_step, reversed_sign, turn_runs, train_fraction, held_out })
     }
 }
 

@@ -92,7 +92,7 @@ fn a_cause_that_turns_impossible_when_another_leaves_leaves_with_it() {
     // Without the delay the damping is negative: the lag under another name.
     let alone = held_out_errors(&model, &spec.without(delay), &p).unwrap();
     assert!(alone.fit.of(0)[0] < 0.0, "{:?}", alone.fit.of(0));
-    let chosen = [viscous, delay].map(|cause| Chosen { cause, evidence: String::new(), against: None }).into();
+    let chosen = [viscous, delay].map(|cause| Chosen { cause, evidence: String::new(), against: None, partner: None }).into();
     let mut s = Selection { spec, chosen, rejected: Vec::new(), negligible: Vec::new(), confounded: Vec::new() };
     prune(&model, &p, &mut s, &|c| all[c].name().to_string());
     let fit = held_out_errors(&model, &s.spec, &p).unwrap().fit.clone();
