@@ -2,6 +2,7 @@
 //! training part and the held-out part.
 
 mod bins;
+mod bursts;
 mod crossings;
 mod cubic_rate;
 mod dropouts;

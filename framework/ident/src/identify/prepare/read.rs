@@ -12,6 +12,7 @@ use super::glitches::glitches_by_segment;
 use super::noise::scatter_rms;
 use super::crossings::{crossing_rate_by_segment, holds_between_moves};
 use super::cubic_rate::cubic_rate_by_segment;
+use super::bursts;
 use super::lattice;
 use super::rate::{DeflectionNoise, coarsest_tick_rad, velocity_by_segment, velocity_half_widths, widest_rate_window};
 use super::{HeldOut, HeldOutWindow, MIN_REVERSALS, MIN_SPAN_LSB, PrepareError, Prepared, RateReading, fundamental_hz, noise_floor, resolution_rad, held_out_window, saturation, segment_starts, sign, turns};
@@ -120,7 +121,7 @@ impl<'a> Read<'a> {
         // repetition of a restarted record still fits per repetition what the others do).
         let rep: Vec<u32> = if data.restarts.is_empty() { Vec::new() } else { (0..n_all).filter(|i| !lost[*i]).map(|i| data.repetition(i)).collect() };
         let t0 = data.t[0];
-        let t: Vec<f64> = kept(&data.t).iter().map(|x| x - t0).collect();
+        let (t, _) = bursts::laid_evenly(kept(&data.t).iter().map(|x| x - t0).collect());
         let starts = segment_starts(&t);
         let frequency_hz = fundamental_hz(&t, &d);
         let period_samples = {
