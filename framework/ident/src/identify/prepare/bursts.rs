@@ -11,6 +11,8 @@
 //! from the sample before the stall to the burst's last, where that spacing is the log's usual
 //! step: what a logger that buffers does.
 
+use crate::identify::numeric::median_step;
+
 /// A step longer than this many median steps is a stall, one shorter than this share of the
 /// median a burst's, and the burst runs on while the steps stay below the catch-up share
 /// (assumptions: a jittered log's steps stay within half and twice its median; the rig
@@ -27,12 +29,10 @@ const SPACING_FACTOR: f64 = 2.0;
 /// samples moved.
 pub(super) fn laid_evenly(mut t: Vec<f64>) -> (Vec<f64>, usize) {
     let n = t.len();
-    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|s| *s > 0.0).collect();
-    if steps.len() < 10 {
+    if n < 11 {
         return (t, 0);
     }
-    let half = steps.len() / 2;
-    let median = *steps.select_nth_unstable_by(half, f64::total_cmp).1;
+    let median = median_step(&t);
     let mut moved = 0;
     let mut i = 1;
     while i + 1 < n {
