@@ -1,6 +1,8 @@
 //! Breaks in a log: gaps in which the motion turned unseen, after which a stateful cause's state
 //! is not the data's to know (see [`unseen_turns`]).
 
+use crate::identify::numeric::median;
+
 /// The travel after a break, in ranges of the motion, over which the samples are left out (see
 /// [`unseen_turns`]): a Dahl state forgets its start as `exp(-travel / scale)`, and the search
 /// keeps the scale below a third of the amplitude (a sixth of the range), so that after one range
@@ -54,10 +56,8 @@ pub fn motion_period_s(t_s: &[f64], turning: &[usize], frequency_hz: f64) -> f64
         return 1.0 / frequency_hz.max(1e-9);
     }
     let mut between: Vec<f64> = turning.windows(2).map(|w| t_s[w[1]] - t_s[w[0]]).collect();
-    let mid = between.len() / 2;
-    2.0 * *between.select_nth_unstable_by(mid, f64::total_cmp).1
+    2.0 * median(&mut between).unwrap_or(0.0)
 }
-
 
 /// The breaks of a record and where each one's settling ends (see [`unseen_turns`]).
 pub(crate) struct Breaks {
@@ -115,7 +115,7 @@ impl Breaks {
 /// What a record's breaks left out (see [`unseen_turns`]).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct AfterBreaks {
-    /// Gaps longer than a period of the excitation.
+    /// Gaps longer than a period of the motion.
     pub breaks: usize,
     /// Samples left out after them, of the whole record, fitted and held out alike.
     pub samples: usize,

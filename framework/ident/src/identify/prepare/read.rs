@@ -121,7 +121,7 @@ impl<'a> Read<'a> {
         // repetition of a restarted record still fits per repetition what the others do).
         let rep: Vec<u32> = if data.restarts.is_empty() { Vec::new() } else { (0..n_all).filter(|i| !lost[*i]).map(|i| data.repetition(i)).collect() };
         let t0 = data.t[0];
-        let (t, _) = bursts::laid_evenly(kept(&data.t).iter().map(|x| x - t0).collect());
+        let t = bursts::laid_evenly(kept(&data.t).iter().map(|x| x - t0).collect());
         let starts = segment_starts(&t);
         let frequency_hz = fundamental_hz(&t, &d);
         let period_samples = {
