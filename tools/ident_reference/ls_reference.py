@@ -6,8 +6,7 @@ stiffness and a unit Dahl state driven by the deflection's 25 ms moving average,
 least squares on the first 70 % of the time range; the arctan's k_b and the Dahl state's scale are
 taken from small grids by the training fit. Scored on the last 30 %, or on the window identify
 held out instead (its `held_out_window`: a record whose last 30 % moves unlike the rest is
-judged on the window most like it), trained on the rest: both judged on the same samples (the
-samples identify leaves out after a break in the log, its `after_breaks`, left out of both parts). Prints, per record, identify's held-out RMSE before and after its causes beside
+judged on the window most like it), trained on the rest: both judged on the same samples. Prints, per record, identify's held-out RMSE before and after its causes beside
 the reference's, and flags records where identify is more than 1.25 times the reference.
 
     .venv-interop/bin/python tools/ident_reference/ls_reference.py [--jointctl BIN] FILE.csv...
@@ -96,23 +95,11 @@ def prepared(path, window):
     return t, d, y, smooth, rate, test
 
 
-def kept(t, left_out):
-    """The samples outside the `left_out` intervals ([start, end] in s from the record's start,
-    each widened by a millisecond): what identify leaves out after a break in the log (its
-    `after_breaks`), left out of the reference's parts likewise, so that both are judged on the
-    same samples."""
-    keep = np.ones(len(t), dtype=bool)
-    for a, b in left_out:
-        keep &= ~((t >= a - 1e-3) & (t <= b + 1e-3))
-    return keep
-
-
-def reference(path, window=(0.7, 1.0), left_out=()):
+def reference(path, window=(0.7, 1.0)):
     """(the reference's baseline alone, the whole reference): RMSE [Nm] on the held-out
-    `window` (fractions of the time range), fitted on the rest, both without `left_out`."""
+    `window` (fractions of the time range), fitted on the rest."""
     t, d, y, smooth, rate, test = prepared(path, window)
-    keep = kept(t, left_out)
-    train, test = ~test & keep, test & keep
+    train = ~test
     span = np.ptp(smooth) or 1.0
     speed = np.percentile(np.abs(rate), 95) or 1.0
     rms = lambda r: float(np.sqrt(np.mean(r ** 2)))
@@ -134,12 +121,10 @@ def reference(path, window=(0.7, 1.0), left_out=()):
     return best_base[1], best[1]
 
 
-def library(path, window=(0.7, 1.0), left_out=()):
-    """The library fit's RMSE [Nm] on the held-out `window`, fitted on the rest (see above),
-    both without `left_out`."""
+def library(path, window=(0.7, 1.0)):
+    """The library fit's RMSE [Nm] on the held-out `window`, fitted on the rest (see above)."""
     t, d, y, smooth, rate, test = prepared(path, window)
-    keep = kept(t, left_out)
-    train, test = ~test & keep, test & keep
+    train = ~test
     span = np.ptp(smooth) or 1.0
     # Normalised so that the columns' sizes are alike (the fit's conditioning).
     x = d / (np.max(np.abs(d)) or 1.0)
@@ -166,11 +151,10 @@ def main():
         report = json.loads(out.stdout) if out.returncode == 0 else None
         held = (report or {}).get('held_out_window') or {}
         window = (held.get('start', 0.7), held.get('end', 1.0))
-        left_out = ((report or {}).get('after_breaks') or {}).get('left_out_s', [])
         try:
-            base, ref = reference(path, window, left_out)
+            base, ref = reference(path, window)
             if args.library:
-                ref = library(path, window, left_out)
+                ref = library(path, window)
         except (OSError, ValueError) as e:
             print(f'{name:45s} no reference: {e}')
             continue
@@ -185,8 +169,6 @@ def main():
         before = rest.get('rmse_before_all_nm') if rest else report['rmse_before']
         after = rest.get('rmse_after_all_nm') if rest else report['rmse_after']
         stops = f", stops included ({rest['held_out_samples']} held-out samples at rest)" if rest else ''
-        if left_out:
-            stops += f", {len(left_out)} break(s)' settling left out"
         if window != (0.7, 1.0):
             stops += f", held out {100 * window[0]:.0f}-{100 * window[1]:.0f} % as identify did"
 

@@ -155,9 +155,6 @@ pub struct Report {
     /// Set when a friction record's stops or turns are left out (see [`prepare::AtRest`]): the
     /// held-out figures above are then over the samples that slide.
     pub at_rest: Option<prepare::AtRest>,
-    /// Set when the log has gaps in which the motion turned unseen: the samples after them left
-    /// out until the motion set a stateful cause's state again (see [`prepare::unseen_turns`]).
-    pub after_breaks: Option<prepare::AfterBreaks>,
     /// The part of the time range held out (fractions of it), and why it is not the last part
     /// when it is not (see [`prepare::held_out_window`]).
     pub held_out_window: prepare::HeldOutWindow,
@@ -579,9 +576,23 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         bin_averages,
         narrow_rate: rate.cloned(),
         at_rest,
-        after_breaks: p.after_breaks.clone(),
         held_out_window: p.held_out.clone(),
-        significance: Significance::stated(significance::blocks_for(t.len())),
+        significance: Significance {
+            test: format!(
+                "block t-test of held-out squared-error differences (Diebold-Mariano with batch means, AR(1)-corrected), one-sided; or forecast encompassing (the held-out residual regressed on the cause's correction, batch-means variance, the blocks' effective number as degrees of freedom) with a slope of at least {:.2} in each of {} parts of the held-out record where the correction acts; or, where the residual is structure, a gain of at least {:.0} % of the excess over the noise floor that worsens none of those parts and betters most of those with something to explain; for coefficients fitted on each ring, a gain of at least {:.0} % of the excess (consistent over those parts where the residual is structure) and a chi-square test of the held-out error drop",
+                significance::CONFIRMED_SLOPE,
+                significance::CONSISTENCY_PARTS,
+                100.0 * significance::LARGE_SHARE_OF_EXCESS,
+                100.0 * significance::LARGE_SHARE_OF_EXCESS
+            ),
+            level: significance::LEVEL,
+            relevance: format!(
+                "a held-out MSE gain of at least {:.0} % of the noise floor's variance and {:.0} % of the excess of the model without the cause over that floor",
+                100.0 * significance::RELEVANT_SHARE_OF_NOISE,
+                100.0 * significance::RELEVANT_SHARE_OF_EXCESS
+            ),
+            blocks: significance::blocks_for(t.len()),
+        },
         held_out,
         rejected,
     };

@@ -296,7 +296,7 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
     };
     let u = &report.unexplained;
     let mut md = format!(
-        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts{}; deflection resolution {:.3e} rad (from its steps). {}{}{}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
+        "# What the model misses: {}\n\n{} samples in {} segment(s), {} dropped as dropouts{}; deflection resolution {:.3e} rad (from its steps). {}{}{}{}\n\n| | held-out torque RMSE [Nm] |\n|---|---|\n| baseline | {:.4} |\n| extended | {:.4} |\n| noise floor (measured) | {:.4} |\n\n",
         a.data.display(),
         report.samples,
         report.segments,
@@ -307,7 +307,6 @@ pub fn run_identify(a: IdentifyArgs) -> ExitCode {
         bins_sentence(report.bin_averages.as_ref()),
         narrow_rate_sentence(report.narrow_rate.as_ref()),
         rest_sentence(report.at_rest.as_ref()),
-        reading::breaks_sentence(report.after_breaks.as_ref()),
         report.rmse_before,
         report.rmse_after,
         u.noise_floor_nm

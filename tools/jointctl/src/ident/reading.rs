@@ -75,13 +75,3 @@ pub(super) fn rest_sentence(r: Option<&jointctl_ident::identify::prepare::AtRest
         )
     })
 }
-
-/// What the record's breaks left out, in a sentence (empty without a break).
-pub(super) fn breaks_sentence(b: Option<&jointctl_ident::identify::prepare::AfterBreaks>) -> String {
-    b.map_or(String::new(), |b| {
-        format!(
-            " Breaks: {} gap(s) longer than a period of the motion, in which the motion turned unseen (a repetition's pause, a long stall): a hysteresis' state after one is what that motion left, which the data does not say; the {} samples after them, until the motion travelled its range once, are left out of the fit and the judgement, for every model alike.",
-            b.breaks, b.samples
-        )
-    })
-}

@@ -2,7 +2,6 @@
 //! training part and the held-out part.
 
 mod bins;
-mod breaks;
 mod bursts;
 mod crossings;
 mod cubic_rate;
@@ -20,7 +19,6 @@ mod rest;
 mod turns;
 mod window;
 
-pub use breaks::{AfterBreaks, SETTLE_RANGES, motion_period_s, unseen_turns};
 pub use noise::noise_floor;
 pub use rest::{AtRest, REST_S};
 pub(crate) use rest::scored_on_every_sample;
@@ -32,7 +30,7 @@ pub use bins::{BIN_READING_MIN_STEP_S, rate_edges, tried_as_bins};
 pub use rate::{NARROWEST_RATE_WINDOW, SHARPER_REACH_SCALES, VELOCITY_WINDOWS_PER_PERIOD, WIDER_WINDOWS_PER_PERIOD, WIDEST_RATE_REACH_S, widest_rate_window};
 pub(crate) use read::{Read, ReadAhead};
 
-use super::causes::{Excitation, Restart};
+use super::causes::Excitation;
 use super::design::Part;
 
 /// One count of the SHERPA joints' 14-bit absolute encoders [rad] (thesis section 3.1): the
@@ -212,8 +210,6 @@ pub(crate) struct Prepared {
     /// Where the reading stays on the count at which the motion turned, `(start, end)` [s] from
     /// `t0` (see `turns`); left out of a friction record's fit and judgement as well.
     pub turns: Vec<(f64, f64)>,
-    /// The samples left out after gaps in which the motion turned unseen (see [`unseen_turns`]).
-    pub after_breaks: Option<AfterBreaks>,
 }
 
 impl Prepared {
@@ -363,48 +359,34 @@ impl Read<'_> {
         // the right hysteresis (blind suite, LuGre) made the held-out part worse than none.
         let amplitude_rad = d.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-6);
         let cycles = (2.0 * period_samples).max(100.0) as usize;
-        let breaks = breaks::Breaks::of(t, d, &self.turning, frequency_hz);
         let warm_start = |start: usize| {
             let mut travel = 0.0;
             let mut i = start;
-            let floor = breaks.last_at_or_before(start);
-            while i > floor && (start - i < cycles || travel < 2.0 * amplitude_rad) {
+            while i > 0 && (start - i < cycles || travel < 2.0 * amplitude_rad) {
                 travel += (d[i] - d[i - 1]).abs();
                 i -= 1;
             }
             i
         };
-        // Every `k`-th sample of the range `r` not settling after a break (and its history),
-        // picked without a full-rate copy.
+        // Every `k`-th sample of the range `r` (its history too), picked without a full-rate copy.
         let part_every = |r: std::ops::Range<usize>, k: usize| {
-            let picks: Vec<usize> = r.clone().step_by(k.max(1)).filter(|i| !breaks.settling(*i)).collect();
-            let pick = |x: &[f64]| picks.iter().map(|i| x[*i]).collect::<Vec<f64>>();
-            let first = picks.first().copied().unwrap_or(r.start);
+            let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
             // The history's samples, which a delay reads before the part's own and a stateful
             // cause reads transformed with them (see `part::Lead`).
-            let lead: Vec<usize> = (warm_start(first)..first).step_by(k.max(1)).collect();
+            let lead: Vec<usize> = (warm_start(r.start)..r.start).step_by(k.max(1)).collect();
             let lead_of = |x: &[f64]| lead.iter().map(|i| x[*i]).collect::<Vec<f64>>();
-            // A piece after a break inside the range starts again at its first sample picked
-            // after the break, from the samples since the break.
-            let mut restarts: Vec<Restart> = Vec::new();
-            for b in breaks.inside(first..r.end) {
-                let at = picks.partition_point(|i| i < b);
-                if at < picks.len() && restarts.last().is_none_or(|last| last.at != at) {
-                    restarts.push(Restart { at, history_rad: d[warm_start(picks[at])..picks[at]].to_vec() });
-                }
-            }
             Part {
                 lead: crate::identify::part::Lead { t: lead_of(t), v: lead_of(v) },
                 warm: lead_of(d),
-                restarts,
+                restarts: Vec::new(),
                 t: pick(t),
                 d: pick(d),
                 v: pick(v),
                 tau: pick(tau),
                 // A pivot not given is none: the configured characteristic's own.
-                pivot: if pivot.is_empty() { vec![0.0; picks.len()] } else { pick(pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
-                rep: if rep.is_empty() { Vec::new() } else { picks.iter().map(|i| rep[*i]).collect() },
-                rate_edges: if edges.is_empty() { Vec::new() } else { picks.iter().map(|i| edges[*i]).collect() },
+                pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
+                rep: if rep.is_empty() { Vec::new() } else { rep[r.clone()].iter().step_by(k).copied().collect() },
+                rate_edges: if edges.is_empty() { Vec::new() } else { edges[r].iter().step_by(k).copied().collect() },
                 bin_width_s: spacing,
                 dt: spacing * k as f64,
             }
@@ -487,7 +469,7 @@ impl Read<'_> {
             kept.into_iter().map(part).reduce(|a, b| a.then(&b))
         };
         let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, at_rest, turns: self.turn_runs.clone(), after_breaks: breaks.said(t) })
+        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, at_rest, turns: self.turn_runs.clone() })
     }
 }
 

@@ -591,7 +591,5 @@ fn t_of_block_means(means: &[f64], kind: TestKind) -> BlockTest {
     BlockTest { blocks, kind, mean_nm2: m, t, critical: student_t((blocks - 1) as f64) }
 }
 
-mod stated;
-
 #[cfg(test)]
 mod tests;
