@@ -79,6 +79,9 @@ effects! {
     SpeedVibration => "speed_vibration",
     /// A mode rung by each reversal of the motion, decaying until the next.
     ReversalRinging => "reversal_ringing",
+    /// A load that follows a joint's position as a link's weight does, `G cos(q - q_G)`: what a
+    /// gravity model leaves of a joint's friction record (the deflection column a position).
+    GravityError => "gravity_error",
 }
 
 /// What an effect's torque depends on, for choosing what an experiment varies to tell two
@@ -129,7 +132,7 @@ impl Effect {
             Effect::StiffnessNonlinearity => &["cubic_nm_per_rad3"],
             Effect::Hysteresis => &["hysteresis"],
             Effect::DeadZone => &["dead_zone_rad", "dead_zone_ramp_rad"],
-            Effect::StribeckFriction | Effect::TimeDelay | Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => &[],
+            Effect::StribeckFriction | Effect::TimeDelay | Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging | Effect::GravityError => &[],
         }
     }
 
@@ -152,7 +155,7 @@ impl Effect {
             Effect::Hysteresis => &["hysteresis"],
             Effect::DeadZone => &["dead_zone_rad", "dead_zone_ramp_rad"],
             Effect::Vibration => &["vibration"],
-            Effect::StiffnessError | Effect::StribeckFriction | Effect::TimeDelay | Effect::SpeedVibration | Effect::ReversalRinging => &[],
+            Effect::StiffnessError | Effect::StribeckFriction | Effect::TimeDelay | Effect::SpeedVibration | Effect::ReversalRinging | Effect::GravityError => &[],
         }
     }
 
@@ -166,7 +169,7 @@ impl Effect {
     pub const fn dependence(self) -> Dependence {
         match self {
             Effect::ViscousFriction | Effect::CoulombFriction | Effect::StribeckFriction | Effect::TimeDelay => Dependence::Rate,
-            Effect::DeadZone | Effect::StiffnessNonlinearity | Effect::StiffnessError | Effect::SensorOffset => Dependence::Deflection,
+            Effect::DeadZone | Effect::StiffnessNonlinearity | Effect::StiffnessError | Effect::SensorOffset | Effect::GravityError => Dependence::Deflection,
             Effect::Hysteresis => Dependence::Stroke,
             Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => Dependence::Time,
         }

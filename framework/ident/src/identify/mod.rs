@@ -32,6 +32,7 @@ pub(crate) mod least_squares;
 pub mod experiment;
 mod friction_confound;
 mod friction_parts;
+mod held_at_stops;
 mod lag;
 mod numeric;
 mod parallel;
@@ -428,11 +429,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     let rmse_after = select::rmse(&after.errors);
     // Over every held-out sample as well, the stops and turns included (not through the
     // held-out cache: it knows a model by its terms, not by the samples it is scored on).
-    let at_rest = at_rest.map(|r| {
-        let every = prepare::scored_on_every_sample(p, whole);
-        let all = |s: &Spec| select::compute_held_out(&model, s, &every).map(|e| select::rmse(&e.errors));
-        prepare::AtRest { rmse_before_all_nm: all(&base), rmse_after_all_nm: all(&spec), ..r }
-    });
+    let at_rest = at_rest.map(|r| held_at_stops::over_every_sample(&model, p, whole, &base, &spec, r));
 
     let duration = p.train_duration_s + p.test.t[p.test.len() - 1] - p.test.t[0];
     // `fit` is the training part's (see `select::compute_held_out`); the parameters' errors are

@@ -69,9 +69,10 @@ pub(super) fn rest_sentence(r: Option<&jointctl_ident::identify::prepare::AtRest
             _ => "turns",
         };
         s + &format!(
-            " The figures below are over the samples that slide; over every held-out sample, {what} included: baseline {} Nm, extended {} Nm.",
+            " The figures below are over the samples that slide; over every held-out sample, {what} included: baseline {} Nm, extended {} Nm{}.",
             figure(r.rmse_before_all_nm),
-            figure(r.rmse_after_all_nm)
+            figure(r.rmse_after_all_nm),
+            r.held_nm.map_or(String::new(), |h| format!(" (the stops predicted holding {h:.3} Nm in the direction the joint last slid, fitted on the training part's stops)"))
         )
     })
 }

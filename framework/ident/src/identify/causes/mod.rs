@@ -12,6 +12,7 @@ pub use super::numeric::log_grid;
 mod coulomb_friction;
 mod reversals;
 mod dead_zone;
+mod gravity_error;
 mod hysteresis;
 mod reversal_ringing;
 mod sensor_offset;
@@ -28,6 +29,7 @@ mod refine;
 pub use coulomb_friction::CoulombFriction;
 pub use reversals::reversals;
 pub use dead_zone::DeadZone;
+pub use gravity_error::GravityError;
 pub use hysteresis::{Hysteresis, dahl_unit, dead_band, loop_unit};
 pub use reversal_ringing::ReversalRinging;
 pub use sensor_offset::SensorOffset;
@@ -75,6 +77,7 @@ pub fn cause_of(effect: Effect) -> Box<dyn CandidateCause> {
         Effect::Vibration => Box::new(Vibration),
         Effect::SpeedVibration => Box::new(SpeedVibration),
         Effect::ReversalRinging => Box::new(ReversalRinging),
+        Effect::GravityError => Box::new(GravityError),
     }
 }
 

@@ -48,6 +48,10 @@ pub struct AtRest {
     pub rmse_before_all_nm: Option<f64>,
     /// The extended model's, likewise [Nm].
     pub rmse_after_all_nm: Option<f64>,
+    /// The torque the stops hold in the direction the joint last slid [Nm], beyond what the
+    /// extended model predicts there: fitted on the training part's stops and used for the
+    /// held-out ones in `rmse_after_all_nm` (see `held_at_stops`).
+    pub held_nm: Option<f64>,
 }
 
 /// A stop lasts at least this many times as long as a turn would stay under the rest's rate
@@ -230,7 +234,7 @@ fn dithers(t: &[f64], d: &[f64], resolution_rad: f64) -> Vec<bool> {
 /// Which samples of `part` lie in one of `intervals` (in time order, apart: as [`stops`]
 /// finds them). A search per sample, not a scan of every interval: a long record with a stop
 /// at every stroke has thousands.
-fn within(part: &Part, intervals: &[(f64, f64)]) -> Vec<bool> {
+pub(crate) fn within(part: &Part, intervals: &[(f64, f64)]) -> Vec<bool> {
     part.t
         .iter()
         .map(|t| {
@@ -302,6 +306,7 @@ impl Prepared {
             turn_held_out_samples: out_test - rest_test,
             rmse_before_all_nm: None,
             rmse_after_all_nm: None,
+            held_nm: None,
         };
         Some((p, reading))
     }
