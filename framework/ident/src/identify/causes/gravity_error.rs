@@ -14,7 +14,7 @@
 //! the arm-joint records"). Over a stroke of `s` rad the columns span about `s^2 / 8` and
 //! `s^3 / 48`: a stroke of a tenth of a radian leaves them nothing the noise does not hide.
 //! Neither the observer nor the simulated plant has a term in a joint's position (their joints
-//! are springs): it writes no fragment. Test: `tests/gravity_beside_friction.rs`.
+//! are springs): it writes no fragment. Test: `tests/arm_joint_friction.rs`.
 
 use super::{CandidateCause, InputSet, SearchContext, Samples};
 use jointctl_models::effect::Effect;
