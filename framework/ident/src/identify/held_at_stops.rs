@@ -24,17 +24,19 @@ pub(crate) fn over_every_sample(model: &Model, sliding: &Prepared, whole: &Prepa
     if sliding.train.rate_edges.is_empty() {
         train.rate_edges = Vec::new();
     }
-    let (rest_train, rest_test) = (prepare::within(&train, &whole.stops), prepare::within(&every.test, &whole.stops));
-    let (sign_train, sign_test) = (last_motion(&train, &rest_train), last_motion(&every.test, &rest_test));
+    // The stop each sample is in, if any.
+    let stop = |part: &Part| -> Vec<Option<usize>> { part.t.iter().map(|t| prepare::interval_of(&whole.stops, *t)).collect() };
+    let (stop_train, stop_test) = (stop(&train), stop(&every.test));
+    let (sign_train, sign_test) = (last_motion(&train, &stop_train), last_motion(&every.test, &stop_test));
     let score = |s: &Spec| -> Option<(f64, f64)> {
         let held = select::compute_held_out(model, s, &every)?;
         let fitted = model.predict(s, &held.fit, &train);
-        let at_rest: Vec<(f64, f64, usize)> = (0..train.len()).filter(|i| rest_train[*i]).map(|i| (train.tau[i] - fitted.torque_nm[i], sign_train[i], stop_of(&whole.stops, train.t[i]))).collect();
+        let at_rest: Vec<(f64, f64, usize)> = (0..train.len()).filter_map(|i| stop_train[i].map(|k| (train.tau[i] - fitted.torque_nm[i], sign_train[i], k))).collect();
         let holds_nm = held_torque_nm(&at_rest);
         let errors: Vec<f64> = (0..held.errors.len())
             .map(|i| {
                 let e = held.residual_nm[i];
-                if rest_test[i] { held.errors[i] - e * e + (e - holds_nm * sign_test[i]).powi(2) } else { held.errors[i] }
+                if stop_test[i].is_some() { held.errors[i] - e * e + (e - holds_nm * sign_test[i]).powi(2) } else { held.errors[i] }
             })
             .collect();
         Some((select::rmse(&errors), holds_nm))
@@ -72,20 +74,15 @@ fn held_torque_nm(at_rest: &[(f64, f64, usize)]) -> f64 {
     if predicts(first, second) && predicts(second, first) { fit(at_rest) } else { 0.0 }
 }
 
-/// The index of the stop (of `stops`, in time order) that holds time `t` [s].
-fn stop_of(stops: &[(f64, f64)], t: f64) -> usize {
-    stops.partition_point(|(a, _)| *a <= t).saturating_sub(1)
-}
-
 /// The sign of the rate each sample of `part` last slid at (0 before the first sample that
 /// slides): a stop's samples take the direction the joint arrived in.
-fn last_motion(part: &Part, at_rest: &[bool]) -> Vec<f64> {
+fn last_motion(part: &Part, at_rest: &[Option<usize>]) -> Vec<f64> {
     let mut sign = 0.0;
     part.v
         .iter()
         .zip(at_rest)
         .map(|(v, rest)| {
-            if !rest && *v != 0.0 {
+            if rest.is_none() && *v != 0.0 {
                 sign = v.signum();
             }
             sign

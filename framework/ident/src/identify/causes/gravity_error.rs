@@ -45,13 +45,10 @@ impl CandidateCause for GravityError {
         vec![s.elastic_rad.iter().map(|e| e.cos() - 1.0).collect(), s.elastic_rad.iter().map(|e| e.sin() - e).collect()]
     }
     fn report(&self, _: &[f64], _: &[String], c: &[f64]) -> BTreeMap<String, f64> {
-        let (a, b) = (c[0], c[1]);
-        BTreeMap::from([
-            ("gravity_cos_nm".into(), a),
-            ("gravity_sin_nm".into(), b),
-            ("gravity_amplitude_nm".into(), a.hypot(b)),
-            ("gravity_peak_from_mean_rad".into(), b.atan2(a)),
-        ])
+        let mut out: BTreeMap<String, f64> = self.coefficient_names().into_iter().zip(c.iter().copied()).collect();
+        out.insert("gravity_amplitude_nm".into(), c[0].hypot(c[1]));
+        out.insert("gravity_peak_from_mean_rad".into(), c[1].atan2(c[0]));
+        out
     }
 }
 

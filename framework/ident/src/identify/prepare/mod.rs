@@ -21,7 +21,7 @@ mod window;
 
 pub use noise::noise_floor;
 pub use rest::{AtRest, REST_S};
-pub(crate) use rest::{scored_on_every_sample, within};
+pub(crate) use rest::{interval_of, scored_on_every_sample};
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
 pub use glitches::MAX_GLITCH_SAMPLES;
 pub(crate) use spring::spring_share;

@@ -234,14 +234,14 @@ fn dithers(t: &[f64], d: &[f64], resolution_rad: f64) -> Vec<bool> {
 /// Which samples of `part` lie in one of `intervals` (in time order, apart: as [`stops`]
 /// finds them). A search per sample, not a scan of every interval: a long record with a stop
 /// at every stroke has thousands.
-pub(crate) fn within(part: &Part, intervals: &[(f64, f64)]) -> Vec<bool> {
-    part.t
-        .iter()
-        .map(|t| {
-            let k = intervals.partition_point(|(a, _)| *a <= *t);
-            k > 0 && *t <= intervals[k - 1].1
-        })
-        .collect()
+fn within(part: &Part, intervals: &[(f64, f64)]) -> Vec<bool> {
+    part.t.iter().map(|t| interval_of(intervals, *t).is_some()).collect()
+}
+
+/// Which of `intervals` (in time order, apart) holds time `t`, if one does.
+pub(crate) fn interval_of(intervals: &[(f64, f64)], t: f64) -> Option<usize> {
+    let k = intervals.partition_point(|(a, _)| *a <= t);
+    (k > 0 && t <= intervals[k - 1].1).then(|| k - 1)
 }
 
 /// `part` without the samples flagged in `drop`.
