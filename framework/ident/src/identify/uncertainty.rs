@@ -13,7 +13,7 @@ use super::numeric::format_value;
 use super::prepare::Prepared;
 use super::least_squares::{ar1_inflated_variance, dot};
 use super::parallel::parallel_map;
-use super::significance::{Z, blocks_for};
+use super::significance::{Z, blocks_for, is_structured};
 
 /// The relative step of a numerical derivative: small against every parameter's scale (a
 /// frequency's phase over a long record turns with `t * df`), large against rounding.
@@ -45,6 +45,12 @@ impl TermCovariance {
     /// with its non-linear parameters: the larger of the classical and the block error.
     pub(crate) fn coefficient_errors(&self) -> Vec<f64> {
         (0..self.at.len()).filter(|e| self.nonlinear[*e].is_none()).map(|e| self.classical[(e, e)].max(self.blocks[(e, e)]).sqrt()).collect()
+    }
+
+    /// The block errors alone of the term's own coefficients: what they move from one stretch of
+    /// the training part to the next (see [`untold_from_zero`]).
+    fn coefficient_block_errors(&self) -> Vec<f64> {
+        (0..self.at.len()).filter(|e| self.nonlinear[*e].is_none()).map(|e| self.blocks[(e, e)].sqrt()).collect()
     }
 }
 
@@ -375,8 +381,9 @@ pub(crate) fn uncertainty_of(cause: &dyn CandidateCause, params: &[f64], names: 
 /// (two-sided 0.2 %); for a pair (a vibration's sine and cosine) a length that does not depend
 /// on how the pair splits it. The errors are those of the covariance the reported uncertainty
 /// comes from (`uncertainty::term_covariance`): joint with the term's non-linear parameters
-/// where the fit gives them, the larger of the classical and the block error, without the
-/// search's distance from the optimum that the report adds. A cause whose held-out gain is large
+/// where the fit gives them, the larger of the classical and the block error, or, where the
+/// training residual is structure (`significance::is_structured`), the block error alone,
+/// without the search's distance from the optimum that the report adds. A cause whose held-out gain is large
 /// and consistent but passes no test (the weakest evidence the rule accepts, see
 /// `significance`) is held to it, and so is one that asks for it whatever its evidence
 /// (`CandidateCause::held_to_its_coefficients`, an offset's drift): a coefficient that moves from one stretch of the training
@@ -397,7 +404,15 @@ pub(crate) fn untold_from_zero(model: &Model, spec: &Spec, full: &HeldOut, jacob
     if span.is_empty() || !full.fit.segment_coefs[i].is_empty() {
         return None;
     }
-    let errors = term_covariance(jacobian, spec, &full.fit, i)?.coefficient_errors();
+    let covariance = term_covariance(jacobian, spec, &full.fit, i)?;
+    // Where the training residual is structure, the classical error's premise (the residual
+    // is noise, its correlation AR(1)) fails: a smooth misfit sampled fast reads as a lag-1
+    // correlation near 1, clamped at 0.99, a variance inflated 199 times whatever the
+    // coefficient does, so the error grows with the sampling rate. What the rule asks, whether
+    // the coefficient holds from one stretch of the training part to the next, is the block
+    // error's measure, and it alone decides there.
+    let mse = dot(&jacobian.residual, &jacobian.residual) / jacobian.residual.len().max(1) as f64;
+    let errors = if is_structured(mse, p.noise_floor_nm.powi(2)) { covariance.coefficient_block_errors() } else { covariance.coefficient_errors() };
     let coefs = &full.fit.coefs[span];
     let length: f64 = coefs.iter().zip(&errors).map(|(c, e)| if *e > 0.0 { (c / e).powi(2) } else if *c != 0.0 { f64::INFINITY } else { 0.0 }).sum();
     let names = model.causes[cause].coefficient_names();

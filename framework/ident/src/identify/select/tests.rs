@@ -34,11 +34,16 @@ fn lagging_at_20_hz() -> crate::csv::Data {
 /// 60 s at 200 Hz of a 100 Nm/rad spring moved by a 0.4 Hz sine of 0.05 rad (14-bit), 0.01 Nm
 /// of noise, and `extra(t)` [Nm] added to the torque.
 fn spring_with(extra: impl Fn(f64) -> f64) -> crate::csv::Data {
+    spring_sampled(12_000, 5e-3, extra)
+}
+
+/// `samples` of the spring of [`spring_with`] every `dt` [s].
+fn spring_sampled(samples: usize, dt: f64, extra: impl Fn(f64) -> f64) -> crate::csv::Data {
     let mut rng = jointctl_test_support::XorShift64::new(0x5851_f42d_4c95_7f2d);
     let q = std::f64::consts::TAU / 16384.0;
     let (mut t_s, mut phi, mut tau) = (Vec::new(), Vec::new(), Vec::new());
-    for i in 0..12_000 {
-        let t = i as f64 * 5e-3;
+    for i in 0..samples {
+        let t = i as f64 * dt;
         let x = 0.05 * (std::f64::consts::TAU * 0.4 * t).sin();
         t_s.push(t);
         phi.push((x / q).round() * q);
@@ -55,22 +60,41 @@ fn a_coefficient_that_wanders_over_the_training_part_is_not_told_from_zero() {
     // 0.014 +- 0.005 Nm, the loop taking what the filter left in one stretch and not in the
     // next. Here an offset beside a torque that wanders (+-0.05 Nm over 6 s, no mean) is not
     // told from zero; a steady offset of 0.1 Nm beside the same wander is.
+    let wander = |t: f64| 0.05 * (std::f64::consts::TAU * t / 6.0).sin();
+    let why = offset_untold(&spring_with(wander)).expect("a wandering torque's offset told from zero");
+    assert!(why.contains("offset_nm") && why.ends_with("is not told from zero"), "{why}");
+    assert_eq!(offset_untold(&spring_with(|t| 0.1 + wander(t))), None);
+}
+
+/// Why an offset fitted beside the thesis' line on `data` is not told from zero, if it is not.
+fn offset_untold(data: &crate::csv::Data) -> Option<String> {
     let builtin = causes::builtin();
     let all: Vec<&dyn CandidateCause> = builtin.iter().map(|c| c.as_ref()).collect();
     let baseline = BaselineModel::Polynomial(1);
     let offset = all.iter().position(|c| c.effect() == Some(Effect::SensorOffset)).unwrap();
     let spec = Spec { terms: vec![Term { cause: offset, params: Vec::new(), grids: Vec::new(), baseline: false }] };
-    let wander = |t: f64| 0.05 * (std::f64::consts::TAU * t / 6.0).sin();
-    let untold = |extra: &dyn Fn(f64) -> f64| {
-        let p = prepare::prepare(&spring_with(extra), 0.7, Window::Last).unwrap();
-        let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.record_middle_s, friction_record: false, causes: &all, held_out: Default::default(), columns: Default::default() };
-        let full = held_out_errors(&model, &spec, &p).unwrap();
-        let jacobian = Jacobian::new(&model, &spec, &full.fit, &p.train);
-        untold_from_zero(&model, &spec, &full, &jacobian, offset, &p)
-    };
-    let why = untold(&wander).expect("a wandering torque's offset told from zero");
-    assert!(why.contains("offset_nm") && why.ends_with("is not told from zero"), "{why}");
-    assert_eq!(untold(&|t| 0.1 + wander(t)), None);
+    let p = prepare::prepare(data, 0.7, Window::Last).unwrap();
+    let model = Model { baseline: &baseline, centre_rad: 0.0, middle_s: p.record_middle_s, friction_record: false, causes: &all, held_out: Default::default(), columns: Default::default() };
+    let full = held_out_errors(&model, &spec, &p).unwrap();
+    let jacobian = Jacobian::new(&model, &spec, &full.fit, &p.train);
+    untold_from_zero(&model, &spec, &full, &jacobian, offset, &p)
+}
+
+#[test]
+fn a_steady_coefficient_beside_a_smooth_misfit_at_a_high_rate_is_told_from_zero() {
+    // Finding (the rig generator's seed 5, device 2, one repetition at 550 Hz: a Maxwell-slip
+    // loop of 0.26 Nm and a cubic beside a 1.4 Nm offset): Dahl's loop took half of what the
+    // offset left over the held-out part, consistently over its parts, and was refused as
+    // not told from zero on the training part, limit 0.318 +- 0.205 Nm. That error was the
+    // classical one: the residual's lag-1 correlation (a smooth misfit sampled fast, clamped
+    // at 0.99) inflated the noise's variance 199 times, an error that grows with the sampling
+    // rate whatever the coefficient does; the block error, what the coefficient moves from
+    // one stretch of the training part to the next, was 0.100. Here an offset of 0.02 Nm
+    // beside a misfit that repeats every cycle (a quadratic no cause models, 0.5 Nm) over 200 s
+    // at 1 kHz is told from zero; the wander of the test above is still not.
+    // The misfit: the sine's square less its mean, 0.5 Nm at twice its frequency.
+    let data = spring_sampled(200_000, 1e-3, |t| 0.02 - 0.5 * (std::f64::consts::TAU * 0.8 * t).cos());
+    assert_eq!(offset_untold(&data), None);
 }
 
 #[test]

@@ -307,10 +307,15 @@ pub fn judge(reduced: &[f64], full: &[f64], test: BlockTest, noise_nm2: f64) -> 
     let bettered_excess: f64 = informative.iter().filter(|(_, g)| *g >= relevant_nm2).map(|(e, _)| e).sum();
     let weighed = bettered_excess > MOST_BY_EXCESS * informative.iter().map(|(e, _)| e).sum::<f64>();
     let most_parts_better = better >= 2 && (2 * better > informative.len() || weighed);
-    let structured = excess >= noise_nm2;
+    let structured = is_structured(mse_reduced, noise_nm2);
     let large = gain >= LARGE_SHARE_OF_EXCESS * excess && gain > 0.0;
     let consistent = structured && worse_allowed && most_parts_better && large;
     Judgement { test, gain_nm2: gain, relevant_nm2, consistent, structured, large, carried: None }
+}
+
+/// Whether an MSE is structure, not noise: the floor's variance again above it (1.4x its RMSE).
+pub(crate) fn is_structured(mse_nm2: f64, noise_nm2: f64) -> bool {
+    mse_nm2 - noise_nm2 >= noise_nm2
 }
 
 /// The two tests.
