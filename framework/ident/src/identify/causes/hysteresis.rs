@@ -171,11 +171,12 @@ fn scale_grid(c: &SearchContext) -> Vec<f64> {
     below
 }
 
-/// The narrowest pre-sliding a friction's loop is searched at [rad] (an assumption: the
-/// narrowest in this project's friction records and generators is 0.4 mrad, `0.8 Nm` over
-/// bristles of `2000 Nm/rad` in `tests/arm_joint_friction.rs`; the rig generator's arm joints
-/// 0.7 mrad; a quarter of the first).
-pub const PRESLIDING_SCALE_RAD: f64 = 1e-4;
+/// The narrowest pre-sliding a friction's loop is searched at [rad] (an assumption: this
+/// project's friction records and generators pre-slide over 0.28-0.7 mrad, the blind
+/// generator's seed 4's `067` the narrowest, `tests/arm_joint_friction.rs` 0.4, the rig
+/// generator's arm joints 0.7; a bit over a third of the narrowest). The grid's last value
+/// at or above it is 0.10-0.15 mrad (its ratio is 1.47).
+pub(crate) const PRESLIDING_SCALE_RAD: f64 = 1e-4;
 
 /// The grid's floor below [`smallest_scale`]'s thousandth of the amplitude: a friction's
 /// pre-sliding (a Dahl loop's scale is the Coulomb level over the bristles' stiffness) is the
@@ -184,8 +185,11 @@ pub const PRESLIDING_SCALE_RAD: f64 = 1e-4;
 /// generator's seed 3, `a2-sine-v2`, a sine over 1.7 rad: an offset and a delay of 173 ms named,
 /// 0.120 Nm held out, 1.46 times the plain least-squares reference's, whose Dahl state at
 /// 0.58 mrad, the offset beside it, left 0.062).
-/// So the grid goes on down to [`PRESLIDING_SCALE_RAD`] where a thousandth of the amplitude is
-/// coarser (an amplitude above 0.1 rad: a spring's deflection keeps its grid), to no less than
+/// So the grid goes on down towards [`PRESLIDING_SCALE_RAD`] where a thousandth of the amplitude
+/// (the largest deflection's size, on a friction record the largest position's) is coarser:
+/// from amplitudes of about 0.15 rad on, the first value below a thousandth being 1.47 times
+/// finer. A spring's deflection up to that keeps its grid (the rig generator's springs); one
+/// deflected further gets the finer values too (no spring record of the blind suites moved). It stops at no less than
 /// the floors of [`smallest_scale`] (a step of the reading, a quarter of the first step after
 /// a turn) nor than a quarter of a sample's typical travel ([`typical_travel_rad`]): a loop
 /// that closes between two samples is, to the data, a friction on the sign of the last step,
