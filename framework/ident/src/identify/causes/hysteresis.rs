@@ -151,69 +151,6 @@ fn smallest_scale(c: &SearchContext) -> f64 {
     (a * 1e-3).max(c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(a / 30.0))
 }
 
-/// The deflection scales searched: 16 from [`smallest_scale`] to a third of the amplitude and,
-/// at the same spacing, on below it down to [`finest_presliding_scale`]. Up to a third of the
-/// amplitude: an assumption, a loop that has not reached its limit within a third of the stroke
-/// is, on a sine, a phase lag that viscous friction explains as well; such a fit names the
-/// wrong cause.
-fn scale_grid(c: &SearchContext) -> Vec<f64> {
-    let mut grid = log_grid(smallest_scale(c), c.excitation.amplitude_rad / 3.0, 16);
-    let ratio = grid[1] / grid[0];
-    let floor = finest_presliding_scale(c);
-    let mut below = Vec::new();
-    let mut scale = grid[0] / ratio;
-    while ratio > 1.0 && scale >= floor * (1.0 - 1e-12) {
-        below.push(scale);
-        scale /= ratio;
-    }
-    below.reverse();
-    below.append(&mut grid);
-    below
-}
-
-/// The narrowest pre-sliding a friction's loop is searched at [rad] (an assumption: this
-/// project's friction records and generators pre-slide over 0.28-0.7 mrad, the blind
-/// generator's seed 4's `067` the narrowest, `tests/arm_joint_friction.rs` 0.4, the rig
-/// generator's arm joints 0.7; a bit over a third of the narrowest). The grid's last value
-/// at or above it is 0.10-0.15 mrad (its ratio is 1.47).
-pub(crate) const PRESLIDING_SCALE_RAD: f64 = 1e-4;
-
-/// The grid's floor below [`smallest_scale`]'s thousandth of the amplitude: a friction's
-/// pre-sliding (a Dahl loop's scale is the Coulomb level over the bristles' stiffness) is the
-/// contact's, not the stroke's. On a joint's position over a range of 1-1.7 rad a thousandth of
-/// it is 1-1.7 mrad, and the loop took a coarser scale or a time delay stood in for it (the rig
-/// generator's seed 3, `a2-sine-v2`, a sine over 1.7 rad: an offset and a delay of 173 ms named,
-/// 0.120 Nm held out, 1.46 times the plain least-squares reference's, whose Dahl state at
-/// 0.58 mrad, the offset beside it, left 0.062).
-/// So the grid goes on down towards [`PRESLIDING_SCALE_RAD`] where a thousandth of the amplitude
-/// (the largest deflection's size, on a friction record the largest position's) is coarser:
-/// from amplitudes of about 0.15 rad on, the first value below a thousandth being 1.47 times
-/// finer. A spring's deflection up to that keeps its grid (the rig generator's springs); one
-/// deflected further gets the finer values too (no spring record of the blind suites moved). It stops at no less than
-/// the floors of [`smallest_scale`] (a step of the reading, a quarter of the first step after
-/// a turn) nor than a quarter of a sample's typical travel ([`typical_travel_rad`]): a loop
-/// that closes between two samples is, to the data, a friction on the sign of the last step,
-/// which the baseline's friction is already (on the shared real-like l3-case008, 20 Hz bins of a
-/// LuGre friction, a loop of 0.5 mrad was taken beside the friction and its viscous part read as
-/// eq. 3.5's arctan: the damping was no longer named).
-fn finest_presliding_scale(c: &SearchContext) -> f64 {
-    let a = c.excitation.amplitude_rad;
-    let floors = c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(a / 30.0);
-    (a * 1e-3).min(PRESLIDING_SCALE_RAD).max(floors).max(typical_travel_rad(c) / TURN_STEP_IN_SCALES)
-}
-
-/// The median deflection a sample moves over [rad]: the rate's size times the step, over the
-/// full-rate stretch; infinite where there is none.
-fn typical_travel_rad(c: &SearchContext) -> f64 {
-    let f = &c.full_rate;
-    let mut travel: Vec<f64> = f.t_s.windows(2).zip(f.velocity_rad_per_s).map(|(t, v)| (t[1] - t[0]).abs() * v.abs()).filter(|x| x.is_finite()).collect();
-    if travel.is_empty() {
-        return f64::INFINITY;
-    }
-    let middle = travel.len() / 2;
-    *travel.select_nth_unstable_by(middle, f64::total_cmp).1
-}
-
 /// A Dahl state is within `exp(-4)`, 2 %, of its limit four deflection scales after a turn: a
 /// loop of a quarter of the log's first step after a turn has closed at that sample, a step in
 /// the sign of the motion to the data (an assumption on the closeness: the false loops lay at
@@ -235,6 +172,10 @@ impl CandidateCause for Hysteresis {
         vec!["limit_nm".into()]
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
+        // Deflection scales up to a third of the amplitude (an assumption: a loop that has not
+        // reached its limit within a third of the stroke is, on a sine, a phase lag that viscous
+        // friction explains as well; such a fit names the wrong cause).
+        let a = c.excitation.amplitude_rad;
         let scatter = c.excitation.deflection_scatter_rad;
         let mut band: Vec<f64> = if scatter > 0.0 && scatter.is_finite() { DEAD_BAND_IN_SCATTER.iter().map(|k| k * scatter).collect() } else { vec![0.0] };
         // A record read as bin averages: the loop at each sample's mean deflection, or its mean
@@ -247,7 +188,7 @@ impl CandidateCause for Hysteresis {
             band.push(OVER_INTERVAL);
         }
         vec![
-            Parameter { name: "lambda_rad".into(), grid: scale_grid(c), refine: Refine::Between },
+            Parameter { name: "lambda_rad".into(), grid: log_grid(smallest_scale(c), a / 3.0, 16), refine: Refine::Between },
             Parameter { name: "input_dead_band_rad".into(), grid: band, refine: Refine::Nested },
             Parameter { name: "shape".into(), grid: SHAPES.to_vec(), refine: Refine::NestedDecimated },
         ]
@@ -457,30 +398,6 @@ mod tests {
         let full_rate = FullRate { t_s: &[], velocity_rad_per_s: &[], residual_nm: &[] };
         let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, RestSamples::default(), true, false);
         Hysteresis.parameters(&ctx)[0].grid.clone()
-    }
-
-    /// The grid on a joint's range of 1.2 rad (18-bit reading), its motion sampled at `dt_s` at
-    /// 0.2 rad/s.
-    fn scales_on_a_joints_range(dt_s: f64) -> Vec<f64> {
-        let excitation = Excitation { amplitude_rad: 1.2, frequency_hz: 0.05, sample_period_s: dt_s, deflection_scatter_rad: 0.0, resolution_rad: 2.4e-5, quantum_rad: 2.4e-5, turn_step_rad: 2.4e-5, bin_width_s: 0.0 };
-        let t: Vec<f64> = (0..1000).map(|i| i as f64 * dt_s).collect();
-        let v = vec![0.2; t.len()];
-        let full_rate = FullRate { t_s: &t, velocity_rad_per_s: &v, residual_nm: &[] };
-        let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, RestSamples::default(), true, true);
-        Hysteresis.parameters(&ctx)[0].grid.clone()
-    }
-
-    #[test]
-    fn a_joints_presliding_is_searched_below_a_thousandth_of_its_range_where_the_samples_resolve_it() {
-        let smallest = |grid: &[f64]| grid.iter().copied().fold(f64::INFINITY, f64::min);
-        // At 1 kHz a sample moves 0.2 mrad: the grid goes on down to 0.1 mrad at its spacing.
-        let fine = scales_on_a_joints_range(1e-3);
-        assert!(fine.len() > 16 && smallest(&fine) >= super::PRESLIDING_SCALE_RAD && smallest(&fine) < 1.5 * super::PRESLIDING_SCALE_RAD, "{fine:?}");
-        assert!(fine.windows(2).all(|w| (w[1] / w[0] / (fine[1] / fine[0]) - 1.0).abs() < 1e-9), "{fine:?}");
-        // At 20 Hz it moves 10 mrad: a loop narrower than a thousandth of the range closes
-        // between two samples; the grid stays at its 16.
-        let slow = scales_on_a_joints_range(0.05);
-        assert!(slow.len() == 16 && (smallest(&slow) / 1.2e-3 - 1.0).abs() < 1e-9, "{slow:?}");
     }
 
     #[test]
