@@ -149,7 +149,11 @@ fn a_friction_records_offset_is_not_taken_by_a_cubic_of_the_positions_arbitrary_
     // stroke far from zero is nearly a constant and a line. Both are now about the same mean.
     // Here, this file's LuGre friction moved by 0.06-0.15 rad about 1.5 rad with a 0.5 Nm
     // offset (before: a cubic named instead of the offset on 2 of these 4 seeds), and the same
-    // without the offset (nothing named).
+    // without the offset (neither an offset nor a cubic; the record's own viscous friction, 0.2
+    // Nm s/rad, where it is named, within 25 %: since the pre-sliding is searched at its own
+    // scale with LuGre's parts, seed 1 names it at 0.197, 0.0122 Nm held out, where before
+    // nothing was named, a loop of 233 Nm/rad for the bristles' 900 and 0.0502 Nm left, five
+    // times the noise).
     for seed in 0..4u64 {
         let report = identify(&lugre_record_about(0.2, 0.5, 1.5, 0.3, 0x51ed_270b_a1c3_9f47 ^ (100 + seed)), &IdentifyOptions::default()).unwrap();
         let named: Vec<(&str, f64)> = report.causes.iter().map(|c| (c.effect.as_str(), c.params.get("offset_nm").copied().unwrap_or(f64::NAN))).collect();
@@ -157,7 +161,28 @@ fn a_friction_records_offset_is_not_taken_by_a_cubic_of_the_positions_arbitrary_
     }
     for seed in 0..2u64 {
         let report = identify(&lugre_record_about(0.2, 0.0, 1.5, 0.3, 0x51ed_270b_a1c3_9f47 ^ (100 + seed)), &IdentifyOptions::default()).unwrap();
-        let named: Vec<&str> = report.causes.iter().map(|c| c.effect.as_str()).collect();
-        assert!(named.is_empty(), "seed {seed} without an offset: {named:?}");
+        let named: Vec<(&str, f64)> = report.causes.iter().map(|c| (c.effect.as_str(), c.params.get("damping_nms_per_rad").copied().unwrap_or(f64::NAN))).collect();
+        assert!(named.iter().all(|(e, b)| *e == "viscous_friction" && (b / 0.2 - 1.0).abs() < 0.25), "seed {seed} without an offset: {named:?}");
     }
+}
+
+#[test]
+fn a_friction_records_stribeck_dip_is_read_in_the_presliding_loop_near_lugres() {
+    // LuGre's Stribeck curve acts through the bristles (their deflection tends to g(v) /
+    // sigma0): on this file's records the joint moves slower than the Stribeck speed (0.03
+    // rad/s) over about 0.1 mrad after each turn, inside the pre-sliding (0.56 mrad). Added to
+    // eq. 3.5's friction on the rate, the dip read 0.06-0.08 Nm at 0.10-0.16 rad/s on 10 of
+    // these 16 records (and none on the other 6), half LuGre's height at 3.5-5 times its speed;
+    // read in the loop (`identify::presliding`), 12 of 16 within a factor 2 of the height
+    // (0.15 Nm) and 1.5 of the speed. Held to 10 of 16.
+    let mut near = Vec::new();
+    for b in [0.4, 1.2] {
+        for k in 0..8u64 {
+            let report = identify(&lugre_record(b, 0x51ed_270b_a1c3_9f47 ^ (200 + k)), &IdentifyOptions::default()).unwrap();
+            let dip = report.no_spring.as_ref().map(|n| n.stribeck.clone()).unwrap_or_default();
+            let (size, speed) = (dip.get("stribeck_nm").copied().unwrap_or(0.0), dip.get("stribeck_speed_rad_per_s").copied().unwrap_or(0.0));
+            near.push((b, k, size, speed, (0.075..=0.3).contains(&size) && (0.02..=0.045).contains(&speed)));
+        }
+    }
+    assert!(near.iter().filter(|r| r.4).count() >= 10, "{near:?}");
 }

@@ -5,8 +5,9 @@
 //! eight records of the blind generator a delay of -2 to -20 ms was named beside the loop. A lead
 //! beside a loop is now read again as the loop's pre-sliding damping, `F_c (u + tau_d du/dt)`
 //! (`presliding_damping_s`, `sigma1 = sigma tau_d`; `identify::presliding`). The finding's own
-//! records check that; this file's own LuGre records, on which no lead was named before, check
-//! that nothing else changes: the damping is looked for only in place of a lead.
+//! records check that; this file's own LuGre records (a spring's), on which no lead was named
+//! before, check that nothing else changes: beside a spring the damping is looked for only in
+//! place of a lead (on a friction record beside the loop alone too, `tests/friction_record.rs`).
 
 use jointctl_ident::identify::{IdentifyOptions, identify};
 

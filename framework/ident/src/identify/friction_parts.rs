@@ -66,13 +66,21 @@ pub struct NoSpring {
 pub(crate) fn no_spring(p: &Prepared, baseline: &BaselineModel, found: &mut Vec<Cause>) -> Option<NoSpring> {
     reads_as_friction(p.spring_share, baseline).then(|| {
         let mut take = |effect: Effect| found.iter().position(|c| c.effect == effect.name()).map(|i| found.remove(i).params);
-        let [presliding, stribeck, lag] = FRICTION_PARTS.map(&mut take);
+        let [mut presliding, mut stribeck, lag] = FRICTION_PARTS.map(&mut take);
+        // A Stribeck curve in the loop (`identify::presliding`) is the friction's dip, read
+        // through the bristles' state instead of added on the rate; beside a dip added on the
+        // rate it stays with the loop's parameters.
+        let in_the_loop = presliding.as_mut().filter(|_| stribeck.is_none()).map(|loop_params| STRIBECK_KEYS.map(|k| loop_params.remove(k).map(|v| (k.to_string(), v)))).filter(|[a, b]| a.is_some() && b.is_some());
+        let where_dip = if in_the_loop.is_some() { " (in the pre-sliding's state, as LuGre's bristles hold it)" } else { "" };
+        if let Some(keys) = in_the_loop {
+            stribeck = Some(keys.into_iter().flatten().collect());
+        }
         let note = format!(
             "no spring: a line in the deflection explains {:.1} % of the torque's variance, of the whole or of what the friction's sign and a line in the rate leave (below {:.0} %), so the deflection column is read as a joint position and the torque as friction; {}{}{}",
             100.0 * p.spring_share,
             100.0 * NO_SPRING_SHARE,
             presliding.as_ref().map_or("no Dahl pre-sliding found".into(), |c| format!("the Dahl loop found is the friction's pre-sliding ({}), not hysteresis", listed(c))),
-            stribeck.as_ref().map_or(String::new(), |c| format!("; its Stribeck dip: {}", listed(c))),
+            stribeck.as_ref().map_or(String::new(), |c| format!("; its Stribeck dip{where_dip}: {}", listed(c))),
             lag.as_ref().map_or(String::new(), |c| format!("; a lag between torque and position ({}), not told apart from the friction's own transition after each reversal", listed(c))),
         );
         NoSpring { deflection_share: p.spring_share, presliding: presliding.unwrap_or_default(), stribeck: stribeck.unwrap_or_default(), lag: lag.unwrap_or_default(), note }
@@ -93,6 +101,10 @@ pub(crate) fn friction_dip(p: &Prepared, baseline: &BaselineModel, found: &mut V
             FrictionDip { params: dip.params, uncertainty: dip.uncertainty, rmse_gain: dip.rmse_gain, evidence: dip.evidence, note }
         })
 }
+
+/// The keys of a Stribeck dip, as the `stribeck_friction` candidate and a loop with the curve
+/// in it report it.
+const STRIBECK_KEYS: [&str; 2] = ["stribeck_nm", "stribeck_speed_rad_per_s"];
 
 /// `name = value, ...` of a part's parameters, for its sentence.
 fn listed(params: &BTreeMap<String, f64>) -> String {

@@ -19,18 +19,60 @@ use super::select;
 /// sample of `whole` (the record with its stops), each fitted on `sliding`'s training part and
 /// its held stops' torque on `whole`'s, and that torque for the extended model.
 pub(crate) fn over_every_sample(model: &Model, sliding: &Prepared, whole: &Prepared, base: &Spec, spec: &Spec, reading: AtRest) -> AtRest {
-    let every = prepare::scored_on_every_sample(sliding, whole);
-    let mut train = whole.train.clone();
-    if sliding.train.rate_edges.is_empty() {
-        train.rate_edges = Vec::new();
+    let scorer = Scorer::new(sliding, whole);
+    let (before, after) = (scorer.score(model, base), scorer.score(model, spec));
+    AtRest { rmse_before_all_nm: before.map(|b| b.0), rmse_after_all_nm: after.map(|a| a.0), held_nm: after.map(|a| a.1), ..reading }
+}
+
+/// A model's held-out RMSE over every held-out sample of a record with stops, with the torque
+/// its stops hold fitted on the training part's (see [`over_every_sample`]).
+pub(crate) struct Scorer {
+    every: Prepared,
+    train: Part,
+    stop_test: Vec<Option<usize>>,
+    stop_train: Vec<Option<usize>>,
+    sign_train: Vec<f64>,
+    sign_test: Vec<f64>,
+    /// Whether each held-out sample is in a turn.
+    turn_test: Vec<bool>,
+}
+
+impl Scorer {
+    /// The scorer of `sliding`'s models over every held-out sample of `whole`.
+    pub(crate) fn new(sliding: &Prepared, whole: &Prepared) -> Scorer {
+        let every = prepare::scored_on_every_sample(sliding, whole);
+        let mut train = whole.train.clone();
+        if sliding.train.rate_edges.is_empty() {
+            train.rate_edges = Vec::new();
+        }
+        // The stop each sample is in, if any.
+        let stop = |part: &Part| -> Vec<Option<usize>> { part.t.iter().map(|t| prepare::interval_of(&whole.stops, *t)).collect() };
+        let (stop_train, stop_test) = (stop(&train), stop(&every.test));
+        let (sign_train, sign_test) = (last_motion(&train, &stop_train), last_motion(&every.test, &stop_test));
+        let turn_test = every.test.t.iter().map(|t| prepare::interval_of(&whole.turns, *t).is_some()).collect();
+        Scorer { every, train, stop_test, stop_train, sign_train, sign_test, turn_test }
     }
-    // The stop each sample is in, if any.
-    let stop = |part: &Part| -> Vec<Option<usize>> { part.t.iter().map(|t| prepare::interval_of(&whole.stops, *t)).collect() };
-    let (stop_train, stop_test) = (stop(&train), stop(&every.test));
-    let (sign_train, sign_test) = (last_motion(&train, &stop_train), last_motion(&every.test, &stop_test));
-    let score = |s: &Spec| -> Option<(f64, f64)> {
-        let held = select::compute_held_out(model, s, &every)?;
-        let fitted = model.predict(s, &held.fit, &train);
+
+    /// The RMSE over every held-out sample [Nm] and the torque the stops hold [Nm] of `s`.
+    pub(crate) fn score(&self, model: &Model, s: &Spec) -> Option<(f64, f64)> {
+        self.errors(model, s).map(|(errors, holds_nm)| (select::rmse(&errors), holds_nm))
+    }
+
+    /// The RMSE over the held-out samples that slide and those at a stop [Nm] of `s`: every
+    /// held-out sample but the turns', where the friction's sign is not known (`None` without a
+    /// held-out stop).
+    pub(crate) fn sliding_and_stops(&self, model: &Model, s: &Spec) -> Option<f64> {
+        let (errors, _) = self.errors(model, s)?;
+        self.stop_test.iter().any(Option::is_some).then_some(())?;
+        let kept: Vec<f64> = errors.iter().zip(&self.turn_test).filter(|(_, turn)| !**turn).map(|(e, _)| *e).collect();
+        Some(select::rmse(&kept))
+    }
+
+    /// The squared error at each held-out sample and the torque the stops hold [Nm] of `s`.
+    fn errors(&self, model: &Model, s: &Spec) -> Option<(Vec<f64>, f64)> {
+        let Scorer { every, train, stop_test, stop_train, sign_train, sign_test, .. } = self;
+        let held = select::compute_held_out(model, s, every)?;
+        let fitted = model.predict(s, &held.fit, train);
         let at_rest: Vec<(f64, f64, usize)> = (0..train.len()).filter_map(|i| stop_train[i].map(|k| (train.tau[i] - fitted.torque_nm[i], sign_train[i], k))).collect();
         let holds_nm = held_torque_nm(&at_rest);
         let errors: Vec<f64> = (0..held.errors.len())
@@ -39,10 +81,8 @@ pub(crate) fn over_every_sample(model: &Model, sliding: &Prepared, whole: &Prepa
                 if stop_test[i].is_some() { held.errors[i] - e * e + (e - holds_nm * sign_test[i]).powi(2) } else { held.errors[i] }
             })
             .collect();
-        Some((select::rmse(&errors), holds_nm))
-    };
-    let (before, after) = (score(base), score(spec));
-    AtRest { rmse_before_all_nm: before.map(|b| b.0), rmse_after_all_nm: after.map(|a| a.0), held_nm: after.map(|a| a.1), ..reading }
+        Some((errors, holds_nm))
+    }
 }
 
 /// Stops a half of the training part's must have for the torque held to be fitted (an

@@ -411,8 +411,9 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
     };
     let held_out_said = friction_confound::decide_on_held_out(&model, &mut selection, &base, p, opts.max_causes, &name);
     friction_confound::resplit_on_held_out(&model, &mut selection, p, &name);
-    // A lead named beside a loop read again as the loop's pre-sliding damping (see `presliding`).
-    presliding::instead_of_a_lead(&model, &mut selection, p, &name);
+    // The loop's LuGre parts: its pre-sliding damping (for a lead named beside it), and a
+    // friction's Stribeck curve in it (see `presliding`).
+    presliding::loop_parts(&model, &mut selection, p, whole, &name);
     // With no cause the extension is the baseline as it was fitted, not one whose parameters
     // the search moved on the way: rmse_after then equals rmse_before.
     // A named delay read again as a transport delay behind a lag (see `lag`), in the models

@@ -3,7 +3,8 @@
 
 use serde_json::json;
 
-use super::{CandidateCause, InputSet, Fragments, Parameter, Refine, Samples, SearchContext, log_grid, object};
+use super::loop_scales::{LOOP_TURN_COUNTS, scale_grid};
+use super::{CandidateCause, InputSet, Fragments, Parameter, Refine, Samples, SearchContext, object};
 use jointctl_models::effect::Effect;
 
 /// `+ F_c * u`, `u` the unit Dahl state; deflection scale `lambda = F_c / sigma` [rad].
@@ -102,7 +103,8 @@ const DEAD_BAND_IN_SCATTER: [f64; 5] = [0.0, 1.0, 2.0, 4.0, 8.0];
 /// tens of milliseconds). The loop's torque is then `F_c (u + tau_d du/dt)`: LuGre's
 /// `sigma0 z + sigma1 dz/dt` (Canudas de Wit et al. 1995) with `sigma1 = sigma tau_d`, the
 /// bristles' damping, which acts while they deflect and not once they slide. Not searched with
-/// the loop: tried in place of a lead named beside it (see `identify::presliding`).
+/// the loop: tried after the selection, in place of a lead named beside it and on a friction
+/// record beside the loop alone (see `identify::presliding`).
 pub(crate) fn presliding_damping_parameter() -> Parameter {
     Parameter { name: "presliding_damping_s".into(), grid: PRESLIDING_DAMPING_S.to_vec(), refine: Refine::Nested }
 }
@@ -112,11 +114,6 @@ const PRESLIDING_DAMPING_S: [f64; 6] = [0.0, 0.002, 0.005, 0.01, 0.02, 0.05];
 /// A loop that runs the other way turns within this share of the amplitude (its inverse; see
 /// `impossible_given`).
 const NEGATIVE_LOOP_STROKE_SHARE: f64 = 6.0;
-
-/// The counts of the reading a loop that runs the other way turns over at least (see
-/// `impossible_given`): `prepare::MIN_SPAN_LSB`, the levels a curve's shape needs to be told
-/// from its quantisation (`prepare` reads the causes, so the value is repeated here).
-const NEGATIVE_LOOP_TURN_COUNTS: f64 = 16.0;
 
 /// The index of the pre-sliding damping among the loop's parameters (after the scale, the dead
 /// band and the shape, which the search always sets).
@@ -129,33 +126,6 @@ pub(crate) const PRESLIDING_DAMPING_AT: usize = 3;
 /// while the interval was being tried (the band does nothing there) and not found again (the
 /// shared real-like l3-case008: 0.0181 Nm held out for 0.0151).
 const OVER_INTERVAL: f64 = -1.0;
-
-/// The smallest deflection scale tried: a thousandth of the amplitude, and no less than one
-/// step of the deflection reading nor than a quarter of the log's first step away from a turn
-/// ([`crate::identify::Excitation::turn_step_rad`]) (at most a tenth of the largest scale: below
-/// one step on a stroke of fewer than 30 steps). A loop whose state turns within one step turns
-/// at every step the reading reverses: a friction on the sign of the last step, which the data
-/// cannot tell from a loop. Searched freely, that took a 20 Hz record's filtered torque lag
-/// beside its time delay (the shared real-like l3-case018: a loop of 0.05 Nm at 0.3 of a step).
-/// Likewise a loop that has closed before a slow log's first sample after each turn: on 20 Hz
-/// bin means, eq. 3.5's friction averaged over the bin at the turn (a step in the rate's sign,
-/// smoothed by the bin) took loops of 0.06 Nm over a hundredth to a twentieth of that sample's
-/// step, on three of the blind devices' 20 Hz records of devices without hysteresis, whose
-/// full-rate variants named none. Loops named on hysteresis records span at least that step
-/// (1.0-1.1 of it on the closest), and a friction record's pre-sliding 0.6 of it (blind seed 2's
-/// 065, a LuGre friction at 200 Hz): the floor is [`TURN_STEP_IN_SCALES`] below the step. With
-/// it one of the three names none; on the other two the floor is beyond the cap (a/30) and a
-/// loop at the cap is named instead (not solved here).
-fn smallest_scale(c: &SearchContext) -> f64 {
-    let a = c.excitation.amplitude_rad;
-    (a * 1e-3).max(c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(a / 30.0))
-}
-
-/// A Dahl state is within `exp(-4)`, 2 %, of its limit four deflection scales after a turn: a
-/// loop of a quarter of the log's first step after a turn has closed at that sample, a step in
-/// the sign of the motion to the data (an assumption on the closeness: the false loops lay at
-/// 0.01-0.06 of the step, the narrowest real ones at 0.6 and more).
-const TURN_STEP_IN_SCALES: f64 = 4.0;
 
 impl CandidateCause for Hysteresis {
     fn name(&self) -> &str {
@@ -172,10 +142,6 @@ impl CandidateCause for Hysteresis {
         vec!["limit_nm".into()]
     }
     fn parameters(&self, c: &SearchContext) -> Vec<Parameter> {
-        // Deflection scales up to a third of the amplitude (an assumption: a loop that has not
-        // reached its limit within a third of the stroke is, on a sine, a phase lag that viscous
-        // friction explains as well; such a fit names the wrong cause).
-        let a = c.excitation.amplitude_rad;
         let scatter = c.excitation.deflection_scatter_rad;
         let mut band: Vec<f64> = if scatter > 0.0 && scatter.is_finite() { DEAD_BAND_IN_SCATTER.iter().map(|k| k * scatter).collect() } else { vec![0.0] };
         // A record read as bin averages: the loop at each sample's mean deflection, or its mean
@@ -188,7 +154,7 @@ impl CandidateCause for Hysteresis {
             band.push(OVER_INTERVAL);
         }
         vec![
-            Parameter { name: "lambda_rad".into(), grid: log_grid(smallest_scale(c), a / 3.0, 16), refine: Refine::Between },
+            Parameter { name: "lambda_rad".into(), grid: scale_grid(c), refine: Refine::Between },
             Parameter { name: "input_dead_band_rad".into(), grid: band, refine: Refine::Nested },
             Parameter { name: "shape".into(), grid: SHAPES.to_vec(), refine: Refine::NestedDecimated },
         ]
@@ -213,9 +179,23 @@ impl CandidateCause for Hysteresis {
             if band > 0.0 {
                 history = dead_band(&history, band);
             }
+            if stribeck(p).0 > 0.0 {
+                // The history has no rates: it starts the state at the limit at speed (Dahl's),
+                // which the record's first turn forgets.
+                let x0 = if before.is_empty() { history.first().copied().unwrap_or(0.0) } else { history[before.len() - 1] };
+                let u0 = loop_unit(&history[..before.len()], p[0], 1.0).last().copied().unwrap_or(0.0);
+                unit.extend(lugre_unit(&history[before.len()..], &s.velocity_rad_per_s[a..b.max(a)], u0, x0, p[0], stribeck(p)));
+                continue;
+            }
             unit.extend_from_slice(&loop_unit(&history, p[0], shape(p))[before.len()..]);
         }
-        if damping_s > 0.0 {
+        let (ratio, speed) = stribeck(p);
+        if damping_s > 0.0 && ratio > 0.0 {
+            // The state's rate from LuGre's law at the rate reading.
+            for (u, v) in unit.iter_mut().zip(s.velocity_rad_per_s) {
+                *u += damping_s * (1.0 - v.signum() * *u / stribeck_limit(*v, ratio, speed)) * v / p[0];
+            }
+        } else if damping_s > 0.0 {
             // `u + tau_d du/dt`, the state's rate from the loop's law at the rate reading.
             for (u, v) in unit.iter_mut().zip(s.velocity_rad_per_s) {
                 *u += damping_s * jointctl_models::extension::loop_rate(*u, *v, p[0], shape(p));
@@ -242,7 +222,7 @@ impl CandidateCause for Hysteresis {
     /// first order, and beside a delay or a lag it took up what their models missed (the
     /// project's own delay and lag records, `delay_behind_a_lag`: loops of scale 0.28-0.35 of
     /// the largest deflection, at the search's bound). Over the quantisation: its turn (three
-    /// scales, 95 % of its limit) over at least [`NEGATIVE_LOOP_TURN_COUNTS`] counts of the reading's
+    /// scales, 95 % of its limit) over at least [`LOOP_TURN_COUNTS`] counts of the reading's
     /// coarsest quantiser (`Excitation::quantum_rad`), the project's rule for a shape told from
     /// its quantisation. The coarsest, not the smallest common step: the simulated elbow's
     /// deflection is a 14-bit output encoder less a fine motor encoder through the ratio, and its
@@ -263,7 +243,7 @@ impl CandidateCause for Hysteresis {
                 None
             } else if wide {
                 Some(format!("a loop that runs the other way and does not turn within the stroke (scale {:.3e} rad, above a {NEGATIVE_LOOP_STROKE_SHARE}th of the amplitude {:.3e}): a lead of the torque", p[0], excitation.amplitude_rad))
-            } else if counts < NEGATIVE_LOOP_TURN_COUNTS {
+            } else if counts < LOOP_TURN_COUNTS {
                 Some(format!("a loop that runs the other way and turns within {counts:.1} counts of the reading (scale {:.3e} rad): not told from its quantisation", p[0]))
             } else {
                 None
@@ -285,6 +265,10 @@ impl CandidateCause for Hysteresis {
         if presliding_damping_s(p) > 0.0 {
             out.insert("presliding_damping_s".into(), presliding_damping_s(p));
         }
+        if stribeck(p).0 > 0.0 {
+            out.insert("stribeck_nm".into(), c[0] * stribeck(p).0);
+            out.insert("stribeck_speed_rad_per_s".into(), stribeck(p).1);
+        }
         out
     }
     fn fragments(&self, p: &[f64], c: &[f64]) -> Fragments {
@@ -295,6 +279,9 @@ impl CandidateCause for Hysteresis {
         if presliding_damping_s(p) > 0.0 {
             h["presliding_damping_s"] = json!(presliding_damping_s(p));
         }
+        // A Stribeck curve in the loop is tried on a friction record only, whose loop is
+        // reported with the friction and writes no fragment (`friction_parts::no_spring`): the
+        // observer's and the simulation's joints are springs.
         // The band filters the reading the observer sees; the simulated plant's loop is driven
         // by its true deflection and needs none.
         let band = p.get(1).copied().unwrap_or(0.0);
@@ -383,6 +370,59 @@ fn shape(p: &[f64]) -> f64 {
     p.get(2).copied().unwrap_or(1.0)
 }
 
+/// The index of the loop's Stribeck ratio among its parameters (its speed follows), after the
+/// pre-sliding damping (see [`stribeck_parameters`]).
+pub(crate) const STRIBECK_AT: usize = PRESLIDING_DAMPING_AT + 1;
+
+/// The loop's Stribeck ratio and speed [rad/s] of parameters `p` (ratio 0 when none was taken).
+pub(crate) fn stribeck(p: &[f64]) -> (f64, f64) {
+    (p.get(STRIBECK_AT).copied().unwrap_or(0.0), p.get(STRIBECK_AT + 1).copied().unwrap_or(1.0))
+}
+
+/// The friction's Stribeck curve inside a friction record's pre-sliding loop, as LuGre holds it
+/// (Canudas de Wit et al. 1995): the bristles' deflection tends to `g(v) / sigma0`, with
+/// `g(v) = F_c (1 + ratio exp(-(v / v_s)^2))`, so the loop's limit is higher at low speed and the
+/// state gets there over a scale that grows with it. Its parameters, the ratio and the speed
+/// `v_s` [rad/s] (a grid over the record's rates, see `identify::presliding`), are set by
+/// `identify::presliding`, which tries them after the selection; the search never does. The
+/// ratios are an assumption: 10-80 % above the loop's limit, about Canudas de Wit et al.'s
+/// example (a breakaway 50 % above the Coulomb level), wider above because the loop's limit
+/// can be below the whole Coulomb level where eq. 3.5's arctan takes part of it.
+pub(crate) fn stribeck_parameters(speeds_rad_per_s: Vec<f64>) -> [Parameter; 2] {
+    [
+        Parameter { name: "stribeck_ratio".into(), grid: STRIBECK_RATIOS.to_vec(), refine: Refine::Nested },
+        Parameter { name: "stribeck_speed_rad_per_s".into(), grid: speeds_rad_per_s, refine: Refine::Nested },
+    ]
+}
+
+/// The Stribeck ratios tried (see [`stribeck_parameters`]).
+pub(crate) const STRIBECK_RATIOS: [f64; 5] = [0.1, 0.2, 0.3, 0.5, 0.8];
+
+/// LuGre's unit state (limit 1 at speed) from `u` at deflection `prev`, over the deflections
+/// `x` at rates `v` [rad/s]: Dahl's exact step at each sample's limit `g(v) / F_c`, over a scale
+/// `lambda g(v) / F_c` (`dz/dphi = (1 - sgn(dphi) sigma0 z / g(v))`, `z = lambda u`).
+///
+fn lugre_unit(x: &[f64], v: &[f64], mut u: f64, mut prev: f64, lambda: f64, (ratio, speed): (f64, f64)) -> Vec<f64> {
+    x.iter()
+        .zip(v)
+        .map(|(&xi, &vi)| {
+            let step = xi - prev;
+            prev = xi;
+            if step != 0.0 {
+                let g = stribeck_limit(vi, ratio, speed);
+                let s = step.signum() * g;
+                u = s + (u - s) * (-step.abs() / (lambda * g)).exp();
+            }
+            u
+        })
+        .collect()
+}
+
+/// `1 + ratio exp(-(v / speed)^2)`: LuGre's `g(v) / F_c`.
+fn stribeck_limit(v: f64, ratio: f64, speed: f64) -> f64 {
+    1.0 + ratio * (-(v / speed).powi(2)).exp()
+}
+
 /// The pre-sliding damping's time constant of parameters `p` [s] (0 when none was taken).
 fn presliding_damping_s(p: &[f64]) -> f64 {
     p.get(PRESLIDING_DAMPING_AT).copied().unwrap_or(0.0)
@@ -390,6 +430,7 @@ fn presliding_damping_s(p: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::loop_scales::PRESLIDING_SCALE_RAD;
     use super::super::{Excitation, FullRate, RestSamples, SearchContext};
     use super::{CandidateCause, Hysteresis};
 
@@ -398,6 +439,51 @@ mod tests {
         let full_rate = FullRate { t_s: &[], velocity_rad_per_s: &[], residual_nm: &[] };
         let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, RestSamples::default(), true, false);
         Hysteresis.parameters(&ctx)[0].grid.clone()
+    }
+
+    /// The grid on a joint's range of 1.2 rad (18-bit reading), its motion sampled at `dt_s` at
+    /// 0.2 rad/s.
+    fn scales_on_a_joints_range(dt_s: f64) -> Vec<f64> {
+        scales_on_a_joints_range_read_by(dt_s, 2.4e-5)
+    }
+
+    /// [`scales_on_a_joints_range`] read in counts of `count_rad`.
+    fn scales_on_a_joints_range_read_by(dt_s: f64, count_rad: f64) -> Vec<f64> {
+        let excitation = Excitation { amplitude_rad: 1.2, frequency_hz: 0.05, sample_period_s: dt_s, deflection_scatter_rad: 0.0, resolution_rad: count_rad, quantum_rad: count_rad, turn_step_rad: count_rad, bin_width_s: 0.0 };
+        let t: Vec<f64> = (0..1000).map(|i| i as f64 * dt_s).collect();
+        let v = vec![0.2; t.len()];
+        let full_rate = FullRate { t_s: &t, velocity_rad_per_s: &v, residual_nm: &[] };
+        let ctx = SearchContext::new(excitation, &[], &[], &[], full_rate, RestSamples::default(), true, true);
+        Hysteresis.parameters(&ctx)[0].grid.clone()
+    }
+
+    #[test]
+    fn a_joints_presliding_is_searched_below_a_thousandth_of_its_range_where_the_samples_resolve_it() {
+        let smallest = |grid: &[f64]| grid.iter().copied().fold(f64::INFINITY, f64::min);
+        // At 1 kHz a sample moves 0.2 mrad: the grid goes on down towards 0.1 mrad at its
+        // spacing.
+        // Its turn spans 16 counts from a scale of 0.128 mrad: the grid stops above that.
+        let fine = scales_on_a_joints_range(1e-3);
+        let floor = (16.0 * 2.4e-5 / 3.0f64).max(PRESLIDING_SCALE_RAD);
+        assert!(fine.len() > 16 && smallest(&fine) >= floor && smallest(&fine) < 1.5 * floor, "{fine:?}");
+        assert!(fine.windows(2).all(|w| (w[1] / w[0] / (fine[1] / fine[0]) - 1.0).abs() < 1e-9), "{fine:?}");
+        // At 20 Hz it moves 10 mrad: a loop narrower than a thousandth of the range closes
+        // between two samples; the grid stays at its 16.
+        let slow = scales_on_a_joints_range(0.05);
+        assert!(slow.len() == 16 && (smallest(&slow) / 1.2e-3 - 1.0).abs() < 1e-9, "{slow:?}");
+    }
+
+    #[test]
+    fn no_presliding_below_a_thousandth_of_the_range_is_searched_whose_turn_spans_fewer_than_16_counts() {
+        // A 14-bit reading (3.8e-4 rad) at 500 Hz, as the blind generator's seed 4's `067`: a
+        // loop's turn over 16 counts is 6 mrad wide, a scale of 2 mrad, coarser than a thousandth
+        // of the range; the grid stays at its 16.
+        let coarse = scales_on_a_joints_range_read_by(2e-3, std::f64::consts::TAU / 16384.0);
+        assert!(coarse.len() == 16 && (coarse[0] / 1.2e-3 - 1.0).abs() < 1e-9, "{coarse:?}");
+        // A 16-bit one: the turn spans 16 counts from a scale of 0.5 mrad.
+        let finer = scales_on_a_joints_range_read_by(2e-3, std::f64::consts::TAU / 65536.0);
+        let floor = 16.0 * std::f64::consts::TAU / 65536.0 / 3.0;
+        assert!(finer.len() > 16 && finer[0] >= floor && finer[0] < 1.5 * floor, "{finer:?}");
     }
 
     #[test]
