@@ -33,7 +33,7 @@ pub(crate) struct Scorer {
     stop_train: Vec<Option<usize>>,
     sign_train: Vec<f64>,
     sign_test: Vec<f64>,
-    /// Whether each held-out sample is in a turn.
+    /// Whether each held-out sample is in a turn and not at a stop.
     turn_test: Vec<bool>,
 }
 
@@ -49,7 +49,9 @@ impl Scorer {
         let stop = |part: &Part| -> Vec<Option<usize>> { part.t.iter().map(|t| prepare::interval_of(&whole.stops, *t)).collect() };
         let (stop_train, stop_test) = (stop(&train), stop(&every.test));
         let (sign_train, sign_test) = (last_motion(&train, &stop_train), last_motion(&every.test, &stop_test));
-        let turn_test = every.test.t.iter().map(|t| prepare::interval_of(&whole.turns, *t).is_some()).collect();
+        // A stop where the joint turns back is a turn too: it stays a stop here, as in the fit's
+        // exclusion (`prepare::rest`).
+        let turn_test = every.test.t.iter().zip(&stop_test).map(|(t, stop)| stop.is_none() && prepare::interval_of(&whole.turns, *t).is_some()).collect();
         Scorer { every, train, stop_test, stop_train, sign_train, sign_test, turn_test }
     }
 

@@ -154,6 +154,9 @@ fn stribeck_in_the_loop(model: &Model, selection: &mut Selection, p: &Prepared, 
     }
     let (loop_cause, scale_rad) = (loop_term.cause, loop_term.params[0]);
     let peak = p.train.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !(peak > 0.0 && peak.is_finite()) {
+        return;
+    }
     let speeds = stribeck_speeds(peak);
     let with = |ratio: f64, speed: f64, scale_rad: f64| {
         let mut s = selection.spec.clone();
@@ -194,11 +197,11 @@ fn stribeck_in_the_loop(model: &Model, selection: &mut Selection, p: &Prepared, 
     let (Some(now_nm), Some(new_nm)) = (held(&selection.spec), held(&spec)) else {
         return;
     };
-    // Two parameters more (`ln n` each), and the pairs looked over charged as a grid is.
-    let charged = best_bic + 2.0 * (n as f64).ln() + 2.0 * (pairs.len() as f64).ln();
+    // The pairs looked over charged as a grid is (the two parameters are in the BIC).
+    let charged = best_bic + 2.0 * (pairs.len() as f64).ln();
     // With the held-out stops too, where the record has them: the state a stop holds is the
-    // loop's, which the curve moves (the turns, where the friction's sign is not known, left
-    // out as from the fit).
+    // loop's, which the curve moves (the turns that are no stop, where the friction's sign is
+    // not known, left out as from the fit).
     let stops = (!std::ptr::eq(p, whole)).then(|| Scorer::new(p, whole));
     let at_stops = |s: &Spec| stops.as_ref().and_then(|e| e.sliding_and_stops(model, s));
     let stops_no_worse = match (at_stops(&selection.spec), at_stops(&spec)) {

@@ -179,7 +179,9 @@ impl CandidateCause for Hysteresis {
             if band > 0.0 {
                 history = dead_band(&history, band);
             }
-            if stribeck(p).0 > 0.0 {
+            // LuGre's curve on Dahl's shape only (`identify::presliding` tries it there; a loop
+            // over a bin's interval returned above).
+            if stribeck(p).0 > 0.0 && shape(p) == 1.0 {
                 // The history has no rates: it starts the state at the limit at speed (Dahl's),
                 // which the record's first turn forgets.
                 let x0 = if before.is_empty() { history.first().copied().unwrap_or(0.0) } else { history[before.len() - 1] };
@@ -190,7 +192,7 @@ impl CandidateCause for Hysteresis {
             unit.extend_from_slice(&loop_unit(&history, p[0], shape(p))[before.len()..]);
         }
         let (ratio, speed) = stribeck(p);
-        if damping_s > 0.0 && ratio > 0.0 {
+        if damping_s > 0.0 && ratio > 0.0 && shape(p) == 1.0 {
             // The state's rate from LuGre's law at the rate reading.
             for (u, v) in unit.iter_mut().zip(s.velocity_rad_per_s) {
                 *u += damping_s * (1.0 - v.signum() * *u / stribeck_limit(*v, ratio, speed)) * v / p[0];
@@ -390,8 +392,9 @@ pub(crate) fn stribeck(p: &[f64]) -> (f64, f64) {
 /// can be below the whole Coulomb level where eq. 3.5's arctan takes part of it.
 pub(crate) fn stribeck_parameters(speeds_rad_per_s: Vec<f64>) -> [Parameter; 2] {
     [
-        Parameter { name: "stribeck_ratio".into(), grid: STRIBECK_RATIOS.to_vec(), refine: Refine::Nested },
-        Parameter { name: "stribeck_speed_rad_per_s".into(), grid: speeds_rad_per_s, refine: Refine::Nested },
+        // Not nested: neither grid has a simpler first value, so each is charged as a parameter.
+        Parameter { name: "stribeck_ratio".into(), grid: STRIBECK_RATIOS.to_vec(), refine: Refine::Not },
+        Parameter { name: "stribeck_speed_rad_per_s".into(), grid: speeds_rad_per_s, refine: Refine::Not },
     ]
 }
 
@@ -401,7 +404,6 @@ pub(crate) const STRIBECK_RATIOS: [f64; 5] = [0.1, 0.2, 0.3, 0.5, 0.8];
 /// LuGre's unit state (limit 1 at speed) from `u` at deflection `prev`, over the deflections
 /// `x` at rates `v` [rad/s]: Dahl's exact step at each sample's limit `g(v) / F_c`, over a scale
 /// `lambda g(v) / F_c` (`dz/dphi = (1 - sgn(dphi) sigma0 z / g(v))`, `z = lambda u`).
-///
 fn lugre_unit(x: &[f64], v: &[f64], mut u: f64, mut prev: f64, lambda: f64, (ratio, speed): (f64, f64)) -> Vec<f64> {
     x.iter()
         .zip(v)
