@@ -30,7 +30,7 @@
 
 use jointctl_models::effect::Effect;
 
-use super::causes::{PRESLIDING_DAMPING_AT, STRIBECK_AT, presliding_damping_parameter, stribeck_parameters};
+use super::causes::{PRESLIDING_DAMPING_AT, STRIBECK_AT, STRIBECK_RATIOS, presliding_damping_parameter, stribeck_parameters};
 use super::design::{Model, Spec, Term};
 use super::held_at_stops::Scorer;
 use super::numeric::refine_log;
@@ -175,8 +175,7 @@ fn stribeck_in_the_loop(model: &Model, selection: &mut Selection, p: &Prepared, 
     };
     let n = p.train.len();
     let rss = |r: f64, v: f64, l: f64| model.fit(&with(r, v, l), &p.train).map_or(f64::INFINITY, |f| f.rss);
-    let ratios = stribeck_parameters(Vec::new())[0].grid.clone();
-    let pairs: Vec<(f64, f64)> = ratios.iter().flat_map(|r| speeds.iter().map(move |v| (*r, *v))).collect();
+    let pairs: Vec<(f64, f64)> = STRIBECK_RATIOS.iter().flat_map(|r| speeds.iter().map(move |v| (*r, *v))).collect();
     // Each pair at the loop's scale, then the scale fitted again beside the few that fit best
     // (fitting it beside each of the 45 made a friction record's identify three times slower).
     let mut at_scale: Vec<(f64, (f64, f64))> = parallel_map(&pairs, |&(r, v)| (rss(r, v, scale_rad), (r, v)));

@@ -191,16 +191,13 @@ impl CandidateCause for Hysteresis {
             }
             unit.extend_from_slice(&loop_unit(&history, p[0], shape(p))[before.len()..]);
         }
-        let (ratio, speed) = stribeck(p);
-        if damping_s > 0.0 && ratio > 0.0 && shape(p) == 1.0 {
-            // The state's rate from LuGre's law at the rate reading.
+        if damping_s > 0.0 {
+            // `u + tau_d du/dt`, the state's rate from the loop's law at the rate reading; with
+            // LuGre's curve, Dahl's law towards the limit `g(v) / F_c`.
+            let (ratio, speed) = stribeck(p);
+            let limit = |v: f64| if ratio > 0.0 && shape(p) == 1.0 { stribeck_limit(v, ratio, speed) } else { 1.0 };
             for (u, v) in unit.iter_mut().zip(s.velocity_rad_per_s) {
-                *u += damping_s * (1.0 - v.signum() * *u / stribeck_limit(*v, ratio, speed)) * v / p[0];
-            }
-        } else if damping_s > 0.0 {
-            // `u + tau_d du/dt`, the state's rate from the loop's law at the rate reading.
-            for (u, v) in unit.iter_mut().zip(s.velocity_rad_per_s) {
-                *u += damping_s * jointctl_models::extension::loop_rate(*u, *v, p[0], shape(p));
+                *u += damping_s * jointctl_models::extension::loop_rate(*u / limit(*v), *v, p[0], shape(p));
             }
         }
         vec![unit]

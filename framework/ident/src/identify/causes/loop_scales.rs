@@ -25,8 +25,13 @@ pub(super) const LOOP_TURN_COUNTS: f64 = 16.0;
 /// it one of the three names none; on the other two the floor is beyond the cap (a/30) and a
 /// loop at the cap is named instead (not solved here).
 fn smallest_scale(c: &SearchContext) -> f64 {
-    let a = c.excitation.amplitude_rad;
-    (a * 1e-3).max(c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(a / 30.0))
+    (c.excitation.amplitude_rad * 1e-3).max(reading_floor(c))
+}
+
+/// One step of the reading or a quarter of the log's first step after a turn, the coarser, at
+/// most a thirtieth of the amplitude (see [`smallest_scale`]).
+fn reading_floor(c: &SearchContext) -> f64 {
+    c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(c.excitation.amplitude_rad / 30.0)
 }
 
 /// The deflection scales searched: 16 from [`smallest_scale`] to a third of the amplitude and,
@@ -81,10 +86,8 @@ pub(crate) const PRESLIDING_SCALE_RAD: f64 = 1e-4;
 /// and was then refused on the held-out part (block t = 0.8), the pre-sliding lost with it
 /// (held out 0.389 -> 0.480 Nm, noise 0.349).
 fn finest_presliding_scale(c: &SearchContext) -> f64 {
-    let a = c.excitation.amplitude_rad;
-    let floors = c.excitation.resolution_rad.max(c.excitation.turn_step_rad / TURN_STEP_IN_SCALES).min(a / 30.0);
     let told_from_quantisation = LOOP_TURN_COUNTS * c.excitation.quantum_rad / 3.0;
-    (a * 1e-3).min(PRESLIDING_SCALE_RAD).max(floors).max(typical_travel_rad(c) / TURN_STEP_IN_SCALES).max(told_from_quantisation)
+    (c.excitation.amplitude_rad * 1e-3).min(PRESLIDING_SCALE_RAD).max(reading_floor(c)).max(typical_travel_rad(c) / TURN_STEP_IN_SCALES).max(told_from_quantisation)
 }
 
 /// The median deflection a sample moves over [rad]: the rate's size times the step, over the

@@ -47,7 +47,7 @@ pub use viscous_friction::ViscousFriction;
 pub use input_set::InputSet;
 pub use refine::Refine;
 pub use reversals::turn_step_rad;
-pub(crate) use hysteresis::{PRESLIDING_DAMPING_AT, STRIBECK_AT, presliding_damping_parameter, stribeck_parameters};
+pub(crate) use hysteresis::{PRESLIDING_DAMPING_AT, STRIBECK_AT, STRIBECK_RATIOS, presliding_damping_parameter, stribeck_parameters};
 
 /// The built-in vocabulary: a cause for each model effect, in [`Effect::ALL`]'s order (the order
 /// candidates are tried; ties go to the earlier one), and last the sensor offset's drift, which
