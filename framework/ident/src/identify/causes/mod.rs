@@ -480,6 +480,15 @@ pub trait CandidateCause: Send + Sync {
     fn searched_within_bounds(&self) -> bool {
         false
     }
+    /// Whether the cause's scale (its first parameter, refined between grid values) is searched
+    /// over its whole grid at every step of the selection (see `search::narrow_to_warm`): its
+    /// fit can have another basin, the lower once other causes are in (a joint's friction
+    /// pre-slides over a thousandth of the stroke a loop first took for a viscous friction's
+    /// phase). True by default; false for a cause whose scale trades with another cause's
+    /// term rather than finding its own effect.
+    fn scale_searched_whole(&self) -> bool {
+        true
+    }
     /// Segments (start indices) on each of which the coefficients are fitted anew, when they
     /// cannot carry over from one stretch of data to the next (the amplitude and phase of each
     /// ring of a structure, rung at random by each reversal). They are fitted on every part, the
