@@ -2,7 +2,8 @@
 """How far the data let anyone see a hidden viscous friction: the blind generator's own model as
 an oracle beside `jointctl identify` (issue 31's misses).
 
-For each record of the blind generator (`tests/blind-gen`, a folder with its `answers.json`)
+For each record of the blind generator (`tests/blind-gen`, a folder with its `answers.json`; or
+of the third generator, `third_generator/generate.py`, whose arctan is its answers' `baseline`)
 whose hidden effects are a viscous friction alone or beside a torque offset, and whose friction is
 eq. 3.5's arctan or a Stribeck curve: the torque is fitted on identify's training part with the
 generator's own structure, the friction's shape taken as the generator made it (`k_b`, or the
@@ -94,6 +95,9 @@ def main():
         answer = answers[folder].get(name)
         if answer is None:
             continue
+        if 'friction' not in answer and 'baseline' in answer:
+            # The third generator's answers: eq. 3.5's arctan and the spring in `baseline`.
+            answer = dict(answer, friction={'k_b': answer['baseline']['k_b']}, k=answer['baseline']['k'])
         hidden = set(answer['effect'].split('+'))
         if 'viscous_friction' not in hidden or not hidden <= {'viscous_friction', 'sensor_offset'} or answer.get('k', 0) == 0:
             continue

@@ -13,7 +13,7 @@ use super::causes::{RestSamples, FullRate, SearchContext};
 use super::confounded::{CONFOUND_BIC, CONFOUND_SHARE, Confounded};
 use super::design::{HeldOut, Model, Part, Spec, Term};
 use super::prepare::Prepared;
-use super::search::{polish, profile_terms, search};
+use super::search::{other_basin, polish, profile_terms, search};
 use super::significance::{Judgement, added_coefficients_test, judge, predicted_cause_test};
 use super::uncertainty::{Jacobian, untold_from_zero};
 
@@ -218,6 +218,12 @@ enum Candidate {
 /// Searches candidate `c`'s parameters with `spec` in place and checks the fit's physics.
 fn propose(model: &Model, spec: &Spec, c: usize, ctx: &SearchContext, p: &Prepared, warm: Option<&[f64]>) -> Candidate {
     let Some(term) = search(model, spec, c, ctx, &p.coarse, p.full_rate_training(), warm) else { return Candidate::NoFit };
+    proposed(model, spec, c, term, p)
+}
+
+/// `term`, searched for candidate `c`, with `spec`: its coefficients profiled, its nested
+/// choices at their simpler values where the training BIC agrees, its physics checked.
+fn proposed(model: &Model, spec: &Spec, c: usize, term: Term, p: &Prepared) -> Candidate {
     let mut s = profile_terms(model, &spec.with(term.clone()), &p.coarse);
     // A choice of `Refine::NestedDecimated` kept only when the refit's BIC agrees.
     if let Some(simpler) = at_simpler_decimated(&term) {
@@ -382,6 +388,43 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 }
             }
         }
+        // A cause refused at its best scale, tested once more in its scale's other basin (see
+        // `search::other_basin`): the training part's best loop can be a bearing's pre-sliding
+        // where the element's own loop, a hundred times wider, is what the held-out part shows.
+        if !accepted {
+            for &c in &refused_alone {
+                let Some(refused) = top.iter().find(|t| t.2 == c).and_then(|t| t.1.term(c)) else { continue };
+                let Some(term) = other_basin(model, &spec, refused, &ctx, coarse, p.full_rate_training()) else { continue };
+                let Candidate::Proposed(s) = proposed(model, &spec, c, term, p) else { continue };
+                let b = score(&s, model.causes[c].look_elsewhere(&ctx));
+                if current - b <= BIC_THRESHOLD {
+                    continue;
+                }
+                // A second try passes at once what `prune` would ask of it: named on consistency
+                // alone, it is told from zero on the training part (a loop kept, then pruned,
+                // left its mark on the others' polished parameters).
+                let untold = |s: &Spec, judgement: &Judgement| {
+                    let full = held_out_errors(model, s, p)?;
+                    let jacobian = Jacobian::new(model, s, &full.fit, &p.train);
+                    (!judgement.test.significant()).then(|| untold_from_zero(model, s, &full, &jacobian, c, p)).flatten()
+                };
+                match check(model, &polish(model, &s, coarse, &p.stretch), &reduced, p, &name) {
+                    Checked::Tested(s, judgement) if judgement.named() && let Some(why) = untold(&s, &judgement) => {
+                        rejected.push(format!("{} (at its scale's other basin, a large gain consistent over the held-out part, but no test passed, and on the training part {why}: {judgement})", name(c)));
+                    }
+                    Checked::Tested(s, judgement) if judgement.named() => {
+                        chosen.push(Chosen { cause: c, against: None, partner: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part, at its scale's other basin (the best scale's fit refused on the held-out part); {judgement}") });
+                        current = score(&s, 0.0);
+                        spec = s;
+                        accepted = true;
+                        break;
+                    }
+                    Checked::Tested(_, judgement) => rejected.push(format!("{} (at its scale's other basin, no evidence on the held-out part: {judgement})", name(c))),
+                    Checked::Impossible(_, why) => rejected.push(why),
+                    Checked::NoFit => {}
+                }
+            }
+        }
         // Two effects can hide each other on the held-out part (a dead zone behind an offset):
         // when no proposal passes alone, the pairs of proposals are tested together (best first);
         // each must still pass given the other at the end.
@@ -520,76 +563,8 @@ fn search_times(model: &Model, candidates: &[usize], ctx: &SearchContext, took: 
     .collect()
 }
 
-/// Every cause must still earn its place given the others: the weakest that is not named any
-/// more leaves the model, one at a time, until each is (at the end of the selection, and again
-/// when a cause joins after it). A cause's place is judged against the model without it and
-/// without the causes that turn physically impossible when it leaves, and those leave with it:
-/// blind seed 8's 052 (a 3.2 ms lag: a 64 Hz filter and a 0.7 ms delay, 20 Hz bins) named the
-/// delay and a viscous friction, the delay left as redundant, and the viscous friction stayed at
-/// -0.13 Nm s/rad, the delay's lag under another name.
-pub(crate) fn prune(model: &Model, p: &Prepared, s: &mut Selection, name: &(dyn Fn(usize) -> String + Sync)) {
-    while let Some(full) = held_out_errors(model, &s.spec, p) {
-        // The models without one cause each (and what turns impossible then), fitted side by
-        // side, with the verdict on each.
-        let margins = parallel_map(&s.chosen, |ch| {
-            let (reduced, dropped) = without_and_impossible(model, &s.spec, ch.cause, p);
-            (held_out_errors(model, &reduced, p).map(|r| verdict(&r, &full, p)), reduced, dropped)
-        });
-        // A cause named on consistency alone is held to its coefficients on the training part
-        // too, and so is one that asks for it whatever the evidence (an offset's drift, see
-        // `CandidateCause::held_to_its_coefficients`); the model's derivatives computed once for all.
-        let mut jacobian = None;
-        let mut margins: Vec<_> = margins
-            .into_iter()
-            .zip(&s.chosen)
-            .map(|((judgement, reduced, dropped), ch)| {
-                // A cause proposed by BIC is held to the same relevance as when it was named:
-                // what its own term carries counts where its gain is below the threshold.
-                let judgement = judgement.map(|j| if j.negligible() && ch.against.is_none() { carried_nm(model, &s.spec, ch.cause, p).map_or(j, |term| j.carrying(term, p.noise_floor_nm)) } else { j });
-                // And one searched beside a proposal that has left: its place on the training
-                // part was the pair's (a negative loop and a damping proposed together beside a
-                // delay on 20 Hz bins, the loop gone for want of evidence: the damping, 0.58 +-
-                // 0.23 Nm s/rad joint with the delay, a change of the delay by c / k, stayed on
-                // its held-out test alone; `delay_at_a_parts_edge`).
-                let partner_left = ch.partner.is_some_and(|p| s.chosen.iter().all(|o| o.cause != p));
-                let held = |j: &Judgement| !j.test.significant() || model.causes[ch.cause].held_to_its_coefficients() || partner_left;
-                let untold = judgement.filter(|j| j.named() && held(j)).and_then(|_| {
-                    let jacobian = jacobian.get_or_insert_with(|| Jacobian::new(model, &s.spec, &full.fit, &p.train));
-                    untold_from_zero(model, &s.spec, &full, jacobian, ch.cause, p)
-                });
-                (judgement, reduced, dropped, untold)
-            })
-            .collect();
-        // The weakest that is not named any more goes first (its gain in units of its
-        // relevance threshold).
-        let weakest = margins.iter().enumerate().filter(|(_, m)| !m.0.is_some_and(|j| j.named()) || m.3.is_some()).min_by(|a, b| {
-            let score = |j: &Option<Judgement>| j.map_or(f64::NEG_INFINITY, |j| j.gain_nm2 / j.relevant_nm2.max(1e-300));
-            score(&a.1.0).total_cmp(&score(&b.1.0))
-        });
-        match weakest.map(|(i, _)| i) {
-            Some(i) => {
-                let gone = s.chosen.remove(i);
-                let (judgement, reduced, dropped, untold) = margins.swap_remove(i);
-                match (judgement, untold) {
-                    (Some(j), Some(why)) if j.test.significant() => {
-                        let beside = gone.partner.map_or(String::new(), |p| format!("searched beside {}, which left the model; ", name(p)));
-                        s.rejected.push(format!("{} ({beside}better on the held-out part, but on the training part {why}: {j})", name(gone.cause)))
-                    }
-                    (Some(j), Some(why)) => s.rejected.push(format!("{} (a large gain consistent over the held-out part, but no test passed, and on the training part {why}: {j})", name(gone.cause))),
-                    (Some(j), None) if j.negligible() => s.negligible.push((gone.cause, format!("once the others were in the model: {j}"))),
-                    (Some(j), None) => s.rejected.push(format!("{} (no evidence once the others were in the model: {j})", name(gone.cause))),
-                    (None, _) => s.rejected.push(format!("{} (no fit without it)", name(gone.cause))),
-                }
-                for (cause, why) in dropped {
-                    s.chosen.retain(|ch| ch.cause != cause);
-                    s.rejected.push(format!("{} ({why} once {} left the model)", name(cause), name(gone.cause)));
-                }
-                s.spec = reduced;
-            }
-            None => break,
-        }
-    }
-}
+mod prune;
+pub(crate) use prune::prune;
 
 #[cfg(test)]
 mod tests;
