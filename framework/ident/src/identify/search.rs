@@ -9,7 +9,7 @@ use super::numeric::refine_log;
 /// fit. With `warm` (the best of the previous step, before one more cause was added), each grid
 /// but the cause's scale is narrowed to the five values nearest it: a cause added elsewhere
 /// moves a parameter a little, not across its grid. The scale (the first parameter, refined
-/// between grid values: a loop's, a dead zone's, the arctan's `k_b`, a ring's damping) is
+/// between grid values: a loop's, a dead zone's, the arctan's `k_b`, a vibration's frequency) is
 /// searched over its whole grid at every step: its fit can have more than one basin, and which
 /// is lower changes as causes join (see [`narrow_to_warm`]); a value away from the previous
 /// step's is taken where it betters those near it by more than BIC charges for a parameter
@@ -51,6 +51,8 @@ pub(crate) fn search(model: &Model, spec: &Spec, cause: usize, ctx: &SearchConte
 /// sharper than eq. 3.5's arctan bends) that the held-out part refused (block t = 0.2), where
 /// the loop over 17.7 mrad lowers it. `refused`: the term at its best, which the held-out part
 /// refused. `None` where the scale's error has one basin, or the cause no scale searched whole.
+/// The term's scale grid is that basin's (the polish and the parameters' errors read their
+/// range from it).
 pub(crate) fn other_basin(model: &Model, spec: &Spec, refused: &Term, ctx: &SearchContext, coarse: &Part, stretch: &Part) -> Option<Term> {
     let cause = refused.cause;
     if !model.causes[cause].applicable(ctx) || !model.causes[cause].scale_searched_whole() {
@@ -60,47 +62,69 @@ pub(crate) fn other_basin(model: &Model, spec: &Spec, refused: &Term, ctx: &Sear
     if !params.first().is_some_and(|p| is_scale(0, p)) || refused.params.len() != params.len() {
         return None;
     }
+    // The scale's grid in its sorted order, scored with the refused term's other parameters.
+    let mut order: Vec<usize> = (0..params[0].grid.len()).collect();
+    order.sort_by(|a, b| params[0].grid[*a].total_cmp(&params[0].grid[*b]));
+    let grid: Vec<f64> = order.iter().map(|k| params[0].grid[*k]).collect();
     let projector = if model.causes[cause].transforms() { None } else { model.projector(spec, coarse) };
-    let scores: Vec<f64> = params[0].grid.iter().map(|x| {
+    let scores: Vec<f64> = grid.iter().map(|x| {
         let mut q = refused.params.clone();
         q[0] = *x;
         rss_of(model, spec, cause, projector.as_ref(), coarse, coarse, &q)
     }).collect();
-    let basin = beyond_ridge(&scores)?;
-    params[0].grid = params[0].grid[basin].to_vec();
+    let from = (0..grid.len()).min_by(|a, b| (grid[*a] - refused.params[0]).abs().total_cmp(&(grid[*b] - refused.params[0]).abs()))?;
+    let basin = beyond_ridge(&scores, from, coarse.t.len())?;
+    params[0].grid = grid[basin].to_vec();
     let whole: Vec<Vec<f64>> = params.iter().map(|p| p.grid.clone()).collect();
     search_over(model, spec, cause, coarse, stretch, params, &whole, &[])
 }
 
-/// The indices of the other basin of `scores` (a fit's error over a sorted grid): from the
-/// global best, uphill each way to a ridge, and beyond that ridge down to a lower value again;
-/// of the two sides, the one whose lowest value is lower. `None` where the error only rises
-/// away from its best (one basin).
-fn beyond_ridge(scores: &[f64]) -> Option<std::ops::Range<usize>> {
-    let best = (0..scores.len()).filter(|k| scores[*k].is_finite()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
-    let lowest = |r: &std::ops::Range<usize>| r.clone().map(|k| scores[k]).filter(|s| s.is_finite()).fold(f64::INFINITY, f64::min);
-    let mut ridge = best;
-    while ridge + 1 < scores.len() && scores[ridge + 1] >= scores[ridge] {
-        ridge += 1;
+/// The other basin of `scores` (a fit's error over a sorted grid, `n` samples) seen from index
+/// `from` (the refused scale's): down to the bottom of its basin, then uphill each way to a ridge, and beyond it down to a value that
+/// betters the ridge by more than BIC charges for a parameter (`bic_prefers`: a ridge the data
+/// tell from their noise); of the two sides, the one reaching lower. The indices returned start
+/// at the ridge, so that the scale can be refined between it and the basin's edge. A value
+/// without a fit (infinite or NaN) is a ridge. `None` where the error only rises away from
+/// `from` (one basin).
+fn beyond_ridge(scores: &[f64], from: usize, n: usize) -> Option<std::ops::Range<usize>> {
+    let s: Vec<f64> = scores.iter().map(|x| if x.is_finite() { *x } else { f64::INFINITY }).collect();
+    if from >= s.len() {
+        return None;
     }
-    let right = ridge + 1..scores.len();
-    let mut ridge = best;
-    while ridge > 0 && scores[ridge - 1] >= scores[ridge] {
-        ridge -= 1;
+    let lowest = |r: std::ops::Range<usize>| r.map(|k| s[k]).fold(f64::INFINITY, f64::min);
+    // Down to the bottom of the refused scale's own basin first (the refused scale lies between
+    // grid values, its nearest one a step up the slope).
+    let mut from = from;
+    loop {
+        let down = [from.wrapping_sub(1), from + 1].into_iter().filter(|k| *k < s.len() && s[*k] < s[from]).min_by(|a, b| s[*a].total_cmp(&s[*b]));
+        match down {
+            Some(k) => from = k,
+            None => break,
+        }
     }
-    let left = 0..ridge;
-    [left, right].into_iter().filter(|r| !r.is_empty() && lowest(r).is_finite()).min_by(|a, b| lowest(a).total_cmp(&lowest(b)))
+    let mut right = from;
+    while right + 1 < s.len() && s[right + 1] >= s[right] {
+        right += 1;
+    }
+    let mut left = from;
+    while left > 0 && s[left - 1] >= s[left] {
+        left -= 1;
+    }
+    // Each side: (its lowest value beyond the ridge, the indices from the ridge on).
+    let sides = [(lowest(right + 1..s.len()), right..s.len(), right), (lowest(0..left), 0..left + 1, left)];
+    sides.into_iter().filter(|(low, _, ridge)| low.is_finite() && bic_prefers(*low, s[*ridge], n)).min_by(|a, b| a.0.total_cmp(&b.0)).map(|(_, r, _)| r)
 }
 
 /// Whether the `j`-th parameter `p` of a cause is its scale: the first, refined between grid
-/// values (a loop's scale, a dead zone's width, the arctan's `k_b`, a ring's damping).
+/// values (a loop's scale, a dead zone's width, the arctan's `k_b`, a vibration's frequency).
 fn is_scale(j: usize, p: &super::causes::Parameter) -> bool {
     j == 0 && matches!(p.refine, Refine::Between)
 }
 
 /// The training fit's residual sum of squares on `part` with `cause` at parameters `q` beside
 /// `spec`: by `projector` on the decimated part where the cause leaves the inputs alone (see
-/// [`search`]), a full refit otherwise; infinite where the fit keeps to no bounds.
+/// [`search`]), a full refit otherwise; infinite where there is no fit, or where the cause is
+/// held to bounds and its coefficients break them (`within_bounds`).
 fn rss_of(model: &Model, spec: &Spec, cause: usize, projector: Option<&super::design::Projector>, coarse: &Part, part: &Part, q: &[f64]) -> f64 {
     let term = Term { cause, params: q.to_vec(), grids: Vec::new(), baseline: false };
     match projector {
@@ -458,19 +482,30 @@ mod tests {
     }
 
     #[test]
-    fn the_other_basin_lies_beyond_the_ridge_from_the_best_on_the_side_reaching_lower() {
-        // One basin: the error only rises away from its best.
-        assert_eq!(super::beyond_ridge(&[5.0, 3.0, 1.0, 2.0, 4.0]), None);
-        assert_eq!(super::beyond_ridge(&[1.0, 2.0, 3.0]), None);
-        // A second basin to the right, past the ridge at 3.
-        assert_eq!(super::beyond_ridge(&[3.0, 1.0, 2.0, 5.0, 4.0, 2.0, 3.0]), Some(4..7));
+    fn the_other_basin_lies_beyond_the_ridge_from_the_refused_scale_on_the_side_reaching_lower() {
+        let n = 1000;
+        // One basin: the error only rises away from the refused scale.
+        assert_eq!(super::beyond_ridge(&[5.0, 3.0, 1.0, 2.0, 4.0], 2, n), None);
+        assert_eq!(super::beyond_ridge(&[1.0, 2.0, 3.0], 0, n), None);
+        // A second basin to the right, past the ridge at 3 (returned from the ridge on).
+        assert_eq!(super::beyond_ridge(&[3.0, 1.0, 2.0, 5.0, 4.0, 2.0, 3.0], 1, n), Some(3..7));
+        // Seen from the refused scale, not from the grid's best: from index 5 the other basin
+        // is the one at 1, to the left.
+        assert_eq!(super::beyond_ridge(&[3.0, 1.0, 2.0, 5.0, 4.0, 2.0, 3.0], 5, n), Some(0..4));
         // A descent to the grid's edge past a ridge is a basin (the error still falls there).
-        assert_eq!(super::beyond_ridge(&[1.0, 2.0, 3.0, 2.5]), Some(3..4));
+        assert_eq!(super::beyond_ridge(&[1.0, 2.0, 3.0, 2.5], 0, n), Some(2..4));
         // Basins on both sides: the one reaching lower (left, 1.5, against 1.8).
-        assert_eq!(super::beyond_ridge(&[1.5, 4.0, 1.0, 4.0, 1.8]), Some(0..1));
-        // A value without a fit (infinite) is a ridge, never a basin.
-        assert_eq!(super::beyond_ridge(&[1.0, f64::INFINITY, f64::INFINITY]), None);
-        assert_eq!(super::beyond_ridge(&[1.0, f64::INFINITY, 3.0]), Some(2..3));
+        assert_eq!(super::beyond_ridge(&[1.5, 4.0, 1.0, 4.0, 1.8], 2, n), Some(0..2));
+        // The refused scale's nearest grid value a step up its basin's slope: the same.
+        assert_eq!(super::beyond_ridge(&[3.0, 1.0, 2.0, 5.0, 4.0, 2.0, 3.0], 2, n), Some(3..7));
+        // A ridge the data do not tell from their noise is none: 3.0 against 2.99 on 1000
+        // samples (ln(3.0 / 2.99) = 3.3e-3, below ln(1000) / 1000 = 6.9e-3).
+        assert_eq!(super::beyond_ridge(&[1.0, 3.0, 2.99], 0, n), None);
+        // A value without a fit (infinite or NaN) is a ridge.
+        assert_eq!(super::beyond_ridge(&[1.0, f64::INFINITY, f64::INFINITY], 0, n), None);
+        assert_eq!(super::beyond_ridge(&[1.0, f64::NAN, 3.0], 0, n), Some(1..3));
+        assert_eq!(super::beyond_ridge(&[1.0], 0, n), None);
+        assert_eq!(super::beyond_ridge(&[], 0, n), None);
     }
 
     #[test]

@@ -400,29 +400,41 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 if current - b <= BIC_THRESHOLD {
                     continue;
                 }
-                // A second try passes at once what `prune` would ask of it: named on consistency
-                // alone, it is told from zero on the training part (a loop kept, then pruned,
-                // left its mark on the others' polished parameters).
-                let untold = |s: &Spec, judgement: &Judgement| {
-                    let full = held_out_errors(model, s, p)?;
-                    let jacobian = Jacobian::new(model, s, &full.fit, &p.train);
-                    (!judgement.test.significant()).then(|| untold_from_zero(model, s, &full, &jacobian, c, p)).flatten()
+                let (s, judgement) = match check(model, &polish(model, &s, coarse, &p.stretch), &reduced, p, &name) {
+                    Checked::Tested(s, judgement) if judgement.negligible() => {
+                        let judgement = carried_nm(model, &s, c, p).map_or(judgement, |term| judgement.carrying(term, p.noise_floor_nm));
+                        (s, judgement)
+                    }
+                    Checked::Tested(s, judgement) => (s, judgement),
+                    Checked::Impossible(_, why) => {
+                        rejected.push(why);
+                        continue;
+                    }
+                    Checked::NoFit => continue,
                 };
-                match check(model, &polish(model, &s, coarse, &p.stretch), &reduced, p, &name) {
-                    Checked::Tested(s, judgement) if judgement.named() && let Some(why) = untold(&s, &judgement) => {
-                        rejected.push(format!("{} (at its scale's other basin, a large gain consistent over the held-out part, but no test passed, and on the training part {why}: {judgement})", name(c)));
-                    }
-                    Checked::Tested(s, judgement) if judgement.named() => {
-                        chosen.push(Chosen { cause: c, against: None, partner: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part, at its scale's other basin (the best scale's fit refused on the held-out part); {judgement}") });
-                        current = score(&s, 0.0);
-                        spec = s;
-                        accepted = true;
-                        break;
-                    }
-                    Checked::Tested(_, judgement) => rejected.push(format!("{} (at its scale's other basin, no evidence on the held-out part: {judgement})", name(c))),
-                    Checked::Impossible(_, why) => rejected.push(why),
-                    Checked::NoFit => {}
+                if !judgement.named() {
+                    let what = if judgement.negligible() { "negligible" } else { "no evidence on the held-out part" };
+                    rejected.push(format!("{} (at its scale's other basin, {what}: {judgement})", name(c)));
+                    continue;
                 }
+                // A second try is told from zero on the training part at once where it passed on
+                // consistency alone (or its cause asks for it), as `prune` asks at the end: a loop
+                // kept, then pruned, left its mark on the others' polished parameters.
+                if (!judgement.test.significant() || model.causes[c].held_to_its_coefficients())
+                    && let Some(full) = held_out_errors(model, &s, p)
+                    && let Some(why) = untold_from_zero(model, &s, &full, &Jacobian::new(model, &s, &full.fit, &p.train), c, p)
+                {
+                    rejected.push(format!("{} (at its scale's other basin, a large gain consistent over the held-out part, but no test passed, and on the training part {why}: {judgement})", name(c)));
+                    continue;
+                }
+                // Its refusal at the best scale is superseded by the naming.
+                let refusal = format!("{} (proposed by BIC, no evidence on the held-out part", name(c));
+                rejected.retain(|r| !r.starts_with(&refusal));
+                chosen.push(Chosen { cause: c, against: None, partner: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part, at its scale's other basin (the best scale's fit refused on the held-out part); {judgement}") });
+                current = score(&s, 0.0);
+                spec = s;
+                accepted = true;
+                break;
             }
         }
         // Two effects can hide each other on the held-out part (a dead zone behind an offset):
