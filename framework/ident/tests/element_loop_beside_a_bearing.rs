@@ -96,10 +96,9 @@ fn a_loop_refused_at_a_bearings_scale_is_named_at_the_elements() {
 }
 
 /// The bearing's friction itself, a loop of the other sign in the reading, named beside the
-/// element's: the bypass near the bearing's levels (from 0.8 times its Coulomb level, 0.64 Nm,
-/// to 1.1 times its static level, 1.0 Nm; 0.58-0.97 Nm measured), the element's loop positive,
-/// and the held-out error under half of what the loop alone left (0.317 Nm at 0.045 rad before
-/// the bypass was a cause, when identify could take one loop only; 0.081-0.122 Nm measured).
+/// element's: the bypass between the bearing's Coulomb and static levels (0.64 and 1.0 Nm), the
+/// element's loop positive, and the held-out error a third of what the loop alone left (0.317
+/// Nm at 0.045 rad before the bypass was a cause; identify could take one loop only).
 #[test]
 fn the_bearings_friction_is_named_a_bypass_beside_the_elements_loop() {
     for (amplitude, frequency) in [(0.045, 0.45), (0.03, 0.3)] {

@@ -82,8 +82,8 @@ effects! {
     /// A load that follows a joint's position as a link's weight does, `G cos(q - q_G)`: what a
     /// gravity model leaves of a joint's friction record (the deflection column a position).
     GravityError => "gravity_error",
-    /// Friction carried past the torque sensor by a bearing beside it, in pre-sliding: a second
-    /// loop of the other sign in the reading, `- F u(phi)` with `u` a unit Dahl state.
+    /// Friction carried past the torque sensor by a bearing beside it: the reading less
+    /// `F atan(k_b dphi/dt)`, eq. 3.5's form with the other sign.
     BypassFriction => "bypass_friction",
 }
 
@@ -171,9 +171,9 @@ impl Effect {
     /// ```
     pub const fn dependence(self) -> Dependence {
         match self {
-            Effect::ViscousFriction | Effect::CoulombFriction | Effect::StribeckFriction | Effect::TimeDelay => Dependence::Rate,
+            Effect::ViscousFriction | Effect::CoulombFriction | Effect::StribeckFriction | Effect::TimeDelay | Effect::BypassFriction => Dependence::Rate,
             Effect::DeadZone | Effect::StiffnessNonlinearity | Effect::StiffnessError | Effect::SensorOffset | Effect::GravityError => Dependence::Deflection,
-            Effect::Hysteresis | Effect::BypassFriction => Dependence::Stroke,
+            Effect::Hysteresis => Dependence::Stroke,
             Effect::Vibration | Effect::SpeedVibration | Effect::ReversalRinging => Dependence::Time,
         }
     }

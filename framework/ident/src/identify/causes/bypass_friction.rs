@@ -4,10 +4,7 @@
 //! deflection, which follows the element's torque, and the sensor reads the element's torque
 //! less that bearing's friction: a loop of the other sign, narrower than the element's. The
 //! hysteresis cause takes one loop of either sign; this one is the reading's second. Tried
-//! beside a spring only: on a joint's friction record the torque is the friction itself. It
-//! does not ask for the element's loop to be named first: alone, its column is the hysteresis
-//! cause's negative Dahl loop, and a tie goes to that cause, earlier in `Effect::ALL`. On a
-//! record read as bin averages it is read at the points (no loop over each bin's interval).
+//! beside a spring only: on a joint's friction record the torque is the friction itself.
 //! Neither the observer nor the simulated plant has a term of its form: it writes no fragment.
 
 use super::{CandidateCause, Hysteresis, InputSet, Parameter, Samples, SearchContext};
@@ -54,7 +51,7 @@ impl CandidateCause for BypassFriction {
         true
     }
     fn impossible(&self, _: &[f64], c: &[f64]) -> Option<String> {
-        (c[0] <= 0.0).then(|| "a bypass of no size or of the element's sign (the element's own loop)".into())
+        (c[0] <= 0.0).then(|| "a bypass that adds to the reading (the element's own loop)".into())
     }
     fn impossible_given(&self, p: &[f64], c: &[f64], excitation: &super::Excitation) -> Option<String> {
         self.impossible(p, c).or_else(|| Hysteresis.impossible_given(&p[..1], &[-c[0]], excitation))
