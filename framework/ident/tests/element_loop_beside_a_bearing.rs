@@ -94,24 +94,3 @@ fn a_loop_refused_at_a_bearings_scale_is_named_at_the_elements() {
         assert!(r.rmse_after < 0.325, "{case}");
     }
 }
-
-/// The bearing's friction itself, a loop of the other sign in the reading, named beside the
-/// element's: the bypass between the bearing's Coulomb and static levels (0.64 and 1.0 Nm), the
-/// element's loop positive, and the held-out error a third of what the loop alone left (0.317
-/// Nm at 0.045 rad before the bypass was a cause; identify could take one loop only).
-#[test]
-fn the_bearings_friction_is_named_a_bypass_beside_the_elements_loop() {
-    for (amplitude, frequency) in [(0.045, 0.45), (0.03, 0.3)] {
-        for seed in 0..3 {
-            let r = identify(&record(amplitude, frequency, seed), &IdentifyOptions::default()).unwrap();
-            let names: Vec<&str> = r.causes.iter().map(|c| c.effect.as_str()).collect();
-            let case = format!("{amplitude} rad, {frequency} Hz, seed {seed}: named {names:?}, held out {} -> {}", r.rmse_before, r.rmse_after);
-            let bypass = r.causes.iter().find(|c| c.effect == "bypass_friction").unwrap_or_else(|| panic!("{case}"));
-            let level = bypass.params["bypass_friction_nm"];
-            assert!((0.8 * COULOMB_NM..1.1 * STATIC_NM).contains(&level), "{case}: bypass {level} Nm");
-            let h = r.causes.iter().find(|c| c.effect == "hysteresis").unwrap_or_else(|| panic!("{case}"));
-            assert!(h.params["limit_nm"] > 0.0, "{case}: {:?}", h.params);
-            assert!(r.rmse_after < 0.15, "{case}");
-        }
-    }
-}

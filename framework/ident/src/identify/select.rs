@@ -359,15 +359,6 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                 match outcome {
                     Checked::Impossible(_, why) => rejected.push(why),
                     Checked::Tested(s, judgement) if judgement.named() => {
-                        // A cause that asks to be held to its coefficients is held to them as it
-                        // joins, not at the end alone: kept until `prune`, it took the step
-                        // another cause would have had (a bypass of 0.19 +- 0.07 Nm on the rig
-                        // generator's seed 3 `d4-full3`, in the place of a ring: 0.163 -> 0.193
-                        // Nm held out).
-                        if let Some((_, why)) = held_untold_as_it_joins(model, &s, &[*c], p) {
-                            rejected.push(format!("{} (on the training part {why}: {judgement})", name(*c)));
-                            continue;
-                        }
                         // Candidates not tested on the held-out part (after it in BIC order, or
                         // a ring's after the ordinary causes) are judged by the training part's
                         // rule; those tested before it and refused for want of evidence, with
@@ -462,10 +453,6 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
                         Some(Checked::Impossible(_, why)) => rejected.push(why),
                         Some(Checked::Tested(both, test)) if test.named() => {
                             let (a, c) = (top[i].2, top[j].2);
-                            if let Some((k, why)) = held_untold_as_it_joins(model, &both, &[a, c], p) {
-                                rejected.push(format!("{} (with {} and {} together, on the training part {why}: {test})", name(k), name(a), name(c)));
-                                continue;
-                            }
                             let b = score(&both, 0.0);
                             for k in [a, c] {
                                 chosen.push(Chosen { cause: k, against: None, partner: None, evidence: format!("BIC {current:.0} -> {b:.0} on the training part with {} and {} together; {}", name(a), name(c), test) });
@@ -509,9 +496,7 @@ pub(crate) fn select(model: &Model, p: &Prepared, base: Spec, max_causes: usize,
             let untested = by_bic.iter().copied().filter(|c| *c != first && top.iter().all(|t| t.2 != *c) && !(mode(first) && mode(*c)));
             let refused = refused_alone.iter().copied().filter(|c| *c != first && !(mode(first) && mode(*c)));
             let beside: Vec<usize> = impossible_alone.iter().copied().chain(untested).chain(refused).collect();
-            if let Some((second, both, test, b)) = beside_an_unconfirmed(model, with_first, &beside, &reduced, p, &name)
-                && held_untold_as_it_joins(model, &both, &[first, second], p).is_none()
-            {
+            if let Some((second, both, test, b)) = beside_an_unconfirmed(model, with_first, &beside, &reduced, p, &name) {
                 let alone = if impossible_alone.contains(&second) {
                     "alone impossible"
                 } else if refused_alone.contains(&second) {
@@ -590,9 +575,7 @@ fn search_times(model: &Model, candidates: &[usize], ctx: &SearchContext, took: 
     .collect()
 }
 
-mod held;
 mod prune;
-use held::held_untold_as_it_joins;
 pub(crate) use prune::prune;
 
 #[cfg(test)]

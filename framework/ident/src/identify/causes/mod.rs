@@ -9,7 +9,6 @@ use serde_json::{Map, Value};
 
 pub use super::numeric::log_grid;
 
-mod bypass_friction;
 mod coulomb_friction;
 mod reversals;
 mod dead_zone;
@@ -28,7 +27,6 @@ mod input_set;
 mod loop_scales;
 mod refine;
 
-pub use bypass_friction::BypassFriction;
 pub use coulomb_friction::CoulombFriction;
 pub use reversals::reversals;
 pub use dead_zone::DeadZone;
@@ -81,7 +79,6 @@ pub fn cause_of(effect: Effect) -> Box<dyn CandidateCause> {
         Effect::SpeedVibration => Box::new(SpeedVibration),
         Effect::ReversalRinging => Box::new(ReversalRinging),
         Effect::GravityError => Box::new(GravityError),
-        Effect::BypassFriction => Box::new(BypassFriction),
     }
 }
 
@@ -416,15 +413,6 @@ pub trait CandidateCause: Send + Sync {
     /// misfit of the others: a line in time (an offset's drift) was named at 1.8 standard errors
     /// beside a Bouc-Wen loop that a Dahl loop fits only in part.
     fn held_to_its_coefficients(&self) -> bool {
-        false
-    }
-    /// Whether, held to its coefficients, it is held to them as it joins the model, not at the
-    /// end alone: for a cause whose passing place would take the step another cause should have
-    /// (a second loop beside the element's took a ring's step, then left untold from zero). Not
-    /// an offset's drift: its passing place is a stepping stone while the others are searched
-    /// (the blind generator's seed 1 `096`, an offset and a loop: with the drift held as it
-    /// joins, nothing was named, 0.56 -> 1.49 Nm held out).
-    fn held_as_it_joins(&self) -> bool {
         false
     }
     /// Whether a baseline term can take this cause as its own within the recorded rates, so that
