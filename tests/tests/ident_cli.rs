@@ -24,7 +24,7 @@ fn identify_names_the_hysteresis_in_the_example_data_in_the_documented_json() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("exactly one JSON object");
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(keys, ["samples", "dropped_samples", "glitch_samples", "saturated_samples", "resolution_rad", "segments", "rmse_before", "rmse_after", "causes", "negligible", "confounded", "experiment", "unexplained", "no_spring", "friction_dip", "bin_averages", "narrow_rate", "at_rest", "held_out_window", "significance", "extension", "gains"]);
+    assert_eq!(keys, ["samples", "dropped_samples", "glitch_samples", "saturated_samples", "after_pauses", "resolution_rad", "segments", "rmse_before", "rmse_after", "causes", "negligible", "confounded", "experiment", "unexplained", "no_spring", "friction_dip", "bin_averages", "narrow_rate", "at_rest", "held_out_window", "significance", "extension", "gains"]);
     // With --config: the static gain (identify's own model), and the simulation's and the
     // observer's on the held-out part.
     for side in ["static", "simulation", "observer"] {

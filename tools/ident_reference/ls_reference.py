@@ -71,11 +71,15 @@ def read(path):
     return a['t'], a['deflection'], a['torque']
 
 
-def prepared(path, window):
+def prepared(path, window, left_out=()):
     """Time from the record's start [s] (repetitions laid one after the other), deflection,
     torque, the deflection's moving average and its rate, and the held-out `window`'s samples
-    (fractions of the time range) as a mask."""
+    (fractions of the time range) as a mask, without those in `left_out` (intervals on the
+    record's own clock that identify left out of its judgement: its `after_pauses`)."""
     t, d, y = read(path)
+    out = np.zeros(len(t), dtype=bool)
+    for a, b in left_out:
+        out |= (t >= a) & (t <= b)
     t = t - t[0]
     dt = np.diff(t)
     if np.any(dt == 0):
@@ -91,15 +95,14 @@ def prepared(path, window):
         smooth[s] = moving_average(t[s], d[s])
         if len(s) > 2:
             rate[s] = np.gradient(smooth[s], t[s])
-    test = (t >= window[0] * t[-1]) & (t <= window[1] * t[-1])
-    return t, d, y, smooth, rate, test
+    window_mask = (t >= window[0] * t[-1]) & (t <= window[1] * t[-1])
+    return t, d, y, smooth, rate, window_mask & ~out, ~window_mask & ~out
 
 
-def reference(path, window=(0.7, 1.0)):
+def reference(path, window=(0.7, 1.0), left_out=()):
     """(the reference's baseline alone, the whole reference): RMSE [Nm] on the held-out
     `window` (fractions of the time range), fitted on the rest."""
-    t, d, y, smooth, rate, test = prepared(path, window)
-    train = ~test
+    t, d, y, smooth, rate, test, train = prepared(path, window, left_out)
     span = np.ptp(smooth) or 1.0
     speed = np.percentile(np.abs(rate), 95) or 1.0
     rms = lambda r: float(np.sqrt(np.mean(r ** 2)))
@@ -121,10 +124,9 @@ def reference(path, window=(0.7, 1.0)):
     return best_base[1], best[1]
 
 
-def library(path, window=(0.7, 1.0)):
+def library(path, window=(0.7, 1.0), left_out=()):
     """The library fit's RMSE [Nm] on the held-out `window`, fitted on the rest (see above)."""
-    t, d, y, smooth, rate, test = prepared(path, window)
-    train = ~test
+    t, d, y, smooth, rate, test, train = prepared(path, window, left_out)
     span = np.ptp(smooth) or 1.0
     # Normalised so that the columns' sizes are alike (the fit's conditioning).
     x = d / (np.max(np.abs(d)) or 1.0)
@@ -152,9 +154,11 @@ def main():
         held = (report or {}).get('held_out_window') or {}
         window = (held.get('start', 0.7), held.get('end', 1.0))
         try:
-            base, ref = reference(path, window)
+            # Scored on the samples identify scored: those it left out after pauses out here too.
+            left_out = (report or {}).get('after_pauses', {}).get('intervals_s', [])
+            base, ref = reference(path, window, left_out)
             if args.library:
-                ref = library(path, window)
+                ref = library(path, window, left_out)
         except (OSError, ValueError) as e:
             print(f'{name:45s} no reference: {e}')
             continue

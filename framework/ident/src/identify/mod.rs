@@ -17,7 +17,6 @@
 //! the observer's and the simulation's configuration.
 
 use std::collections::BTreeMap;
-
 use jointctl_models::effect::Effect;
 use serde::Serialize;
 
@@ -120,6 +119,8 @@ pub struct Report {
     pub glitch_samples: usize,
     /// Samples excluded at the torque sensor's limit (saturated; see `prepare`).
     pub saturated_samples: usize,
+    /// Samples excluded after pauses, up to the motion's next turn (see `prepare::pauses`).
+    pub after_pauses: prepare::AfterPauses,
     /// A torque that falls as the deflection rises: one column's sign reversed, likely.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
@@ -559,6 +560,7 @@ fn extend(p: &prepare::Prepared, rate: Option<&bin_reading::NarrowRate>, all: &[
         dropped_samples: p.dropped,
         glitch_samples: p.glitches,
         saturated_samples: p.saturated,
+        after_pauses: p.after_pauses.clone(),
         warning: p.reversed_sign.clone(),
         resolution_rad: p.resolution_rad,
         segments: p.segments,

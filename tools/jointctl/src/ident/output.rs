@@ -31,7 +31,7 @@ pub(super) fn causes_cell(report: &jointctl_ident::identify::Report) -> String {
 }
 
 /// What else was left out before fitting, for the report's first sentence: the deflection's
-/// glitches and the samples at the torque sensor's limit, each when there are any.
+/// glitches, the samples at the torque sensor's limit and those after pauses, each when there are any.
 pub(super) fn left_out_sentence(report: &jointctl_ident::identify::Report) -> String {
     let mut s = String::new();
     if report.glitch_samples > 0 {
@@ -39,6 +39,9 @@ pub(super) fn left_out_sentence(report: &jointctl_ident::identify::Report) -> St
     }
     if report.saturated_samples > 0 {
         s += &format!(", {} at the torque sensor's limit (saturated: the sensor past its range) left out", report.saturated_samples);
+    }
+    if report.after_pauses.samples > 0 {
+        s += &format!(", {} after pauses longer than the motion's strokes left out up to its next turn (no model knows a loop's state there)", report.after_pauses.samples);
     }
     s
 }

@@ -12,6 +12,7 @@ mod saturation;
 mod spring;
 mod sign;
 mod noise;
+mod pauses;
 mod pieces;
 mod read;
 mod rate;
@@ -20,6 +21,7 @@ mod turns;
 mod window;
 
 pub use noise::noise_floor;
+pub use pauses::{AfterPauses, before_the_next_turn, unseen_paths};
 pub use rest::{AtRest, REST_S};
 pub(crate) use rest::{interval_of, scored_on_every_sample};
 pub use window::{HeldOut, HeldOutWindow, REACH_TOLERANCE, held_out_window};
@@ -182,6 +184,8 @@ pub(crate) struct Prepared {
     pub glitches: usize,
     /// Samples left out at the torque sensor's limit, not already dropouts (see `saturation`).
     pub saturated: usize,
+    /// Samples left out after pauses, up to the motion's next turn (see `pauses`).
+    pub after_pauses: AfterPauses,
     /// A torque that falls as the deflection rises, said (see `sign`).
     pub reversed_sign: Option<String>,
     /// The deflection's resolution estimated from the data [rad].
@@ -368,9 +372,16 @@ impl Read<'_> {
             }
             i
         };
-        // Every `k`-th sample of the range `r` (its history too), picked without a full-rate copy.
-        let part_every = |r: std::ops::Range<usize>, k: usize| {
-            let pick = |x: &[f64]| x[r.clone()].iter().step_by(k).copied().collect::<Vec<f64>>();
+        // After a pause whose path the log does not show, up to the motion's next turn (see
+        // `pauses`): no model knows a loop's state there, so the parts that are fitted and judged
+        // leave those samples out (the histories keep them: the path the loop is driven by).
+        let unseen = before_the_next_turn(t, d, tau, noise_floor_nm, &self.turning, spacing);
+        let after_pauses = AfterPauses::of(&unseen, t, t0);
+        // Every `k`-th sample of the range `r` (its history too), those after pauses left out but
+        // for a contiguous stretch (`whole`), picked without a full-rate copy.
+        let part_every_of = |r: std::ops::Range<usize>, k: usize, whole: bool| {
+            let picked: Vec<usize> = r.clone().step_by(k).filter(|i| whole || after_pauses.samples == 0 || !unseen[*i]).collect();
+            let pick = |x: &[f64]| picked.iter().map(|i| x[*i]).collect::<Vec<f64>>();
             // The history's samples, which a delay reads before the part's own and a stateful
             // cause reads transformed with them (see `part::Lead`).
             let lead: Vec<usize> = (warm_start(r.start)..r.start).step_by(k.max(1)).collect();
@@ -384,14 +395,15 @@ impl Read<'_> {
                 v: pick(v),
                 tau: pick(tau),
                 // A pivot not given is none: the configured characteristic's own.
-                pivot: if pivot.is_empty() { vec![0.0; r.clone().step_by(k).len()] } else { pick(pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
-                rep: if rep.is_empty() { Vec::new() } else { rep[r.clone()].iter().step_by(k).copied().collect() },
-                rate_edges: if edges.is_empty() { Vec::new() } else { edges[r].iter().step_by(k).copied().collect() },
+                pivot: if pivot.is_empty() { vec![0.0; picked.len()] } else { pick(pivot).into_iter().map(|p| if p.is_finite() { p } else { 0.0 }).collect() },
+                rep: if rep.is_empty() { Vec::new() } else { picked.iter().map(|i| rep[*i]).collect() },
+                rate_edges: if edges.is_empty() { Vec::new() } else { picked.iter().map(|i| edges[*i]).collect() },
                 bin_width_s: spacing,
                 dt: spacing * k as f64,
             }
         };
-        let part = |r: std::ops::Range<usize>| part_every(r, 1);
+        let part_every = |r: std::ops::Range<usize>, k: usize| part_every_of(r, k, false);
+        let part = |r: std::ops::Range<usize>| part_every_of(r, 1, true);
         let trained = lo + (t.len() - hi);
         if trained < window::MIN_TRAINING || hi - lo < window::MIN_HELD_OUT {
             return Err(PrepareError::UnevenSplit { train_percent: 100.0 * train_fraction, train: trained, held_out: hi - lo });
@@ -469,7 +481,7 @@ impl Read<'_> {
             kept.into_iter().map(part).reduce(|a, b| a.then(&b))
         };
         let record_middle_s = 0.5 * t.last().copied().unwrap_or(0.0);
-        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, at_rest, turns: self.turn_runs.clone() })
+        Ok(Prepared { record_middle_s, train, test, coarse, stretch, train_at_full_rate: every_fit == 1, excitation, samples: data.len(), dropped: self.dropouts, glitches: self.glitches, saturated: self.saturated, after_pauses, reversed_sign: self.reversed_sign.clone(), resolution_rad: resolution, segments: starts.len(), t0, noise_floor_nm, spring_share, held_out, train_duration_s, stops, at_rest, turns: self.turn_runs.clone() })
     }
 }
 
