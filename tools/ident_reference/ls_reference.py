@@ -74,13 +74,12 @@ def read(path):
 def prepared(path, window, left_out=()):
     """Time from the record's start [s] (repetitions laid one after the other), deflection,
     torque, the deflection's moving average and its rate, and the held-out `window`'s samples
-    (fractions of the time range) as a mask, without those in `left_out` (intervals on the
-    record's own clock that identify left out of its judgement: its `after_pauses`)."""
+    (fractions of the time range) as a mask, without those in `left_out` (the intervals identify
+    left out of its fit and judgement, its `after_pauses`, on the clock of the record as it reads
+    it: repetitions whose time restarts laid a second apart, as here)."""
     t, d, y = read(path)
-    out = np.zeros(len(t), dtype=bool)
-    for a, b in left_out:
-        out |= (t >= a) & (t <= b)
-    t = t - t[0]
+    t0 = t[0]
+    t = t - t0
     dt = np.diff(t)
     if np.any(dt == 0):
         raise ValueError('a time stamp repeats')
@@ -89,6 +88,12 @@ def prepared(path, window, left_out=()):
         # identify does).
         dt[dt < 0] = 1.0
         t = np.concatenate([[0.0], np.cumsum(dt)])
+    # Within half a step of an interval's ends: identify lays a logger's bursts evenly, which
+    # moves a stamp by less than the stall it follows.
+    tolerance = 0.5 * float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    out = np.zeros(len(t), dtype=bool)
+    for a, b in left_out:
+        out |= (t + t0 >= a - tolerance) & (t + t0 <= b + tolerance)
     smooth = np.empty_like(d)
     rate = np.zeros_like(d)
     for s in segments(t):

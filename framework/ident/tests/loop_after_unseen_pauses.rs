@@ -96,3 +96,30 @@ fn a_rig_record_names_its_loop_and_cubic() {
     assert!((limit - 0.612).abs() < 0.25 * 0.612 && (cubic + 1501.0).abs() < 0.25 * 1501.0, "limit {limit}, k3 {cubic}");
     assert!(!named.contains(&"viscous_friction") && r.after_pauses.samples > 0, "{named:?}");
 }
+
+#[test]
+fn a_held_out_part_left_out_whole_is_judged_whole_instead() {
+    // A review's finding: the parts' sizes were checked before the samples after a pause were
+    // left out. Four cycles, a pause across which the torque steps 0.5 Nm, then a long rest and
+    // a last stroke to a crest 0.15 s before the record's end: of the last 30 % held out (the
+    // rest and the stroke) 14 samples are left after the turn, fewer than a held-out part needs.
+    let (mut t, mut d, mut tau) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..1600 {
+        let s = i as f64 * 0.01;
+        let x = if (1.0..15.0).contains(&s) { 0.05 * (std::f64::consts::TAU * (s - 1.0) / 3.5).sin() } else { 0.0 };
+        t.push(s);
+        d.push(x);
+        tau.push(600.0 * x + 0.001 * ((i * 7919) % 13) as f64);
+    }
+    for i in 0..640 {
+        let s = i as f64 * 0.01;
+        let x = if s < 6.0 { 0.0 } else { 0.05 * (std::f64::consts::TAU * (s - 6.0)).sin() };
+        t.push(36.0 + s);
+        d.push(x);
+        tau.push(600.0 * x - 0.5 + 0.001 * ((i * 7919) % 13) as f64);
+    }
+    let last = IdentifyOptions { held_out: jointctl_ident::identify::prepare::HeldOut::Last, ..IdentifyOptions::default() };
+    let r = identify(&Data::from_columns(t, d, tau), &last).unwrap();
+    assert_eq!(r.after_pauses.samples, 0);
+    assert!(r.rmse_after.is_finite());
+}

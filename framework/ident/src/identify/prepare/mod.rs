@@ -374,8 +374,15 @@ impl Read<'_> {
         };
         // After a pause whose path the log does not show, up to the motion's next turn (see
         // `pauses`): no model knows a loop's state there, so the parts that are fitted and judged
-        // leave those samples out (the histories keep them: the path the loop is driven by).
-        let unseen = before_the_next_turn(t, d, tau, noise_floor_nm, &self.turning, spacing);
+        // leave those samples out (a part's history keeps them; inside a part the loop steps from
+        // the reading before the pause to the one at the turn whole). The full-rate stretch keeps
+        // them (it is contiguous), so a choice made on it sees them. Not when a part would be
+        // left with too few samples: the record is judged whole, as before.
+        let unseen = {
+            let out = before_the_next_turn(t, d, tau, noise_floor_nm, &self.turning, spacing);
+            let kept = |r: std::ops::Range<usize>| r.filter(|i| !out[*i]).count();
+            if kept(lo..hi) < window::MIN_HELD_OUT || kept(0..lo) + kept(hi..t.len()) < window::MIN_TRAINING { vec![false; t.len()] } else { out }
+        };
         let after_pauses = AfterPauses::of(&unseen, t, t0);
         // Every `k`-th sample of the range `r` (its history too), those after pauses left out but
         // for a contiguous stretch (`whole`), picked without a full-rate copy.

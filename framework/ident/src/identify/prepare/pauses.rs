@@ -47,9 +47,11 @@ pub fn unseen_paths(t_s: &[f64], turning: &[usize], spacing_s: f64) -> Vec<usize
 pub struct AfterPauses {
     /// Samples left out.
     pub samples: usize,
-    /// Each run of them, from its first sample's time to its last's, on the record's own clock
-    /// [s] (a tool that scores another model on identify's held-out samples leaves them out too,
-    /// as `tools/ident_reference/ls_reference.py` does).
+    /// Each run of them, from its first sample's time to its last's [s], on the clock of the
+    /// record as read: its own stamps, a repetition whose time restarted laid
+    /// [`crate::csv::RESTART_GAP_S`] after the one before, a logger's burst laid evenly (within a
+    /// stall of its stamps; see `bursts`). A tool that scores another model on identify's
+    /// held-out samples leaves them out too, as `tools/ident_reference/ls_reference.py` does.
     pub intervals_s: Vec<[f64; 2]>,
 }
 
@@ -145,16 +147,19 @@ pub fn before_the_next_turn(t_s: &[f64], deflection_rad: &[f64], torque_nm: &[f6
         let (a, b) = d[r.clone()].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
         (b - a <= still).then(|| r.clone().map(|i| torque_nm[i] - slope * d[i]).sum::<f64>() / r.len() as f64)
     };
-    let mut left_out = 0;
     for pause in pauses {
         if pause < m || pause + m > n {
             continue;
         }
         let stepped = matches!((held(pause - m..pause), held(pause..pause + m)), (Some(a), Some(b)) if (b - a).abs() > STEP_FLOORS * floor_nm);
-        let Some(turn) = turning.iter().find(|k| **k >= pause).filter(|_| stepped) else { continue };
+        // The first turn once the joint has left the rest after the pause: a turn read inside
+        // that rest (its lowest reading, one count below the one before the pause) is no turn
+        // of the motion's, and the stroke after it still starts from the unknown state.
+        let Some(moved) = (pause..n).find(|j| (d[*j] - d[pause]).abs() > still).filter(|_| stepped) else { continue };
+        let Some(turn) = turning.iter().find(|k| **k > moved) else { continue };
         out[pause..*turn].iter_mut().for_each(|x| *x = true);
-        left_out += turn - pause;
     }
+    let left_out = out.iter().filter(|x| **x).count();
     if left_out as f64 > MOST_LEFT_OUT * n as f64 {
         return vec![false; n];
     }
@@ -209,6 +214,22 @@ mod tests {
     }
 
     #[test]
+    fn a_turn_read_inside_the_rest_after_a_pause_is_not_the_next_turn() {
+        // A stroke that ends on the way down and rests at 0; after the pause the joint rests a
+        // thousandth of its range lower, where the reading's lowest point (a turn) lies, then
+        // rises to a crest 1.25 s after the pause.
+        let first = |t: f64| if (1.0..2.5).contains(&t) { (std::f64::consts::TAU * t).sin() } else { 0.0 };
+        let second = |t: f64| if (1.0..3.0).contains(&t) { (std::f64::consts::TAU * t).sin() } else if t < 1.0 { -0.002 } else { 0.0 };
+        let t: Vec<f64> = (0..400).map(|i| i as f64 * 0.01).chain((0..400).map(|i| 13.0 + i as f64 * 0.01)).collect();
+        let d: Vec<f64> = (0..800).map(|i| if i < 400 { first(i as f64 * 0.01) } else { second((i - 400) as f64 * 0.01) }).collect();
+        let tau: Vec<f64> = (0..800).map(|i| 10.0 * d[i] - if i < 400 { 0.0 } else { 0.5 }).collect();
+        let turning = reversals(&d);
+        assert!(turning.contains(&400), "{turning:?}");
+        let out = before_the_next_turn(&t, &d, &tau, 0.01, &turning, 0.01);
+        assert_eq!((out.iter().position(|x| *x), out.iter().filter(|x| **x).count()), (Some(400), 125));
+    }
+
+    #[test]
     fn a_joint_moving_at_a_pause_is_not_judged_by_its_torque() {
         // A pause of 20 s that cuts the first repetition's cycles (the joint moves at both its
         // edges), the torque 0.5 Nm lower after it and on through the pause between repetitions.
@@ -230,6 +251,6 @@ mod tests {
         let d: Vec<f64> = (0..264).map(|i| group[i % 44]).collect();
         let tau: Vec<f64> = (0..264).map(|i| d[i] - (i / 44) as f64).collect();
         assert!(!unseen_paths(&t, &reversals(&d), 1.0).is_empty());
-        assert!(before_the_next_turn(&t, &d, &tau, 0.01, &reversals(&d), 0.01).iter().all(|x| !*x));
+        assert!(before_the_next_turn(&t, &d, &tau, 0.01, &reversals(&d), 1.0).iter().all(|x| !*x));
     }
 }
